@@ -1,0 +1,1 @@
+"""The ``mfflap`` command line: a thin layer over the library."""

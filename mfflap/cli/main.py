@@ -1,0 +1,72 @@
+"""Entry point of the ``mfflap`` command."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import click
+import numpy as np
+
+from mfflap.errors import MfflapError
+
+
+class MfflapGroup(click.Group):
+    """A click group that turns mfflap's own errors into one clear line and exit code 2."""
+
+    def invoke(self, ctx: click.Context):
+        try:
+            return super().invoke(ctx)
+        except MfflapError as exc:
+            click.echo(f"mfflap: error: {exc}", err=True)
+            sys.exit(2)
+
+
+@click.group(cls=MfflapGroup, context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(package_name="mfflap")
+def cli() -> None:
+    """Morison reduced-order model of flapping-foil propulsion, its discrete adjoint, and the
+    CFD pipeline (OpenFOAM, Fluent) that identifies and checks it."""
+
+
+def _echo_json(data) -> None:
+    click.echo(json.dumps(data, indent=2, default=lambda o: np.asarray(o).tolist()))
+
+
+@cli.command()
+@click.argument("case_file", type=click.Path(dir_okay=False, path_type=Path))
+@click.option("--json", "as_json", is_flag=True, help="Print the cycle means as JSON.")
+@click.option("--figure", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="Where to save the one-cycle figure (PNG). Default: <case>.cycle.png")
+@click.option("--output", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="Also write the results (HDF5, with the case stored beside them).")
+@click.option("--scheme", type=click.Choice(["paper", "midpoint"]), default=None,
+              help="Discrete scheme (default: the case's [model] scheme).")
+def evaluate(case_file: Path, as_json: bool, figure: Path | None, output: Path | None,
+             scheme: str | None) -> None:
+    """Evaluate the [motion] of CASE_FILE with the Morison model over one cycle.
+
+    A harmonic motion is converted to the discrete half-cycle scheme with the case's
+    [discretisation] n_steps; a ramp motion is evaluated continuously over its cycles.
+    Prints the cycle means and saves a figure of thrust, power, F_n, F_t and M.
+    """
+    from mfflap.evaluation import evaluate_case
+
+    result = evaluate_case(case_file, scheme=scheme)
+    figure = figure or case_file.with_suffix(".cycle.png")
+    result.figure.savefig(figure, dpi=120)
+    if output is not None:
+        result.save(output)
+    if as_json:
+        _echo_json({"case": str(case_file), "scheme": result.scheme, **result.summary_dict(),
+                    "figure": str(figure)})
+        return
+    click.echo(f"case {case_file} ({result.description}, scheme {result.scheme})")
+    for key, (value, unit) in result.summary_with_units().items():
+        click.echo(f"  {key:26s} {value: .6g} {unit}")
+    click.echo(f"figure: {figure}")
+
+
+def main() -> None:  # pragma: no cover
+    cli()

@@ -1,0 +1,262 @@
+"""Case files: TOML validated at load into frozen dataclasses.
+
+A case file has these tables (all optional but ``[study]``; missing ones take the paper's
+values)::
+
+    [study]           name, description
+    [fluid]           density, kinematic_viscosity
+    [plate]           chord, span, thickness
+    [flow]            velocity
+    [model]           n_strips, scheme, and [model.coefficients] (the four Morison values)
+    [motion]          the motion evaluated by ``mfflap evaluate``
+    [discretisation]  n_steps (N per half cycle)
+    [optimisation]    beta values, limits, penalties, smoothing, period bounds
+    [identification]  the Table 1 grid and the pitch ramp rate
+
+Every error names the file, the key, the value and the allowed range.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from mfflap.errors import ConfigError
+from mfflap.kinematics.continuous import HarmonicMotion, RampHarmonicMotion
+from mfflap.parameters import Fluid, FreeStream, MorisonCoefficients, Plate, StripSettings
+from mfflap.toml_io import dumps, read_toml
+from mfflap.validation import bounded, check_fields, from_mapping
+
+
+@dataclass(frozen=True)
+class StudyInfo:
+    """Name and description of a study."""
+
+    name: str = "study"
+    description: str = ""
+
+
+@dataclass(frozen=True)
+class ModelSettings:
+    """Strip model settings (see :class:`~mfflap.parameters.StripSettings`)."""
+
+    n_strips: int = bounded(20, low=1, high=100000, unit="1", doc="chordwise strips")
+    scheme: str = bounded("paper", choices=("paper", "midpoint"), unit="",
+                          doc="discrete evaluation scheme")
+    added_mass_volume_normal: float | None = None
+    added_mass_volume_tangential: float | None = None
+    drag_area_normal: float | None = None
+    drag_area_tangential: float | None = None
+
+    def __post_init__(self) -> None:
+        check_fields(self, prefix="model.")
+
+    def strip_settings(self) -> StripSettings:
+        """The strip settings of the model."""
+        return StripSettings(
+            n_strips=self.n_strips,
+            added_mass_volume_normal=self.added_mass_volume_normal,
+            added_mass_volume_tangential=self.added_mass_volume_tangential,
+            drag_area_normal=self.drag_area_normal,
+            drag_area_tangential=self.drag_area_tangential,
+        )
+
+
+@dataclass(frozen=True)
+class MotionSpec:
+    """A continuous motion given in engineering units (degrees)."""
+
+    kind: str = bounded("harmonic", choices=("harmonic", "ramp_harmonic"), unit="")
+    frequency: float = bounded(1.0, low=0.0, low_open=True, high=100.0, unit="Hz")
+    heave_amplitude: float = bounded(0.3, low=0.0, high=10.0, unit="m")
+    pitch_amplitude_deg: float = bounded(20.0, low=0.0, high=90.0, high_open=True, unit="deg")
+    pitch_ramp_rate_deg: float = bounded(10.0, low=0.0, high=1000.0, unit="deg/s",
+                                         doc="theta_kamp of the identification motion")
+    phase_deg: float = bounded(90.0, low=-360.0, high=360.0, unit="deg",
+                               doc="phase by which heave leads pitch")
+
+    def __post_init__(self) -> None:
+        check_fields(self, prefix="motion.")
+
+    def build(self) -> HarmonicMotion | RampHarmonicMotion:
+        """The motion object."""
+        phase = math.radians(self.phase_deg)
+        if self.kind == "harmonic":
+            return HarmonicMotion(self.frequency, self.heave_amplitude,
+                                  math.radians(self.pitch_amplitude_deg), phase)
+        return RampHarmonicMotion(self.frequency, self.heave_amplitude,
+                                  math.radians(self.pitch_ramp_rate_deg), phase)
+
+
+@dataclass(frozen=True)
+class Discretisation:
+    """Time discretisation of the half cycle."""
+
+    n_steps: int = bounded(50, low=2, high=10_000_000, unit="1", doc="N, steps per half cycle")
+
+    def __post_init__(self) -> None:
+        check_fields(self, prefix="discretisation.")
+
+
+@dataclass(frozen=True)
+class OptimisationSettings:
+    """The penalised optimisation problem of the paper (shared/design/equations.md)."""
+
+    betas: tuple[float, ...] = bounded((0.0, 0.5, 1.0), low=0.0, high=1.0, unit="1",
+                                       doc="thrust/power weights beta")
+    max_power: float = bounded(50.0, low=0.0, low_open=True, unit="W", doc="P_max")
+    max_heave: float = bounded(0.5, low=0.0, low_open=True, unit="m", doc="h_max")
+    penalty_power: float = bounded(10.0, low=0.0, unit="1/W", doc="sigma_P")
+    penalty_heave: float = bounded(1.0e4, low=0.0, unit="N/m^2", doc="sigma_h")
+    smoothing_pitch: float = bounded(1.0e-6, low=0.0, unit="N s^4", doc="epsilon_theta")
+    smoothing_heave: float = bounded(1.0e-4, low=0.0, unit="N s^4/m^2", doc="epsilon_h")
+    n_steps: int = bounded(50, low=2, high=1_000_000, unit="1", doc="N per half cycle")
+    min_period: float = bounded(0.2, low=0.0, low_open=True, unit="s")
+    max_period: float = bounded(20.0, low=0.0, low_open=True, unit="s")
+    scheme: str = bounded("paper", choices=("paper", "midpoint"), unit="")
+
+    def __post_init__(self) -> None:
+        check_fields(self, prefix="optimisation.")
+        if self.min_period >= self.max_period:
+            raise ConfigError(
+                f"min_period {self.min_period} s must be smaller than max_period "
+                f"{self.max_period} s: the bounds exclude every period",
+                key="optimisation.min_period",
+            )
+
+
+@dataclass(frozen=True)
+class IdentificationGrid:
+    """The motion grid of the identification campaign (the paper's Table 1 by default)."""
+
+    frequencies: tuple[float, ...] = bounded((0.1, 0.2, 0.5, 1.0, 2.0), low=0.0, low_open=True,
+                                             high=100.0, unit="Hz")
+    heave_amplitudes: tuple[float, ...] = bounded((0.1, 0.2, 0.3, 0.4, 0.5), low=0.0,
+                                                  high=10.0, unit="m")
+    phases_deg: tuple[float, ...] = bounded((45.0, 67.5, 90.0, 112.5, 135.0), low=-360.0,
+                                            high=360.0, unit="deg")
+    pitch_ramp_rate_deg: float = bounded(10.0, low=0.0, high=1000.0, unit="deg/s",
+                                         doc="theta_kamp")
+    n_cycles: float = bounded(3.0, low=0.5, high=1000.0, unit="1", doc="cycles simulated")
+    frequency_weights: tuple[float, ...] | None = None
+
+    def __post_init__(self) -> None:
+        check_fields(self, prefix="identification.")
+        w = self.frequency_weights
+        if w is not None:
+            if len(w) != len(self.frequencies) or any(x < 0 for x in w) or sum(w) <= 0:
+                raise ConfigError(
+                    f"value {list(w)!r}: needs one weight >= 0 per frequency "
+                    f"({len(self.frequencies)}) and a positive sum",
+                    key="identification.frequency_weights",
+                )
+
+
+@dataclass(frozen=True)
+class CaseConfig:
+    """A whole case file."""
+
+    study: StudyInfo = field(default_factory=StudyInfo)
+    fluid: Fluid = field(default_factory=Fluid)
+    plate: Plate = field(default_factory=Plate)
+    flow: FreeStream = field(default_factory=FreeStream)
+    model: ModelSettings = field(default_factory=ModelSettings)
+    coefficients: MorisonCoefficients = field(default_factory=MorisonCoefficients)
+    motion: MotionSpec = field(default_factory=MotionSpec)
+    discretisation: Discretisation = field(default_factory=Discretisation)
+    optimisation: OptimisationSettings = field(default_factory=OptimisationSettings)
+    identification: IdentificationGrid = field(default_factory=IdentificationGrid)
+    source: str | None = field(default=None, compare=False)
+
+    def morison_model(self):
+        """The Morison model this case describes."""
+        from mfflap.hydro.morison import MorisonModel
+
+        return MorisonModel(self.plate, self.fluid, self.flow, self.coefficients,
+                            self.model.strip_settings())
+
+    def to_dict(self) -> dict[str, Any]:
+        """Nested plain dict (the TOML tables)."""
+        out = {}
+        for f in dataclasses.fields(self):
+            if f.name == "source":
+                continue
+            section = dataclasses.asdict(getattr(self, f.name))
+            out[f.name] = {k: list(v) if isinstance(v, tuple) else v for k, v in section.items()}
+        out["model"]["coefficients"] = out.pop("coefficients")
+        return out
+
+    def to_toml(self) -> str:
+        """TOML text that :func:`load_case` reads back into an equal object."""
+        return dumps(self.to_dict())
+
+
+_SECTIONS: dict[str, type] = {
+    "study": StudyInfo,
+    "fluid": Fluid,
+    "plate": Plate,
+    "flow": FreeStream,
+    "model": ModelSettings,
+    "motion": MotionSpec,
+    "discretisation": Discretisation,
+    "optimisation": OptimisationSettings,
+    "identification": IdentificationGrid,
+}
+
+
+def _build(cls: type, mapping: Any, source: str | None, key: str):
+    try:
+        return from_mapping(cls, mapping, source=source, prefix=key + ".")
+    except ConfigError as exc:
+        if exc.source is None:
+            raise ConfigError(str(exc), source=source) from exc
+        raise
+
+
+def case_from_dict(data: dict[str, Any], source: str | None = None) -> CaseConfig:
+    """Validate a parsed case mapping.
+
+    Raises
+    ------
+    ConfigError
+        Naming the file (``source``), the key, the value and the allowed range.
+    """
+    unknown = sorted(set(data) - set(_SECTIONS))
+    if unknown:
+        raise ConfigError(f"unknown table [{unknown[0]}]; allowed: {', '.join(_SECTIONS)}",
+                          source=source, key=unknown[0])
+    parts: dict[str, Any] = {}
+    for name, cls in _SECTIONS.items():
+        mapping = dict(data.get(name, {})) if isinstance(data.get(name, {}), dict) else data[name]
+        if name == "model" and isinstance(mapping, dict):
+            coeffs = mapping.pop("coefficients", {})
+            parts["coefficients"] = _build(MorisonCoefficients, coeffs, source,
+                                           "model.coefficients")
+        parts[name] = _build(cls, mapping, source, name)
+    return CaseConfig(**parts, source=source)
+
+
+def load_case(path: str | Path) -> CaseConfig:
+    """Read and validate a TOML case file."""
+    return case_from_dict(read_toml(path), source=str(path))
+
+
+def loads_case(text: str, source: str = "<string>") -> CaseConfig:
+    """Validate case TOML given as text (e.g. the copy stored in a results file)."""
+    import tomllib
+
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"TOML syntax error: {exc}", source=source) from exc
+    return case_from_dict(data, source=source)
+
+
+def degrees(values) -> np.ndarray:
+    """Convenience: degrees to radians as an array."""
+    return np.deg2rad(np.asarray(values, dtype=float))

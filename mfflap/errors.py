@@ -1,0 +1,75 @@
+"""Exceptions raised by mfflap. Every message names what was wrong and where."""
+
+from __future__ import annotations
+
+
+class MfflapError(Exception):
+    """Base class of every error mfflap raises on purpose."""
+
+
+class ConfigError(MfflapError, ValueError):
+    """An impossible or malformed configuration (case file, parameter, setting).
+
+    Parameters
+    ----------
+    message
+        What is wrong and what is allowed.
+    source
+        The file (or other source) the setting came from, if any.
+    key
+        Dotted key of the offending setting, if any.
+    """
+
+    def __init__(self, message: str, *, source: str | None = None, key: str | None = None):
+        self.source = source
+        self.key = key
+        where = ": ".join(p for p in (source, key) if p)
+        super().__init__(f"{where}: {message}" if where else message)
+
+
+class MotionError(MfflapError, ValueError):
+    """A motion that cannot be evaluated (NaN samples, non-increasing times, bad period)."""
+
+
+class ParseError(MfflapError, ValueError):
+    """A solver output file that cannot be read as what it claims to be.
+
+    Parameters
+    ----------
+    message
+        What is wrong.
+    path
+        The file being parsed.
+    line
+        1-based line number of the offending line, if known.
+    """
+
+    def __init__(self, message: str, *, path: str | None = None, line: int | None = None):
+        self.path = path
+        self.line = line
+        where = str(path) if path else "<text>"
+        if line is not None:
+            where += f", line {line}"
+        super().__init__(f"{where}: {message}")
+
+
+class CfdRunError(MfflapError, RuntimeError):
+    """A CFD run that crashed, diverged or timed out.
+
+    Parameters
+    ----------
+    message
+        What happened.
+    case
+        The case directory.
+    log_tail
+        The last lines of the solver log.
+    """
+
+    def __init__(self, message: str, *, case: str, log_tail: str = ""):
+        self.case = case
+        self.log_tail = log_tail
+        text = f"case {case}: {message}"
+        if log_tail:
+            text += "\n--- last log lines ---\n" + log_tail
+        super().__init__(text)

@@ -1,0 +1,247 @@
+"""Continuous motions: functions of time that can be sampled anywhere.
+
+Every class here has ``sample(times) -> KinematicState`` with exact derivatives. Parameters
+may be arrays (broadcast together); the state then has shape ``params.shape + (n_times,)``,
+which is how sweeps evaluate many motions at once.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from mfflap.errors import MotionError
+from mfflap.kinematics.state import KinematicState
+
+
+def check_times(times: np.ndarray | float, what: str = "time array") -> np.ndarray:
+    """Return ``times`` as a 1-D float array, refusing NaN and non-increasing values.
+
+    Raises
+    ------
+    MotionError
+        If a time is not finite or the array is not strictly increasing.
+    """
+    t = np.atleast_1d(np.asarray(times, dtype=float))
+    if t.ndim != 1:
+        raise MotionError(f"{what} must be one-dimensional, got shape {t.shape}")
+    if not np.all(np.isfinite(t)):
+        bad = int(np.argmin(np.isfinite(t)))
+        raise MotionError(f"{what} has a non-finite value at index {bad}")
+    if t.size > 1 and np.any(np.diff(t) <= 0):
+        i = int(np.argmax(np.diff(t) <= 0))
+        raise MotionError(
+            f"{what} is not strictly increasing: t[{i}] = {t[i]!r} s, t[{i + 1}] = {t[i + 1]!r} s"
+        )
+    return t
+
+
+@runtime_checkable
+class Motion(Protocol):
+    """Anything that can be sampled in time."""
+
+    def sample(self, times: np.ndarray) -> KinematicState:
+        """Kinematic state at ``times`` (s)."""
+        ...
+
+
+def _positive_array(value, name: str) -> np.ndarray:
+    a = np.asarray(value, dtype=float)
+    if not np.all(np.isfinite(a)) or np.any(a <= 0):
+        raise MotionError(f"{name} must be finite and > 0, got {value!r}")
+    return a
+
+
+def _finite_array(value, name: str) -> np.ndarray:
+    a = np.asarray(value, dtype=float)
+    if not np.all(np.isfinite(a)):
+        raise MotionError(f"{name} must be finite, got {value!r}")
+    return a
+
+
+@dataclass(frozen=True)
+class HarmonicMotion:
+    """Sinusoidal heave and pitch: theta = theta_a sin(2 pi f t), h = h_a sin(2 pi f t + phi).
+
+    Parameters
+    ----------
+    frequency : float or ndarray, Hz
+    heave_amplitude : float or ndarray, m
+    pitch_amplitude : float or ndarray, rad
+    phase : float or ndarray, rad
+        Phase by which heave leads pitch.
+    """
+
+    frequency: float | np.ndarray
+    heave_amplitude: float | np.ndarray
+    pitch_amplitude: float | np.ndarray
+    phase: float | np.ndarray = np.pi / 2
+
+    def __post_init__(self) -> None:
+        _positive_array(self.frequency, "frequency")
+        _finite_array(self.heave_amplitude, "heave_amplitude")
+        _finite_array(self.pitch_amplitude, "pitch_amplitude")
+        _finite_array(self.phase, "phase")
+
+    @property
+    def period(self) -> np.ndarray | float:
+        """Period 1/f, s."""
+        return 1.0 / np.asarray(self.frequency, dtype=float)
+
+    def sample(self, times: np.ndarray) -> KinematicState:
+        """Exact state at ``times``; shape ``broadcast(params).shape + (n_times,)``."""
+        t = check_times(times)
+        f, ha, ta, ph = np.broadcast_arrays(
+            *(np.asarray(v, dtype=float) for v in
+              (self.frequency, self.heave_amplitude, self.pitch_amplitude, self.phase))
+        )
+        w = (2 * np.pi * f)[..., None]
+        ta, ha, ph = ta[..., None], ha[..., None], ph[..., None]
+        arg_p = w * t
+        arg_h = w * t + ph
+        tt = np.broadcast_to(t, arg_p.shape)
+        return KinematicState(
+            time=t if f.ndim == 0 else np.array(tt),
+            pitch_angle=ta * np.sin(arg_p),
+            pitch_rate=ta * w * np.cos(arg_p),
+            pitch_acceleration=-ta * w**2 * np.sin(arg_p),
+            heave_position=ha * np.sin(arg_h),
+            heave_velocity=ha * w * np.cos(arg_h),
+            heave_acceleration=-ha * w**2 * np.sin(arg_h),
+        )
+
+
+@dataclass(frozen=True)
+class RampHarmonicMotion:
+    """The identification motion: theta = k t sin(2 pi f t), h = h_a sin(2 pi f t + phi).
+
+    The pitch amplitude grows linearly in time at ``pitch_ramp_rate`` (the paper's theta_kamp)
+    so that one CFD run explores many pitch amplitudes.
+
+    Parameters
+    ----------
+    frequency : float or ndarray, Hz
+    heave_amplitude : float or ndarray, m
+    pitch_ramp_rate : float or ndarray, rad/s
+    phase : float or ndarray, rad
+    """
+
+    frequency: float | np.ndarray
+    heave_amplitude: float | np.ndarray
+    pitch_ramp_rate: float | np.ndarray
+    phase: float | np.ndarray = np.pi / 2
+
+    def __post_init__(self) -> None:
+        _positive_array(self.frequency, "frequency")
+        _finite_array(self.heave_amplitude, "heave_amplitude")
+        _finite_array(self.pitch_ramp_rate, "pitch_ramp_rate")
+        _finite_array(self.phase, "phase")
+
+    @property
+    def period(self) -> np.ndarray | float:
+        """Period of the carrier 1/f, s (the motion itself is not periodic)."""
+        return 1.0 / np.asarray(self.frequency, dtype=float)
+
+    def sample(self, times: np.ndarray) -> KinematicState:
+        """Exact state at ``times``; shape ``broadcast(params).shape + (n_times,)``."""
+        t = check_times(times)
+        f, ha, k, ph = np.broadcast_arrays(
+            *(np.asarray(v, dtype=float) for v in
+              (self.frequency, self.heave_amplitude, self.pitch_ramp_rate, self.phase))
+        )
+        w = (2 * np.pi * f)[..., None]
+        k, ha, ph = k[..., None], ha[..., None], ph[..., None]
+        s, c = np.sin(w * t), np.cos(w * t)
+        arg_h = w * t + ph
+        tt = np.broadcast_to(t, s.shape)
+        return KinematicState(
+            time=t if f.ndim == 0 else np.array(tt),
+            pitch_angle=k * t * s,
+            pitch_rate=k * s + k * t * w * c,
+            pitch_acceleration=2 * k * w * c - k * t * w**2 * s,
+            heave_position=ha * np.sin(arg_h),
+            heave_velocity=ha * w * np.cos(arg_h),
+            heave_acceleration=-ha * w**2 * np.sin(arg_h),
+        )
+
+
+class PeriodicSplineMotion:
+    """Periodic cubic spline through one period of pitch and heave samples.
+
+    Parameters
+    ----------
+    period : float, s
+    pitch_angle : ndarray, rad, shape (n,)
+        Samples at ``t_i = i * period / n``, i = 0..n-1 (the end point is implied).
+    heave_position : ndarray, m, shape (n,)
+    """
+
+    def __init__(self, period: float, pitch_angle: np.ndarray, heave_position: np.ndarray):
+        self.period = float(_positive_array(period, "period"))
+        th = _finite_array(pitch_angle, "pitch_angle")
+        hp = _finite_array(heave_position, "heave_position")
+        if th.ndim != 1 or th.shape != hp.shape or th.size < 4:
+            raise MotionError(
+                "pitch_angle and heave_position must be 1-D arrays of the same length >= 4, "
+                f"got shapes {th.shape} and {hp.shape}"
+            )
+        n = th.size
+        knots = np.arange(n + 1) * self.period / n
+        self._pitch = CubicSpline(knots, np.append(th, th[0]), bc_type="periodic")
+        self._heave = CubicSpline(knots, np.append(hp, hp[0]), bc_type="periodic")
+        self.sample_pitch = th
+        self.sample_heave = hp
+
+    def sample(self, times: np.ndarray) -> KinematicState:
+        """State at ``times`` (wrapped into one period), shape ``(n_times,)``."""
+        t = check_times(times)
+        tw = np.mod(t, self.period)
+        p, h = self._pitch, self._heave
+        return KinematicState(
+            time=t,
+            pitch_angle=p(tw),
+            pitch_rate=p(tw, 1),
+            pitch_acceleration=p(tw, 2),
+            heave_position=h(tw),
+            heave_velocity=h(tw, 1),
+            heave_acceleration=h(tw, 2),
+        )
+
+
+class TabulatedMotion:
+    """A user's table of pitch and heave against time, interpolated by cubic splines.
+
+    Parameters
+    ----------
+    time : ndarray, s, shape (n,)
+        Strictly increasing.
+    pitch_angle : ndarray, rad, shape (n,)
+    heave_position : ndarray, m, shape (n,)
+    """
+
+    def __init__(self, time: np.ndarray, pitch_angle: np.ndarray, heave_position: np.ndarray):
+        t = check_times(time, "table time column")
+        th = _finite_array(pitch_angle, "pitch_angle")
+        hp = _finite_array(heave_position, "heave_position")
+        if t.size < 4 or th.shape != t.shape or hp.shape != t.shape:
+            raise MotionError("a motion table needs >= 4 rows and equal-length columns")
+        self.table_time = t
+        self._pitch = CubicSpline(t, th)
+        self._heave = CubicSpline(t, hp)
+
+    def sample(self, times: np.ndarray) -> KinematicState:
+        """State at ``times`` inside the table's range."""
+        t = check_times(times)
+        if t[0] < self.table_time[0] - 1e-12 or t[-1] > self.table_time[-1] + 1e-12:
+            raise MotionError(
+                f"times [{t[0]}, {t[-1]}] s leave the table's range "
+                f"[{self.table_time[0]}, {self.table_time[-1]}] s"
+            )
+        p, h = self._pitch, self._heave
+        return KinematicState(
+            time=t, pitch_angle=p(t), pitch_rate=p(t, 1), pitch_acceleration=p(t, 2),
+            heave_position=h(t), heave_velocity=h(t, 1), heave_acceleration=h(t, 2),
+        )

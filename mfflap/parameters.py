@@ -1,0 +1,154 @@
+"""Physical parameters: fluid, plate, free stream and Morison coefficients (SI units).
+
+All are frozen dataclasses whose fields carry their unit and allowed range; constructing one
+with an impossible value raises :class:`mfflap.errors.ConfigError` naming the field.
+Defaults are the paper's set-up (Yin et al. 2026, Biomimetics 11, 393).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+from mfflap.validation import bounded, check_fields
+
+
+@dataclass(frozen=True)
+class Fluid:
+    """Incompressible fluid."""
+
+    density: float = bounded(1000.0, low=0.0, low_open=True, unit="kg/m^3", doc="rho")
+    kinematic_viscosity: float = bounded(1.0e-6, low=0.0, low_open=True, unit="m^2/s", doc="nu")
+
+    def __post_init__(self) -> None:
+        check_fields(self, prefix="fluid.")
+
+
+@dataclass(frozen=True)
+class Plate:
+    """Rigid flat plate pitching about its leading edge."""
+
+    chord: float = bounded(0.16, low=0.0, low_open=True, unit="m", doc="chord length l")
+    span: float = bounded(0.18, low=0.0, low_open=True, unit="m", doc="span s")
+    thickness: float = bounded(0.003, low=0.0, low_open=True, unit="m", doc="thickness d")
+
+    def __post_init__(self) -> None:
+        check_fields(self, prefix="plate.")
+        if self.thickness >= self.chord:
+            from mfflap.errors import ConfigError
+
+            raise ConfigError(
+                f"value {self.thickness!r} must be smaller than the chord {self.chord!r} m",
+                key="plate.thickness",
+            )
+
+
+@dataclass(frozen=True)
+class FreeStream:
+    """Uniform stream along +Y0 relative to the foil's mean position."""
+
+    velocity: float = bounded(0.3, low=0.0, unit="m/s", doc="free-stream speed U")
+
+    def __post_init__(self) -> None:
+        check_fields(self, prefix="flow.")
+
+
+@dataclass(frozen=True)
+class MorisonCoefficients:
+    """The four Morison coefficients (dimensionless). Paper's identified values by default."""
+
+    drag_normal: float = bounded(2.49, low=0.0, unit="1", doc="C_Dn")
+    drag_tangential: float = bounded(3.12, low=0.0, unit="1", doc="C_Dt")
+    added_mass_normal: float = bounded(1.02, low=0.0, unit="1", doc="C_an")
+    added_mass_tangential: float = bounded(0.87, low=0.0, unit="1", doc="C_at")
+
+    def __post_init__(self) -> None:
+        check_fields(self, prefix="coefficients.")
+
+    def as_term_values(self) -> dict[str, float]:
+        """Coefficient per Morison term name (see :mod:`mfflap.hydro.morison`)."""
+        return {
+            "normal_drag": self.drag_normal,
+            "tangential_drag": self.drag_tangential,
+            "normal_added_mass": self.added_mass_normal,
+            "tangential_added_mass": self.added_mass_tangential,
+        }
+
+    @classmethod
+    def from_term_values(cls, values: dict[str, float]) -> MorisonCoefficients:
+        """Inverse of :meth:`as_term_values` (missing terms keep the paper's values)."""
+        base = cls()
+        return replace(
+            base,
+            drag_normal=float(values.get("normal_drag", base.drag_normal)),
+            drag_tangential=float(values.get("tangential_drag", base.drag_tangential)),
+            added_mass_normal=float(values.get("normal_added_mass", base.added_mass_normal)),
+            added_mass_tangential=float(
+                values.get("tangential_added_mass", base.added_mass_tangential)
+            ),
+        )
+
+
+@dataclass(frozen=True)
+class StripSettings:
+    """How the plate is cut into strips and which volumes and areas each strip carries.
+
+    ``None`` for a volume or area selects the default of shared/design/equations.md:
+    V_n = pi (l/2)^2 s (flat-plate added mass), V_t = l s d, S_n = l s, S_t = d s;
+    each shared equally between the strips.
+    """
+
+    n_strips: int = bounded(20, low=1, high=100000, unit="1", doc="number of chordwise strips")
+    added_mass_volume_normal: float | None = None
+    added_mass_volume_tangential: float | None = None
+    drag_area_normal: float | None = None
+    drag_area_tangential: float | None = None
+
+    def __post_init__(self) -> None:
+        if isinstance(self.n_strips, bool) or not isinstance(self.n_strips, int):
+            from mfflap.errors import ConfigError
+
+            raise ConfigError(f"value {self.n_strips!r} must be a whole number >= 1",
+                              key="model.n_strips")
+        check_fields(self, prefix="model.")
+        for name in ("added_mass_volume_normal", "added_mass_volume_tangential",
+                     "drag_area_normal", "drag_area_tangential"):
+            v = getattr(self, name)
+            if v is not None and not (v >= 0.0 and v < float("inf")):
+                from mfflap.errors import ConfigError
+
+                raise ConfigError(f"value {v!r} out of range; allowed: [0, inf)",
+                                  key=f"model.{name}")
+
+
+@dataclass(frozen=True)
+class StripGeometry:
+    """Resolved per-strip geometry (all strips equal): positions, volumes, areas."""
+
+    chord: float
+    n_strips: int
+    volume_normal: float  # total V_n, m^3
+    volume_tangential: float  # total V_t, m^3
+    area_normal: float  # total S_n, m^2
+    area_tangential: float  # total S_t, m^2
+    positions: tuple[float, ...] = field(repr=False, default=())
+
+    @classmethod
+    def from_settings(cls, plate: Plate, settings: StripSettings) -> StripGeometry:
+        """Resolve the defaults of :class:`StripSettings` against a plate."""
+        import math
+
+        n = settings.n_strips
+        chord, s, d = plate.chord, plate.span, plate.thickness
+        vn = settings.added_mass_volume_normal
+        vt = settings.added_mass_volume_tangential
+        sn = settings.drag_area_normal
+        st = settings.drag_area_tangential
+        return cls(
+            chord=chord,
+            n_strips=n,
+            volume_normal=math.pi * (chord / 2) ** 2 * s if vn is None else vn,
+            volume_tangential=chord * s * d if vt is None else vt,
+            area_normal=chord * s if sn is None else sn,
+            area_tangential=d * s if st is None else st,
+            positions=tuple(chord * (2 * k - 1) / (2 * n) for k in range(1, n + 1)),
+        )

@@ -1,0 +1,181 @@
+"""Results in HDF5: a schema version, SI units on every dataset, inputs stored beside them.
+
+Layout of a results file::
+
+    /                       attrs: mfflap_schema_version, mfflap_version, created_utc, kind
+    /inputs                 attrs: config_toml (the full input configuration as TOML text)
+    /<group>/<dataset>      attrs: units, description
+
+:func:`write_group` / :func:`read_group` store flat dicts of arrays; the typed helpers below
+store the package's objects and read them back into the same objects.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import h5py
+import numpy as np
+
+from mfflap.errors import MfflapError
+from mfflap.hydro.loads import LOAD_UNITS, Loads
+from mfflap.kinematics.discrete import DiscreteMotion
+from mfflap.kinematics.state import KINEMATIC_UNITS, KinematicState
+
+SCHEMA_VERSION = 1
+
+
+class ResultsFile:
+    """An HDF5 results file opened for writing or reading.
+
+    Parameters
+    ----------
+    path
+        File path.
+    mode
+        ``"w"`` (create/overwrite), ``"a"`` (append) or ``"r"``.
+    kind
+        What the file holds (e.g. ``"evaluation"``, ``"optimisation"``), written at creation.
+    config_toml
+        Full input configuration as TOML text, stored at creation in ``/inputs``.
+    """
+
+    def __init__(self, path: str | Path, mode: str = "r", *, kind: str = "results",
+                 config_toml: str | None = None):
+        from mfflap import __version__
+
+        self.path = Path(path)
+        if mode == "r" and not self.path.exists():
+            raise MfflapError(f"{self.path}: no such results file")
+        self._h5 = h5py.File(self.path, mode)
+        if mode == "r":
+            version = self._h5.attrs.get("mfflap_schema_version")
+            if version is None:
+                raise MfflapError(f"{self.path}: not an mfflap results file (no schema version)")
+            if int(version) > SCHEMA_VERSION:
+                raise MfflapError(
+                    f"{self.path}: schema version {int(version)} is newer than this mfflap "
+                    f"reads ({SCHEMA_VERSION}); upgrade mfflap"
+                )
+        elif "mfflap_schema_version" not in self._h5.attrs:
+            self._h5.attrs["mfflap_schema_version"] = SCHEMA_VERSION
+            self._h5.attrs["mfflap_version"] = __version__
+            self._h5.attrs["created_utc"] = _dt.datetime.now(_dt.UTC).isoformat()
+            self._h5.attrs["kind"] = kind
+            grp = self._h5.require_group("inputs")
+            grp.attrs["config_toml"] = config_toml or ""
+
+    @property
+    def h5(self) -> h5py.File:
+        """The underlying h5py file."""
+        return self._h5
+
+    @property
+    def config_toml(self) -> str:
+        """The input configuration stored at creation."""
+        return str(self._h5["inputs"].attrs.get("config_toml", ""))
+
+    def close(self) -> None:
+        """Close the file."""
+        self._h5.close()
+
+    def __enter__(self) -> ResultsFile:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    # -- generic -----------------------------------------------------------------------------
+    def write_group(self, name: str, arrays: Mapping[str, Any], units: Mapping[str, str],
+                    attrs: Mapping[str, Any] | None = None) -> h5py.Group:
+        """Write a flat dict of arrays; every array must have a unit.
+
+        Raises
+        ------
+        MfflapError
+            If an array has no unit.
+        """
+        if name in self._h5:
+            del self._h5[name]
+        grp = self._h5.create_group(name)
+        for key, value in arrays.items():
+            if key not in units:
+                raise MfflapError(f"{self.path}:{name}/{key}: no unit given")
+            arr = np.asarray(value)
+            if np.iscomplexobj(arr):
+                arr = np.real(arr)
+            ds = grp.create_dataset(key, data=arr)
+            ds.attrs["units"] = units[key]
+        for k, v in (attrs or {}).items():
+            grp.attrs[k] = v
+        return grp
+
+    def read_group(self, name: str) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        """Arrays and attributes of a group written by :meth:`write_group`."""
+        if name not in self._h5:
+            raise MfflapError(f"{self.path}: no group {name!r}; has {sorted(self._h5)}")
+        grp = self._h5[name]
+        arrays = {k: grp[k][()] for k in grp if isinstance(grp[k], h5py.Dataset)}
+        return arrays, dict(grp.attrs)
+
+    def units(self, name: str) -> dict[str, str]:
+        """Units of every dataset of a group."""
+        grp = self._h5[name]
+        return {k: str(grp[k].attrs["units"]) for k in grp if isinstance(grp[k], h5py.Dataset)}
+
+    # -- typed -------------------------------------------------------------------------------
+    def write_state(self, name: str, state: KinematicState) -> None:
+        """Store a kinematic state."""
+        arrays = {k: getattr(state, k) for k in KINEMATIC_UNITS}
+        arrays["time"] = state.time
+        self.write_group(name, arrays, {**KINEMATIC_UNITS, "time": "s"})
+
+    def read_state(self, name: str) -> KinematicState:
+        """Read back a kinematic state."""
+        arrays, _ = self.read_group(name)
+        return KinematicState(**arrays)
+
+    def write_loads(self, name: str, loads: Loads) -> None:
+        """Store loads with their source."""
+        arrays = {k: getattr(loads, k) for k in LOAD_UNITS}
+        arrays["time"] = loads.time
+        self.write_group(name, arrays, {**LOAD_UNITS, "time": "s"}, {"source": loads.source})
+
+    def read_loads(self, name: str) -> Loads:
+        """Read back loads."""
+        arrays, attrs = self.read_group(name)
+        return Loads(source=str(attrs.get("source", "unknown")), **arrays)
+
+    def write_discrete_motion(self, name: str, motion: DiscreteMotion) -> None:
+        """Store the controls and the time step of a discrete motion."""
+        self.write_group(
+            name,
+            {"pitch_acceleration": motion.pitch_acceleration,
+             "heave_acceleration": motion.heave_acceleration,
+             "time_step": motion.time_step},
+            {"pitch_acceleration": "rad/s^2", "heave_acceleration": "m/s^2", "time_step": "s"},
+        )
+
+    def read_discrete_motion(self, name: str) -> DiscreteMotion:
+        """Read back a discrete motion."""
+        a, _ = self.read_group(name)
+        dt = a["time_step"]
+        return DiscreteMotion(a["pitch_acceleration"], a["heave_acceleration"],
+                              float(dt) if np.ndim(dt) == 0 else dt)
+
+    def write_summary(self, name: str, summary) -> None:
+        """Store a :class:`~mfflap.performance.CycleSummary`."""
+        from mfflap.performance import CycleSummary
+
+        self.write_group(name, {k: getattr(summary, k) for k in CycleSummary.UNITS},
+                         CycleSummary.UNITS)
+
+    def read_summary(self, name: str):
+        """Read back a :class:`~mfflap.performance.CycleSummary`."""
+        from mfflap.performance import CycleSummary
+
+        arrays, _ = self.read_group(name)
+        return CycleSummary(**{k: arrays[k] for k in CycleSummary.UNITS})

@@ -1,0 +1,192 @@
+"""Range-checked fields for frozen dataclasses, and building them from TOML mappings.
+
+A field declared with :func:`bounded` carries its unit, its allowed range and a short
+description. :func:`check_fields` validates an instance (called from ``__post_init__``) and
+:func:`from_mapping` builds an instance from a mapping, naming the file, the key, the value and
+the allowed range in every error.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping
+from typing import Any, TypeVar
+
+from mfflap.errors import ConfigError
+
+T = TypeVar("T")
+
+
+def bounded(
+    default: Any = dataclasses.MISSING,
+    *,
+    low: float | None = None,
+    high: float | None = None,
+    low_open: bool = False,
+    high_open: bool = False,
+    unit: str = "",
+    doc: str = "",
+    choices: tuple[Any, ...] | None = None,
+) -> Any:
+    """Declare a dataclass field with a unit and an allowed range.
+
+    Parameters
+    ----------
+    default
+        Default value; omit for a required field.
+    low, high
+        Bounds of the allowed range (``None``: unbounded).
+    low_open, high_open
+        Whether the bound itself is excluded.
+    unit
+        SI unit of the value, for messages and HDF5 attributes.
+    doc
+        One-line description.
+    choices
+        For string settings: the allowed values.
+    """
+    meta = {
+        "low": low,
+        "high": high,
+        "low_open": low_open,
+        "high_open": high_open,
+        "unit": unit,
+        "doc": doc,
+        "choices": choices,
+    }
+    return dataclasses.field(default=default, metadata=meta)
+
+
+def describe_range(meta: Mapping[str, Any]) -> str:
+    """Human-readable allowed range of a field, e.g. ``(0, inf) m``."""
+    if meta.get("choices"):
+        return "one of " + ", ".join(repr(c) for c in meta["choices"])
+    low, high = meta.get("low"), meta.get("high")
+    left = "(" if meta.get("low_open") or low is None else "["
+    right = ")" if meta.get("high_open") or high is None else "]"
+    lo = "-inf" if low is None else f"{low:g}"
+    hi = "inf" if high is None else f"{high:g}"
+    unit = f" {meta['unit']}" if meta.get("unit") else ""
+    return f"{left}{lo}, {hi}{right}{unit}"
+
+
+def _check_value(name: str, value: Any, meta: Mapping[str, Any], where: str | None) -> None:
+    if meta.get("choices") is not None:
+        if value not in meta["choices"]:
+            raise ConfigError(
+                f"value {value!r} is not allowed; allowed: {describe_range(meta)}",
+                source=where,
+                key=name,
+            )
+        return
+    if meta.get("low") is None and meta.get("high") is None:
+        return
+    if isinstance(value, list | tuple):
+        if not value:
+            raise ConfigError("empty list; give at least one value", source=where, key=name)
+        for i, item in enumerate(value):
+            _check_value(f"{name}[{i}]", item, meta, where)
+        return
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise ConfigError(
+            f"value {value!r} is not a number; allowed: {describe_range(meta)}",
+            source=where,
+            key=name,
+        )
+    v = float(value)
+    low, high = meta.get("low"), meta.get("high")
+    bad = not math.isfinite(v)
+    if low is not None:
+        bad |= v <= low if meta.get("low_open") else v < low
+    if high is not None:
+        bad |= v >= high if meta.get("high_open") else v > high
+    if bad:
+        raise ConfigError(
+            f"value {value!r} is out of range; allowed: {describe_range(meta)}",
+            source=where,
+            key=name,
+        )
+
+
+def check_fields(instance: Any, where: str | None = None, prefix: str = "") -> None:
+    """Validate every :func:`bounded` field of a dataclass instance.
+
+    Raises
+    ------
+    ConfigError
+        Naming the key, the value and the allowed range.
+    """
+    for f in dataclasses.fields(instance):
+        if "unit" in f.metadata:
+            _check_value(prefix + f.name, getattr(instance, f.name), f.metadata, where)
+
+
+def from_mapping(cls: type[T], mapping: Mapping[str, Any], *, source: str | None = None,
+                 prefix: str = "") -> T:
+    """Build a dataclass from a mapping, refusing unknown keys and out-of-range values.
+
+    Parameters
+    ----------
+    cls
+        The dataclass to build.
+    mapping
+        Keys are field names.
+    source
+        File the mapping came from (for messages).
+    prefix
+        Dotted key of the mapping in its file, e.g. ``"plate."``.
+    """
+    if not isinstance(mapping, Mapping):
+        raise ConfigError(
+            f"expected a table of settings, got {type(mapping).__name__}",
+            source=source,
+            key=prefix.rstrip(".") or None,
+        )
+    fields = {f.name: f for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
+    unknown = sorted(set(mapping) - set(fields))
+    if unknown:
+        raise ConfigError(
+            f"unknown key(s) {', '.join(unknown)}; allowed: {', '.join(sorted(fields))}",
+            source=source,
+            key=prefix + unknown[0],
+        )
+    for name, f in fields.items():
+        if name in mapping and "unit" in f.metadata:
+            _check_value(prefix + name, mapping[name], f.metadata, source)
+    missing = [
+        n for n, f in fields.items()
+        if n not in mapping and f.default is dataclasses.MISSING
+        and f.default_factory is dataclasses.MISSING
+    ]
+    if missing:
+        raise ConfigError(f"required key(s) missing: {', '.join(missing)}", source=source,
+                          key=prefix + missing[0])
+    values = {}
+    for k, v in mapping.items():
+        f = fields[k]
+        if f.type in ("int", int) and (isinstance(v, bool) or not isinstance(v, int)):
+            raise ConfigError(f"value {v!r} must be a whole number; allowed: "
+                              f"{describe_range(f.metadata)}", source=source, key=prefix + k)
+        if f.type in ("str", str) and not isinstance(v, str):
+            raise ConfigError(f"value {v!r} must be a string; allowed: "
+                              f"{describe_range(f.metadata)}", source=source, key=prefix + k)
+        if isinstance(v, list):
+            v = tuple(v)
+        elif f.type in ("float", float) and isinstance(v, int):
+            v = float(v)
+        values[k] = v
+    return cls(**values)
+
+
+def as_dict(instance: Any) -> dict[str, Any]:
+    """Plain-dict form of a (nested) dataclass, for TOML/HDF5 attributes."""
+    return dataclasses.asdict(instance)
+
+
+def unit_of(cls: Any, name: str) -> str:
+    """Unit declared for field ``name`` of dataclass ``cls``."""
+    for f in dataclasses.fields(cls):
+        if f.name == name:
+            return str(f.metadata.get("unit", ""))
+    raise KeyError(name)

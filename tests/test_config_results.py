@@ -1,0 +1,167 @@
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from mfflap.cli.main import cli
+from mfflap.config import CaseConfig, load_case, loads_case
+from mfflap.errors import ConfigError, MfflapError
+from mfflap.hydro import MorisonModel
+from mfflap.kinematics import harmonic_to_discrete
+from mfflap.performance import evaluate_discrete
+from mfflap.results import SCHEMA_VERSION, ResultsFile
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_paper_case_loads_with_paper_values():
+    case = load_case(ROOT / "cases" / "paper2026.toml")
+    assert case.plate.chord == 0.16 and case.plate.span == 0.18 and case.plate.thickness == 0.003
+    assert case.flow.velocity == 0.3
+    assert case.coefficients.drag_normal == 2.49 and case.coefficients.added_mass_tangential == 0.87
+    assert case.optimisation.max_power == 50.0
+    assert case.identification.frequencies == (0.1, 0.2, 0.5, 1.0, 2.0)
+    assert len(case.identification.phases_deg) == 5
+
+
+def test_case_toml_round_trip():
+    case = load_case(ROOT / "cases" / "paper2026.toml")
+    again = loads_case(case.to_toml())
+    assert again == case
+
+
+@pytest.mark.parametrize(
+    ("text", "key", "fragment"),
+    [
+        ("[plate]\nchord = -0.1\n", "plate.chord", "(0, inf) m"),
+        ("[plate]\nspan = 0\n", "plate.span", "(0, inf) m"),
+        ("[plate]\nthickness = 0.5\n", "plate.thickness", "smaller than the chord"),
+        ("[fluid]\ndensity = 0\n", "fluid.density", "(0, inf)"),
+        ("[flow]\nvelocity = -1\n", "flow.velocity", "[0, inf)"),
+        ("[model]\nn_strips = 0\n", "model.n_strips", "[1, 100000]"),
+        ("[model]\nn_strips = 2.5\n", "model.n_strips", "whole number"),
+        ("[model]\nscheme = 'rk4'\n", "model.scheme", "'paper', 'midpoint'"),
+        ("[model.coefficients]\ndrag_normal = -2\n", "model.coefficients.drag_normal", "[0, inf)"),
+        ("[model.coefficients]\nlift = 1\n", "model.coefficients.lift", "unknown key"),
+        ("[motion]\nfrequency = 0\n", "motion.frequency", "(0, 100] Hz"),
+        ("[motion]\npitch_amplitude_deg = 95\n", "motion.pitch_amplitude_deg", "[0, 90) deg"),
+        ("[motion]\nkind = 'square'\n", "motion.kind", "'harmonic'"),
+        ("[discretisation]\nn_steps = 1\n", "discretisation.n_steps", "[2, "),
+        ("[optimisation]\nbetas = [0.0, 1.5]\n", "optimisation.betas[1]", "[0, 1]"),
+        ("[optimisation]\nmax_heave = 0\n", "optimisation.max_heave", "(0, inf) m"),
+        ("[optimisation]\npenalty_power = -1\n", "optimisation.penalty_power", "[0, inf)"),
+        ("[optimisation]\nmin_period = 5\nmax_period = 1\n", "optimisation.min_period",
+         "exclude every period"),
+        ("[identification]\nfrequencies = []\n", "identification.frequencies", "empty list"),
+        ("[identification]\nfrequency_weights = [1, 2]\n", "identification.frequency_weights",
+         "one weight"),
+        ("[nonsense]\na = 1\n", "nonsense", "unknown table"),
+        ("[plate]\nchord = 'big'\n", "plate.chord", "not a number"),
+    ],
+)
+def test_every_validation_error_names_file_key_value_range(tmp_path, text, key, fragment):
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    with pytest.raises(ConfigError) as info:
+        load_case(path)
+    message = str(info.value)
+    assert str(path) in message
+    assert key in message
+    assert fragment in message
+
+
+def test_toml_syntax_error_names_file_and_line(tmp_path):
+    path = tmp_path / "broken.toml"
+    path.write_text("[plate]\nchord = 0.16\nspan = = 3\n")
+    with pytest.raises(ConfigError, match=r"broken.toml.*line 3"):
+        load_case(path)
+
+
+def test_missing_case_file(tmp_path):
+    with pytest.raises(ConfigError, match="no such file"):
+        load_case(tmp_path / "nope.toml")
+
+
+def test_hdf5_round_trip(tmp_path):
+    model = MorisonModel()
+    d = harmonic_to_discrete(np.array([0.5, 1.0]), 0.3, 0.3, np.pi / 2, 30)
+    ev = evaluate_discrete(model, d)
+    case = CaseConfig()
+    path = tmp_path / "r.h5"
+    with ResultsFile(path, "w", kind="test", config_toml=case.to_toml()) as rf:
+        rf.write_discrete_motion("motion", d)
+        rf.write_state("state", ev.state)
+        rf.write_loads("loads", ev.loads)
+        rf.write_summary("summary", ev.summary)
+    with ResultsFile(path) as rf:
+        assert rf.h5.attrs["mfflap_schema_version"] == SCHEMA_VERSION
+        assert loads_case(rf.config_toml) == case
+        d2 = rf.read_discrete_motion("motion")
+        np.testing.assert_array_equal(d2.pitch_acceleration, d.pitch_acceleration)
+        np.testing.assert_array_equal(d2.time_step, d.time_step)
+        st = rf.read_state("state")
+        np.testing.assert_array_equal(st.heave_velocity, ev.state.heave_velocity)
+        lo = rf.read_loads("loads")
+        assert lo.source == "morison"
+        np.testing.assert_array_equal(lo.moment, ev.loads.moment)
+        s2 = rf.read_summary("summary")
+        np.testing.assert_array_equal(s2.mean_thrust, ev.summary.mean_thrust)
+        units = rf.units("loads")
+        assert units["moment"] == "N*m" and units["time"] == "s"
+        for grp in ("motion", "state", "loads", "summary"):
+            for name, ds in rf.h5[grp].items():
+                assert ds.attrs["units"], f"{grp}/{name} has no unit"
+
+
+def test_results_refuse_unitless_data_and_foreign_files(tmp_path):
+    with ResultsFile(tmp_path / "a.h5", "w") as rf, pytest.raises(MfflapError, match="no unit"):
+        rf.write_group("g", {"x": [1.0]}, {})
+    import h5py
+
+    with h5py.File(tmp_path / "foreign.h5", "w") as f:
+        f["x"] = 1
+    with pytest.raises(MfflapError, match="not an mfflap results file"):
+        ResultsFile(tmp_path / "foreign.h5")
+
+
+def test_cli_evaluate_text_json_and_figure(tmp_path):
+    import json
+
+    runner = CliRunner()
+    fig = tmp_path / "c.png"
+    out = tmp_path / "c.h5"
+    res = runner.invoke(cli, ["evaluate", str(ROOT / "cases" / "paper2026.toml"), "--json",
+                              "--figure", str(fig), "--output", str(out)])
+    assert res.exit_code == 0, res.output
+    data = json.loads(res.output)
+    assert data["mean_thrust"] > 0 and data["mean_power"] > 0
+    assert fig.stat().st_size > 10_000
+    with ResultsFile(out) as rf:
+        assert "paper2026" in rf.config_toml
+    res = runner.invoke(cli, ["evaluate", str(ROOT / "cases" / "paper2026.toml"),
+                              "--figure", str(fig)])
+    assert res.exit_code == 0 and "mean_thrust" in res.output
+
+
+def test_cli_ramp_motion(tmp_path):
+    path = tmp_path / "ramp.toml"
+    path.write_text("[study]\nname='r'\n[motion]\nkind='ramp_harmonic'\nfrequency=0.5\n"
+                    "heave_amplitude=0.2\npitch_ramp_rate_deg=10\n")
+    res = CliRunner().invoke(cli, ["evaluate", str(path), "--figure", str(tmp_path / "r.png")])
+    assert res.exit_code == 0, res.output
+
+
+def test_cli_bad_case_gives_clear_error(tmp_path):
+    path = tmp_path / "bad.toml"
+    path.write_text("[plate]\nchord = -1\n")
+    res = CliRunner().invoke(cli, ["evaluate", str(path)])
+    assert res.exit_code == 2
+    assert "plate.chord" in res.output and "Traceback" not in res.output
+
+
+def test_cli_help_everywhere():
+    runner = CliRunner()
+    for args in (["--help"], ["evaluate", "--help"]):
+        res = runner.invoke(cli, args)
+        assert res.exit_code == 0 and "Usage" in res.output
