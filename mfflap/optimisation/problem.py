@@ -1,0 +1,235 @@
+"""The penalised objective J(u, dt) of shared/design/equations.md and its exact gradient.
+
+J = (1/N) sum_j L_j + J_s with
+L_j = -(1 - beta) F_thrust,j + beta P_in,j + 1/2 sigma_P max(0, P_in,j - P_max)^2
+      + 1/2 sigma_h max(0, |h_j| - h_max)^2,
+J_s = 1/2 eps_theta [sum_{j<N} (acc_{j+1} - acc_j)^2 + (acc_1 + acc_N)^2] + the same for heave.
+
+Gradient (discrete adjoint, O(N)): a backward sweep of the semi-implicit Euler steps with
+lambda_{N+1} = 0 gives dJ/dx_1 and the partial gradients at fixed x_1; the closed-form linear
+map x_1(u, dt) of the antisymmetric closure is then chained in. This is algebraically the same
+gradient as the paper's closure lambda_{N+1} = -lambda_1 and includes the dependence of x_1 on
+u and dt that equations.md warns about.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from mfflap.errors import ConfigError
+from mfflap.hydro.morison import MorisonModel
+from mfflap.kinematics.discrete import SCHEMES, DiscreteMotion, initial_state_weights
+from mfflap.performance import thrust_and_power
+
+
+@dataclass(frozen=True)
+class Gradient:
+    """dJ/d(controls) and dJ/d(time step).
+
+    pitch_acceleration : shape (..., N), units of J per rad/s^2
+    heave_acceleration : shape (..., N)
+    time_step : shape (...)
+    """
+
+    pitch_acceleration: np.ndarray
+    heave_acceleration: np.ndarray
+    time_step: np.ndarray
+
+    def flat(self) -> np.ndarray:
+        """[d/d pitch (N), d/d heave (N), d/d dt] of one motion."""
+        return np.concatenate([self.pitch_acceleration, self.heave_acceleration,
+                               np.atleast_1d(self.time_step)])
+
+
+def _positive_part(x):
+    if np.iscomplexobj(x):
+        return np.where(x.real > 0, x, 0)
+    return np.maximum(x, 0)
+
+
+def _abs(x):
+    return x * np.sign(x.real) if np.iscomplexobj(x) else np.abs(x)
+
+
+class FlappingProblem:
+    """beta-weighted thrust/power objective with power, heave and smoothness penalties.
+
+    Parameters
+    ----------
+    model
+        The Morison model.
+    beta : 1, in [0, 1]
+    max_power : W, P_max > 0
+    max_heave : m, h_max > 0
+    penalty_power : sigma_P >= 0, 1/W
+    penalty_heave : sigma_h >= 0, N/m^2 (in units of J)
+    smoothing_pitch, smoothing_heave : eps_theta, eps_h >= 0
+    scheme : ``"paper"`` or ``"midpoint"``
+    """
+
+    def __init__(self, model: MorisonModel, beta: float = 0.0, max_power: float = 50.0,
+                 max_heave: float = 0.5, penalty_power: float = 10.0,
+                 penalty_heave: float = 1.0e4, smoothing_pitch: float = 1e-6,
+                 smoothing_heave: float = 1e-4, scheme: str = "paper"):
+        checks = [
+            ("beta", beta, 0 <= beta <= 1, "[0, 1]"),
+            ("max_power", max_power, max_power > 0, "(0, inf) W"),
+            ("max_heave", max_heave, max_heave > 0, "(0, inf) m"),
+            ("penalty_power", penalty_power, penalty_power >= 0, "[0, inf)"),
+            ("penalty_heave", penalty_heave, penalty_heave >= 0, "[0, inf)"),
+            ("smoothing_pitch", smoothing_pitch, smoothing_pitch >= 0, "[0, inf)"),
+            ("smoothing_heave", smoothing_heave, smoothing_heave >= 0, "[0, inf)"),
+        ]
+        for name, value, ok, allowed in checks:
+            if not (ok and np.isfinite(value)):
+                raise ConfigError(f"value {value!r} is not allowed; allowed: {allowed}",
+                                  key=f"optimisation.{name}")
+        if scheme not in SCHEMES:
+            raise ConfigError(f"value {scheme!r}; allowed: {SCHEMES}", key="optimisation.scheme")
+        self.model = model
+        self.beta = float(beta)
+        self.max_power = float(max_power)
+        self.max_heave = float(max_heave)
+        self.penalty_power = float(penalty_power)
+        self.penalty_heave = float(penalty_heave)
+        self.smoothing_pitch = float(smoothing_pitch)
+        self.smoothing_heave = float(smoothing_heave)
+        self.scheme = scheme
+
+    # -- objective ---------------------------------------------------------------------------
+    def stage_costs(self, motion: DiscreteMotion) -> np.ndarray:
+        """L_j, shape (..., N). Complex-step safe."""
+        state = motion.states(self.scheme)  # type: ignore[arg-type]
+        thrust, power = thrust_and_power(self.model.loads(state), state)
+        excess_p = _positive_part(power - self.max_power)
+        excess_h = _positive_part(_abs(state.heave_position) - self.max_heave)
+        return (-(1 - self.beta) * thrust + self.beta * power
+                + 0.5 * self.penalty_power * excess_p**2 + 0.5 * self.penalty_heave * excess_h**2)
+
+    def smoothness(self, motion: DiscreteMotion):
+        """J_s with the wrap term (acc_1 + acc_N), shape (...)."""
+        out = 0.0
+        for eps, a in ((self.smoothing_pitch, motion.pitch_acceleration),
+                       (self.smoothing_heave, motion.heave_acceleration)):
+            d = np.diff(a, axis=-1)
+            wrap = a[..., 0] + a[..., -1]
+            out = out + 0.5 * eps * ((d**2).sum(axis=-1) + wrap**2)
+        return out
+
+    def objective(self, motion: DiscreteMotion):
+        """J = mean_j L_j + J_s, shape (...)."""
+        return self.stage_costs(motion).mean(axis=-1) + self.smoothness(motion)
+
+    # -- gradient ----------------------------------------------------------------------------
+    def _local_partials(self, motion: DiscreteMotion) -> dict[str, np.ndarray]:
+        """dL_j/dz for z in pitch angle/rate/acc, heave position/velocity/acc (hydro rates)."""
+        m = self.model
+        st = motion.states(self.scheme)  # type: ignore[arg-type]
+        g, rho, u = m.geometry, m.fluid.density, m.stream.velocity
+        c_ = m.coefficients
+        pos = np.asarray(g.positions)
+        lb, l2b = pos.mean(), (pos**2).mean()
+        ka = c_["normal_added_mass"] * rho * g.volume_normal
+        kd = 0.5 * rho * c_["normal_drag"] * g.area_normal / g.n_strips
+        kt = c_["tangential_added_mass"] * rho * g.volume_tangential
+        kdt = 0.5 * rho * c_["tangential_drag"] * g.area_tangential
+        th, td, tdd = st.pitch_angle, st.pitch_rate, st.pitch_acceleration
+        hp, hd, hdd = st.heave_position, st.heave_velocity, st.heave_acceleration
+        s, c = np.sin(th), np.cos(th)
+        an = hd * c + u * s
+        adn = hdd * c - hd * td * s + u * td * c
+        vt = hd * s - u * c
+        avt = hdd * s + hd * td * c + u * td * s
+        v = an[..., None] + td[..., None] * pos
+        av = np.abs(v)
+        q0 = (av * v).sum(-1)
+        q1 = (av * v) @ pos
+        d0 = 2 * av.sum(-1)
+        d1 = 2 * av @ pos
+        d2 = 2 * av @ pos**2
+        fn = -ka * (adn + tdd * lb) - kd * q0
+        mo = -ka * (adn * lb + tdd * l2b) - kd * q1
+        ft = -kt * avt - kdt * np.abs(vt) * vt
+        zero = np.zeros_like(th)
+        # derivatives of the intermediate quantities, per input
+        d_an = {"th": -hd * s + u * c, "td": zero, "tdd": zero, "hd": c, "hdd": zero}
+        d_adn = {"th": -hdd * s - hd * td * c - u * td * s, "td": -hd * s + u * c, "tdd": zero,
+                 "hd": -td * s, "hdd": c}
+        d_vt = {"th": an, "td": zero, "tdd": zero, "hd": s, "hdd": zero}
+        d_avt = {"th": adn, "td": an, "tdd": zero, "hd": td * c, "hdd": s}
+        thrust = fn * s - ft * c
+        power = -(fn * c + ft * s) * hd - mo * td
+        del thrust
+        dl_dp = self.beta + self.penalty_power * np.maximum(power - self.max_power, 0)
+        dl_dt = -(1 - self.beta)
+        out = {}
+        for z in ("th", "td", "tdd", "hd", "hdd"):
+            is_td = 1.0 if z == "td" else 0.0
+            is_tdd = 1.0 if z == "tdd" else 0.0
+            fn_z = -ka * (d_adn[z] + is_tdd * lb) - kd * (d0 * d_an[z] + d1 * is_td)
+            mo_z = -ka * (d_adn[z] * lb + is_tdd * l2b) - kd * (d1 * d_an[z] + d2 * is_td)
+            ft_z = -kt * d_avt[z] - kdt * 2 * np.abs(vt) * d_vt[z]
+            t_z = fn_z * s - ft_z * c
+            p_z = -(fn_z * c + ft_z * s) * hd - mo_z * td
+            if z == "th":
+                t_z = t_z + fn * c + ft * s
+                p_z = p_z - (-fn * s + ft * c) * hd
+            elif z == "hd":
+                p_z = p_z - (fn * c + ft * s)
+            elif z == "td":
+                p_z = p_z - mo
+            out[z] = dl_dt * t_z + dl_dp * p_z
+        excess_h = np.maximum(np.abs(hp) - self.max_heave, 0)
+        out["hp"] = self.penalty_heave * excess_h * np.sign(hp)
+        return out
+
+    def gradient(self, motion: DiscreteMotion) -> Gradient:
+        """Exact gradient of :meth:`objective` by the discrete adjoint, O(N)."""
+        n = motion.n_steps
+        dt = np.asarray(motion.time_step, dtype=float)
+        dtc = dt[..., None]
+        p = self._local_partials(motion)
+        tr = motion.trajectory()
+        grads = {}
+        grad_dt = np.zeros(dt.shape)
+        for dof, acc, rate_key, g_rate, g_pos, g_acc in (
+            ("pitch", motion.pitch_acceleration, "pitch_rate",
+             p["td"], p["th"], p["tdd"]),
+            ("heave", motion.heave_acceleration, "heave_velocity",
+             p["hd"], p["hp"], p["hdd"]),
+        ):
+            g_rate, g_pos, g_acc = g_rate / n, g_pos / n, g_acc / n
+            if self.scheme == "midpoint":
+                # hydro rate = rate_j + dt acc_j / 2
+                g_acc = g_acc + 0.5 * dtc * g_rate
+                grad_dt = grad_dt + 0.5 * (g_rate * acc).sum(-1)
+            # backward sweep, lambda_{N+1} = 0: lam_p_j = sum_{i>=j} g_pos_i,
+            # lam_r_j = g_rate_j + lam_r_{j+1} + dt lam_p_{j+1}
+            lam_p = np.flip(np.cumsum(np.flip(g_pos, -1), -1), -1)
+            lam_p_next = np.concatenate([lam_p[..., 1:], np.zeros_like(lam_p[..., :1])], -1)
+            lam_r = np.flip(np.cumsum(np.flip(g_rate + dtc * lam_p_next, -1), -1), -1)
+            lam_r_next = np.concatenate([lam_r[..., 1:], np.zeros_like(lam_r[..., :1])], -1)
+            rate = tr[rate_key][..., :-1]
+            g_u = g_acc + dtc * lam_r_next + dtc**2 * lam_p_next
+            grad_dt = grad_dt + (acc * lam_r_next + (rate + 2 * dtc * acc) * lam_p_next).sum(-1)
+            # chain through x_1(u, dt): rate_1 = -(dt/2) sum acc, pos_1 = dt^2 sum w_j acc_j
+            w = initial_state_weights(n)
+            g_u = g_u + lam_r[..., :1] * (-0.5 * dtc) + lam_p[..., :1] * dtc**2 * w
+            grad_dt = grad_dt + lam_r[..., 0] * (-0.5 * acc.sum(-1)) + lam_p[..., 0] * (
+                2 * dt * (acc @ w))
+            grads[dof] = g_u
+        for dof, eps, acc in (("pitch", self.smoothing_pitch, motion.pitch_acceleration),
+                              ("heave", self.smoothing_heave, motion.heave_acceleration)):
+            if eps == 0:
+                continue
+            d = np.diff(acc, axis=-1)
+            gs = np.zeros_like(acc)
+            gs[..., :-1] -= eps * d
+            gs[..., 1:] += eps * d
+            wrap = acc[..., 0] + acc[..., -1]
+            gs[..., 0] += eps * wrap
+            gs[..., -1] += eps * wrap
+            grads[dof] = grads[dof] + gs
+        return Gradient(grads["pitch"], grads["heave"], grad_dt)

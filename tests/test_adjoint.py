@@ -1,0 +1,90 @@
+import numpy as np
+import pytest
+
+from mfflap.errors import ConfigError
+from mfflap.hydro import MorisonModel
+from mfflap.kinematics import DiscreteMotion, harmonic_to_discrete
+from mfflap.metrics import cosine_similarity
+from mfflap.optimisation import FlappingProblem
+
+N = 24
+
+
+def perturbed_motion(seed=0):
+    rng = np.random.default_rng(seed)
+    d = harmonic_to_discrete(1.2, 0.45, np.deg2rad(35), 1.4, N)
+    return DiscreteMotion(d.pitch_acceleration * (1 + 0.2 * rng.normal(size=N)),
+                          d.heave_acceleration * (1 + 0.2 * rng.normal(size=N)), d.time_step)
+
+
+def as_vector(d):
+    return np.concatenate([d.pitch_acceleration, d.heave_acceleration, [d.time_step]])
+
+
+def from_vector(x):
+    return DiscreteMotion(x[:N], x[N:2 * N], x[2 * N])
+
+
+def complex_step(problem, d, h=1e-30):
+    x = as_vector(d)
+    out = np.empty_like(x)
+    for i in range(x.size):
+        xc = x.astype(complex)
+        xc[i] += 1j * h
+        out[i] = np.imag(problem.objective(from_vector(xc))) / h
+    return out
+
+
+@pytest.mark.parametrize("scheme", ["paper", "midpoint"])
+@pytest.mark.parametrize("beta", [0.0, 0.5, 1.0])
+def test_adjoint_matches_complex_step(scheme, beta):
+    d = perturbed_motion()
+    # P_max = 30 W and h_max = 0.4 m make both penalties active on this motion
+    problem = FlappingProblem(MorisonModel(), beta=beta, max_power=30.0, max_heave=0.4,
+                              smoothing_pitch=1e-5, smoothing_heave=1e-3, scheme=scheme)
+    state = d.states(scheme)
+    assert np.max(np.abs(state.heave_position)) > 0.4
+    adj = problem.gradient(d).flat()
+    cs = complex_step(problem, d)
+    assert np.max(np.abs(adj - cs)) <= 1e-10 * np.max(np.abs(cs))
+    assert abs(adj[-1] - cs[-1]) <= 1e-10 * abs(cs[-1])  # the time-step component
+
+
+def test_adjoint_matches_central_differences_away_from_kinks():
+    d = perturbed_motion(3)
+    problem = FlappingProblem(MorisonModel(), beta=0.5, max_power=1e4, max_heave=5.0)
+    adj = problem.gradient(d).flat()
+    x = as_vector(d)
+    fd = np.empty_like(x)
+    for i in range(x.size):
+        step = 1e-6 * max(1.0, abs(x[i]))
+        xp, xm = x.copy(), x.copy()
+        xp[i] += step
+        xm[i] -= step
+        fd[i] = (problem.objective(from_vector(xp)) - problem.objective(from_vector(xm))) / (
+            2 * step)
+    assert cosine_similarity(adj[:-1], fd[:-1]) > 1 - 1e-8
+    np.testing.assert_allclose(adj, fd, rtol=1e-4, atol=1e-6 * np.abs(fd).max())
+
+
+def test_batched_gradient_equals_single():
+    ds = [perturbed_motion(s) for s in range(3)]
+    batch = DiscreteMotion(np.stack([d.pitch_acceleration for d in ds]),
+                           np.stack([d.heave_acceleration for d in ds]),
+                           np.array([d.time_step for d in ds]))
+    problem = FlappingProblem(MorisonModel(), beta=0.3, max_power=30.0)
+    gb = problem.gradient(batch)
+    for i, d in enumerate(ds):
+        g = problem.gradient(d)
+        np.testing.assert_allclose(gb.pitch_acceleration[i], g.pitch_acceleration, rtol=1e-12)
+        np.testing.assert_allclose(gb.time_step[i], g.time_step, rtol=1e-12)
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [{"beta": -0.1}, {"beta": 1.5}, {"max_heave": 0.0}, {"max_power": -1.0},
+     {"penalty_power": -1.0}, {"smoothing_heave": -1e-3}, {"scheme": "rk4"}],
+)
+def test_meaningless_settings_are_refused(kwargs):
+    with pytest.raises(ConfigError):
+        FlappingProblem(MorisonModel(), **kwargs)
