@@ -1,0 +1,1 @@
+"""CFD adapters: Motion -> case files, case -> Loads (OpenFOAM; Fluent to follow)."""

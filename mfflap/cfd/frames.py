@@ -1,0 +1,43 @@
+"""The one place where the model's frame meets the CFD case's frame.
+
+Model: X0 = heave direction, Y0 = free stream (water moves at +U along Y0); chord unit vector
+e_t = (sin theta, cos theta) in (X0, Y0).
+CFD case: x = stream direction (inflow +x), y = heave direction, z out of the 2D plane; the
+plate lies along +x from the leading edge at the origin at theta = 0.
+So (x, y) = (Y0, X0), e_t = (cos theta, sin theta) in (x, y): theta is the case's rotation
+about +z (anticlockwise positive), and the heave is the case's y displacement.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def case_displacement(heave_position: np.ndarray) -> np.ndarray:
+    """Translation (dx, dy, dz) in the case frame for a heave h, shape (..., 3), m."""
+    h = np.asarray(heave_position, dtype=float)
+    z = np.zeros_like(h)
+    return np.stack([z, h, z], axis=-1)
+
+
+def case_rotation_deg(pitch_angle: np.ndarray) -> np.ndarray:
+    """Rotation (rx, ry, rz) in degrees for a pitch angle theta (rad), shape (..., 3)."""
+    th = np.degrees(np.asarray(pitch_angle, dtype=float))
+    z = np.zeros_like(th)
+    return np.stack([z, z, th], axis=-1)
+
+
+def case_force_to_model(force_x: np.ndarray, force_y: np.ndarray
+                        ) -> tuple[np.ndarray, np.ndarray]:
+    """(F_X0, F_Y0) in the model frame from the case's (F_x, F_y)."""
+    return np.asarray(force_y), np.asarray(force_x)
+
+
+def case_moment_to_model(moment_z: np.ndarray) -> np.ndarray:
+    """Moment about the leading edge in the model's sign (M = sum F_nk l_k).
+
+    The model's M is the moment of normal forces (along e_n = (cos, -sin) in (X0, Y0), i.e.
+    (-sin, cos) in (x, y), which is e_t rotated +90 deg) at arm l along e_t: r x F = l F_n e_z.
+    So the model's M equals the case's M_z about the leading edge.
+    """
+    return np.asarray(moment_z)

@@ -1,0 +1,1 @@
+"""OpenFOAM adapter: case writer, runner and force-log parser."""

@@ -1,0 +1,144 @@
+"""Parse OpenFOAM ``forces`` function-object logs and turn them into body-frame Loads.
+
+Three dialects are recognised from the header and the rows:
+
+- ``v1912``: ``force.dat``/``moment.dat``, rows ``t (tx ty tz) (px py pz) (vx vy vz)``;
+- ``com-bare``: later openfoam.com releases, the same nine columns without parentheses;
+- ``foundation``: the Foundation line's ``forces.dat``, rows ``t ((px py pz) (vx vy vz))
+  ((mpx ...) (mvx ...))`` whose first triple is pressure, not total.
+
+Several time folders (restarts) are merged, later folders winning on overlap. A last line
+cut short by a killed run is dropped; any other malformed line is an error naming the file
+and the line.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from mfflap.errors import ParseError
+
+_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|[-+]?(?:nan|inf)", re.I)
+
+
+@dataclass(frozen=True)
+class ForceHistory:
+    """Total force (and optionally moment) in the case frame, N and N*m, per unit of mesh depth
+    as OpenFOAM wrote it (i.e. for the mesh's depth)."""
+
+    time: np.ndarray
+    force: np.ndarray  # (n, 3) total force
+    moment: np.ndarray | None  # (n, 3) about CofR, or None
+    dialect: str
+
+
+def _numbers(line: str, path: str, lineno: int) -> list[float]:
+    cleaned = line.replace("(", " ").replace(")", " ")
+    toks = cleaned.split()
+    out = []
+    for tok in toks:
+        if not _NUMBER.fullmatch(tok):
+            raise ParseError(f"not a number: {tok!r}", path=path, line=lineno)
+        v = float(tok)
+        if not math.isfinite(v):
+            raise ParseError(f"non-finite value {tok!r} (a diverged run?)", path=path,
+                             line=lineno)
+        out.append(v)
+    return out
+
+
+def detect_dialect(text: str, name: str = "") -> str:
+    """``"v1912"``, ``"com-bare"`` or ``"foundation"`` from a file's text and name."""
+    for line in text.splitlines():
+        s = line.strip()
+        if not s or s.startswith("#"):
+            continue
+        if "((" in s:
+            return "foundation"
+        return "v1912" if "(" in s else "com-bare"
+    if name == "forces.dat":
+        return "foundation"
+    raise ParseError("no data rows", path=name or None)
+
+
+def parse_table(text: str, path: str = "<text>", columns: int = 9) -> tuple[np.ndarray, str]:
+    """Rows of a force or moment file as an array (n, 1 + columns) and the dialect."""
+    dialect = detect_dialect(text, Path(path).name)
+    ncol = 1 + (12 if dialect == "foundation" else columns)
+    lines = text.splitlines()
+    complete_last = text.endswith("\n")
+    rows = []
+    for i, line in enumerate(lines, start=1):
+        s = line.strip()
+        if not s or s.startswith("#"):
+            continue
+        try:
+            vals = _numbers(s, path, i)
+        except ParseError:
+            if i == len(lines) and not complete_last:
+                break  # truncated last line of a killed run
+            raise
+        if dialect != "foundation" and ("(" in s) != (dialect == "v1912"):
+            raise ParseError("row format differs from the file's first row", path=path, line=i)
+        if len(vals) != ncol:
+            if i == len(lines) and not complete_last:
+                break
+            raise ParseError(f"expected {ncol} numbers, found {len(vals)}", path=path, line=i)
+        rows.append(vals)
+    if not rows:
+        raise ParseError("no complete data rows", path=path)
+    arr = np.asarray(rows)
+    if np.any(np.diff(arr[:, 0]) <= 0):
+        i = int(np.argmax(np.diff(arr[:, 0]) <= 0))
+        raise ParseError(f"time does not increase after t = {arr[i, 0]!r}", path=path)
+    return arr, dialect
+
+
+def _merge(parts: list[np.ndarray]) -> np.ndarray:
+    """Merge restart segments in order; a later segment replaces the overlap."""
+    out = parts[0]
+    for nxt in parts[1:]:
+        out = np.concatenate([out[out[:, 0] < nxt[0, 0]], nxt])
+    return out
+
+
+def read_forces(case_dir: str | Path, function_name: str = "forces") -> ForceHistory:
+    """Read every time folder of ``postProcessing/<function_name>`` of a case."""
+    base = Path(case_dir) / "postProcessing" / function_name
+    if not base.is_dir():
+        raise ParseError("no forces output folder", path=str(base))
+    folders = sorted((p for p in base.iterdir() if p.is_dir()), key=lambda p: float(p.name))
+    if not folders:
+        raise ParseError("no time folders", path=str(base))
+    f_parts, m_parts, dialect = [], [], ""
+    for folder in folders:
+        if (folder / "force.dat").is_file():
+            arr, dialect = parse_table((folder / "force.dat").read_text(), str(folder /
+                                                                                "force.dat"))
+            f_parts.append(arr[:, :4])
+            if (folder / "moment.dat").is_file():
+                marr, _ = parse_table((folder / "moment.dat").read_text(),
+                                      str(folder / "moment.dat"))
+                m_parts.append(marr[:, :4])
+        elif (folder / "forces.dat").is_file():
+            arr, dialect = parse_table((folder / "forces.dat").read_text(),
+                                       str(folder / "forces.dat"))
+            # pressure + viscous = total; moments likewise
+            f_parts.append(np.column_stack([arr[:, 0], arr[:, 1:4] + arr[:, 4:7]]))
+            m_parts.append(np.column_stack([arr[:, 0], arr[:, 7:10] + arr[:, 10:13]]))
+        else:
+            raise ParseError("neither force.dat nor forces.dat", path=str(folder))
+    force = _merge(f_parts)
+    moment = _merge(m_parts) if len(m_parts) == len(f_parts) else None
+    if moment is not None:
+        n = min(len(force), len(moment))
+        force, moment = force[:n], moment[:n]
+        if not np.allclose(force[:, 0], moment[:, 0], rtol=0, atol=1e-9):
+            raise ParseError("force and moment files have different time bases", path=str(base))
+    return ForceHistory(force[:, 0], force[:, 1:4], None if moment is None else moment[:, 1:4],
+                        dialect)

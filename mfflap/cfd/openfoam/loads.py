@@ -1,0 +1,67 @@
+"""From a parsed OpenFOAM force history and the imposed motion to body-frame Loads."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mfflap.cfd.frames import case_force_to_model, case_moment_to_model
+from mfflap.cfd.openfoam.forces import ForceHistory
+from mfflap.errors import ParseError
+from mfflap.hydro.loads import Loads
+from mfflap.kinematics.continuous import Motion
+from mfflap.kinematics.state import KinematicState
+
+
+def smooth_ramp(t: np.ndarray, ramp_time: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """C^2 smoothstep r(t) over ``ramp_time`` and its first two derivatives."""
+    if ramp_time <= 0:
+        one = np.ones_like(t)
+        return one, 0 * one, 0 * one
+    x = np.clip(t / ramp_time, 0, 1)
+    inside = (t > 0) & (t < ramp_time)
+    r = x**3 * (10 - 15 * x + 6 * x**2)
+    dr = np.where(inside, 30 * x**2 * (1 - x) ** 2 / ramp_time, 0)
+    ddr = np.where(inside, 60 * x * (1 - x) * (1 - 2 * x) / ramp_time**2, 0)
+    return r, dr, ddr
+
+
+def imposed_state(motion: Motion, times: np.ndarray, ramp_time: float = 0.0) -> KinematicState:
+    """The kinematics the CFD case actually imposes: heave from zero, times the start-up ramp."""
+    s = motion.sample(times)
+    h0 = motion.sample(np.array([0.0])).heave_position[0]
+    r, dr, ddr = smooth_ramp(np.asarray(times, dtype=float), ramp_time)
+    h = s.heave_position - h0
+    return KinematicState(
+        time=s.time,
+        pitch_angle=r * s.pitch_angle,
+        pitch_rate=dr * s.pitch_angle + r * s.pitch_rate,
+        pitch_acceleration=ddr * s.pitch_angle + 2 * dr * s.pitch_rate + r * s.pitch_acceleration,
+        heave_position=r * h,
+        heave_velocity=dr * h + r * s.heave_velocity,
+        heave_acceleration=ddr * h + 2 * dr * s.heave_velocity + r * s.heave_acceleration,
+    )
+
+
+def to_loads(history: ForceHistory, state: KinematicState, span: float, depth: float,
+             source: str) -> Loads:
+    """Body-frame loads on the whole span from a force history on the state's time base.
+
+    The forces are scaled by span/depth; the moment is taken about the *moving* leading
+    edge: M_LE = M_CofR - r_LE x F with r_LE = (0, h, 0) in the case frame.
+    """
+    if history.moment is None:
+        raise ParseError("the force history has no moments; need moment.dat or forces.dat")
+    if len(history.time) != len(state.time) or not np.allclose(history.time, state.time):
+        raise ParseError("the state is not sampled on the force history's time base")
+    scale = span / depth
+    fx, fy = history.force[:, 0] * scale, history.force[:, 1] * scale
+    mz = history.moment[:, 2] * scale
+    y_le = state.heave_position
+    mz_le = mz + y_le * fx  # -(x_le fy - y_le fx), x_le = 0
+    f_x0, f_y0 = case_force_to_model(fx, fy)
+    th = state.pitch_angle
+    s, c = np.sin(th), np.cos(th)
+    # e_n = (cos, -sin), e_t = (sin, cos) in (X0, Y0)
+    normal = f_x0 * c - f_y0 * s
+    tangential = f_x0 * s + f_y0 * c
+    return Loads(state.time, normal, tangential, case_moment_to_model(mz_le), source=source)

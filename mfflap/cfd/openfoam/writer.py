@@ -1,0 +1,160 @@
+"""Write a runnable 2D OpenFOAM case of the plate for any motion.
+
+The templates live in ``cfd_templates/openfoam`` (jinja2 where they carry numbers); the mesh
+resolutions in ``cfd_templates/openfoam/meshes.toml``. The whole mesh moves as a rigid body
+(solidBody / tabulated6DoFMotion about the leading edge), so there is no mesh deformation.
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+from dataclasses import dataclass
+from pathlib import Path
+
+import jinja2
+import numpy as np
+
+from mfflap.cfd.frames import case_displacement, case_rotation_deg
+from mfflap.errors import ConfigError, MotionError
+from mfflap.kinematics.continuous import Motion
+from mfflap.parameters import Fluid, FreeStream, Plate
+from mfflap.toml_io import read_toml
+
+
+def template_dir() -> Path:
+    """The OpenFOAM template folder (``cfd_templates/openfoam`` beside the package)."""
+    here = Path(__file__).resolve()
+    for parent in here.parents:
+        candidate = parent / "cfd_templates" / "openfoam"
+        if candidate.is_dir():
+            return candidate
+    raise ConfigError("cannot find cfd_templates/openfoam beside the mfflap package")
+
+
+@dataclass(frozen=True)
+class MeshSpec:
+    """An O-grid resolution (see meshes.toml)."""
+
+    name: str
+    n_chord: int
+    n_edge: int
+    n_radial: int
+    radial_expansion: float
+    radius_chords: float
+
+    @property
+    def n_cells(self) -> int:
+        """Cells of the one-cell-thick mesh."""
+        return (2 * self.n_chord + 2 * self.n_edge) * self.n_radial
+
+
+def mesh_specs() -> dict[str, MeshSpec]:
+    """The named resolutions of meshes.toml."""
+    path = template_dir() / "meshes.toml"
+    data = read_toml(path)
+    return {name: MeshSpec(name=name, **values) for name, values in data.items()}
+
+
+@dataclass(frozen=True)
+class SolverSettings:
+    """PIMPLE and time-step settings of a run."""
+
+    max_courant: float = 4.0
+    n_outer_correctors: int = 2
+    n_correctors: int = 1
+    max_time_step: float = 5e-3
+    initial_time_step: float = 1e-4
+    turbulence_intensity: float = 0.01
+    write_interval: float = 1.0e9  # s: fields are written only at the end (and on restart)
+
+
+def motion_table(motion: Motion, end_time: float, rows_per_second: float = 400.0,
+                 ramp_time: float = 0.0) -> np.ndarray:
+    """Rows (t, dx, dy, dz, rx, ry, rz) of the tabulated6DoFMotion table.
+
+    Displacements start at zero (h(t) - h(0)), the table runs 10 % past ``end_time``, and an
+    optional smooth start-up ramp (C^2 smoothstep over ``ramp_time`` s) multiplies the motion.
+    """
+    if not end_time > 0:
+        raise MotionError(f"end_time must be > 0 s, got {end_time!r}")
+    t_end = 1.1 * end_time + 0.05
+    n = max(math.ceil(t_end * rows_per_second), 8)
+    t = np.linspace(0.0, t_end, n + 1)
+    s = motion.sample(t).check_finite("motion table")
+    if ramp_time > 0:
+        x = np.clip(t / ramp_time, 0, 1)
+        ramp = x**3 * (10 - 15 * x + 6 * x**2)
+    else:
+        ramp = np.ones_like(t)
+    heave = ramp * (s.heave_position - s.heave_position[0])
+    pitch = ramp * s.pitch_angle
+    return np.column_stack([t, case_displacement(heave), case_rotation_deg(pitch)])
+
+
+def format_motion_table(rows: np.ndarray) -> str:
+    """OpenFOAM text of the table: ``N ( (t ((dx dy dz) (rx ry rz))) ... )``."""
+    lines = [f"{len(rows)}", "("]
+    for r in rows:
+        lines.append(f"({r[0]:.9g} (({r[1]:.9g} {r[2]:.9g} {r[3]:.9g}) "
+                     f"({r[4]:.9g} {r[5]:.9g} {r[6]:.9g})))")
+    lines.append(")")
+    return "\n".join(lines) + "\n"
+
+
+def write_case(case_dir: str | Path, motion: Motion, end_time: float, mesh: str = "coarse",
+               plate: Plate | None = None, fluid: Fluid | None = None,
+               stream: FreeStream | None = None, solver: SolverSettings | None = None,
+               depth: float | None = None, ramp_time: float = 0.0,
+               y_plus: bool = False) -> Path:
+    """Write a complete OpenFOAM case folder for ``motion`` up to ``end_time`` seconds.
+
+    Parameters
+    ----------
+    depth : m
+        Depth of the one-cell-thick mesh; the plate's span by default, so forces are those of
+        the whole plate (:func:`mfflap.cfd.openfoam.forces.to_loads` scales otherwise).
+    """
+    plate, fluid, stream = plate or Plate(), fluid or Fluid(), stream or FreeStream()
+    solver = solver or SolverSettings()
+    specs = mesh_specs()
+    if mesh not in specs:
+        raise ConfigError(f"unknown mesh {mesh!r}; allowed: {', '.join(specs)}", key="mesh")
+    spec = specs[mesh]
+    depth = plate.span if depth is None else depth
+    case_dir = Path(case_dir)
+    case_dir.mkdir(parents=True, exist_ok=True)
+    u = stream.velocity
+    k = 1.5 * (solver.turbulence_intensity * max(u, 1e-3)) ** 2
+    length_scale = 0.07 * plate.chord
+    epsilon = 0.09**0.75 * k**1.5 / length_scale
+    radius = spec.radius_chords * plate.chord
+    context = {
+        "mesh": spec, "chord": plate.chord, "half_t": plate.thickness / 2, "depth": depth,
+        "xc": plate.chord / 2, "radius": radius, "r45": radius / math.sqrt(2),
+        "end_time": end_time, "initial_time_step": solver.initial_time_step,
+        "max_time_step": solver.max_time_step, "max_courant": solver.max_courant,
+        "write_interval": solver.write_interval, "density": fluid.density,
+        "kinematic_viscosity": fluid.kinematic_viscosity, "velocity": u, "k": k,
+        "epsilon": epsilon, "n_outer_correctors": solver.n_outer_correctors,
+        "n_correctors": solver.n_correctors, "y_plus": y_plus, "y_plus_interval": 20,
+    }
+    env = jinja2.Environment(undefined=jinja2.StrictUndefined, keep_trailing_newline=True)
+    src = template_dir()
+    for path in src.rglob("*"):
+        if path.is_dir() or path.name == "meshes.toml":
+            continue
+        rel = path.relative_to(src)
+        out = case_dir / rel.parent / rel.name.removesuffix(".j2")
+        out.parent.mkdir(parents=True, exist_ok=True)
+        if path.suffix == ".j2":
+            out.write_text(env.from_string(path.read_text()).render(**context))
+        else:
+            shutil.copyfile(path, out)
+    rows = motion_table(motion, end_time, ramp_time=ramp_time)
+    (case_dir / "constant" / "motion.dat").write_text(format_motion_table(rows))
+    (case_dir / "mfflap_case.toml").write_text(
+        f'mesh = "{mesh}"\nend_time = {end_time!r}\ndepth = {depth!r}\nspan = {plate.span!r}\n'
+        f"ramp_time = {ramp_time!r}\nn_cells = {spec.n_cells}\n"
+    )
+    return case_dir
