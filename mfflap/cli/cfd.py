@@ -1,0 +1,89 @@
+"""``mfflap cfd``: write, run and parse OpenFOAM cases."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import click
+import numpy as np
+
+
+@click.group()
+def cfd() -> None:
+    """OpenFOAM cases: write a case for a motion, run it, parse its forces."""
+
+
+@cfd.command()
+@click.argument("case_file", type=click.Path(dir_okay=False, path_type=Path))
+@click.argument("case_dir", type=click.Path(file_okay=False, path_type=Path))
+@click.option("--mesh", default="coarse", show_default=True, help="coarse | medium | fine")
+@click.option("--cycles", default=3.0, show_default=True, help="Carrier periods to simulate.")
+@click.option("--ramp-time", default=0.0, show_default=True, help="Smooth start-up ramp, s.")
+@click.option("--y-plus", is_flag=True, help="Add the yPlus function object.")
+def write(case_file: Path, case_dir: Path, mesh: str, cycles: float, ramp_time: float,
+          y_plus: bool) -> None:
+    """Write an OpenFOAM case for the [motion] of CASE_FILE into CASE_DIR."""
+    from mfflap.cfd.openfoam.writer import write_case
+    from mfflap.config import load_case
+
+    case = load_case(case_file)
+    end_time = cycles / case.motion.frequency
+    write_case(case_dir, case.motion.build(), end_time, mesh=mesh, plate=case.plate,
+               fluid=case.fluid, stream=case.flow, ramp_time=ramp_time, y_plus=y_plus)
+    click.echo(f"wrote {case_dir} (mesh {mesh}, end time {end_time:g} s)")
+
+
+@cfd.command()
+@click.argument("case_dir", type=click.Path(file_okay=False, exists=True, path_type=Path))
+@click.option("--timeout", default=3600.0, show_default=True, help="Seconds for pimpleFoam.")
+def run(case_dir: Path, timeout: float) -> None:
+    """Mesh (once), check and run CASE_DIR with pimpleFoam; restarts from the latest time."""
+    from mfflap.cfd.openfoam.runner import run_case
+
+    run_case(case_dir, timeout_s=timeout)
+    click.echo(f"finished {case_dir}")
+
+
+@cfd.command()
+@click.argument("case_dir", type=click.Path(file_okay=False, exists=True, path_type=Path))
+@click.option("--case-file", type=click.Path(dir_okay=False, path_type=Path), required=True,
+              help="The case file whose [motion] the CFD case imposes.")
+@click.option("--discard", default=0.0, show_default=True,
+              help="Seconds of start-up transient left out of the comparison.")
+@click.option("--json", "as_json", is_flag=True, help="Print results as JSON.")
+def parse(case_dir: Path, case_file: Path, discard: float, as_json: bool) -> None:
+    """Parse CASE_DIR's forces into F_n, F_t, M, thrust and power, compared with the model."""
+    from mfflap.cfd.openfoam.forces import read_forces
+    from mfflap.cfd.openfoam.loads import imposed_state, to_loads
+    from mfflap.config import load_case
+    from mfflap.metrics import nrmse, pearson
+    from mfflap.performance import thrust_and_power
+    from mfflap.toml_io import read_toml
+
+    case = load_case(case_file)
+    meta = read_toml(case_dir / "mfflap_case.toml")
+    history = read_forces(case_dir)
+    state = imposed_state(case.motion.build(), history.time, float(meta.get("ramp_time", 0)))
+    cfd_loads = to_loads(history, state, case.plate.span, float(meta["depth"]),
+                         source=f"openfoam:{case_dir}")
+    model_loads = case.morison_model().loads(state)
+    keep = history.time >= discard
+    if keep.sum() < 2:
+        raise click.UsageError(f"--discard {discard} s leaves fewer than two samples")
+    thrust, power = thrust_and_power(cfd_loads, state)
+    m_thrust, m_power = thrust_and_power(model_loads, state)
+    thrust, power, m_thrust, m_power = (a[keep] for a in (thrust, power, m_thrust, m_power))
+    out = {"case_dir": str(case_dir), "dialect": history.dialect,
+           "n_samples": len(history.time), "end_time": float(history.time[-1]),
+           "cfd_mean_thrust": float(thrust.mean()), "model_mean_thrust": float(m_thrust.mean()),
+           "cfd_mean_power": float(power.mean()), "model_mean_power": float(m_power.mean())}
+    for name in ("normal_force", "tangential_force", "moment"):
+        a, b = getattr(model_loads, name)[keep], getattr(cfd_loads, name)[keep]
+        out[f"nrmse_{name}"] = float(nrmse(a, b))
+        out[f"pearson_{name}"] = float(pearson(a, b))
+    if as_json:
+        click.echo(json.dumps(out, indent=2, default=lambda o: np.asarray(o).tolist()))
+    else:
+        for k, v in out.items():
+            click.echo(f"  {k:24s} {v}")

@@ -1,0 +1,43 @@
+import json
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from mfflap.cli.main import cli
+
+CASE = Path(__file__).resolve().parents[1] / "cases" / "paper2026.toml"
+
+
+@pytest.mark.openfoam
+def test_cfd_write_run_parse_with_real_openfoam(tmp_path):
+    runner = CliRunner()
+    case_dir = tmp_path / "of"
+    res = runner.invoke(cli, ["cfd", "write", str(CASE), str(case_dir), "--cycles", "0.05"])
+    assert res.exit_code == 0, res.output
+    res = runner.invoke(cli, ["cfd", "run", str(case_dir), "--timeout", "300"])
+    assert res.exit_code == 0, res.output
+    res = runner.invoke(cli, ["cfd", "parse", str(case_dir), "--case-file", str(CASE), "--json",
+                                 "--discard", "0.01"])
+    assert res.exit_code == 0, res.output
+    out = json.loads(res.output)
+    assert out["dialect"] == "v1912" and out["n_samples"] > 20
+    assert out["pearson_normal_force"] > 0.5
+
+
+def test_cfd_run_on_missing_folder_is_a_clear_error(tmp_path):
+    res = CliRunner().invoke(cli, ["cfd", "parse", str(tmp_path), "--case-file", str(CASE)])
+    assert res.exit_code == 2
+    assert "mfflap_case.toml" in res.output and "no such file" in res.output
+
+
+def test_gradcheck_cli(tmp_path):
+    fig = tmp_path / "g.png"
+    res = CliRunner().invoke(cli, ["gradcheck", str(CASE), "--n-steps", "12", "--json",
+                                   "--figure", str(fig)])
+    assert res.exit_code == 0, res.output
+    out = json.loads(res.output)
+    for beta in ("0.0", "0.5", "1.0"):
+        assert out[beta]["max_rel_error_complex_step"] <= 1e-10
+        assert out[beta]["cosine_similarity_controls_fd"] > 0.999
+    assert fig.stat().st_size > 10_000
