@@ -62,6 +62,36 @@ def _finite_array(value, name: str) -> np.ndarray:
     return a
 
 
+def _carrier(times, frequency, heave_amplitude, pitch_parameter, phase):
+    """Broadcast parameters against the time axis and sample the heave sinusoid.
+
+    Returns (t, w, pitch_parameter, heave dict, time array for the state), with parameters
+    shaped (..., 1) so that they broadcast against ``t``.
+    """
+    t = check_times(times)
+    f, ha, pp, ph = np.broadcast_arrays(
+        *(np.asarray(v, dtype=float) for v in (frequency, heave_amplitude, pitch_parameter,
+                                               phase))
+    )
+    w = (2 * np.pi * f)[..., None]
+    ha, pp, ph = ha[..., None], pp[..., None], ph[..., None]
+    arg_h = w * t + ph
+    heave = {
+        "heave_position": ha * np.sin(arg_h),
+        "heave_velocity": ha * w * np.cos(arg_h),
+        "heave_acceleration": -ha * w**2 * np.sin(arg_h),
+    }
+    time = t if f.ndim == 0 else np.array(np.broadcast_to(t, arg_h.shape))
+    return t, w, pp, heave, time
+
+
+def _check_carrier(frequency, heave_amplitude, pitch_parameter, phase, pitch_name) -> None:
+    _positive_array(frequency, "frequency")
+    _finite_array(heave_amplitude, "heave_amplitude")
+    _finite_array(pitch_parameter, pitch_name)
+    _finite_array(phase, "phase")
+
+
 @dataclass(frozen=True)
 class HarmonicMotion:
     """Sinusoidal heave and pitch: theta = theta_a sin(2 pi f t), h = h_a sin(2 pi f t + phi).
@@ -81,10 +111,8 @@ class HarmonicMotion:
     phase: float | np.ndarray = np.pi / 2
 
     def __post_init__(self) -> None:
-        _positive_array(self.frequency, "frequency")
-        _finite_array(self.heave_amplitude, "heave_amplitude")
-        _finite_array(self.pitch_amplitude, "pitch_amplitude")
-        _finite_array(self.phase, "phase")
+        _check_carrier(self.frequency, self.heave_amplitude, self.pitch_amplitude, self.phase,
+                       "pitch_amplitude")
 
     @property
     def period(self) -> np.ndarray | float:
@@ -93,24 +121,15 @@ class HarmonicMotion:
 
     def sample(self, times: np.ndarray) -> KinematicState:
         """Exact state at ``times``; shape ``broadcast(params).shape + (n_times,)``."""
-        t = check_times(times)
-        f, ha, ta, ph = np.broadcast_arrays(
-            *(np.asarray(v, dtype=float) for v in
-              (self.frequency, self.heave_amplitude, self.pitch_amplitude, self.phase))
-        )
-        w = (2 * np.pi * f)[..., None]
-        ta, ha, ph = ta[..., None], ha[..., None], ph[..., None]
+        t, w, ta, heave, time = _carrier(times, self.frequency, self.heave_amplitude,
+                                         self.pitch_amplitude, self.phase)
         arg_p = w * t
-        arg_h = w * t + ph
-        tt = np.broadcast_to(t, arg_p.shape)
         return KinematicState(
-            time=t if f.ndim == 0 else np.array(tt),
+            time=time,
             pitch_angle=ta * np.sin(arg_p),
             pitch_rate=ta * w * np.cos(arg_p),
             pitch_acceleration=-ta * w**2 * np.sin(arg_p),
-            heave_position=ha * np.sin(arg_h),
-            heave_velocity=ha * w * np.cos(arg_h),
-            heave_acceleration=-ha * w**2 * np.sin(arg_h),
+            **heave,
         )
 
 
@@ -135,10 +154,8 @@ class RampHarmonicMotion:
     phase: float | np.ndarray = np.pi / 2
 
     def __post_init__(self) -> None:
-        _positive_array(self.frequency, "frequency")
-        _finite_array(self.heave_amplitude, "heave_amplitude")
-        _finite_array(self.pitch_ramp_rate, "pitch_ramp_rate")
-        _finite_array(self.phase, "phase")
+        _check_carrier(self.frequency, self.heave_amplitude, self.pitch_ramp_rate, self.phase,
+                       "pitch_ramp_rate")
 
     @property
     def period(self) -> np.ndarray | float:
@@ -147,24 +164,15 @@ class RampHarmonicMotion:
 
     def sample(self, times: np.ndarray) -> KinematicState:
         """Exact state at ``times``; shape ``broadcast(params).shape + (n_times,)``."""
-        t = check_times(times)
-        f, ha, k, ph = np.broadcast_arrays(
-            *(np.asarray(v, dtype=float) for v in
-              (self.frequency, self.heave_amplitude, self.pitch_ramp_rate, self.phase))
-        )
-        w = (2 * np.pi * f)[..., None]
-        k, ha, ph = k[..., None], ha[..., None], ph[..., None]
+        t, w, k, heave, time = _carrier(times, self.frequency, self.heave_amplitude,
+                                        self.pitch_ramp_rate, self.phase)
         s, c = np.sin(w * t), np.cos(w * t)
-        arg_h = w * t + ph
-        tt = np.broadcast_to(t, s.shape)
         return KinematicState(
-            time=t if f.ndim == 0 else np.array(tt),
+            time=time,
             pitch_angle=k * t * s,
             pitch_rate=k * s + k * t * w * c,
             pitch_acceleration=2 * k * w * c - k * t * w**2 * s,
-            heave_position=ha * np.sin(arg_h),
-            heave_velocity=ha * w * np.cos(arg_h),
-            heave_acceleration=-ha * w**2 * np.sin(arg_h),
+            **heave,
         )
 
 
