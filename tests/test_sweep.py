@@ -1,0 +1,38 @@
+import numpy as np
+
+from mfflap.hydro import MorisonModel
+from mfflap.kinematics import harmonic_to_discrete
+from mfflap.performance import evaluate_discrete
+from mfflap.sweep import pareto_front, sinusoid_sweep
+
+
+def test_pareto_front_hand_example():
+    thrust = np.array([1.0, 2.0, 1.5, 3.0, 2.5, 0.5])
+    power = np.array([1.0, 2.0, 3.0, 4.0, 4.0, 0.5])
+    front = pareto_front(thrust, power)
+    assert list(front) == [5, 0, 1, 3]  # (0.5, 0.5), (1, 1), (2, 2), (3, 4)
+
+
+def test_pareto_points_are_not_dominated(rng):
+    t, p = rng.normal(size=200), rng.normal(size=200)
+    front = set(pareto_front(t, p).tolist())
+    for i in range(200):
+        dominated = np.any((t >= t[i]) & (p <= p[i]) & ((t > t[i]) | (p < p[i])))
+        assert (i in front) == (not dominated)
+
+
+def test_sweep_matches_single_evaluations_and_feasibility():
+    model = MorisonModel()
+    res = sinusoid_sweep(model, [0.5, 1.0], [0.1, 0.3], np.deg2rad([10, 30]),
+                         np.deg2rad([45, 90]), n_steps=30, max_power=50.0, chunk=5)
+    assert res.mean_thrust.size == 16
+    for i in (0, 7, 15):
+        d = harmonic_to_discrete(res.frequency[i], res.heave_amplitude[i],
+                                 res.pitch_amplitude[i], res.phase[i], 30)
+        s = evaluate_discrete(model, d).summary
+        assert np.isclose(s.mean_thrust, res.mean_thrust[i], rtol=1e-12)
+        assert res.feasible[i] == (s.max_power <= 50.0)
+    best = res.best_feasible()
+    assert res.feasible[best]
+    assert np.all(res.mean_thrust[res.feasible] <= res.mean_thrust[best])
+    assert not res.feasible.all()  # 1 Hz, 0.3 m is beyond 50 W
