@@ -1,0 +1,51 @@
+"""Gradient cost over forward cost at several N, and sinusoidal-sweep throughput.
+
+Run: python benchmarks/adjoint_and_sweep.py
+Every number is a ratio against a baseline measured in the same process.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from mfflap.hydro import MorisonModel
+from mfflap.kinematics import harmonic_to_discrete
+from mfflap.optimisation import FlappingProblem
+from mfflap.sweep import sinusoid_sweep
+
+
+def best_of(fn, repeat=5):
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return min(times)
+
+
+def main() -> None:
+    model = MorisonModel()
+    problem = FlappingProblem(model, beta=0.5, max_power=50.0)
+    print("N        forward [s]   gradient [s]   gradient/forward")
+    base = None
+    for n in (50, 500, 5000, 50000):
+        d = harmonic_to_discrete(1.0, 0.3, 0.35, np.pi / 2, n)
+        fwd = best_of(lambda d=d: problem.objective(d))
+        grad = best_of(lambda d=d: problem.gradient(d))
+        base = base or grad
+        print(f"{n:<8d} {fwd:12.3e}  {grad:12.3e}   {grad / fwd:6.2f}   "
+              f"(gradient time / N=50 gradient time: {grad / base:8.1f})")
+    values = np.linspace(0.1, 2, 20), np.linspace(0.05, 0.5, 10), np.linspace(0, 1, 10), \
+        np.linspace(0, np.pi, 10)
+    t0 = time.perf_counter()
+    res = sinusoid_sweep(model, *values, n_steps=50)
+    elapsed = time.perf_counter() - t0
+    print(f"sweep: {res.mean_thrust.size} sinusoids at N=50 in {elapsed:.2f} s = "
+          f"{res.mean_thrust.size / elapsed:,.0f} motions/s (target 1e6/s: ratio "
+          f"{res.mean_thrust.size / elapsed / 1e6:.3f})")
+
+
+if __name__ == "__main__":
+    main()
