@@ -16,6 +16,7 @@ import jinja2
 import numpy as np
 
 from mfflap.cfd.frames import case_displacement, case_rotation_deg
+from mfflap.cfd.openfoam.loads import imposed_state
 from mfflap.errors import ConfigError, MotionError
 from mfflap.kinematics.continuous import Motion
 from mfflap.parameters import Fluid, FreeStream, Plate
@@ -73,22 +74,17 @@ def motion_table(motion: Motion, end_time: float, rows_per_second: float = 400.0
                  ramp_time: float = 0.0) -> np.ndarray:
     """Rows (t, dx, dy, dz, rx, ry, rz) of the tabulated6DoFMotion table.
 
-    Displacements start at zero (h(t) - h(0)), the table runs 10 % past ``end_time``, and an
-    optional smooth start-up ramp (C^2 smoothstep over ``ramp_time`` s) multiplies the motion.
+    The kinematics are :func:`~mfflap.cfd.openfoam.loads.imposed_state` (heave from zero,
+    optional C^2 start-up ramp over ``ramp_time`` s), the same the force conversion uses; the
+    table runs 10 % past ``end_time``.
     """
     if not end_time > 0:
         raise MotionError(f"end_time must be > 0 s, got {end_time!r}")
     t_end = 1.1 * end_time + 0.05
     n = max(math.ceil(t_end * rows_per_second), 8)
     t = np.linspace(0.0, t_end, n + 1)
-    s = motion.sample(t).check_finite("motion table")
-    if ramp_time > 0:
-        x = np.clip(t / ramp_time, 0, 1)
-        ramp = x**3 * (10 - 15 * x + 6 * x**2)
-    else:
-        ramp = np.ones_like(t)
-    heave = ramp * (s.heave_position - s.heave_position[0])
-    pitch = ramp * s.pitch_angle
+    s = imposed_state(motion, t, ramp_time).check_finite("motion table")
+    heave, pitch = s.heave_position, s.pitch_angle
     return np.column_stack([t, case_displacement(heave), case_rotation_deg(pitch)])
 
 
