@@ -1,4 +1,4 @@
-"""Check the adjoint gradient against complex step and central finite differences."""
+"""Check the adjoint gradient against complex step, central differences and CasADi AD."""
 
 from __future__ import annotations
 
@@ -28,6 +28,7 @@ class GradCheck:
     finite_difference: np.ndarray
     max_rel_error_complex_step: float
     max_rel_error_finite_difference: float
+    max_rel_error_casadi: float
     cosine_similarity_controls_fd: float
     cosine_similarity_controls_cs: float
 
@@ -35,6 +36,7 @@ class GradCheck:
         """Scalars as a JSON-friendly dict."""
         return {k: float(getattr(self, k)) for k in (
             "max_rel_error_complex_step", "max_rel_error_finite_difference",
+            "max_rel_error_casadi",
             "cosine_similarity_controls_fd", "cosine_similarity_controls_cs")}
 
 
@@ -66,10 +68,14 @@ def check_gradient(problem: FlappingProblem, motion: DiscreteMotion,
         fd[i] = (problem.objective(_unpack(xp, n)) - problem.objective(_unpack(xm, n))) / (
             2 * step)
     scale = np.max(np.abs(cs))
+    from mfflap.optimisation.casadi_objective import casadi_gradient
+
+    ca_grad = casadi_gradient(problem, motion)
     return GradCheck(
         adjoint=adj, complex_step=cs, finite_difference=fd,
         max_rel_error_complex_step=float(np.max(np.abs(adj - cs)) / scale),
         max_rel_error_finite_difference=float(np.max(np.abs(adj - fd)) / scale),
+        max_rel_error_casadi=float(np.max(np.abs(adj - ca_grad)) / scale),
         cosine_similarity_controls_fd=cosine_similarity(adj[:-1], fd[:-1]),
         cosine_similarity_controls_cs=cosine_similarity(adj[:-1], cs[:-1]),
     )

@@ -39,5 +39,6 @@ def test_gradcheck_cli(tmp_path):
     out = json.loads(res.output)
     for beta in ("0.0", "0.5", "1.0"):
         assert out[beta]["max_rel_error_complex_step"] <= 1e-10
+        assert out[beta]["max_rel_error_casadi"] <= 1e-10
         assert out[beta]["cosine_similarity_controls_fd"] > 0.999
     assert fig.stat().st_size > 10_000

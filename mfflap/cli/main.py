@@ -111,7 +111,8 @@ def gradcheck(case_file: Path, n_steps: int, as_json: bool, figure: Path | None)
     for beta, c in checks.items():
         ok = "ok" if c.max_rel_error_complex_step <= 1e-10 else "FAILED"
         click.echo(f"beta={beta:g}: max|adj-cs|/max|cs| = {c.max_rel_error_complex_step:.2e} "
-                   f"({ok}); max|adj-fd|/max|cs| = {c.max_rel_error_finite_difference:.2e}; "
+                   f"({ok}); vs CasADi AD {c.max_rel_error_casadi:.2e}; "
+                   f"max|adj-fd|/max|cs| = {c.max_rel_error_finite_difference:.2e}; "
                    f"cos sim (controls) vs FD {c.cosine_similarity_controls_fd:.8f}")
     click.echo(FD_NOTE)
     click.echo(f"figure: {figure}")
