@@ -86,11 +86,12 @@ def gradcheck(case_file: Path, n_steps: int, as_json: bool, figure: Path | None)
     The point is the case's [motion] sinusoid, perturbed so that no symmetry hides an
     error, with the case's [optimisation] penalties (P_max, h_max) as they are.
     """
+    from mfflap.config import load_case
     from mfflap.gradcheck import FD_NOTE, check_gradient, scatter_figure
     from mfflap.kinematics import DiscreteMotion, to_discrete
     from mfflap.optimisation import FlappingProblem
 
-    case = load_case_cli(case_file)
+    case = load_case(case_file)
     o = case.optimisation
     base = to_discrete(case.motion.build(), 1 / case.motion.frequency, n_steps)
     rng = np.random.default_rng(0)
@@ -116,13 +117,6 @@ def gradcheck(case_file: Path, n_steps: int, as_json: bool, figure: Path | None)
                    f"cos sim (controls) vs FD {c.cosine_similarity_controls_fd:.8f}")
     click.echo(FD_NOTE)
     click.echo(f"figure: {figure}")
-
-
-def load_case_cli(path: Path):
-    """Load a case file (errors reach the user through MfflapGroup)."""
-    from mfflap.config import load_case
-
-    return load_case(path)
 
 
 _register_subgroups()

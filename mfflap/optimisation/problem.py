@@ -159,9 +159,7 @@ class FlappingProblem:
                  "hd": -td * s, "hdd": c}
         d_vt = {"th": an, "td": zero, "tdd": zero, "hd": s, "hdd": zero}
         d_avt = {"th": adn, "td": an, "tdd": zero, "hd": td * c, "hdd": s}
-        thrust = fn * s - ft * c
         power = -(fn * c + ft * s) * hd - mo * td
-        del thrust
         dl_dp = self.beta + self.penalty_power * np.maximum(power - self.max_power, 0)
         dl_dt = -(1 - self.beta)
         out = {}
