@@ -194,3 +194,14 @@ def test_divergence_signatures():
     assert _DIVERGED.search("Solving for p, Initial residual = nan, Final residual = nan")
     assert _DIVERGED.search("#1  Foam::sigFpe::sigHandler(int) at ??")
     assert _DIVERGED.search("--> FOAM FATAL ERROR:")
+
+
+def test_courant_numbers_with_exponents_are_read():
+    """Regression: values like 1.2e+02 (an exploding run) were dropped by the old filter."""
+    from mfflap.cfd.openfoam.runner import max_courant
+
+    log = ("Courant Number mean: 0.01 max: 3.9\n"
+           "Courant Number mean: 0.5 max: 1.2e+02\n"
+           "Courant Number mean: 0.02 max: 4.5e-01\n")
+    assert max_courant(log) == 120.0
+    assert max_courant("no courant lines") == 0.0

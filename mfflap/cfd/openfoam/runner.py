@@ -18,7 +18,7 @@ _DIVERGED = re.compile(
     r"FOAM FATAL)",
     re.I,
 )
-_COURANT = re.compile(r"Courant Number mean: \S+ max: (\S+)")
+_COURANT = re.compile(r"Courant Number mean: \S+ max: ([-+0-9.eE]+)\s")
 
 
 def openfoam_available() -> bool:
@@ -30,6 +30,11 @@ def _env() -> dict[str, str]:
     env = dict(os.environ)
     env.setdefault("WM_PROJECT_DIR", "/usr/share/openfoam")
     return env
+
+
+def max_courant(log_text: str) -> float:
+    """Largest maximum Courant number reported in a pimpleFoam log (0 if none)."""
+    return max((float(c) for c in _COURANT.findall(log_text)), default=0.0)
 
 
 def _tail(path: Path, n: int = 20) -> str:
@@ -62,13 +67,12 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
             raise CfdRunError(f"{application} timed out after {timeout_s} s", case=str(case_dir),
                               log_tail=_tail(log)) from exc
     text = log.read_text(errors="replace")
-    courants = [float(c) for c in _COURANT.findall(text[-200_000:])
-                if c.replace(".", "", 1).replace("e", "").replace("-", "").isdigit()]
+    courants = max_courant(text[-200_000:])
     if proc.returncode != 0 or _DIVERGED.search(text[-50_000:]):
         raise CfdRunError(f"{application} failed (exit code {proc.returncode}, diverged or "
                           "crashed)", case=str(case_dir), log_tail=_tail(log))
-    if courants and max(courants) > max_courant_abort:
-        raise CfdRunError(f"Courant number exploded to {max(courants):g}", case=str(case_dir),
+    if courants > max_courant_abort:
+        raise CfdRunError(f"Courant number exploded to {courants:g}", case=str(case_dir),
                           log_tail=_tail(log))
     return log
 
