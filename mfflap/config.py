@@ -143,6 +143,10 @@ class IdentificationGrid:
     pitch_ramp_rate_deg: float = bounded(10.0, low=0.0, high=1000.0, unit="deg/s",
                                          doc="theta_kamp")
     n_cycles: float = bounded(3.0, low=0.5, high=1000.0, unit="1", doc="cycles simulated")
+    max_duration: float = bounded(6.0, low=0.1, high=1.0e5, unit="s",
+                                  doc="cap on simulated time per case (keeps theta_kamp t bounded)")
+    discard_time: float = bounded(0.75, low=0.0, high=1.0e5, unit="s",
+                                  doc="start-up transient left out of the fit")
     frequency_weights: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:

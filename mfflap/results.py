@@ -107,7 +107,9 @@ class ResultsFile:
             arr = np.asarray(value)
             if np.iscomplexobj(arr):
                 arr = np.real(arr)
-            ds = grp.create_dataset(key, data=arr)
+            big = arr.size >= 256 and arr.dtype.kind in "fiu"
+            ds = grp.create_dataset(key, data=arr, compression="gzip" if big else None,
+                                    shuffle=big)
             ds.attrs["units"] = units[key]
         for k, v in (attrs or {}).items():
             grp.attrs[k] = v

@@ -31,9 +31,11 @@ def cli() -> None:
 
 
 def _register_subgroups() -> None:
+    from mfflap.cli.campaign import campaign
     from mfflap.cli.cfd import cfd
 
     cli.add_command(cfd)
+    cli.add_command(campaign)
 
 
 def _echo_json(data) -> None:

@@ -1,0 +1,88 @@
+"""One CFD case of a campaign and the grid of them (the paper's Table 1 by default)."""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import asdict, dataclass
+
+from mfflap.config import IdentificationGrid
+from mfflap.errors import ConfigError
+from mfflap.kinematics.continuous import RampHarmonicMotion
+
+
+@dataclass(frozen=True)
+class CfdCase:
+    """An identification motion, theta = k t sin(2 pi f t), h = h_a sin(2 pi f t + phi).
+
+    Attributes
+    ----------
+    frequency : Hz
+    heave_amplitude : m
+    phase_deg : deg
+    pitch_ramp_rate_deg : deg/s (theta_kamp)
+    duration : s, simulated time
+    ramp_time : s, C^2 start-up ramp of the imposed motion (removes the start-up spike)
+    """
+
+    frequency: float
+    heave_amplitude: float
+    phase_deg: float
+    pitch_ramp_rate_deg: float
+    duration: float
+    ramp_time: float
+
+    @property
+    def case_id(self) -> str:
+        """Stable, file-name and TOML-key safe identifier, e.g. ``f1p000_h0p300_phi090p0``."""
+        text = f"f{self.frequency:.3f}_h{self.heave_amplitude:.3f}_phi{self.phase_deg:05.1f}"
+        return text.replace(".", "p").replace("-", "m")
+
+    def motion(self) -> RampHarmonicMotion:
+        """The continuous motion the case imposes (before the start-up ramp)."""
+        return RampHarmonicMotion(self.frequency, self.heave_amplitude,
+                                  math.radians(self.pitch_ramp_rate_deg),
+                                  math.radians(self.phase_deg))
+
+    def as_dict(self) -> dict[str, float]:
+        """Plain values (for TOML and HDF5 attributes)."""
+        return asdict(self)
+
+
+def case_for(grid: IdentificationGrid, frequency: float, heave_amplitude: float,
+             phase_deg: float) -> CfdCase:
+    """The case of ``grid`` at one (f, h_amp, phi): n_cycles periods capped at max_duration."""
+    duration = min(grid.n_cycles / frequency, grid.max_duration)
+    ramp_time = min(0.25 / frequency, 0.5)
+    return CfdCase(float(frequency), float(heave_amplitude), float(phase_deg),
+                   float(grid.pitch_ramp_rate_deg), float(duration), float(ramp_time))
+
+
+def _pick(values: Sequence[float], subset: Iterable[float] | None, name: str) -> list[float]:
+    if subset is None:
+        return list(values)
+    chosen = []
+    for v in subset:
+        match = [x for x in values if math.isclose(x, v, rel_tol=1e-9, abs_tol=1e-12)]
+        if not match:
+            raise ConfigError(f"{v!r} is not on the grid ({list(values)})", key=name)
+        chosen.append(match[0])
+    return chosen
+
+
+def grid_cases(grid: IdentificationGrid, frequencies: Iterable[float] | None = None,
+               heave_amplitudes: Iterable[float] | None = None,
+               phases_deg: Iterable[float] | None = None) -> list[CfdCase]:
+    """All cases of the grid, or of a sub-grid; ordered so that every frequency comes early.
+
+    The order interleaves frequencies (f varies fastest), so a campaign stopped part-way
+    still covers the whole frequency range.
+    """
+    fs = _pick(grid.frequencies, frequencies, "identification.frequencies")
+    hs = _pick(grid.heave_amplitudes, heave_amplitudes, "identification.heave_amplitudes")
+    ps = _pick(grid.phases_deg, phases_deg, "identification.phases_deg")
+    # middle values first: a partial campaign then spans the grid instead of one corner
+    hs = sorted(hs, key=lambda v: abs(v - sorted(hs)[len(hs) // 2]))
+    ps = sorted(ps, key=lambda v: abs(v - 90.0))
+    return [case_for(grid, f, h, p) for p, h, f in itertools.product(ps, hs, fs)]

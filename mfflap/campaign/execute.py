@@ -1,0 +1,202 @@
+"""Run a campaign of CFD cases on dask.distributed, resumably.
+
+State lives in the output folder only:
+
+- ``campaign.toml``: the setup and the list of cases (written once; a rerun must match);
+- ``<case_id>.h5``: a finished case (written atomically; never rerun);
+- ``<case_id>.failed.toml``: why a case failed (retried only on request);
+- ``cases/<case_id>/``: the OpenFOAM case while it runs (resumed from its last written time).
+
+A campaign killed at any moment therefore loses at most the unwritten part of the runs in
+flight and corrupts nothing; rerunning the same command continues it.
+"""
+
+from __future__ import annotations
+
+import shutil
+import traceback
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+from mfflap.campaign.cases import CfdCase
+from mfflap.campaign.records import RECORD_SUFFIX, write_record
+from mfflap.cfd.openfoam.writer import SolverSettings
+from mfflap.errors import ConfigError, MfflapError
+from mfflap.parameters import Fluid, FreeStream, Plate
+from mfflap.toml_io import dumps, read_toml
+
+
+@dataclass(frozen=True)
+class CampaignSetup:
+    """Everything that is the same for every case of a campaign."""
+
+    mesh: str = "coarse"
+    solver: SolverSettings = field(default_factory=SolverSettings)
+    plate: Plate = field(default_factory=Plate)
+    fluid: Fluid = field(default_factory=Fluid)
+    stream: FreeStream = field(default_factory=FreeStream)
+    timeout_s: float = 6 * 3600.0
+    keep_case_dirs: bool = False
+
+    def as_dict(self) -> dict[str, Any]:
+        """Plain nested values for campaign.toml."""
+        return {"mesh": self.mesh, "timeout_s": self.timeout_s,
+                "solver": asdict(self.solver), "plate": asdict(self.plate),
+                "fluid": asdict(self.fluid), "stream": asdict(self.stream)}
+
+
+@dataclass
+class CaseStatus:
+    """Where one case stands."""
+
+    case_id: str
+    state: str  # "done" | "failed" | "pending"
+    message: str = ""
+
+
+def _failed_path(out: Path, case_id: str) -> Path:
+    return out / f"{case_id}.failed.toml"
+
+
+def run_one(case: CfdCase, out_dir: str, setup: CampaignSetup) -> CaseStatus:
+    """Run one case on a worker: resume or start its OpenFOAM run, write its record.
+
+    Never raises for a CFD failure: the failure is written beside the records and returned.
+    """
+    from mfflap.campaign.openfoam_run import run_motion
+
+    out = Path(out_dir)
+    record_path = out / f"{case.case_id}{RECORD_SUFFIX}"
+    if record_path.exists():
+        return CaseStatus(case.case_id, "done", "already finished")
+    case_dir = out / "cases" / case.case_id
+    solver = SolverSettings(**{**asdict(setup.solver), "write_interval": case.duration / 4})
+    try:
+        record = run_motion(case_dir, case.motion(), case.case_id,
+                            {"kind": "ramp_harmonic", **case.as_dict()}, case.duration,
+                            mesh=setup.mesh, ramp_time=case.ramp_time, solver=solver,
+                            plate=setup.plate, fluid=setup.fluid, stream=setup.stream,
+                            timeout_s=setup.timeout_s)
+        write_record(record_path, record)
+    except Exception as exc:  # a failed case must not stop the campaign
+        tail = getattr(exc, "log_tail", "") or traceback.format_exc(limit=3)
+        _failed_path(out, case.case_id).write_text(
+            dumps({"case_id": case.case_id, "error": str(exc), "log_tail": tail[-4000:]}))
+        return CaseStatus(case.case_id, "failed", str(exc).splitlines()[0])
+    _failed_path(out, case.case_id).unlink(missing_ok=True)
+    if not setup.keep_case_dirs:
+        shutil.rmtree(case_dir, ignore_errors=True)
+    cpu = record.provenance.get("cpu_time_s", 0.0)
+    return CaseStatus(case.case_id, "done", f"{cpu:.0f} s CPU")
+
+
+def _write_manifest(out: Path, cases: Sequence[CfdCase], setup: CampaignSetup) -> None:
+    manifest = out / "campaign.toml"
+    wanted = {"setup": setup.as_dict(), "cases": {c.case_id: c.as_dict() for c in cases}}
+    if manifest.exists():
+        old = read_toml(manifest)
+        if old.get("setup") != read_toml_text(dumps({"setup": wanted["setup"]}))["setup"]:
+            raise ConfigError(f"{manifest}: this folder holds a campaign with another setup; "
+                              "use a new output folder", key="setup")
+        merged = {**old.get("cases", {}), **wanted["cases"]}
+        wanted["cases"] = merged
+    tmp = manifest.with_suffix(".toml.tmp")
+    tmp.write_text(dumps(wanted))
+    tmp.replace(manifest)
+
+
+def read_toml_text(text: str) -> dict[str, Any]:
+    """Parse TOML text (round-trip helper for comparing manifests)."""
+    import tomllib
+
+    return tomllib.loads(text)
+
+
+def campaign_status(out_dir: str | Path) -> list[CaseStatus]:
+    """Status of every case listed in ``out_dir/campaign.toml``."""
+    out = Path(out_dir)
+    manifest = out / "campaign.toml"
+    if not manifest.exists():
+        raise MfflapError(f"{out}: no campaign.toml (not a campaign folder)")
+    statuses = []
+    for case_id in read_toml(manifest).get("cases", {}):
+        if (out / f"{case_id}{RECORD_SUFFIX}").exists():
+            statuses.append(CaseStatus(case_id, "done"))
+        elif _failed_path(out, case_id).exists():
+            info = read_toml(_failed_path(out, case_id))
+            statuses.append(CaseStatus(case_id, "failed", str(info.get("error", ""))))
+        else:
+            statuses.append(CaseStatus(case_id, "pending"))
+    return statuses
+
+
+def run_campaign(cases: Sequence[CfdCase], out_dir: str | Path,
+                 setup: CampaignSetup | None = None, *, n_workers: int = 1,
+                 scheduler_address: str | None = None, retry_failed: bool = False,
+                 progress: bool = True,
+                 on_result: Callable[[CaseStatus], None] | None = None) -> list[CaseStatus]:
+    """Run the cases that are not finished yet on a dask cluster; return every case's status.
+
+    Parameters
+    ----------
+    n_workers
+        Worker processes of the LocalCluster (one OpenFOAM run each; two serial runs give
+        more throughput than one run on two ranks here).
+    scheduler_address
+        Address of an existing dask scheduler (e.g. one started by dask-jobqueue's
+        SLURMCluster); a LocalCluster is started when None.
+    retry_failed
+        Rerun cases that failed before (otherwise they stay failed and are reported).
+    on_result
+        Called with each case's status as it finishes (e.g. to commit results).
+    """
+    from dask.distributed import Client, LocalCluster, as_completed
+
+    setup = setup or CampaignSetup()
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    ids = [c.case_id for c in cases]
+    if len(set(ids)) != len(ids):
+        raise ConfigError("the campaign lists a case twice", key="cases")
+    _write_manifest(out, cases, setup)
+    results: dict[str, CaseStatus] = {}
+    todo = []
+    for c in cases:
+        if (out / f"{c.case_id}{RECORD_SUFFIX}").exists():
+            results[c.case_id] = CaseStatus(c.case_id, "done", "already finished")
+        elif _failed_path(out, c.case_id).exists() and not retry_failed:
+            info = read_toml(_failed_path(out, c.case_id))
+            results[c.case_id] = CaseStatus(c.case_id, "failed", str(info.get("error", "")))
+        else:
+            todo.append(c)
+    if todo:
+        cluster = None
+        if scheduler_address is None:
+            cluster = LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
+                                   dashboard_address=None)
+        client = Client(scheduler_address or cluster)
+        try:
+            futures = [client.submit(run_one, c, str(out), setup, key=f"mfflap-{c.case_id}",
+                                     pure=False) for c in todo]
+            bar = None
+            if progress:
+                from tqdm import tqdm
+
+                bar = tqdm(total=len(todo), desc="CFD cases", unit="case")
+            for fut in as_completed(futures):
+                status: CaseStatus = fut.result()
+                results[status.case_id] = status
+                if bar is not None:
+                    bar.set_postfix_str(f"{status.case_id}: {status.state} {status.message}"[:60])
+                    bar.update()
+                if on_result is not None:
+                    on_result(status)
+            if bar is not None:
+                bar.close()
+        finally:
+            client.close()
+            if cluster is not None:
+                cluster.close()
+    return [results[c.case_id] for c in cases]

@@ -1,0 +1,97 @@
+"""Run one motion in OpenFOAM and turn the finished case into a :class:`CfdRecord`."""
+
+from __future__ import annotations
+
+import re
+import shutil
+import time
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any
+
+from mfflap.campaign.records import CfdRecord
+from mfflap.cfd.openfoam.forces import read_forces
+from mfflap.cfd.openfoam.loads import imposed_state, to_loads
+from mfflap.cfd.openfoam.runner import run_case
+from mfflap.cfd.openfoam.writer import SolverSettings, write_case
+from mfflap.errors import CfdRunError
+from mfflap.kinematics.continuous import Motion
+from mfflap.parameters import Fluid, FreeStream, Plate
+from mfflap.toml_io import read_toml
+
+_BUILD = re.compile(r"^Build\s*:\s*(.+)$", re.M)
+_EXEC = re.compile(r"ExecutionTime = ([0-9.eE+-]+) s\s+ClockTime = ([0-9.eE+-]+) s")
+
+
+def solver_provenance(case_dir: str | Path) -> dict[str, Any]:
+    """OpenFOAM build, CPU and clock time, time steps, from the case's pimpleFoam log.
+
+    A restarted run appends to the same log; CPU times of the segments are summed.
+    """
+    log = Path(case_dir) / "log.pimpleFoam"
+    text = log.read_text(errors="replace") if log.exists() else ""
+    build = _BUILD.search(text)
+    cpu = clock = 0.0
+    for segment in text.split("Create time")[1:]:
+        times = _EXEC.findall(segment)
+        if times:
+            cpu += float(times[-1][0])
+            clock += float(times[-1][1])
+    return {
+        "solver": "OpenFOAM pimpleFoam",
+        "openfoam_build": build.group(1).strip() if build else "unknown",
+        "cpu_time_s": cpu,
+        "clock_time_s": clock,
+        "n_time_steps": text.count("\nCourant Number mean"),
+    }
+
+
+def record_from_case(case_dir: str | Path, motion: Motion, name: str,
+                     parameters: dict[str, Any], plate: Plate | None = None) -> CfdRecord:
+    """Parse a finished OpenFOAM case written by mfflap into a record."""
+    case_dir = Path(case_dir)
+    meta = read_toml(case_dir / "mfflap_case.toml")
+    history = read_forces(case_dir)
+    state = imposed_state(motion, history.time, float(meta["ramp_time"]))
+    loads = to_loads(history, state, float(meta["span"]), float(meta["depth"]),
+                     source=f"openfoam:{name}")
+    prov = {**solver_provenance(case_dir), "mesh": meta["mesh"], "n_cells": meta["n_cells"],
+            "force_dialect": history.dialect, "depth_m": meta["depth"], "span_m": meta["span"]}
+    for key, value in meta.items():
+        if key.startswith("solver_"):
+            prov[key] = value
+    if plate is not None:
+        prov["chord_m"] = plate.chord
+    return CfdRecord(name, state, loads, parameters, prov, history.force, history.moment)
+
+
+def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict[str, Any],
+               end_time: float, *, mesh: str = "coarse", ramp_time: float = 0.0,
+               solver: SolverSettings | None = None, plate: Plate | None = None,
+               fluid: Fluid | None = None, stream: FreeStream | None = None,
+               timeout_s: float = 6 * 3600.0) -> CfdRecord:
+    """Write (unless already written), run or resume, and parse one OpenFOAM case.
+
+    Fields are written four times per run so that a killed run resumes from its last
+    written time instead of from zero.
+    """
+    case_dir = Path(case_dir)
+    solver = solver or SolverSettings(write_interval=end_time / 4)
+    if not (case_dir / "mfflap_case.toml").exists():
+        tmp = case_dir.with_name(case_dir.name + ".writing")
+        shutil.rmtree(tmp, ignore_errors=True)
+        write_case(tmp, motion, end_time, mesh=mesh, plate=plate, fluid=fluid, stream=stream,
+                   solver=solver, ramp_time=ramp_time)
+        with open(tmp / "mfflap_case.toml", "a") as fh:
+            for key, value in asdict(solver).items():
+                fh.write(f"solver_{key} = {value!r}\n")
+        shutil.rmtree(case_dir, ignore_errors=True)
+        tmp.rename(case_dir)
+    started = time.perf_counter()
+    run_case(case_dir, timeout_s=timeout_s)
+    record = record_from_case(case_dir, motion, name, parameters, plate)
+    if record.time[-1] < 0.98 * end_time:
+        raise CfdRunError(f"the run stopped at t = {record.time[-1]:.4g} s before endTime "
+                          f"{end_time:.4g} s", case=str(case_dir))
+    record.provenance["wall_time_this_session_s"] = time.perf_counter() - started
+    return record

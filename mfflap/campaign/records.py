@@ -1,0 +1,208 @@
+"""CFD records: one HDF5 file per finished CFD run (kinematics, loads, raw forces, provenance).
+
+A record is self-contained: the imposed kinematics and the forces on the same time base,
+so identification, back-tests and gap diagnosis need nothing else. Records are written to a
+temporary name and renamed into place, so a run killed at any moment leaves either a whole
+record or none.
+
+Layout::
+
+    /                 attrs: kind = "cfd_record", schema version, mfflap version
+    /inputs           attrs: config_toml (the case parameters as TOML)
+    /kinematics       imposed KinematicState (SI units)
+    /loads            body-frame F_n, F_t, M about the moving leading edge, whole span
+    /raw              case-frame total force and moment about CofR, per mesh depth
+    /parameters       attrs: the motion's parameters (e.g. frequency, heave_amplitude, ...)
+    /provenance       attrs: solver, version, mesh, cells, solver settings, CPU time, ...
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from mfflap.errors import MfflapError
+from mfflap.hydro.loads import Loads
+from mfflap.kinematics.state import KinematicState
+from mfflap.results import ResultsFile
+from mfflap.toml_io import dumps
+
+RECORD_SUFFIX = ".h5"
+_STATE_KEYS = ("pitch_angle", "pitch_rate", "pitch_acceleration", "heave_position",
+               "heave_velocity", "heave_acceleration")
+
+
+@dataclass
+class CfdRecord:
+    """The result of one CFD run.
+
+    Attributes
+    ----------
+    name : str
+        Case identifier (file stem).
+    state : KinematicState
+        Imposed kinematics on the force time base.
+    loads : Loads
+        CFD loads (body frame, whole span, moment about the leading edge).
+    parameters : dict
+        Parameters of the motion (``kind`` plus e.g. ``frequency`` Hz, ``heave_amplitude`` m,
+        ``phase_deg``, ``pitch_ramp_rate_deg``, ``duration`` s, ``ramp_time`` s).
+    provenance : dict
+        Solver, version, mesh, number of cells, solver settings, CPU time s, ...
+    raw_force, raw_moment : ndarray (n, 3) or None
+        Case-frame total force N and moment N*m about CofR per mesh depth, as written.
+    """
+
+    name: str
+    state: KinematicState
+    loads: Loads
+    parameters: dict[str, Any]
+    provenance: dict[str, Any] = field(default_factory=dict)
+    raw_force: np.ndarray | None = None
+    raw_moment: np.ndarray | None = None
+
+    @property
+    def time(self) -> np.ndarray:
+        """Sample times, s."""
+        return self.loads.time
+
+    def window(self, start_time: float) -> CfdRecord:
+        """The record from ``start_time`` s on (drops a start-up transient)."""
+        keep = self.time >= start_time
+        if keep.sum() < 4:
+            raise MfflapError(f"record {self.name}: fewer than 4 samples after t = "
+                              f"{start_time} s (it ends at {self.time[-1]:.4g} s)")
+        s = self.state
+        state = KinematicState(**{k: getattr(s, k)[..., keep] for k in ("time", *_STATE_KEYS)})
+        ld = self.loads
+        loads = Loads(ld.time[keep], ld.normal_force[keep], ld.tangential_force[keep],
+                      ld.moment[keep], source=ld.source)
+        return CfdRecord(self.name, state, loads, dict(self.parameters), dict(self.provenance),
+                         None if self.raw_force is None else self.raw_force[keep],
+                         None if self.raw_moment is None else self.raw_moment[keep])
+
+
+def _clean_attrs(mapping: Mapping[str, Any]) -> dict[str, Any]:
+    out = {}
+    for k, v in mapping.items():
+        if v is None:
+            continue
+        out[k] = v if isinstance(v, (int, float, str, bool, np.number)) else str(v)
+    return out
+
+
+def _single(record: CfdRecord) -> CfdRecord:
+    """The record with every array but time in float32 (compact fixtures)."""
+    def f32(a):
+        return None if a is None else np.asarray(a, dtype=np.float32)
+
+    s, ld = record.state, record.loads
+    state = KinematicState(time=s.time, **{k: f32(getattr(s, k)) for k in _STATE_KEYS})
+    loads = Loads(ld.time, f32(ld.normal_force), f32(ld.tangential_force), f32(ld.moment),
+                  source=ld.source)
+    return CfdRecord(record.name, state, loads, record.parameters, record.provenance,
+                     f32(record.raw_force), f32(record.raw_moment))
+
+
+def write_record(path: str | Path, record: CfdRecord, single_precision: bool = False) -> Path:
+    """Write ``record`` atomically (temporary file, then rename); return the path.
+
+    ``single_precision`` stores everything but time as float32 (about half the size; the
+    forces' own noise is far above float32 resolution), for the fixtures that ship.
+    """
+    path = Path(path)
+    if single_precision:
+        record = _single(record)
+        record.provenance = {**record.provenance, "storage": "float32"}
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    toml = dumps({"parameters": _clean_attrs(record.parameters)})
+    try:
+        with ResultsFile(tmp, "w", kind="cfd_record", config_toml=toml) as rf:
+            rf.write_state("kinematics", record.state)
+            rf.write_loads("loads", record.loads)
+            if record.raw_force is not None:
+                raw = {"force": record.raw_force}
+                units = {"force": "N"}
+                if record.raw_moment is not None:
+                    raw["moment"] = record.raw_moment
+                    units["moment"] = "N*m"
+                rf.write_group("raw", raw, units,
+                               {"frame": "case (x stream, y heave)", "per": "mesh depth"})
+            rf.h5.create_group("parameters").attrs.update(_clean_attrs(record.parameters))
+            rf.h5.create_group("provenance").attrs.update(_clean_attrs(record.provenance))
+            rf.h5.attrs["name"] = record.name
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+    return path
+
+
+def _attr(v: Any) -> Any:
+    if isinstance(v, bytes):
+        return v.decode()
+    if isinstance(v, np.generic):
+        return v.item()
+    return v
+
+
+def read_record(path: str | Path) -> CfdRecord:
+    """Read a record written by :func:`write_record`.
+
+    Raises
+    ------
+    MfflapError
+        If the file is not a CFD record, or its loads are not finite or not on the
+        kinematics' time base (the message names the file).
+    """
+    path = Path(path)
+    with ResultsFile(path, "r") as rf:
+        kind = rf.h5.attrs.get("kind")
+        if kind != "cfd_record":
+            raise MfflapError(f"{path}: not a CFD record (kind {kind!r})")
+        state = rf.read_state("kinematics")
+        state = KinematicState(**{k: np.asarray(getattr(state, k), dtype=float)
+                                  for k in ("time", *_STATE_KEYS)})
+        loads = rf.read_loads("loads")
+        loads = Loads(loads.time, *(np.asarray(getattr(loads, k), dtype=float) for k in
+                                    ("normal_force", "tangential_force", "moment")),
+                      source=loads.source)
+        raw_force = raw_moment = None
+        if "raw" in rf.h5:
+            raw_force = rf.h5["raw/force"][()]
+            raw_moment = rf.h5["raw/moment"][()] if "moment" in rf.h5["raw"] else None
+        params = {k: _attr(v) for k, v in rf.h5["parameters"].attrs.items()}
+        prov = {k: _attr(v) for k, v in rf.h5["provenance"].attrs.items()}
+        name = str(_attr(rf.h5.attrs.get("name", path.stem)))
+    t = loads.time
+    if t.shape != state.time.shape or not np.allclose(t, state.time):
+        raise MfflapError(f"{path}: loads and kinematics are on different time bases")
+    if np.any(np.diff(t) <= 0):
+        i = int(np.argmin(np.diff(t)))
+        raise MfflapError(f"{path}: time is not increasing at sample {i + 1} (t = {t[i + 1]})")
+    for key in ("normal_force", "tangential_force", "moment"):
+        bad = ~np.isfinite(getattr(loads, key))
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise MfflapError(f"{path}: loads/{key} is not finite at sample {i} (t = {t[i]})")
+    return CfdRecord(name, state, loads, params, prov, raw_force, raw_moment)
+
+
+def read_records(folder: str | Path) -> list[CfdRecord]:
+    """Every record in ``folder`` (sorted by name); an unreadable one raises naming its file."""
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise MfflapError(f"{folder}: no such fixture folder")
+    return [read_record(p) for p in sorted(folder.glob(f"*{RECORD_SUFFIX}"))
+            if not p.name.startswith(".")]
+
+
+def fixture_dir(name: str = "table1_coarse") -> Path:
+    """A fixture folder shipped with the package (``mfflap/data/fixtures/<name>``)."""
+    return Path(__file__).resolve().parent.parent / "data" / "fixtures" / name

@@ -1,0 +1,86 @@
+"""``mfflap campaign``: run a grid of CFD cases on dask, resumably, and show where it stands."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import click
+
+
+def _floats(text: str | None) -> list[float] | None:
+    if text is None:
+        return None
+    try:
+        return [float(v) for v in text.split(",") if v.strip()]
+    except ValueError as exc:
+        raise click.BadParameter(f"{text!r}: expected comma-separated numbers") from exc
+
+
+@click.group()
+def campaign() -> None:
+    """CFD campaigns over the identification grid ([identification] of a case file)."""
+
+
+@campaign.command("run")
+@click.argument("case_file", type=click.Path(dir_okay=False, exists=True, path_type=Path))
+@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
+              required=True, help="Campaign folder: one HDF5 record per finished case.")
+@click.option("--frequencies", help="Subset of the grid's frequencies, Hz (e.g. 0.1,1,2).")
+@click.option("--heave-amplitudes", help="Subset of the heave amplitudes, m.")
+@click.option("--phases", help="Subset of the phases, deg.")
+@click.option("--mesh", default="coarse", show_default=True, help="coarse | medium | fine")
+@click.option("--workers", default=1, show_default=True, help="LocalCluster worker processes.")
+@click.option("--scheduler", default=None,
+              help="Address of an existing dask scheduler (tcp://host:8786) instead of a "
+                   "LocalCluster, e.g. one from dask-jobqueue's SLURMCluster.")
+@click.option("--retry-failed", is_flag=True, help="Rerun cases that failed before.")
+@click.option("--keep-cases", is_flag=True, help="Keep the OpenFOAM case folders.")
+@click.option("--timeout", default=6 * 3600.0, show_default=True, help="Seconds per case.")
+@click.option("--dry-run", is_flag=True, help="List the cases and exit.")
+def run_cmd(case_file: Path, out_dir: Path, frequencies: str | None,
+            heave_amplitudes: str | None, phases: str | None, mesh: str, workers: int,
+            scheduler: str | None, retry_failed: bool, keep_cases: bool, timeout: float,
+            dry_run: bool) -> None:
+    """Run the identification grid of CASE_FILE in OpenFOAM.
+
+    Finished cases are never rerun: rerun the same command to continue a campaign that was
+    stopped. Failed cases are reported and do not stop the others.
+    """
+    from mfflap.campaign.cases import grid_cases
+    from mfflap.campaign.execute import CampaignSetup, run_campaign
+    from mfflap.config import load_case
+
+    case = load_case(case_file)
+    cases = grid_cases(case.identification, _floats(frequencies), _floats(heave_amplitudes),
+                       _floats(phases))
+    if dry_run:
+        for c in cases:
+            click.echo(f"{c.case_id}  duration {c.duration:g} s  ramp {c.ramp_time:g} s")
+        return
+    setup = CampaignSetup(mesh=mesh, plate=case.plate, fluid=case.fluid, stream=case.flow,
+                          timeout_s=timeout, keep_case_dirs=keep_cases)
+    statuses = run_campaign(cases, out_dir, setup, n_workers=workers,
+                            scheduler_address=scheduler, retry_failed=retry_failed)
+    done = sum(s.state == "done" for s in statuses)
+    click.echo(f"{done}/{len(statuses)} cases done in {out_dir}")
+    for s in statuses:
+        if s.state == "failed":
+            click.echo(f"FAILED {s.case_id}: {s.message}")
+
+
+@campaign.command("status")
+@click.argument("out_dir", type=click.Path(file_okay=False, exists=True, path_type=Path))
+@click.option("--json", "as_json", is_flag=True, help="Print the statuses as JSON.")
+def status_cmd(out_dir: Path, as_json: bool) -> None:
+    """Per-case status of the campaign in OUT_DIR (done, failed with why, pending)."""
+    from mfflap.campaign.execute import campaign_status
+
+    statuses = campaign_status(out_dir)
+    if as_json:
+        click.echo(json.dumps([vars(s) for s in statuses], indent=2))
+        return
+    for s in statuses:
+        click.echo(f"{s.state:8s} {s.case_id}  {s.message}")
+    counts = {k: sum(s.state == k for s in statuses) for k in ("done", "failed", "pending")}
+    click.echo(", ".join(f"{v} {k}" for k, v in counts.items()))

@@ -1,0 +1,128 @@
+"""Campaigns on a real dask LocalCluster running real OpenFOAM; records; resume; failures."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mfflap.campaign.cases import CfdCase, grid_cases
+from mfflap.campaign.execute import CampaignSetup, campaign_status, run_campaign
+from mfflap.campaign.openfoam_run import run_motion
+from mfflap.campaign.records import CfdRecord, read_record, read_records, write_record
+from mfflap.cfd.openfoam.runner import openfoam_available
+from mfflap.config import IdentificationGrid
+from mfflap.errors import ConfigError, MfflapError
+from mfflap.hydro import MorisonModel
+from mfflap.kinematics import RampHarmonicMotion
+from mfflap.metrics import pearson
+
+SHORT = CfdCase(1.0, 0.3, 90.0, 10.0, duration=0.04, ramp_time=0.02)
+OTHER = CfdCase(2.0, 0.1, 45.0, 10.0, duration=0.04, ramp_time=0.02)
+
+
+def test_grid_covers_every_frequency_first_and_caps_duration():
+    grid = IdentificationGrid()
+    cases = grid_cases(grid)
+    assert len(cases) == 125
+    assert len({c.case_id for c in cases}) == 125
+    assert {c.frequency for c in cases[:5]} == set(grid.frequencies)
+    assert cases[0].heave_amplitude == 0.3 and cases[0].phase_deg == 90.0
+    for c in cases:
+        assert c.duration == pytest.approx(min(grid.n_cycles / c.frequency, grid.max_duration))
+        assert "." not in c.case_id
+    sub = grid_cases(grid, heave_amplitudes=[0.1, 0.5], phases_deg=[90])
+    assert len(sub) == 10
+    with pytest.raises(ConfigError, match=r"0\.33 is not on the grid"):
+        grid_cases(grid, heave_amplitudes=[0.33])
+
+
+def synthetic_record(name="syn", n=200) -> CfdRecord:
+    motion = RampHarmonicMotion(1.0, 0.3, np.deg2rad(10), np.pi / 2)
+    state = motion.sample(np.linspace(0, 2, n))
+    loads = MorisonModel().loads(state)
+    return CfdRecord(name, state, loads, {"kind": "ramp_harmonic", "frequency": 1.0},
+                     {"solver": "test"})
+
+
+def test_record_round_trip_and_atomic_write(tmp_path):
+    rec = synthetic_record()
+    path = write_record(tmp_path / "syn.h5", rec)
+    assert not list(tmp_path.glob(".*tmp"))
+    back = read_record(path)
+    np.testing.assert_array_equal(back.loads.normal_force, rec.loads.normal_force)
+    np.testing.assert_array_equal(back.state.pitch_angle, rec.state.pitch_angle)
+    assert back.parameters["frequency"] == 1.0 and back.provenance["solver"] == "test"
+    # a leftover temporary file of a killed writer is not a record
+    (tmp_path / ".half.h5.123.tmp").write_bytes(b"\x89HDF")
+    assert [r.name for r in read_records(tmp_path)] == ["syn"]
+    small = read_record(write_record(tmp_path / "small.h5", rec, single_precision=True))
+    assert small.loads.normal_force.dtype == np.float64  # read back as float64
+    np.testing.assert_allclose(small.loads.normal_force, rec.loads.normal_force, rtol=1e-6,
+                               atol=1e-6 * np.abs(rec.loads.normal_force).max())
+    np.testing.assert_array_equal(small.time, rec.time)  # time stays double
+    w = back.window(1.0)
+    assert w.time[0] >= 1.0 and len(w.time) == len(w.state.time)
+
+
+def test_record_with_nan_is_refused_naming_file_and_sample(tmp_path):
+    rec = synthetic_record()
+    rec.loads.normal_force[17] = np.nan
+    path = write_record(tmp_path / "bad.h5", rec)
+    with pytest.raises(MfflapError, match=r"bad\.h5: loads/normal_force is not finite at "
+                                          r"sample 17"):
+        read_record(path)
+
+
+@pytest.mark.openfoam
+def test_restart_continues_from_last_written_time(tmp_path):
+    """A run stopped early continues from its last written time; the force folders merge."""
+    assert openfoam_available()
+    motion = SHORT.motion()
+    case_dir = tmp_path / "c"
+    run_motion(case_dir, motion, "c", {}, end_time=0.03, ramp_time=0.02)
+    control = case_dir / "system" / "controlDict"
+    control.write_text(control.read_text().replace("endTime         0.03;",
+                                                   "endTime         0.06;"))
+    rec = run_motion(case_dir, motion, "c", {}, end_time=0.06, ramp_time=0.02)
+    folders = sorted(p.name for p in (case_dir / "postProcessing" / "forces").iterdir())
+    assert len(folders) == 2 and folders[0] == "0"
+    assert np.all(np.diff(rec.time) > 0) and rec.time[-1] > 0.058
+    log = (case_dir / "log.pimpleFoam").read_text()
+    assert log.count("Starting time loop") == 2
+    model = MorisonModel().loads(rec.state)
+    after = rec.time > 0.02
+    assert pearson(rec.loads.normal_force[after], model.normal_force[after]) > 0.8
+
+
+@pytest.mark.openfoam
+def test_campaign_on_local_cluster_resumes_and_reports_failures(tmp_path):
+    """Real LocalCluster, two worker processes, real pimpleFoam."""
+    assert openfoam_available()
+    out = tmp_path / "camp"
+    failing = CfdCase(0.5, 0.2, 90.0, 10.0, duration=60.0, ramp_time=0.5)
+    setup = CampaignSetup(timeout_s=20.0)  # the 60 s case cannot finish: it fails cleanly
+    statuses = run_campaign([SHORT, OTHER, failing], out, setup, n_workers=2, progress=False)
+    states = {s.case_id: s.state for s in statuses}
+    assert states == {SHORT.case_id: "done", OTHER.case_id: "done", failing.case_id: "failed"}
+    failed = next(s for s in statuses if s.state == "failed")
+    assert "timed out" in failed.message
+    records = {r.name: r for r in read_records(out)}
+    assert set(records) == {SHORT.case_id, OTHER.case_id}
+    rec = records[SHORT.case_id]
+    assert rec.provenance["openfoam_build"].startswith("OPENFOAM=1912")
+    assert rec.provenance["mesh"] == "coarse" and rec.provenance["cpu_time_s"] > 0
+    assert rec.parameters["frequency"] == 1.0
+    assert not (out / "cases" / SHORT.case_id).exists()  # cleaned after success
+    mtime = (out / f"{SHORT.case_id}.h5").stat().st_mtime_ns
+    again = run_campaign([SHORT, OTHER, failing], out, setup, n_workers=1, progress=False)
+    assert [s.state for s in again] == ["done", "done", "failed"]
+    assert all(s.message == "already finished" for s in again[:2])
+    assert (out / f"{SHORT.case_id}.h5").stat().st_mtime_ns == mtime  # never rerun
+    assert [s.state for s in campaign_status(out)] == ["done", "done", "failed"]
+    with pytest.raises(ConfigError, match="another setup"):
+        run_campaign([SHORT], out, CampaignSetup(mesh="medium"), progress=False)
+
+
+def test_status_of_a_folder_that_is_not_a_campaign(tmp_path):
+    with pytest.raises(MfflapError, match=r"no campaign\.toml"):
+        campaign_status(Path(tmp_path))
