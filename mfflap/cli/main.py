@@ -33,9 +33,12 @@ def cli() -> None:
 def _register_subgroups() -> None:
     from mfflap.cli.campaign import campaign
     from mfflap.cli.cfd import cfd
+    from mfflap.cli.identify import identify, report
 
     cli.add_command(cfd)
     cli.add_command(campaign)
+    cli.add_command(identify)
+    cli.add_command(report)
 
 
 def _echo_json(data) -> None:

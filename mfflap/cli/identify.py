@@ -1,0 +1,107 @@
+"""``mfflap identify`` and ``mfflap report identification``."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import click
+
+
+def _strategies(names: tuple[str, ...], weights: str | None, case) -> list:
+    chosen: list = list(names) or ["uniform", "low", "high"]
+    if weights:
+        try:
+            chosen.append([float(v) for v in weights.split(",")])
+        except ValueError as exc:
+            raise click.BadParameter(f"{weights!r}: expected comma-separated numbers") from exc
+    elif case.identification.frequency_weights is not None and not names:
+        chosen.append(list(case.identification.frequency_weights))
+    return chosen
+
+
+@click.command()
+@click.argument("case_file", type=click.Path(dir_okay=False, exists=True, path_type=Path))
+@click.option("--fixtures", type=click.Path(file_okay=False, exists=True, path_type=Path),
+              default=None, help="Folder of CFD records (default: the shipped fixtures).")
+@click.option("--strategy", "strategies", multiple=True,
+              type=click.Choice(["uniform", "low", "high"]),
+              help="Weighting strategy; repeat for several (default: all three).")
+@click.option("--weights", default=None,
+              help="User weights per frequency, ascending frequency, comma-separated.")
+@click.option("--components", default=None,
+              help="Fitted components, comma-separated (default normal_force,"
+                   "tangential_force,moment).")
+@click.option("--bootstrap", "n_bootstrap", default=200, show_default=True,
+              help="Case-bootstrap replicates.")
+@click.option("--output", type=click.Path(dir_okay=False, path_type=Path),
+              default=Path("identification.h5"), show_default=True, help="HDF5 results.")
+@click.option("--json", "as_json", is_flag=True, help="Print coefficients as JSON.")
+def identify(case_file: Path, fixtures: Path | None, strategies: tuple[str, ...],
+             weights: str | None, components: str | None, n_bootstrap: int, output: Path,
+             as_json: bool) -> None:
+    """Fit the Morison coefficients of CASE_FILE's model to CFD records."""
+    from mfflap.campaign.records import fixture_dir
+    from mfflap.config import load_case
+    from mfflap.identification.workflow import (
+        identify_strategies,
+        load_cases,
+        save_identification,
+    )
+
+    case = load_case(case_file)
+    folder = fixtures or fixture_dir()
+    cases, excluded = load_cases(case, folder)
+    comps = components.split(",") if components else None
+    results = identify_strategies(case, cases, excluded, _strategies(strategies, weights, case),
+                                  comps, n_bootstrap)
+    save_identification(output, case, results, str(folder))
+    summary = {
+        label: {"coefficients": r.coefficients, "standard_error": r.standard_error,
+                "median_nrmse_normal_force": float(
+                    sorted(r.metrics["normal_force"]["nrmse"])[len(r.case_names) // 2]),
+                "n_cases": len(r.case_names), "excluded": r.excluded}
+        for label, r in results.items()
+    }
+    if as_json:
+        click.echo(json.dumps(summary, indent=2))
+        return
+    click.echo(f"{len(cases)} cases from {folder}; {len(excluded)} left out")
+    for label, r in results.items():
+        coeffs = "  ".join(f"{n} = {v:.3f} ± {r.standard_error[n]:.3f}"
+                           for n, v in r.coefficients.items())
+        click.echo(f"{label:8s} {coeffs}")
+    click.echo(f"wrote {output}")
+
+
+@click.group()
+def report() -> None:
+    """HTML reports from mfflap's HDF5 results."""
+
+
+@report.command("identification")
+@click.argument("results_file", type=click.Path(dir_okay=False, exists=True, path_type=Path))
+@click.option("--fixtures", type=click.Path(file_okay=False, exists=True, path_type=Path),
+              default=None, help="The record folder (default: the one the results name).")
+@click.option("--out", "out_path", type=click.Path(dir_okay=False, path_type=Path),
+              default=None, help="HTML file (default: <results>.html).")
+def report_identification(results_file: Path, fixtures: Path | None,
+                          out_path: Path | None) -> None:
+    """Maps of Pearson and NRMSE, overlays, applicability region, weighting sensitivity."""
+    from mfflap.config import loads_case
+    from mfflap.identification.store import read_identification, strategies_in
+    from mfflap.identification.workflow import load_cases
+    from mfflap.reports.identification import identification_report
+    from mfflap.results import ResultsFile
+
+    with ResultsFile(results_file, "r") as rf:
+        case = loads_case(rf.config_toml, source=f"{results_file}:/inputs")
+        results = {s: read_identification(rf, f"identification/{s}") for s in strategies_in(rf)}
+        source = str(rf.h5["identification"].attrs.get("source", ""))
+    if not results:
+        raise click.ClickException(f"{results_file}: no identification results")
+    cases, _ = load_cases(case, fixtures or source)
+    out_path = out_path or results_file.with_suffix(".html")
+    identification_report(out_path, results, cases, case.morison_model(), case.flow.velocity,
+                          source)
+    click.echo(f"wrote {out_path}")

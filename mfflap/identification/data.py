@@ -1,0 +1,117 @@
+"""CFD records prepared for fitting: transient removed, uniform time base, regressors."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from mfflap.campaign.records import CfdRecord
+from mfflap.errors import MfflapError
+from mfflap.hydro.base import ForceModel
+from mfflap.hydro.loads import Loads
+from mfflap.kinematics.state import KinematicState
+from mfflap.performance import thrust_and_power
+
+#: Load components a fit can use, with their units.
+COMPONENTS = {"normal_force": "N", "tangential_force": "N", "moment": "N*m"}
+#: Derived signals that are scored (not fitted directly).
+DERIVED = {"thrust": "N", "input_power": "W"}
+_STATE_KEYS = ("pitch_angle", "pitch_rate", "pitch_acceleration", "heave_position",
+               "heave_velocity", "heave_acceleration")
+
+
+@dataclass
+class CaseData:
+    """One CFD case ready for fitting and scoring.
+
+    Attributes
+    ----------
+    name : str
+    parameters : dict
+        Motion parameters (frequency Hz, heave_amplitude m, phase_deg, ...).
+    state : KinematicState
+        Imposed kinematics on a uniform time base after the transient.
+    cfd : Loads
+        CFD loads on the same time base.
+    """
+
+    name: str
+    parameters: dict
+    state: KinematicState
+    cfd: Loads
+
+    @property
+    def frequency(self) -> float:
+        """Carrier frequency, Hz."""
+        return float(self.parameters.get("frequency", np.nan))
+
+    @property
+    def n_samples(self) -> int:
+        """Samples on the uniform time base."""
+        return len(self.state.time)
+
+    def regressor_matrix(self, model: ForceModel, component: str) -> np.ndarray:
+        """(n_samples, n_terms) regressors of ``component`` for every term of ``model``."""
+        regs = model.regressors(self.state)
+        return np.column_stack([getattr(regs[t.name], component) for t in model.terms])
+
+    def cfd_signal(self, component: str) -> np.ndarray:
+        """A CFD load component, or the derived thrust / input power."""
+        if component in COMPONENTS:
+            return getattr(self.cfd, component)
+        thrust, power = thrust_and_power(self.cfd, self.state)
+        return thrust if component == "thrust" else power
+
+
+def _resample_state(state: KinematicState, t: np.ndarray) -> KinematicState:
+    return KinematicState(time=t, **{k: np.interp(t, state.time, getattr(state, k))
+                                     for k in _STATE_KEYS})
+
+
+def prepare_case(record: CfdRecord, discard_time: float = 0.75, n_samples: int = 400,
+                 max_gap_ratio: float = 25.0) -> CaseData:
+    """Drop the start-up transient and resample a record onto a uniform time base.
+
+    Adaptive CFD time steps crowd samples where the flow is fast; a uniform base keeps them
+    from weighting the fit. The start is the later of ``discard_time`` and the record's own
+    start-up ramp.
+
+    Raises
+    ------
+    MfflapError
+        If the record has a gap (a step more than ``max_gap_ratio`` times the median step),
+        or too little data after the transient; the message names the record and the time.
+    """
+    t = record.time
+    start = max(discard_time, float(record.parameters.get("ramp_time", 0.0)))
+    dt = np.diff(t)
+    med = float(np.median(dt)) if len(dt) else 0.0
+    if len(dt) and np.any(dt > max_gap_ratio * med):
+        i = int(np.argmax(dt))
+        raise MfflapError(f"record {record.name}: gap in the force history between "
+                          f"t = {t[i]:.6g} s and {t[i + 1]:.6g} s ({dt[i] / med:.0f} median "
+                          "steps); rerun or trim the case")
+    if t[-1] - start < 0.2 * (t[-1] - t[0]) or t[-1] <= start:
+        raise MfflapError(f"record {record.name}: only {max(t[-1] - start, 0):.3g} s of "
+                          f"{t[-1] - t[0]:.3g} s remain after discarding {start:.3g} s of "
+                          "start-up")
+    n = int(min(n_samples, max(8, np.sum(t >= start))))
+    tu = np.linspace(start, t[-1], n)
+    state = _resample_state(record.state, tu)
+    cfd = Loads(tu, *(np.interp(tu, t, getattr(record.loads, k)) for k in COMPONENTS),
+                source=record.loads.source)
+    return CaseData(record.name, dict(record.parameters), state, cfd)
+
+
+def prepare_cases(records: Sequence[CfdRecord], discard_time: float = 0.75,
+                  n_samples: int = 400) -> tuple[list[CaseData], dict[str, str]]:
+    """Prepare every record; records that cannot be used are returned with the reason."""
+    cases, excluded = [], {}
+    for rec in records:
+        try:
+            cases.append(prepare_case(rec, discard_time, n_samples))
+        except MfflapError as exc:
+            excluded[rec.name] = str(exc)
+    return cases, excluded

@@ -1,0 +1,94 @@
+"""A small self-contained HTML report: sections of text, tables and embedded PNG figures."""
+
+from __future__ import annotations
+
+import base64
+import datetime as _dt
+import html
+import io
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import jinja2
+from matplotlib.figure import Figure
+
+_TEMPLATE = jinja2.Template("""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>{{ title }}</title>
+<style>
+body { font-family: sans-serif; max-width: 1100px; margin: 2em auto; color: #222; }
+table { border-collapse: collapse; margin: 1em 0; }
+td, th { border: 1px solid #bbb; padding: 3px 8px; text-align: right; }
+th { background: #eee; } td:first-child, th:first-child { text-align: left; }
+.warn { background: #fff3cd; border-left: 4px solid #e0a800; padding: 0.5em 1em; }
+img { max-width: 100%; } figure { margin: 1em 0; } figcaption { color: #555; }
+</style></head><body>
+<h1>{{ title }}</h1><p>{{ subtitle }}</p>
+{% for s in sections %}<section><h2>{{ s.title }}</h2>
+{% for block in s.blocks %}{{ block }}
+{% endfor %}</section>{% endfor %}
+<hr><p><small>mfflap {{ version }}, {{ created }}</small></p></body></html>
+""")
+
+
+def figure_html(fig: Figure, caption: str = "", dpi: int = 110) -> str:
+    """An ``<figure>`` with the PNG embedded (base64); closes the figure."""
+    import matplotlib.pyplot as plt
+
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=dpi, bbox_inches="tight")
+    plt.close(fig)
+    data = base64.b64encode(buf.getvalue()).decode()
+    return (f'<figure><img src="data:image/png;base64,{data}" alt="{html.escape(caption)}">'
+            f"<figcaption>{html.escape(caption)}</figcaption></figure>")
+
+
+def table_html(header: Sequence[str], rows: Sequence[Sequence[object]]) -> str:
+    """A table; floats are shown with 4 significant digits."""
+    def cell(v):
+        return f"{v:.4g}" if isinstance(v, float) else html.escape(str(v))
+
+    head = "".join(f"<th>{html.escape(h)}</th>" for h in header)
+    body = "".join("<tr>" + "".join(f"<td>{cell(v)}</td>" for v in r) + "</tr>" for r in rows)
+    return f"<table><tr>{head}</tr>{body}</table>"
+
+
+def text_html(text: str, warn: bool = False) -> str:
+    """A paragraph (escaped); ``warn`` highlights it."""
+    cls = ' class="warn"' if warn else ""
+    return f"<p{cls}>{html.escape(text)}</p>"
+
+
+@dataclass
+class Section:
+    """A titled section of HTML blocks."""
+
+    title: str
+    blocks: list[str] = field(default_factory=list)
+
+
+@dataclass
+class Report:
+    """A report being assembled."""
+
+    title: str
+    subtitle: str = ""
+    sections: list[Section] = field(default_factory=list)
+
+    def section(self, title: str) -> Section:
+        """Start a new section and return it."""
+        s = Section(title)
+        self.sections.append(s)
+        return s
+
+    def write(self, path: str | Path) -> Path:
+        """Write the HTML file."""
+        from mfflap import __version__
+
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(_TEMPLATE.render(
+            title=html.escape(self.title), subtitle=html.escape(self.subtitle),
+            sections=self.sections, version=__version__,
+            created=_dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M UTC")))
+        return path

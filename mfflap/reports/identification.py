@@ -1,0 +1,226 @@
+"""Identification and weighting-sensitivity reports (the paper's Figure 3 and Table 2 kind)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.figure import Figure
+
+from mfflap.hydro.base import ForceModel
+from mfflap.identification.data import CaseData
+from mfflap.identification.fit import IdentificationResult
+from mfflap.reports.html import Report, figure_html, table_html, text_html
+
+SIGNAL_LABELS = {"normal_force": "F_n", "tangential_force": "F_t", "moment": "M",
+                 "thrust": "thrust", "input_power": "input power"}
+APPLICABLE_NRMSE = 0.10
+
+
+def _param(result: IdentificationResult, key: str) -> np.ndarray:
+    return np.array([float(p.get(key, np.nan)) for p in result.case_parameters])
+
+
+def heave_strouhal(result: IdentificationResult, velocity: float) -> np.ndarray:
+    """St_h = 2 f h_amp / U of every case (the heave-based Strouhal number)."""
+    return 2 * _param(result, "frequency") * _param(result, "heave_amplitude") / velocity
+
+
+def map_figure(result: IdentificationResult, signal: str = "normal_force",
+               metric: str = "nrmse") -> Figure:
+    """Heat maps of a metric over (f, h_amp), one panel per phase."""
+    f, h, p = (_param(result, k) for k in ("frequency", "heave_amplitude", "phase_deg"))
+    values = result.metrics[signal][metric]
+    fs, hs, ps = np.unique(f), np.unique(h), np.unique(p)
+    fig, axes = plt.subplots(1, len(ps), figsize=(3.2 * len(ps) + 1, 3.2), squeeze=False)
+    cmap = "viridis_r" if metric == "nrmse" else "viridis"
+    vmin, vmax = (0, max(0.3, float(np.nanmax(values)))) if metric == "nrmse" else (0, 1)
+    im = None
+    for ax, phase in zip(axes[0], ps, strict=True):
+        grid = np.full((len(hs), len(fs)), np.nan)
+        for i in np.flatnonzero(p == phase):
+            grid[np.searchsorted(hs, h[i]), np.searchsorted(fs, f[i])] = values[i]
+        im = ax.imshow(grid, origin="lower", cmap=cmap, vmin=vmin, vmax=vmax, aspect="auto")
+        for (r, c), v in np.ndenumerate(grid):
+            if np.isfinite(v):
+                ax.text(c, r, f"{v:.2f}", ha="center", va="center", fontsize=7,
+                        color="w" if (v > 0.5 * vmax) == (metric == "nrmse") else "k")
+        ax.set_xticks(range(len(fs)), [f"{v:g}" for v in fs])
+        ax.set_yticks(range(len(hs)), [f"{v:g}" for v in hs])
+        ax.set_xlabel("f [Hz]")
+        ax.set_title(f"φ = {phase:g}°")
+    axes[0][0].set_ylabel("h_amp [m]")
+    fig.colorbar(im, ax=axes[0].tolist(), label=f"{metric} of {SIGNAL_LABELS[signal]}")
+    return fig
+
+
+def overlay_figure(cases: Sequence[CaseData], model: ForceModel, names: Sequence[str],
+                   signals: Sequence[str] = ("normal_force", "thrust")) -> Figure:
+    """CFD and model time histories of chosen cases."""
+    from mfflap.performance import thrust_and_power
+
+    by_name = {c.name: c for c in cases}
+    chosen = [by_name[n] for n in names if n in by_name]
+    fig, axes = plt.subplots(len(signals), max(len(chosen), 1),
+                             figsize=(4 * max(len(chosen), 1), 2.6 * len(signals)),
+                             squeeze=False)
+    for j, c in enumerate(chosen):
+        pred = model.loads(c.state)
+        thrust, power = thrust_and_power(pred, c.state)
+        for i, s in enumerate(signals):
+            ax = axes[i][j]
+            model_signal = {"thrust": thrust, "input_power": power}.get(s)
+            if model_signal is None:
+                model_signal = getattr(pred, s)
+            ax.plot(c.state.time, c.cfd_signal(s), "k-", lw=1, label="CFD")
+            ax.plot(c.state.time, model_signal, "C1--", lw=1.2, label="model")
+            ax.set_ylabel(SIGNAL_LABELS[s])
+            if i == 0:
+                ax.set_title(c.name, fontsize=9)
+            if i == len(signals) - 1:
+                ax.set_xlabel("t [s]")
+    axes[0][0].legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def applicability_figure(result: IdentificationResult, velocity: float,
+                         signal: str = "normal_force",
+                         threshold: float = APPLICABLE_NRMSE) -> Figure:
+    """NRMSE against the heave Strouhal number, and the share of phases that pass per (f, h)."""
+    st = heave_strouhal(result, velocity)
+    err = result.metrics[signal]["nrmse"]
+    f, h = _param(result, "frequency"), _param(result, "heave_amplitude")
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 3.6))
+    sc = a1.scatter(st, err, c=np.log10(f), cmap="plasma", s=18)
+    a1.axhline(threshold, color="k", ls=":", label=f"NRMSE = {threshold:.0%}")
+    a1.set_xscale("log")
+    a1.set_xlabel("St_h = 2 f h_amp / U")
+    a1.set_ylabel(f"NRMSE of {SIGNAL_LABELS[signal]}")
+    a1.legend(fontsize=8)
+    fig.colorbar(sc, ax=a1, label="log10 f [Hz]")
+    fs, hs = np.unique(f), np.unique(h)
+    share = np.full((len(hs), len(fs)), np.nan)
+    for r, hv in enumerate(hs):
+        for c, fv in enumerate(fs):
+            sel = (f == fv) & (h == hv)
+            if sel.any():
+                share[r, c] = np.mean(err[sel] <= threshold)
+    im = a2.imshow(share, origin="lower", cmap="RdYlGn", vmin=0, vmax=1, aspect="auto")
+    a2.set_xticks(range(len(fs)), [f"{v:g}" for v in fs])
+    a2.set_yticks(range(len(hs)), [f"{v:g}" for v in hs])
+    a2.set_xlabel("f [Hz]")
+    a2.set_ylabel("h_amp [m]")
+    a2.set_title(f"share of phases with NRMSE ≤ {threshold:.0%}")
+    fig.colorbar(im, ax=a2)
+    fig.tight_layout()
+    return fig
+
+
+def coefficient_figure(results: Mapping[str, IdentificationResult]) -> Figure:
+    """Coefficients with bootstrap 95 % intervals, per weighting strategy."""
+    names = list(next(iter(results.values())).coefficients)
+    fig, ax = plt.subplots(figsize=(7, 3.6))
+    width = 0.8 / len(results)
+    for k, (label, res) in enumerate(results.items()):
+        x = np.arange(len(names)) + (k - (len(results) - 1) / 2) * width
+        v = np.array([res.coefficients[n] for n in names])
+        lo = np.array([res.interval[n][0] for n in names])
+        hi = np.array([res.interval[n][1] for n in names])
+        ax.bar(x, v, width, label=label)
+        ax.errorbar(x, v, yerr=[np.maximum(v - lo, 0), np.maximum(hi - v, 0)], fmt="none",
+                    ecolor="k", capsize=2)
+    ax.set_xticks(range(len(names)), names, rotation=15)
+    ax.set_ylabel("coefficient")
+    ax.legend(title="weighting", fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def strategy_error_figure(results: Mapping[str, IdentificationResult],
+                          signal: str = "normal_force") -> Figure:
+    """Mean NRMSE per frequency for each weighting strategy."""
+    fig, ax = plt.subplots(figsize=(6, 3.4))
+    for label, res in results.items():
+        f = _param(res, "frequency")
+        fs = np.unique(f)
+        err = res.metrics[signal]["nrmse"]
+        ax.plot(fs, [err[f == v].mean() for v in fs], "o-", label=label)
+    ax.set_xscale("log")
+    ax.set_xlabel("f [Hz]")
+    ax.set_ylabel(f"mean NRMSE of {SIGNAL_LABELS[signal]}")
+    ax.axhline(APPLICABLE_NRMSE, color="k", ls=":")
+    ax.legend(title="weighting", fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def _coefficient_rows(results: Mapping[str, IdentificationResult]) -> list[list[object]]:
+    rows = []
+    for label, res in results.items():
+        for n, v in res.coefficients.items():
+            lo, hi = res.interval[n]
+            rows.append([label, n, float(v), float(res.standard_error[n]), float(lo), float(hi)])
+    return rows
+
+
+def identification_report(path: str | Path, results: Mapping[str, IdentificationResult],
+                          cases: Sequence[CaseData], base_model: ForceModel, velocity: float,
+                          source: str = "") -> Path:
+    """Write the identification and weighting-sensitivity report (HTML)."""
+    first = next(iter(results.values()))
+    rep = Report("Identification of the Morison coefficients",
+                 f"{len(first.case_names)} CFD cases{f' from {source}' if source else ''}; "
+                 f"fitted components: {', '.join(first.components)}")
+    s = rep.section("Coefficients")
+    s.blocks.append(table_html(["weighting", "term", "value", "bootstrap s.e.", "2.5 %",
+                                "97.5 %"], _coefficient_rows(results)))
+    s.blocks.append(figure_html(coefficient_figure(results),
+                                "Coefficients and bootstrap 95 % intervals per strategy"))
+    n_per_f = {}
+    for p in first.case_parameters:
+        n_per_f[p.get("frequency")] = n_per_f.get(p.get("frequency"), 0) + 1
+    if min(n_per_f.values()) < 2:
+        s.blocks.append(text_html("Some frequencies have a single case: the case bootstrap "
+                                  "cannot resample them and understates the uncertainty.",
+                                  warn=True))
+    if first.excluded:
+        s.blocks.append(text_html("Cases left out of the fit:", warn=True))
+        s.blocks.append(table_html(["case", "reason"], sorted(first.excluded.items())))
+    for label, res in results.items():
+        model = res.model(base_model)
+        sec = rep.section(f"Agreement maps ({label} weighting)")
+        for sig in ("normal_force", "thrust"):
+            for metric in ("pearson", "nrmse"):
+                sec.blocks.append(figure_html(map_figure(res, sig, metric),
+                                              f"{metric} of {SIGNAL_LABELS[sig]} over "
+                                              "(f, h_amp) per phase"))
+        err = res.metrics["normal_force"]["nrmse"]
+        order = np.argsort(err)
+        pick = [res.case_names[order[0]], res.case_names[order[len(order) // 2]],
+                res.case_names[order[-1]]]
+        sec.blocks.append(figure_html(overlay_figure(cases, model, pick),
+                                      "Best, median and worst case by NRMSE of F_n"))
+        sec.blocks.append(figure_html(applicability_figure(res, velocity),
+                                      "Applicability region: NRMSE ≤ 10 %"))
+        ok = err <= APPLICABLE_NRMSE
+        sec.blocks.append(text_html(f"{ok.sum()} of {len(err)} cases within NRMSE ≤ 10 % on "
+                                    f"F_n; median Pearson of F_n "
+                                    f"{np.median(res.metrics['normal_force']['pearson']):.3f}."))
+    if len(results) > 1:
+        sec = rep.section("Sensitivity to the frequency weighting")
+        sec.blocks.append(figure_html(strategy_error_figure(results),
+                                      "Mean NRMSE of F_n per frequency, per strategy"))
+        rows = []
+        for label, res in results.items():
+            rows.append([label] + [float(np.median(res.metrics[s]["nrmse"])) for s in
+                                   ("normal_force", "tangential_force", "moment", "thrust",
+                                    "input_power")])
+        sec.blocks.append(table_html(["weighting", "median NRMSE F_n", "F_t", "M", "thrust",
+                                      "power"], rows))
+    return rep.write(path)

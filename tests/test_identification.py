@@ -1,0 +1,149 @@
+"""Identification: weights, recovery of known coefficients, bad input."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mfflap.campaign.cases import grid_cases
+from mfflap.campaign.records import CfdRecord
+from mfflap.config import IdentificationGrid
+from mfflap.errors import ConfigError, MfflapError
+from mfflap.hydro import MorisonModel
+from mfflap.hydro.loads import Loads
+from mfflap.identification import frequency_weights, identify, prepare_cases
+from mfflap.identification.data import prepare_case
+
+TRUE = {"normal_drag": 2.0, "tangential_drag": 4.0, "normal_added_mass": 1.2,
+        "tangential_added_mass": 0.5}
+
+
+def synthetic_records(rng, noise=0.05, coefficients=TRUE, subset=None, n=500):
+    model = MorisonModel().with_coefficients(coefficients)
+    recs = []
+    for c in subset or grid_cases(IdentificationGrid(), heave_amplitudes=[0.1, 0.3, 0.5],
+                                  phases_deg=[45, 90, 135]):
+        t = np.sort(np.concatenate([[0.0, c.duration], rng.uniform(0, c.duration, n - 2)]))
+        s = c.motion().sample(t)
+        clean = model.loads(s)
+
+        def noisy(a):
+            return a + noise * np.std(a) * rng.standard_normal(a.shape)
+
+        loads = Loads(t, noisy(clean.normal_force), noisy(clean.tangential_force),
+                      noisy(clean.moment))
+        recs.append(CfdRecord(c.case_id, s, loads, c.as_dict()))
+    return recs
+
+
+def test_strategy_weights():
+    fs = [0.1, 0.2, 0.5, 1.0, 2.0, 2.0, 0.1]
+    assert frequency_weights(fs, "uniform") == pytest.approx({f: 0.2 for f in set(fs)})
+    low = frequency_weights(fs, "low")
+    assert list(low.values()) == pytest.approx([0.4, 0.3, 0.15, 0.1, 0.05])
+    assert list(frequency_weights(fs, "high").values()) == pytest.approx(
+        [0.05, 0.1, 0.15, 0.3, 0.4])
+    assert frequency_weights(fs, [1, 1, 0, 0, 2])[2.0] == pytest.approx(0.5)
+    three = frequency_weights([1, 2, 3], "low")
+    assert three[1] > three[2] > three[3] and sum(three.values()) == pytest.approx(1)
+    with pytest.raises(ConfigError, match="unknown weighting strategy 'mid'"):
+        frequency_weights(fs, "mid")
+    with pytest.raises(ConfigError, match="one finite weight >= 0 per distinct frequency"):
+        frequency_weights(fs, [1, 2])
+
+
+@pytest.mark.parametrize("strategy", ["uniform", "low", "high"])
+def test_recovers_known_coefficients_within_stated_uncertainty(strategy):
+    """Synthetic CFD from the model itself, 5 % noise, uneven adaptive-like time steps."""
+    rng = np.random.default_rng(7)
+    cases, excluded = prepare_cases(synthetic_records(rng))
+    assert not excluded and len(cases) == 45
+    res = identify(cases, MorisonModel(), strategy, n_bootstrap=100)
+    for name, value in TRUE.items():
+        se = res.standard_error[name]
+        assert se > 0
+        assert abs(res.coefficients[name] - value) < 4 * se + 1e-3 * value, name
+    assert np.all(res.metrics["normal_force"]["pearson"] > 0.99)
+
+
+def test_fixed_terms_and_subset_of_components():
+    rng = np.random.default_rng(3)
+    cases, _ = prepare_cases(synthetic_records(rng, noise=0.0))
+    res = identify(cases, MorisonModel(), components=("tangential_force",),
+                   fixed={"normal_drag": 2.0, "normal_added_mass": 1.2}, n_bootstrap=0)
+    assert res.fitted_terms == ("tangential_added_mass", "tangential_drag")
+    # exact but for the linear resampling of uneven samples onto the uniform base
+    assert res.coefficients["tangential_drag"] == pytest.approx(4.0, rel=2e-3)
+    assert res.coefficients["tangential_added_mass"] == pytest.approx(0.5, rel=2e-3)
+    with pytest.raises(ConfigError, match="unknown terms"):
+        identify(cases, MorisonModel(), fixed={"lift": 1.0})
+    with pytest.raises(ConfigError, match="cannot fit components"):
+        identify(cases, MorisonModel(), components=("thrust",))
+
+
+def test_unidentifiable_term_is_refused():
+    rng = np.random.default_rng(3)
+    cases, _ = prepare_cases(synthetic_records(rng))
+    with pytest.raises(MfflapError, match="do not determine"):
+        # no case data on F_t: its two coefficients are undetermined
+        identify(cases, MorisonModel(), components=("normal_force",),
+                 fixed={"normal_drag": 2.0, "normal_added_mass": 1.2})
+
+
+def test_gap_and_short_records_are_refused_by_name():
+    rng = np.random.default_rng(0)
+    rec = synthetic_records(rng, subset=grid_cases(IdentificationGrid(), [1.0], [0.3], [90]))[0]
+    keep = (rec.time < 1.2) | (rec.time > 2.0)
+    gappy = CfdRecord(rec.name, rec.state.__class__(**{
+        k: getattr(rec.state, k)[keep] for k in ("time", "pitch_angle", "pitch_rate",
+                                                 "pitch_acceleration", "heave_position",
+                                                 "heave_velocity", "heave_acceleration")}),
+        Loads(rec.time[keep], rec.loads.normal_force[keep], rec.loads.tangential_force[keep],
+              rec.loads.moment[keep]), rec.parameters)
+    with pytest.raises(MfflapError, match=rf"record {rec.name}: gap in the force history"):
+        prepare_case(gappy)
+    cases, excluded = prepare_cases([gappy, rec])
+    assert [c.name for c in cases] == [rec.name] and rec.name in excluded
+    with pytest.raises(MfflapError, match="remain after discarding"):
+        prepare_case(rec, discard_time=2.9)
+
+
+def test_identify_cli_report_and_hdf5_round_trip(tmp_path):
+    """CLI on a folder of real HDF5 records (synthetic forces), a failed case named."""
+    from click.testing import CliRunner
+
+    from mfflap.campaign.records import write_record
+    from mfflap.cli.main import cli
+    from mfflap.identification.store import read_identification
+    from mfflap.results import ResultsFile
+
+    rng = np.random.default_rng(11)
+    folder = tmp_path / "fixtures"
+    for rec in synthetic_records(rng, subset=grid_cases(IdentificationGrid(),
+                                                         heave_amplitudes=[0.2, 0.4],
+                                                         phases_deg=[90, 135])):
+        write_record(folder / f"{rec.name}.h5", rec, single_precision=True)
+    (folder / "f9p000_h0p100_phi090p0.failed.toml").write_text(
+        'case_id = "f9p000_h0p100_phi090p0"\nerror = "pimpleFoam diverged"\n')
+    case_file = Path(__file__).parents[1] / "cases" / "paper2026.toml"
+    out = tmp_path / "id.h5"
+    runner = CliRunner()
+    res = runner.invoke(cli, ["identify", str(case_file), "--fixtures", str(folder),
+                              "--output", str(out), "--bootstrap", "50", "--json"])
+    assert res.exit_code == 0, res.output
+    summary = json.loads(res.output)
+    assert set(summary) == {"uniform", "low", "high"}
+    assert summary["uniform"]["coefficients"]["normal_drag"] == pytest.approx(2.0, rel=0.02)
+    assert "f9p000_h0p100_phi090p0" in summary["low"]["excluded"]
+    with ResultsFile(out) as rf:
+        back = read_identification(rf, "identification/low")
+        assert "paper2026" in rf.config_toml
+    assert back.coefficients == pytest.approx(summary["low"]["coefficients"])
+    assert back.weights[0.1] == pytest.approx(0.4)
+    html_path = tmp_path / "id.html"
+    res = runner.invoke(cli, ["report", "identification", str(out), "--out", str(html_path)])
+    assert res.exit_code == 0, res.output
+    text = html_path.read_text()
+    assert text.count("<img") >= 10 and "pimpleFoam diverged" in text
+    assert "Sensitivity to the frequency weighting" in text
