@@ -34,11 +34,13 @@ def _register_subgroups() -> None:
     from mfflap.cli.campaign import campaign
     from mfflap.cli.cfd import cfd
     from mfflap.cli.identify import identify, report
+    from mfflap.cli.optimise import optimise
 
     cli.add_command(cfd)
     cli.add_command(campaign)
     cli.add_command(identify)
     cli.add_command(report)
+    cli.add_command(optimise)
 
 
 def _echo_json(data) -> None:

@@ -13,8 +13,9 @@ from mfflap.kinematics.discrete import DiscreteMotion, initial_state_weights
 from mfflap.optimisation.problem import FlappingProblem
 
 
-def build_objective(problem: FlappingProblem, n_steps: int) -> tuple[ca.Function, ca.Function]:
-    """CasADi functions J(z) and dJ/dz(z) with z = [pitch acc (N), heave acc (N), dt]."""
+def symbolic_stages(problem: FlappingProblem, n_steps: int) -> dict[str, ca.SX]:
+    """Symbolic z = [pitch acc (N), heave acc (N), dt] and, per step, thrust, input power,
+    heave position and the two accelerations, as CasADi SX expressions."""
     n = n_steps
     z = ca.SX.sym("z", 2 * n + 1)
     dt = z[2 * n]
@@ -52,14 +53,30 @@ def build_objective(problem: FlappingProblem, n_steps: int) -> tuple[ca.Function
           - 0.5 * rho * c["tangential_drag"] * g.area_tangential * ca.fabs(vt) * vt)
     thrust = fn * s - ft * co
     power = -(fn * co + ft * s) * hd - mo * td
+    return {"z": z, "thrust": thrust, "power": power, "heave_position": hp,
+            "pitch_acceleration": tdd, "heave_acceleration": hdd}
+
+
+def smoothness_expr(problem: FlappingProblem, pitch_acc: ca.SX, heave_acc: ca.SX) -> ca.SX:
+    """J_s with its wrap term."""
+    out = 0
+    for eps, acc in ((problem.smoothing_pitch, pitch_acc), (problem.smoothing_heave, heave_acc)):
+        d = acc[1:] - acc[:-1]
+        out = out + 0.5 * eps * (ca.sumsqr(d) + (acc[0] + acc[acc.shape[0] - 1]) ** 2)
+    return out
+
+
+def build_objective(problem: FlappingProblem, n_steps: int) -> tuple[ca.Function, ca.Function]:
+    """CasADi functions J(z) and dJ/dz(z) with z = [pitch acc (N), heave acc (N), dt]."""
+    n = n_steps
+    e = symbolic_stages(problem, n)
+    z, thrust, power, hp = e["z"], e["thrust"], e["power"], e["heave_position"]
     p = problem
     stage = (-(1 - p.beta) * thrust + p.beta * power
              + 0.5 * p.penalty_power * ca.fmax(power - p.max_power, 0) ** 2
              + 0.5 * p.penalty_heave * ca.fmax(ca.fabs(hp) - p.max_heave, 0) ** 2)
-    objective = ca.sum1(stage) / n
-    for eps, acc in ((p.smoothing_pitch, tdd), (p.smoothing_heave, hdd)):
-        d = acc[1:] - acc[:-1]
-        objective = objective + 0.5 * eps * (ca.sumsqr(d) + (acc[0] + acc[n - 1]) ** 2)
+    objective = ca.sum1(stage) / n + smoothness_expr(p, e["pitch_acceleration"],
+                                                     e["heave_acceleration"])
     f = ca.Function("J", [z], [objective])
     grad = ca.Function("dJ", [z], [ca.gradient(objective, z)])
     return f, grad

@@ -1,0 +1,73 @@
+"""``mfflap optimise``: the beta sweep of optimised motions with sweep, IPOPT and report."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import click
+
+
+@click.command()
+@click.argument("case_file", type=click.Path(dir_okay=False, exists=True, path_type=Path))
+@click.option("--betas", default=None, help="Comma-separated betas (default: the case's).")
+@click.option("--starts", default=3, show_default=True,
+              help="Multi-start: best sinusoid plus points along the Pareto front.")
+@click.option("--ipopt/--no-ipopt", default=True, show_default=True,
+              help="Also solve the hard-constrained problem with IPOPT.")
+@click.option("--gain-table", is_flag=True,
+              help="Also tabulate the beta = 0 gain against N and the smoothing weights.")
+@click.option("--output", type=click.Path(dir_okay=False, path_type=Path),
+              default=Path("optimisation.h5"), show_default=True)
+@click.option("--report", "report_path", type=click.Path(dir_okay=False, path_type=Path),
+              default=None, help="HTML report (default: <output>.html).")
+@click.option("--json", "as_json", is_flag=True, help="Print the optimised means as JSON.")
+def optimise(case_file: Path, betas: str | None, starts: int, ipopt: bool, gain_table: bool,
+             output: Path, report_path: Path | None, as_json: bool) -> None:
+    """Optimise the motion of CASE_FILE for each beta with the discrete adjoint."""
+    from mfflap.config import load_case
+    from mfflap.optimisation.study import beta_study
+    from mfflap.optimisation.study import gain_table as make_gain_table
+    from mfflap.optimisation.workflow import write_study
+    from mfflap.reports.html import Report
+    from mfflap.reports.optimisation import add_optimisation_sections
+    from mfflap.results import ResultsFile
+
+    case = load_case(case_file)
+    beta_list = None
+    if betas:
+        try:
+            beta_list = [float(b) for b in betas.split(",")]
+        except ValueError as exc:
+            raise click.BadParameter(f"{betas!r}: expected comma-separated numbers") from exc
+
+    def progress(msg: str) -> None:
+        if not as_json:
+            click.echo(msg, err=True)
+
+    model = case.morison_model()
+    study = beta_study(case, beta_list, n_starts=starts, with_ipopt=ipopt, model=model,
+                       progress=progress)
+    gain = make_gain_table(case, model=model, sweep=study.sweep, progress=progress) \
+        if gain_table else None
+    with ResultsFile(output, "w", kind="optimisation", config_toml=case.to_toml()) as rf:
+        write_study(rf, case, study, gain, model)
+    rep = Report(f"Optimisation study: {case.study.name}", case.study.description)
+    add_optimisation_sections(rep, study, model, case.optimisation.scheme,
+                              case.optimisation.max_power, gain)
+    html = rep.write(report_path or output.with_suffix(".html"))
+    out = {f"{b:g}": {**r.summary.as_dict(), "period": float(r.motion.period),
+                      "converged": r.converged, "flags": r.flags}
+           for b, r in study.sqp.items()}
+    if as_json:
+        click.echo(json.dumps({"optimised": out, "thrust_gain_beta0": study.thrust_gain},
+                              indent=2))
+        return
+    for b, r in study.sqp.items():
+        s = r.summary
+        click.echo(f"beta {b:4g}: thrust {float(s.mean_thrust):8.3f} N  power "
+                   f"{float(s.mean_power):8.3f} W  St {float(s.strouhal_number):5.2f}  "
+                   f"{'converged' if r.converged else 'NOT CONVERGED'}"
+                   f"{'  FLAGGED' if r.flags else ''}")
+    click.echo(f"beta = 0 thrust gain over the best feasible sinusoid: {study.thrust_gain:+.1%}")
+    click.echo(f"wrote {output} and {html}")

@@ -1,0 +1,244 @@
+"""Optimisers of the discrete motion: SQP on the penalised objective (exact adjoint gradient,
+sigma_P continuation, multi-start) and a hard-constrained IPOPT formulation through CasADi.
+
+Design variables: the N pitch and N heave accelerations of the half cycle and the time step,
+scaled by the starting point's magnitudes so that the SQP sees numbers of order one. The time
+step is bounded by the period bounds (T = 2 N dt).
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from scipy.optimize import minimize
+
+from mfflap.errors import ConfigError
+from mfflap.kinematics.convert import resample
+from mfflap.kinematics.discrete import DiscreteMotion
+from mfflap.optimisation.problem import FlappingProblem
+from mfflap.performance import CycleSummary, evaluate_discrete
+
+#: An optimum is flagged when |mean energy residual| exceeds this share of its mean power.
+ENERGY_RESIDUAL_SHARE = 0.1
+#: ... or when its peak power after resampling to 10 N exceeds P_max by more than this.
+RESAMPLED_POWER_MARGIN = 0.05
+
+
+@dataclass
+class OptimisationResult:
+    """One optimised motion with how it was found and what it achieves.
+
+    Attributes
+    ----------
+    motion : DiscreteMotion
+        The optimum, or the last iterate when ``converged`` is False.
+    method : str
+        ``"sqp-penalty"`` or ``"ipopt-constrained"``.
+    start : str
+        Which starting point led to it.
+    converged : bool
+    message : str
+        The optimiser's own message.
+    objective : float
+        J of the final motion under the *final* settings.
+    history : ndarray
+        Objective after each iteration (all continuation stages).
+    summary : CycleSummary
+        Cycle means at the N samples.
+    resampled_max_power : float, W
+        Peak input power after resampling the motion to 10 N steps.
+    flags : list of str
+        Model artefacts the optimum may exploit (empty when none).
+    n_iterations : int
+    wall_time_s : float
+    """
+
+    beta: float
+    motion: DiscreteMotion
+    method: str
+    start: str
+    converged: bool
+    message: str
+    objective: float
+    history: np.ndarray
+    summary: CycleSummary
+    resampled_max_power: float
+    flags: list[str] = field(default_factory=list)
+    n_iterations: int = 0
+    wall_time_s: float = 0.0
+
+
+def _pack(motion: DiscreteMotion) -> np.ndarray:
+    return np.concatenate([np.real(motion.pitch_acceleration),
+                           np.real(motion.heave_acceleration), [float(np.real(motion.time_step))]])
+
+
+def _unpack(z: np.ndarray, n: int) -> DiscreteMotion:
+    return DiscreteMotion(z[:n], z[n:2 * n], float(z[2 * n]))
+
+
+def _scales(motion: DiscreteMotion) -> np.ndarray:
+    n = motion.n_steps
+    sp = max(float(np.max(np.abs(motion.pitch_acceleration))), 1e-3)
+    sh = max(float(np.max(np.abs(motion.heave_acceleration))), 1e-3)
+    return np.concatenate([np.full(n, sp), np.full(n, sh), [float(motion.time_step)]])
+
+
+def time_step_bounds(n_steps: int, min_period: float, max_period: float) -> tuple[float, float]:
+    """dt bounds from period bounds, T = 2 N dt."""
+    return min_period / (2 * n_steps), max_period / (2 * n_steps)
+
+
+def assess(problem: FlappingProblem, motion: DiscreteMotion
+           ) -> tuple[CycleSummary, float, list[str]]:
+    """Cycle summary, peak power after resampling to 10 N, and artefact flags."""
+    ev = evaluate_discrete(problem.model, motion, problem.scheme)  # type: ignore[arg-type]
+    s = ev.summary
+    fine = resample(motion, 10 * motion.n_steps)
+    fine_ev = evaluate_discrete(problem.model, fine, problem.scheme)  # type: ignore[arg-type]
+    peak = float(np.max(fine_ev.input_power))
+    flags = []
+    share = abs(float(s.energy_residual)) / max(abs(float(s.mean_power)), 1e-12)
+    if share > ENERGY_RESIDUAL_SHARE:
+        flags.append(f"energy residual {float(s.energy_residual):.3g} W is {share:.0%} of the "
+                     f"mean power {float(s.mean_power):.3g} W: the scheme's energy error may "
+                     "carry the optimum (try scheme = 'midpoint')")
+    if peak > (1 + RESAMPLED_POWER_MARGIN) * problem.max_power:
+        flags.append(f"peak power {peak:.3g} W after resampling to {10 * motion.n_steps} "
+                     f"steps exceeds P_max {problem.max_power:g} W by more than "
+                     f"{RESAMPLED_POWER_MARGIN:.0%}: the optimum exploits the sampling")
+    return s, peak, flags
+
+
+def optimise_sqp(problem: FlappingProblem, start: DiscreteMotion, *, min_period: float,
+                 max_period: float, continuation: Sequence[float] = (0.01, 0.1, 1.0),
+                 max_iterations: int = 400, tolerance: float = 1e-9, start_label: str = "start",
+                 callback: Callable[[int, float], None] | None = None) -> OptimisationResult:
+    """SLSQP on the penalised objective with the exact adjoint gradient.
+
+    The power penalty is raised through ``continuation`` (multipliers of the problem's
+    sigma_P, ending at 1): early stages explore, the last one enforces P_max.
+    Non-convergence is reported in the result (``converged`` False, the last iterate kept).
+    """
+    if not continuation or continuation[-1] != 1.0 or any(c <= 0 for c in continuation):
+        raise ConfigError(f"continuation {list(continuation)} must be positive multipliers "
+                          "ending at 1.0", key="optimisation.continuation")
+    n = start.n_steps
+    lo, hi = time_step_bounds(n, min_period, max_period)
+    dt0 = float(np.clip(start.time_step, lo, hi))
+    start = DiscreteMotion(start.pitch_acceleration, start.heave_acceleration, dt0)
+    scale = _scales(start)
+    bounds = [(None, None)] * (2 * n) + [(lo / scale[-1], hi / scale[-1])]
+    x = _pack(start) / scale
+    history: list[float] = []
+    t0 = time.perf_counter()
+    converged, message, iterations = False, "not run", 0
+    for mult in continuation:
+        stage = replace_problem(problem, penalty_power=problem.penalty_power * mult)
+
+        def fun(xs, stage=stage):
+            m = _unpack(xs * scale, n)
+            j = float(stage.objective(m))
+            g = stage.gradient(m).flat() * scale
+            return j, g
+
+        def record(xs, stage=stage):
+            history.append(float(stage.objective(_unpack(xs * scale, n))))
+            if callback is not None:
+                callback(len(history), history[-1])
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            res = minimize(fun, x, jac=True, method="SLSQP", bounds=bounds, callback=record,
+                           options={"maxiter": max_iterations, "ftol": tolerance})
+        x = res.x
+        converged, message = bool(res.success), str(res.message)
+        iterations += int(res.nit)
+    motion = _unpack(x * scale, n)
+    summary, peak, flags = assess(problem, motion)
+    return OptimisationResult(problem.beta, motion, "sqp-penalty", start_label, converged,
+                              message, float(problem.objective(motion)), np.array(history),
+                              summary, peak, flags, iterations, time.perf_counter() - t0)
+
+
+def replace_problem(problem: FlappingProblem, **changes) -> FlappingProblem:
+    """A copy of ``problem`` with some settings changed (validated again)."""
+    kw = {k: getattr(problem, k) for k in ("beta", "max_power", "max_heave", "penalty_power",
+                                           "penalty_heave", "smoothing_pitch",
+                                           "smoothing_heave", "scheme")}
+    kw.update(changes)
+    return FlappingProblem(problem.model, **kw)
+
+
+def optimise_ipopt(problem: FlappingProblem, start: DiscreteMotion, *, min_period: float,
+                   max_period: float, max_iterations: int = 1000, tolerance: float = 1e-8,
+                   start_label: str = "start") -> OptimisationResult:
+    """Hard constraints P_in,j <= P_max and |h_j| <= h_max, solved by IPOPT (CasADi).
+
+    The objective is the same beta-weighted mean with the smoothness term and no penalties.
+    """
+    import casadi as ca
+
+    from mfflap.optimisation.casadi_objective import smoothness_expr, symbolic_stages
+
+    n = start.n_steps
+    lo, hi = time_step_bounds(n, min_period, max_period)
+    dt0 = float(np.clip(start.time_step, lo, hi))
+    start = DiscreteMotion(start.pitch_acceleration, start.heave_acceleration, dt0)
+    scale = _scales(start)
+    e = symbolic_stages(problem, n)
+    xs = ca.SX.sym("x", 2 * n + 1)
+    sub = ca.Function("sub", [e["z"]], [e["thrust"], e["power"], e["heave_position"],
+                                        e["pitch_acceleration"], e["heave_acceleration"]])
+    thrust, power, hp, tdd, hdd = sub(xs * ca.DM(scale))
+    b = problem.beta
+    f = ca.sum1(-(1 - b) * thrust + b * power) / n + smoothness_expr(problem, tdd, hdd)
+    g = ca.vertcat(power, hp)
+    lbg = np.concatenate([np.full(n, -np.inf), np.full(n, -problem.max_heave)])
+    ubg = np.concatenate([np.full(n, problem.max_power), np.full(n, problem.max_heave)])
+    lbx = np.full(2 * n + 1, -np.inf)
+    ubx = np.full(2 * n + 1, np.inf)
+    lbx[-1], ubx[-1] = lo / scale[-1], hi / scale[-1]
+    solver = ca.nlpsol("mfflap_ipopt", "ipopt", {"x": xs, "f": f, "g": g},
+                       {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
+                        "ipopt.max_iter": max_iterations, "ipopt.tol": tolerance})
+    t0 = time.perf_counter()
+    sol = solver(x0=_pack(start) / scale, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
+    stats = solver.stats()
+    motion = _unpack(np.asarray(sol["x"]).ravel() * scale, n)
+    summary, peak, flags = assess(problem, motion)
+    hard = replace_problem(problem, penalty_power=0.0, penalty_heave=0.0)
+    return OptimisationResult(problem.beta, motion, "ipopt-constrained", start_label,
+                              bool(stats.get("success", False)),
+                              str(stats.get("return_status", "")),
+                              float(hard.objective(motion)), np.array([float(sol["f"])]),
+                              summary, peak, flags, int(stats.get("iter_count", 0)),
+                              time.perf_counter() - t0)
+
+
+def multistart(problem: FlappingProblem, starts: Sequence[tuple[str, DiscreteMotion]], *,
+               min_period: float, max_period: float,
+               progress: Callable[[str], None] | None = None, **kwargs
+               ) -> tuple[OptimisationResult, list[OptimisationResult]]:
+    """SQP from each start; the best result (lowest J, converged first) and all of them."""
+    if not starts:
+        raise ConfigError("multistart needs at least one starting motion")
+    results = []
+    for label, motion in starts:
+        res = optimise_sqp(problem, motion, min_period=min_period, max_period=max_period,
+                           start_label=label, **kwargs)
+        results.append(res)
+        if progress is not None:
+            progress(f"beta {problem.beta:g} from {label}: J = {res.objective:.4g}, "
+                     f"thrust {float(res.summary.mean_thrust):.3g} N, "
+                     f"{'converged' if res.converged else 'NOT converged'}")
+    best = min(results, key=lambda r: (not r.converged, r.objective))
+    return best, results
+
+
+__all__ = ["OptimisationResult", "assess", "multistart", "optimise_ipopt", "optimise_sqp",
+           "replace", "replace_problem", "time_step_bounds"]

@@ -1,0 +1,76 @@
+"""Optimisation results in HDF5, with every setting beside the numbers."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict
+
+import numpy as np
+
+from mfflap.optimisation.optimise import OptimisationResult
+from mfflap.optimisation.problem import FlappingProblem
+from mfflap.results import ResultsFile
+from mfflap.sweep import SweepResult
+
+
+def problem_settings(problem: FlappingProblem) -> dict[str, float | str]:
+    """The settings of a problem (for attributes)."""
+    return {k: getattr(problem, k) for k in ("beta", "max_power", "max_heave", "penalty_power",
+                                             "penalty_heave", "smoothing_pitch",
+                                             "smoothing_heave", "scheme")}
+
+
+def write_result(rf: ResultsFile, group: str, result: OptimisationResult,
+                 settings: dict | None = None) -> None:
+    """Store one optimised motion: controls, period, summary, history, flags and settings."""
+    rf.write_discrete_motion(f"{group}/motion", result.motion)
+    rf.write_summary(f"{group}/summary", result.summary)
+    rf.write_group(f"{group}/history", {"objective": result.history}, {"objective": "J"})
+    g = rf.h5[group]
+    attrs = {"beta": result.beta, "method": result.method, "start": result.start,
+             "converged": result.converged, "message": result.message,
+             "objective": result.objective, "period_s": float(result.motion.period),
+             "n_steps": result.motion.n_steps,
+             "resampled_max_power_W": result.resampled_max_power,
+             "resampled_n_steps": 10 * result.motion.n_steps,
+             "flags": json.dumps(result.flags), "n_iterations": result.n_iterations,
+             "wall_time_s": result.wall_time_s}
+    for k, v in (settings or {}).items():
+        attrs[f"setting_{k}"] = v
+    g.attrs.update(attrs)
+
+
+def read_result(rf: ResultsFile, group: str) -> OptimisationResult:
+    """Read back :func:`write_result`."""
+    g = rf.h5[group]
+    a = dict(g.attrs)
+    hist, _ = rf.read_group(f"{group}/history")
+    return OptimisationResult(
+        beta=float(a["beta"]), motion=rf.read_discrete_motion(f"{group}/motion"),
+        method=str(a["method"]), start=str(a["start"]), converged=bool(a["converged"]),
+        message=str(a["message"]), objective=float(a["objective"]),
+        history=hist["objective"], summary=rf.read_summary(f"{group}/summary"),
+        resampled_max_power=float(a["resampled_max_power_W"]), flags=json.loads(a["flags"]),
+        n_iterations=int(a["n_iterations"]), wall_time_s=float(a["wall_time_s"]))
+
+
+SWEEP_UNITS = {"frequency": "Hz", "heave_amplitude": "m", "pitch_amplitude": "rad",
+               "phase": "rad", "mean_thrust": "N", "mean_power": "W", "efficiency": "1",
+               "max_power": "W", "strouhal_number": "1", "feasible": "1"}
+
+
+def write_sweep(rf: ResultsFile, group: str, sweep: SweepResult, best: int) -> None:
+    """Store a sinusoid sweep and the index of its best feasible motion."""
+    rf.write_group(group, asdict(sweep), SWEEP_UNITS, {"best_feasible": best})
+
+
+def read_sweep(rf: ResultsFile, group: str) -> tuple[SweepResult, int]:
+    """Read back :func:`write_sweep`."""
+    arrays, attrs = rf.read_group(group)
+    arrays["feasible"] = np.asarray(arrays["feasible"], dtype=bool)
+    return SweepResult(**arrays), int(attrs["best_feasible"])
+
+
+def beta_key(beta: float) -> str:
+    """Group name of a beta, e.g. ``beta_0.50``."""
+    return f"beta_{beta:.2f}"

@@ -1,0 +1,162 @@
+"""The paper's optimisation study: best feasible sinusoid, beta sweep of optimised motions
+(multi-start SQP, IPOPT comparison), the thrust gain and its dependence on N and smoothing."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from mfflap.config import CaseConfig, OptimisationSettings
+from mfflap.kinematics.convert import harmonic_to_discrete, resample
+from mfflap.kinematics.discrete import DiscreteMotion
+from mfflap.optimisation.optimise import (
+    OptimisationResult,
+    multistart,
+    optimise_ipopt,
+)
+from mfflap.optimisation.problem import FlappingProblem
+from mfflap.sweep import SweepResult, pareto_front, sinusoid_sweep
+
+Progress = Callable[[str], None]
+
+
+def problem_for(config: CaseConfig, beta: float, model=None,
+                settings: OptimisationSettings | None = None) -> FlappingProblem:
+    """The penalised problem of a case at one beta."""
+    o = settings or config.optimisation
+    return FlappingProblem(model or config.morison_model(), beta, o.max_power, o.max_heave,
+                           o.penalty_power, o.penalty_heave, o.smoothing_pitch,
+                           o.smoothing_heave, o.scheme)
+
+
+def default_sweep(config: CaseConfig, model=None, progress: Progress | None = None
+                  ) -> SweepResult:
+    """Sinusoids over f (within the period bounds, at most 3 Hz), h_amp up to h_max, pitch
+    amplitude 0-60 deg and phase 0-180 deg, at the optimiser's N."""
+    o = config.optimisation
+    f_hi = min(1.0 / o.min_period, 3.0)
+    f_lo = max(1.0 / o.max_period, 0.05)
+    freqs = np.geomspace(f_lo, f_hi, 28)
+    heaves = np.linspace(0.05, o.max_heave, 10)
+    pitches = np.deg2rad(np.linspace(0.0, 60.0, 13))
+    phases = np.deg2rad(np.linspace(0.0, 180.0, 9))
+
+    def report(done, total):
+        if progress is not None and (done == total or done % 20000 == 0):
+            progress(f"sinusoid sweep {done}/{total}")
+
+    return sinusoid_sweep(model or config.morison_model(), freqs, heaves, pitches, phases,
+                          n_steps=o.n_steps, max_power=o.max_power, scheme=o.scheme,
+                          progress=report)
+
+
+def sinusoid_motion(sweep: SweepResult, index: int, n_steps: int) -> DiscreteMotion:
+    """The discrete motion of one swept sinusoid."""
+    return harmonic_to_discrete(sweep.frequency[index], sweep.heave_amplitude[index],
+                                sweep.pitch_amplitude[index], sweep.phase[index], n_steps)
+
+
+def starting_points(sweep: SweepResult, n_steps: int, n_starts: int
+                    ) -> list[tuple[str, DiscreteMotion]]:
+    """The best feasible sinusoid and up to n_starts - 1 others spread along the feasible
+    Pareto front."""
+    best = sweep.best_feasible()
+    feas = np.flatnonzero(sweep.feasible)
+    front = feas[pareto_front(sweep.mean_thrust[feas], sweep.mean_power[feas])]
+    picks = [best]
+    if n_starts > 1 and len(front):
+        for i in front[np.unique(np.linspace(0, len(front) - 1, n_starts - 1).round()
+                                 .astype(int))]:
+            if i not in picks:
+                picks.append(int(i))
+    labels = []
+    for i in picks[:n_starts]:
+        tag = "best sinusoid" if i == best else "Pareto sinusoid"
+        labels.append((f"{tag} f={sweep.frequency[i]:.3g} Hz h={sweep.heave_amplitude[i]:.3g}"
+                       f" m th={np.rad2deg(sweep.pitch_amplitude[i]):.0f} deg "
+                       f"phi={np.rad2deg(sweep.phase[i]):.0f} deg",
+                       sinusoid_motion(sweep, i, n_steps)))
+    return labels
+
+
+@dataclass
+class BetaStudy:
+    """Optimised motions for each beta, with the sinusoid baseline."""
+
+    sweep: SweepResult
+    best_sinusoid: int
+    sqp: dict[float, OptimisationResult]
+    sqp_all: dict[float, list[OptimisationResult]]
+    ipopt: dict[float, OptimisationResult] = field(default_factory=dict)
+
+    @property
+    def thrust_gain(self) -> float:
+        """beta = 0 mean-thrust gain over the best feasible sinusoid (fraction)."""
+        base = float(self.sweep.mean_thrust[self.best_sinusoid])
+        return float(self.sqp[min(self.sqp)].summary.mean_thrust) / base - 1.0
+
+
+def beta_study(config: CaseConfig, betas: Sequence[float] | None = None, n_starts: int = 3,
+               with_ipopt: bool = True, model=None, sweep: SweepResult | None = None,
+               progress: Progress | None = None) -> BetaStudy:
+    """Best feasible sinusoid, then multi-start SQP (and IPOPT) for each beta."""
+    o = config.optimisation
+    model = model or config.morison_model()
+    sweep = sweep if sweep is not None else default_sweep(config, model, progress)
+    best = sweep.best_feasible()
+    starts = starting_points(sweep, o.n_steps, n_starts)
+    sqp, sqp_all, ipopt = {}, {}, {}
+    for beta in betas if betas is not None else o.betas:
+        problem = problem_for(config, beta, model)
+        sqp[beta], sqp_all[beta] = multistart(problem, starts, min_period=o.min_period,
+                                              max_period=o.max_period, progress=progress)
+        if with_ipopt:
+            ipopt[beta] = optimise_ipopt(problem, starts[0][1], min_period=o.min_period,
+                                         max_period=o.max_period, start_label=starts[0][0])
+            if progress is not None:
+                r = ipopt[beta]
+                progress(f"beta {beta:g} IPOPT (hard constraints): thrust "
+                         f"{float(r.summary.mean_thrust):.3g} N, {r.message}")
+    return BetaStudy(sweep, best, sqp, sqp_all, ipopt)
+
+
+def gain_table(config: CaseConfig, n_steps: Sequence[int] = (25, 50, 100),
+               smoothing_factors: Sequence[float] = (0.1, 1.0, 10.0), model=None,
+               sweep: SweepResult | None = None, progress: Progress | None = None
+               ) -> dict[str, np.ndarray]:
+    """beta = 0 thrust gain over the best feasible sinusoid for several N and smoothing
+    weights (both epsilons scaled by the factor), each from the best sinusoid.
+
+    Returns arrays ``gain`` (n_N, n_factors), ``thrust`` N, ``strouhal_number``, ``flagged``.
+    """
+    from dataclasses import replace
+
+    from mfflap.optimisation.optimise import optimise_sqp
+
+    model = model or config.morison_model()
+    sweep = sweep if sweep is not None else default_sweep(config, model, progress)
+    best = sweep.best_feasible()
+    base = float(sweep.mean_thrust[best])
+    shape = (len(n_steps), len(smoothing_factors))
+    out = {k: np.full(shape, np.nan) for k in ("gain", "thrust", "strouhal_number")}
+    out["flagged"] = np.zeros(shape, dtype=bool)
+    o = config.optimisation
+    for i, n in enumerate(n_steps):
+        start = resample(sinusoid_motion(sweep, best, o.n_steps), n)
+        for j, fac in enumerate(smoothing_factors):
+            settings = replace(o, n_steps=n, smoothing_pitch=o.smoothing_pitch * fac,
+                               smoothing_heave=o.smoothing_heave * fac)
+            problem = problem_for(config, 0.0, model, settings)
+            r = optimise_sqp(problem, start, min_period=o.min_period, max_period=o.max_period)
+            out["thrust"][i, j] = float(r.summary.mean_thrust)
+            out["gain"][i, j] = out["thrust"][i, j] / base - 1.0
+            out["strouhal_number"][i, j] = float(r.summary.strouhal_number)
+            out["flagged"][i, j] = bool(r.flags)
+            if progress is not None:
+                progress(f"gain table N={n} smoothing x{fac:g}: {out['gain'][i, j]:+.1%}")
+    out["n_steps"] = np.asarray(n_steps)
+    out["smoothing_factors"] = np.asarray(smoothing_factors)
+    out["baseline_thrust"] = np.asarray(base)
+    return out

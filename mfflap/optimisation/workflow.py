@@ -1,0 +1,34 @@
+"""Run and store the optimisation study of a case."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+
+from mfflap.config import CaseConfig
+from mfflap.optimisation.store import beta_key, problem_settings, write_result, write_sweep
+from mfflap.optimisation.study import BetaStudy, problem_for
+from mfflap.results import ResultsFile
+
+GAIN_UNITS = {"gain": "1", "thrust": "N", "strouhal_number": "1", "flagged": "1",
+              "n_steps": "1", "smoothing_factors": "1", "baseline_thrust": "N"}
+
+
+def write_study(rf: ResultsFile, config: CaseConfig, study: BetaStudy,
+                gain: Mapping[str, np.ndarray] | None = None, model=None,
+                prefix: str = "optimisation") -> None:
+    """Store the sweep, every beta's SQP optimum (and all starts), IPOPT results, the gain."""
+    write_sweep(rf, f"{prefix}/sweep", study.sweep, study.best_sinusoid)
+    o = config.optimisation
+    for beta, r in study.sqp.items():
+        settings = {**problem_settings(problem_for(config, beta, model)), "n_steps": o.n_steps,
+                    "min_period": o.min_period, "max_period": o.max_period}
+        write_result(rf, f"{prefix}/sqp/{beta_key(beta)}", r, settings)
+        for k, other in enumerate(study.sqp_all.get(beta, [])):
+            write_result(rf, f"{prefix}/sqp_starts/{beta_key(beta)}/start_{k}", other, settings)
+        if beta in study.ipopt:
+            write_result(rf, f"{prefix}/ipopt/{beta_key(beta)}", study.ipopt[beta], settings)
+    rf.h5[prefix].attrs["thrust_gain_beta0"] = study.thrust_gain
+    if gain is not None:
+        rf.write_group(f"{prefix}/gain_table", gain, GAIN_UNITS)

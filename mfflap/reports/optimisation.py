@@ -1,0 +1,146 @@
+"""Figures and report sections of the optimisation study (the paper's Figure 4)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.figure import Figure
+
+from mfflap.kinematics.discrete import DiscreteMotion
+from mfflap.optimisation.optimise import OptimisationResult
+from mfflap.performance import evaluate_discrete
+from mfflap.reports.html import Report, figure_html, table_html, text_html
+from mfflap.sweep import SweepResult, pareto_front
+
+
+def pareto_figure(sweep: SweepResult, best: int,
+                  optimised: Mapping[float, OptimisationResult] | None = None) -> Figure:
+    """(a) mean thrust vs mean power, (b) thrust vs efficiency; feasible set and front."""
+    fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4))
+    feas = sweep.feasible
+    for ax, x in ((a, sweep.mean_power), (b, sweep.efficiency)):
+        ax.scatter(x[~feas], sweep.mean_thrust[~feas], s=2, c="0.85", label="infeasible")
+        ax.scatter(x[feas], sweep.mean_thrust[feas], s=3, c="C0", label="feasible")
+        ax.plot(x[best], sweep.mean_thrust[best], "k*", ms=12, label="best feasible sinusoid")
+    idx = np.flatnonzero(feas)
+    front = idx[pareto_front(sweep.mean_thrust[idx], sweep.mean_power[idx])]
+    a.plot(sweep.mean_power[front], sweep.mean_thrust[front], "C3-", lw=1.5,
+           label="constrained Pareto front")
+    for beta, r in (optimised or {}).items():
+        s = r.summary
+        a.plot(float(s.mean_power), float(s.mean_thrust), "o", ms=8, mec="k",
+               label=f"optimised β = {beta:g}")
+        b.plot(float(s.efficiency), float(s.mean_thrust), "o", ms=8, mec="k")
+    a.set_xlabel("mean input power [W]")
+    b.set_xlabel("efficiency η")
+    b.set_xlim(-0.2, 1.0)
+    for ax in (a, b):
+        ax.set_ylabel("mean thrust [N]")
+    a.legend(fontsize=7, markerscale=2)
+    fig.tight_layout()
+    return fig
+
+
+def cycle_curves(model, motion: DiscreteMotion, scheme: str) -> dict[str, np.ndarray]:
+    """Pitch, heave, thrust and power over a full cycle, normalised time t/T."""
+    ev = evaluate_discrete(model, motion, scheme)  # type: ignore[arg-type]
+    t, pitch, heave = motion.full_cycle_positions()
+    period = float(motion.period)
+    return {"t": t / period, "pitch_deg": np.rad2deg(pitch), "heave": heave,
+            "thrust": np.concatenate([ev.thrust, ev.thrust]),
+            "power": np.concatenate([ev.input_power, ev.input_power])}
+
+
+def motion_figure(model, motions: Mapping[str, DiscreteMotion], scheme: str,
+                  max_power: float | None = None) -> Figure:
+    """Figure 4c-e: pitch, heave, thrust and input power over one cycle per motion."""
+    fig, axes = plt.subplots(2, 2, figsize=(11, 6), sharex=True)
+    for label, m in motions.items():
+        c = cycle_curves(model, m, scheme)
+        ls = "--" if "sinusoid" in label else "-"
+        axes[0, 0].plot(c["t"], c["pitch_deg"], ls, label=label)
+        axes[0, 1].plot(c["t"], c["heave"], ls)
+        axes[1, 0].plot(c["t"], c["thrust"], ls)
+        axes[1, 1].plot(c["t"], c["power"], ls)
+    if max_power is not None:
+        axes[1, 1].axhline(max_power, color="k", ls=":", label="P_max")
+        axes[1, 1].legend(fontsize=8)
+    for ax, lab in zip(axes.flat, ("pitch θ [deg]", "heave h [m]", "thrust [N]",
+                                   "input power [W]"), strict=True):
+        ax.set_ylabel(lab)
+    for ax in axes[1]:
+        ax.set_xlabel("t / T")
+    axes[0, 0].legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def history_figure(results: Mapping[float, OptimisationResult]) -> Figure:
+    """Objective over the SQP iterations (all continuation stages) for each beta."""
+    fig, ax = plt.subplots(figsize=(6, 3.4))
+    for beta, r in results.items():
+        h = r.history
+        if len(h):
+            ax.plot(np.arange(1, len(h) + 1), h - h.min() + 1e-12, label=f"β = {beta:g}")
+    ax.set_yscale("log")
+    ax.set_xlabel("SQP iteration")
+    ax.set_ylabel("J - min J")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def result_rows(label: str, r: OptimisationResult) -> list[object]:
+    """One table row of an optimised motion."""
+    s = r.summary
+    return [label, r.method, float(s.mean_thrust), float(s.mean_power), float(s.efficiency),
+            float(s.strouhal_number), float(r.motion.period), float(s.max_power),
+            r.resampled_max_power, "yes" if r.converged else f"NO: {r.message}",
+            "; ".join(r.flags) or "none"]
+
+
+RESULT_HEADER = ["motion", "method", "mean thrust [N]", "mean power [W]", "η", "St",
+                 "period [s]", "max power [W]", "max power at 10N [W]", "converged", "flags"]
+
+
+def add_optimisation_sections(rep: Report, study, model, scheme: str, max_power: float,
+                              gain: Mapping[str, np.ndarray] | None = None) -> None:
+    """Sections of the optimisation study (sweep, beta sweep, IPOPT, gain table)."""
+    sw, best = study.sweep, study.best_sinusoid
+    s = rep.section("Sinusoidal sweep and constrained Pareto front")
+    s.blocks.append(text_html(
+        f"{len(sw.frequency)} sinusoids, {int(sw.feasible.sum())} feasible under P_max = "
+        f"{max_power:g} W. Best feasible: f = {sw.frequency[best]:.3g} Hz, h_amp = "
+        f"{sw.heave_amplitude[best]:.3g} m, θ_amp = {np.rad2deg(sw.pitch_amplitude[best]):.0f}°"
+        f", φ = {np.rad2deg(sw.phase[best]):.0f}°, mean thrust {sw.mean_thrust[best]:.3g} N."))
+    s.blocks.append(figure_html(pareto_figure(sw, best, study.sqp),
+                                "Mean thrust against mean power and efficiency (Fig. 4a,b)"))
+    s = rep.section("Optimised motions (β sweep)")
+    rows = [result_rows(f"β = {b:g}", r) for b, r in study.sqp.items()]
+    rows += [result_rows(f"β = {b:g}", r) for b, r in study.ipopt.items()]
+    s.blocks.append(table_html(RESULT_HEADER, rows))
+    s.blocks.append(text_html(f"β = 0 thrust gain over the best feasible sinusoid: "
+                              f"{study.thrust_gain:+.1%} (the paper: +50.29 %)."))
+    for b, r in study.sqp.items():
+        if r.flags:
+            s.blocks.append(text_html(f"β = {b:g}: " + " ".join(r.flags), warn=True))
+    from mfflap.optimisation.study import sinusoid_motion
+
+    motions = {"best sinusoid": sinusoid_motion(sw, best, next(iter(study.sqp.values()))
+                                                .motion.n_steps)}
+    motions.update({f"β = {b:g}": r.motion for b, r in study.sqp.items()})
+    s.blocks.append(figure_html(motion_figure(model, motions, scheme, max_power),
+                                "Motion, thrust and power over a cycle (Fig. 4c-e)"))
+    s.blocks.append(figure_html(history_figure(study.sqp), "SQP convergence"))
+    if gain is not None:
+        s = rep.section("β = 0 gain against N and the smoothing weights")
+        header = ["N"] + [f"ε × {f:g}" for f in gain["smoothing_factors"]]
+        rows = [[int(n)] + [f"{g:+.1%}{' (flagged)' if fl else ''}" for g, fl in
+                            zip(gain["gain"][i], gain["flagged"][i], strict=True)]
+                for i, n in enumerate(gain["n_steps"])]
+        s.blocks.append(table_html(header, rows))

@@ -1,0 +1,118 @@
+"""Optimisers: SQP with the adjoint vs IPOPT, non-convergence, artefact flags, storage, CLI."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from mfflap.config import load_case
+from mfflap.errors import ConfigError
+from mfflap.kinematics.convert import harmonic_to_discrete
+from mfflap.optimisation.optimise import assess, optimise_ipopt, optimise_sqp
+from mfflap.optimisation.problem import FlappingProblem
+from mfflap.optimisation.store import read_result, write_result
+from mfflap.results import ResultsFile
+
+CASE = Path(__file__).parents[1] / "cases" / "paper2026.toml"
+START = harmonic_to_discrete(2.1, 0.05, np.deg2rad(50), np.deg2rad(112.5), 30)
+
+
+def problem(beta, **kw):
+    c = load_case(CASE)
+    o = c.optimisation
+    args = {"max_power": o.max_power, "max_heave": o.max_heave, "penalty_power": o.penalty_power,
+            "penalty_heave": o.penalty_heave, "smoothing_pitch": o.smoothing_pitch,
+            "smoothing_heave": o.smoothing_heave, "scheme": "midpoint", **kw}
+    return FlappingProblem(c.morison_model(), beta, **args)
+
+
+def test_sqp_and_ipopt_reach_the_same_optimum():
+    p = problem(0.5)
+    sqp = optimise_sqp(p, START, min_period=0.2, max_period=20.0)
+    ipo = optimise_ipopt(p, START, min_period=0.2, max_period=20.0)
+    assert sqp.converged and ipo.converged
+    assert sqp.objective < float(p.objective(START))  # improved on the start
+    assert float(sqp.summary.mean_thrust) == pytest.approx(float(ipo.summary.mean_thrust),
+                                                           rel=0.02)
+    assert float(sqp.motion.period) == pytest.approx(float(ipo.motion.period), rel=0.05)
+    # the hard constraints hold at the samples
+    assert float(ipo.summary.max_power) <= p.max_power * (1 + 1e-6)
+    # the penalty optimum violates P_max only slightly at sigma_P = 10
+    assert float(sqp.summary.max_power) <= p.max_power * 1.02
+    # the optimum is a stationary point of the penalised objective
+    g = p.gradient(sqp.motion).flat()
+    g0 = p.gradient(START).flat()
+    assert np.linalg.norm(g[:-1]) < 1e-2 * np.linalg.norm(g0[:-1])
+
+
+def test_beta0_optimum_beats_the_starting_sinusoid_under_the_power_limit():
+    p = problem(0.0)
+    r = optimise_sqp(p, START, min_period=0.2, max_period=20.0)
+    base = assess(p, START)[0]
+    assert float(r.summary.mean_thrust) > 1.2 * float(base.mean_thrust)
+    assert float(r.summary.max_power) < 1.02 * p.max_power
+    assert np.all(np.diff(r.history[: 5]) <= 1e-9) or len(r.history) < 5
+
+
+def test_non_convergence_is_reported_with_the_last_iterate():
+    p = problem(0.0)
+    r = optimise_sqp(p, START, min_period=0.2, max_period=20.0, max_iterations=2,
+                     continuation=(1.0,))
+    assert not r.converged
+    assert "Iteration limit" in r.message or "iteration" in r.message.lower()
+    assert r.motion.n_steps == START.n_steps and np.isfinite(r.objective)
+
+
+def test_bad_continuation_and_period_bounds_are_refused():
+    p = problem(0.0)
+    with pytest.raises(ConfigError, match=r"ending at 1\.0"):
+        optimise_sqp(p, START, min_period=0.2, max_period=20.0, continuation=(0.1, 0.5))
+    from mfflap.config import loads_case
+    with pytest.raises(ConfigError, match="exclude every period"):
+        loads_case("[optimisation]\nmin_period = 5.0\nmax_period = 1.0\n")
+
+
+def test_artefact_flags():
+    """A sinusoid whose sampled peak power is near P_max but whose true peak is far above."""
+    coarse = harmonic_to_discrete(2.0, 0.3, np.deg2rad(30), np.deg2rad(90), 4)
+    p = problem(0.0, scheme="paper", max_power=1e9)
+    s, peak, _ = assess(p, coarse)
+    p_tight = problem(0.0, scheme="paper", max_power=float(s.max_power))
+    _, peak2, flags2 = assess(p_tight, coarse)
+    assert peak2 == pytest.approx(peak)
+    if peak > 1.05 * float(s.max_power):
+        assert any("after resampling" in f for f in flags2)
+    # the paper scheme's energy residual at N = 4 is a large share of the mean power
+    assert any("energy residual" in f for f in flags2)
+    fine = harmonic_to_discrete(0.5, 0.1, np.deg2rad(10), np.deg2rad(90), 200)
+    assert assess(problem(0.0, max_power=1e9), fine)[2] == []
+
+
+def test_result_round_trip(tmp_path):
+    p = problem(0.5)
+    r = optimise_sqp(p, START, min_period=0.2, max_period=20.0, max_iterations=5)
+    with ResultsFile(tmp_path / "o.h5", "w", kind="optimisation") as rf:
+        write_result(rf, "opt/beta_0.50", r, {"n_steps": 30, "scheme": "midpoint"})
+    with ResultsFile(tmp_path / "o.h5") as rf:
+        back = read_result(rf, "opt/beta_0.50")
+        assert rf.h5["opt/beta_0.50"].attrs["setting_scheme"] == "midpoint"
+    np.testing.assert_array_equal(back.motion.pitch_acceleration, r.motion.pitch_acceleration)
+    assert back.converged == r.converged and back.flags == r.flags
+
+
+@pytest.mark.slow
+def test_optimise_cli_writes_results_and_report(tmp_path):
+    out = tmp_path / "opt.h5"
+    res = CliRunner().invoke(__import__("mfflap.cli.main", fromlist=["cli"]).cli,
+                             ["optimise", str(CASE), "--betas", "0.5", "--starts", "1",
+                              "--no-ipopt", "--output", str(out), "--json"])
+    assert res.exit_code == 0, res.output
+    data = json.loads(res.output[res.output.index("{"):])
+    assert data["optimised"]["0.5"]["converged"] is True
+    html = out.with_suffix(".html").read_text()
+    assert html.count("<img") >= 3 and "Pareto" in html
+    with ResultsFile(out) as rf:
+        assert "optimisation/sqp/beta_0.50/motion" in rf.h5
+        assert rf.h5["optimisation/sweep/mean_thrust"].attrs["units"] == "N"
