@@ -147,3 +147,17 @@ def test_identify_cli_report_and_hdf5_round_trip(tmp_path):
     text = html_path.read_text()
     assert text.count("<img") >= 10 and "pimpleFoam diverged" in text
     assert "Sensitivity to the frequency weighting" in text
+
+
+def test_one_step_cfd_glitch_is_removed_and_reported():
+    rng = np.random.default_rng(5)
+    rec = synthetic_records(rng, noise=0.0, subset=grid_cases(IdentificationGrid(), [1.0],
+                                                              [0.3], [90]), n=3000)[0]
+    clean = prepare_case(rec)
+    assert clean.notes == []
+    i = int(np.searchsorted(rec.time, 1.94))
+    rec.loads.normal_force[i] += 40 * np.ptp(rec.loads.normal_force)
+    glitched = prepare_case(rec)
+    assert len(glitched.notes) == 1 and "normal_force: 1 spike" in glitched.notes[0]
+    np.testing.assert_allclose(glitched.cfd.normal_force, clean.cfd.normal_force,
+                               atol=2e-2 * np.ptp(clean.cfd.normal_force))

@@ -31,16 +31,20 @@ def cli() -> None:
 
 
 def _register_subgroups() -> None:
+    from mfflap.cli.backtest import backtest
     from mfflap.cli.campaign import campaign
     from mfflap.cli.cfd import cfd
     from mfflap.cli.identify import identify, report
     from mfflap.cli.optimise import optimise
+    from mfflap.cli.run import run_cmd
 
     cli.add_command(cfd)
     cli.add_command(campaign)
     cli.add_command(identify)
     cli.add_command(report)
     cli.add_command(optimise)
+    cli.add_command(backtest)
+    cli.add_command(run_cmd)
 
 
 def _echo_json(data) -> None:

@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.ndimage import median_filter
 
 from mfflap.campaign.records import CfdRecord
 from mfflap.errors import MfflapError
@@ -41,6 +42,7 @@ class CaseData:
     parameters: dict
     state: KinematicState
     cfd: Loads
+    notes: list[str] = field(default_factory=list)
 
     @property
     def frequency(self) -> float:
@@ -68,6 +70,25 @@ class CaseData:
 def _resample_state(state: KinematicState, t: np.ndarray) -> KinematicState:
     return KinematicState(time=t, **{k: np.interp(t, state.time, getattr(state, k))
                                      for k in _STATE_KEYS})
+
+
+def despike(values: np.ndarray, window: int = 9, threshold: float = 12.0,
+            min_share: float = 0.25) -> tuple[np.ndarray, np.ndarray]:
+    """Replace isolated one-to-few-step spikes by the running median.
+
+    A sample is a spike when it departs from the running median (``window`` samples) by more
+    than ``threshold`` times the median absolute departure *and* by more than ``min_share``
+    of the signal's robust range (2nd to 98th percentile). CFD time steps are far shorter
+    than the flow's time scales, so real force variations pass; the one-step pressure glitches
+    a PIMPLE step can produce do not. Returns the cleaned values and the spike mask.
+    """
+    med = median_filter(values, size=window, mode="nearest")
+    dev = np.abs(values - med)
+    mad = float(np.median(dev))
+    scale = max(mad, 1e-6 * float(np.max(np.abs(values))) + 1e-300)
+    lo, hi = np.percentile(values, [2.0, 98.0])
+    mask = (dev > threshold * scale) & (dev > min_share * (hi - lo))
+    return np.where(mask, med, values), mask
 
 
 def prepare_case(record: CfdRecord, discard_time: float = 0.75, n_samples: int = 400,
@@ -100,9 +121,16 @@ def prepare_case(record: CfdRecord, discard_time: float = 0.75, n_samples: int =
     n = int(min(n_samples, max(8, np.sum(t >= start))))
     tu = np.linspace(start, t[-1], n)
     state = _resample_state(record.state, tu)
-    cfd = Loads(tu, *(np.interp(tu, t, getattr(record.loads, k)) for k in COMPONENTS),
-                source=record.loads.source)
-    return CaseData(record.name, dict(record.parameters), state, cfd)
+    notes, cleaned = [], []
+    for k in COMPONENTS:
+        values, mask = despike(getattr(record.loads, k))
+        if mask.any():
+            first = t[np.argmax(mask)]
+            notes.append(f"{k}: {int(mask.sum())} spike sample(s) replaced by the running "
+                         f"median (first at t = {first:.4g} s)")
+        cleaned.append(np.interp(tu, t, values))
+    cfd = Loads(tu, *cleaned, source=record.loads.source)
+    return CaseData(record.name, dict(record.parameters), state, cfd, notes)
 
 
 def prepare_cases(records: Sequence[CfdRecord], discard_time: float = 0.75,

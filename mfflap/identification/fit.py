@@ -74,6 +74,7 @@ class IdentificationResult:
     case_parameters: list[dict]
     metrics: dict[str, dict[str, np.ndarray]]
     excluded: dict[str, str] = field(default_factory=dict)
+    notes: dict[str, list[str]] = field(default_factory=dict)
 
     def model(self, base: ForceModel) -> ForceModel:
         """``base`` with the fitted coefficients."""
@@ -224,6 +225,7 @@ def identify(cases: Sequence[CaseData], model: ForceModel,
         components=tuple(components), case_names=[c.name for c in cases],
         case_parameters=[dict(c.parameters) for c in cases],
         metrics=score(cases, fitted_model), excluded=dict(excluded or {}),
+        notes={c.name: list(c.notes) for c in cases if c.notes},
     )
 
 

@@ -33,7 +33,7 @@ def write_identification(rf: ResultsFile, result: IdentificationResult,
              "strategy": result.strategy, "components": json.dumps(result.components),
              "case_names": json.dumps(result.case_names),
              "case_parameters": json.dumps(result.case_parameters),
-             "excluded": json.dumps(result.excluded)}
+             "excluded": json.dumps(result.excluded), "notes": json.dumps(result.notes)}
     rf.write_group(group, arrays, units, attrs)
     return group
 
@@ -57,7 +57,7 @@ def read_identification(rf: ResultsFile, group: str) -> IdentificationResult:
         components=tuple(json.loads(attrs["components"])),
         case_names=json.loads(attrs["case_names"]),
         case_parameters=json.loads(attrs["case_parameters"]), metrics=metrics,
-        excluded=json.loads(attrs["excluded"]),
+        excluded=json.loads(attrs["excluded"]), notes=json.loads(attrs.get("notes", "{}")),
     )
 
 

@@ -177,7 +177,17 @@ def identification_report(path: str | Path, results: Mapping[str, Identification
     rep = Report("Identification of the Morison coefficients",
                  f"{len(first.case_names)} CFD cases{f' from {source}' if source else ''}; "
                  f"fitted components: {', '.join(first.components)}")
-    s = rep.section("Coefficients")
+    add_identification_sections(rep, results, cases, base_model, velocity, source)
+    return rep.write(path)
+
+
+def add_identification_sections(rep: Report, results: Mapping[str, IdentificationResult],
+                                cases: Sequence[CaseData], base_model: ForceModel,
+                                velocity: float, source: str = "") -> None:
+    """Coefficients, agreement maps, overlays, applicability and weighting sensitivity."""
+    first = next(iter(results.values()))
+    s = rep.section(f"Identified coefficients ({len(first.case_names)} CFD cases"
+                    f"{f' from {source}' if source else ''})")
     s.blocks.append(table_html(["weighting", "term", "value", "bootstrap s.e.", "2.5 %",
                                 "97.5 %"], _coefficient_rows(results)))
     s.blocks.append(figure_html(coefficient_figure(results),
@@ -189,6 +199,10 @@ def identification_report(path: str | Path, results: Mapping[str, Identification
         s.blocks.append(text_html("Some frequencies have a single case: the case bootstrap "
                                   "cannot resample them and understates the uncertainty.",
                                   warn=True))
+    if first.notes:
+        s.blocks.append(text_html("Data cleaning (one-step CFD force glitches):"))
+        s.blocks.append(table_html(["case", "what was done"],
+                                   [(k, "; ".join(v)) for k, v in sorted(first.notes.items())]))
     if first.excluded:
         s.blocks.append(text_html("Cases left out of the fit:", warn=True))
         s.blocks.append(table_html(["case", "reason"], sorted(first.excluded.items())))
@@ -223,4 +237,3 @@ def identification_report(path: str | Path, results: Mapping[str, Identification
                                     "input_power")])
         sec.blocks.append(table_html(["weighting", "median NRMSE F_n", "F_t", "M", "thrust",
                                       "power"], rows))
-    return rep.write(path)

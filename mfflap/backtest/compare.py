@@ -1,0 +1,99 @@
+"""Compare the CFD of a periodic motion with the model over its last simulated cycle."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from mfflap.campaign.records import CfdRecord
+from mfflap.metrics import nrmse, pearson
+from mfflap.performance import thrust_and_power
+
+
+@dataclass
+class BacktestComparison:
+    """Model against CFD over the last cycle (the CFD's own time base).
+
+    Attributes
+    ----------
+    time : s; cfd_thrust, model_thrust : N; cfd_power, model_power : W
+    nrmse, pearson : dict per signal (thrust, input_power, normal_force, moment)
+    cfd_mean_thrust, model_mean_thrust : N; cfd_mean_power, model_mean_power : W
+    cfd_max_power : W; max_power_ok : bool (CFD's instantaneous power <= P_max)
+    cycle_to_cycle_thrust_change : fraction between the last two cycles (periodicity check)
+    """
+
+    time: np.ndarray
+    cfd_thrust: np.ndarray
+    model_thrust: np.ndarray
+    cfd_power: np.ndarray
+    model_power: np.ndarray
+    nrmse: dict[str, float]
+    pearson: dict[str, float]
+    cfd_mean_thrust: float
+    model_mean_thrust: float
+    cfd_mean_power: float
+    model_mean_power: float
+    cfd_max_power: float
+    max_power_ok: bool
+    cycle_to_cycle_thrust_change: float
+
+    @property
+    def mean_thrust_error(self) -> float:
+        """(model - CFD) / |CFD| mean thrust."""
+        return (self.model_mean_thrust - self.cfd_mean_thrust) / max(abs(self.cfd_mean_thrust),
+                                                                     1e-12)
+
+    @property
+    def mean_power_error(self) -> float:
+        """(model - CFD) / |CFD| mean input power."""
+        return (self.model_mean_power - self.cfd_mean_power) / max(abs(self.cfd_mean_power),
+                                                                   1e-12)
+
+    def as_dict(self) -> dict[str, float | bool | dict]:
+        """Scalars only (for JSON and HDF5 attributes)."""
+        return {"nrmse": self.nrmse, "pearson": self.pearson,
+                "cfd_mean_thrust": self.cfd_mean_thrust,
+                "model_mean_thrust": self.model_mean_thrust,
+                "cfd_mean_power": self.cfd_mean_power, "model_mean_power": self.model_mean_power,
+                "mean_thrust_error": self.mean_thrust_error,
+                "mean_power_error": self.mean_power_error, "cfd_max_power": self.cfd_max_power,
+                "max_power_ok": self.max_power_ok,
+                "cycle_to_cycle_thrust_change": self.cycle_to_cycle_thrust_change}
+
+
+def _time_mean(t: np.ndarray, y: np.ndarray) -> float:
+    return float(np.trapezoid(y, t) / (t[-1] - t[0]))
+
+
+def compare_last_cycle(record: CfdRecord, model, period: float,
+                       max_power: float) -> BacktestComparison:
+    """Model (on the imposed kinematics) against CFD over the last full period of the record."""
+    t = record.time
+    end = t[-1]
+    last = t >= end - period
+    prev = (t >= end - 2 * period) & (t < end - period)
+    state = record.state
+    pred = model.loads(state)
+    m_thrust, m_power = thrust_and_power(pred, state)
+    c_thrust, c_power = thrust_and_power(record.loads, state)
+    signals = {"thrust": (m_thrust, c_thrust), "input_power": (m_power, c_power),
+               "normal_force": (pred.normal_force, record.loads.normal_force),
+               "moment": (pred.moment, record.loads.moment)}
+    nr = {k: float(nrmse(m[last], c[last])) for k, (m, c) in signals.items()}
+    pe = {k: float(pearson(m[last], c[last])) for k, (m, c) in signals.items()}
+    tl = t[last]
+    cfd_mean_thrust = _time_mean(tl, c_thrust[last])
+    change = np.nan
+    if prev.sum() > 4:
+        before = _time_mean(t[prev], c_thrust[prev])
+        change = abs(cfd_mean_thrust - before) / max(abs(cfd_mean_thrust), 1e-12)
+    cfd_max = float(np.max(c_power[last]))
+    return BacktestComparison(
+        time=tl, cfd_thrust=c_thrust[last], model_thrust=m_thrust[last],
+        cfd_power=c_power[last], model_power=m_power[last], nrmse=nr, pearson=pe,
+        cfd_mean_thrust=cfd_mean_thrust, model_mean_thrust=_time_mean(tl, m_thrust[last]),
+        cfd_mean_power=_time_mean(tl, c_power[last]),
+        model_mean_power=_time_mean(tl, m_power[last]), cfd_max_power=cfd_max,
+        max_power_ok=bool(cfd_max <= max_power), cycle_to_cycle_thrust_change=float(change))

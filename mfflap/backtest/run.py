@@ -1,0 +1,142 @@
+"""Run (or find) the CFD of an optimised motion and compare it with the model.
+
+The CFD comes, in this order, from: a live OpenFOAM run (``live=True`` and OpenFOAM
+installed), or a precomputed record keyed by :func:`motion_key` in the fixture folders. A
+motion with neither is reported as not back-tested, with the reason; it is never skipped
+silently.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from mfflap.backtest.compare import BacktestComparison, compare_last_cycle
+from mfflap.campaign.records import CfdRecord, read_record, write_record
+from mfflap.errors import MfflapError
+from mfflap.kinematics.continuous import PeriodicSplineMotion
+from mfflap.kinematics.convert import to_spline
+from mfflap.kinematics.discrete import DiscreteMotion
+
+
+def motion_key(motion: DiscreteMotion, digits: int = 4) -> str:
+    """A short hash of a motion's period and full-cycle pitch and heave (rounded).
+
+    Rounding to ``digits`` significant digits (relative to each signal's amplitude) keeps the
+    key stable against last-bit differences between machines.
+    """
+    _, pitch, heave = motion.full_cycle_positions()
+    h = hashlib.sha256()
+    for arr in (np.atleast_1d(motion.period), pitch, heave):
+        arr = np.real(np.asarray(arr, dtype=float))
+        scale = max(float(np.max(np.abs(arr))), 1e-12)
+        h.update((np.round(arr / scale, digits) + 0.0).tobytes())  # + 0.0: no -0.0
+        h.update(f"{scale:.{digits}g}".encode())
+    return h.hexdigest()[:16]
+
+
+@dataclass
+class BacktestOutcome:
+    """What happened to one motion's back-test."""
+
+    label: str
+    key: str
+    status: str  # "back-tested" | "not back-tested"
+    source: str  # "live OpenFOAM" | "fixture <path>" | reason it is missing
+    record: CfdRecord | None = None
+    comparison: BacktestComparison | None = None
+
+
+def cfd_motion(motion: DiscreteMotion) -> PeriodicSplineMotion:
+    """The continuous motion imposed in CFD (periodic spline through the full cycle)."""
+    return to_spline(motion)
+
+
+def _matching_fixture(key: str, motion: DiscreteMotion, folders: Sequence[Path],
+                      tolerance: float = 2e-3) -> Path | None:
+    """A record with this key; else one whose stored motion matches within ``tolerance``."""
+    for folder in folders:
+        exact = folder / f"backtest_{key}.h5"
+        if exact.exists():
+            return exact
+    spline = cfd_motion(motion)
+    for folder in folders:
+        for path in sorted(folder.glob("backtest_*.h5")):
+            rec = read_record(path)
+            if abs(float(rec.parameters.get("period", -1)) - spline.period) > tolerance * \
+                    spline.period:
+                continue
+            ref = spline.sample(rec.time)
+            scale_p = max(np.ptp(ref.pitch_angle), 1e-9)
+            scale_h = max(np.ptp(ref.heave_position), 1e-9)
+            start = float(rec.parameters.get("ramp_time", 0.0))
+            after = rec.time >= start
+            dp = np.max(np.abs(rec.state.pitch_angle[after] - ref.pitch_angle[after])) / scale_p
+            h0 = spline.sample(np.array([0.0])).heave_position[0]
+            dh = np.max(np.abs(rec.state.heave_position[after] - (ref.heave_position[after]
+                                                                   - h0))) / scale_h
+            if dp < tolerance and dh < tolerance:
+                return path
+    return None
+
+
+def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float, *,
+                    fixture_folders: Sequence[str | Path] = (), live: bool = False,
+                    work_dir: str | Path | None = None, n_cycles: float = 3.0,
+                    mesh: str = "coarse", plate=None, fluid=None, stream=None,
+                    save_to: str | Path | None = None) -> BacktestOutcome:
+    """Back-test one periodic motion: run or find its CFD, compare the last cycle.
+
+    Parameters
+    ----------
+    live
+        Run OpenFOAM (requires it installed and ``work_dir``).
+    save_to
+        Folder where a live run's record is written as ``backtest_<key>.h5`` (a fixture).
+    """
+    from mfflap.campaign.openfoam_run import run_motion
+    from mfflap.cfd.openfoam.runner import openfoam_available
+
+    key = motion_key(motion)
+    spline = cfd_motion(motion)
+    period = spline.period
+    folders = [Path(f) for f in fixture_folders if Path(f).is_dir()]
+    record = None
+    source = ""
+    if live:
+        if not openfoam_available():
+            source = "OpenFOAM is not installed"
+        elif work_dir is None:
+            source = "no work folder for the live run"
+        else:
+            name = f"backtest_{key}"
+            params = {"kind": "periodic_spline", "label": label, "period": period,
+                      "n_steps": motion.n_steps, "ramp_time": 0.5 * period,
+                      "n_cycles": n_cycles, "motion_key": key}
+            try:
+                record = run_motion(Path(work_dir) / name, spline, name, params,
+                                    n_cycles * period, mesh=mesh, ramp_time=0.5 * period,
+                                    plate=plate, fluid=fluid, stream=stream)
+                source = "live OpenFOAM"
+                if save_to is not None:
+                    write_record(Path(save_to) / f"{name}.h5", record, single_precision=True)
+            except MfflapError as exc:
+                source = f"live OpenFOAM run failed: {str(exc).splitlines()[0]}"
+    if record is None:
+        path = _matching_fixture(key, motion, folders)
+        if path is not None:
+            record = read_record(path)
+            source = f"fixture {path.name}"
+        elif not source:
+            source = (f"no CFD fixture for motion key {key} in "
+                      f"{[str(f) for f in folders] or 'no fixture folder'} and no live run")
+        else:
+            source += f"; no CFD fixture for motion key {key}"
+    if record is None:
+        return BacktestOutcome(label, key, "not back-tested", source)
+    comparison = compare_last_cycle(record, model, period, max_power)
+    return BacktestOutcome(label, key, "back-tested", source, record, comparison)

@@ -1,0 +1,39 @@
+"""Back-test every optimised motion of an optimisation study, and the best sinusoid."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+from mfflap.backtest.run import BacktestOutcome, backtest_motion
+from mfflap.config import CaseConfig
+from mfflap.kinematics.discrete import DiscreteMotion
+
+
+def backtest_all(config: CaseConfig, motions: dict[str, DiscreteMotion], model, *,
+                 fixture_folders: Sequence[str | Path], live: bool = False,
+                 work_dir: str | Path | None = None, save_to: str | Path | None = None,
+                 mesh: str = "coarse", progress: Callable[[str], None] | None = None
+                 ) -> dict[str, BacktestOutcome]:
+    """Back-test each labelled motion (a failure of one does not stop the others)."""
+    out = {}
+    for label, motion in motions.items():
+        if progress is not None:
+            progress(f"back-test {label}: {'running OpenFOAM' if live else 'looking up CFD'}")
+        out[label] = backtest_motion(
+            motion, label, model, config.optimisation.max_power,
+            fixture_folders=fixture_folders, live=live, work_dir=work_dir, mesh=mesh,
+            plate=config.plate, fluid=config.fluid, stream=config.flow, save_to=save_to)
+        if progress is not None:
+            o = out[label]
+            progress(f"back-test {label}: {o.status} ({o.source})")
+    return out
+
+
+def gain_in_cfd(outcomes: dict[str, BacktestOutcome], optimised: str = "β = 0",
+                baseline: str = "best sinusoid") -> float | None:
+    """CFD mean thrust of the optimised motion over the best sinusoid's, minus one."""
+    a, b = outcomes.get(optimised), outcomes.get(baseline)
+    if a is None or b is None or a.comparison is None or b.comparison is None:
+        return None
+    return a.comparison.cfd_mean_thrust / b.comparison.cfd_mean_thrust - 1.0

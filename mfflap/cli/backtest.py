@@ -1,0 +1,64 @@
+"""``mfflap backtest``: check optimised motions against CFD."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import click
+
+
+@click.command()
+@click.argument("optimisation_file", type=click.Path(dir_okay=False, exists=True,
+                                                     path_type=Path))
+@click.option("--live", is_flag=True, help="Run OpenFOAM (else use precomputed fixtures).")
+@click.option("--work", "work_dir", type=click.Path(file_okay=False, path_type=Path),
+              default=Path("backtest_cases"), show_default=True, help="OpenFOAM case folder.")
+@click.option("--fixtures", "fixture_folders", multiple=True,
+              type=click.Path(file_okay=False, path_type=Path),
+              help="Folders of back-test records (default: the shipped ones).")
+@click.option("--save-to", type=click.Path(file_okay=False, path_type=Path), default=None,
+              help="Write live runs as back-test records (fixtures) here.")
+@click.option("--mesh", default="coarse", show_default=True)
+@click.option("--json", "as_json", is_flag=True)
+def backtest(optimisation_file: Path, live: bool, work_dir: Path,
+             fixture_folders: tuple[Path, ...], save_to: Path | None, mesh: str,
+             as_json: bool) -> None:
+    """Back-test the optimised motions (and the best sinusoid) of OPTIMISATION_FILE."""
+    from mfflap.backtest.workflow import backtest_all, gain_in_cfd
+    from mfflap.campaign.records import fixture_dir
+    from mfflap.config import loads_case
+    from mfflap.optimisation.store import read_result, read_sweep
+    from mfflap.optimisation.study import sinusoid_motion
+    from mfflap.results import ResultsFile
+
+    with ResultsFile(optimisation_file) as rf:
+        case = loads_case(rf.config_toml, source=f"{optimisation_file}:/inputs")
+        sweep, best = read_sweep(rf, "optimisation/sweep")
+        motions = {}
+        for key in sorted(rf.h5["optimisation/sqp"]):
+            r = read_result(rf, f"optimisation/sqp/{key}")
+            motions[f"β = {r.beta:g}"] = r.motion
+    n = next(iter(motions.values())).n_steps
+    motions = {"best sinusoid": sinusoid_motion(sweep, best, n), **motions}
+    folders = list(fixture_folders) or [fixture_dir("backtest")]
+    outcomes = backtest_all(case, motions, case.morison_model(), fixture_folders=folders,
+                            live=live, work_dir=work_dir, save_to=save_to, mesh=mesh,
+                            progress=lambda m: click.echo(m, err=True))
+    data = {label: {"status": o.status, "source": o.source, "motion_key": o.key,
+                    **(o.comparison.as_dict() if o.comparison else {})}
+            for label, o in outcomes.items()}
+    gain = gain_in_cfd(outcomes)
+    if as_json:
+        click.echo(json.dumps({"motions": data, "cfd_thrust_gain": gain}, indent=2))
+        return
+    for label, d in data.items():
+        if d["status"] != "back-tested":
+            click.echo(f"{label:14s} NOT BACK-TESTED: {d['source']}")
+            continue
+        click.echo(f"{label:14s} thrust CFD {d['cfd_mean_thrust']:.3f} N model "
+                   f"{d['model_mean_thrust']:.3f} N; power CFD {d['cfd_mean_power']:.3f} W "
+                   f"model {d['model_mean_power']:.3f} W; NRMSE thrust "
+                   f"{d['nrmse']['thrust']:.3f}; CFD max power {d['cfd_max_power']:.1f} W")
+    if gain is not None:
+        click.echo(f"beta = 0 thrust gain over the best sinusoid in CFD: {gain:+.1%}")

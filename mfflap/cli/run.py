@@ -1,0 +1,55 @@
+"""``mfflap run``: the whole pipeline of a study file."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+
+@click.command("run")
+@click.argument("case_file", type=click.Path(dir_okay=False, exists=True, path_type=Path))
+@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
+              default=None, help="Output folder (default: <study name>_run).")
+@click.option("--fixtures", type=click.Path(file_okay=False, exists=True, path_type=Path),
+              default=None, help="Identification CFD records (default: shipped fixtures).")
+@click.option("--backtest-fixtures", multiple=True,
+              type=click.Path(file_okay=False, path_type=Path),
+              help="Back-test CFD records (default: shipped fixtures).")
+@click.option("--live", is_flag=True, help="Run the back-test CFD live with OpenFOAM.")
+@click.option("--coefficients", default="case", show_default=True,
+              help="Model coefficients for the optimisation: 'case' or "
+                   "'identified:<uniform|low|high>'.")
+@click.option("--starts", default=3, show_default=True, help="Multi-start points per beta.")
+@click.option("--gain-table", is_flag=True, help="Also tabulate the gain against N and ε.")
+@click.option("--no-ipopt", is_flag=True, help="Skip the hard-constrained IPOPT comparison.")
+def run_cmd(case_file: Path, out_dir: Path | None, fixtures: Path | None,
+            backtest_fixtures: tuple[Path, ...], live: bool, coefficients: str, starts: int,
+            gain_table: bool, no_ipopt: bool) -> None:
+    """Identification, sweep, optimisation, back-test and reports for CASE_FILE.
+
+    Writes <out>/report.html (every figure), <out>/results.h5 (every number and the inputs)
+    and <out>/vtk/*.pvd (the motions for ParaView). A stage that fails is reported and the
+    run goes on.
+    """
+    from mfflap.campaign.records import fixture_dir
+    from mfflap.config import load_case
+    from mfflap.pipeline import RunOptions, run_study, write_outputs
+
+    case = load_case(case_file)
+    if not (coefficients == "case" or coefficients.startswith("identified:")):
+        raise click.BadParameter(f"{coefficients!r}: use 'case' or 'identified:<strategy>'")
+    out_dir = out_dir or Path(f"{case.study.name}_run")
+    out_dir.mkdir(parents=True, exist_ok=True)
+    options = RunOptions(fixtures=fixtures, backtest_fixtures=backtest_fixtures, live=live,
+                         work_dir=out_dir / "cfd_cases", coefficients=coefficients,
+                         n_starts=starts, with_ipopt=not no_ipopt, gain_table=gain_table,
+                         vtk_dir=out_dir / "vtk")
+    outcome = run_study(case, options, progress=lambda m: click.echo(m, err=True))
+    write_outputs(case, outcome, out_dir / "results.h5", out_dir / "report.html",
+                  str(fixtures or fixture_dir()))
+    click.echo(f"wrote {out_dir / 'report.html'} and {out_dir / 'results.h5'}")
+    if outcome.problems:
+        click.echo(f"{len(outcome.problems)} problem(s), listed in the report:")
+        for p in outcome.problems:
+            click.echo(f"  - {p.splitlines()[0]}")

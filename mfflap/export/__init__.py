@@ -1,0 +1,1 @@
+"""Exports of motions for other tools (ParaView)."""

@@ -1,0 +1,204 @@
+"""The main job, ``mfflap run``: identification -> sinusoid sweep -> optimisation for each
+beta -> back-test against CFD -> coefficient sensitivity -> one HTML report and one HDF5
+file with every number and the inputs.
+
+Each stage that fails is reported and the run goes on with the rest; the report says what is
+missing and why.
+"""
+
+from __future__ import annotations
+
+import time
+import traceback
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from mfflap.config import CaseConfig
+from mfflap.errors import MfflapError
+
+Progress = Callable[[str], None]
+
+
+@dataclass
+class RunOptions:
+    """Options of the main job."""
+
+    fixtures: Path | None = None  # identification records (default: shipped table1_coarse)
+    backtest_fixtures: tuple[Path, ...] = ()  # default: shipped backtest folder
+    live: bool = False  # run the back-test CFD with OpenFOAM
+    work_dir: Path = Path("mfflap_run_cases")
+    coefficients: str = "case"  # "case" or "identified:<strategy>"
+    n_starts: int = 3
+    with_ipopt: bool = True
+    gain_table: bool = False
+    sensitivity: bool = True
+    vtk_dir: Path | None = None
+    mesh: str = "coarse"
+
+
+@dataclass
+class RunOutcome:
+    """What the main job produced, and what it could not."""
+
+    identification: dict = field(default_factory=dict)
+    study: object | None = None
+    gain: dict | None = None
+    backtests: dict = field(default_factory=dict)
+    sensitivity: dict = field(default_factory=dict)
+    problems: list[str] = field(default_factory=list)
+    timings: dict[str, float] = field(default_factory=dict)
+    cases: list = field(default_factory=list)
+    model: object | None = None
+
+
+def _stage(outcome: RunOutcome, name: str, progress: Progress, fn):
+    t0 = time.perf_counter()
+    progress(f"[{name}] started")
+    try:
+        result = fn()
+    except MfflapError as exc:
+        outcome.problems.append(f"{name}: {exc}")
+        progress(f"[{name}] FAILED: {exc}")
+        result = None
+    except Exception as exc:  # report and go on; the traceback goes to the report
+        outcome.problems.append(f"{name}: unexpected {type(exc).__name__}: {exc}\n"
+                                f"{traceback.format_exc(limit=4)}")
+        progress(f"[{name}] FAILED: {type(exc).__name__}: {exc}")
+        result = None
+    outcome.timings[name] = time.perf_counter() - t0
+    progress(f"[{name}] done in {outcome.timings[name]:.1f} s")
+    return result
+
+
+def coefficient_sensitivity(config: CaseConfig, identification: dict, sweep,
+                            progress: Progress) -> dict:
+    """Re-optimise beta = 0 with each weighting strategy's coefficients (Figure 5)."""
+    from mfflap.optimisation.optimise import optimise_sqp
+    from mfflap.optimisation.study import problem_for, sinusoid_motion
+
+    o = config.optimisation
+    out = {}
+    base = config.morison_model()
+    for label, res in identification.items():
+        model = res.model(base)
+        start = sinusoid_motion(sweep, sweep.best_feasible(), o.n_steps)
+        r = optimise_sqp(problem_for(config, 0.0, model), start, min_period=o.min_period,
+                         max_period=o.max_period, start_label="best sinusoid")
+        out[label] = (model, r)
+        progress(f"sensitivity {label}: thrust {float(r.summary.mean_thrust):.3g} N, "
+                 f"period {float(r.motion.period):.3g} s")
+    return out
+
+
+def run_study(config: CaseConfig, options: RunOptions, progress: Progress = print
+              ) -> RunOutcome:
+    """Run every stage; failures are collected in ``outcome.problems``."""
+    from mfflap.backtest.workflow import backtest_all
+    from mfflap.campaign.records import fixture_dir
+    from mfflap.identification.workflow import identify_strategies, load_cases
+    from mfflap.optimisation.study import beta_study, gain_table, sinusoid_motion
+
+    outcome = RunOutcome()
+    folder = options.fixtures or fixture_dir()
+
+    def identification():
+        cases, excluded = load_cases(config, folder)
+        for name, why in excluded.items():
+            outcome.problems.append(f"identification: case {name} left out: {why}")
+        outcome.cases = cases
+        return identify_strategies(config, cases, excluded, ["uniform", "low", "high"])
+
+    outcome.identification = _stage(outcome, "identification", progress, identification) or {}
+    model = config.morison_model()
+    if options.coefficients.startswith("identified:"):
+        strategy = options.coefficients.split(":", 1)[1]
+        if strategy in outcome.identification:
+            model = outcome.identification[strategy].model(model)
+        else:
+            outcome.problems.append(f"optimisation: no identified coefficients for strategy "
+                                    f"{strategy!r}; used the case's coefficients")
+    outcome.model = model
+    outcome.study = _stage(outcome, "optimisation", progress, lambda: beta_study(
+        config, n_starts=options.n_starts, with_ipopt=options.with_ipopt, model=model,
+        progress=progress))
+    study = outcome.study
+    if study is not None and options.gain_table:
+        outcome.gain = _stage(outcome, "gain table", progress, lambda: gain_table(
+            config, model=model, sweep=study.sweep, progress=progress))
+    if study is not None:
+        n = config.optimisation.n_steps
+        motions = {"best sinusoid": sinusoid_motion(study.sweep, study.best_sinusoid, n)}
+        motions.update({f"β = {b:g}": r.motion for b, r in study.sqp.items()})
+        folders = list(options.backtest_fixtures) or [fixture_dir("backtest")]
+        outcome.backtests = _stage(outcome, "back-test", progress, lambda: backtest_all(
+            config, motions, model, fixture_folders=folders, live=options.live,
+            work_dir=options.work_dir, mesh=options.mesh, progress=progress)) or {}
+        for label, o in outcome.backtests.items():
+            if o.status != "back-tested":
+                outcome.problems.append(f"back-test: {label} not back-tested: {o.source}")
+        if options.sensitivity and outcome.identification:
+            outcome.sensitivity = _stage(outcome, "coefficient sensitivity", progress,
+                                         lambda: coefficient_sensitivity(
+                                             config, outcome.identification, study.sweep,
+                                             progress)) or {}
+        if options.vtk_dir is not None:
+            from mfflap.export.vtk import export_motion
+
+            def vtk():
+                for label, m in motions.items():
+                    safe = label.replace(" ", "_").replace("=", "").replace("β", "beta")
+                    export_motion(options.vtk_dir, m, model, config.optimisation.scheme, safe)
+
+            _stage(outcome, "VTK export", progress, vtk)
+    return outcome
+
+
+def write_outputs(config: CaseConfig, outcome: RunOutcome, h5_path: Path, html_path: Path,
+                  source: str) -> None:
+    """One HDF5 file with every number and the inputs; one self-contained HTML report."""
+    from mfflap.backtest.store import write_backtests
+    from mfflap.identification.store import write_identification
+    from mfflap.optimisation.store import beta_key, write_result
+    from mfflap.optimisation.workflow import write_study
+    from mfflap.reports.html import Report, text_html
+    from mfflap.reports.run import add_backtest_sections, add_sensitivity_section
+    from mfflap.results import ResultsFile
+
+    with ResultsFile(h5_path, "w", kind="run", config_toml=config.to_toml()) as rf:
+        for res in outcome.identification.values():
+            write_identification(rf, res)
+        if outcome.study is not None:
+            write_study(rf, config, outcome.study, outcome.gain, outcome.model)
+        write_backtests(rf, outcome.backtests)
+        for label, (_, r) in outcome.sensitivity.items():
+            write_result(rf, f"sensitivity/{label}/{beta_key(0.0)}", r)
+        rf.h5.attrs["problems"] = "\n".join(outcome.problems)
+        rf.h5.attrs["stage_times_s"] = str(outcome.timings)
+    rep = Report(f"mfflap run: {config.study.name}", config.study.description)
+    s = rep.section("Summary")
+    if outcome.problems:
+        s.blocks.append(text_html("What is missing and why:", warn=True))
+        for p in outcome.problems:
+            s.blocks.append(text_html(p, warn=True))
+    else:
+        s.blocks.append(text_html("Every stage ran."))
+    s.blocks.append(text_html("Stage times: " + ", ".join(f"{k} {v:.1f} s" for k, v in
+                                                          outcome.timings.items())))
+    if outcome.identification:
+        from mfflap.reports.identification import add_identification_sections
+
+        add_identification_sections(rep, outcome.identification, outcome.cases,
+                                    config.morison_model(), config.flow.velocity, source)
+    if outcome.study is not None:
+        from mfflap.reports.optimisation import add_optimisation_sections
+
+        add_optimisation_sections(rep, outcome.study, outcome.model, config.optimisation.scheme,
+                                  config.optimisation.max_power, outcome.gain)
+    add_backtest_sections(rep, outcome.backtests, config.optimisation.max_power)
+    if outcome.sensitivity:
+        add_sensitivity_section(rep, outcome.sensitivity, config.optimisation.scheme)
+    rep.write(html_path)
+
+
+__all__ = ["RunOptions", "RunOutcome", "run_study", "write_outputs"]

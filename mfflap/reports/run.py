@@ -1,0 +1,108 @@
+"""Report sections of the main job: back-test (model vs CFD) and coefficient sensitivity."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.figure import Figure
+
+from mfflap.backtest.run import BacktestOutcome
+from mfflap.reports.html import Report, figure_html, table_html, text_html
+
+
+def backtest_figure(outcomes: Mapping[str, BacktestOutcome], max_power: float) -> Figure:
+    """Thrust and input power over the last CFD cycle, model vs CFD, per motion."""
+    done = {k: o for k, o in outcomes.items() if o.comparison is not None}
+    fig, axes = plt.subplots(2, max(len(done), 1), figsize=(4 * max(len(done), 1), 5.5),
+                             squeeze=False)
+    for j, (label, o) in enumerate(done.items()):
+        c = o.comparison
+        t = (c.time - c.time[0]) / (c.time[-1] - c.time[0])
+        axes[0][j].plot(t, c.cfd_thrust, "k-", lw=1, label="CFD")
+        axes[0][j].plot(t, c.model_thrust, "C1--", label="model")
+        axes[1][j].plot(t, c.cfd_power, "k-", lw=1)
+        axes[1][j].plot(t, c.model_power, "C1--")
+        axes[1][j].axhline(max_power, color="r", ls=":", label="P_max")
+        axes[0][j].set_title(label)
+        axes[1][j].set_xlabel("t / T (last cycle)")
+    axes[0][0].set_ylabel("thrust [N]")
+    axes[1][0].set_ylabel("input power [W]")
+    axes[0][0].legend(fontsize=8)
+    axes[1][0].legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def add_backtest_sections(rep: Report, outcomes: Mapping[str, BacktestOutcome],
+                          max_power: float) -> None:
+    """Back-test table, figure and the CFD thrust gain."""
+    from mfflap.backtest.workflow import gain_in_cfd
+
+    s = rep.section("Back-test against CFD")
+    if not outcomes:
+        s.blocks.append(text_html("No back-test was run.", warn=True))
+        return
+    rows = []
+    for label, o in outcomes.items():
+        if o.comparison is None:
+            rows.append([label, o.status, o.source] + ["-"] * 8)
+            continue
+        c = o.comparison
+        rows.append([label, o.status, o.source, c.cfd_mean_thrust, c.model_mean_thrust,
+                     c.cfd_mean_power, c.model_mean_power, c.nrmse["thrust"],
+                     c.pearson["thrust"], c.cfd_max_power,
+                     "yes" if c.max_power_ok else "NO"])
+    s.blocks.append(table_html(["motion", "status", "CFD from", "CFD thrust [N]",
+                                "model thrust [N]", "CFD power [W]", "model power [W]",
+                                "NRMSE thrust", "Pearson thrust", "CFD max power [W]",
+                                "CFD power ≤ P_max"], rows))
+    if any(o.comparison is not None for o in outcomes.values()):
+        s.blocks.append(figure_html(backtest_figure(outcomes, max_power),
+                                    "Last simulated cycle: model against CFD"))
+    gain = gain_in_cfd(outcomes)
+    if gain is not None:
+        s.blocks.append(text_html(f"β = 0 thrust gain over the best feasible sinusoid in CFD: "
+                                  f"{gain:+.1%}."))
+    for label, o in outcomes.items():
+        if o.comparison is None:
+            s.blocks.append(text_html(f"{label}: not back-tested ({o.source}).", warn=True))
+        elif not np.isnan(o.comparison.cycle_to_cycle_thrust_change) and \
+                o.comparison.cycle_to_cycle_thrust_change > 0.05:
+            s.blocks.append(text_html(
+                f"{label}: CFD mean thrust changed by "
+                f"{o.comparison.cycle_to_cycle_thrust_change:.0%} between the last two cycles; "
+                "the flow is not yet periodic.", warn=True))
+
+
+def add_sensitivity_section(rep: Report, sensitivity: Mapping[str, tuple], scheme: str) -> None:
+    """Figure 5: beta = 0 re-optimised with each strategy's coefficients."""
+    from mfflap.reports.optimisation import cycle_curves
+
+    s = rep.section("Coefficient sensitivity (β = 0 re-optimised per weighting strategy)")
+    fig, axes = plt.subplots(2, 2, figsize=(11, 6))
+    rows = []
+    for label, (model, r) in sensitivity.items():
+        m = r.motion
+        tt = np.arange(m.n_steps) / m.n_steps / 2
+        axes[0, 0].plot(tt, m.pitch_acceleration, label=label)
+        axes[0, 1].plot(tt, m.heave_acceleration)
+        c = cycle_curves(model, m, scheme)
+        axes[1, 0].plot(c["t"], c["thrust"])
+        axes[1, 1].plot(c["t"], c["power"])
+        rows.append([label, float(r.summary.mean_thrust), float(r.summary.max_power),
+                     float(m.period), float(r.summary.strouhal_number)])
+    for ax, lab in zip(axes.flat, ("pitch acceleration [rad/s²]", "heave acceleration [m/s²]",
+                                   "thrust [N]", "input power [W]"), strict=True):
+        ax.set_ylabel(lab)
+        ax.set_xlabel("t / T")
+    axes[0, 0].legend(fontsize=8)
+    fig.tight_layout()
+    s.blocks.append(figure_html(fig, "Optimised controls, thrust and power per strategy "
+                                     "(Fig. 5)"))
+    s.blocks.append(table_html(["coefficients from", "mean thrust [N]", "max power [W]",
+                                "period [s]", "St"], rows))

@@ -1,0 +1,130 @@
+"""Back-test (keys, fixture lookup, comparison, live OpenFOAM), VTK export, and `mfflap run`."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from mfflap.backtest.compare import compare_last_cycle
+from mfflap.backtest.run import backtest_motion, cfd_motion, motion_key
+from mfflap.campaign.records import CfdRecord, write_record
+from mfflap.cfd.openfoam.loads import imposed_state
+from mfflap.cfd.openfoam.runner import openfoam_available
+from mfflap.hydro import MorisonModel
+from mfflap.kinematics.convert import harmonic_to_discrete
+from mfflap.kinematics.discrete import DiscreteMotion
+from mfflap.performance import thrust_and_power
+
+CASE = Path(__file__).parents[1] / "cases" / "paper2026.toml"
+MOTION = harmonic_to_discrete(1.5, 0.2, np.deg2rad(30), np.deg2rad(90), 40)
+
+
+def model_record(motion: DiscreteMotion, n_cycles=3.0, name=None) -> CfdRecord:
+    """A 'CFD' record made by the model itself on the imposed spline kinematics."""
+    spline = cfd_motion(motion)
+    t = np.linspace(0, n_cycles * spline.period, 1500)
+    ramp = 0.5 * spline.period
+    state = imposed_state(spline, t, ramp)
+    loads = MorisonModel().loads(state)
+    key = motion_key(motion)
+    return CfdRecord(name or f"backtest_{key}", state, loads,
+                     {"kind": "periodic_spline", "period": spline.period, "ramp_time": ramp,
+                      "motion_key": key})
+
+
+def test_motion_key_is_stable_to_last_bits_and_tells_motions_apart():
+    k = motion_key(MOTION)
+    nudged = DiscreteMotion(MOTION.pitch_acceleration * (1 + 1e-12),
+                            MOTION.heave_acceleration, MOTION.time_step * (1 + 1e-12))
+    assert motion_key(nudged) == k
+    other = harmonic_to_discrete(1.5, 0.2, np.deg2rad(31), np.deg2rad(90), 40)
+    assert motion_key(other) != k
+
+
+def test_comparison_of_the_model_with_itself_is_perfect():
+    rec = model_record(MOTION)
+    period = cfd_motion(MOTION).period
+    c = compare_last_cycle(rec, MorisonModel(), period, max_power=1e9)
+    assert c.nrmse["thrust"] == pytest.approx(0, abs=1e-12)
+    assert c.pearson["input_power"] == pytest.approx(1.0)
+    assert c.mean_thrust_error == pytest.approx(0, abs=1e-12)
+    assert c.cycle_to_cycle_thrust_change < 1e-3  # periodic after the ramp
+    assert c.time[-1] - c.time[0] == pytest.approx(period, rel=0.01)
+    # the power limit check uses the CFD's instantaneous power over the last cycle
+    _, power = thrust_and_power(rec.loads, rec.state)
+    limit = 0.9 * float(power[rec.time >= rec.time[-1] - period].max())
+    assert not compare_last_cycle(rec, MorisonModel(), period, limit).max_power_ok
+
+
+def test_fixture_lookup_by_key_then_by_tolerance_and_missing_is_reported(tmp_path):
+    folder = tmp_path / "bt"
+    write_record(folder / f"backtest_{motion_key(MOTION)}.h5", model_record(MOTION))
+    found = backtest_motion(MOTION, "β = 0", MorisonModel(), 50.0, fixture_folders=[folder])
+    assert found.status == "back-tested" and found.source.startswith("fixture backtest_")
+    # a motion a hair away (another machine's optimum) hashes differently but still matches
+    near = DiscreteMotion(MOTION.pitch_acceleration * (1 + 2e-4), MOTION.heave_acceleration,
+                          MOTION.time_step)
+    assert motion_key(near) != motion_key(MOTION)
+    assert backtest_motion(near, "near", MorisonModel(), 50.0,
+                           fixture_folders=[folder]).status == "back-tested"
+    far = harmonic_to_discrete(1.0, 0.3, np.deg2rad(20), np.deg2rad(90), 40)
+    missing = backtest_motion(far, "far", MorisonModel(), 50.0, fixture_folders=[folder])
+    assert missing.status == "not back-tested" and motion_key(far) in missing.source
+    assert missing.comparison is None
+
+
+@pytest.mark.openfoam
+def test_live_backtest_runs_openfoam_and_saves_a_fixture(tmp_path):
+    assert openfoam_available()
+    fast = harmonic_to_discrete(2.0, 0.1, np.deg2rad(10), np.deg2rad(90), 20)
+    out = backtest_motion(fast, "fast", MorisonModel(), 50.0, live=True, work_dir=tmp_path,
+                          n_cycles=0.2, save_to=tmp_path / "fx")
+    assert out.status == "back-tested" and out.source == "live OpenFOAM"
+    saved = tmp_path / "fx" / f"backtest_{out.key}.h5"
+    assert saved.exists()
+    again = backtest_motion(fast, "fast", MorisonModel(), 50.0, fixture_folders=[saved.parent])
+    assert again.source == f"fixture {saved.name}"
+    assert again.comparison.cfd_mean_thrust == pytest.approx(out.comparison.cfd_mean_thrust,
+                                                             rel=1e-4)
+
+
+def test_vtk_time_series_reads_back_in_pyvista(tmp_path):
+    import pyvista as pv
+
+    from mfflap.export.vtk import export_motion
+
+    pvd = export_motion(tmp_path, MOTION, MorisonModel(), name="m", n_frames=20)
+    reader = pv.get_reader(str(pvd))
+    assert len(reader.time_values) == 20
+    t, pitch, heave = MOTION.full_cycle_positions()
+    reader.set_active_time_value(reader.time_values[5])
+    mesh = reader.read()[0]
+    k = np.unique(np.linspace(0, len(t) - 1, 20).round().astype(int))[5]
+    assert mesh.point_data["heave_m"][0] == pytest.approx(heave[k])
+    # the trailing edge sits at chord x (cos, sin) of the pitch from the leading edge
+    xmax = mesh.points[:, 0].max()
+    assert xmax == pytest.approx(0.16 * np.cos(pitch[k]), rel=1e-5)
+
+
+@pytest.mark.slow
+def test_main_job_runs_end_to_end_on_the_shipped_fixtures(tmp_path):
+    """`mfflap run` on the shipped CFD fixtures: every stage, one report, one HDF5 file."""
+    from mfflap.cli.main import cli
+    from mfflap.results import ResultsFile
+
+    out = tmp_path / "run"
+    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--starts", "1",
+                                   "--no-ipopt"])
+    assert res.exit_code == 0, res.output
+    html = (out / "report.html").read_text()
+    for title in ("Identified coefficients", "Optimised motions", "Back-test against CFD",
+                  "Coefficient sensitivity", "Sinusoidal sweep"):
+        assert title in html
+    assert html.count("<img") >= 15
+    with ResultsFile(out / "results.h5") as rf:
+        assert "paper2026" in rf.config_toml
+        assert {"identification", "optimisation", "backtest", "sensitivity"} <= set(rf.h5)
+        statuses = {rf.h5[f"backtest/{k}"].attrs["status"] for k in rf.h5["backtest"]}
+        assert statuses <= {"back-tested", "not back-tested"}
+    assert list((out / "vtk").glob("*.pvd"))
