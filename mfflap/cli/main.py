@@ -34,6 +34,7 @@ def _register_subgroups() -> None:
     from mfflap.cli.backtest import backtest
     from mfflap.cli.campaign import campaign
     from mfflap.cli.cfd import cfd
+    from mfflap.cli.gap import gap
     from mfflap.cli.identify import identify, report
     from mfflap.cli.optimise import optimise
     from mfflap.cli.run import run_cmd
@@ -45,6 +46,7 @@ def _register_subgroups() -> None:
     cli.add_command(optimise)
     cli.add_command(backtest)
     cli.add_command(run_cmd)
+    cli.add_command(gap)
 
 
 def _echo_json(data) -> None:

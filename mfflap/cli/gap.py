@@ -1,0 +1,108 @@
+"""``mfflap gap diagnose | blindtest``."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import click
+
+
+@click.group()
+def gap() -> None:
+    """Sim-to-real gap diagnosis of the reduced model against CFD."""
+
+
+@gap.command("diagnose")
+@click.argument("case_file", type=click.Path(dir_okay=False, exists=True, path_type=Path))
+@click.option("--fixtures", "folders", multiple=True,
+              type=click.Path(file_okay=False, exists=True, path_type=Path),
+              help="Folders of CFD records (campaign, back-test); default: shipped fixtures.")
+@click.option("--csv", "csv_files", multiple=True,
+              type=click.Path(dir_okay=False, exists=True, path_type=Path),
+              help="External (motion, force) CSV files: time, pitch_angle, heave_position, "
+                   "normal_force, tangential_force, moment.")
+@click.option("--alpha", default=0.01, show_default=True, help="Significance level.")
+@click.option("--min-gain", default=0.02, show_default=True,
+              help="Smallest held-out error reduction worth claiming.")
+@click.option("--output", type=click.Path(dir_okay=False, path_type=Path),
+              default=Path("gap.h5"), show_default=True)
+@click.option("--report", "report_path", type=click.Path(dir_okay=False, path_type=Path),
+              default=None, help="HTML report (default: <output>.html).")
+@click.option("--json", "as_json", is_flag=True)
+def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Path, ...],
+                 alpha: float, min_gain: float, output: Path, report_path: Path | None,
+                 as_json: bool) -> None:
+    """Where the model of CASE_FILE departs from CFD, and which effect explains it."""
+    from mfflap.campaign.records import fixture_dir, read_records
+    from mfflap.config import load_case
+    from mfflap.gap.candidates import FlowContext
+    from mfflap.gap.diagnose import _predictions, diagnose
+    from mfflap.gap.external import read_csv_case
+    from mfflap.gap.report import gap_report, write_diagnosis
+    from mfflap.gap.system import group_folds
+    from mfflap.gap.where import decompose
+    from mfflap.identification.data import prepare_cases
+    from mfflap.results import ResultsFile
+
+    case = load_case(case_file)
+    cases = []
+    sources = []
+    for folder in folders or ((fixture_dir(),) if not csv_files else ()):
+        prepared, excluded = prepare_cases(read_records(folder),
+                                           case.identification.discard_time)
+        cases += prepared
+        sources.append(str(folder))
+        for name, why in excluded.items():
+            click.echo(f"left out {name}: {why}", err=True)
+    cases += [read_csv_case(p) for p in csv_files]
+    sources += [str(p) for p in csv_files]
+    context = FlowContext(case.plate, case.fluid, case.flow)
+    from mfflap.gap.diagnose import default_candidates
+
+    diag = diagnose(cases, case.morison_model(), default_candidates(context), alpha=alpha,
+                    min_gain=min_gain)
+    from mfflap.gap.system import GapSystem
+
+    base = case.morison_model()
+    system = GapSystem.build(cases, base.terms, [])
+    pred = _predictions(system, list(range(len(base.terms))), group_folds(range(len(cases)), 5))
+    where = decompose(system, pred, case.flow.velocity, case.plate.chord)
+    with ResultsFile(output, "w", kind="gap_diagnosis", config_toml=case.to_toml()) as rf:
+        write_diagnosis(rf, diag, where)
+    html = gap_report(report_path or output.with_suffix(".html"), diag, where,
+                      ", ".join(sources))
+    if as_json:
+        click.echo(json.dumps({"verdict": diag.verdict,
+                               "chosen": diag.chosen.label if diag.chosen else None,
+                               "ranking": [[s.label, s.gain, s.p_value] for s in diag.scores],
+                               "validation": diag.validation}, indent=2))
+        return
+    click.echo(diag.verdict)
+    for name, share in where["ranking"][:5]:
+        click.echo(f"  {name}: {share:.2f}")
+    click.echo(f"wrote {output} and {html}")
+
+
+@gap.command("blindtest")
+@click.option("--trials", default=70, show_default=True)
+@click.option("--snr", default=3.0, show_default=True, help="Signal-to-noise ratio.")
+@click.option("--seed", default=0, show_default=True)
+@click.option("--json", "as_json", is_flag=True)
+def blindtest_cmd(trials: int, snr: float, seed: int, as_json: bool) -> None:
+    """Diagnose datasets with a hidden effect (or none) and score the attributions."""
+    from tqdm import tqdm
+
+    from mfflap.gap.blindtest import blind_test
+
+    bar = tqdm(total=trials, desc="blind trials", disable=as_json)
+    result = blind_test(trials, snr, seed, progress=lambda done, total: bar.update())
+    bar.close()
+    if as_json:
+        click.echo(json.dumps({"attribution_accuracy": result.attribution_accuracy,
+                               "null_correct": result.null_correct,
+                               "mean_heldout_gain": result.mean_gain,
+                               "labels": result.labels,
+                               "confusion": result.confusion().tolist()}, indent=2))
+        return
+    click.echo(result.summary())

@@ -1,0 +1,29 @@
+"""Quasi-steady circulatory lift of a thin plate, acting at the quarter chord."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mfflap.gap.candidates.base import CandidateEffect, register
+
+
+def quasi_steady_normal_force(effect: CandidateEffect, state) -> np.ndarray:
+    """-1/2 rho S |v_t| v_n per unit lift slope (small-angle flat-plate normal force)."""
+    f = effect.flow(state)
+    rho, area = effect.context.fluid.density, effect.context.area
+    return -0.5 * rho * area * np.abs(f.tangential_velocity) * f.normal_velocity_le
+
+
+@register
+class CirculatoryLift(CandidateEffect):
+    """Quasi-steady circulatory lift F_n = -1/2 rho S a |v_t| v_n at c/4 (a: lift slope)."""
+
+    name = "circulatory_lift"
+    physical_name = "quasi-steady circulatory lift"
+    coefficient_name = "lift slope a = dC_L/dalpha (thin-aerofoil theory: 2 pi)"
+    plausible = (1.0, 8.0)
+    typical = 2 * np.pi
+
+    def regressor(self, state):
+        fn = quasi_steady_normal_force(self, state)
+        return self.loads(state, normal=fn, moment=fn * 0.25 * self.context.plate.chord)

@@ -1,0 +1,29 @@
+"""Leading-edge vortex lift (Polhamus' suction analogy)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mfflap.gap.candidates.base import CandidateEffect, register
+
+
+@register
+class LeadingEdgeVortex(CandidateEffect):
+    """Polhamus vortex normal force C_N,v = K_v cos(alpha) sin^2(alpha) sign(alpha), at 0.4 c.
+
+    With v_n = V sin(alpha) and |v_t| = V cos(alpha): F_n = -1/2 rho S K_v |v_t| |v_n| v_n / V.
+    """
+
+    name = "leading_edge_vortex"
+    physical_name = "leading-edge vortex lift (Polhamus suction analogy)"
+    coefficient_name = "vortex-lift factor K_v (flat plate: about pi)"
+    plausible = (0.5, 6.0)
+    typical = np.pi
+
+    def regressor(self, state):
+        f = self.flow(state)
+        ctx = self.context
+        vn, vt = f.normal_velocity_le, f.tangential_velocity
+        speed = np.sqrt(vn**2 + vt**2) + 1e-12
+        fn = -0.5 * ctx.fluid.density * ctx.area * np.abs(vt) * np.abs(vn) * vn / speed
+        return self.loads(state, normal=fn, moment=fn * 0.4 * ctx.plate.chord)

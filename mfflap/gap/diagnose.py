@@ -1,0 +1,198 @@
+"""Which unmodelled effect explains the gap: cross-validated candidate selection.
+
+Every candidate (and every small combination) is added to the base model, fitted on training
+cases and scored on held-out cases (folds grouped by case). A candidate is *claimed* only
+when it lowers the held-out error by at least ``min_gain`` of the base model's and the
+per-case improvements pass a one-sided Wilcoxon signed-rank test at level ``alpha``;
+otherwise the verdict is "no candidate explains it". A combination is preferred over the
+best single candidate only if it clears the same bar against that candidate.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.stats import wilcoxon
+
+from mfflap.gap.candidates import CandidateEffect, FlowContext, load_all
+from mfflap.gap.system import COMPONENTS, GapSystem, group_folds
+from mfflap.hydro.base import ForceModel
+from mfflap.identification.data import CaseData
+from mfflap.metrics import nrmse, pearson
+from mfflap.performance import thrust_and_power
+
+
+@dataclass
+class CandidateScore:
+    """Held-out performance of the base model plus a set of candidates."""
+
+    names: tuple[str, ...]
+    heldout_sse: np.ndarray  # per case
+    gain: float  # relative reduction of the total held-out error vs the base model
+    p_value: float
+    significant: bool
+    coefficients: dict[str, float]  # mean over folds
+    coefficient_spread: dict[str, float]  # std over folds
+    plausible: dict[str, bool]
+
+    @property
+    def label(self) -> str:
+        """``a + b`` for reports."""
+        return " + ".join(self.names)
+
+
+@dataclass
+class Diagnosis:
+    """Result of a gap diagnosis."""
+
+    base_names: list[str]
+    base_sse: np.ndarray
+    scores: list[CandidateScore]
+    chosen: CandidateScore | None
+    verdict: str
+    gap: dict[str, dict] = field(default_factory=dict)
+    validation: dict[str, dict] = field(default_factory=dict)
+    case_names: list[str] = field(default_factory=list)
+
+
+def _significance(before: np.ndarray, after: np.ndarray) -> float:
+    d = before - after
+    if np.allclose(d, 0):
+        return 1.0
+    try:
+        return float(wilcoxon(d, alternative="greater").pvalue)
+    except ValueError:
+        return 1.0
+
+
+def _score(system: GapSystem, names: tuple[str, ...], folds, base_sse: np.ndarray,
+           candidates: dict[str, CandidateEffect], alpha: float, min_gain: float,
+           reference: np.ndarray | None = None) -> CandidateScore:
+    cols = list(range(system.n_base)) + [system.names.index(n) for n in names]
+    sse, coefs = system.cross_validate(cols, folds)
+    ref = base_sse if reference is None else reference
+    gain = 1.0 - sse.sum() / base_sse.sum()
+    rel = 1.0 - sse.sum() / ref.sum()
+    p = _significance(ref, sse)
+    c = np.array(coefs)[:, system.n_base:]
+    means = dict(zip(names, c.mean(axis=0).tolist(), strict=True))
+    spread = dict(zip(names, c.std(axis=0).tolist(), strict=True))
+    plausible = {n: candidates[n].is_plausible(means[n]) for n in names}
+    return CandidateScore(names, sse, float(gain), p, bool(p < alpha and rel >= min_gain),
+                          means, spread, plausible)
+
+
+def _predictions(system: GapSystem, cols: list[int], folds) -> list[dict[str, np.ndarray]]:
+    every = np.arange(len(system.cases))
+    out: list[dict[str, np.ndarray]] = [{} for _ in system.cases]
+    for held in folds:
+        x = system.fit(cols, np.setdiff1d(every, held))
+        for i in held:
+            for k in COMPONENTS:
+                out[i][k] = system.predict(i, cols, x, k)
+    return out
+
+
+def gap_metrics(system: GapSystem, predictions: list[dict[str, np.ndarray]]) -> dict:
+    """Per case, per signal: NRMSE, Pearson; mean-thrust and mean-power errors."""
+    from mfflap.hydro.loads import Loads
+
+    n = len(system.cases)
+    out = {s: {"nrmse": np.empty(n), "pearson": np.empty(n)} for s in
+           (*COMPONENTS, "thrust", "input_power")}
+    out["mean_thrust_error"] = np.empty(n)
+    out["mean_power_error"] = np.empty(n)
+    for i, c in enumerate(system.cases):
+        p = predictions[i]
+        loads = Loads(c.state.time, p["normal_force"], p["tangential_force"], p["moment"])
+        thrust, power = thrust_and_power(loads, c.state)
+        sig = {**p, "thrust": thrust, "input_power": power}
+        for s, v in sig.items():
+            ref = c.cfd_signal(s)
+            out[s]["nrmse"][i] = nrmse(v, ref)
+            out[s]["pearson"][i] = pearson(v, ref)
+        ct, cp = c.cfd_signal("thrust"), c.cfd_signal("input_power")
+        out["mean_thrust_error"][i] = (thrust.mean() - ct.mean()) / max(np.abs(ct).mean(),
+                                                                        1e-12)
+        out["mean_power_error"][i] = (power.mean() - cp.mean()) / max(np.abs(cp).mean(), 1e-12)
+    return out
+
+
+def default_candidates(context: FlowContext | None = None) -> dict[str, CandidateEffect]:
+    """One instance of every registered candidate."""
+    return {name: cls(context) for name, cls in sorted(load_all().items())}
+
+
+def diagnose(cases: Sequence[CaseData], base_model: ForceModel,
+             candidates: dict[str, CandidateEffect] | None = None, *,
+             context: FlowContext | None = None, max_combination: int = 2,
+             n_folds: int = 5, alpha: float = 0.01, min_gain: float = 0.02, seed: int = 0,
+             validate_by: Sequence[str] = ("frequency", "heave_amplitude"),
+             system: GapSystem | None = None) -> Diagnosis:
+    """Rank the candidate effects by held-out improvement and claim one only if significant.
+
+    Parameters
+    ----------
+    cases
+        Any (motion, force history) pairs, prepared as :class:`CaseData`.
+    base_model
+        The reduced model whose terms are refitted together with each candidate.
+    validate_by
+        Case parameters for leave-one-group-out validation of the chosen effect (e.g.
+        leave-one-frequency-out).
+    """
+    candidates = candidates or default_candidates(context)
+    system = system or GapSystem.build(cases, base_model.terms, list(candidates.values()))
+    folds = group_folds(range(len(system.cases)), n_folds, seed)
+    base_cols = list(range(system.n_base))
+    base_sse, _ = system.cross_validate(base_cols, folds)
+    singles = [_score(system, (n,), folds, base_sse, candidates, alpha, min_gain)
+               for n in candidates]
+    singles.sort(key=lambda s: -s.gain)
+    scores = list(singles)
+    best = singles[0] if singles and singles[0].significant else None
+    chosen = best
+    if best is not None and max_combination >= 2:
+        for combo in itertools.combinations(candidates, 2):
+            if best.names[0] not in combo:
+                continue
+            pair = _score(system, combo, folds, base_sse, candidates, alpha, min_gain,
+                          reference=best.heldout_sse)
+            scores.append(pair)
+            if pair.significant and (chosen is best or pair.gain > chosen.gain):
+                chosen = pair
+    scores.sort(key=lambda s: -s.gain)
+    if chosen is None:
+        top = singles[0] if singles else None
+        verdict = ("no candidate explains it" + (
+            f" (best: {top.label}, held-out gain {top.gain:+.1%}, p = {top.p_value:.2g})"
+            if top else ""))
+    else:
+        implaus = [n for n, ok in chosen.plausible.items() if not ok]
+        verdict = (f"{chosen.label}: held-out error {chosen.gain:.1%} lower "
+                   f"(p = {chosen.p_value:.2g})"
+                   + (f"; implausible coefficient for {', '.join(implaus)}" if implaus else ""))
+    diag = Diagnosis(list(system.names[: system.n_base]), base_sse, scores, chosen, verdict,
+                     case_names=[c.name for c in system.cases])
+    diag.gap["before"] = gap_metrics(system, _predictions(system, base_cols, folds))
+    if chosen is not None:
+        cols = base_cols + [system.names.index(n) for n in chosen.names]
+        diag.gap["after"] = gap_metrics(system, _predictions(system, cols, folds))
+        for key in validate_by:
+            labels = [c.parameters.get(key) for c in system.cases]
+            if any(v is None for v in labels) or len(set(labels)) < 2:
+                continue
+            g = group_folds(labels)
+            before, _ = system.cross_validate(base_cols, g)
+            after, _ = system.cross_validate(cols, g)
+            per_group = {}
+            for fold in g:
+                lab = labels[fold[0]]
+                per_group[str(lab)] = float(1.0 - after[fold].sum() / before[fold].sum())
+            diag.validation[f"leave-one-{key}-out"] = {
+                "gain": float(1.0 - after.sum() / before.sum()),
+                "p_value": _significance(before, after), "per_group_gain": per_group}
+    return diag

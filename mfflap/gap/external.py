@@ -1,0 +1,83 @@
+"""(motion, force history) pairs from outside mfflap: CSV files or plain arrays."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from scipy.interpolate import make_smoothing_spline
+
+from mfflap.errors import ParseError
+from mfflap.hydro.loads import Loads
+from mfflap.identification.data import CaseData
+from mfflap.kinematics.state import KinematicState
+
+CSV_COLUMNS = ("time", "pitch_angle", "heave_position", "normal_force", "tangential_force",
+               "moment")
+
+
+def case_from_arrays(name: str, time, pitch_angle, heave_position, normal_force,
+                     tangential_force, moment, parameters: dict | None = None) -> CaseData:
+    """A case from sampled positions (rad, m) and loads (N, N*m, body frame, about the LE).
+
+    Rates and accelerations come from smoothing splines of the positions (the generalised
+    cross-validation choice of smoothing), so noisy measured motions can be used.
+    """
+    t = np.asarray(time, dtype=float)
+    if t.ndim != 1 or len(t) < 8 or np.any(np.diff(t) <= 0):
+        raise ParseError(f"{name}: time must be increasing with at least 8 samples")
+    arrays = {}
+    for key, values in (("pitch", pitch_angle), ("heave", heave_position)):
+        y = np.asarray(values, dtype=float)
+        if y.shape != t.shape or not np.all(np.isfinite(y)):
+            raise ParseError(f"{name}: {key} must be finite with one value per time")
+        spline = make_smoothing_spline(t, y)
+        arrays[key] = (spline(t), spline.derivative(1)(t), spline.derivative(2)(t))
+    state = KinematicState(time=t, pitch_angle=arrays["pitch"][0],
+                           pitch_rate=arrays["pitch"][1],
+                           pitch_acceleration=arrays["pitch"][2],
+                           heave_position=arrays["heave"][0],
+                           heave_velocity=arrays["heave"][1],
+                           heave_acceleration=arrays["heave"][2])
+    loads = Loads(t, *(np.asarray(v, dtype=float) for v in (normal_force, tangential_force,
+                                                            moment)), source=name)
+    return CaseData(name, dict(parameters or {}), state, loads)
+
+
+def read_csv_case(path: str | Path, parameters: dict | None = None) -> CaseData:
+    """A CSV with a header naming the columns of :data:`CSV_COLUMNS` (any order; SI units).
+
+    Raises
+    ------
+    ParseError
+        Naming the file and the line for a missing column or an unreadable value.
+    """
+    path = Path(path)
+    lines = path.read_text().splitlines()
+    if not lines:
+        raise ParseError("empty file", path=str(path))
+    header = [h.strip() for h in lines[0].split(",")]
+    missing = [c for c in CSV_COLUMNS if c not in header]
+    if missing:
+        raise ParseError(f"missing column(s) {missing}; the header has {header}",
+                         path=str(path), line=1)
+    rows = []
+    for i, line in enumerate(lines[1:], start=2):
+        if not line.strip():
+            continue
+        parts = line.split(",")
+        if len(parts) != len(header):
+            raise ParseError(f"{len(parts)} values for {len(header)} columns", path=str(path),
+                             line=i)
+        try:
+            rows.append([float(p) for p in parts])
+        except ValueError as exc:
+            raise ParseError(f"unreadable number: {exc}", path=str(path), line=i) from exc
+    data = np.array(rows)
+    col = {h: data[:, j] for j, h in enumerate(header)}
+    for c in CSV_COLUMNS:
+        bad = ~np.isfinite(col[c])
+        if bad.any():
+            raise ParseError(f"column {c} is not finite", path=str(path),
+                             line=int(np.argmax(bad)) + 2)
+    return case_from_arrays(path.stem, *(col[c] for c in CSV_COLUMNS), parameters=parameters)

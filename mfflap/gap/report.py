@@ -1,0 +1,161 @@
+"""Gap-diagnosis report (HTML) and storage (HDF5)."""
+
+from __future__ import annotations
+
+import json
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+
+from mfflap.gap.diagnose import Diagnosis
+from mfflap.reports.html import Report, figure_html, table_html, text_html
+from mfflap.results import ResultsFile
+
+SIGNALS = ("normal_force", "tangential_force", "moment", "thrust", "input_power")
+
+
+def _where_figure(where: dict):
+    fig, axes = plt.subplots(2, 2, figsize=(11, 7))
+    comp = where["by_component"]
+    axes[0, 0].bar(list(comp), list(comp.values()))
+    axes[0, 0].set_title("share of squared error by component")
+    ph = where["by_phase"]
+    axes[0, 1].bar(ph["bin_centres_deg"], ph["squared_share"], width=25)
+    axes[0, 1].set_xlabel("phase in the carrier cycle [deg]")
+    axes[0, 1].set_title("share of squared F_n residual by phase")
+    st = {**where["by_state"], **where["by_regime"]}
+    axes[1, 0].barh(list(st), list(st.values()))
+    axes[1, 0].set_xlabel("η² (share of the residual a variable organises)")
+    hv = where["by_harmonic"]
+    axes[1, 1].bar(list(hv), list(hv.values()))
+    axes[1, 1].set_title("residual power by harmonic of the carrier")
+    for ax in (axes[0, 0], axes[1, 1]):
+        ax.tick_params(axis="x", rotation=20)
+    fig.tight_layout()
+    return fig
+
+
+def _regime_figure(where: dict, diag: Diagnosis):
+    rv = where["regime_values"]
+    keys = [k for k in ("Strouhal number 2 f h / U", "reduced frequency k = pi f c / U",
+                        "peak effective angle of attack") if k in rv]
+    fig, axes = plt.subplots(1, len(keys), figsize=(4 * len(keys), 3.4), squeeze=False)
+    before = diag.gap["before"]["normal_force"]["nrmse"]
+    after = diag.gap.get("after", {}).get("normal_force", {}).get("nrmse")
+    for ax, k in zip(axes[0], keys, strict=True):
+        ax.scatter(rv[k], before, s=14, label="model")
+        if after is not None:
+            ax.scatter(rv[k], after, s=14, marker="x", label="model + chosen effect")
+        ax.set_xlabel(k)
+        ax.set_ylabel("held-out NRMSE of F_n")
+    axes[0][0].legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def _candidate_figure(diag: Diagnosis):
+    fig, ax = plt.subplots(figsize=(8, 0.35 * len(diag.scores) + 1.5))
+    labels = [s.label for s in diag.scores]
+    gains = [s.gain for s in diag.scores]
+    colours = ["C2" if s.significant else "0.6" for s in diag.scores]
+    ax.barh(labels, gains, color=colours)
+    ax.invert_yaxis()
+    ax.set_xlabel("held-out error reduction vs the base model (green: significant)")
+    fig.tight_layout()
+    return fig
+
+
+def gap_report(path, diag: Diagnosis, where: dict, source: str = "",
+               snapshots: list[tuple[object, str]] | None = None):
+    """Write the HTML report of a diagnosis."""
+    rep = Report("Sim-to-real gap diagnosis", f"{len(diag.case_names)} cases"
+                 f"{f' from {source}' if source else ''}; base model: "
+                 f"{', '.join(diag.base_names)}")
+    s = rep.section("Verdict")
+    s.blocks.append(text_html(diag.verdict, warn=diag.chosen is None))
+    s = rep.section("Where the model departs from CFD")
+    s.blocks.append(table_html(["factor", "share / η²"], [(k, float(v)) for k, v in
+                                                          where["ranking"][:15]]))
+    s.blocks.append(figure_html(_where_figure(where), "Residual by component, phase, state, "
+                                                      "regime and harmonic"))
+    s.blocks.append(figure_html(_regime_figure(where, diag), "Per-case error against regime"))
+    lag = where["phase_lag_deg"]
+    if np.any(np.isfinite(lag)):
+        s.blocks.append(text_html(f"Phase of the model's first harmonic of F_n relative to "
+                                  f"CFD's: median {np.nanmedian(lag):+.1f}° "
+                                  f"(positive: the model leads)."))
+    for fig, caption in snapshots or []:
+        s.blocks.append(figure_html(fig, caption))
+    s = rep.section("Which unmodelled effect")
+    rows = []
+    for sc in diag.scores:
+        coefs = "; ".join(f"{n} = {v:.3g} ± {sc.coefficient_spread[n]:.2g}"
+                          f"{'' if sc.plausible[n] else ' (implausible)'}"
+                          for n, v in sc.coefficients.items())
+        rows.append([sc.label, sc.gain, sc.p_value, "yes" if sc.significant else "no", coefs])
+    s.blocks.append(table_html(["candidate(s)", "held-out gain", "p (Wilcoxon)",
+                                "significant", "coefficients (mean ± spread over folds)"],
+                               rows))
+    s.blocks.append(figure_html(_candidate_figure(diag), "Held-out gain per candidate"))
+    s = rep.section("How far the gap shrinks (held-out cases)")
+    rows = []
+    for sig in SIGNALS:
+        b = diag.gap["before"][sig]
+        a = diag.gap.get("after", {}).get(sig)
+        rows.append([sig, float(np.median(b["nrmse"])),
+                     float(np.median(a["nrmse"])) if a else "-",
+                     float(np.median(b["pearson"])), float(np.median(a["pearson"])) if a else "-"])
+    for key in ("mean_thrust_error", "mean_power_error"):
+        b = diag.gap["before"][key]
+        a = diag.gap.get("after", {}).get(key)
+        rows.append([key + " (mean |.|)", float(np.mean(np.abs(b))),
+                     float(np.mean(np.abs(a))) if a is not None else "-", "", ""])
+    s.blocks.append(table_html(["signal", "median NRMSE before", "after", "median Pearson "
+                                "before", "after"], rows))
+    if diag.validation:
+        s = rep.section("Validation of the chosen effect on withheld groups")
+        s.blocks.append(table_html(["validation", "held-out gain", "p"],
+                                   [(k, v["gain"], v["p_value"]) for k, v in
+                                    diag.validation.items()]))
+    return rep.write(path)
+
+
+def write_diagnosis(rf: ResultsFile, diag: Diagnosis, where: dict, group: str = "gap") -> None:
+    """Store the scores, the decomposition, the gap before/after and the verdict."""
+    rf.write_group(f"{group}/scores", {
+        "heldout_gain": np.array([s.gain for s in diag.scores]),
+        "p_value": np.array([s.p_value for s in diag.scores]),
+        "significant": np.array([s.significant for s in diag.scores]),
+        "base_heldout_sse": diag.base_sse},
+        {"heldout_gain": "1", "p_value": "1", "significant": "1", "base_heldout_sse": "1"},
+        {"labels": json.dumps([s.label for s in diag.scores]),
+         "coefficients": json.dumps([s.coefficients for s in diag.scores])})
+    for phase, metrics in diag.gap.items():
+        arrays, units = {}, {}
+        for sig, val in metrics.items():
+            if isinstance(val, dict):
+                for m, arr in val.items():
+                    arrays[f"{m}_{sig}"] = arr
+                    units[f"{m}_{sig}"] = "1"
+            else:
+                arrays[sig] = val
+                units[sig] = "1"
+        rf.write_group(f"{group}/gap_{phase}", arrays, units)
+    rf.write_group(f"{group}/where", {
+        "phase_bin_centres": where["by_phase"]["bin_centres_deg"],
+        "phase_squared_share": where["by_phase"]["squared_share"],
+        "phase_lag": where["phase_lag_deg"], "case_sse": where["case_sse"]},
+        {"phase_bin_centres": "deg", "phase_squared_share": "1", "phase_lag": "deg",
+         "case_sse": "1"},
+        {"ranking": json.dumps(where["ranking"]),
+         "by_component": json.dumps(where["by_component"]),
+         "by_state": json.dumps(where["by_state"]), "by_regime": json.dumps(where["by_regime"]),
+         "by_harmonic": json.dumps(where["by_harmonic"])})
+    g = rf.h5[group]
+    g.attrs["verdict"] = diag.verdict
+    g.attrs["chosen"] = diag.chosen.label if diag.chosen else ""
+    g.attrs["case_names"] = json.dumps(diag.case_names)
+    g.attrs["validation"] = json.dumps(diag.validation)

@@ -1,0 +1,124 @@
+"""Per-case least-squares blocks over the base terms and every candidate.
+
+For case c and component k the rows are (y - A x) / s_k with s_k the component's RMS over
+all cases, weighted 1 / n_samples(c) so that every case counts equally. Keeping each case's
+Gram matrix G_c = A'A, g_c = A'y and y'y makes any fit on any subset of terms and cases a
+sum of small blocks, and any case's squared error a quadratic form: cross-validation of every
+candidate set costs almost nothing once the regressors are evaluated.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from mfflap.errors import MfflapError
+from mfflap.hydro.base import ForceTerm
+from mfflap.identification.data import CaseData
+
+COMPONENTS = ("normal_force", "tangential_force", "moment")
+
+
+@dataclass
+class GapSystem:
+    """Regressors of every case for the base terms followed by the candidates.
+
+    Attributes
+    ----------
+    names : list of str
+        Column names: base terms, then candidates.
+    n_base : int
+    grams : (n_cases, p, p); rhs : (n_cases, p); yy : (n_cases,)
+    scales : dict component -> RMS
+    columns : per case, per component, (n_samples, p) regressor matrices (unscaled)
+    """
+
+    names: list[str]
+    n_base: int
+    grams: np.ndarray
+    rhs: np.ndarray
+    yy: np.ndarray
+    scales: dict[str, float]
+    columns: list[dict[str, np.ndarray]]
+    cases: list[CaseData]
+
+    @classmethod
+    def build(cls, cases: Sequence[CaseData], base: Sequence[ForceTerm],
+              candidates: Sequence[ForceTerm],
+              components: Sequence[str] = COMPONENTS) -> GapSystem:
+        """Evaluate every regressor of every case once."""
+        if len(cases) < 3:
+            raise MfflapError(f"gap diagnosis needs at least 3 cases, got {len(cases)}")
+        terms = list(base) + list(candidates)
+        names = [t.name for t in terms]
+        scales = {}
+        for k in components:
+            y = np.concatenate([c.cfd_signal(k) for c in cases])
+            scales[k] = float(np.sqrt(np.mean(y**2))) or 1.0
+        p = len(terms)
+        grams, rhs, yy = np.zeros((len(cases), p, p)), np.zeros((len(cases), p)), np.zeros(
+            len(cases))
+        columns = []
+        for i, c in enumerate(cases):
+            regs = [t.regressor(c.state) for t in terms]
+            cols = {}
+            w = 1.0 / c.n_samples
+            for k in components:
+                a = np.column_stack([getattr(r, k) for r in regs])
+                y = c.cfd_signal(k)
+                cols[k] = a
+                a_s, y_s = a / scales[k], y / scales[k]
+                grams[i] += w * a_s.T @ a_s
+                rhs[i] += w * a_s.T @ y_s
+                yy[i] += w * y_s @ y_s
+            columns.append(cols)
+        return cls(names, len(base), grams, rhs, yy, scales, columns, list(cases))
+
+    def fit(self, cols: Sequence[int], train: np.ndarray) -> np.ndarray:
+        """Unconstrained least squares on ``cols`` over the ``train`` cases."""
+        cols = list(cols)
+        g = self.grams[train][:, cols][:, :, cols].sum(axis=0)
+        b = self.rhs[train][:, cols].sum(axis=0)
+        ridge = 1e-10 * np.trace(g) / len(cols)
+        return np.linalg.solve(g + ridge * np.eye(len(cols)), b)
+
+    def case_sse(self, cols: Sequence[int], x: np.ndarray, cases: np.ndarray) -> np.ndarray:
+        """Weighted scaled squared error of each case in ``cases`` for coefficients ``x``."""
+        cols = list(cols)
+        g = self.grams[cases][:, cols][:, :, cols]
+        b = self.rhs[cases][:, cols]
+        return self.yy[cases] - 2 * b @ x + np.einsum("i,cij,j->c", x, g, x)
+
+    def predict(self, case: int, cols: Sequence[int], x: np.ndarray, component: str
+                ) -> np.ndarray:
+        """Prediction of one component for one case."""
+        return self.columns[case][component][:, list(cols)] @ x
+
+    def cross_validate(self, cols: Sequence[int], folds: Sequence[np.ndarray]
+                       ) -> tuple[np.ndarray, list[np.ndarray]]:
+        """Held-out squared error per case and the coefficients fitted for each fold."""
+        sse = np.empty(len(self.cases))
+        coefs = []
+        every = np.arange(len(self.cases))
+        for held in folds:
+            train = np.setdiff1d(every, held)
+            x = self.fit(cols, train)
+            sse[held] = self.case_sse(cols, x, held)
+            coefs.append(x)
+        return sse, coefs
+
+
+def group_folds(labels: Sequence[object], n_folds: int | None = None,
+                seed: int = 0) -> list[np.ndarray]:
+    """Folds that keep each group (case, frequency, amplitude...) together."""
+    labels = list(labels)
+    groups = sorted(set(labels), key=str)
+    rng = np.random.default_rng(seed)
+    order = rng.permutation(len(groups))
+    k = len(groups) if n_folds is None else min(n_folds, len(groups))
+    folds = [[] for _ in range(k)]
+    for pos, gi in enumerate(order):
+        folds[pos % k].extend(i for i, lab in enumerate(labels) if lab == groups[gi])
+    return [np.array(sorted(f)) for f in folds if f]

@@ -1,0 +1,169 @@
+"""Gap diagnosis: candidate library, Wagner lag, decomposition, selection, blind benchmark."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from mfflap.campaign.records import CfdRecord, write_record
+from mfflap.errors import ParseError
+from mfflap.gap.blindtest import NULL, blind_test, synthesize
+from mfflap.gap.candidates import CandidateEffect, load_all, register
+from mfflap.gap.candidates.base import _REGISTRY
+from mfflap.gap.candidates.wake_lag import JONES, wagner_filter
+from mfflap.gap.diagnose import _predictions, default_candidates, diagnose
+from mfflap.gap.external import read_csv_case
+from mfflap.gap.system import GapSystem, group_folds
+from mfflap.gap.where import correlation_ratio, decompose
+from mfflap.hydro import MorisonModel
+
+CASE = Path(__file__).parents[1] / "cases" / "paper2026.toml"
+
+
+def test_library_has_the_required_effects_with_finite_regressors():
+    names = set(load_all())
+    assert {"circulatory_lift", "wake_lag", "pitch_rate_lift", "leading_edge_vortex",
+            "added_mass_coupling", "skin_friction"} <= names
+    data = synthesize(np.random.default_rng(0), NULL, 0.0, n_cases=3)
+    for name, effect in default_candidates().items():
+        r = effect.regressor(data[0].state)
+        assert all(np.all(np.isfinite(getattr(r, k))) for k in
+                   ("normal_force", "tangential_force", "moment")), name
+        assert effect.is_plausible(effect.typical), name
+
+
+def test_wagner_step_response_is_jones_function():
+    """A unit step after a long zero input: y(s) = 1 - sum A_i exp(-b_i s), s = 2 U t / c."""
+    u, c = 0.3, 0.16
+    t = np.linspace(-1.0, 20.0, 20001)
+    x = (t >= 0).astype(float)
+    y = wagner_filter(x, t, u, c)
+    s = 2 * u * t / c
+    after = t > 0.01
+    phi = 1 - sum(a * np.exp(-b * s[after]) for a, b in JONES)
+    # zero-order hold of the input: a one-sample shift of the step, so compare at s +/- ds
+    assert np.max(np.abs(y[after] - phi)) < 2e-3
+    assert y[t < 0].max() == 0.0 and y[-1] == pytest.approx(1 - sum(
+        a * np.exp(-b * s[-1]) for a, b in JONES), abs=1e-3)
+
+
+def test_a_new_candidate_is_one_class_and_is_used_by_the_diagnosis():
+    @register
+    class ConstantNormalForce(CandidateEffect):
+        """A constant normal force (a test candidate)."""
+
+        name = "test_constant_normal_force"
+        plausible = (0.0, 100.0)
+
+        def regressor(self, state):
+            return self.loads(state, normal=np.ones(state.shape))
+
+    try:
+        assert "test_constant_normal_force" in default_candidates()
+        rng = np.random.default_rng(4)
+        data = synthesize(rng, NULL, 0.0)
+        for c in data:  # hide a constant 3 N offset in F_n
+            c.cfd.normal_force[:] += 3.0
+        diag = diagnose(data, MorisonModel())
+        assert diag.chosen is not None
+        assert diag.chosen.names[0] == "test_constant_normal_force"
+        assert diag.chosen.coefficients["test_constant_normal_force"] == pytest.approx(3.0,
+                                                                                      rel=0.2)
+    finally:
+        _REGISTRY.pop("test_constant_normal_force")
+
+
+@pytest.mark.parametrize("effect", ["wake_lag", "skin_friction", "added_mass_coupling"])
+def test_hidden_effect_is_found_and_the_gap_shrinks(effect):
+    data = synthesize(np.random.default_rng(11), effect, 4.0)
+    diag = diagnose(data, MorisonModel())
+    assert diag.chosen is not None and diag.chosen.names[0] == effect
+    before = diag.gap["before"]
+    after = diag.gap["after"]
+    shrink = {k: np.median(after[k]["nrmse"]) / np.median(before[k]["nrmse"])
+              for k in ("normal_force", "tangential_force", "moment")}
+    assert min(shrink.values()) < 0.8, shrink
+    assert diag.validation["leave-one-frequency-out"]["gain"] > 0.1
+
+
+def test_null_dataset_claims_nothing_and_says_so():
+    diag = diagnose(synthesize(np.random.default_rng(5), NULL, 0.0), MorisonModel())
+    assert diag.chosen is None
+    assert diag.verdict.startswith("no candidate explains it")
+    assert "after" not in diag.gap
+
+
+def test_blind_benchmark_meets_its_targets_at_snr_3():
+    """The issue's target: right effect first in >= 90 % of trials, no claim in >= 90 % of
+    null trials (30 trials here; the benchmark script runs more)."""
+    res = blind_test(n_trials=30, snr=3.0, seed=7)
+    assert res.attribution_accuracy >= 0.9
+    assert res.null_correct >= 0.9
+    assert res.confusion().sum() == 30
+    weak = blind_test(n_trials=20, snr=0.2, seed=7)  # the test can fail: at SNR 0.2 it does
+    assert weak.attribution_accuracy < 0.7
+
+
+def test_decomposition_finds_a_phase_locked_residual():
+    rng = np.random.default_rng(2)
+    data = synthesize(rng, NULL, 0.0)
+    model = MorisonModel()
+    for c in data:  # residual that is a pure function of the carrier phase
+        f = c.parameters["frequency"]
+        exact = model.loads(c.state)
+        c.cfd.normal_force[:] = (exact.normal_force
+                                 + 5 * np.sign(np.sin(2 * np.pi * f * c.state.time)))
+        c.cfd.tangential_force[:] = exact.tangential_force
+        c.cfd.moment[:] = exact.moment
+    system = GapSystem.build(data, model.terms, [])
+    pred = [{k: getattr(model.loads(c.state), k) for k in
+             ("normal_force", "tangential_force", "moment")} for c in data]
+    where = decompose(system, pred, 0.3, 0.16)
+    assert where["by_state"]["phase in the cycle"] > 0.9
+    assert where["by_component"]["normal_force"] > 0.99
+    assert sum(where["by_component"].values()) == pytest.approx(1.0)
+    assert correlation_ratio(np.arange(10.0), np.zeros(10)) == 0.0
+    folds = group_folds(range(len(data)), 5)
+    assert sorted(np.concatenate(folds).tolist()) == list(range(len(data)))
+    assert _predictions(system, [0, 1, 2, 3], folds)[0]["moment"].shape == data[0].state.shape
+
+
+def test_external_csv_case_and_its_errors(tmp_path):
+    t = np.linspace(0, 2, 200)
+    pitch, heave = 0.3 * np.sin(2 * np.pi * t), 0.2 * np.cos(2 * np.pi * t)
+    rows = ["time,pitch_angle,heave_position,normal_force,tangential_force,moment"]
+    rows += [f"{a},{b},{c},1.0,0.5,0.1" for a, b, c in zip(t, pitch, heave, strict=True)]
+    good = tmp_path / "run.csv"
+    good.write_text("\n".join(rows) + "\n")
+    case = read_csv_case(good)
+    assert case.state.heave_velocity[50] == pytest.approx(
+        -0.4 * np.pi * np.sin(2 * np.pi * t[50]), rel=0.02)
+    bad = tmp_path / "bad.csv"
+    bad.write_text("\n".join([*rows[:10], "0.5,0.1,oops,1,1,1", *rows[10:]]) + "\n")
+    with pytest.raises(ParseError, match=r"bad\.csv.*line 11"):
+        read_csv_case(bad)
+    missing = tmp_path / "missing.csv"
+    missing.write_text("time,pitch_angle\n0,0\n")
+    with pytest.raises(ParseError, match="missing column"):
+        read_csv_case(missing)
+
+
+def test_gap_cli_on_a_record_folder(tmp_path):
+    from mfflap.cli.main import cli
+
+    data = synthesize(np.random.default_rng(3), "circulatory_lift", 4.0)
+    folder = tmp_path / "records"
+    for c in data:
+        write_record(folder / f"{c.name}.h5", CfdRecord(c.name, c.state, c.cfd, c.parameters))
+    out = tmp_path / "gap.h5"
+    res = CliRunner().invoke(cli, ["gap", "diagnose", str(CASE), "--fixtures", str(folder),
+                                   "--output", str(out), "--json"])
+    assert res.exit_code == 0, res.output
+    data_out = json.loads(res.output[res.output.index("{"):])
+    assert data_out["chosen"] == "circulatory_lift"
+    assert "Which unmodelled effect" in out.with_suffix(".html").read_text()
+    res = CliRunner().invoke(cli, ["gap", "blindtest", "--trials", "5", "--json"])
+    assert res.exit_code == 0, res.output
+    assert len(json.loads(res.output)["confusion"]) == 7
