@@ -46,14 +46,29 @@ def run(case_dir: Path, timeout: float) -> None:
 
 
 @cfd.command()
-@click.argument("case_dir", type=click.Path(file_okay=False, exists=True, path_type=Path))
+@click.argument("source", type=click.Path(exists=True, path_type=Path))
 @click.option("--case-file", type=click.Path(dir_okay=False, path_type=Path), required=True,
               help="The case file whose [motion] the CFD case imposes.")
 @click.option("--discard", default=0.0, show_default=True,
               help="Seconds of start-up transient left out of the comparison.")
+@click.option("--fx", default="fx-plate", show_default=True,
+              help="Fluent: report column of the x force.")
+@click.option("--fy", default="fy-plate", show_default=True,
+              help="Fluent: report column of the y force.")
+@click.option("--mz", default="mz-plate", show_default=True,
+              help="Fluent: report column of the z moment about the origin.")
+@click.option("--depth", default=1.0, show_default=True,
+              help="Fluent: depth the 2D forces are given for, m (Fluent 2D: 1 m).")
+@click.option("--ramp-time", default=0.0, show_default=True,
+              help="Fluent: start-up ramp of the UDF, s.")
 @click.option("--json", "as_json", is_flag=True, help="Print results as JSON.")
-def parse(case_dir: Path, case_file: Path, discard: float, as_json: bool) -> None:
-    """Parse CASE_DIR's forces into F_n, F_t, M, thrust and power, compared with the model."""
+def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: str,
+          depth: float, ramp_time: float, as_json: bool) -> None:
+    """Parse forces into F_n, F_t, M, thrust and power, compared with the model.
+
+    SOURCE is an OpenFOAM case folder written by mfflap, or a Fluent report file (.out) with
+    force and moment columns and the flow time.
+    """
     from mfflap.cfd.openfoam.forces import read_forces
     from mfflap.cfd.openfoam.loads import imposed_state, to_loads
     from mfflap.config import load_case
@@ -62,11 +77,19 @@ def parse(case_dir: Path, case_file: Path, discard: float, as_json: bool) -> Non
     from mfflap.toml_io import read_toml
 
     case = load_case(case_file)
-    meta = read_toml(case_dir / "mfflap_case.toml")
-    history = read_forces(case_dir)
-    state = imposed_state(case.motion.build(), history.time, float(meta.get("ramp_time", 0)))
-    cfd_loads = to_loads(history, state, case.plate.span, float(meta["depth"]),
-                         source=f"openfoam:{case_dir}")
+    if source.is_dir():
+        meta = read_toml(source / "mfflap_case.toml")
+        history = read_forces(source)
+        depth = float(meta["depth"])
+        ramp_time = float(meta.get("ramp_time", 0))
+        label = f"openfoam:{source}"
+    else:
+        from mfflap.cfd.fluent.report import report_forces
+
+        history = report_forces(source, fx, fy, mz)
+        label = f"fluent:{source}"
+    state = imposed_state(case.motion.build(), history.time, ramp_time)
+    cfd_loads = to_loads(history, state, case.plate.span, depth, source=label)
     model_loads = case.morison_model().loads(state)
     keep = history.time >= discard
     if keep.sum() < 2:
@@ -74,7 +97,7 @@ def parse(case_dir: Path, case_file: Path, discard: float, as_json: bool) -> Non
     thrust, power = thrust_and_power(cfd_loads, state)
     m_thrust, m_power = thrust_and_power(model_loads, state)
     thrust, power, m_thrust, m_power = (a[keep] for a in (thrust, power, m_thrust, m_power))
-    out = {"case_dir": str(case_dir), "dialect": history.dialect,
+    out = {"source": str(source), "dialect": history.dialect,
            "n_samples": len(history.time), "end_time": float(history.time[-1]),
            "cfd_mean_thrust": float(thrust.mean()), "model_mean_thrust": float(m_thrust.mean()),
            "cfd_mean_power": float(power.mean()), "model_mean_power": float(m_power.mean())}
@@ -87,3 +110,23 @@ def parse(case_dir: Path, case_file: Path, discard: float, as_json: bool) -> Non
     else:
         for k, v in out.items():
             click.echo(f"  {k:24s} {v}")
+
+
+@cfd.command()
+@click.argument("case_file", type=click.Path(dir_okay=False, exists=True, path_type=Path))
+@click.argument("out_dir", type=click.Path(file_okay=False, path_type=Path))
+@click.option("--cycles", default=3.0, show_default=True, help="Carrier periods to simulate.")
+@click.option("--ramp-time", default=0.0, show_default=True, help="Smooth start-up ramp, s.")
+@click.option("--time-step", default=1e-3, show_default=True, help="Fluent time step, s.")
+@click.option("--table", is_flag=True, help="Table-driven UDF even for a sinusoid.")
+def fluent(case_file: Path, out_dir: Path, cycles: float, ramp_time: float, time_step: float,
+           table: bool) -> None:
+    """Write a DEFINE_CG_MOTION UDF and a batch journal for the [motion] of CASE_FILE."""
+    from mfflap.cfd.fluent.udf import write_fluent_case
+    from mfflap.config import load_case
+
+    case = load_case(case_file)
+    end_time = cycles / case.motion.frequency
+    write_fluent_case(out_dir, case.motion.build(), end_time, ramp_time=ramp_time,
+                      time_step=time_step, velocity=case.flow.velocity, table=table)
+    click.echo(f"wrote {out_dir / 'mfflap_motion.c'} and {out_dir / 'mfflap_run.jou'}")

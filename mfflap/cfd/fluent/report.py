@@ -1,0 +1,142 @@
+"""Fluent report files (``*.out``): parse by column names, flow-time aware.
+
+Layout: line 1 a quoted title; line 2 starts with ``"Time Step"`` (transient) or
+``"Iteration"`` (steady); line 3 the column names as quoted tokens in parentheses; then
+whitespace-separated numeric rows. Columns are found by name (their order varies) and the
+time is the ``flow-time`` column, never step x dt (the step may change during a run).
+Restarted runs that append rows again from an earlier time keep the later rows.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from mfflap.cfd.openfoam.forces import ForceHistory
+from mfflap.errors import ParseError
+
+_TOKEN = re.compile(r'"([^"]*)"')
+
+
+@dataclass
+class FluentReport:
+    """Columns of one report file."""
+
+    path: str
+    title: str
+    kind: str  # "transient" | "steady"
+    columns: dict[str, np.ndarray]
+
+    @property
+    def time(self) -> np.ndarray:
+        """Flow time, s (transient reports only)."""
+        if "flow-time" not in self.columns:
+            raise ParseError(f"no 'flow-time' column; columns: {list(self.columns)}",
+                             path=self.path, line=3)
+        return self.columns["flow-time"]
+
+
+def parse_report(text: str, path: str = "<text>") -> FluentReport:
+    """Parse the text of a report file.
+
+    Raises
+    ------
+    ParseError
+        For a missing or malformed header, a row with a wrong number of values (other than a
+        cut last line, which is dropped), an unreadable number, NaN/inf, or flow time that
+        is not increasing after restarts are resolved; naming the file and line.
+    """
+    lines = text.splitlines()
+    if len(lines) < 3:
+        raise ParseError("a report file needs a title, a type and a column-name line",
+                         path=path, line=len(lines) or 1)
+    title = _TOKEN.findall(lines[0])
+    if not title:
+        raise ParseError("line 1 is not a quoted report title", path=path, line=1)
+    second = lines[1].strip()
+    if second.startswith('"Time Step"'):
+        kind = "transient"
+    elif second.startswith('"Iteration"'):
+        kind = "steady"
+    else:
+        raise ParseError('line 2 must start with "Time Step" or "Iteration" (is this a Fluent '
+                         "report file?)", path=path, line=2)
+    header = lines[2].strip()
+    if not (header.startswith("(") and header.endswith(")")):
+        raise ParseError("line 3 must list the column names in parentheses", path=path, line=3)
+    names = _TOKEN.findall(header)
+    if not names or len(set(names)) != len(names):
+        raise ParseError(f"line 3 has no or repeated column names: {names}", path=path, line=3)
+    rows, row_lines = [], []
+    body = [(i, ln) for i, ln in enumerate(lines[3:], start=4) if ln.strip()]
+    for pos, (lineno, line) in enumerate(body):
+        parts = line.split()
+        last = pos == len(body) - 1
+        if len(parts) != len(names):
+            if last and 0 < len(parts) < len(names) and not text.endswith("\n"):
+                break  # the cut last line of a killed run
+            raise ParseError(f"{len(parts)} values for {len(names)} columns {names}",
+                             path=path, line=lineno)
+        try:
+            values = [float(p) for p in parts]
+        except ValueError as exc:
+            if last and not text.endswith("\n"):
+                break
+            raise ParseError(f"unreadable number in {line.strip()!r}", path=path,
+                             line=lineno) from exc
+        if not all(np.isfinite(values)):
+            raise ParseError("NaN or infinite value: the run diverged here", path=path,
+                             line=lineno)
+        rows.append(values)
+        row_lines.append(lineno)
+    if not rows:
+        raise ParseError("no data rows", path=path, line=4)
+    data = np.array(rows)
+    if kind == "transient" and "flow-time" in names:
+        t = data[:, names.index("flow-time")]
+        # a restart appends from an earlier time: keep, for each time, the last row written
+        keep = np.ones(len(t), dtype=bool)
+        latest = np.inf
+        for i in range(len(t) - 1, -1, -1):
+            if t[i] >= latest:
+                keep[i] = False
+            else:
+                latest = t[i]
+        data = data[keep]
+        lines_kept = np.array(row_lines)[keep]
+        bad = np.flatnonzero(np.diff(data[:, names.index("flow-time")]) <= 0)
+        if len(bad):
+            raise ParseError("flow-time is not increasing", path=path,
+                             line=int(lines_kept[bad[0] + 1]))
+    return FluentReport(path, title[0], kind, {n: data[:, j] for j, n in enumerate(names)})
+
+
+def read_report(path: str | Path) -> FluentReport:
+    """Parse a report file from disk."""
+    path = Path(path)
+    if not path.exists():
+        raise ParseError("no such report file", path=str(path))
+    return parse_report(path.read_text(errors="replace"), str(path))
+
+
+def report_forces(path: str | Path, force_x: str = "fx-plate", force_y: str = "fy-plate",
+                  moment_z: str | None = "mz-plate") -> ForceHistory:
+    """The case-frame force (and moment about the CofR) of a report file as a
+    :class:`~mfflap.cfd.openfoam.forces.ForceHistory`, the object the OpenFOAM side produces,
+    so :func:`~mfflap.cfd.openfoam.loads.to_loads` turns both into the same loads."""
+    rep = read_report(path)
+    wanted = [c for c in (force_x, force_y, moment_z) if c]
+    missing = [c for c in wanted if c not in rep.columns]
+    if missing:
+        raise ParseError(f"missing column(s) {missing}; the file has {list(rep.columns)}",
+                         path=str(path), line=3)
+    t = rep.time
+    zeros = np.zeros_like(t)
+    force = np.column_stack([rep.columns[force_x], rep.columns[force_y], zeros])
+    moment = None
+    if moment_z:
+        moment = np.column_stack([zeros, zeros, rep.columns[moment_z]])
+    return ForceHistory(t, force, moment, dialect="fluent-report")

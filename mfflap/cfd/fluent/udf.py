@@ -1,0 +1,144 @@
+"""Generate DEFINE_CG_MOTION UDFs and the batch journal from templates (jinja2)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import jinja2
+import numpy as np
+
+from mfflap.cfd.frames import case_displacement, case_rotation_deg
+from mfflap.cfd.openfoam.loads import imposed_state
+from mfflap.errors import ConfigError, MotionError
+from mfflap.kinematics.continuous import HarmonicMotion, Motion, RampHarmonicMotion
+
+
+def template_dir() -> Path:
+    """``cfd_templates/fluent`` beside the package."""
+    here = Path(__file__).resolve()
+    for parent in here.parents:
+        candidate = parent / "cfd_templates" / "fluent"
+        if candidate.is_dir():
+            return candidate
+    raise ConfigError("cannot find cfd_templates/fluent beside the mfflap package")
+
+
+def standin_header_dir() -> Path:
+    """Folder of the stand-in ``udf.h`` used to compile UDFs without Fluent."""
+    return template_dir() / "standin"
+
+
+def _env() -> jinja2.Environment:
+    return jinja2.Environment(loader=jinja2.FileSystemLoader(str(template_dir())),
+                              undefined=jinja2.StrictUndefined, keep_trailing_newline=True)
+
+
+def _signs() -> tuple[float, float]:
+    """Case-frame sign of a positive heave (along y) and of a positive pitch (about z)."""
+    heave = float(case_displacement(np.array([1.0]))[0, 1])
+    pitch = float(case_rotation_deg(np.array([1.0]))[0, 2])
+    return math.copysign(1.0, heave), math.copysign(1.0, pitch)
+
+
+def _check_name(udf_name: str) -> None:
+    if not udf_name.isidentifier():
+        raise ConfigError(f"UDF name {udf_name!r} is not a C identifier", key="udf_name")
+
+
+def analytic_udf(motion: HarmonicMotion | RampHarmonicMotion, ramp_time: float = 0.0,
+                 udf_name: str = "mfflap_motion") -> str:
+    """C source of an analytic DEFINE_CG_MOTION for a sinusoid (with or without the
+    theta_kamp t pitch ramp) and the C^2 start-up ramp."""
+    from mfflap import __version__
+
+    _check_name(udf_name)
+    ramp = isinstance(motion, RampHarmonicMotion)
+    coeff = motion.pitch_ramp_rate if ramp else motion.pitch_amplitude
+    values = [motion.frequency, motion.heave_amplitude, coeff, motion.phase]
+    if any(np.ndim(v) for v in values):
+        raise MotionError("one UDF is written for one motion; got array parameters")
+    heave_sign, pitch_sign = _signs()
+    return _env().get_template("cg_motion_analytic.c.j2").render(
+        version=__version__, ramp=ramp, frequency=float(motion.frequency),
+        heave_amplitude=float(motion.heave_amplitude), pitch_coefficient=float(coeff),
+        phase=float(motion.phase), ramp_time=float(ramp_time), udf_name=udf_name,
+        heave_sign=heave_sign, pitch_sign=pitch_sign)
+
+
+def velocity_table(motion: Motion, end_time: float, rows_per_second: float = 2000.0,
+                   ramp_time: float = 0.0) -> np.ndarray:
+    """Rows (t, heave velocity, pitch rate) of the imposed motion from 0 to 1.1 end_time."""
+    if not end_time > 0:
+        raise MotionError(f"end_time must be > 0 s, got {end_time!r}")
+    t = np.linspace(0.0, 1.1 * end_time, max(int(1.1 * end_time * rows_per_second), 8) + 1)
+    s = imposed_state(motion, t, ramp_time).check_finite("UDF table")
+    return np.column_stack([t, s.heave_velocity, s.pitch_rate])
+
+
+def table_udf(motion: Motion, end_time: float, ramp_time: float = 0.0,
+              udf_name: str = "mfflap_motion", rows_per_second: float = 2000.0,
+              periodic_period: float | None = None, description: str = "tabulated motion"
+              ) -> str:
+    """C source of a table-driven DEFINE_CG_MOTION (linear interpolation).
+
+    ``periodic_period`` wraps times beyond the table (for a periodic motion without start-up
+    ramp); otherwise the end values are held.
+    """
+    from mfflap import __version__
+
+    _check_name(udf_name)
+    if periodic_period is not None:
+        if ramp_time > 0:
+            raise ConfigError("a periodic table cannot carry a start-up ramp; use ramp_time 0 "
+                              "or a clamped table", key="ramp_time")
+        end_time = periodic_period / 1.1
+    rows = velocity_table(motion, end_time, rows_per_second, ramp_time)
+    if periodic_period is not None:
+        rows = rows[rows[:, 0] <= periodic_period + 1e-12]
+        rows[-1, 1:] = rows[0, 1:]
+    heave_sign, pitch_sign = _signs()
+    return _env().get_template("cg_motion_table.c.j2").render(
+        version=__version__, rows=rows.tolist(), n_rows=len(rows), t_first=rows[0, 0],
+        t_last=rows[-1, 0], periodic=periodic_period is not None,
+        period=float(periodic_period or 0.0), interpolation="linear", udf_name=udf_name,
+        heave_sign=heave_sign, pitch_sign=pitch_sign, description=description)
+
+
+def journal(udf_file: str, report_file: str = "plate-forces.out", case_file: str = "plate.cas.h5",
+            udf_name: str = "mfflap_motion", time_step: float = 1e-3, n_steps: int = 1000,
+            max_iterations: int = 20, velocity: float = 0.3, plate_zone: str = "plate",
+            fluid_zone: str = "fluid", journal_name: str = "mfflap_run.jou",
+            output_case: str = "plate_final.cas.h5") -> str:
+    """Batch journal: read the case, compile and load the UDF, make the fluid zone a rigid
+    body driven by it, add force/moment report definitions and a report file with the flow
+    time, and run ``n_steps`` time steps."""
+    from mfflap import __version__
+
+    _check_name(udf_name)
+    if n_steps < 1 or time_step <= 0 or max_iterations < 1:
+        raise ConfigError("n_steps and max_iterations must be >= 1 and time_step > 0",
+                          key="journal")
+    return _env().get_template("run.jou.j2").render(
+        version=__version__, udf_file=udf_file, report_file=report_file, case_file=case_file,
+        udf_name=udf_name, time_step=time_step, n_steps=n_steps, max_iterations=max_iterations,
+        velocity=velocity, plate_zone=plate_zone, fluid_zone=fluid_zone,
+        journal_name=journal_name, output_case=output_case)
+
+
+def write_fluent_case(folder: str | Path, motion: Motion, end_time: float, *,
+                      ramp_time: float = 0.0, time_step: float = 1e-3, velocity: float = 0.3,
+                      table: bool | None = None, udf_name: str = "mfflap_motion") -> Path:
+    """Write ``mfflap_motion.c`` (analytic for sinusoids, else table-driven) and
+    ``mfflap_run.jou`` into ``folder``."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    analytic = isinstance(motion, HarmonicMotion | RampHarmonicMotion) and not table
+    source = (analytic_udf(motion, ramp_time, udf_name) if analytic  # type: ignore[arg-type]
+              else table_udf(motion, end_time, ramp_time, udf_name))
+    (folder / "mfflap_motion.c").write_text(source)
+    n_steps = max(math.ceil(end_time / time_step), 1)
+    (folder / "mfflap_run.jou").write_text(journal("mfflap_motion.c", time_step=time_step,
+                                                   n_steps=n_steps, velocity=velocity,
+                                                   udf_name=udf_name))
+    return folder

@@ -1,0 +1,270 @@
+"""Fluent adapter: generated UDFs compiled with gcc (ND_ND 2 and 3) and run in a C test
+program against the Python motion; journal; report-file parser on real output, fuzzed."""
+
+import json
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from mfflap.cfd.fluent.report import parse_report, read_report, report_forces
+from mfflap.cfd.fluent.udf import (
+    analytic_udf,
+    journal,
+    standin_header_dir,
+    table_udf,
+    velocity_table,
+    write_fluent_case,
+)
+from mfflap.cfd.openfoam.forces import read_forces
+from mfflap.cfd.openfoam.loads import imposed_state, to_loads
+from mfflap.errors import ConfigError, ParseError
+from mfflap.kinematics import HarmonicMotion, RampHarmonicMotion
+from mfflap.kinematics.convert import harmonic_to_discrete, to_spline
+
+DATA = Path(__file__).parent / "data"
+GCC = shutil.which("gcc")
+RAMP = RampHarmonicMotion(0.5, 0.3, np.deg2rad(10.0), np.deg2rad(67.5))
+SINE = HarmonicMotion(1.0, 0.2, np.deg2rad(25.0), np.deg2rad(90.0))
+
+MAIN = r"""
+#include "udf.h"
+#include <stdlib.h>
+void mfflap_motion(Dynamic_Thread *dt, real vel[], real omega[], real time, real dtime);
+int main(int argc, char **argv)
+{
+    int i;
+    real vel[ND_ND], omega[3];
+    for (i = 1; i < argc; i++) {
+        real t = atof(argv[i]);
+        mfflap_motion(NULL, vel, omega, t, 1e-3);
+        printf("%.17g %.17g %.17g %.17g\n", (double)vel[0], (double)vel[1], (double)omega[2],
+               (double)omega[0]);
+    }
+    return 0;
+}
+"""
+
+
+def compile_syntax(source: str, tmp_path: Path, nd: int) -> None:
+    assert GCC, "gcc must be installed (.ci/run installs it)"
+    src = tmp_path / f"udf_{nd}.c"
+    src.write_text(source)
+    subprocess.run([GCC, "-fsyntax-only", "-Wall", "-Wextra", "-Werror",
+                    "-Wno-unused-parameter", f"-DND_ND={nd}", "-I", str(standin_header_dir()),
+                    str(src)], check=True, capture_output=True, text=True)
+
+
+def run_udf(source: str, tmp_path: Path, times: np.ndarray, nd: int = 2) -> np.ndarray:
+    assert GCC, "gcc must be installed (.ci/run installs it)"
+    (tmp_path / "udf.c").write_text(source)
+    (tmp_path / "main.c").write_text(MAIN)
+    exe = tmp_path / "udf_test"
+    subprocess.run([GCC, "-O1", "-Wall", "-Werror", "-Wno-unused-parameter", f"-DND_ND={nd}",
+                    "-I", str(standin_header_dir()), str(tmp_path / "udf.c"),
+                    str(tmp_path / "main.c"), "-lm", "-o", str(exe)], check=True,
+                   capture_output=True, text=True)
+    out = subprocess.run([str(exe), *[repr(float(t)) for t in times]], check=True,
+                         capture_output=True, text=True).stdout
+    return np.array([[float(v) for v in line.split()] for line in out.splitlines()])
+
+
+@pytest.mark.parametrize("nd", [2, 3])
+def test_every_generated_udf_compiles_against_the_standin_header(tmp_path, nd):
+    for source in (analytic_udf(RAMP, ramp_time=0.5), analytic_udf(SINE),
+                   table_udf(RAMP, 2.0, ramp_time=0.5),
+                   table_udf(to_spline(harmonic_to_discrete(1.0, 0.2, 0.4, 1.2, 20)), 1.0,
+                             periodic_period=1.0)):
+        compile_syntax(source, tmp_path, nd)
+
+
+@pytest.mark.parametrize("motion", [RAMP, SINE], ids=["ramp", "sine"])
+def test_analytic_udf_output_matches_the_python_motion(tmp_path, motion):
+    times = np.linspace(0.0, 3.0, 61)
+    out = run_udf(analytic_udf(motion, ramp_time=0.4), tmp_path, times)
+    exact = imposed_state(motion, times, 0.4)
+    assert np.all(out[:, 0] == 0) and np.all(out[:, 3] == 0)
+    np.testing.assert_allclose(out[:, 1], exact.heave_velocity, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(out[:, 2], exact.pitch_rate, rtol=1e-12, atol=1e-12)
+
+
+def test_table_udf_interpolates_like_numpy_and_wraps_periodically(tmp_path):
+    times = np.concatenate([np.linspace(0.0, 2.5, 137), [-0.1, 10.0]])
+    src = table_udf(RAMP, 2.0, ramp_time=0.5)
+    out = run_udf(src, tmp_path, times, nd=3)
+    rows = velocity_table(RAMP, 2.0, ramp_time=0.5)
+    np.testing.assert_allclose(out[:, 1], np.interp(times, rows[:, 0], rows[:, 1]),
+                               rtol=1e-12, atol=1e-12)  # clamped outside
+    exact = imposed_state(RAMP, times[:137], 0.5)
+    inside = times[:137] <= rows[-1, 0]
+    np.testing.assert_allclose(out[:137][inside, 2], exact.pitch_rate[inside],
+                               atol=2e-3 * np.abs(exact.pitch_rate).max())
+    spline = to_spline(harmonic_to_discrete(1.0, 0.2, 0.4, 1.2, 20))
+    periodic = run_udf(table_udf(spline, 1.0, periodic_period=1.0), tmp_path, [0.3, 1.3, 5.3])
+    np.testing.assert_allclose(periodic[1:, 1:3], periodic[[0, 0], 1:3], atol=1e-9)
+    np.testing.assert_allclose(periodic[0, 1], spline.sample(np.array([0.3])).heave_velocity[0],
+                               rtol=2e-3)
+
+
+def test_udf_settings_are_checked():
+    with pytest.raises(ConfigError, match="not a C identifier"):
+        analytic_udf(SINE, udf_name="my motion")
+    with pytest.raises(ConfigError, match="periodic table cannot carry a start-up ramp"):
+        table_udf(SINE, 1.0, ramp_time=0.2, periodic_period=1.0)
+
+
+def test_journal_references_the_udf_and_the_report_file(tmp_path):
+    folder = write_fluent_case(tmp_path / "fl", RAMP, 6.0, ramp_time=0.5, time_step=2e-3)
+    text = (folder / "mfflap_run.jou").read_text()
+    assert '"mfflap_motion.c"' in text and "mfflap_motion::libudf" in text
+    assert "flow-time" in text and '"plate-forces.out"' in text
+    assert "/solve/dual-time-iterate 3000 " in text
+    commands = [ln for ln in text.splitlines() if ln and not ln.startswith(";")]
+    for line in commands:
+        assert line.startswith("/"), line
+        assert line.count('"') % 2 == 0 and line.count("(") == line.count(")"), line
+    # the report columns the journal creates are the parser's defaults
+    names = re.findall(r"/solve/report-definitions/add (\S+)", text)
+    assert names == ["fx-plate", "fy-plate", "mz-plate"]
+    assert "vel[1]" in (folder / "mfflap_motion.c").read_text()
+    with pytest.raises(ConfigError):
+        journal("x.c", n_steps=0)
+
+
+def test_real_fluent_report_file_uses_flow_time_not_step_times_dt():
+    rep = read_report(DATA / "fluent" / "report-def-0-rfile.out")
+    assert rep.title == "vazao-mass-porta" and rep.kind == "transient"
+    assert list(rep.columns) == ["Time Step", "vazao-mass-porta", "flow-time"]
+    step, t = rep.columns["Time Step"], rep.time
+    assert t[step == 505][0] == pytest.approx(50.05)  # 0.1 s steps to 500, 0.01 s after
+    assert not np.allclose(t, step * 0.1)
+    assert rep.columns["vazao-mass-porta"][-1] == pytest.approx(-7.418637935812349)
+
+
+HEADER = '"plate-forces"\n"Time Step" "fx-plate fy-plate etc.."\n'
+
+
+def report_text(names, rows):
+    head = HEADER + "(" + " ".join(f'"{n}"' for n in names) + ")\n"
+    return head + "\n".join(" ".join(repr(float(v)) for v in r) for r in rows) + "\n"
+
+
+def test_columns_by_name_restart_overlap_and_cut_last_line():
+    names = ["flow-time", "mz-plate", "Time Step", "fy-plate", "fx-plate"]
+    rows = [[0.1 * i, i, i, 2 * i, 3 * i] for i in range(1, 8)]
+    rows += [[0.1 * i, -i, i, -2 * i, -3 * i] for i in range(5, 10)]  # restart from t = 0.5
+    text = report_text(names, rows)
+    rep = parse_report(text, "f.out")
+    np.testing.assert_allclose(rep.time, 0.1 * np.arange(1, 10))
+    assert rep.columns["fx-plate"][5] == -18  # the restarted rows win
+    cut = text + "1.0 3.0 10"  # killed while writing
+    assert len(parse_report(cut, "f.out").time) == 9
+
+
+@pytest.mark.parametrize(("text", "message", "line"), [
+    ('"t"\n"Iteration" "x"\n("Iteration" "cd")\n1 0.1\n2 nan\n', "NaN", 5),
+    ('"t"\n"Time Step" "x"\n("Time Step" "fx" "flow-time")\n1 0.1 0.1\n2 0.2\n3 0.3 0.3\n',
+     "2 values for 3 columns", 5),
+    ('"t"\n"Time Step" "x"\n("Time Step" "fx" "flow-time")\n1 0.1 abc\n2 0.2 0.2\n',
+     "unreadable number", 4),
+    ("# Forces\n# Time forces\n0 (1 2 3) (0 0 0) (0 0 0)\n", "quoted report title", 1),
+    ('"t"\n"Time Step" "x"\n"Time Step" "fx"\n', "parentheses", 3),
+])
+def test_bad_report_files_name_file_and_line(text, message, line):
+    with pytest.raises(ParseError, match=rf"bad\.out, line {line}: .*{message}"):
+        parse_report(text, "bad.out")
+
+
+def test_missing_force_columns_are_named(tmp_path):
+    path = tmp_path / "r.out"
+    path.write_text(report_text(["Time Step", "flow-time", "drag"], [[1, 0.1, 2.0],
+                                                                    [2, 0.2, 2.0]]))
+    with pytest.raises(ParseError, match=r"missing column\(s\) \['fx-plate', 'fy-plate', "
+                                         r"'mz-plate'\]"):
+        report_forces(path)
+
+
+def test_fluent_and_openfoam_forces_map_to_the_same_loads(tmp_path):
+    """The real OpenFOAM v1912 forces written as a Fluent report give identical loads."""
+    case = tmp_path / "case" / "postProcessing" / "forces" / "0"
+    case.mkdir(parents=True)
+    for name in ("force.dat", "moment.dat"):
+        shutil.copy(DATA / "openfoam_v1912" / name, case / name)
+    of = read_forces(tmp_path / "case")
+    rows = np.column_stack([np.arange(len(of.time)), of.moment[:, 2], of.force[:, 1],
+                            of.time, of.force[:, 0]])
+    path = tmp_path / "plate-forces.out"
+    path.write_text(report_text(["Time Step", "mz-plate", "fy-plate", "flow-time", "fx-plate"],
+                                rows))
+    fl = report_forces(path)
+    motion = HarmonicMotion(1.0, 0.3, np.deg2rad(20), np.pi / 2)
+    state = imposed_state(motion, of.time)
+    a = to_loads(of, state, 0.18, 0.18, "openfoam")
+    b = to_loads(fl, state, 0.18, 0.18, "fluent")
+    for k in ("normal_force", "tangential_force", "moment"):
+        np.testing.assert_allclose(getattr(b, k), getattr(a, k), rtol=1e-12, atol=1e-12)
+
+
+@settings(max_examples=150, deadline=None)
+@given(cut=st.integers(min_value=0, max_value=400), junk=st.text(max_size=12),
+       pos=st.integers(min_value=0, max_value=400))
+def test_report_parser_fuzz_never_hangs_or_lies(cut, junk, pos):
+    names = ["Time Step", "fx-plate", "flow-time"]
+    rows = [[i, np.sin(i), 0.01 * i] for i in range(1, 30)]
+    text = report_text(names, rows)
+    broken = text[:cut] if cut < len(text) else text
+    broken = broken[:pos] + junk + broken[pos:]
+    try:
+        rep = parse_report(broken, "fuzz.out")
+        t = rep.time
+        fx_values = rep.columns["fx-plate"]
+    except ParseError as exc:
+        assert "fuzz.out" in str(exc)
+        return
+    except KeyError:  # junk renamed the column: the caller asks by name and is refused
+        with pytest.raises(ParseError, match="missing column"):
+            report_forces_from_text(broken)
+        return
+    # a successful parse returns only true rows, in order
+    assert np.all(np.diff(t) > 0)
+    truth = {round(0.01 * i, 9): np.sin(i) for i in range(1, 30)}
+    for ti, fx in zip(t, fx_values, strict=True):
+        if round(ti, 9) in truth and truth[round(ti, 9)] == fx:
+            continue
+        # junk may have altered a number into another valid one; it must still be finite
+        assert np.isfinite(fx) and np.isfinite(ti)
+
+
+def report_forces_from_text(text):
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as d:
+        p = Path(d) / "fuzz.out"
+        p.write_text(text)
+        return report_forces(p, "fx-plate", "fx-plate", None)
+
+
+def test_cli_writes_fluent_files_and_parses_a_report(tmp_path):
+    from mfflap.cli.main import cli
+
+    case = Path(__file__).parents[1] / "cases" / "paper2026.toml"
+    res = CliRunner().invoke(cli, ["cfd", "fluent", str(case), str(tmp_path / "fl"),
+                                   "--cycles", "1"])
+    assert res.exit_code == 0, res.output
+    assert (tmp_path / "fl" / "mfflap_motion.c").exists()
+    t = np.linspace(0.01, 1.0, 100)
+    rows = np.column_stack([np.arange(100), np.sin(6 * t), np.cos(6 * t), 0.1 * t, t])
+    path = tmp_path / "plate-forces.out"
+    path.write_text(report_text(["Time Step", "fx-plate", "fy-plate", "mz-plate", "flow-time"],
+                                rows))
+    res = CliRunner().invoke(cli, ["cfd", "parse", str(path), "--case-file", str(case),
+                                   "--json"])
+    assert res.exit_code == 0, res.output
+    out = json.loads(res.output)
+    assert out["dialect"] == "fluent-report" and out["n_samples"] == 100
