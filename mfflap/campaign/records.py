@@ -206,3 +206,17 @@ def read_records(folder: str | Path) -> list[CfdRecord]:
 def fixture_dir(name: str = "table1_coarse") -> Path:
     """A fixture folder shipped with the package (``mfflap/data/fixtures/<name>``)."""
     return Path(__file__).resolve().parent.parent / "data" / "fixtures" / name
+
+
+def compact_folder(folder: str | Path) -> list[Path]:
+    """Rewrite every full-precision record of ``folder`` in single precision (fixtures)."""
+    done = []
+    for path in sorted(Path(folder).glob(f"*{RECORD_SUFFIX}")):
+        if path.name.startswith("."):
+            continue
+        rec = read_record(path)
+        if rec.provenance.get("storage") == "float32":
+            continue
+        write_record(path, rec, single_precision=True)
+        done.append(path)
+    return done
