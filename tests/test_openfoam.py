@@ -205,3 +205,50 @@ def test_courant_numbers_with_exponents_are_read():
            "Courant Number mean: 0.02 max: 4.5e-01\n")
     assert max_courant(log) == 120.0
     assert max_courant("no courant lines") == 0.0
+
+
+@pytest.mark.openfoam
+def test_decomposed_run_matches_the_serial_run(tmp_path):
+    """pimpleFoam on 2 ranks (decomposePar, method simple) gives the serial forces."""
+    serial = write_case(tmp_path / "serial", MOTION, end_time=0.03, mesh="coarse")
+    parallel = write_case(tmp_path / "parallel", MOTION, end_time=0.03, mesh="coarse")
+    run_case(serial, timeout_s=300)
+    run_case(parallel, timeout_s=300, n_procs=2)
+    assert (parallel / "processor1").is_dir()
+    assert "Finalising parallel run" in (parallel / "log.pimpleFoam").read_text()
+    a, b = read_forces(serial), read_forces(parallel)
+    assert abs(len(a.time) - len(b.time)) <= 2  # adaptive steps differ in the last digits
+    late = a.time > 0.015  # after the start-up transient
+    fy = np.interp(a.time[late], b.time, b.force[:, 1])
+    span = np.ptp(a.force[late, 1])
+    assert np.max(np.abs(fy - a.force[late, 1])) < 0.02 * span + 1e-6
+
+
+@pytest.mark.openfoam
+def test_convergence_command_on_three_meshes_and_two_courant_limits(tmp_path):
+    """Real runs on coarse/medium/fine and a second Courant limit; y+ history; resumable."""
+    import json
+
+    from click.testing import CliRunner
+
+    from mfflap.cli.main import cli
+
+    case = Path(__file__).parents[1] / "cases" / "paper2026.toml"
+    out = tmp_path / "conv"
+    args = ["cfd", "convergence", str(case), str(out), "--cycles", "0.02", "--ramp-time",
+            "0.005", "--json"]
+    res = CliRunner().invoke(cli, args)
+    assert res.exit_code == 0, res.output
+    data = json.loads(res.output[res.output.index("{"):])
+    assert data["reference"] == "fine_co4"
+    assert set(data["runs"]) == {"coarse_co4", "medium_co4", "fine_co4", "coarse_co2"}
+    assert data["runs"]["fine_co4"]["n_cells"] > data["runs"]["coarse_co4"]["n_cells"]
+    for key in ("coarse_co4 vs fine_co4", "medium_co4 vs fine_co4", "coarse_co4 vs coarse_co2"):
+        assert 0 <= data["nrmse"][key]["normal_force"] < 1.0
+    assert data["runs"]["coarse_co4"]["y_plus_mean"] > 0
+    assert (out / "convergence.html").read_text().count("<img") == 1
+    # a second call finds every run finished and reruns nothing
+    mtime = (out / "fine_co4.h5").stat().st_mtime_ns
+    res = CliRunner().invoke(cli, args)
+    assert res.exit_code == 0 and "already finished" in res.output
+    assert (out / "fine_co4.h5").stat().st_mtime_ns == mtime

@@ -69,7 +69,8 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
                end_time: float, *, mesh: str = "coarse", ramp_time: float = 0.0,
                solver: SolverSettings | None = None, plate: Plate | None = None,
                fluid: Fluid | None = None, stream: FreeStream | None = None,
-               timeout_s: float = 6 * 3600.0) -> CfdRecord:
+               timeout_s: float = 6 * 3600.0, y_plus: bool = False,
+               n_procs: int = 1) -> CfdRecord:
     """Write (unless already written), run or resume, and parse one OpenFOAM case.
 
     Fields are written four times per run so that a killed run resumes from its last
@@ -81,14 +82,14 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
         tmp = case_dir.with_name(case_dir.name + ".writing")
         shutil.rmtree(tmp, ignore_errors=True)
         write_case(tmp, motion, end_time, mesh=mesh, plate=plate, fluid=fluid, stream=stream,
-                   solver=solver, ramp_time=ramp_time)
+                   solver=solver, ramp_time=ramp_time, y_plus=y_plus)
         with open(tmp / "mfflap_case.toml", "a") as fh:
             for key, value in asdict(solver).items():
                 fh.write(f"solver_{key} = {value!r}\n")
         shutil.rmtree(case_dir, ignore_errors=True)
         tmp.rename(case_dir)
     started = time.perf_counter()
-    run_case(case_dir, timeout_s=timeout_s)
+    run_case(case_dir, timeout_s=timeout_s, n_procs=n_procs)
     record = record_from_case(case_dir, motion, name, parameters, plate)
     if record.time[-1] < 0.98 * end_time:
         raise CfdRunError(f"the run stopped at t = {record.time[-1]:.4g} s before endTime "

@@ -134,6 +134,7 @@ def write_case(case_dir: str | Path, motion: Motion, end_time: float, mesh: str 
         "kinematic_viscosity": fluid.kinematic_viscosity, "velocity": u, "k": k,
         "epsilon": epsilon, "n_outer_correctors": solver.n_outer_correctors,
         "n_correctors": solver.n_correctors, "y_plus": y_plus, "y_plus_interval": 20,
+        "n_procs": 2,
     }
     env = jinja2.Environment(undefined=jinja2.StrictUndefined, keep_trailing_newline=True)
     src = template_dir()

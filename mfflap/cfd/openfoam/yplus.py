@@ -1,0 +1,61 @@
+"""The yPlus function object's output (postProcessing/yPlus/<time>/yPlus.dat)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from mfflap.errors import ParseError
+
+
+@dataclass
+class YPlusHistory:
+    """y+ on one patch over time: min, max and area average."""
+
+    time: np.ndarray
+    minimum: np.ndarray
+    maximum: np.ndarray
+    average: np.ndarray
+
+
+def read_y_plus(case_dir: str | Path, patch: str = "plate") -> YPlusHistory:
+    """y+ of ``patch``, merged over restart folders (later folders win).
+
+    Raises
+    ------
+    ParseError
+        If there is no yPlus output, or a row cannot be read (naming file and line).
+    """
+    root = Path(case_dir) / "postProcessing" / "yPlus"
+    folders = sorted((p for p in root.iterdir() if p.is_dir()), key=lambda p: float(p.name)) \
+        if root.is_dir() else []
+    if not folders:
+        raise ParseError("no yPlus output (write the case with y_plus=True)", path=str(root))
+    rows: dict[float, tuple[float, float, float]] = {}
+    for folder in folders:
+        path = folder / "yPlus.dat"
+        lines = path.read_text().splitlines()
+        for i, line in enumerate(lines, start=1):
+            if not line.strip() or line.lstrip().startswith("#"):
+                continue
+            parts = line.split()
+            if len(parts) != 5:
+                if i == len(lines):
+                    break  # cut last line of a killed run
+                raise ParseError(f"expected 5 columns (time patch min max average), got "
+                                 f"{len(parts)}", path=str(path), line=i)
+            if parts[1] != patch:
+                continue
+            try:
+                t, lo, hi, avg = (float(parts[k]) for k in (0, 2, 3, 4))
+            except ValueError as exc:
+                raise ParseError(f"unreadable number in {line.strip()!r}", path=str(path),
+                                 line=i) from exc
+            rows[t] = (lo, hi, avg)
+    if not rows:
+        raise ParseError(f"no y+ rows for patch {patch!r}", path=str(root))
+    t = np.array(sorted(rows))
+    v = np.array([rows[k] for k in t])
+    return YPlusHistory(t, v[:, 0], v[:, 1], v[:, 2])
