@@ -174,6 +174,45 @@ def replace_problem(problem: FlappingProblem, **changes) -> FlappingProblem:
     return FlappingProblem(problem.model, **kw)
 
 
+_IPOPT_CACHE: dict[tuple, object] = {}
+
+
+def _ipopt_solver(problem: FlappingProblem, n: int, max_iterations: int, tolerance: float):
+    """The IPOPT NLP for N steps of this model and scheme, built once and cached.
+
+    The scaling, beta, P_max, h_max and the smoothing weights are NLP parameters, so one
+    build (the expensive part: CasADi's exact Hessian graph) serves a whole beta sweep and
+    every multi-start.
+    """
+    import casadi as ca
+
+    from mfflap.optimisation.casadi_objective import symbolic_stages
+
+    m = problem.model
+    key = (n, problem.scheme, tuple(sorted(m.coefficients.items())), m.geometry,
+           m.fluid, m.stream, max_iterations, tolerance)
+    if key in _IPOPT_CACHE:
+        return _IPOPT_CACHE[key]
+    e = symbolic_stages(problem, n)
+    xs = ca.SX.sym("x", 2 * n + 1)
+    par = ca.SX.sym("p", 2 * n + 6)
+    scale, beta, eps_p, eps_h = par[: 2 * n + 1], par[2 * n + 1], par[2 * n + 4], par[2 * n + 5]
+    sub = ca.Function("sub", [e["z"]], [e["thrust"], e["power"], e["heave_position"],
+                                        e["pitch_acceleration"], e["heave_acceleration"]])
+    thrust, power, hp, tdd, hdd = sub(xs * scale)
+    smooth = 0
+    for eps, acc in ((eps_p, tdd), (eps_h, hdd)):
+        d = acc[1:] - acc[:-1]
+        smooth = smooth + 0.5 * eps * (ca.sumsqr(d) + (acc[0] + acc[n - 1]) ** 2)
+    f = ca.sum1(-(1 - beta) * thrust + beta * power) / n + smooth
+    g = ca.vertcat(power - par[2 * n + 2], hp)
+    solver = ca.nlpsol("mfflap_ipopt", "ipopt", {"x": xs, "f": f, "g": g, "p": par},
+                       {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
+                        "ipopt.max_iter": max_iterations, "ipopt.tol": tolerance})
+    _IPOPT_CACHE[key] = solver
+    return solver
+
+
 def optimise_ipopt(problem: FlappingProblem, start: DiscreteMotion, *, min_period: float,
                    max_period: float, max_iterations: int = 1000, tolerance: float = 1e-8,
                    start_label: str = "start") -> OptimisationResult:
@@ -181,33 +220,21 @@ def optimise_ipopt(problem: FlappingProblem, start: DiscreteMotion, *, min_perio
 
     The objective is the same beta-weighted mean with the smoothness term and no penalties.
     """
-    import casadi as ca
-
-    from mfflap.optimisation.casadi_objective import smoothness_expr, symbolic_stages
-
     n = start.n_steps
     lo, hi = time_step_bounds(n, min_period, max_period)
     dt0 = float(np.clip(start.time_step, lo, hi))
     start = DiscreteMotion(start.pitch_acceleration, start.heave_acceleration, dt0)
     scale = _scales(start)
-    e = symbolic_stages(problem, n)
-    xs = ca.SX.sym("x", 2 * n + 1)
-    sub = ca.Function("sub", [e["z"]], [e["thrust"], e["power"], e["heave_position"],
-                                        e["pitch_acceleration"], e["heave_acceleration"]])
-    thrust, power, hp, tdd, hdd = sub(xs * ca.DM(scale))
-    b = problem.beta
-    f = ca.sum1(-(1 - b) * thrust + b * power) / n + smoothness_expr(problem, tdd, hdd)
-    g = ca.vertcat(power, hp)
+    t0 = time.perf_counter()
+    solver = _ipopt_solver(problem, n, max_iterations, tolerance)
+    par = np.concatenate([scale, [problem.beta, problem.max_power, problem.max_heave,
+                                  problem.smoothing_pitch, problem.smoothing_heave]])
     lbg = np.concatenate([np.full(n, -np.inf), np.full(n, -problem.max_heave)])
-    ubg = np.concatenate([np.full(n, problem.max_power), np.full(n, problem.max_heave)])
+    ubg = np.concatenate([np.zeros(n), np.full(n, problem.max_heave)])
     lbx = np.full(2 * n + 1, -np.inf)
     ubx = np.full(2 * n + 1, np.inf)
     lbx[-1], ubx[-1] = lo / scale[-1], hi / scale[-1]
-    solver = ca.nlpsol("mfflap_ipopt", "ipopt", {"x": xs, "f": f, "g": g},
-                       {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
-                        "ipopt.max_iter": max_iterations, "ipopt.tol": tolerance})
-    t0 = time.perf_counter()
-    sol = solver(x0=_pack(start) / scale, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
+    sol = solver(x0=_pack(start) / scale, p=par, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
     stats = solver.stats()
     motion = _unpack(np.asarray(sol["x"]).ravel() * scale, n)
     summary, peak, flags = assess(problem, motion)

@@ -1,0 +1,84 @@
+"""One beta optimisation from the best sinusoid to convergence (target < 0.5 s at N = 50),
+and identification over the whole 125-case grid (target < 2 s).
+
+Run: python benchmarks/optimiser_and_identification.py
+Each time is also printed as a ratio against a baseline measured in the same process (one
+objective + adjoint gradient evaluation; one model evaluation of the grid), so the numbers
+can be compared between machines.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+
+from mfflap.campaign.cases import grid_cases
+from mfflap.campaign.records import CfdRecord
+from mfflap.config import IdentificationGrid, load_case
+from mfflap.hydro.loads import Loads
+from mfflap.identification import identify, prepare_cases
+from mfflap.kinematics.convert import harmonic_to_discrete
+from mfflap.optimisation.optimise import optimise_ipopt, optimise_sqp
+from mfflap.optimisation.study import problem_for
+
+CASE = Path(__file__).parents[1] / "cases" / "paper2026.toml"
+
+
+def optimiser() -> None:
+    case = load_case(CASE)
+    o = case.optimisation
+    start = harmonic_to_discrete(2.1, 0.05, np.deg2rad(50), np.deg2rad(112.5), o.n_steps)
+    print(f"one optimisation from a sinusoid, N = {o.n_steps} (target < 0.5 s)")
+    print("beta  method            iterations  time [s]  time / (J + grad) eval   target met")
+    for beta in o.betas:
+        problem = problem_for(case, beta)
+        t0 = time.perf_counter()
+        for _ in range(20):
+            problem.objective(start)
+            problem.gradient(start)
+        eval_time = (time.perf_counter() - t0) / 20
+        if beta == o.betas[0]:
+            t0 = time.perf_counter()
+            optimise_ipopt(problem, start, min_period=o.min_period, max_period=o.max_period)
+            print(f"      (IPOPT NLP build with CasADi's exact Hessian, once per N and model: "
+                  f"{time.perf_counter() - t0:.2f} s including the first solve)")
+        for name, fn in (("SQP (adjoint)", optimise_sqp), ("IPOPT (cached)", optimise_ipopt)):
+            t0 = time.perf_counter()
+            r = fn(problem, start, min_period=o.min_period, max_period=o.max_period)
+            dt = time.perf_counter() - t0
+            print(f"{beta:4.2f}  {name:16s}  {r.n_iterations:10d}  {dt:8.3f}  "
+                  f"{dt / eval_time:10.0f}              {'yes' if dt < 0.5 else 'NO'}")
+
+
+def identification() -> None:
+    rng = np.random.default_rng(0)
+    case = load_case(CASE)
+    model = case.morison_model()
+    records = []
+    t0 = time.perf_counter()
+    for c in grid_cases(IdentificationGrid()):
+        t = np.linspace(0, c.duration, 1500)
+        s = c.motion().sample(t)
+        ld = model.loads(s)
+        noisy = [getattr(ld, k) * (1 + 0.05 * rng.standard_normal(len(t)))
+                 for k in ("normal_force", "tangential_force", "moment")]
+        records.append(CfdRecord(c.case_id, s, Loads(t, *noisy), c.as_dict()))
+    baseline = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    cases, _ = prepare_cases(records)
+    prep = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    identify(cases, model, "uniform", n_bootstrap=200)
+    fit = time.perf_counter() - t0
+    total = prep + fit
+    print(f"\nidentification over {len(cases)} cases (target < 2 s): preparation {prep:.3f} s, "
+          f"fit + 200 bootstrap replicates + scoring {fit:.3f} s, total {total:.3f} s "
+          f"({total / baseline:.2f} x the time to evaluate the model on the grid); "
+          f"target met: {'yes' if total < 2 else 'NO'}")
+
+
+if __name__ == "__main__":
+    optimiser()
+    identification()
