@@ -167,3 +167,30 @@ def test_gap_cli_on_a_record_folder(tmp_path):
     res = CliRunner().invoke(cli, ["gap", "blindtest", "--trials", "5", "--json"])
     assert res.exit_code == 0, res.output
     assert len(json.loads(res.output)["confusion"]) == 7
+
+
+@pytest.mark.openfoam
+def test_vorticity_at_the_largest_residual_from_real_openfoam_fields(tmp_path):
+    """A real run that writes fields; the diagnosis report shows the flow at the residual peak."""
+    from mfflap.campaign.openfoam_run import run_motion
+    from mfflap.cfd.openfoam.writer import SolverSettings
+    from mfflap.cli.main import cli
+    from mfflap.gap.flowfield import vorticity_field
+    from mfflap.kinematics import HarmonicMotion
+
+    records = tmp_path / "records"
+    for c in synthesize(np.random.default_rng(1), NULL, 0.0, n_cases=3):
+        write_record(records / f"{c.name}.h5", CfdRecord(c.name, c.state, c.cfd, c.parameters))
+    motion = HarmonicMotion(1.0, 0.3, np.deg2rad(20), np.pi / 2)
+    rec = run_motion(tmp_path / "of", motion, "live", {"frequency": 1.0}, 0.04,
+                     solver=SolverSettings(write_interval=0.01))
+    write_record(records / "live.h5", rec)
+    xy, w, shown = vorticity_field(tmp_path / "of", 0.03)
+    assert shown == pytest.approx(0.03, abs=1e-6) and xy.shape[0] == w.shape[0] > 1000
+    # the strongest vorticity sits at the plate (within a chord of the leading edge)
+    assert np.linalg.norm(xy[np.argmax(np.abs(w))]) < 0.2
+    res = CliRunner().invoke(cli, ["gap", "diagnose", str(CASE), "--fixtures", str(records),
+                                   "--flow", f"live={tmp_path / 'of'}", "--discard", "0",
+                                   "--output", str(tmp_path / "g.h5")])
+    assert res.exit_code == 0, res.output
+    assert "live: vorticity at t =" in (tmp_path / "g.html").read_text()

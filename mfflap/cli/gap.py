@@ -6,6 +6,7 @@ import json
 from pathlib import Path
 
 import click
+import numpy as np
 
 
 @click.group()
@@ -22,6 +23,11 @@ def gap() -> None:
               type=click.Path(dir_okay=False, exists=True, path_type=Path),
               help="External (motion, force) CSV files: time, pitch_angle, heave_position, "
                    "normal_force, tangential_force, moment.")
+@click.option("--flow", "flow_dirs", multiple=True,
+              help="CASE=DIR: an OpenFOAM case folder with written fields for record CASE; the "
+                   "report shows its vorticity where the model misses most.")
+@click.option("--discard", default=None, type=float,
+              help="Start-up time left out, s (default: the case's identification.discard_time).")
 @click.option("--alpha", default=0.01, show_default=True, help="Significance level.")
 @click.option("--min-gain", default=0.02, show_default=True,
               help="Smallest held-out error reduction worth claiming.")
@@ -31,7 +37,8 @@ def gap() -> None:
               default=None, help="HTML report (default: <output>.html).")
 @click.option("--json", "as_json", is_flag=True)
 def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Path, ...],
-                 alpha: float, min_gain: float, output: Path, report_path: Path | None,
+                 flow_dirs: tuple[str, ...], discard: float | None, alpha: float,
+                 min_gain: float, output: Path, report_path: Path | None,
                  as_json: bool) -> None:
     """Where the model of CASE_FILE departs from CFD, and which effect explains it."""
     from mfflap.campaign.records import fixture_dir, read_records
@@ -49,8 +56,9 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
     cases = []
     sources = []
     for folder in folders or ((fixture_dir(),) if not csv_files else ()):
-        prepared, excluded = prepare_cases(read_records(folder),
-                                           case.identification.discard_time)
+        prepared, excluded = prepare_cases(
+            read_records(folder), case.identification.discard_time if discard is None
+            else discard)
         cases += prepared
         sources.append(str(folder))
         for name, why in excluded.items():
@@ -68,10 +76,25 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
     system = GapSystem.build(cases, base.terms, [])
     pred = _predictions(system, list(range(len(base.terms))), group_folds(range(len(cases)), 5))
     where = decompose(system, pred, case.flow.velocity, case.plate.chord)
+    snapshots = []
+    for item in flow_dirs:
+        from mfflap.gap.flowfield import vorticity_figure
+
+        name, _, folder = item.partition("=")
+        index = next((i for i, c in enumerate(cases) if c.name == name), None)
+        if index is None or not folder:
+            raise click.BadParameter(f"{item!r}: expected CASE=DIR with CASE one of the records",
+                                     param_hint="--flow")
+        c = cases[index]
+        residual = c.cfd_signal("normal_force") - pred[index]["normal_force"]
+        t_peak = float(c.state.time[int(np.argmax(np.abs(residual)))])
+        fig, shown = vorticity_figure(folder, t_peak, case.plate.chord)
+        snapshots.append((fig, f"{name}: vorticity at t = {shown:.4g} s, the written time "
+                               f"nearest the largest F_n residual (t = {t_peak:.4g} s)"))
     with ResultsFile(output, "w", kind="gap_diagnosis", config_toml=case.to_toml()) as rf:
         write_diagnosis(rf, diag, where)
     html = gap_report(report_path or output.with_suffix(".html"), diag, where,
-                      ", ".join(sources))
+                      ", ".join(sources), snapshots)
     if as_json:
         click.echo(json.dumps({"verdict": diag.verdict,
                                "chosen": diag.chosen.label if diag.chosen else None,
