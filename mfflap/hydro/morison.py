@@ -115,17 +115,72 @@ class NormalDrag(_MorisonTerm):
         return flow.normal_velocity_le[..., None] + state.pitch_rate[..., None] * self.positions
 
     def regressor(self, state: KinematicState) -> Loads:
-        q = signed_square(self.strip_velocities(state))
         k = 0.5 * self.fluid.density * self.geometry.area_normal / self.geometry.n_strips
-        fn = -k * q.sum(axis=-1)
-        mo = -k * (q @ self.positions)
-        return Loads(state.time, fn, self._zeros(state), mo, source=self.name)
+        if np.iscomplexobj(state.pitch_angle) or np.iscomplexobj(state.heave_velocity):
+            q = signed_square(self.strip_velocities(state))  # complex step: strip by strip
+            fn, mo = q.sum(axis=-1), q @ self.positions
+        else:
+            flow = self._flow(state)
+            fn, mo = self.strip_sums(flow.normal_velocity_le, state.pitch_rate)
+        return Loads(state.time, -k * fn, self._zeros(state), -k * mo, source=self.name)
+
+    def strip_sums(self, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """sum_k |v_k| v_k and sum_k |v_k| v_k l_k for v_k = a + b l_k, in O(1) per sample.
+
+        v_k is linear in l_k, so it changes sign at most once along the chord: the strips
+        split into two contiguous runs of one sign each, and on each run sum v_k^2 and
+        sum v_k^2 l_k are polynomials in a and b with the run's power sums of l_k (a
+        cumulative table built once). Exact up to rounding.
+        """
+        a, b = np.broadcast_arrays(np.asarray(a, dtype=float), np.asarray(b, dtype=float))
+        pos = self.positions
+        n = len(pos)
+        table = self._power_table()
+        with np.errstate(divide="ignore", invalid="ignore"):
+            zero = np.where(b != 0, -a / np.where(b != 0, b, 1.0), np.inf)
+        m = np.searchsorted(pos, zero)  # strips with l_k < l*: the first run
+        m = np.where(b == 0, n, m)
+
+        head = table[:, m]  # power sums p = 0..3 over the first run (strips 0..m-1)
+        total = table[:, n]
+        aa, ab2, bb = a * a, 2 * a * b, b * b
+        f1 = aa * head[0] + ab2 * head[1] + bb * head[2]
+        g1 = aa * head[1] + ab2 * head[2] + bb * head[3]
+        ft = aa * total[0] + ab2 * total[1] + bb * total[2]
+        gt = aa * total[1] + ab2 * total[2] + bb * total[3]
+        sb = np.sign(b)
+        first = np.where(b == 0, np.sign(a), -sb)
+        self._last = (a, b, head, total, first, sb)
+        # first run with its sign, the rest (total - first run) with the other sign
+        return (first - sb) * f1 + sb * ft, (first - sb) * g1 + sb * gt
+
+    def strip_abs_cubes(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """sum_k |v_k|^3 for v_k = a + b l_k in O(1) per sample (see :meth:`strip_sums`)."""
+        self.strip_sums(a, b)
+        a, b, head, total, first, sb = self._last
+        c3 = (a**3, 3 * a * a * b, 3 * a * b * b, b**3)
+        c1 = sum(c * h for c, h in zip(c3, head, strict=True))
+        ct = sum(c * t for c, t in zip(c3, total, strict=True))
+        return (first - sb) * c1 + sb * ct
+
+    def _power_table(self) -> np.ndarray:
+        table = getattr(self, "_table", None)
+        if table is None:
+            pos = self.positions
+            table = np.zeros((4, len(pos) + 1))
+            for p in range(4):
+                table[p, 1:] = np.cumsum(pos**p)
+            self._table = table
+        return table
 
     def dissipation(self, state: KinematicState) -> np.ndarray:
         """Power dissipated per unit coefficient, sum_k 1/2 rho S_nk |v_nk|^3, W."""
-        v = np.real(self.strip_velocities(state))
         k = 0.5 * self.fluid.density * self.geometry.area_normal / self.geometry.n_strips
-        return k * (np.abs(v) ** 3).sum(axis=-1)
+        flow = RelativeFlow.of(
+            KinematicState(**{f: np.real(getattr(state, f)) for f in (
+                "time", "pitch_angle", "pitch_rate", "pitch_acceleration", "heave_position",
+                "heave_velocity", "heave_acceleration")}), self.stream.velocity)
+        return k * self.strip_abs_cubes(flow.normal_velocity_le, np.real(state.pitch_rate))
 
 
 class TangentialDrag(_MorisonTerm):

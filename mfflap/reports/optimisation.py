@@ -127,6 +127,11 @@ def add_optimisation_sections(rep: Report, study, model, scheme: str, max_power:
     s.blocks.append(text_html(f"β = 0 thrust gain over the best feasible sinusoid: "
                               f"{study.thrust_gain:+.1%} (the paper: +50.29 %)."))
     for b, r in study.sqp.items():
+        if float(r.summary.mean_power) < 0:
+            s.blocks.append(text_html(
+                f"β = {b:g}: mean input power {float(r.summary.mean_power):.3g} W < 0 with mean "
+                f"thrust {float(r.summary.mean_thrust):.3g} N: a generator-like regime (the "
+                "flow drives the plate), as the paper reports for β = 1."))
         if r.flags:
             s.blocks.append(text_html(f"β = {b:g}: " + " ".join(r.flags), warn=True))
     from mfflap.optimisation.study import sinusoid_motion
