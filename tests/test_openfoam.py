@@ -252,3 +252,23 @@ def test_convergence_command_on_three_meshes_and_two_courant_limits(tmp_path):
     res = CliRunner().invoke(cli, args)
     assert res.exit_code == 0 and "already finished" in res.output
     assert (out / "fine_co4.h5").stat().st_mtime_ns == mtime
+
+
+def test_collapsed_time_step_is_recognised_from_a_real_log_excerpt():
+    """The tail of a real v1912 run whose k-epsilon blew up: dt went to 1e-26 s while the
+    Courant number stayed below 6, so the run would never have ended."""
+    from mfflap.cfd.openfoam.runner import collapsed_time_step
+
+    text = (DATA / "collapsed_dt.log").read_text()
+    dt, t = collapsed_time_step(text, 1e-9)
+    assert dt == pytest.approx(7.3073054e-26) and t == pytest.approx(1.3821858)
+    assert collapsed_time_step(text, 1e-30) is None
+
+
+@pytest.mark.openfoam
+def test_runner_stops_a_run_whose_time_step_collapses(tmp_path):
+    """A watchdog threshold above the run's real time step must stop it within seconds."""
+    case = write_case(tmp_path / "run", MOTION, end_time=5.0, mesh="coarse")
+    with pytest.raises(CfdRunError, match="time step collapsed") as info:
+        run_case(case, timeout_s=120, min_time_step=1.0)
+    assert "run" in str(info.value)

@@ -7,6 +7,7 @@ import os
 import re
 import shutil
 import subprocess
+import time
 from pathlib import Path
 
 from mfflap.errors import CfdRunError
@@ -43,34 +44,77 @@ def _tail(path: Path, n: int = 20) -> str:
     return "\n".join(path.read_text(errors="replace").splitlines()[-n:])
 
 
+_DELTA_T = re.compile(r"^deltaT = ([0-9.eE+-]+)\s*$", re.M)
+_TIME = re.compile(r"^Time = ([0-9.eE+-]+)\s*$", re.M)
+
+
+def _read_tail(path: Path, n_bytes: int = 20_000) -> str:
+    with open(path, "rb") as fh:
+        fh.seek(0, os.SEEK_END)
+        size = fh.tell()
+        fh.seek(max(size - n_bytes, 0))
+        return fh.read().decode(errors="replace")
+
+
+def collapsed_time_step(log_text: str, min_time_step: float) -> tuple[float, float] | None:
+    """(deltaT, time) if the last written time step is below ``min_time_step``, else None."""
+    steps = _DELTA_T.findall(log_text)
+    if not steps or float(steps[-1]) >= min_time_step:
+        return None
+    times = _TIME.findall(log_text)
+    return float(steps[-1]), float(times[-1]) if times else float("nan")
+
+
 def run_application(case_dir: str | Path, application: str, timeout_s: float = 3600.0,
                     max_courant_abort: float = 100.0, n_procs: int = 1,
-                    extra_args: tuple[str, ...] = ()) -> Path:
+                    extra_args: tuple[str, ...] = (), min_time_step: float = 1e-9,
+                    poll_s: float = 2.0) -> Path:
     """Run one OpenFOAM application in a case; return the log path.
+
+    The log is watched while the solver runs: a time step that collapses below
+    ``min_time_step`` (an instability that the adaptive time step hides: the Courant number
+    stays bounded while dt goes to zero and the run never ends) stops the run at once.
 
     Raises
     ------
     CfdRunError
-        On a non-zero exit, a timeout, NaNs or a floating-point exception in the log, or a
-        Courant number above ``max_courant_abort`` (an exploding run), with the log's tail.
+        On a non-zero exit, a timeout, NaNs or a floating-point exception in the log, a
+        collapsed time step, or a Courant number above ``max_courant_abort``, with the
+        log's tail.
     """
     case_dir = Path(case_dir)
     if not openfoam_available():
         raise CfdRunError("OpenFOAM is not installed (apt-get install openfoam)",
                           case=str(case_dir))
     log = case_dir / f"log.{application}"
+    command = [application, "-case", str(case_dir), *extra_args]
+    if n_procs > 1:
+        command = ["mpirun", "-np", str(n_procs), "--allow-run-as-root", "--oversubscribe",
+                   *command, "-parallel"]
+    started = time.monotonic()
     with open(log, "a") as fh:
+        proc = subprocess.Popen(command, stdout=fh, stderr=subprocess.STDOUT, env=_env())
         try:
-            command = [application, "-case", str(case_dir), *extra_args]
-            if n_procs > 1:
-                command = ["mpirun", "-np", str(n_procs), "--allow-run-as-root",
-                           "--oversubscribe", *command, "-parallel"]
-            proc = subprocess.run(command, stdout=fh,
-                                  stderr=subprocess.STDOUT, timeout=timeout_s, env=_env(),
-                                  check=False)
-        except subprocess.TimeoutExpired as exc:
-            raise CfdRunError(f"{application} timed out after {timeout_s} s", case=str(case_dir),
-                              log_tail=_tail(log)) from exc
+            while True:
+                try:
+                    proc.wait(timeout=poll_s)
+                    break
+                except subprocess.TimeoutExpired:
+                    pass
+                if time.monotonic() - started > timeout_s:
+                    raise CfdRunError(f"{application} timed out after {timeout_s} s",
+                                      case=str(case_dir), log_tail=_tail(log))
+                fh.flush()
+                collapsed = collapsed_time_step(_read_tail(log), min_time_step)
+                if collapsed is not None:
+                    raise CfdRunError(
+                        f"{application} diverged: the time step collapsed to "
+                        f"{collapsed[0]:.3g} s at t = {collapsed[1]:.6g} s (an instability "
+                        "held at the Courant limit)", case=str(case_dir), log_tail=_tail(log))
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
     text = log.read_text(errors="replace")
     courants = max_courant(text[-200_000:])
     if proc.returncode != 0 or _DIVERGED.search(text[-50_000:]):
@@ -82,7 +126,8 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
     return log
 
 
-def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1) -> None:
+def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
+             min_time_step: float = 1e-9) -> None:
     """blockMesh (once), checkMesh (once), then pimpleFoam from the latest written time.
 
     With ``n_procs`` > 1 the case is decomposed once (``method simple``: scotch and metis are
@@ -104,4 +149,5 @@ def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1) 
         dict_path.write_text(text)
         if not (case_dir / "processor0").exists():
             run_application(case_dir, "decomposePar", timeout_s=300)
-    run_application(case_dir, "pimpleFoam", timeout_s=timeout_s, n_procs=n_procs)
+    run_application(case_dir, "pimpleFoam", timeout_s=timeout_s, n_procs=n_procs,
+                    min_time_step=min_time_step)
