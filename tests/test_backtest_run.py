@@ -115,7 +115,7 @@ def test_main_job_runs_end_to_end_on_the_shipped_fixtures(tmp_path):
 
     out = tmp_path / "run"
     res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--starts", "1",
-                                   "--no-ipopt"])
+                                   "--no-ipopt", "--no-gain-table"])
     assert res.exit_code == 0, res.output
     html = (out / "report.html").read_text()
     for title in ("Identified coefficients", "Optimised motions", "Back-test against CFD",

@@ -21,7 +21,8 @@ import click
               help="Model coefficients for the optimisation: 'case' or "
                    "'identified:<uniform|low|high>'.")
 @click.option("--starts", default=3, show_default=True, help="Multi-start points per beta.")
-@click.option("--gain-table", is_flag=True, help="Also tabulate the gain against N and ε.")
+@click.option("--gain-table/--no-gain-table", default=True, show_default=True,
+              help="Tabulate the beta = 0 gain against N and the smoothing weights.")
 @click.option("--no-ipopt", is_flag=True, help="Skip the hard-constrained IPOPT comparison.")
 def run_cmd(case_file: Path, out_dir: Path | None, fixtures: Path | None,
             backtest_fixtures: tuple[Path, ...], live: bool, coefficients: str, starts: int,

@@ -175,6 +175,11 @@ def diagnose(cases: Sequence[CaseData], base_model: ForceModel,
         verdict = (f"{chosen.label}: held-out error {chosen.gain:.1%} lower "
                    f"(p = {chosen.p_value:.2g})"
                    + (f"; implausible coefficient for {', '.join(implaus)}" if implaus else ""))
+    n_cases = len(system.cases)
+    if 0.5**n_cases > alpha:
+        verdict += (f"; with {n_cases} cases no improvement can reach p < {alpha:g} (the "
+                    f"one-sided signed-rank test needs at least "
+                    f"{int(np.ceil(np.log2(1 / alpha)))} cases): add cases")
     diag = Diagnosis(list(system.names[: system.n_base]), base_sse, scores, chosen, verdict,
                      case_names=[c.name for c in system.cases])
     diag.gap["before"] = gap_metrics(system, _predictions(system, base_cols, folds))
