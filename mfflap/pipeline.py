@@ -50,6 +50,7 @@ class RunOutcome:
     timings: dict[str, float] = field(default_factory=dict)
     cases: list = field(default_factory=list)
     model: object | None = None
+    gap: tuple | None = None
 
 
 def _stage(outcome: RunOutcome, name: str, progress: Progress, fn):
@@ -91,6 +92,21 @@ def coefficient_sensitivity(config: CaseConfig, identification: dict, sweep,
     return out
 
 
+def gap_diagnosis(config: CaseConfig, cases: list) -> tuple:
+    """Diagnosis and residual decomposition of the case's model on the identification CFD."""
+    from mfflap.gap.candidates import FlowContext
+    from mfflap.gap.diagnose import _predictions, default_candidates, diagnose
+    from mfflap.gap.system import GapSystem, group_folds
+    from mfflap.gap.where import decompose
+
+    base = config.morison_model()
+    diag = diagnose(cases, base, default_candidates(FlowContext(config.plate, config.fluid,
+                                                                config.flow)))
+    system = GapSystem.build(cases, base.terms, [])
+    pred = _predictions(system, list(range(len(base.terms))), group_folds(range(len(cases)), 5))
+    return diag, decompose(system, pred, config.flow.velocity, config.plate.chord)
+
+
 def run_study(config: CaseConfig, options: RunOptions, progress: Progress = print
               ) -> RunOutcome:
     """Run every stage; failures are collected in ``outcome.problems``."""
@@ -119,6 +135,9 @@ def run_study(config: CaseConfig, options: RunOptions, progress: Progress = prin
             outcome.problems.append(f"optimisation: no identified coefficients for strategy "
                                     f"{strategy!r}; used the case's coefficients")
     outcome.model = model
+    if outcome.cases:
+        outcome.gap = _stage(outcome, "gap diagnosis", progress,
+                             lambda: gap_diagnosis(config, outcome.cases))
     outcome.study = _stage(outcome, "optimisation", progress, lambda: beta_study(
         config, n_starts=options.n_starts, with_ipopt=options.with_ipopt, model=model,
         progress=progress))
@@ -173,6 +192,10 @@ def write_outputs(config: CaseConfig, outcome: RunOutcome, h5_path: Path, html_p
         write_backtests(rf, outcome.backtests)
         for label, (_, r) in outcome.sensitivity.items():
             write_result(rf, f"sensitivity/{label}/{beta_key(0.0)}", r)
+        if outcome.gap is not None:
+            from mfflap.gap.report import write_diagnosis
+
+            write_diagnosis(rf, *outcome.gap)
         rf.h5.attrs["problems"] = "\n".join(outcome.problems)
         rf.h5.attrs["stage_times_s"] = str(outcome.timings)
     rep = Report(f"mfflap run: {config.study.name}", config.study.description)
@@ -196,6 +219,10 @@ def write_outputs(config: CaseConfig, outcome: RunOutcome, h5_path: Path, html_p
         add_optimisation_sections(rep, outcome.study, outcome.model, config.optimisation.scheme,
                                   config.optimisation.max_power, outcome.gain)
     add_backtest_sections(rep, outcome.backtests, config.optimisation.max_power)
+    if outcome.gap is not None:
+        from mfflap.gap.report import add_gap_sections
+
+        add_gap_sections(rep, *outcome.gap)
     if outcome.sensitivity:
         add_sensitivity_section(rep, outcome.sensitivity, config.optimisation.scheme)
     rep.write(html_path)

@@ -119,12 +119,12 @@ def test_main_job_runs_end_to_end_on_the_shipped_fixtures(tmp_path):
     assert res.exit_code == 0, res.output
     html = (out / "report.html").read_text()
     for title in ("Identified coefficients", "Optimised motions", "Back-test against CFD",
-                  "Coefficient sensitivity", "Sinusoidal sweep"):
+                  "Coefficient sensitivity", "Sinusoidal sweep", "Sim-to-real gap"):
         assert title in html
     assert html.count("<img") >= 15
     with ResultsFile(out / "results.h5") as rf:
         assert "paper2026" in rf.config_toml
-        assert {"identification", "optimisation", "backtest", "sensitivity"} <= set(rf.h5)
+        assert {"identification", "optimisation", "backtest", "sensitivity", "gap"} <= set(rf.h5)
         statuses = {rf.h5[f"backtest/{k}"].attrs["status"] for k in rf.h5["backtest"]}
         assert statuses <= {"back-tested", "not back-tested"}
     assert list((out / "vtk").glob("*.pvd"))

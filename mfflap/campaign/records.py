@@ -28,13 +28,12 @@ import numpy as np
 
 from mfflap.errors import MfflapError
 from mfflap.hydro.loads import Loads
-from mfflap.kinematics.state import KinematicState
+from mfflap.kinematics.state import KINEMATIC_UNITS, KinematicState
 from mfflap.results import ResultsFile
 from mfflap.toml_io import dumps
 
 RECORD_SUFFIX = ".h5"
-_STATE_KEYS = ("pitch_angle", "pitch_rate", "pitch_acceleration", "heave_position",
-               "heave_velocity", "heave_acceleration")
+_STATE_KEYS = tuple(KINEMATIC_UNITS)
 
 
 @dataclass

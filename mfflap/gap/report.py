@@ -74,7 +74,14 @@ def gap_report(path, diag: Diagnosis, where: dict, source: str = "",
     rep = Report("Sim-to-real gap diagnosis", f"{len(diag.case_names)} cases"
                  f"{f' from {source}' if source else ''}; base model: "
                  f"{', '.join(diag.base_names)}")
-    s = rep.section("Verdict")
+    add_gap_sections(rep, diag, where, snapshots)
+    return rep.write(path)
+
+
+def add_gap_sections(rep: Report, diag: Diagnosis, where: dict,
+                     snapshots: list[tuple[object, str]] | None = None) -> None:
+    """Verdict, where the model departs, candidates, gap before/after, validation."""
+    s = rep.section("Sim-to-real gap: verdict")
     s.blocks.append(text_html(diag.verdict, warn=diag.chosen is None))
     s = rep.section("Where the model departs from CFD")
     s.blocks.append(table_html(["factor", "share / η²"], [(k, float(v)) for k, v in
@@ -120,7 +127,6 @@ def gap_report(path, diag: Diagnosis, where: dict, source: str = "",
         s.blocks.append(table_html(["validation", "held-out gain", "p"],
                                    [(k, v["gain"], v["p_value"]) for k, v in
                                     diag.validation.items()]))
-    return rep.write(path)
 
 
 def write_diagnosis(rf: ResultsFile, diag: Diagnosis, where: dict, group: str = "gap") -> None:

@@ -176,11 +176,8 @@ class NormalDrag(_MorisonTerm):
     def dissipation(self, state: KinematicState) -> np.ndarray:
         """Power dissipated per unit coefficient, sum_k 1/2 rho S_nk |v_nk|^3, W."""
         k = 0.5 * self.fluid.density * self.geometry.area_normal / self.geometry.n_strips
-        flow = RelativeFlow.of(
-            KinematicState(**{f: np.real(getattr(state, f)) for f in (
-                "time", "pitch_angle", "pitch_rate", "pitch_acceleration", "heave_position",
-                "heave_velocity", "heave_acceleration")}), self.stream.velocity)
-        return k * self.strip_abs_cubes(flow.normal_velocity_le, np.real(state.pitch_rate))
+        a = np.real(self._flow(state).normal_velocity_le)
+        return k * self.strip_abs_cubes(a, np.real(state.pitch_rate))
 
 
 class TangentialDrag(_MorisonTerm):

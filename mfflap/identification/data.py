@@ -12,15 +12,14 @@ from mfflap.campaign.records import CfdRecord
 from mfflap.errors import MfflapError
 from mfflap.hydro.base import ForceModel
 from mfflap.hydro.loads import Loads
-from mfflap.kinematics.state import KinematicState
+from mfflap.kinematics.state import KINEMATIC_UNITS, KinematicState
 from mfflap.performance import thrust_and_power
 
 #: Load components a fit can use, with their units.
 COMPONENTS = {"normal_force": "N", "tangential_force": "N", "moment": "N*m"}
 #: Derived signals that are scored (not fitted directly).
 DERIVED = {"thrust": "N", "input_power": "W"}
-_STATE_KEYS = ("pitch_angle", "pitch_rate", "pitch_acceleration", "heave_position",
-               "heave_velocity", "heave_acceleration")
+_STATE_KEYS = tuple(KINEMATIC_UNITS)
 
 
 @dataclass
