@@ -99,13 +99,13 @@ def test_campaign_on_local_cluster_resumes_and_reports_failures(tmp_path):
     """Real LocalCluster, two worker processes, real pimpleFoam."""
     assert openfoam_available()
     out = tmp_path / "camp"
-    failing = CfdCase(0.5, 0.2, 90.0, 10.0, duration=60.0, ramp_time=0.5)
-    setup = CampaignSetup(timeout_s=20.0)  # the 60 s case cannot finish: it fails cleanly
+    failing = CfdCase(0.0, 0.2, 90.0, 10.0, duration=1.0, ramp_time=0.5)  # f = 0: refused
+    setup = CampaignSetup(timeout_s=900.0)
     statuses = run_campaign([SHORT, OTHER, failing], out, setup, n_workers=2, progress=False)
     states = {s.case_id: s.state for s in statuses}
     assert states == {SHORT.case_id: "done", OTHER.case_id: "done", failing.case_id: "failed"}
     failed = next(s for s in statuses if s.state == "failed")
-    assert "timed out" in failed.message
+    assert "frequency must be finite and > 0" in failed.message
     records = {r.name: r for r in read_records(out)}
     assert set(records) == {SHORT.case_id, OTHER.case_id}
     rec = records[SHORT.case_id]
@@ -126,3 +126,15 @@ def test_campaign_on_local_cluster_resumes_and_reports_failures(tmp_path):
 def test_status_of_a_folder_that_is_not_a_campaign(tmp_path):
     with pytest.raises(MfflapError, match=r"no campaign\.toml"):
         campaign_status(Path(tmp_path))
+
+
+@pytest.mark.openfoam
+def test_a_run_that_cannot_finish_in_time_fails_cleanly_with_its_log(tmp_path):
+    from mfflap.campaign.execute import run_one
+
+    long_case = CfdCase(0.5, 0.2, 90.0, 10.0, duration=100.0, ramp_time=0.5)
+    status = run_one(long_case, str(tmp_path), CampaignSetup(timeout_s=3.0))
+    assert status.state == "failed" and "timed out after 3.0 s" in status.message
+    note = (tmp_path / f"{long_case.case_id}.failed.toml").read_text()
+    assert "log_tail" in note and "tabulated6DoFMotion" in note  # the solver's own lines
+    assert (tmp_path / "cases" / long_case.case_id).is_dir()  # kept for a restart
