@@ -136,5 +136,5 @@ def test_a_run_that_cannot_finish_in_time_fails_cleanly_with_its_log(tmp_path):
     status = run_one(long_case, str(tmp_path), CampaignSetup(timeout_s=3.0))
     assert status.state == "failed" and "timed out after 3.0 s" in status.message
     note = (tmp_path / f"{long_case.case_id}.failed.toml").read_text()
-    assert "log_tail" in note and "tabulated6DoFMotion" in note  # the solver's own lines
+    assert "log_tail" in note and ("Solving for" in note or "tabulated6DoFMotion" in note)
     assert (tmp_path / "cases" / long_case.case_id).is_dir()  # kept for a restart
