@@ -128,3 +128,14 @@ def test_main_job_runs_end_to_end_on_the_shipped_fixtures(tmp_path):
         statuses = {rf.h5[f"backtest/{k}"].attrs["status"] for k in rf.h5["backtest"]}
         assert statuses <= {"back-tested", "not back-tested"}
     assert list((out / "vtk").glob("*.pvd"))
+
+
+def test_a_failed_cfd_run_is_reported_with_its_reason(tmp_path):
+    folder = tmp_path / "bt"
+    folder.mkdir()
+    key = motion_key(MOTION)
+    (folder / f"backtest_{key}.failed.toml").write_text(
+        f'motion_key = "{key}"\nerror = "case x: pimpleFoam diverged: the time step collapsed"\n')
+    out = backtest_motion(MOTION, "β = 1", MorisonModel(), 50.0, fixture_folders=[folder])
+    assert out.status == "not back-tested"
+    assert "failed" in out.source and "time step collapsed" in out.source

@@ -138,3 +138,17 @@ def test_a_run_that_cannot_finish_in_time_fails_cleanly_with_its_log(tmp_path):
     note = (tmp_path / f"{long_case.case_id}.failed.toml").read_text()
     assert "log_tail" in note and ("Solving for" in note or "tabulated6DoFMotion" in note)
     assert (tmp_path / "cases" / long_case.case_id).is_dir()  # kept for a restart
+
+
+@pytest.mark.openfoam
+def test_collapsed_time_step_is_retried_with_a_lower_courant_limit(tmp_path):
+    """Every attempt 'collapses' (the watchdog threshold is above any real step): the run
+    is resumed twice with maxCo 4 -> 2 -> 1, then reported."""
+    from mfflap.errors import CfdRunError
+
+    case_dir = tmp_path / "c"
+    with pytest.raises(CfdRunError, match="time step collapsed"):
+        run_motion(case_dir, SHORT.motion(), "c", {}, 1.0, ramp_time=0.02, min_time_step=1.0)
+    control = (case_dir / "system" / "controlDict").read_text()
+    assert "maxCo           1;" in control
+    assert (case_dir / "log.pimpleFoam").read_text().count("Starting time loop") == 3

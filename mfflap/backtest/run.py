@@ -21,6 +21,7 @@ from mfflap.errors import MfflapError
 from mfflap.kinematics.continuous import PeriodicSplineMotion
 from mfflap.kinematics.convert import to_spline
 from mfflap.kinematics.discrete import DiscreteMotion
+from mfflap.toml_io import dumps, read_toml
 
 
 def motion_key(motion: DiscreteMotion, digits: int = 4) -> str:
@@ -126,11 +127,20 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
                     write_record(Path(save_to) / f"{name}.h5", record, single_precision=True)
             except MfflapError as exc:
                 source = f"live OpenFOAM run failed: {str(exc).splitlines()[0]}"
+                if save_to is not None:  # a failure is a result too: the report says why
+                    Path(save_to).mkdir(parents=True, exist_ok=True)
+                    (Path(save_to) / f"{name}.failed.toml").write_text(dumps(
+                        {"motion_key": key, "label": label, "error": str(exc)[:4000]}))
     if record is None:
         path = _matching_fixture(key, motion, folders)
+        failed = [f / f"backtest_{key}.failed.toml" for f in folders
+                  if (f / f"backtest_{key}.failed.toml").exists()]
         if path is not None:
             record = read_record(path)
             source = f"fixture {path.name}"
+        elif failed and not source:
+            error = str(read_toml(failed[0]).get("error", "")).splitlines()[0]
+            source = f"the CFD run of this motion failed ({failed[0].name}): {error}"
         elif not source:
             source = (f"no CFD fixture for motion key {key} in "
                       f"{[str(f) for f in folders] or 'no fixture folder'} and no live run")

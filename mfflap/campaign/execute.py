@@ -161,6 +161,8 @@ def run_campaign(cases: Sequence[CfdCase], out_dir: str | Path,
     if len(set(ids)) != len(ids):
         raise ConfigError("the campaign lists a case twice", key="cases")
     _write_manifest(out, cases, setup)
+    for stale in (out / "cases").glob("*.writing"):  # a case folder half-written when killed
+        shutil.rmtree(stale, ignore_errors=True)
     results: dict[str, CaseStatus] = {}
     todo = []
     for c in cases:

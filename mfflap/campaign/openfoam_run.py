@@ -46,6 +46,21 @@ def solver_provenance(case_dir: str | Path) -> dict[str, Any]:
     }
 
 
+_MAX_CO = re.compile(r"^(maxCo\s+)([0-9.eE+-]+)(;)", re.M)
+
+
+def lower_courant_limit(case_dir: str | Path, factor: float = 0.5) -> float:
+    """Halve ``maxCo`` in the case's controlDict; return the new limit."""
+    path = Path(case_dir) / "system" / "controlDict"
+    text = path.read_text()
+    match = _MAX_CO.search(text)
+    if match is None:
+        raise CfdRunError("no maxCo entry in system/controlDict", case=str(case_dir))
+    value = float(match.group(2)) * factor
+    path.write_text(_MAX_CO.sub(lambda m: f"{m.group(1)}{value:g}{m.group(3)}", text, count=1))
+    return value
+
+
 def record_from_case(case_dir: str | Path, motion: Motion, name: str,
                      parameters: dict[str, Any], plate: Plate | None = None) -> CfdRecord:
     """Parse a finished OpenFOAM case written by mfflap into a record."""
@@ -70,11 +85,14 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
                solver: SolverSettings | None = None, plate: Plate | None = None,
                fluid: Fluid | None = None, stream: FreeStream | None = None,
                timeout_s: float = 6 * 3600.0, y_plus: bool = False,
-               n_procs: int = 1) -> CfdRecord:
+               n_procs: int = 1, max_retries: int = 2,
+               min_time_step: float = 1e-7) -> CfdRecord:
     """Write (unless already written), run or resume, and parse one OpenFOAM case.
 
     Fields are written four times per run so that a killed run resumes from its last
-    written time instead of from zero.
+    written time instead of from zero. A run whose time step collapses (an instability held
+    at the Courant limit) is resumed from its last written time with half the Courant limit,
+    up to ``max_retries`` times; the retries are recorded in the provenance.
     """
     case_dir = Path(case_dir)
     solver = solver or SolverSettings(write_interval=end_time / 4)
@@ -89,8 +107,21 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
         shutil.rmtree(case_dir, ignore_errors=True)
         tmp.rename(case_dir)
     started = time.perf_counter()
-    run_case(case_dir, timeout_s=timeout_s, n_procs=n_procs)
+    retries = []
+    while True:
+        try:
+            run_case(case_dir, timeout_s=timeout_s, n_procs=n_procs,
+                     min_time_step=min_time_step)
+            break
+        except CfdRunError as exc:
+            if "time step collapsed" not in str(exc) or len(retries) >= max_retries:
+                raise
+            courant = lower_courant_limit(case_dir)
+            retries.append(f"time step collapsed; resumed from the last written time with "
+                           f"maxCo {courant:g}")
     record = record_from_case(case_dir, motion, name, parameters, plate)
+    if retries:
+        record.provenance["retries"] = "; ".join(retries)
     if record.time[-1] < 0.98 * end_time:
         raise CfdRunError(f"the run stopped at t = {record.time[-1]:.4g} s before endTime "
                           f"{end_time:.4g} s", case=str(case_dir))

@@ -67,7 +67,7 @@ def collapsed_time_step(log_text: str, min_time_step: float) -> tuple[float, flo
 
 def run_application(case_dir: str | Path, application: str, timeout_s: float = 3600.0,
                     max_courant_abort: float = 100.0, n_procs: int = 1,
-                    extra_args: tuple[str, ...] = (), min_time_step: float = 1e-9,
+                    extra_args: tuple[str, ...] = (), min_time_step: float = 1e-7,
                     poll_s: float = 2.0) -> Path:
     """Run one OpenFOAM application in a case; return the log path.
 
@@ -127,7 +127,7 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
 
 
 def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
-             min_time_step: float = 1e-9) -> None:
+             min_time_step: float = 1e-7) -> None:
     """blockMesh (once), checkMesh (once), then pimpleFoam from the latest written time.
 
     With ``n_procs`` > 1 the case is decomposed once (``method simple``: scotch and metis are
