@@ -116,3 +116,18 @@ def test_optimise_cli_writes_results_and_report(tmp_path):
     with ResultsFile(out) as rf:
         assert "optimisation/sqp/beta_0.50/motion" in rf.h5
         assert rf.h5["optimisation/sweep/mean_thrust"].attrs["units"] == "N"
+
+
+def test_refined_sinusoid_is_feasible_and_no_worse_than_the_grid():
+    from mfflap.optimisation.refine import refine_best_sinusoid
+    from mfflap.sweep import sinusoid_sweep
+
+    c = load_case(CASE)
+    model = c.morison_model()
+    sweep = sinusoid_sweep(model, np.linspace(0.5, 2.5, 6), np.linspace(0.05, 0.3, 4),
+                           np.deg2rad(np.linspace(10, 50, 5)), np.deg2rad([60, 90, 120]),
+                           n_steps=30, max_power=50.0)
+    r = refine_best_sinusoid(model, sweep, 30, 50.0, 0.5, 0.2, 20.0)
+    assert r.max_power <= 50.0 * (1 + 1e-6)
+    assert r.mean_thrust >= r.grid_thrust
+    assert r.mean_thrust > 1.01 * r.grid_thrust  # a coarse grid leaves room to improve

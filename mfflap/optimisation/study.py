@@ -17,6 +17,7 @@ from mfflap.optimisation.optimise import (
     optimise_ipopt,
 )
 from mfflap.optimisation.problem import FlappingProblem
+from mfflap.optimisation.refine import RefinedSinusoid, refine_best_sinusoid
 from mfflap.sweep import SweepResult, pareto_front, sinusoid_sweep
 
 Progress = Callable[[str], None]
@@ -90,12 +91,21 @@ class BetaStudy:
     sqp: dict[float, OptimisationResult]
     sqp_all: dict[float, list[OptimisationResult]]
     ipopt: dict[float, OptimisationResult] = field(default_factory=dict)
+    refined: RefinedSinusoid | None = None
 
     @property
     def thrust_gain(self) -> float:
-        """beta = 0 mean-thrust gain over the best feasible sinusoid (fraction)."""
+        """beta = 0 mean-thrust gain over the best feasible sinusoid of the grid (fraction)."""
         base = float(self.sweep.mean_thrust[self.best_sinusoid])
         return float(self.sqp[min(self.sqp)].summary.mean_thrust) / base - 1.0
+
+    @property
+    def thrust_gain_refined(self) -> float | None:
+        """beta = 0 gain over the refined best feasible sinusoid (fraction)."""
+        if self.refined is None:
+            return None
+        return float(self.sqp[min(self.sqp)].summary.mean_thrust) / \
+            self.refined.mean_thrust - 1.0
 
 
 def beta_study(config: CaseConfig, betas: Sequence[float] | None = None, n_starts: int = 3,
@@ -107,6 +117,12 @@ def beta_study(config: CaseConfig, betas: Sequence[float] | None = None, n_start
     sweep = sweep if sweep is not None else default_sweep(config, model, progress)
     best = sweep.best_feasible()
     starts = starting_points(sweep, o.n_steps, n_starts)
+    refined = refine_best_sinusoid(model, sweep, o.n_steps, o.max_power, o.max_heave,
+                                   o.min_period, o.max_period, o.scheme)
+    if progress is not None:
+        progress(f"refined best feasible sinusoid: f = {refined.frequency:.4g} Hz, h = "
+                 f"{refined.heave_amplitude:.4g} m, mean thrust {refined.mean_thrust:.4g} N "
+                 f"(grid {refined.grid_thrust:.4g} N)")
     sqp, sqp_all, ipopt = {}, {}, {}
     for beta in betas if betas is not None else o.betas:
         problem = problem_for(config, beta, model)
@@ -119,7 +135,7 @@ def beta_study(config: CaseConfig, betas: Sequence[float] | None = None, n_start
                 r = ipopt[beta]
                 progress(f"beta {beta:g} IPOPT (hard constraints): thrust "
                          f"{float(r.summary.mean_thrust):.3g} N, {r.message}")
-    return BetaStudy(sweep, best, sqp, sqp_all, ipopt)
+    return BetaStudy(sweep, best, sqp, sqp_all, ipopt, refined)
 
 
 def gain_table(config: CaseConfig, n_steps: Sequence[int] = (25, 50, 100),

@@ -30,5 +30,15 @@ def write_study(rf: ResultsFile, config: CaseConfig, study: BetaStudy,
         if beta in study.ipopt:
             write_result(rf, f"{prefix}/ipopt/{beta_key(beta)}", study.ipopt[beta], settings)
     rf.h5[prefix].attrs["thrust_gain_beta0"] = study.thrust_gain
+    if study.refined is not None:
+        from dataclasses import asdict
+
+        r = study.refined
+        rf.write_group(f"{prefix}/refined_sinusoid",
+                       {k: v for k, v in asdict(r).items() if isinstance(v, float)},
+                       {"frequency": "Hz", "heave_amplitude": "m", "pitch_amplitude": "rad",
+                        "phase": "rad", "mean_thrust": "N", "max_power": "W",
+                        "grid_thrust": "N"}, {"success": r.success, "message": r.message})
+        rf.h5[prefix].attrs["thrust_gain_beta0_refined"] = study.thrust_gain_refined
     if gain is not None:
         rf.write_group(f"{prefix}/gain_table", gain, GAIN_UNITS)

@@ -126,6 +126,14 @@ def add_optimisation_sections(rep: Report, study, model, scheme: str, max_power:
     s.blocks.append(table_html(RESULT_HEADER, rows))
     s.blocks.append(text_html(f"β = 0 thrust gain over the best feasible sinusoid: "
                               f"{study.thrust_gain:+.1%} (the paper: +50.29 %)."))
+    if study.refined is not None:
+        r = study.refined
+        s.blocks.append(text_html(
+            f"Refined best feasible sinusoid (continuous search from the grid point): f = "
+            f"{r.frequency:.4g} Hz, h_amp = {r.heave_amplitude:.4g} m, θ_amp = "
+            f"{np.rad2deg(r.pitch_amplitude):.1f}°, φ = {np.rad2deg(r.phase):.1f}°, mean "
+            f"thrust {r.mean_thrust:.4g} N (grid {r.grid_thrust:.4g} N); β = 0 gain over it: "
+            f"{study.thrust_gain_refined:+.1%}."))
     for b, r in study.sqp.items():
         if float(r.summary.mean_power) < 0:
             s.blocks.append(text_html(
