@@ -154,6 +154,14 @@ class NormalDrag(_MorisonTerm):
         # first run with its sign, the rest (total - first run) with the other sign
         return (first - sb) * f1 + sb * ft, (first - sb) * g1 + sb * gt
 
+    def strip_abs_sums(self, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, ...]:
+        """sum_k |v_k| l_k^p for p = 0, 1, 2 (the drag terms' derivatives), O(1) per sample."""
+        self.strip_sums(a, b)
+        a, b, head, total, first, sb = self._last
+        w = first - sb
+        return tuple(w * (a * head[p] + b * head[p + 1]) + sb * (a * total[p] + b * total[p + 1])
+                     for p in range(3))
+
     def strip_abs_cubes(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """sum_k |v_k|^3 for v_k = a + b l_k in O(1) per sample (see :meth:`strip_sums`)."""
         self.strip_sums(a, b)

@@ -121,7 +121,8 @@ class DiscreteMotion:
         hr, hp = integrate(self.heave_acceleration, self.time_step)
         return {"pitch_rate": pr, "pitch_angle": pa, "heave_velocity": hr, "heave_position": hp}
 
-    def states(self, scheme: Scheme = "paper") -> KinematicState:
+    def states(self, scheme: Scheme = "paper",
+               trajectory: dict[str, np.ndarray] | None = None) -> KinematicState:
         """The N states at which the hydrodynamic model is evaluated, t_j = (j-1) dt.
 
         Parameters
@@ -129,10 +130,12 @@ class DiscreteMotion:
         scheme
             ``"paper"`` uses the step's rate x_j; ``"midpoint"`` uses
             rate_j + dt acc_j / 2 (the energy-consistent variant of equations.md).
+        trajectory
+            :meth:`trajectory` if the caller has it already (saves integrating twice).
         """
         if scheme not in SCHEMES:
             raise MotionError(f"unknown scheme {scheme!r}; allowed: {', '.join(SCHEMES)}")
-        tr = self.trajectory()
+        tr = self.trajectory() if trajectory is None else trajectory
         dt = np.asarray(self.time_step)[..., None]
         pr, hr = tr["pitch_rate"][..., :-1], tr["heave_velocity"][..., :-1]
         if scheme == "midpoint":
