@@ -86,6 +86,7 @@ def test_hidden_effect_is_found_and_the_gap_shrinks(effect):
               for k in ("normal_force", "tangential_force", "moment")}
     assert min(shrink.values()) < 0.8, shrink
     assert diag.validation["leave-one-frequency-out"]["gain"] > 0.1
+    assert diag.validation["leave-one-frequency-out"]["claimed"] is True
 
 
 def test_null_dataset_claims_nothing_and_says_so():
@@ -93,6 +94,8 @@ def test_null_dataset_claims_nothing_and_says_so():
     assert diag.chosen is None
     assert diag.verdict.startswith("no candidate explains it")
     assert "after" not in diag.gap
+    lofo = diag.validation["leave-one-frequency-out"]
+    assert lofo["claimed"] is False and lofo["candidate"] == diag.scores[0].label
 
 
 def test_blind_benchmark_meets_its_targets_at_snr_3():

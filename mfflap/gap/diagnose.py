@@ -183,9 +183,14 @@ def diagnose(cases: Sequence[CaseData], base_model: ForceModel,
     diag = Diagnosis(list(system.names[: system.n_base]), base_sse, scores, chosen, verdict,
                      case_names=[c.name for c in system.cases])
     diag.gap["before"] = gap_metrics(system, _predictions(system, base_cols, folds))
+    validated = chosen or (singles[0] if singles else None)
     if chosen is not None:
         cols = base_cols + [system.names.index(n) for n in chosen.names]
         diag.gap["after"] = gap_metrics(system, _predictions(system, cols, folds))
+    if validated is not None:
+        # leave-one-group-out of the chosen effect; of the best candidate when none is
+        # claimed, so the user sees how it would generalise (labelled as not claimed)
+        cols = base_cols + [system.names.index(n) for n in validated.names]
         for key in validate_by:
             labels = [c.parameters.get(key) for c in system.cases]
             if any(v is None for v in labels) or len(set(labels)) < 2:
@@ -198,6 +203,7 @@ def diagnose(cases: Sequence[CaseData], base_model: ForceModel,
                 lab = labels[fold[0]]
                 per_group[str(lab)] = float(1.0 - after[fold].sum() / before[fold].sum())
             diag.validation[f"leave-one-{key}-out"] = {
+                "candidate": validated.label, "claimed": chosen is not None,
                 "gain": float(1.0 - after.sum() / before.sum()),
                 "p_value": _significance(before, after), "per_group_gain": per_group}
     return diag

@@ -123,10 +123,14 @@ def add_gap_sections(rep: Report, diag: Diagnosis, where: dict,
     s.blocks.append(table_html(["signal", "median NRMSE before", "after", "median Pearson "
                                 "before", "after"], rows))
     if diag.validation:
-        s = rep.section("Validation of the chosen effect on withheld groups")
-        s.blocks.append(table_html(["validation", "held-out gain", "p"],
-                                   [(k, v["gain"], v["p_value"]) for k, v in
-                                    diag.validation.items()]))
+        s = rep.section("Validation on withheld groups")
+        s.blocks.append(table_html(["validation", "candidate", "claimed", "held-out gain", "p",
+                                    "gain per withheld group"],
+                                   [(k, v["candidate"], "yes" if v["claimed"] else
+                                     "no (best candidate only)", v["gain"], v["p_value"],
+                                     "; ".join(f"{g}: {x:+.1%}" for g, x in
+                                               v["per_group_gain"].items()))
+                                    for k, v in diag.validation.items()]))
 
 
 def write_diagnosis(rf: ResultsFile, diag: Diagnosis, where: dict, group: str = "gap") -> None:
