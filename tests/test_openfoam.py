@@ -272,3 +272,24 @@ def test_runner_stops_a_run_whose_time_step_collapses(tmp_path):
     with pytest.raises(CfdRunError, match="time step collapsed") as info:
         run_case(case, timeout_s=120, min_time_step=1.0)
     assert "run" in str(info.value)
+
+
+def test_restart_into_the_same_time_folder_supersedes_a_collapsed_segment(tmp_path):
+    """v1912 writes force_0.dat beside force.dat when a run restarts from the same time. The
+    first segment may end in a collapsed run whose times repeat at the written precision
+    (seen on a real back-test): the later segment wins and the merge is clean."""
+    case = copy_real_case(tmp_path)
+    folder = case / "postProcessing" / "forces" / "0"
+    for name in ("force", "moment"):
+        text = (DATA / f"{name}.dat").read_text()
+        rows = [ln for ln in text.splitlines() if ln and not ln.startswith("#")]
+        last = rows[-1].split(None, 1)[1]
+        collapsed = "\n".join(f"0.3441266 {last}" for _ in range(3))  # repeated times
+        (folder / f"{name}.dat").write_text(text + collapsed + "\n")
+        shutil.copy(DATA / f"{name}.dat", folder / f"{name}_0.dat")
+    with pytest.raises(ParseError, match="time does not increase"):
+        parse_table((folder / "force.dat").read_text(), "force.dat")
+    merged = read_forces(case)
+    reference = read_forces(copy_real_case(tmp_path / "ref"))
+    np.testing.assert_array_equal(merged.time, reference.time)
+    np.testing.assert_array_equal(merged.force, reference.force)

@@ -66,8 +66,13 @@ def detect_dialect(text: str, name: str = "") -> str:
     raise ParseError("no data rows", path=name or None)
 
 
-def parse_table(text: str, path: str = "<text>", columns: int = 9) -> tuple[np.ndarray, str]:
-    """Rows of a force or moment file as an array (n, 1 + columns) and the dialect."""
+def parse_table(text: str, path: str = "<text>", columns: int = 9,
+                check_increasing: bool = True) -> tuple[np.ndarray, str]:
+    """Rows of a force or moment file as an array (n, 1 + columns) and the dialect.
+
+    ``check_increasing`` False leaves the time check to the caller (a segment that a restart
+    supersedes may end in a collapsed run whose times repeat at the written precision).
+    """
     dialect = detect_dialect(text, Path(path).name)
     ncol = 1 + (12 if dialect == "foundation" else columns)
     lines = text.splitlines()
@@ -93,10 +98,27 @@ def parse_table(text: str, path: str = "<text>", columns: int = 9) -> tuple[np.n
     if not rows:
         raise ParseError("no complete data rows", path=path)
     arr = np.asarray(rows)
+    if check_increasing:
+        _check_increasing(arr, path)
+    return arr, dialect
+
+
+def _check_increasing(arr: np.ndarray, path: str) -> None:
     if np.any(np.diff(arr[:, 0]) <= 0):
         i = int(np.argmax(np.diff(arr[:, 0]) <= 0))
-        raise ParseError(f"time does not increase after t = {arr[i, 0]!r}", path=path)
-    return arr, dialect
+        raise ParseError(f"time does not increase after t = {float(arr[i, 0])!r}", path=path)
+
+
+def _segments(folder: Path, stem: str) -> list[Path]:
+    """``<stem>.dat`` then the restart files ``<stem>_0.dat``, ``<stem>_1.dat``... that
+    OpenFOAM writes when a run restarts into an existing time folder."""
+    numbered = []
+    for p in folder.glob(f"{stem}_*.dat"):
+        suffix = p.stem[len(stem) + 1:]
+        if suffix.isdigit():
+            numbered.append((int(suffix), p))
+    first = [folder / f"{stem}.dat"] if (folder / f"{stem}.dat").is_file() else []
+    return first + [p for _, p in sorted(numbered)]
 
 
 def _merge(parts: list[np.ndarray]) -> np.ndarray:
@@ -117,23 +139,26 @@ def read_forces(case_dir: str | Path, function_name: str = "forces") -> ForceHis
         raise ParseError("no time folders", path=str(base))
     f_parts, m_parts, dialect = [], [], ""
     for folder in folders:
-        if (folder / "force.dat").is_file():
-            arr, dialect = parse_table((folder / "force.dat").read_text(), str(folder /
-                                                                                "force.dat"))
-            f_parts.append(arr[:, :4])
-            if (folder / "moment.dat").is_file():
-                marr, _ = parse_table((folder / "moment.dat").read_text(),
-                                      str(folder / "moment.dat"))
-                m_parts.append(marr[:, :4])
-        elif (folder / "forces.dat").is_file():
-            arr, dialect = parse_table((folder / "forces.dat").read_text(),
-                                       str(folder / "forces.dat"))
-            # pressure + viscous = total; moments likewise
-            f_parts.append(np.column_stack([arr[:, 0], arr[:, 1:4] + arr[:, 4:7]]))
-            m_parts.append(np.column_stack([arr[:, 0], arr[:, 7:10] + arr[:, 10:13]]))
+        forces = _segments(folder, "force")
+        if forces:
+            moments = _segments(folder, "moment")
+            for k, path in enumerate(forces):
+                arr, dialect = parse_table(path.read_text(), str(path), check_increasing=False)
+                f_parts.append(arr[:, :4])
+                if k < len(moments):
+                    marr, _ = parse_table(moments[k].read_text(), str(moments[k]),
+                                          check_increasing=False)
+                    m_parts.append(marr[:, :4])
+        elif _segments(folder, "forces"):
+            for path in _segments(folder, "forces"):
+                arr, dialect = parse_table(path.read_text(), str(path), check_increasing=False)
+                # pressure + viscous = total; moments likewise
+                f_parts.append(np.column_stack([arr[:, 0], arr[:, 1:4] + arr[:, 4:7]]))
+                m_parts.append(np.column_stack([arr[:, 0], arr[:, 7:10] + arr[:, 10:13]]))
         else:
             raise ParseError("neither force.dat nor forces.dat", path=str(folder))
     force = _merge(f_parts)
+    _check_increasing(force, str(base))
     moment = _merge(m_parts) if len(m_parts) == len(f_parts) else None
     if moment is not None:
         n = min(len(force), len(moment))
