@@ -28,6 +28,11 @@ def load_cases(config: CaseConfig, folder: str | Path | None = None,
     """Prepared cases of a record folder (the shipped fixtures by default) and the excluded."""
     folder = Path(folder) if folder is not None else fixture_dir()
     records = read_records(folder)
+    if not records:
+        from mfflap.errors import MfflapError
+
+        raise MfflapError(f"{folder}: no CFD records (*.h5) to identify from; run "
+                          "`mfflap campaign run` into it or point --fixtures elsewhere")
     cases, excluded = prepare_cases(records, config.identification.discard_time, n_samples)
     excluded.update(failed_cases(folder))
     return cases, excluded
