@@ -52,7 +52,7 @@ def pareto_front(thrust: np.ndarray, power: np.ndarray) -> np.ndarray:
 
 def sinusoid_sweep(model, frequencies, heave_amplitudes, pitch_amplitudes, phases,
                    n_steps: int = 50, max_power: float = 50.0, scheme: str = "paper",
-                   chunk: int = 20000, progress=None) -> SweepResult:
+                   chunk: int = 20000, progress=None, compiled: bool = True) -> SweepResult:
     """Evaluate every combination of the given parameter values (a full grid).
 
     Parameters
@@ -66,6 +66,9 @@ def sinusoid_sweep(model, frequencies, heave_amplitudes, pitch_amplitudes, phase
         Motions evaluated at once (bounds memory: about chunk x N x strips x 8 bytes).
     progress
         Optional callable ``progress(done, total)``.
+    compiled
+        Use the fused numba kernel (:mod:`mfflap.sweep_kernel`) when the model is the plain
+        Morison model with equal strips; the array version otherwise.
     """
     grids = np.meshgrid(*(np.atleast_1d(np.asarray(v, dtype=float)) for v in
                           (frequencies, heave_amplitudes, pitch_amplitudes, phases)),
@@ -74,6 +77,35 @@ def sinusoid_sweep(model, frequencies, heave_amplitudes, pitch_amplitudes, phase
     total = f.size
     out = {k: np.empty(total) for k in ("mean_thrust", "mean_power", "efficiency", "max_power",
                                         "strouhal_number")}
+    if np.any(f <= 0) or not np.all(np.isfinite(f)):
+        raise ConfigError("sweep frequencies must be finite and > 0 Hz", key="frequencies")
+    constants = None
+    if compiled and scheme in ("paper", "midpoint"):
+        from mfflap.hydro.morison import MorisonModel
+        from mfflap.sweep_kernel import kernel_constants
+
+        if type(model) is MorisonModel:
+            constants = kernel_constants(model)
+    if constants is not None:
+        from mfflap.sweep_kernel import sweep_kernel
+
+        u = constants["u"]
+        block = max(chunk * 10, 100_000)
+        res = np.empty((total, 6))
+        for start in range(0, total, block):
+            sl = slice(start, min(start + block, total))
+            sweep_kernel(f[sl], h[sl], th[sl], ph[sl], n_steps, scheme == "midpoint",
+                         constants["u"], constants["chord"], constants["n_strips"],
+                         constants["k_an"], constants["k_at"], constants["k_dn"],
+                         constants["k_dt"], constants["lbar"], constants["l2bar"], res[sl])
+            if progress is not None:
+                progress(sl.stop, total)
+        out["mean_thrust"], out["mean_power"], out["max_power"] = res[:, 0], res[:, 1], res[:, 2]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            out["efficiency"] = np.where(res[:, 1] != 0, u * res[:, 0] / np.where(
+                res[:, 1] == 0, 1, res[:, 1]), np.nan)
+        out["strouhal_number"] = 2 * f * res[:, 4] / u
+        return SweepResult(f, h, th, ph, **out, feasible=out["max_power"] <= max_power)
     for start in range(0, total, chunk):
         sl = slice(start, min(start + chunk, total))
         d = harmonic_to_discrete(f[sl], h[sl], th[sl], ph[sl], n_steps)
