@@ -146,6 +146,7 @@ def test_identify_cli_report_and_hdf5_round_trip(tmp_path):
     assert res.exit_code == 0, res.output
     text = html_path.read_text()
     assert text.count("<img") >= 10 and "pimpleFoam diverged" in text
+    assert "CFD cases used" in text and "f1p000_h0p200_phi090p0" in text
     assert "Sensitivity to the frequency weighting" in text
 
 

@@ -42,6 +42,7 @@ class CaseData:
     state: KinematicState
     cfd: Loads
     notes: list[str] = field(default_factory=list)
+    provenance: dict = field(default_factory=dict)
 
     @property
     def frequency(self) -> float:
@@ -129,7 +130,8 @@ def prepare_case(record: CfdRecord, discard_time: float = 0.75, n_samples: int =
                          f"median (first at t = {first:.4g} s)")
         cleaned.append(np.interp(tu, t, values))
     cfd = Loads(tu, *cleaned, source=record.loads.source)
-    return CaseData(record.name, dict(record.parameters), state, cfd, notes)
+    return CaseData(record.name, dict(record.parameters), state, cfd, notes,
+                    dict(record.provenance))
 
 
 def prepare_cases(records: Sequence[CfdRecord], discard_time: float = 0.75,

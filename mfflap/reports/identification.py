@@ -199,6 +199,24 @@ def add_identification_sections(rep: Report, results: Mapping[str, Identificatio
         s.blocks.append(text_html("Some frequencies have a single case: the case bootstrap "
                                   "cannot resample them and understates the uncertainty.",
                                   warn=True))
+    by_name = {c.name: c for c in cases}
+    rows = []
+    for i, name in enumerate(first.case_names):
+        c = by_name.get(name)
+        prov = c.provenance if c is not None else {}
+        par = first.case_parameters[i]
+        rows.append([name, float(par.get("frequency", np.nan)),
+                     float(par.get("heave_amplitude", np.nan)),
+                     float(par.get("phase_deg", np.nan)), str(prov.get("mesh", "-")),
+                     prov.get("n_cells", "-"), float(prov.get("cpu_time_s", np.nan)),
+                     str(prov.get("retries", "")) or "-",
+                     float(first.metrics["normal_force"]["nrmse"][i]),
+                     float(first.metrics["normal_force"]["pearson"][i])])
+    s.blocks.append(text_html("CFD cases used (provenance from each record; agreement with "
+                              f"the {first.strategy}-weighted fit):"))
+    s.blocks.append(table_html(["case", "f [Hz]", "h_amp [m]", "φ [deg]", "mesh", "cells",
+                                "CPU [s]", "solver retries", "NRMSE F_n", "Pearson F_n"],
+                               rows))
     if first.notes:
         s.blocks.append(text_html("Data cleaning (one-step CFD force glitches):"))
         s.blocks.append(table_html(["case", "what was done"],
