@@ -94,17 +94,10 @@ def coefficient_sensitivity(config: CaseConfig, identification: dict, sweep,
 
 def gap_diagnosis(config: CaseConfig, cases: list) -> tuple:
     """Diagnosis and residual decomposition of the case's model on the identification CFD."""
-    from mfflap.gap.candidates import FlowContext
-    from mfflap.gap.diagnose import _predictions, default_candidates, diagnose
-    from mfflap.gap.system import GapSystem, group_folds
-    from mfflap.gap.where import decompose
+    from mfflap.gap.workflow import diagnose_cases
 
-    base = config.morison_model()
-    diag = diagnose(cases, base, default_candidates(FlowContext(config.plate, config.fluid,
-                                                                config.flow)))
-    system = GapSystem.build(cases, base.terms, [])
-    pred = _predictions(system, list(range(len(base.terms))), group_folds(range(len(cases)), 5))
-    return diag, decompose(system, pred, config.flow.velocity, config.plate.chord)
+    diag, where, _ = diagnose_cases(config, cases)
+    return diag, where
 
 
 def run_study(config: CaseConfig, options: RunOptions, progress: Progress = print

@@ -43,12 +43,9 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
     """Where the model of CASE_FILE departs from CFD, and which effect explains it."""
     from mfflap.campaign.records import fixture_dir, read_records
     from mfflap.config import load_case
-    from mfflap.gap.candidates import FlowContext
-    from mfflap.gap.diagnose import _predictions, diagnose
     from mfflap.gap.external import read_csv_case
     from mfflap.gap.report import gap_report, write_diagnosis
-    from mfflap.gap.system import group_folds
-    from mfflap.gap.where import decompose
+    from mfflap.gap.workflow import diagnose_cases
     from mfflap.identification.data import prepare_cases
     from mfflap.results import ResultsFile
 
@@ -65,17 +62,7 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
             click.echo(f"left out {name}: {why}", err=True)
     cases += [read_csv_case(p) for p in csv_files]
     sources += [str(p) for p in csv_files]
-    context = FlowContext(case.plate, case.fluid, case.flow)
-    from mfflap.gap.diagnose import default_candidates
-
-    diag = diagnose(cases, case.morison_model(), default_candidates(context), alpha=alpha,
-                    min_gain=min_gain)
-    from mfflap.gap.system import GapSystem
-
-    base = case.morison_model()
-    system = GapSystem.build(cases, base.terms, [])
-    pred = _predictions(system, list(range(len(base.terms))), group_folds(range(len(cases)), 5))
-    where = decompose(system, pred, case.flow.velocity, case.plate.chord)
+    diag, where, pred = diagnose_cases(case, cases, alpha=alpha, min_gain=min_gain)
     snapshots = []
     for item in flow_dirs:
         from mfflap.gap.flowfield import vorticity_figure

@@ -11,7 +11,7 @@ from __future__ import annotations
 import time
 import warnings
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.optimize import minimize
@@ -268,4 +268,4 @@ def multistart(problem: FlappingProblem, starts: Sequence[tuple[str, DiscreteMot
 
 
 __all__ = ["OptimisationResult", "assess", "multistart", "optimise_ipopt", "optimise_sqp",
-           "replace", "replace_problem", "time_step_bounds"]
+           "replace_problem", "time_step_bounds"]
