@@ -8,6 +8,7 @@ from pathlib import Path
 import jinja2
 import numpy as np
 
+from mfflap.cfd import templates
 from mfflap.cfd.frames import case_displacement, case_rotation_deg
 from mfflap.cfd.openfoam.loads import imposed_state
 from mfflap.errors import ConfigError, MotionError
@@ -15,13 +16,8 @@ from mfflap.kinematics.continuous import HarmonicMotion, Motion, RampHarmonicMot
 
 
 def template_dir() -> Path:
-    """``cfd_templates/fluent`` beside the package."""
-    here = Path(__file__).resolve()
-    for parent in here.parents:
-        candidate = parent / "cfd_templates" / "fluent"
-        if candidate.is_dir():
-            return candidate
-    raise ConfigError("cannot find cfd_templates/fluent beside the mfflap package")
+    """The Fluent template folder (``cfd_templates/fluent``)."""
+    return templates.template_dir("fluent")
 
 
 def standin_header_dir() -> Path:

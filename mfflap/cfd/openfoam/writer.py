@@ -15,6 +15,7 @@ from pathlib import Path
 import jinja2
 import numpy as np
 
+from mfflap.cfd import templates
 from mfflap.cfd.frames import case_displacement, case_rotation_deg
 from mfflap.cfd.openfoam.loads import imposed_state
 from mfflap.errors import ConfigError, MotionError
@@ -24,13 +25,8 @@ from mfflap.toml_io import read_toml
 
 
 def template_dir() -> Path:
-    """The OpenFOAM template folder (``cfd_templates/openfoam`` beside the package)."""
-    here = Path(__file__).resolve()
-    for parent in here.parents:
-        candidate = parent / "cfd_templates" / "openfoam"
-        if candidate.is_dir():
-            return candidate
-    raise ConfigError("cannot find cfd_templates/openfoam beside the mfflap package")
+    """The OpenFOAM template folder (``cfd_templates/openfoam``)."""
+    return templates.template_dir("openfoam")
 
 
 @dataclass(frozen=True)
