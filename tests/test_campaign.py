@@ -143,7 +143,8 @@ def test_a_run_that_cannot_finish_in_time_fails_cleanly_with_its_log(tmp_path):
 @pytest.mark.openfoam
 def test_collapsed_time_step_is_retried_with_a_lower_courant_limit(tmp_path):
     """Every attempt 'collapses' (the watchdog threshold is above any real step): the run
-    is resumed twice with maxCo 4 -> 2 -> 1, then reported."""
+    is resumed twice with maxCo 4 -> 2 -> 1 (upwind k-epsilon on the last try), then
+    reported; the solver accepts the changed schemes."""
     from mfflap.errors import CfdRunError
 
     case_dir = tmp_path / "c"
@@ -151,4 +152,8 @@ def test_collapsed_time_step_is_retried_with_a_lower_courant_limit(tmp_path):
         run_motion(case_dir, SHORT.motion(), "c", {}, 1.0, ramp_time=0.02, min_time_step=1.0)
     control = (case_dir / "system" / "controlDict").read_text()
     assert "maxCo           1;" in control
+    schemes = (case_dir / "system" / "fvSchemes").read_text()
+    assert "div(phi,k)      Gauss upwind;" in schemes
+    assert "div(phi,epsilon) Gauss upwind;" in schemes
+    assert "div(phi,U)      Gauss linearUpwind grad(U);" in schemes  # momentum untouched
     assert (case_dir / "log.pimpleFoam").read_text().count("Starting time loop") == 3

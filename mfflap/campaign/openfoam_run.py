@@ -61,6 +61,21 @@ def lower_courant_limit(case_dir: str | Path, factor: float = 0.5) -> float:
     return value
 
 
+_TURBULENCE_DIV = re.compile(r"^(\s*div\(phi,(?:k|epsilon)\)\s+)Gauss [^;]+;", re.M)
+
+
+def use_upwind_turbulence(case_dir: str | Path) -> bool:
+    """Switch k and epsilon convection to bounded first-order upwind (the most robust choice
+    for a k-epsilon blow-up); True if the schemes changed."""
+    path = Path(case_dir) / "system" / "fvSchemes"
+    text = path.read_text()
+    new = _TURBULENCE_DIV.sub(lambda m: f"{m.group(1)}Gauss upwind;", text)
+    if new == text:
+        return False
+    path.write_text(new)
+    return True
+
+
 def record_from_case(case_dir: str | Path, motion: Motion, name: str,
                      parameters: dict[str, Any], plate: Plate | None = None) -> CfdRecord:
     """Parse a finished OpenFOAM case written by mfflap into a record."""
@@ -92,7 +107,8 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
     Fields are written four times per run so that a killed run resumes from its last
     written time instead of from zero. A run whose time step collapses (an instability held
     at the Courant limit) is resumed from its last written time with half the Courant limit,
-    up to ``max_retries`` times; the retries are recorded in the provenance.
+    up to ``max_retries`` times, the last time also with first-order upwind convection of k
+    and epsilon; the retries are recorded in the provenance.
     """
     case_dir = Path(case_dir)
     solver = solver or SolverSettings(write_interval=end_time / 4)
@@ -117,8 +133,11 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
             if "time step collapsed" not in str(exc) or len(retries) >= max_retries:
                 raise
             courant = lower_courant_limit(case_dir)
+            note = f"maxCo {courant:g}"
+            if len(retries) == max_retries - 1 and use_upwind_turbulence(case_dir):
+                note += " and first-order upwind k and epsilon"
             retries.append(f"time step collapsed; resumed from the last written time with "
-                           f"maxCo {courant:g}")
+                           f"{note}")
     record = record_from_case(case_dir, motion, name, parameters, plate)
     if retries:
         record.provenance["retries"] = "; ".join(retries)
