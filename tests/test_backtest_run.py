@@ -115,8 +115,14 @@ def test_main_job_runs_end_to_end_on_the_shipped_fixtures(tmp_path):
 
     out = tmp_path / "run"
     res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--starts", "1",
-                                   "--no-ipopt", "--no-gain-table"])
+                                   "--no-ipopt", "--no-gain-table", "--json"])
     assert res.exit_code == 0, res.output
+    import json
+
+    summary = json.loads(res.output[res.output.index("{\n"):])
+    assert set(summary["optimised"]) == {"0", "0.5", "1"}
+    assert set(summary["coefficients"]) == {"uniform", "low", "high"}
+    assert "gap_verdict" in summary and len(summary["backtest"]) == 4
     html = (out / "report.html").read_text()
     for title in ("Identified coefficients", "Optimised motions", "Back-test against CFD",
                   "Coefficient sensitivity", "Sinusoidal sweep", "Sim-to-real gap"):

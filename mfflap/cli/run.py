@@ -24,9 +24,10 @@ import click
 @click.option("--gain-table/--no-gain-table", default=True, show_default=True,
               help="Tabulate the beta = 0 gain against N and the smoothing weights.")
 @click.option("--no-ipopt", is_flag=True, help="Skip the hard-constrained IPOPT comparison.")
+@click.option("--json", "as_json", is_flag=True, help="Print the key numbers as JSON.")
 def run_cmd(case_file: Path, out_dir: Path | None, fixtures: Path | None,
             backtest_fixtures: tuple[Path, ...], live: bool, coefficients: str, starts: int,
-            gain_table: bool, no_ipopt: bool) -> None:
+            gain_table: bool, no_ipopt: bool, as_json: bool) -> None:
     """Identification, sweep, optimisation, back-test and reports for CASE_FILE.
 
     Writes <out>/report.html (every figure), <out>/results.h5 (every number and the inputs)
@@ -49,8 +50,31 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: Path | None,
     outcome = run_study(case, options, progress=lambda m: click.echo(m, err=True))
     write_outputs(case, outcome, out_dir / "results.h5", out_dir / "report.html",
                   str(fixtures or fixture_dir()))
+    if as_json:
+        import json
+
+        click.echo(json.dumps(run_summary(outcome), indent=2, default=float))
+        return
     click.echo(f"wrote {out_dir / 'report.html'} and {out_dir / 'results.h5'}")
     if outcome.problems:
         click.echo(f"{len(outcome.problems)} problem(s), listed in the report:")
         for p in outcome.problems:
             click.echo(f"  - {p.splitlines()[0]}")
+
+
+def run_summary(outcome) -> dict:
+    """The key numbers of a run (JSON-friendly)."""
+    out: dict = {"problems": [p.splitlines()[0] for p in outcome.problems]}
+    out["coefficients"] = {k: r.coefficients for k, r in outcome.identification.items()}
+    if outcome.study is not None:
+        out["optimised"] = {f"{b:g}": {**r.summary.as_dict(), "period": float(r.motion.period),
+                                       "converged": r.converged, "flags": r.flags}
+                            for b, r in outcome.study.sqp.items()}
+        out["thrust_gain_beta0"] = outcome.study.thrust_gain
+        out["thrust_gain_beta0_refined"] = outcome.study.thrust_gain_refined
+    out["backtest"] = {k: {"status": o.status, "source": o.source,
+                           **(o.comparison.as_dict() if o.comparison else {})}
+                       for k, o in outcome.backtests.items()}
+    if outcome.gap is not None:
+        out["gap_verdict"] = outcome.gap[0].verdict
+    return out
