@@ -126,7 +126,8 @@ def campaign_status(out_dir: str | Path) -> list[CaseStatus]:
             statuses.append(CaseStatus(case_id, "done"))
         elif _failed_path(out, case_id).exists():
             info = read_toml(_failed_path(out, case_id))
-            statuses.append(CaseStatus(case_id, "failed", str(info.get("error", ""))))
+            error = str(info.get("error", "")).splitlines()
+            statuses.append(CaseStatus(case_id, "failed", error[0] if error else ""))
         else:
             statuses.append(CaseStatus(case_id, "pending"))
     return statuses
@@ -170,7 +171,8 @@ def run_campaign(cases: Sequence[CfdCase], out_dir: str | Path,
             results[c.case_id] = CaseStatus(c.case_id, "done", "already finished")
         elif _failed_path(out, c.case_id).exists() and not retry_failed:
             info = read_toml(_failed_path(out, c.case_id))
-            results[c.case_id] = CaseStatus(c.case_id, "failed", str(info.get("error", "")))
+            error = str(info.get("error", "")).splitlines()
+            results[c.case_id] = CaseStatus(c.case_id, "failed", error[0] if error else "")
         else:
             todo.append(c)
     if todo:
