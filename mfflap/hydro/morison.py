@@ -124,13 +124,12 @@ class NormalDrag(_MorisonTerm):
             fn, mo = self.strip_sums(flow.normal_velocity_le, state.pitch_rate)
         return Loads(state.time, -k * fn, self._zeros(state), -k * mo, source=self.name)
 
-    def strip_sums(self, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """sum_k |v_k| v_k and sum_k |v_k| v_k l_k for v_k = a + b l_k, in O(1) per sample.
+    def _runs(self, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, ...]:
+        """Split the strips at the sign change of v_k = a + b l_k.
 
-        v_k is linear in l_k, so it changes sign at most once along the chord: the strips
-        split into two contiguous runs of one sign each, and on each run sum v_k^2 and
-        sum v_k^2 l_k are polynomials in a and b with the run's power sums of l_k (a
-        cumulative table built once). Exact up to rounding.
+        Returns a, b (broadcast), the power sums of l_k (p = 0..3) over the first run and
+        over all strips, the sign weight of the first run relative to the rest, and the
+        rest's sign: any sum_k sign(v_k) P(v_k, l_k) is w * P(head) + sb * P(total).
         """
         a, b = np.broadcast_arrays(np.asarray(a, dtype=float), np.asarray(b, dtype=float))
         pos = self.positions
@@ -140,36 +139,38 @@ class NormalDrag(_MorisonTerm):
             zero = np.where(b != 0, -a / np.where(b != 0, b, 1.0), np.inf)
         m = np.searchsorted(pos, zero)  # strips with l_k < l*: the first run
         m = np.where(b == 0, n, m)
-
-        head = table[:, m]  # power sums p = 0..3 over the first run (strips 0..m-1)
-        total = table[:, n]
-        aa, ab2, bb = a * a, 2 * a * b, b * b
-        f1 = aa * head[0] + ab2 * head[1] + bb * head[2]
-        g1 = aa * head[1] + ab2 * head[2] + bb * head[3]
-        ft = aa * total[0] + ab2 * total[1] + bb * total[2]
-        gt = aa * total[1] + ab2 * total[2] + bb * total[3]
         sb = np.sign(b)
         first = np.where(b == 0, np.sign(a), -sb)
-        self._last = (a, b, head, total, first, sb)
-        # first run with its sign, the rest (total - first run) with the other sign
-        return (first - sb) * f1 + sb * ft, (first - sb) * g1 + sb * gt
+        return a, b, table[:, m], table[:, n], first - sb, sb
+
+    def strip_sums(self, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """sum_k |v_k| v_k and sum_k |v_k| v_k l_k for v_k = a + b l_k, in O(1) per sample.
+
+        v_k is linear in l_k, so it changes sign at most once along the chord: the strips
+        split into two contiguous runs of one sign each, and on each run sum v_k^2 and
+        sum v_k^2 l_k are polynomials in a and b with the run's power sums of l_k (a
+        cumulative table built once). Exact up to rounding.
+        """
+        a, b, head, total, w, sb = self._runs(a, b)
+        aa, ab2, bb = a * a, 2 * a * b, b * b
+
+        def sq(s, p):  # sum over a run of v^2 l^p
+            return aa * s[p] + ab2 * s[p + 1] + bb * s[p + 2]
+
+        return w * sq(head, 0) + sb * sq(total, 0), w * sq(head, 1) + sb * sq(total, 1)
 
     def strip_abs_sums(self, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, ...]:
         """sum_k |v_k| l_k^p for p = 0, 1, 2 (the drag terms' derivatives), O(1) per sample."""
-        self.strip_sums(a, b)
-        a, b, head, total, first, sb = self._last
-        w = first - sb
+        a, b, head, total, w, sb = self._runs(a, b)
         return tuple(w * (a * head[p] + b * head[p + 1]) + sb * (a * total[p] + b * total[p + 1])
                      for p in range(3))
 
     def strip_abs_cubes(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """sum_k |v_k|^3 for v_k = a + b l_k in O(1) per sample (see :meth:`strip_sums`)."""
-        self.strip_sums(a, b)
-        a, b, head, total, first, sb = self._last
+        a, b, head, total, w, sb = self._runs(a, b)
         c3 = (a**3, 3 * a * a * b, 3 * a * b * b, b**3)
-        c1 = sum(c * h for c, h in zip(c3, head, strict=True))
-        ct = sum(c * t for c, t in zip(c3, total, strict=True))
-        return (first - sb) * c1 + sb * ct
+        return w * sum(c * h for c, h in zip(c3, head, strict=True)) + sb * sum(
+            c * t for c, t in zip(c3, total, strict=True))
 
     def _power_table(self) -> np.ndarray:
         table = getattr(self, "_table", None)
