@@ -34,6 +34,11 @@ def optimiser() -> None:
     print("beta  method            iterations  time [s]  time / (J + grad) eval   target met")
     for beta in o.betas:
         problem = problem_for(case, beta)
+        if beta == o.betas[0]:  # one-off costs (imports, loading the compiled kernels)
+            t0 = time.perf_counter()
+            optimise_sqp(problem, start, min_period=o.min_period, max_period=o.max_period)
+            print(f"      (first SQP run in the process, with one-off imports and kernel "
+                  f"loading: {time.perf_counter() - t0:.2f} s)")
         t0 = time.perf_counter()
         for _ in range(20):
             problem.objective(start)

@@ -70,9 +70,9 @@ def sinusoid_sweep(model, frequencies, heave_amplitudes, pitch_amplitudes, phase
         Use the fused numba kernel (:mod:`mfflap.sweep_kernel`) when the model is the plain
         Morison model with equal strips; the array version otherwise.
     """
-    grids = np.meshgrid(*(np.atleast_1d(np.asarray(v, dtype=float)) for v in
-                          (frequencies, heave_amplitudes, pitch_amplitudes, phases)),
-                        indexing="ij")
+    axes = [np.atleast_1d(np.asarray(v, dtype=float)).ravel() for v in
+            (frequencies, heave_amplitudes, pitch_amplitudes, phases)]
+    grids = np.meshgrid(*axes, indexing="ij")
     f, h, th, ph = (g.ravel() for g in grids)
     total = f.size
     out = {k: np.empty(total) for k in ("mean_thrust", "mean_power", "efficiency", "max_power",
@@ -87,19 +87,20 @@ def sinusoid_sweep(model, frequencies, heave_amplitudes, pitch_amplitudes, phase
         if type(model) is MorisonModel:
             constants = kernel_constants(model)
     if constants is not None:
-        from mfflap.sweep_kernel import sweep_kernel
+        from mfflap.sweep_kernel import sweep_grid_kernel
 
         u = constants["u"]
         block = max(chunk * 10, 100_000)
-        res = np.empty((total, 6))
+        res = np.empty((total, 5))
         for start in range(0, total, block):
-            sl = slice(start, min(start + block, total))
-            sweep_kernel(f[sl], h[sl], th[sl], ph[sl], n_steps, scheme == "midpoint",
-                         constants["u"], constants["chord"], constants["n_strips"],
-                         constants["k_an"], constants["k_at"], constants["k_dn"],
-                         constants["k_dt"], constants["lbar"], constants["l2bar"], res[sl])
+            stop = min(start + block, total)
+            sweep_grid_kernel(*axes, start, stop, n_steps, scheme == "midpoint",
+                              constants["u"], constants["chord"], constants["n_strips"],
+                              constants["k_an"], constants["k_at"], constants["k_dn"],
+                              constants["k_dt"], constants["lbar"], constants["l2bar"],
+                              res[start:stop])
             if progress is not None:
-                progress(sl.stop, total)
+                progress(stop, total)
         out["mean_thrust"], out["mean_power"], out["max_power"] = res[:, 0], res[:, 1], res[:, 2]
         with np.errstate(divide="ignore", invalid="ignore"):
             out["efficiency"] = np.where(res[:, 1] != 0, u * res[:, 0] / np.where(

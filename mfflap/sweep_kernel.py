@@ -15,25 +15,55 @@ import numpy as np
 
 
 @numba.njit(cache=True, inline="always")
-def _drag_sums(a, b, n, h):
-    """sum |v|v, sum |v|v l and sum |v|^3 over equal strips, v = a + b l (closed form)."""
+def _split(a, b, n, h):
+    """Strips l_k = h (2k - 1), k = 1..n, of v = a + b l: the count m of the first run
+    (one sign), the sign weight w of that run relative to the rest, and the rest's sign sb.
+    Any sum_k sign(v_k) P(v_k, l_k) is w * P(first m strips) + sb * P(all strips)."""
     if b == 0.0:
-        m = n
-        first = 1.0 if a > 0 else (-1.0 if a < 0 else 0.0)
-        sb = 0.0
-    else:
-        zero = -a / b
-        m = math.ceil((zero / h + 1.0) / 2.0) - 1.0
-        m = min(max(m, 0.0), n)
-        sb = 1.0 if b > 0 else -1.0
-        first = -sb
-    w = first - sb
-    s0h, s1h = m, h * m * m
-    s2h = h * h * m * (4.0 * m * m - 1.0) / 3.0
-    s3h = h * h * h * m * m * (2.0 * m * m - 1.0)
-    s0t, s1t = n, h * n * n
-    s2t = h * h * n * (4.0 * n * n - 1.0) / 3.0
-    s3t = h * h * h * n * n * (2.0 * n * n - 1.0)
+        return n, (1.0 if a > 0 else (-1.0 if a < 0 else 0.0)), 0.0
+    zero = -a / b
+    m = math.ceil((zero / h + 1.0) / 2.0) - 1.0
+    m = min(max(m, 0.0), n)
+    sb = 1.0 if b > 0 else -1.0
+    return m, -2.0 * sb, sb
+
+
+@numba.njit(cache=True, inline="always")
+def _power_sums(m, h):
+    """sum_{k<=m} l_k^p for p = 0..3, l_k = h (2k - 1)."""
+    return (m, h * m * m, h * h * m * (4.0 * m * m - 1.0) / 3.0,
+            h * h * h * m * m * (2.0 * m * m - 1.0))
+
+
+@numba.njit(cache=True, inline="always")
+def drag_sums(a, b, n, h):
+    """sum_k |v_k| v_k and sum_k |v_k| v_k l_k over n equal strips, v = a + b l (closed form)."""
+    m, w, sb = _split(a, b, n, h)
+    s0h, s1h, s2h, s3h = _power_sums(m, h)
+    s0t, s1t, s2t, s3t = _power_sums(n, h)
+    aa, ab2, bb = a * a, 2.0 * a * b, b * b
+    q0 = w * (aa * s0h + ab2 * s1h + bb * s2h) + sb * (aa * s0t + ab2 * s1t + bb * s2t)
+    q1 = w * (aa * s1h + ab2 * s2h + bb * s3h) + sb * (aa * s1t + ab2 * s2t + bb * s3t)
+    return q0, q1
+
+
+@numba.njit(cache=True, inline="always")
+def drag_abs_sums(a, b, n, h):
+    """sum_k |v_k| l_k^p for p = 0, 1, 2 (the drag sums' derivatives), closed form."""
+    m, w, sb = _split(a, b, n, h)
+    s0h, s1h, s2h, s3h = _power_sums(m, h)
+    s0t, s1t, s2t, s3t = _power_sums(n, h)
+    return (w * (a * s0h + b * s1h) + sb * (a * s0t + b * s1t),
+            w * (a * s1h + b * s2h) + sb * (a * s1t + b * s2t),
+            w * (a * s2h + b * s3h) + sb * (a * s2t + b * s3t))
+
+
+@numba.njit(cache=True, inline="always")
+def drag_sums_and_cube(a, b, n, h):
+    """:func:`drag_sums` and :func:`drag_cube_sum` with one split of the strips."""
+    m, w, sb = _split(a, b, n, h)
+    s0h, s1h, s2h, s3h = _power_sums(m, h)
+    s0t, s1t, s2t, s3t = _power_sums(n, h)
     aa, ab2, bb = a * a, 2.0 * a * b, b * b
     q0 = w * (aa * s0h + ab2 * s1h + bb * s2h) + sb * (aa * s0t + ab2 * s1t + bb * s2t)
     q1 = w * (aa * s1h + ab2 * s2h + bb * s3h) + sb * (aa * s1t + ab2 * s2t + bb * s3t)
@@ -43,44 +73,99 @@ def _drag_sums(a, b, n, h):
     return q0, q1, cube
 
 
-@numba.njit(parallel=True, cache=True)
-def sweep_kernel(f, ha, ta, ph, n_steps, midpoint, u, chord, n_strips, k_an, k_at, k_dn,
-                 k_dt, lbar, l2bar, out):
-    """Fill ``out[:, 0:6]`` = mean thrust, mean power, max power, energy residual,
-    trailing-edge amplitude, (unused) for every motion.
+@numba.njit(cache=True, inline="always")
+def drag_cube_sum(a, b, n, h):
+    """sum_k |v_k|^3 over n equal strips, v = a + b l (closed form)."""
+    m, w, sb = _split(a, b, n, h)
+    s0h, s1h, s2h, s3h = _power_sums(m, h)
+    s0t, s1t, s2t, s3t = _power_sums(n, h)
+    c0, c1, c2, c3 = a * a * a, 3.0 * a * a * b, 3.0 * a * b * b, b * b * b
+    return (w * (c0 * s0h + c1 * s1h + c2 * s2h + c3 * s3h)
+            + sb * (c0 * s0t + c1 * s1t + c2 * s2t + c3 * s3t))
 
+
+@numba.njit(cache=True)
+def _pitch_sequences(ta, n):
+    """Per pitch amplitude: angle, its sine and cosine, R and A with rate = R / dt and
+    acceleration = A / dt^2 (the discrete harmonic's angles do not depend on dt)."""
+    step = math.pi / n
+    factor = -4.0 * math.sin(step / 2.0) ** 2
+    out = np.empty((ta.shape[0], 5, n))
+    for i in range(ta.shape[0]):
+        s_a = 0.0
+        s_w = 0.0
+        for j in range(n):
+            a = factor * ta[i] * math.sin(step * j)
+            out[i, 4, j] = a
+            s_a += a
+            s_w += (2.0 * (j + 1) - n - 2.0) / 4.0 * a
+        r = -0.5 * s_a
+        th = s_w
+        for j in range(n):
+            out[i, 0, j] = th
+            out[i, 1, j] = math.sin(th)
+            out[i, 2, j] = math.cos(th)
+            out[i, 3, j] = r
+            r += out[i, 4, j]
+            th += r
+    return out
+
+
+@numba.njit(cache=True)
+def _heave_sequences(ph, n):
+    """Per phase, for unit heave amplitude: position P, V and B with velocity = V / dt and
+    acceleration = B / dt^2."""
+    step = math.pi / n
+    factor = -4.0 * math.sin(step / 2.0) ** 2
+    out = np.empty((ph.shape[0], 3, n))
+    for i in range(ph.shape[0]):
+        cp, sph = math.cos(ph[i]), math.sin(ph[i])
+        s_a = 0.0
+        s_w = 0.0
+        for j in range(n):
+            a = factor * (math.sin(step * j) * cp + math.cos(step * j) * sph)
+            out[i, 2, j] = a
+            s_a += a
+            s_w += (2.0 * (j + 1) - n - 2.0) / 4.0 * a
+        v = -0.5 * s_a
+        x = s_w
+        for j in range(n):
+            out[i, 0, j] = x
+            out[i, 1, j] = v
+            v += out[i, 2, j]
+            x += v
+    return out
+
+
+@numba.njit(parallel=True, cache=True)
+def sweep_grid_kernel(f, ha, ta, ph, start, stop, n_steps, midpoint, u, chord, n_strips, k_an,
+                      k_at, k_dn, k_dt, lbar, l2bar, out):
+    """Fill ``out[i - start, 0:5]`` = mean thrust, mean power, max power, energy residual,
+    trailing-edge amplitude for the motions ``start <= i < stop`` of the grid
+    f x ha x ta x ph (C order, like ``np.meshgrid(..., indexing="ij")`` raveled).
+
+    A discrete harmonic of N steps at dt = 1 / (2 N f) has angles and positions that do not
+    depend on f, rates that scale with 1/dt and accelerations with 1/dt^2 (see
+    :func:`mfflap.kinematics.convert.harmonic_to_discrete`): the sequences are computed once
+    per pitch amplitude and per phase, so the loop over the grid needs no sine or cosine.
     k_an = C_an rho V_n, k_at = C_at rho V_t, k_dn = C_Dn rho S_n / (2 n), k_dt = C_Dt rho S_t / 2.
     """
     n = n_steps
     h = chord / (2.0 * n_strips)
-    step = math.pi / n
-    factor_s = -4.0 * math.sin(step / 2.0) ** 2
-    sin_j = np.empty(n)
-    cos_j = np.empty(n)
-    for j in range(n):
-        sin_j[j] = math.sin(step * j)
-        cos_j[j] = math.cos(step * j)
-    for i in numba.prange(f.shape[0]):
-        dt = 1.0 / (2.0 * n * f[i])
-        fac = factor_s / (dt * dt)
-        cp, sph = math.cos(ph[i]), math.sin(ph[i])
-        # x_1 of the closure, for pitch and heave
-        sp = 0.0
-        sh = 0.0
-        wp = 0.0
-        wh = 0.0
-        for j in range(n):
-            ap = fac * ta[i] * sin_j[j]
-            ah = fac * ha[i] * (sin_j[j] * cp + cos_j[j] * sph)
-            sp += ap
-            sh += ah
-            wj = (2.0 * (j + 1) - n - 2.0) / 4.0
-            wp += wj * ap
-            wh += wj * ah
-        rp = -0.5 * dt * sp
-        rh = -0.5 * dt * sh
-        th = dt * dt * wp
-        hp = dt * dt * wh
+    ns = float(n_strips)
+    pitch = _pitch_sequences(ta, n)
+    heave = _heave_sequences(ph, n)
+    nh, nt, npp = ha.shape[0], ta.shape[0], ph.shape[0]
+    for i in numba.prange(start, stop):
+        i_p = i % npp
+        rest = i // npp
+        i_t = rest % nt
+        rest = rest // nt
+        i_h = rest % nh
+        i_f = rest // nh
+        inv_dt = 2.0 * n * f[i_f]
+        inv_dt2 = inv_dt * inv_dt
+        amp = ha[i_h]
         sum_t = 0.0
         sum_p = 0.0
         sum_d = 0.0
@@ -88,42 +173,41 @@ def sweep_kernel(f, ha, ta, ph, n_steps, midpoint, u, chord, n_strips, k_an, k_a
         te_max = -1e300
         te_min = 1e300
         for j in range(n):
-            tdd = fac * ta[i] * sin_j[j]
-            hdd = fac * ha[i] * (sin_j[j] * cp + cos_j[j] * sph)
-            td = rp + 0.5 * dt * tdd if midpoint else rp
-            hd = rh + 0.5 * dt * hdd if midpoint else rh
-            s = math.sin(th)
-            c = math.cos(th)
+            s = pitch[i_t, 1, j]
+            c = pitch[i_t, 2, j]
+            tdd = pitch[i_t, 4, j] * inv_dt2
+            hdd = amp * heave[i_p, 2, j] * inv_dt2
+            if midpoint:
+                td = (pitch[i_t, 3, j] + 0.5 * pitch[i_t, 4, j]) * inv_dt
+                hd = amp * (heave[i_p, 1, j] + 0.5 * heave[i_p, 2, j]) * inv_dt
+            else:
+                td = pitch[i_t, 3, j] * inv_dt
+                hd = amp * heave[i_p, 1, j] * inv_dt
             an = hd * c + u * s
             adn = hdd * c - hd * td * s + u * td * c
             vt = hd * s - u * c
             avt = hdd * s + hd * td * c + u * td * s
-            q0, q1, cube = _drag_sums(an, td, float(n_strips), h)
+            q0, q1, cube = drag_sums_and_cube(an, td, ns, h)
             fn = -k_an * (adn + tdd * lbar) - k_dn * q0
             mo = -k_an * (adn * lbar + tdd * l2bar) - k_dn * q1
             ft = -k_at * avt - k_dt * abs(vt) * vt
-            thrust = fn * s - ft * c
             power = -(fn * c + ft * s) * hd - mo * td
-            sum_t += thrust
+            sum_t += fn * s - ft * c
             sum_p += power
-            sum_d += k_dn * cube + k_dt * abs(vt) ** 3
+            sum_d += k_dn * cube + k_dt * abs(vt) * vt * vt
             if power > pmax:
                 pmax = power
-            te = hp + chord * s
+            te = amp * heave[i_p, 0, j] + chord * s
             te_max = max(te_max, te)
             te_min = min(te_min, te)
-            # advance x_j -> x_{j+1} (semi-implicit Euler)
-            rp += dt * tdd
-            rh += dt * hdd
-            th += dt * rp
-            hp += dt * rh
         mt = sum_t / n
         mp = sum_p / n
-        out[i, 0] = mt
-        out[i, 1] = mp
-        out[i, 2] = pmax
-        out[i, 3] = mp - u * mt - sum_d / n
-        out[i, 4] = max(abs(te_max), abs(te_min))
+        k = i - start
+        out[k, 0] = mt
+        out[k, 1] = mp
+        out[k, 2] = pmax
+        out[k, 3] = mp - u * mt - sum_d / n
+        out[k, 4] = max(abs(te_max), abs(te_min))
 
 
 def kernel_constants(model) -> dict[str, float] | None:

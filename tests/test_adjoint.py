@@ -35,19 +35,90 @@ def complex_step(problem, d, h=1e-30):
     return out
 
 
+@pytest.mark.parametrize("compiled", [True, False], ids=["kernel", "arrays"])
 @pytest.mark.parametrize("scheme", ["paper", "midpoint"])
 @pytest.mark.parametrize("beta", [0.0, 0.5, 1.0])
-def test_adjoint_matches_complex_step(scheme, beta):
+def test_adjoint_matches_complex_step(scheme, beta, compiled):
     d = perturbed_motion()
     # P_max = 30 W and h_max = 0.4 m make both penalties active on this motion
     problem = FlappingProblem(MorisonModel(), beta=beta, max_power=30.0, max_heave=0.4,
-                              smoothing_pitch=1e-5, smoothing_heave=1e-3, scheme=scheme)
+                              smoothing_pitch=1e-5, smoothing_heave=1e-3, scheme=scheme,
+                              compiled=compiled)
+    assert (problem._kernel(d) is not None) == compiled
     state = d.states(scheme)
     assert np.max(np.abs(state.heave_position)) > 0.4
     adj = problem.gradient(d).flat()
     cs = complex_step(problem, d)
     assert np.max(np.abs(adj - cs)) <= 1e-10 * np.max(np.abs(cs))
     assert abs(adj[-1] - cs[-1]) <= 1e-10 * abs(cs[-1])  # the time-step component
+
+
+@pytest.mark.parametrize("scheme", ["paper", "midpoint"])
+@pytest.mark.parametrize("n_steps", [2, 3, 24, 301])
+def test_compiled_kernel_equals_the_array_code(scheme, n_steps):
+    """Objective, gradient and the packed entry point of the numba kernel agree with the
+    array implementation (the reference) to rounding, penalties active."""
+    rng = np.random.default_rng(n_steps)
+    d0 = harmonic_to_discrete(1.2, 0.45, np.deg2rad(35), 1.4, n_steps)
+    d = DiscreteMotion(d0.pitch_acceleration * (1 + 0.2 * rng.normal(size=n_steps)),
+                       d0.heave_acceleration * (1 + 0.2 * rng.normal(size=n_steps)),
+                       d0.time_step)
+    kw = dict(beta=0.3, max_power=30.0, max_heave=0.4, smoothing_pitch=1e-5,
+              smoothing_heave=1e-3, scheme=scheme)
+    fast = FlappingProblem(MorisonModel(), compiled=True, **kw)
+    slow = FlappingProblem(MorisonModel(), compiled=False, **kw)
+    j_ref, g_ref = float(slow.objective(d)), slow.gradient(d).flat()
+    assert np.isclose(fast.objective(d), j_ref, rtol=1e-13)
+    np.testing.assert_allclose(fast.gradient(d).flat(), g_ref, rtol=0,
+                               atol=1e-12 * np.abs(g_ref).max())
+    j, g = fast.packed_value_and_gradient(as_vector_any(d))
+    assert np.isclose(j, j_ref, rtol=1e-13)
+    np.testing.assert_allclose(g, g_ref, rtol=0, atol=1e-12 * np.abs(g_ref).max())
+    j_only, none = fast.packed_value_and_gradient(as_vector_any(d), want_gradient=False)
+    assert none is None and np.isclose(j_only, j_ref, rtol=1e-13)
+
+
+def as_vector_any(d):
+    return np.concatenate([d.pitch_acceleration, d.heave_acceleration, [d.time_step]])
+
+
+def test_complex_inputs_take_the_array_code_and_other_models_are_refused():
+    """The adjoint's partials are those of the four Morison terms: a model with another
+    term is refused (its gradient would silently miss the term); complex steps and batches
+    take the array code."""
+    from mfflap.hydro.base import ForceTerm
+    from mfflap.hydro.loads import Loads
+
+    class LinearHeaveDamping(ForceTerm):
+        name = "linear_heave_damping"
+
+        def regressor(self, state):
+            z = 0 * state.heave_velocity
+            return Loads(state.time, -state.heave_velocity, z, z)
+
+    with pytest.raises(ConfigError, match="linear_heave_damping"):
+        FlappingProblem(MorisonModel() + LinearHeaveDamping())
+    d = perturbed_motion(1)
+    problem = FlappingProblem(MorisonModel())
+    assert problem._kernel(d) is not None
+    assert problem._kernel(DiscreteMotion(d.pitch_acceleration + 0j, d.heave_acceleration,
+                                          d.time_step)) is None
+    batch = DiscreteMotion(np.stack([d.pitch_acceleration] * 2),
+                           np.stack([d.heave_acceleration] * 2), np.full(2, d.time_step))
+    assert problem._kernel(batch) is None
+    np.testing.assert_allclose(problem.gradient(batch).pitch_acceleration[1],
+                               problem.gradient(d).pitch_acceleration, rtol=1e-12)
+
+
+def test_packed_entry_point_refuses_bad_controls():
+    from mfflap.errors import MotionError
+
+    problem = FlappingProblem(MorisonModel())
+    x = as_vector(perturbed_motion())
+    problem.packed_value_and_gradient(x)
+    for bad in (np.r_[x[:-1], -1e-3], np.r_[np.nan, x[1:]]):
+        with pytest.raises(MotionError):
+            problem.packed_value_and_gradient(bad)
 
 
 def test_adjoint_matches_central_differences_away_from_kinks():

@@ -141,13 +141,11 @@ def optimise_sqp(problem: FlappingProblem, start: DiscreteMotion, *, min_period:
         stage = replace_problem(problem, penalty_power=problem.penalty_power * mult)
 
         def fun(xs, stage=stage):
-            m = _unpack(xs * scale, n)
-            j = float(stage.objective(m))
-            g = stage.gradient(m).flat() * scale
-            return j, g
+            j, g = stage.packed_value_and_gradient(xs * scale)
+            return j, g * scale
 
         def record(xs, stage=stage):
-            history.append(float(stage.objective(_unpack(xs * scale, n))))
+            history.append(stage.packed_value_and_gradient(xs * scale, False)[0])
             if callback is not None:
                 callback(len(history), history[-1])
 
@@ -169,7 +167,7 @@ def replace_problem(problem: FlappingProblem, **changes) -> FlappingProblem:
     """A copy of ``problem`` with some settings changed (validated again)."""
     kw = {k: getattr(problem, k) for k in ("beta", "max_power", "max_heave", "penalty_power",
                                            "penalty_heave", "smoothing_pitch",
-                                           "smoothing_heave", "scheme")}
+                                           "smoothing_heave", "scheme", "compiled")}
     kw.update(changes)
     return FlappingProblem(problem.model, **kw)
 

@@ -53,6 +53,11 @@ def _abs(x):
     return x * np.sign(x.real) if np.iscomplexobj(x) else np.abs(x)
 
 
+_NO_GRAD = np.empty(0)
+_MORISON_TERMS = ("normal_added_mass", "tangential_added_mass", "normal_drag",
+                  "tangential_drag")
+
+
 class FlappingProblem:
     """beta-weighted thrust/power objective with power, heave and smoothness penalties.
 
@@ -67,12 +72,16 @@ class FlappingProblem:
     penalty_heave : sigma_h >= 0, N/m^2 (in units of J)
     smoothing_pitch, smoothing_heave : eps_theta, eps_h >= 0
     scheme : ``"paper"`` or ``"midpoint"``
+    compiled
+        Evaluate single real motions with the compiled kernel
+        (:mod:`mfflap.optimisation.adjoint_kernel`) when the model allows it; the array code
+        below is the reference and serves complex steps, batches and other models.
     """
 
     def __init__(self, model: MorisonModel, beta: float = 0.0, max_power: float = 50.0,
                  max_heave: float = 0.5, penalty_power: float = 10.0,
                  penalty_heave: float = 1.0e4, smoothing_pitch: float = 1e-6,
-                 smoothing_heave: float = 1e-4, scheme: str = "paper"):
+                 smoothing_heave: float = 1e-4, scheme: str = "paper", compiled: bool = True):
         checks = [
             ("beta", beta, 0 <= beta <= 1, "[0, 1]"),
             ("max_power", max_power, max_power > 0, "(0, inf) W"),
@@ -88,6 +97,11 @@ class FlappingProblem:
                                   key=f"optimisation.{name}")
         if scheme not in SCHEMES:
             raise ConfigError(f"value {scheme!r}; allowed: {SCHEMES}", key="optimisation.scheme")
+        names = sorted(getattr(model, "coefficients", {}))
+        if not isinstance(model, MorisonModel) or names != sorted(_MORISON_TERMS):
+            raise ConfigError(
+                f"the optimiser's adjoint covers the four Morison terms only; the model "
+                f"{getattr(model, 'name', model)!r} has terms {names}", key="model")
         self.model = model
         self.beta = float(beta)
         self.max_power = float(max_power)
@@ -97,6 +111,22 @@ class FlappingProblem:
         self.smoothing_pitch = float(smoothing_pitch)
         self.smoothing_heave = float(smoothing_heave)
         self.scheme = scheme
+        self.compiled = bool(compiled)
+        self._kernel_args: tuple | bool | None = False  # False: not looked up yet
+
+    def _kernel(self, motion: DiscreteMotion) -> tuple | None:
+        """The compiled kernel's constants if it can evaluate ``motion``, else None."""
+        if not self.compiled:
+            return None
+        pa, ha = motion.pitch_acceleration, motion.heave_acceleration
+        if (pa.ndim != 1 or np.ndim(motion.time_step) != 0 or np.iscomplexobj(pa)
+                or np.iscomplexobj(ha) or np.iscomplexobj(motion.time_step)):
+            return None
+        if self._kernel_args is False:
+            from mfflap.optimisation.adjoint_kernel import problem_constants
+
+            self._kernel_args = problem_constants(self)
+        return self._kernel_args  # type: ignore[return-value]
 
     # -- objective ---------------------------------------------------------------------------
     def stage_costs(self, motion: DiscreteMotion) -> np.ndarray:
@@ -120,6 +150,14 @@ class FlappingProblem:
 
     def objective(self, motion: DiscreteMotion):
         """J = mean_j L_j + J_s, shape (...)."""
+        args = self._kernel(motion)
+        if args is not None:
+            from mfflap.optimisation.adjoint_kernel import objective_and_gradient
+
+            return objective_and_gradient(
+                np.ascontiguousarray(motion.pitch_acceleration, dtype=float),
+                np.ascontiguousarray(motion.heave_acceleration, dtype=float),
+                float(motion.time_step), self.scheme == "midpoint", False, *args, _NO_GRAD)
         return self.stage_costs(motion).mean(axis=-1) + self.smoothness(motion)
 
     # -- gradient ----------------------------------------------------------------------------
@@ -181,8 +219,58 @@ class FlappingProblem:
         out["hp"] = self.penalty_heave * excess_h * np.sign(hp)
         return out
 
+    def value_and_gradient(self, motion: DiscreteMotion) -> tuple[float, np.ndarray]:
+        """J and the flat gradient [d/d pitch (N), d/d heave (N), d/d dt] of one motion, in
+        one pass when the compiled kernel applies (what the optimisers call)."""
+        args = self._kernel(motion)
+        if args is None:
+            return float(self.objective(motion)), self.gradient(motion).flat()
+        from mfflap.optimisation.adjoint_kernel import objective_and_gradient
+
+        out = np.empty(2 * motion.n_steps + 1)
+        value = objective_and_gradient(
+            np.ascontiguousarray(motion.pitch_acceleration, dtype=float),
+            np.ascontiguousarray(motion.heave_acceleration, dtype=float),
+            float(motion.time_step), self.scheme == "midpoint", True, *args, out)
+        return value, out
+
+    def packed_value_and_gradient(self, z: np.ndarray, want_gradient: bool = True
+                                  ) -> tuple[float, np.ndarray | None]:
+        """J and its flat gradient at the packed controls z = [pitch (N), heave (N), dt].
+
+        The optimisers' entry point: with the compiled kernel it skips building a
+        :class:`DiscreteMotion` (whose input checks cost more than the kernel at N = 50).
+        """
+        z = np.asarray(z, dtype=float)
+        n = (z.size - 1) // 2
+        motion = None
+        if self._kernel_args is False or not np.isfinite(z).all() or z[-1] <= 0 or n < 2:
+            motion = DiscreteMotion(z[:n], z[n:2 * n], float(z[-1]))  # validates, or raises
+        args = self._kernel(motion) if motion is not None else (
+            self._kernel_args if self.compiled else None)
+        if args is None:
+            motion = motion or DiscreteMotion(z[:n], z[n:2 * n], float(z[-1]))
+            if not want_gradient:
+                return float(self.objective(motion)), None
+            return float(self.objective(motion)), self.adjoint_gradient(motion).flat()
+        from mfflap.optimisation.adjoint_kernel import objective_and_gradient
+
+        out = np.empty(2 * n + 1) if want_gradient else _NO_GRAD
+        value = objective_and_gradient(np.ascontiguousarray(z[:n]),
+                                       np.ascontiguousarray(z[n:2 * n]), float(z[-1]),
+                                       self.scheme == "midpoint", want_gradient, *args, out)
+        return value, (out if want_gradient else None)
+
     def gradient(self, motion: DiscreteMotion) -> Gradient:
         """Exact gradient of :meth:`objective` by the discrete adjoint, O(N)."""
+        n = motion.n_steps
+        if self._kernel(motion) is not None:
+            _, flat = self.value_and_gradient(motion)
+            return Gradient(flat[:n], flat[n:2 * n], np.asarray(flat[2 * n]))
+        return self.adjoint_gradient(motion)
+
+    def adjoint_gradient(self, motion: DiscreteMotion) -> Gradient:
+        """The array implementation of the adjoint (any batch shape; the reference)."""
         n = motion.n_steps
         dt = np.asarray(motion.time_step, dtype=float)
         dtc = dt[..., None]

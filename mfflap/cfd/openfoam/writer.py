@@ -40,6 +40,15 @@ class MeshSpec:
     radial_expansion: float
     radius_chords: float
 
+    def __post_init__(self) -> None:
+        for key in ("n_chord", "n_edge", "n_radial"):
+            if int(getattr(self, key)) < 1:
+                raise ConfigError(f"mesh {self.name!r}: {key} must be >= 1, got "
+                                  f"{getattr(self, key)!r}", key=key)
+        if not self.radial_expansion > 0 or not self.radius_chords > 1:
+            raise ConfigError(f"mesh {self.name!r}: radial_expansion must be > 0 and "
+                              "radius_chords > 1", key="radial_expansion")
+
     @property
     def n_cells(self) -> int:
         """Cells of the one-cell-thick mesh."""
@@ -64,6 +73,22 @@ class SolverSettings:
     initial_time_step: float = 1e-4
     turbulence_intensity: float = 0.01
     write_interval: float = 1.0e9  # s: fields are written only at the end (and on restart)
+    pressure_solver: str = "PCG"
+    pressure_tolerance: float = 1e-7
+
+    def __post_init__(self) -> None:
+        if self.pressure_solver not in ("PCG", "GAMG"):
+            raise ConfigError(f"pressure_solver must be PCG or GAMG, got {self.pressure_solver!r}",
+                              key="pressure_solver")
+        if not self.max_courant > 0:
+            raise ConfigError(f"max_courant must be > 0, got {self.max_courant!r}",
+                              key="max_courant")
+        if self.n_outer_correctors < 1 or self.n_correctors < 1:
+            raise ConfigError("n_outer_correctors and n_correctors must be >= 1",
+                              key="n_outer_correctors")
+        if not self.pressure_tolerance > 0:
+            raise ConfigError(f"pressure_tolerance must be > 0, got {self.pressure_tolerance!r}",
+                              key="pressure_tolerance")
 
 
 def motion_table(motion: Motion, end_time: float, rows_per_second: float = 400.0,
@@ -94,7 +119,8 @@ def format_motion_table(rows: np.ndarray) -> str:
     return "\n".join(lines) + "\n"
 
 
-def write_case(case_dir: str | Path, motion: Motion, end_time: float, mesh: str = "coarse",
+def write_case(case_dir: str | Path, motion: Motion, end_time: float,
+               mesh: str | MeshSpec = "coarse",
                plate: Plate | None = None, fluid: Fluid | None = None,
                stream: FreeStream | None = None, solver: SolverSettings | None = None,
                depth: float | None = None, ramp_time: float = 0.0,
@@ -109,10 +135,13 @@ def write_case(case_dir: str | Path, motion: Motion, end_time: float, mesh: str 
     """
     plate, fluid, stream = plate or Plate(), fluid or Fluid(), stream or FreeStream()
     solver = solver or SolverSettings()
-    specs = mesh_specs()
-    if mesh not in specs:
-        raise ConfigError(f"unknown mesh {mesh!r}; allowed: {', '.join(specs)}", key="mesh")
-    spec = specs[mesh]
+    if isinstance(mesh, MeshSpec):
+        spec = mesh
+    else:
+        specs = mesh_specs()
+        if mesh not in specs:
+            raise ConfigError(f"unknown mesh {mesh!r}; allowed: {', '.join(specs)}", key="mesh")
+        spec = specs[mesh]
     depth = plate.span if depth is None else depth
     case_dir = Path(case_dir)
     case_dir.mkdir(parents=True, exist_ok=True)
@@ -130,7 +159,8 @@ def write_case(case_dir: str | Path, motion: Motion, end_time: float, mesh: str 
         "kinematic_viscosity": fluid.kinematic_viscosity, "velocity": u, "k": k,
         "epsilon": epsilon, "n_outer_correctors": solver.n_outer_correctors,
         "n_correctors": solver.n_correctors, "y_plus": y_plus, "y_plus_interval": 20,
-        "n_procs": 2,
+        "n_procs": 2, "pressure_solver": solver.pressure_solver,
+        "pressure_tolerance": solver.pressure_tolerance,
     }
     env = jinja2.Environment(undefined=jinja2.StrictUndefined, keep_trailing_newline=True)
     src = template_dir()
@@ -147,7 +177,7 @@ def write_case(case_dir: str | Path, motion: Motion, end_time: float, mesh: str 
     rows = motion_table(motion, end_time, ramp_time=ramp_time)
     (case_dir / "constant" / "motion.dat").write_text(format_motion_table(rows))
     (case_dir / "mfflap_case.toml").write_text(
-        f'mesh = "{mesh}"\nend_time = {end_time!r}\ndepth = {depth!r}\nspan = {plate.span!r}\n'
+        f'mesh = "{spec.name}"\nend_time = {end_time!r}\ndepth = {depth!r}\nspan = {plate.span!r}\n'
         f"ramp_time = {ramp_time!r}\nn_cells = {spec.n_cells}\n"
     )
     return case_dir
