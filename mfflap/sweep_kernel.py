@@ -74,6 +74,20 @@ def drag_sums_and_cube(a, b, n, h):
 
 
 @numba.njit(cache=True, inline="always")
+def drag_sums_and_abs(a, b, n, h):
+    """:func:`drag_sums` and :func:`drag_abs_sums` with one split of the strips."""
+    m, w, sb = _split(a, b, n, h)
+    s0h, s1h, s2h, s3h = _power_sums(m, h)
+    s0t, s1t, s2t, s3t = _power_sums(n, h)
+    aa, ab2, bb = a * a, 2.0 * a * b, b * b
+    q0 = w * (aa * s0h + ab2 * s1h + bb * s2h) + sb * (aa * s0t + ab2 * s1t + bb * s2t)
+    q1 = w * (aa * s1h + ab2 * s2h + bb * s3h) + sb * (aa * s1t + ab2 * s2t + bb * s3t)
+    return (q0, q1, w * (a * s0h + b * s1h) + sb * (a * s0t + b * s1t),
+            w * (a * s1h + b * s2h) + sb * (a * s1t + b * s2t),
+            w * (a * s2h + b * s3h) + sb * (a * s2t + b * s3t))
+
+
+@numba.njit(cache=True, inline="always")
 def drag_cube_sum(a, b, n, h):
     """sum_k |v_k|^3 over n equal strips, v = a + b l (closed form)."""
     m, w, sb = _split(a, b, n, h)

@@ -5,7 +5,7 @@ The same J and the same adjoint as :class:`mfflap.optimisation.problem.FlappingP
 as three O(N) loops: the forward sweep of the semi-implicit Euler steps, the stage partials,
 and the backward adjoint sweep. It covers the four-term Morison model with equal strips
 (:func:`mfflap.sweep_kernel.kernel_constants`); the drag strip sums are closed-form
-(:func:`mfflap.sweep_kernel.drag_sums`). Tested against the array code to rounding.
+(:func:`mfflap.sweep_kernel.drag_sums_and_abs`). Tested against the array code to rounding.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ import math
 import numba
 import numpy as np
 
-from mfflap.sweep_kernel import drag_abs_sums, drag_sums
+from mfflap.sweep_kernel import drag_sums, drag_sums_and_abs
 
 
 @numba.njit(cache=True)
@@ -43,101 +43,92 @@ def objective_and_gradient(pitch_acc, heave_acc, dt, midpoint, want_gradient, u,
         sh += heave_acc[j]
         wp += wj * pitch_acc[j]
         wh += wj * heave_acc[j]
-    rate_p = np.empty(n)
-    rate_h = np.empty(n)
-    ang = np.empty(n)
-    pos = np.empty(n)
+    # one forward pass: states, stage costs and (with the gradient) the stage partials,
+    # kept per step in one row of ``work`` = [pitch rate, heave velocity, dL/d theta,
+    # dL/d theta rate, dL/d theta acc, dL/d heave velocity, dL/d heave acc, dL/d heave]
+    work = np.empty((n if want_gradient else 0, 8))
     rp = -0.5 * dt * sp
     rh = -0.5 * dt * sh
     th = dt * dt * wp
     hp = dt * dt * wh
-    for j in range(n):
-        rate_p[j] = rp
-        rate_h[j] = rh
-        ang[j] = th
-        pos[j] = hp
-        rp += dt * pitch_acc[j]
-        rh += dt * heave_acc[j]
-        th += dt * rp
-        hp += dt * rh
-    # stage costs and their partials
     total = 0.0
-    g_th = np.empty(n)
-    g_td = np.empty(n)
-    g_tdd = np.empty(n)
-    g_hd = np.empty(n)
-    g_hdd = np.empty(n)
-    g_hp = np.empty(n)
     w_thrust = -(1.0 - beta)
     for j in range(n):
         tdd = pitch_acc[j]
         hdd = heave_acc[j]
-        td = rate_p[j] + 0.5 * dt * tdd if midpoint else rate_p[j]
-        hd = rate_h[j] + 0.5 * dt * hdd if midpoint else rate_h[j]
-        s = math.sin(ang[j])
-        c = math.cos(ang[j])
+        td = rp + 0.5 * dt * tdd if midpoint else rp
+        hd = rh + 0.5 * dt * hdd if midpoint else rh
+        s = math.sin(th)
+        c = math.cos(th)
         an = hd * c + u * s
         adn = hdd * c - hd * td * s + u * td * c
         vt = hd * s - u * c
         avt = hdd * s + hd * td * c + u * td * s
-        q0, q1 = drag_sums(an, td, ns, h)
+        if want_gradient:
+            q0, q1, a0, a1, a2 = drag_sums_and_abs(an, td, ns, h)
+        else:
+            q0, q1 = drag_sums(an, td, ns, h)
+            a0 = a1 = a2 = 0.0
         fn = -k_an * (adn + tdd * lbar) - k_dn * q0
         mo = -k_an * (adn * lbar + tdd * l2bar) - k_dn * q1
         ft = -k_at * avt - k_dt * abs(vt) * vt
         thrust = fn * s - ft * c
         power = -(fn * c + ft * s) * hd - mo * td
         excess_p = max(power - max_power, 0.0)
-        excess_h = max(abs(pos[j]) - max_heave, 0.0)
+        excess_h = max(abs(hp) - max_heave, 0.0)
         total += (w_thrust * thrust + beta * power + 0.5 * penalty_power * excess_p * excess_p
                   + 0.5 * penalty_heave * excess_h * excess_h)
-        if not want_gradient:
-            continue
-        a0, a1, a2 = drag_abs_sums(an, td, ns, h)
-        d0, d1, d2 = 2.0 * a0, 2.0 * a1, 2.0 * a2
-        w_power = beta + penalty_power * excess_p
-        abs_vt2 = 2.0 * abs(vt)
-        fc_fs = fn * c + ft * s
-        # theta
-        d_an = -hd * s + u * c
-        d_adn = -hdd * s - hd * td * c - u * td * s
-        fn_z = -k_an * d_adn - k_dn * d0 * d_an
-        mo_z = -k_an * d_adn * lbar - k_dn * d1 * d_an
-        ft_z = -k_at * adn - k_dt * abs_vt2 * an
-        t_z = fn_z * s - ft_z * c + fc_fs
-        p_z = -(fn_z * c + ft_z * s) * hd - mo_z * td - (-fn * s + ft * c) * hd
-        g_th[j] = w_thrust * t_z + w_power * p_z
-        # theta rate
-        d_adn = -hd * s + u * c
-        fn_z = -k_an * d_adn - k_dn * d1
-        mo_z = -k_an * d_adn * lbar - k_dn * d2
-        ft_z = -k_at * an
-        t_z = fn_z * s - ft_z * c
-        p_z = -(fn_z * c + ft_z * s) * hd - mo_z * td - mo
-        g_td[j] = w_thrust * t_z + w_power * p_z
-        # theta acceleration
-        fn_z = -k_an * lbar
-        mo_z = -k_an * l2bar
-        t_z = fn_z * s
-        p_z = -(fn_z * c) * hd - mo_z * td
-        g_tdd[j] = w_thrust * t_z + w_power * p_z
-        # heave velocity
-        d_adn = -td * s
-        fn_z = -k_an * d_adn - k_dn * d0 * c
-        mo_z = -k_an * d_adn * lbar - k_dn * d1 * c
-        ft_z = -k_at * td * c - k_dt * abs_vt2 * s
-        t_z = fn_z * s - ft_z * c
-        p_z = -(fn_z * c + ft_z * s) * hd - mo_z * td - fc_fs
-        g_hd[j] = w_thrust * t_z + w_power * p_z
-        # heave acceleration
-        fn_z = -k_an * c
-        mo_z = -k_an * c * lbar
-        ft_z = -k_at * s
-        t_z = fn_z * s - ft_z * c
-        p_z = -(fn_z * c + ft_z * s) * hd - mo_z * td
-        g_hdd[j] = w_thrust * t_z + w_power * p_z
-        # heave position (penalty only)
-        sgn = 1.0 if pos[j] > 0 else (-1.0 if pos[j] < 0 else 0.0)
-        g_hp[j] = penalty_heave * excess_h * sgn
+        if want_gradient:
+            d0, d1, d2 = 2.0 * a0, 2.0 * a1, 2.0 * a2
+            w_power = beta + penalty_power * excess_p
+            abs_vt2 = 2.0 * abs(vt)
+            fc_fs = fn * c + ft * s
+            row = work[j]
+            row[0] = rp
+            row[1] = rh
+            # theta
+            d_an = -hd * s + u * c
+            d_adn = -hdd * s - hd * td * c - u * td * s
+            fn_z = -k_an * d_adn - k_dn * d0 * d_an
+            mo_z = -k_an * d_adn * lbar - k_dn * d1 * d_an
+            ft_z = -k_at * adn - k_dt * abs_vt2 * an
+            t_z = fn_z * s - ft_z * c + fc_fs
+            p_z = -(fn_z * c + ft_z * s) * hd - mo_z * td - (-fn * s + ft * c) * hd
+            row[2] = w_thrust * t_z + w_power * p_z
+            # theta rate
+            d_adn = -hd * s + u * c
+            fn_z = -k_an * d_adn - k_dn * d1
+            mo_z = -k_an * d_adn * lbar - k_dn * d2
+            ft_z = -k_at * an
+            t_z = fn_z * s - ft_z * c
+            p_z = -(fn_z * c + ft_z * s) * hd - mo_z * td - mo
+            row[3] = w_thrust * t_z + w_power * p_z
+            # theta acceleration
+            fn_z = -k_an * lbar
+            mo_z = -k_an * l2bar
+            row[4] = w_thrust * fn_z * s + w_power * (-(fn_z * c) * hd - mo_z * td)
+            # heave velocity
+            d_adn = -td * s
+            fn_z = -k_an * d_adn - k_dn * d0 * c
+            mo_z = -k_an * d_adn * lbar - k_dn * d1 * c
+            ft_z = -k_at * td * c - k_dt * abs_vt2 * s
+            t_z = fn_z * s - ft_z * c
+            p_z = -(fn_z * c + ft_z * s) * hd - mo_z * td - fc_fs
+            row[5] = w_thrust * t_z + w_power * p_z
+            # heave acceleration
+            fn_z = -k_an * c
+            mo_z = -k_an * c * lbar
+            ft_z = -k_at * s
+            t_z = fn_z * s - ft_z * c
+            p_z = -(fn_z * c + ft_z * s) * hd - mo_z * td
+            row[6] = w_thrust * t_z + w_power * p_z
+            # heave position (penalty only)
+            row[7] = penalty_heave * excess_h * (1.0 if hp > 0 else (-1.0 if hp < 0 else 0.0))
+        # advance x_j -> x_{j+1} (semi-implicit Euler)
+        rp += dt * tdd
+        rh += dt * hdd
+        th += dt * rp
+        hp += dt * rh
     value = total / n
     # smoothness with its wrap term
     for eps, acc in ((smoothing_pitch, pitch_acc), (smoothing_heave, heave_acc)):
@@ -147,40 +138,41 @@ def objective_and_gradient(pitch_acc, heave_acc, dt, midpoint, want_gradient, u,
         value += 0.5 * eps * ss
     if not want_gradient:
         return value
+    # backward adjoint sweep of both degrees of freedom, lambda_{N+1} = 0
+    inv_n = 1.0 / n
     grad_dt = 0.0
-    for dof in range(2):
-        if dof == 0:
-            acc, rate, g_rate, g_pos, g_acc, eps = (pitch_acc, rate_p, g_td, g_th, g_tdd,
-                                                    smoothing_pitch)
-            off = 0
-        else:
-            acc, rate, g_rate, g_pos, g_acc, eps = (heave_acc, rate_h, g_hd, g_hp, g_hdd,
-                                                    smoothing_heave)
-            off = n
-        # backward sweep, lambda_{N+1} = 0
-        lam_p_next = 0.0
-        lam_r_next = 0.0
-        sum_acc = 0.0
-        sum_wacc = 0.0
-        for j in range(n - 1, -1, -1):
-            gr = g_rate[j] / n
-            ga = g_acc[j] / n
-            if midpoint:  # hydro rate = rate_j + dt acc_j / 2
-                ga += 0.5 * dt * gr
-                grad_dt += 0.5 * gr * acc[j]
-            grad_out[off + j] = ga + dt * lam_r_next + dt * dt * lam_p_next
-            grad_dt += acc[j] * lam_r_next + (rate[j] + 2.0 * dt * acc[j]) * lam_p_next
-            lam_p = g_pos[j] / n + lam_p_next
-            lam_r = gr + dt * lam_p_next + lam_r_next
-            lam_p_next = lam_p
-            lam_r_next = lam_r
-            sum_acc += acc[j]
-            sum_wacc += (2.0 * (j + 1) - n - 2.0) / 4.0 * acc[j]
-        # chain through x_1(u, dt): rate_1 = -(dt/2) sum acc, pos_1 = dt^2 sum w_j acc_j
-        for j in range(n):
-            wj = (2.0 * (j + 1) - n - 2.0) / 4.0
-            grad_out[off + j] += -0.5 * dt * lam_r_next + dt * dt * wj * lam_p_next
-        grad_dt += -0.5 * sum_acc * lam_r_next + 2.0 * dt * sum_wacc * lam_p_next
+    lp_p = 0.0  # pitch: lambda of the angle and of the rate at step j+1
+    lr_p = 0.0
+    lp_h = 0.0  # heave: lambda of the position and of the velocity
+    lr_h = 0.0
+    for j in range(n - 1, -1, -1):
+        row = work[j]
+        ap = pitch_acc[j]
+        ah = heave_acc[j]
+        gr_p = row[3] * inv_n
+        gr_h = row[5] * inv_n
+        ga_p = row[4] * inv_n
+        ga_h = row[6] * inv_n
+        if midpoint:  # hydro rate = rate_j + dt acc_j / 2
+            ga_p += 0.5 * dt * gr_p
+            ga_h += 0.5 * dt * gr_h
+            grad_dt += 0.5 * (gr_p * ap + gr_h * ah)
+        grad_out[j] = ga_p + dt * lr_p + dt * dt * lp_p
+        grad_out[n + j] = ga_h + dt * lr_h + dt * dt * lp_h
+        grad_dt += (ap * lr_p + (row[0] + 2.0 * dt * ap) * lp_p
+                    + ah * lr_h + (row[1] + 2.0 * dt * ah) * lp_h)
+        lr_p += gr_p + dt * lp_p
+        lr_h += gr_h + dt * lp_h
+        lp_p += row[2] * inv_n
+        lp_h += row[7] * inv_n
+    # chain through x_1(u, dt): rate_1 = -(dt/2) sum acc, angle_1 = dt^2 sum_j w_j acc_j;
+    # and the smoothness term
+    grad_dt += -0.5 * (sp * lr_p + sh * lr_h) + 2.0 * dt * (wp * lp_p + wh * lp_h)
+    for j in range(n):
+        wj = (2.0 * (j + 1) - n - 2.0) / 4.0
+        grad_out[j] += -0.5 * dt * lr_p + dt * dt * wj * lp_p
+        grad_out[n + j] += -0.5 * dt * lr_h + dt * dt * wj * lp_h
+    for off, eps, acc in ((0, smoothing_pitch, pitch_acc), (n, smoothing_heave, heave_acc)):
         if eps != 0.0:
             for j in range(n - 1):
                 d = acc[j + 1] - acc[j]
