@@ -157,3 +157,25 @@ def test_collapsed_time_step_is_retried_with_a_lower_courant_limit(tmp_path):
     assert "div(phi,epsilon) Gauss upwind;" in schemes
     assert "div(phi,U)      Gauss linearUpwind grad(U);" in schemes  # momentum untouched
     assert (case_dir / "log.pimpleFoam").read_text().count("Starting time loop") == 3
+
+
+def test_manifest_written_before_the_pressure_solver_setting_still_resumes(tmp_path):
+    """campaign.toml files written before pressure_solver/pressure_tolerance existed describe
+    PCG runs at 1e-7: they resume with those settings and refuse GAMG."""
+    from dataclasses import asdict, replace
+
+    from mfflap.campaign.execute import CampaignSetup, _write_manifest
+    from mfflap.toml_io import dumps, read_toml
+
+    cases = grid_cases(IdentificationGrid(frequencies=(1.0,), heave_amplitudes=(0.1,),
+                                          phases_deg=(90.0,)))
+    setup = CampaignSetup()
+    old = setup.as_dict()
+    old["solver"] = {k: v for k, v in asdict(setup.solver).items()
+                     if k not in ("pressure_solver", "pressure_tolerance")}
+    (tmp_path / "campaign.toml").write_text(dumps({"setup": old, "cases": {}}))
+    _write_manifest(tmp_path, cases, setup)  # same runs: accepted
+    assert read_toml(tmp_path / "campaign.toml")["setup"]["solver"]["pressure_solver"] == "PCG"
+    gamg = replace(setup, solver=replace(setup.solver, pressure_solver="GAMG"))
+    with pytest.raises(ConfigError, match="another setup"):
+        _write_manifest(tmp_path, cases, gamg)

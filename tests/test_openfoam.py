@@ -293,3 +293,49 @@ def test_restart_into_the_same_time_folder_supersedes_a_collapsed_segment(tmp_pa
     reference = read_forces(copy_real_case(tmp_path / "ref"))
     np.testing.assert_array_equal(merged.time, reference.time)
     np.testing.assert_array_equal(merged.force, reference.force)
+
+
+@pytest.mark.openfoam
+def test_gamg_and_pcg_pressure_solvers_give_the_same_forces_on_a_custom_mesh(tmp_path):
+    """A MeshSpec not in meshes.toml runs; the pressure solver changes cost, not forces."""
+    from dataclasses import replace
+
+    from mfflap.cfd.openfoam.writer import MeshSpec, SolverSettings
+
+    spec = MeshSpec("tiny", n_chord=20, n_edge=4, n_radial=20, radial_expansion=100.0,
+                    radius_chords=8.0)
+    forces = {}
+    for solver in ("PCG", "GAMG"):
+        settings = replace(SolverSettings(), pressure_solver=solver)
+        case = write_case(tmp_path / solver, MOTION, end_time=0.03, mesh=spec, solver=settings)
+        assert f"solver {solver};" in (case / "system/fvSolution").read_text()
+        assert 'mesh = "tiny"' in (case / "mfflap_case.toml").read_text()
+        run_case(case, timeout_s=300)
+        forces[solver] = read_forces(case)
+    a, b = forces["PCG"], forces["GAMG"]
+    t = np.linspace(0.005, min(a.time[-1], b.time[-1]), 50)
+    fa, fb = np.interp(t, a.time, a.force[:, 0]), np.interp(t, b.time, b.force[:, 0])
+    assert np.max(np.abs(fa - fb)) <= 1e-3 * np.max(np.abs(fa))
+
+
+@pytest.mark.parametrize("changes, key", [
+    ({"pressure_solver": "ILU"}, "pressure_solver"),
+    ({"max_courant": 0.0}, "max_courant"),
+    ({"n_outer_correctors": 0}, "n_outer_correctors"),
+    ({"pressure_tolerance": -1.0}, "pressure_tolerance"),
+])
+def test_impossible_solver_settings_are_refused_by_name(changes, key):
+    from mfflap.cfd.openfoam.writer import SolverSettings
+    from mfflap.errors import ConfigError
+
+    with pytest.raises(ConfigError, match=key):
+        SolverSettings(**changes)
+
+
+def test_impossible_mesh_is_refused_by_name():
+    from mfflap.cfd.openfoam.writer import MeshSpec
+    from mfflap.errors import ConfigError
+
+    with pytest.raises(ConfigError, match="n_radial"):
+        MeshSpec("bad", n_chord=10, n_edge=2, n_radial=0, radial_expansion=10.0,
+                 radius_chords=5.0)

@@ -92,12 +92,25 @@ def run_one(case: CfdCase, out_dir: str, setup: CampaignSetup) -> CaseStatus:
     return CaseStatus(case.case_id, "done", f"{cpu:.0f} s CPU")
 
 
+#: Solver settings added after campaigns were first written, at the values those runs used:
+#: a manifest without them describes runs made with these values.
+_ADDED_SOLVER_SETTINGS = {"pressure_solver": "PCG", "pressure_tolerance": 1e-7}
+
+
+def _with_added_settings(setup: dict[str, Any]) -> dict[str, Any]:
+    setup = dict(setup)
+    if isinstance(setup.get("solver"), dict):
+        setup["solver"] = {**_ADDED_SOLVER_SETTINGS, **setup["solver"]}
+    return setup
+
+
 def _write_manifest(out: Path, cases: Sequence[CfdCase], setup: CampaignSetup) -> None:
     manifest = out / "campaign.toml"
     wanted = {"setup": setup.as_dict(), "cases": {c.case_id: c.as_dict() for c in cases}}
     if manifest.exists():
         old = read_toml(manifest)
-        if old.get("setup") != read_toml_text(dumps({"setup": wanted["setup"]}))["setup"]:
+        if (_with_added_settings(old.get("setup", {}))
+                != read_toml_text(dumps({"setup": wanted["setup"]}))["setup"]):
             raise ConfigError(f"{manifest}: this folder holds a campaign with another setup; "
                               "use a new output folder", key="setup")
         merged = {**old.get("cases", {}), **wanted["cases"]}
