@@ -39,12 +39,16 @@ class MeshSpec:
     n_radial: int
     radial_expansion: float
     radius_chords: float
+    chord_grading: float = 1.0  # mid-chord cell / end cell along the faces (1: uniform)
 
     def __post_init__(self) -> None:
         for key in ("n_chord", "n_edge", "n_radial"):
             if int(getattr(self, key)) < 1:
                 raise ConfigError(f"mesh {self.name!r}: {key} must be >= 1, got "
                                   f"{getattr(self, key)!r}", key=key)
+        if not self.chord_grading > 0:
+            raise ConfigError(f"mesh {self.name!r}: chord_grading must be > 0, got "
+                              f"{self.chord_grading!r}", key="chord_grading")
         if not self.radial_expansion > 0 or not self.radius_chords > 1:
             raise ConfigError(f"mesh {self.name!r}: radial_expansion must be > 0 and "
                               "radius_chords > 1", key="radial_expansion")
