@@ -90,17 +90,17 @@ def sinusoid_sweep(model, frequencies, heave_amplitudes, pitch_amplitudes, phase
         from mfflap.sweep_kernel import sweep_grid_kernel
 
         u = constants["u"]
-        block = max(chunk * 10, 100_000)
         res = np.empty((total, 5))
-        for start in range(0, total, block):
-            stop = min(start + block, total)
+        n_groups = axes[0].size * axes[2].size * axes[3].size  # (f, theta, phi) combinations
+        block = max(1, chunk // max(axes[1].size, 1))  # groups per call (progress)
+        for start in range(0, n_groups, block):
+            stop = min(start + block, n_groups)
             sweep_grid_kernel(*axes, start, stop, n_steps, scheme == "midpoint",
                               constants["u"], constants["chord"], constants["n_strips"],
                               constants["k_an"], constants["k_at"], constants["k_dn"],
-                              constants["k_dt"], constants["lbar"], constants["l2bar"],
-                              res[start:stop])
+                              constants["k_dt"], constants["lbar"], constants["l2bar"], res)
             if progress is not None:
-                progress(stop, total)
+                progress(stop * axes[1].size, total)
         out["mean_thrust"], out["mean_power"], out["max_power"] = res[:, 0], res[:, 1], res[:, 2]
         with np.errstate(divide="ignore", invalid="ignore"):
             out["efficiency"] = np.where(res[:, 1] != 0, u * res[:, 0] / np.where(

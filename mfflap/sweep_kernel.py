@@ -154,74 +154,102 @@ def _heave_sequences(ph, n):
 @numba.njit(parallel=True, cache=True)
 def sweep_grid_kernel(f, ha, ta, ph, start, stop, n_steps, midpoint, u, chord, n_strips, k_an,
                       k_at, k_dn, k_dt, lbar, l2bar, out):
-    """Fill ``out[i - start, 0:5]`` = mean thrust, mean power, max power, energy residual,
-    trailing-edge amplitude for the motions ``start <= i < stop`` of the grid
-    f x ha x ta x ph (C order, like ``np.meshgrid(..., indexing="ij")`` raveled).
+    """Evaluate the grid f x ha x ta x ph (C order, like ``np.meshgrid(..., indexing="ij")``
+    raveled) for the (f, ta, ph) combinations ``start <= g < stop`` (g = (i_f nt + i_t) np
+    + i_p) and every heave amplitude; ``out[motion, 0:5]`` = mean thrust, mean power, max
+    power, energy residual, trailing-edge amplitude, with ``out`` the whole grid's rows.
 
     A discrete harmonic of N steps at dt = 1 / (2 N f) has angles and positions that do not
     depend on f, rates that scale with 1/dt and accelerations with 1/dt^2 (see
     :func:`mfflap.kinematics.convert.harmonic_to_discrete`): the sequences are computed once
-    per pitch amplitude and per phase, so the loop over the grid needs no sine or cosine.
-    k_an = C_an rho V_n, k_at = C_at rho V_t, k_dn = C_Dn rho S_n / (2 n), k_dt = C_Dt rho S_t / 2.
+    per pitch amplitude and per phase, so the grid loop needs no sine or cosine. The pitch
+    quantities are shared by all heave amplitudes, which form the innermost, vectorisable
+    loop. k_an = C_an rho V_n, k_at = C_at rho V_t, k_dn = C_Dn rho S_n / (2 n),
+    k_dt = C_Dt rho S_t / 2.
     """
     n = n_steps
     h = chord / (2.0 * n_strips)
     ns = float(n_strips)
+    s0t, s1t, s2t, s3t = _power_sums(ns, h)
     pitch = _pitch_sequences(ta, n)
     heave = _heave_sequences(ph, n)
     nh, nt, npp = ha.shape[0], ta.shape[0], ph.shape[0]
-    for i in numba.prange(start, stop):
-        i_p = i % npp
-        rest = i // npp
-        i_t = rest % nt
-        rest = rest // nt
-        i_h = rest % nh
-        i_f = rest // nh
+    for g in numba.prange(start, stop):
+        i_p = g % npp
+        i_t = (g // npp) % nt
+        i_f = g // (npp * nt)
         inv_dt = 2.0 * n * f[i_f]
         inv_dt2 = inv_dt * inv_dt
-        amp = ha[i_h]
-        sum_t = 0.0
-        sum_p = 0.0
-        sum_d = 0.0
-        pmax = -1e300
-        te_max = -1e300
-        te_min = 1e300
+        sum_t = np.zeros(nh)
+        sum_p = np.zeros(nh)
+        sum_d = np.zeros(nh)
+        pmax = np.full(nh, -1e300)
+        te_max = np.full(nh, -1e300)
+        te_min = np.full(nh, 1e300)
         for j in range(n):
             s = pitch[i_t, 1, j]
             c = pitch[i_t, 2, j]
             tdd = pitch[i_t, 4, j] * inv_dt2
-            hdd = amp * heave[i_p, 2, j] * inv_dt2
             if midpoint:
                 td = (pitch[i_t, 3, j] + 0.5 * pitch[i_t, 4, j]) * inv_dt
-                hd = amp * (heave[i_p, 1, j] + 0.5 * heave[i_p, 2, j]) * inv_dt
+                vel = (heave[i_p, 1, j] + 0.5 * heave[i_p, 2, j]) * inv_dt
             else:
                 td = pitch[i_t, 3, j] * inv_dt
-                hd = amp * heave[i_p, 1, j] * inv_dt
-            an = hd * c + u * s
-            adn = hdd * c - hd * td * s + u * td * c
-            vt = hd * s - u * c
-            avt = hdd * s + hd * td * c + u * td * s
-            q0, q1, cube = drag_sums_and_cube(an, td, ns, h)
-            fn = -k_an * (adn + tdd * lbar) - k_dn * q0
-            mo = -k_an * (adn * lbar + tdd * l2bar) - k_dn * q1
-            ft = -k_at * avt - k_dt * abs(vt) * vt
-            power = -(fn * c + ft * s) * hd - mo * td
-            sum_t += fn * s - ft * c
-            sum_p += power
-            sum_d += k_dn * cube + k_dt * abs(vt) * vt * vt
-            if power > pmax:
-                pmax = power
-            te = amp * heave[i_p, 0, j] + chord * s
-            te_max = max(te_max, te)
-            te_min = min(te_min, te)
-        mt = sum_t / n
-        mp = sum_p / n
-        k = i - start
-        out[k, 0] = mt
-        out[k, 1] = mp
-        out[k, 2] = pmax
-        out[k, 3] = mp - u * mt - sum_d / n
-        out[k, 4] = max(abs(te_max), abs(te_min))
+                vel = heave[i_p, 1, j] * inv_dt
+            acc = heave[i_p, 2, j] * inv_dt2
+            pos = heave[i_p, 0, j]
+            us, utc = u * s, u * td * c
+            # the strips' sign split depends on a through -a / b only
+            if td == 0.0:
+                sb = 0.0
+                inv_b = 0.0
+            else:
+                sb = 1.0 if td > 0 else -1.0
+                inv_b = 1.0 / td
+            for k in range(nh):
+                amp = ha[k]
+                hd = amp * vel
+                hdd = amp * acc
+                an = hd * c + us
+                adn = hdd * c - hd * td * s + utc
+                vt = hd * s - u * c
+                avt = hdd * s + hd * td * c + u * td * s
+                if td == 0.0:
+                    m = ns
+                    w = 1.0 if an > 0 else (-1.0 if an < 0 else 0.0)
+                else:
+                    m = math.ceil((-an * inv_b / h + 1.0) / 2.0) - 1.0
+                    m = min(max(m, 0.0), ns)
+                    w = -2.0 * sb
+                s0h, s1h, s2h, s3h = _power_sums(m, h)
+                aa, ab2, bb = an * an, 2.0 * an * td, td * td
+                q0 = w * (aa * s0h + ab2 * s1h + bb * s2h) + sb * (aa * s0t + ab2 * s1t
+                                                                   + bb * s2t)
+                q1 = w * (aa * s1h + ab2 * s2h + bb * s3h) + sb * (aa * s1t + ab2 * s2t
+                                                                   + bb * s3t)
+                c0, c1, c2, c3 = an * aa, 3.0 * aa * td, 3.0 * an * bb, td * bb
+                cube = (w * (c0 * s0h + c1 * s1h + c2 * s2h + c3 * s3h)
+                        + sb * (c0 * s0t + c1 * s1t + c2 * s2t + c3 * s3t))
+                fn = -k_an * (adn + tdd * lbar) - k_dn * q0
+                mo = -k_an * (adn * lbar + tdd * l2bar) - k_dn * q1
+                ft = -k_at * avt - k_dt * abs(vt) * vt
+                power = -(fn * c + ft * s) * hd - mo * td
+                sum_t[k] += fn * s - ft * c
+                sum_p[k] += power
+                sum_d[k] += k_dn * cube + k_dt * abs(vt) * vt * vt
+                pmax[k] = max(pmax[k], power)
+                te = amp * pos + chord * s
+                te_max[k] = max(te_max[k], te)
+                te_min[k] = min(te_min[k], te)
+        for k in range(nh):
+            row = ((i_f * nh + k) * nt + i_t) * npp + i_p
+            mt = sum_t[k] / n
+            mp = sum_p[k] / n
+            out[row, 0] = mt
+            out[row, 1] = mp
+            out[row, 2] = pmax[k]
+            out[row, 3] = mp - u * mt - sum_d[k] / n
+            out[row, 4] = max(abs(te_max[k]), abs(te_min[k]))
 
 
 def kernel_constants(model) -> dict[str, float] | None:

@@ -1,3 +1,5 @@
+import itertools
+
 import numpy as np
 import pytest
 
@@ -57,3 +59,22 @@ def test_compiled_sweep_kernel_equals_the_array_evaluation(scheme):
         np.testing.assert_allclose(a[ok], b[ok], rtol=1e-9,
                                    atol=1e-12 * np.nanmax(np.abs(b[ok])))
     np.testing.assert_array_equal(fast.feasible, slow.feasible)
+
+
+def test_compiled_sweep_in_small_blocks_reports_progress_and_keeps_the_grid_order():
+    """Several kernel calls (blocks of (f, theta, phi) groups) fill the C-ordered grid."""
+    from mfflap.hydro import MorisonModel
+
+    model = MorisonModel()
+    args = (np.array([0.4, 1.3, 2.0]), np.array([0.0, 0.2, 0.45]), np.deg2rad([10, 50]),
+            np.deg2rad([30, 90, 150]))
+    seen = []
+    fast = sinusoid_sweep(model, *args, n_steps=20, chunk=4,
+                          progress=lambda done, total: seen.append((done, total)))
+    assert len(seen) > 3 and seen[-1] == (54, 54)
+    assert all(a[0] < b[0] for a, b in itertools.pairwise(seen))
+    for i in (0, 13, 31, 53):
+        one = sinusoid_sweep(model, fast.frequency[i], fast.heave_amplitude[i],
+                             fast.pitch_amplitude[i], fast.phase[i], n_steps=20, compiled=False)
+        assert np.isclose(one.mean_thrust[0], fast.mean_thrust[i], rtol=1e-10)
+        assert np.isclose(one.max_power[0], fast.max_power[i], rtol=1e-10)
