@@ -339,3 +339,26 @@ def test_impossible_mesh_is_refused_by_name():
     with pytest.raises(ConfigError, match="n_radial"):
         MeshSpec("bad", n_chord=10, n_edge=2, n_radial=0, radial_expansion=10.0,
                  radius_chords=5.0)
+
+
+@pytest.mark.openfoam
+def test_convergence_floor_reruns_the_reference_with_the_other_pressure_solver(tmp_path):
+    """--floor: the reference again with GAMG; its NRMSE is round-off small on a short run."""
+    import json
+
+    from click.testing import CliRunner
+
+    from mfflap.cli.main import cli
+
+    case = Path(__file__).parents[1] / "cases" / "paper2026.toml"
+    args = ["cfd", "convergence", str(case), str(tmp_path / "c"), "--meshes", "coarse",
+            "--courant", "4", "--cycles", "0.02", "--ramp-time", "0.005", "--floor",
+            "--n-correctors", "2", "--json"]
+    res = CliRunner().invoke(cli, args)
+    assert res.exit_code == 0, res.output
+    data = json.loads(res.output[res.output.index("{"):])
+    assert set(data["runs"]) == {"coarse_co4", "coarse_co4_GAMG"}
+    floor = data["nrmse"]["coarse_co4_GAMG vs coarse_co4 (round-off floor)"]
+    assert 0 < floor["normal_force"] < 1e-3
+    solver = (tmp_path / "c" / "cases" / "coarse_co4_GAMG" / "system" / "fvSolution").read_text()
+    assert "solver GAMG;" in solver and "nCorrectors     2;" in solver

@@ -143,12 +143,21 @@ def fluent(case_file: Path, out_dir: Path, cycles: float, ramp_time: float, time
 @click.option("--ramp-time", default=None, type=float,
               help="Start-up ramp, s (default: a quarter period).")
 @click.option("--procs", default=1, show_default=True, help="MPI ranks per run.")
+@click.option("--pressure-solver", type=click.Choice(["PCG", "GAMG"]), default="PCG",
+              show_default=True, help="Linear solver of the pressure equation.")
+@click.option("--n-correctors", default=1, show_default=True,
+              help="PIMPLE pressure correctors per outer iteration.")
+@click.option("--floor", is_flag=True,
+              help="Rerun the reference with the other pressure solver: the round-off floor "
+                   "under every NRMSE of the study.")
 @click.option("--json", "as_json", is_flag=True, help="Print the NRMSE table as JSON.")
 def convergence(case_file: Path, out_dir: Path, meshes: str, courants: str, cycles: float,
-                ramp_time: float | None, procs: int, as_json: bool) -> None:
+                ramp_time: float | None, procs: int, pressure_solver: str, n_correctors: int,
+                floor: bool, as_json: bool) -> None:
     """Mesh and time-step convergence of the [motion] of CASE_FILE: NRMSE between runs and
     the plate's y+ over time (HDF5 records, HTML report, resumable)."""
     from mfflap.cfd.convergence import convergence_figure, run_convergence
+    from mfflap.cfd.openfoam.writer import SolverSettings
     from mfflap.config import load_case
     from mfflap.reports.html import Report, figure_html, table_html
 
@@ -159,7 +168,10 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: str, cycl
                             meshes=[m.strip() for m in meshes.split(",")],
                             courants=[float(c) for c in courants.split(",")], ramp_time=ramp,
                             plate=case.plate, fluid=case.fluid, stream=case.flow,
-                            n_procs=procs, progress=lambda m: click.echo(m, err=True))
+                            n_procs=procs, floor=floor,
+                            solver=SolverSettings(pressure_solver=pressure_solver,
+                                                  n_correctors=n_correctors),
+                            progress=lambda m: click.echo(m, err=True))
     rep = Report("Mesh and time-step convergence", f"{case.study.name}: {cycles:g} cycles")
     sec = rep.section("NRMSE between runs")
     sec.blocks.append(table_html(["comparison", "F_n", "F_t", "M"],
