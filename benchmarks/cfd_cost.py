@@ -40,8 +40,9 @@ COMPONENTS = ("normal_force", "moment", "tangential_force")
 
 
 def run_setup(args):
-    label, mesh, pressure_solver, root = args
-    solver = replace(SolverSettings(), pressure_solver=pressure_solver, write_interval=0.5)
+    label, mesh, pressure_solver, n_correctors, root = args
+    solver = replace(SolverSettings(), pressure_solver=pressure_solver, write_interval=0.5,
+                     n_correctors=n_correctors)
     case = write_case(Path(root) / label, MOTION, end_time=CYCLES, mesh=mesh,
                       ramp_time=RAMP_S, solver=solver)
     r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -67,8 +68,9 @@ def compare(run, ref) -> str:
 def main() -> None:
     meshes = sys.argv[1:] or ["coarse", "lean", "medium"]
     root = tempfile.mkdtemp(prefix="mfflap-cfd-cost-")
-    jobs = [("medium-PCG", "medium", "PCG", root)] + [
-        (f"{m}-GAMG", m, "GAMG", root) for m in meshes]
+    # the lean mesh runs with two pressure correctors (it has one-step glitches with one)
+    jobs = [("medium-PCG", "medium", "PCG", 1, root)] + [
+        (f"{m}-GAMG", m, "GAMG", 2 if m == "lean" else 1, root) for m in meshes]
     with ProcessPoolExecutor(2) as pool:
         results = {r[0]: r for r in pool.map(run_setup, jobs)}
     ref = results["medium-GAMG"] if "medium-GAMG" in results else results["medium-PCG"]

@@ -29,7 +29,8 @@ def campaign() -> None:
 @click.option("--frequencies", help="Subset of the grid's frequencies, Hz (e.g. 0.1,1,2).")
 @click.option("--heave-amplitudes", help="Subset of the heave amplitudes, m.")
 @click.option("--phases", help="Subset of the phases, deg.")
-@click.option("--mesh", default="coarse", show_default=True, help="coarse | medium | fine")
+@click.option("--mesh", default="coarse", show_default=True,
+              help="coarse | lean | medium | fine (cfd_templates/openfoam/meshes.toml)")
 @click.option("--workers", default=1, show_default=True, help="LocalCluster worker processes.")
 @click.option("--scheduler", default=None,
               help="Address of an existing dask scheduler (tcp://host:8786) instead of a "

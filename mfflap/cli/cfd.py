@@ -17,7 +17,8 @@ def cfd() -> None:
 @cfd.command()
 @click.argument("case_file", type=click.Path(dir_okay=False, path_type=Path))
 @click.argument("case_dir", type=click.Path(file_okay=False, path_type=Path))
-@click.option("--mesh", default="coarse", show_default=True, help="coarse | medium | fine")
+@click.option("--mesh", default="coarse", show_default=True,
+              help="coarse | lean | medium | fine (cfd_templates/openfoam/meshes.toml)")
 @click.option("--cycles", default=3.0, show_default=True, help="Carrier periods to simulate.")
 @click.option("--ramp-time", default=0.0, show_default=True, help="Smooth start-up ramp, s.")
 @click.option("--y-plus", is_flag=True, help="Add the yPlus function object.")
