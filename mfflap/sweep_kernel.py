@@ -48,32 +48,6 @@ def drag_sums(a, b, n, h):
 
 
 @numba.njit(cache=True, inline="always")
-def drag_abs_sums(a, b, n, h):
-    """sum_k |v_k| l_k^p for p = 0, 1, 2 (the drag sums' derivatives), closed form."""
-    m, w, sb = _split(a, b, n, h)
-    s0h, s1h, s2h, s3h = _power_sums(m, h)
-    s0t, s1t, s2t, s3t = _power_sums(n, h)
-    return (w * (a * s0h + b * s1h) + sb * (a * s0t + b * s1t),
-            w * (a * s1h + b * s2h) + sb * (a * s1t + b * s2t),
-            w * (a * s2h + b * s3h) + sb * (a * s2t + b * s3t))
-
-
-@numba.njit(cache=True, inline="always")
-def drag_sums_and_cube(a, b, n, h):
-    """:func:`drag_sums` and :func:`drag_cube_sum` with one split of the strips."""
-    m, w, sb = _split(a, b, n, h)
-    s0h, s1h, s2h, s3h = _power_sums(m, h)
-    s0t, s1t, s2t, s3t = _power_sums(n, h)
-    aa, ab2, bb = a * a, 2.0 * a * b, b * b
-    q0 = w * (aa * s0h + ab2 * s1h + bb * s2h) + sb * (aa * s0t + ab2 * s1t + bb * s2t)
-    q1 = w * (aa * s1h + ab2 * s2h + bb * s3h) + sb * (aa * s1t + ab2 * s2t + bb * s3t)
-    c0, c1, c2, c3 = a * aa, 3.0 * aa * b, 3.0 * a * bb, b * bb
-    cube = (w * (c0 * s0h + c1 * s1h + c2 * s2h + c3 * s3h)
-            + sb * (c0 * s0t + c1 * s1t + c2 * s2t + c3 * s3t))
-    return q0, q1, cube
-
-
-@numba.njit(cache=True, inline="always")
 def drag_sums_and_abs(a, b, n, h):
     """:func:`drag_sums` and :func:`drag_abs_sums` with one split of the strips."""
     m, w, sb = _split(a, b, n, h)
@@ -88,14 +62,18 @@ def drag_sums_and_abs(a, b, n, h):
 
 
 @numba.njit(cache=True, inline="always")
-def drag_cube_sum(a, b, n, h):
-    """sum_k |v_k|^3 over n equal strips, v = a + b l (closed form)."""
-    m, w, sb = _split(a, b, n, h)
+def _sums_and_cube_given_split(a, b, m, w, sb, h, n):
+    """sum |v|v, sum |v|v l and sum |v|^3 over n equal strips, v = a + b l, for the split
+    (m, w, sb) of :func:`_split` (the caller may hoist the b-only part of the split)."""
     s0h, s1h, s2h, s3h = _power_sums(m, h)
     s0t, s1t, s2t, s3t = _power_sums(n, h)
-    c0, c1, c2, c3 = a * a * a, 3.0 * a * a * b, 3.0 * a * b * b, b * b * b
-    return (w * (c0 * s0h + c1 * s1h + c2 * s2h + c3 * s3h)
+    aa, ab2, bb = a * a, 2.0 * a * b, b * b
+    q0 = w * (aa * s0h + ab2 * s1h + bb * s2h) + sb * (aa * s0t + ab2 * s1t + bb * s2t)
+    q1 = w * (aa * s1h + ab2 * s2h + bb * s3h) + sb * (aa * s1t + ab2 * s2t + bb * s3t)
+    c0, c1, c2, c3 = a * aa, 3.0 * aa * b, 3.0 * a * bb, b * bb
+    cube = (w * (c0 * s0h + c1 * s1h + c2 * s2h + c3 * s3h)
             + sb * (c0 * s0t + c1 * s1t + c2 * s2t + c3 * s3t))
+    return q0, q1, cube
 
 
 @numba.njit(cache=True)
@@ -170,7 +148,6 @@ def sweep_grid_kernel(f, ha, ta, ph, start, stop, n_steps, midpoint, u, chord, n
     n = n_steps
     h = chord / (2.0 * n_strips)
     ns = float(n_strips)
-    s0t, s1t, s2t, s3t = _power_sums(ns, h)
     pitch = _pitch_sequences(ta, n)
     heave = _heave_sequences(ph, n)
     nh, nt, npp = ha.shape[0], ta.shape[0], ph.shape[0]
@@ -221,15 +198,7 @@ def sweep_grid_kernel(f, ha, ta, ph, start, stop, n_steps, midpoint, u, chord, n
                     m = math.ceil((-an * inv_b / h + 1.0) / 2.0) - 1.0
                     m = min(max(m, 0.0), ns)
                     w = -2.0 * sb
-                s0h, s1h, s2h, s3h = _power_sums(m, h)
-                aa, ab2, bb = an * an, 2.0 * an * td, td * td
-                q0 = w * (aa * s0h + ab2 * s1h + bb * s2h) + sb * (aa * s0t + ab2 * s1t
-                                                                   + bb * s2t)
-                q1 = w * (aa * s1h + ab2 * s2h + bb * s3h) + sb * (aa * s1t + ab2 * s2t
-                                                                   + bb * s3t)
-                c0, c1, c2, c3 = an * aa, 3.0 * aa * td, 3.0 * an * bb, td * bb
-                cube = (w * (c0 * s0h + c1 * s1h + c2 * s2h + c3 * s3h)
-                        + sb * (c0 * s0t + c1 * s1t + c2 * s2t + c3 * s3t))
+                q0, q1, cube = _sums_and_cube_given_split(an, td, m, w, sb, h, ns)
                 fn = -k_an * (adn + tdd * lbar) - k_dn * q0
                 mo = -k_an * (adn * lbar + tdd * l2bar) - k_dn * q1
                 ft = -k_at * avt - k_dt * abs(vt) * vt
