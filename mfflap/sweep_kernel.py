@@ -1,4 +1,4 @@
-"""A fused, compiled kernel for the sinusoidal sweep (numba): one pass per motion.
+"""A fused, compiled kernel for the sinusoidal sweep (numba): the whole grid in one pass.
 
 It evaluates exactly what :func:`mfflap.performance.evaluate_discrete` evaluates for a
 harmonic motion converted by :func:`mfflap.kinematics.convert.harmonic_to_discrete` (the
