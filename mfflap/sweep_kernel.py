@@ -36,43 +36,45 @@ def _power_sums(m, h):
 
 
 @numba.njit(cache=True, inline="always")
-def drag_sums(a, b, n, h):
-    """sum_k |v_k| v_k and sum_k |v_k| v_k l_k over n equal strips, v = a + b l (closed form)."""
-    m, w, sb = _split(a, b, n, h)
-    s0h, s1h, s2h, s3h = _power_sums(m, h)
-    s0t, s1t, s2t, s3t = _power_sums(n, h)
+def _square_sums(a, b, w, sb, hs, ts):
+    """sum_k |v_k| v_k and sum_k |v_k| v_k l_k from the split (w, sb) and the power sums of
+    the first run (hs) and of all strips (ts)."""
     aa, ab2, bb = a * a, 2.0 * a * b, b * b
-    q0 = w * (aa * s0h + ab2 * s1h + bb * s2h) + sb * (aa * s0t + ab2 * s1t + bb * s2t)
-    q1 = w * (aa * s1h + ab2 * s2h + bb * s3h) + sb * (aa * s1t + ab2 * s2t + bb * s3t)
+    q0 = w * (aa * hs[0] + ab2 * hs[1] + bb * hs[2]) + sb * (aa * ts[0] + ab2 * ts[1]
+                                                             + bb * ts[2])
+    q1 = w * (aa * hs[1] + ab2 * hs[2] + bb * hs[3]) + sb * (aa * ts[1] + ab2 * ts[2]
+                                                             + bb * ts[3])
     return q0, q1
 
 
 @numba.njit(cache=True, inline="always")
-def drag_sums_and_abs(a, b, n, h):
-    """:func:`drag_sums` and :func:`drag_abs_sums` with one split of the strips."""
+def drag_sums(a, b, n, h):
+    """sum_k |v_k| v_k and sum_k |v_k| v_k l_k over n equal strips, v = a + b l (closed form)."""
     m, w, sb = _split(a, b, n, h)
-    s0h, s1h, s2h, s3h = _power_sums(m, h)
-    s0t, s1t, s2t, s3t = _power_sums(n, h)
-    aa, ab2, bb = a * a, 2.0 * a * b, b * b
-    q0 = w * (aa * s0h + ab2 * s1h + bb * s2h) + sb * (aa * s0t + ab2 * s1t + bb * s2t)
-    q1 = w * (aa * s1h + ab2 * s2h + bb * s3h) + sb * (aa * s1t + ab2 * s2t + bb * s3t)
-    return (q0, q1, w * (a * s0h + b * s1h) + sb * (a * s0t + b * s1t),
-            w * (a * s1h + b * s2h) + sb * (a * s1t + b * s2t),
-            w * (a * s2h + b * s3h) + sb * (a * s2t + b * s3t))
+    return _square_sums(a, b, w, sb, _power_sums(m, h), _power_sums(n, h))
+
+
+@numba.njit(cache=True, inline="always")
+def drag_sums_and_abs(a, b, n, h):
+    """:func:`drag_sums` and sum_k |v_k| l_k^p for p = 0, 1, 2 (their derivatives), with one
+    split of the strips."""
+    m, w, sb = _split(a, b, n, h)
+    hs, ts = _power_sums(m, h), _power_sums(n, h)
+    q0, q1 = _square_sums(a, b, w, sb, hs, ts)
+    return (q0, q1, w * (a * hs[0] + b * hs[1]) + sb * (a * ts[0] + b * ts[1]),
+            w * (a * hs[1] + b * hs[2]) + sb * (a * ts[1] + b * ts[2]),
+            w * (a * hs[2] + b * hs[3]) + sb * (a * ts[2] + b * ts[3]))
 
 
 @numba.njit(cache=True, inline="always")
 def _sums_and_cube_given_split(a, b, m, w, sb, h, n):
     """sum |v|v, sum |v|v l and sum |v|^3 over n equal strips, v = a + b l, for the split
     (m, w, sb) of :func:`_split` (the caller may hoist the b-only part of the split)."""
-    s0h, s1h, s2h, s3h = _power_sums(m, h)
-    s0t, s1t, s2t, s3t = _power_sums(n, h)
-    aa, ab2, bb = a * a, 2.0 * a * b, b * b
-    q0 = w * (aa * s0h + ab2 * s1h + bb * s2h) + sb * (aa * s0t + ab2 * s1t + bb * s2t)
-    q1 = w * (aa * s1h + ab2 * s2h + bb * s3h) + sb * (aa * s1t + ab2 * s2t + bb * s3t)
-    c0, c1, c2, c3 = a * aa, 3.0 * aa * b, 3.0 * a * bb, b * bb
-    cube = (w * (c0 * s0h + c1 * s1h + c2 * s2h + c3 * s3h)
-            + sb * (c0 * s0t + c1 * s1t + c2 * s2t + c3 * s3t))
+    hs, ts = _power_sums(m, h), _power_sums(n, h)
+    q0, q1 = _square_sums(a, b, w, sb, hs, ts)
+    c0, c1, c2, c3 = a * a * a, 3.0 * a * a * b, 3.0 * a * b * b, b * b * b
+    cube = (w * (c0 * hs[0] + c1 * hs[1] + c2 * hs[2] + c3 * hs[3])
+            + sb * (c0 * ts[0] + c1 * ts[1] + c2 * ts[2] + c3 * ts[3]))
     return q0, q1, cube
 
 
