@@ -143,8 +143,8 @@ def test_a_run_that_cannot_finish_in_time_fails_cleanly_with_its_log(tmp_path):
 @pytest.mark.openfoam
 def test_collapsed_time_step_is_retried_with_a_lower_courant_limit(tmp_path):
     """Every attempt 'collapses' (the watchdog threshold is above any real step): the run
-    is resumed twice with maxCo 4 -> 2 -> 1 (upwind k-epsilon on the last try), then
-    reported; the solver accepts the changed schemes."""
+    is resumed with the inletOutlet far field, then with maxCo 4 -> 2 -> 1 (upwind k-epsilon
+    on the last try), then reported; the solver accepts the changed fields and schemes."""
     from mfflap.errors import CfdRunError
 
     case_dir = tmp_path / "c"
@@ -156,7 +156,9 @@ def test_collapsed_time_step_is_retried_with_a_lower_courant_limit(tmp_path):
     assert "div(phi,k)      Gauss upwind;" in schemes
     assert "div(phi,epsilon) Gauss upwind;" in schemes
     assert "div(phi,U)      Gauss linearUpwind grad(U);" in schemes  # momentum untouched
-    assert (case_dir / "log.pimpleFoam").read_text().count("Starting time loop") == 3
+    assert (case_dir / "log.pimpleFoam").read_text().count("Starting time loop") == 4
+    assert "type inletOutlet;" in (case_dir / "0" / "U").read_text()
+    assert "type fixedValue;" in (case_dir / "0" / "p").read_text()
 
 
 def test_manifest_written_before_the_pressure_solver_setting_still_resumes(tmp_path):
@@ -179,3 +181,44 @@ def test_manifest_written_before_the_pressure_solver_setting_still_resumes(tmp_p
     gamg = replace(setup, solver=replace(setup.solver, pressure_solver="GAMG"))
     with pytest.raises(ConfigError, match="another setup"):
         _write_manifest(tmp_path, cases, gamg)
+
+
+def test_far_field_switch_rewrites_binary_time_folders_and_the_run_resumes(tmp_path):
+    """A real run writes binary fields; the far-field switch edits only the patch dictionary
+    text of U and p in every time folder, and pimpleFoam resumes from them."""
+    from dataclasses import replace
+
+    from mfflap.campaign.openfoam_run import use_inlet_outlet_far_field
+    from mfflap.cfd.openfoam.runner import run_case
+    from mfflap.cfd.openfoam.writer import SolverSettings, write_case
+
+    solver = replace(SolverSettings(), write_interval=0.01)
+    case = write_case(tmp_path / "c", SHORT.motion(), end_time=0.02, solver=solver)
+    run_case(case, timeout_s=300)
+    written = [p for p in case.iterdir() if p.name not in ("0",) and (p / "U").is_file()]
+    assert written and b"freestreamVelocity" in (written[-1] / "U").read_bytes()
+    assert use_inlet_outlet_far_field(case) is True
+    assert use_inlet_outlet_far_field(case) is False  # nothing left to switch
+    for folder in [case / "0", *written]:
+        u, p = (folder / "U").read_bytes(), (folder / "p").read_bytes()
+        assert b"inletOutlet" in u and b"freestream" not in u and b"freestream" not in p
+    control = case / "system" / "controlDict"
+    control.write_text(control.read_text().replace("endTime         0.02;",
+                                                   "endTime         0.03;"))
+    run_case(case, timeout_s=300)
+    assert (case / "log.pimpleFoam").read_text().count("Starting time loop") == 2
+
+
+def test_solver_setting_selects_the_far_field_and_refuses_unknown_ones(tmp_path):
+    from dataclasses import replace
+
+    from mfflap.cfd.openfoam.writer import SolverSettings, write_case
+
+    with pytest.raises(ConfigError, match="far_field"):
+        SolverSettings(far_field="farfield")
+    case = write_case(tmp_path / "c", SHORT.motion(), end_time=0.02,
+                      solver=replace(SolverSettings(), far_field="inletOutlet"))
+    assert "type inletOutlet;" in (case / "0" / "U").read_text()
+    assert "type fixedValue; value uniform 0;" in (case / "0" / "p").read_text()
+    default = write_case(tmp_path / "d", SHORT.motion(), end_time=0.02)
+    assert "freestreamVelocity" in (default / "0" / "U").read_text()

@@ -76,6 +76,43 @@ def use_upwind_turbulence(case_dir: str | Path) -> bool:
     return True
 
 
+_FREESTREAM_U = re.compile(
+    rb"type\s+freestreamVelocity;\s*freestreamValue(\s+uniform\s+\([^)]*\));")
+_FREESTREAM_P = re.compile(rb"type\s+freestreamPressure;\s*freestreamValue\s+uniform\s+[^;]+;")
+
+
+def _is_time_folder(name: str) -> bool:
+    try:
+        float(name)
+    except ValueError:
+        return False
+    return True
+
+
+def use_inlet_outlet_far_field(case_dir: str | Path) -> bool:
+    """Switch the far field from freestreamVelocity/freestreamPressure to inletOutlet
+    velocity and a fixed pressure, in 0/ and in every written time folder (ASCII or binary
+    fields: only the dictionary text of the patch changes); True if anything changed.
+
+    Where the whole mesh heaves several times faster than the stream (h = 0.5 m at
+    f = 0.5 Hz, U = 0.3 m/s) the freestream pair let the velocity grow without bound in the
+    outer cells along the heave path; restarted from the same fields with this far field
+    the run went on with a normal time step.
+    """
+    changed = False
+    for field, pattern, repl in (("U", _FREESTREAM_U, rb"type inletOutlet;\n        inletValue\1;"),
+                                 ("p", _FREESTREAM_P, rb"type fixedValue;")):
+        for path in Path(case_dir).glob(f"*/{field}"):
+            if not _is_time_folder(path.parent.name):
+                continue
+            data = path.read_bytes()
+            new = pattern.sub(repl, data)
+            if new != data:
+                path.write_bytes(new)
+                changed = True
+    return changed
+
+
 def record_from_case(case_dir: str | Path, motion: Motion, name: str,
                      parameters: dict[str, Any], plate: Plate | None = None) -> CfdRecord:
     """Parse a finished OpenFOAM case written by mfflap into a record."""
@@ -100,15 +137,17 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
                solver: SolverSettings | None = None, plate: Plate | None = None,
                fluid: Fluid | None = None, stream: FreeStream | None = None,
                timeout_s: float = 6 * 3600.0, y_plus: bool = False,
-               n_procs: int = 1, max_retries: int = 2,
+               n_procs: int = 1, max_retries: int = 3,
                min_time_step: float = 1e-7) -> CfdRecord:
     """Write (unless already written), run or resume, and parse one OpenFOAM case.
 
     Fields are written four times per run so that a killed run resumes from its last
     written time instead of from zero. A run whose time step collapses (an instability held
-    at the Courant limit) is resumed from its last written time with half the Courant limit,
-    up to ``max_retries`` times, the last time also with first-order upwind convection of k
-    and epsilon; the retries are recorded in the provenance.
+    at the Courant limit) is resumed from its last written time, up to ``max_retries``
+    times: first with the inletOutlet far field (:func:`use_inlet_outlet_far_field`) if it
+    had the freestream one, then with half the Courant limit, the last time also with
+    first-order upwind convection of k and epsilon; the retries are recorded in the
+    provenance.
     """
     case_dir = Path(case_dir)
     solver = solver or SolverSettings(write_interval=end_time / 4)
@@ -132,6 +171,10 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
         except CfdRunError as exc:
             if "time step collapsed" not in str(exc) or len(retries) >= max_retries:
                 raise
+            if not retries and use_inlet_outlet_far_field(case_dir):
+                retries.append("time step collapsed; resumed from the last written time with "
+                               "the inletOutlet far field")
+                continue
             courant = lower_courant_limit(case_dir)
             note = f"maxCo {courant:g}"
             if len(retries) == max_retries - 1 and use_upwind_turbulence(case_dir):

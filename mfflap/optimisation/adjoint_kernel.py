@@ -3,8 +3,9 @@
 The same J and the same adjoint as :class:`mfflap.optimisation.problem.FlappingProblem`
 (whose array code is the reference and stays in use for complex steps and batches), written
 as two O(N) passes: the forward sweep of the semi-implicit Euler steps with the stage costs
-and their partials, and the backward adjoint sweep of both degrees of freedom. It covers the four-term Morison model with equal strips
-(:func:`mfflap.sweep_kernel.kernel_constants`); the drag strip sums are closed-form
+and their partials, and the backward adjoint sweep of both degrees of freedom. It covers the
+four-term Morison model with equal strips (:func:`mfflap.sweep_kernel.kernel_constants`);
+the drag strip sums are closed-form
 (:func:`mfflap.sweep_kernel.drag_sums_and_abs`). Tested against the array code to rounding.
 """
 

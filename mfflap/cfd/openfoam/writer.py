@@ -79,11 +79,18 @@ class SolverSettings:
     write_interval: float = 1.0e9  # s: fields are written only at the end (and on restart)
     pressure_solver: str = "PCG"
     pressure_tolerance: float = 1e-7
+    #: "freestream": freestreamVelocity/freestreamPressure on the far field;
+    #: "inletOutlet": inletOutlet velocity and a fixed pressure (stable where the whole mesh
+    #: heaves much faster than the stream; see :func:`mfflap.campaign.openfoam_run.run_motion`)
+    far_field: str = "freestream"
 
     def __post_init__(self) -> None:
         if self.pressure_solver not in ("PCG", "GAMG"):
             raise ConfigError(f"pressure_solver must be PCG or GAMG, got {self.pressure_solver!r}",
                               key="pressure_solver")
+        if self.far_field not in ("freestream", "inletOutlet"):
+            raise ConfigError(f"far_field must be freestream or inletOutlet, got "
+                              f"{self.far_field!r}", key="far_field")
         if not self.max_courant > 0:
             raise ConfigError(f"max_courant must be > 0, got {self.max_courant!r}",
                               key="max_courant")
@@ -164,7 +171,7 @@ def write_case(case_dir: str | Path, motion: Motion, end_time: float,
         "epsilon": epsilon, "n_outer_correctors": solver.n_outer_correctors,
         "n_correctors": solver.n_correctors, "y_plus": y_plus, "y_plus_interval": 20,
         "n_procs": 2, "pressure_solver": solver.pressure_solver,
-        "pressure_tolerance": solver.pressure_tolerance,
+        "pressure_tolerance": solver.pressure_tolerance, "far_field": solver.far_field,
     }
     env = jinja2.Environment(undefined=jinja2.StrictUndefined, keep_trailing_newline=True)
     src = template_dir()
