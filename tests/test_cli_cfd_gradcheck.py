@@ -10,11 +10,18 @@ CASE = Path(__file__).resolve().parents[1] / "cases" / "paper2026.toml"
 
 
 @pytest.mark.openfoam
-def test_cfd_write_run_parse_with_real_openfoam(tmp_path):
+@pytest.mark.parametrize("options", [[], ["--far-field", "inletOutlet", "--pressure-solver",
+                                          "GAMG"]], ids=["default", "inletOutlet-GAMG"])
+def test_cfd_write_run_parse_with_real_openfoam(tmp_path, options):
     runner = CliRunner()
     case_dir = tmp_path / "of"
-    res = runner.invoke(cli, ["cfd", "write", str(CASE), str(case_dir), "--cycles", "0.05"])
+    res = runner.invoke(cli, ["cfd", "write", str(CASE), str(case_dir), "--cycles", "0.05",
+                              *options])
     assert res.exit_code == 0, res.output
+    far = "inletOutlet" if options else "freestreamVelocity"
+    assert f"type {far};" in (case_dir / "0" / "U").read_text()
+    assert f"solver {'GAMG' if options else 'PCG'};" in (case_dir / "system/fvSolution"
+                                                         ).read_text()
     res = runner.invoke(cli, ["cfd", "run", str(case_dir), "--timeout", "300"])
     assert res.exit_code == 0, res.output
     res = runner.invoke(cli, ["cfd", "parse", str(case_dir), "--case-file", str(CASE), "--json",

@@ -22,16 +22,23 @@ def cfd() -> None:
 @click.option("--cycles", default=3.0, show_default=True, help="Carrier periods to simulate.")
 @click.option("--ramp-time", default=0.0, show_default=True, help="Smooth start-up ramp, s.")
 @click.option("--y-plus", is_flag=True, help="Add the yPlus function object.")
+@click.option("--far-field", type=click.Choice(["freestream", "inletOutlet"]),
+              default="freestream", show_default=True,
+              help="Far-field conditions (inletOutlet: for heaves much faster than the stream).")
+@click.option("--pressure-solver", type=click.Choice(["PCG", "GAMG"]), default="PCG",
+              show_default=True, help="Linear solver of the pressure equation.")
 def write(case_file: Path, case_dir: Path, mesh: str, cycles: float, ramp_time: float,
-          y_plus: bool) -> None:
+          y_plus: bool, far_field: str, pressure_solver: str) -> None:
     """Write an OpenFOAM case for the [motion] of CASE_FILE into CASE_DIR."""
-    from mfflap.cfd.openfoam.writer import write_case
+    from mfflap.cfd.openfoam.writer import SolverSettings, write_case
     from mfflap.config import load_case
 
     case = load_case(case_file)
     end_time = cycles / case.motion.frequency
+    solver = SolverSettings(far_field=far_field, pressure_solver=pressure_solver)
     write_case(case_dir, case.motion.build(), end_time, mesh=mesh, plate=case.plate,
-               fluid=case.fluid, stream=case.flow, ramp_time=ramp_time, y_plus=y_plus)
+               fluid=case.fluid, stream=case.flow, ramp_time=ramp_time, y_plus=y_plus,
+               solver=solver)
     click.echo(f"wrote {case_dir} (mesh {mesh}, end time {end_time:g} s)")
 
 
