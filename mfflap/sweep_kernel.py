@@ -78,6 +78,25 @@ def _sums_and_cube_given_split(a, b, m, w, sb, h, n):
     return q0, q1, cube
 
 
+@numba.njit(cache=True, inline="always")
+def _integrate_unit_step(acc, position, rate):
+    """The semi-implicit Euler steps with the antisymmetric closure at dt = 1: fill
+    ``position`` and ``rate`` (at dt, rate / dt and acc / dt^2 with the same positions)."""
+    n = acc.shape[0]
+    s_a = 0.0
+    s_w = 0.0
+    for j in range(n):
+        s_a += acc[j]
+        s_w += (2.0 * (j + 1) - n - 2.0) / 4.0 * acc[j]
+    r = -0.5 * s_a
+    x = s_w
+    for j in range(n):
+        position[j] = x
+        rate[j] = r
+        r += acc[j]
+        x += r
+
+
 @numba.njit(cache=True)
 def _pitch_sequences(ta, n):
     """Per pitch amplitude: angle, its sine and cosine, R and A with rate = R / dt and
@@ -86,22 +105,12 @@ def _pitch_sequences(ta, n):
     factor = -4.0 * math.sin(step / 2.0) ** 2
     out = np.empty((ta.shape[0], 5, n))
     for i in range(ta.shape[0]):
-        s_a = 0.0
-        s_w = 0.0
         for j in range(n):
-            a = factor * ta[i] * math.sin(step * j)
-            out[i, 4, j] = a
-            s_a += a
-            s_w += (2.0 * (j + 1) - n - 2.0) / 4.0 * a
-        r = -0.5 * s_a
-        th = s_w
+            out[i, 4, j] = factor * ta[i] * math.sin(step * j)
+        _integrate_unit_step(out[i, 4], out[i, 0], out[i, 3])
         for j in range(n):
-            out[i, 0, j] = th
-            out[i, 1, j] = math.sin(th)
-            out[i, 2, j] = math.cos(th)
-            out[i, 3, j] = r
-            r += out[i, 4, j]
-            th += r
+            out[i, 1, j] = math.sin(out[i, 0, j])
+            out[i, 2, j] = math.cos(out[i, 0, j])
     return out
 
 
@@ -114,20 +123,9 @@ def _heave_sequences(ph, n):
     out = np.empty((ph.shape[0], 3, n))
     for i in range(ph.shape[0]):
         cp, sph = math.cos(ph[i]), math.sin(ph[i])
-        s_a = 0.0
-        s_w = 0.0
         for j in range(n):
-            a = factor * (math.sin(step * j) * cp + math.cos(step * j) * sph)
-            out[i, 2, j] = a
-            s_a += a
-            s_w += (2.0 * (j + 1) - n - 2.0) / 4.0 * a
-        v = -0.5 * s_a
-        x = s_w
-        for j in range(n):
-            out[i, 0, j] = x
-            out[i, 1, j] = v
-            v += out[i, 2, j]
-            x += v
+            out[i, 2, j] = factor * (math.sin(step * j) * cp + math.cos(step * j) * sph)
+        _integrate_unit_step(out[i, 2], out[i, 0], out[i, 1])
     return out
 
 
