@@ -1,16 +1,18 @@
-"""CPU per flapping cycle of each mesh, and the NRMSE of its forces against the medium mesh.
+"""CPU per flapping cycle of CFD set-ups, and the NRMSE of their forces against the medium mesh.
 
 f = 1 Hz, h_amp = 0.3 m, theta = 20 deg, phi = 90 deg, U = 0.3 m/s, with a 0.25 s smooth
 start-up ramp, two cycles. Every set-up runs in this process's pool (two at a time, two
 cores); CPU times are each run's own (blockMesh + pimpleFoam), printed per simulated cycle
 and as a ratio to the medium mesh.
 
-The medium mesh runs twice, with the PCG and with the GAMG pressure solver (both converged
-to 1e-7): the NRMSE between those two is the floor under any comparison with "the medium
-mesh", since they differ only by round-off in the linear solves. Forces are compared on the
-first cycle after the ramp (0.25-1 s) and on the second cycle (1-2 s), de-spiked.
+The reference is the "reference" set-up of setups.toml (the medium mesh, GAMG). It runs a
+second time with PCG instead of GAMG (both converged to 1e-7): the NRMSE between those two is
+the floor under any comparison with the medium mesh, since they differ only by round-off in
+the linear solves. Forces are compared on the first cycle after the ramp (0.25-1 s) and on
+the second cycle (1-2 s), de-spiked.
 
-Run: python benchmarks/cfd_cost.py [mesh ...] [--cycles 2]   (default: coarse lean medium)
+Run: python benchmarks/cfd_cost.py [setup ...] [--meshes coarse,lean] [--cycles 2]
+     (default: the "affordable" set-up; --meshes adds named meshes at the reference settings)
 """
 
 from __future__ import annotations
@@ -27,7 +29,8 @@ import numpy as np
 from mfflap.cfd.openfoam.forces import read_forces
 from mfflap.cfd.openfoam.loads import imposed_state, to_loads
 from mfflap.cfd.openfoam.runner import run_case
-from mfflap.cfd.openfoam.writer import SolverSettings, write_case
+from mfflap.cfd.openfoam.setups import setup
+from mfflap.cfd.openfoam.writer import mesh_specs, write_case
 from mfflap.identification.data import despike
 from mfflap.kinematics import HarmonicMotion
 from mfflap.metrics import nrmse
@@ -44,9 +47,8 @@ def windows(cycles: float) -> dict[str, tuple[float, float]]:
 
 
 def run_setup(args):
-    label, mesh, pressure_solver, n_correctors, cycles, root = args
-    solver = replace(SolverSettings(), pressure_solver=pressure_solver, write_interval=0.5,
-                     n_correctors=n_correctors)
+    label, mesh, solver, cycles, root = args
+    solver = replace(solver, write_interval=0.5)
     case = write_case(Path(root) / label, MOTION, end_time=cycles, mesh=mesh,
                       ramp_time=RAMP_S, solver=solver)
     r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -72,23 +74,36 @@ def compare(run, ref, cycles: float) -> str:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("meshes", nargs="*", default=["coarse", "lean", "medium"])
+    parser.add_argument("setups", nargs="*", default=["affordable"],
+                        help="set-ups of setups.toml")
+    parser.add_argument("--meshes", default="", help="named meshes run at the reference "
+                        "settings, comma separated")
     parser.add_argument("--cycles", type=float, default=2.0, help="cycles simulated")
     args = parser.parse_args()
-    meshes, cycles = args.meshes, args.cycles
+    cycles = args.cycles
     root = tempfile.mkdtemp(prefix="mfflap-cfd-cost-")
-    # the lean mesh runs with two pressure correctors (it has one-step glitches with one)
-    jobs = [("medium-PCG", "medium", "PCG", 1, cycles, root)] + [
-        (f"{m}-GAMG", m, "GAMG", 2 if m == "lean" else 1, cycles, root) for m in meshes]
+    ref = setup("reference")
+    jobs = [("reference", ref.mesh, ref.solver, cycles, root),
+            ("reference-PCG", ref.mesh, replace(ref.solver, pressure_solver="PCG"), cycles,
+             root)]
+    jobs += [(name, setup(name).mesh, setup(name).solver, cycles, root) for name in args.setups]
+    specs = mesh_specs()
+    jobs += [(f"{m}-mesh", specs[m], ref.solver, cycles, root)
+             for m in (s.strip() for s in args.meshes.split(",")) if m]
+    # the longest runs first, so that the two workers finish together
+    jobs.sort(key=lambda j: -j[1].n_cells)
     with ProcessPoolExecutor(2) as pool:
         results = {r[0]: r for r in pool.map(run_setup, jobs)}
-    ref = results["medium-GAMG"] if "medium-GAMG" in results else results["medium-PCG"]
+    base = results["reference"]
     print(f"f = 1 Hz, h = 0.3 m, theta = 20 deg, U = 0.3 m/s; {cycles:g} cycles; cases in {root}")
-    print("set-up         CPU per cycle   / medium   NRMSE against medium (GAMG)")
+    print("set-up          cells  CPU per cycle  / reference   NRMSE against the reference "
+          "(medium mesh)")
+    cells = {j[0]: j[1].n_cells for j in jobs}
     for label, res in results.items():
-        errors = compare(res, ref, cycles)
-        print(f"{label:14s} {res[1]:10.1f} s   {res[1] / ref[1]:7.3f}   {errors}")
-    print("medium-PCG against medium-GAMG is the floor: the same mesh, another linear solver.")
+        errors = compare(res, base, cycles)
+        print(f"{label:14s} {cells[label]:6d} {res[1]:10.1f} s   {res[1] / base[1]:7.3f}   "
+              f"{errors}")
+    print("reference-PCG against reference is the floor: the same mesh, another linear solver.")
     print("Target: <= 90 s per cycle with F_n and M within 2 % NRMSE of the medium mesh.")
 
 

@@ -162,8 +162,9 @@ def test_collapsed_time_step_is_retried_with_a_lower_courant_limit(tmp_path):
 
 
 def test_manifest_written_before_the_pressure_solver_setting_still_resumes(tmp_path):
-    """campaign.toml files written before pressure_solver/pressure_tolerance existed describe
-    PCG runs at 1e-7: they resume with those settings and refuse GAMG."""
+    """campaign.toml files written before pressure_solver/pressure_tolerance, far_field and
+    velocity_convection existed describe PCG runs at 1e-7 with the freestream far field and
+    linearUpwind U: they resume with those settings and refuse GAMG or LUST."""
     from dataclasses import asdict, replace
 
     from mfflap.campaign.execute import CampaignSetup, _write_manifest
@@ -174,13 +175,17 @@ def test_manifest_written_before_the_pressure_solver_setting_still_resumes(tmp_p
     setup = CampaignSetup()
     old = setup.as_dict()
     old["solver"] = {k: v for k, v in asdict(setup.solver).items()
-                     if k not in ("pressure_solver", "pressure_tolerance")}
+                     if k not in ("pressure_solver", "pressure_tolerance", "far_field",
+                                  "velocity_convection")}
     (tmp_path / "campaign.toml").write_text(dumps({"setup": old, "cases": {}}))
     _write_manifest(tmp_path, cases, setup)  # same runs: accepted
     assert read_toml(tmp_path / "campaign.toml")["setup"]["solver"]["pressure_solver"] == "PCG"
-    gamg = replace(setup, solver=replace(setup.solver, pressure_solver="GAMG"))
-    with pytest.raises(ConfigError, match="another setup"):
-        _write_manifest(tmp_path, cases, gamg)
+    solver = read_toml(tmp_path / "campaign.toml")["setup"]["solver"]
+    assert solver["velocity_convection"] == "linearUpwind"
+    for change in ({"pressure_solver": "GAMG"}, {"velocity_convection": "LUST"}):
+        other = replace(setup, solver=replace(setup.solver, **change))
+        with pytest.raises(ConfigError, match="another setup"):
+            _write_manifest(tmp_path, cases, other)
 
 
 def test_far_field_switch_rewrites_binary_time_folders_and_the_run_resumes(tmp_path):

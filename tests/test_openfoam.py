@@ -323,6 +323,7 @@ def test_gamg_and_pcg_pressure_solvers_give_the_same_forces_on_a_custom_mesh(tmp
     ({"max_courant": 0.0}, "max_courant"),
     ({"n_outer_correctors": 0}, "n_outer_correctors"),
     ({"pressure_tolerance": -1.0}, "pressure_tolerance"),
+    ({"velocity_convection": "upwind"}, "velocity_convection"),
 ])
 def test_impossible_solver_settings_are_refused_by_name(changes, key):
     from mfflap.cfd.openfoam.writer import SolverSettings
@@ -330,6 +331,18 @@ def test_impossible_solver_settings_are_refused_by_name(changes, key):
 
     with pytest.raises(ConfigError, match=key):
         SolverSettings(**changes)
+
+
+def test_velocity_convection_scheme_reaches_fv_schemes(tmp_path):
+    """The U convection scheme of the settings is the one the case's fvSchemes names."""
+    from mfflap.cfd.openfoam.writer import SolverSettings
+
+    for scheme in ("linearUpwind", "LUST"):
+        case = write_case(tmp_path / scheme, MOTION, end_time=0.1,
+                          solver=SolverSettings(velocity_convection=scheme))
+        schemes = (case / "system" / "fvSchemes").read_text()
+        assert f"div(phi,U)      Gauss {scheme} grad(U);" in schemes
+        assert schemes.count("div(phi,U)") == 1
 
 
 def test_impossible_mesh_is_refused_by_name():
@@ -343,7 +356,8 @@ def test_impossible_mesh_is_refused_by_name():
 
 @pytest.mark.openfoam
 def test_convergence_floor_reruns_the_reference_with_the_other_pressure_solver(tmp_path):
-    """--floor: the reference again with GAMG; its NRMSE is round-off small on a short run."""
+    """--floor: the reference again with GAMG; its NRMSE is round-off small on a short run.
+    --setups: a named set-up runs with its own mesh and solver and is compared too."""
     import json
 
     from click.testing import CliRunner
@@ -353,11 +367,16 @@ def test_convergence_floor_reruns_the_reference_with_the_other_pressure_solver(t
     case = Path(__file__).parents[1] / "cases" / "paper2026.toml"
     args = ["cfd", "convergence", str(case), str(tmp_path / "c"), "--meshes", "coarse",
             "--courant", "4", "--cycles", "0.02", "--ramp-time", "0.005", "--floor",
-            "--n-correctors", "2", "--json"]
+            "--n-correctors", "2", "--setups", "affordable", "--json"]
     res = CliRunner().invoke(cli, args)
     assert res.exit_code == 0, res.output
     data = json.loads(res.output[res.output.index("{"):])
-    assert set(data["runs"]) == {"coarse_co4", "coarse_co4_GAMG"}
+    assert set(data["runs"]) == {"coarse_co4", "coarse_co4_GAMG", "setup_affordable"}
+    assert data["runs"]["setup_affordable"]["mesh"] == "graded"
+    assert "setup_affordable vs coarse_co4" in data["nrmse"]
+    affordable = tmp_path / "c" / "cases" / "setup_affordable"
+    assert "Gauss LUST grad(U)" in (affordable / "system" / "fvSchemes").read_text()
+    assert "nOuterCorrectors 1;" in (affordable / "system" / "fvSolution").read_text()
     floor = data["nrmse"]["coarse_co4_GAMG vs coarse_co4 (round-off floor)"]
     assert 0 < floor["normal_force"] < 1e-3
     solver = (tmp_path / "c" / "cases" / "coarse_co4_GAMG" / "system" / "fvSolution").read_text()
@@ -365,7 +384,7 @@ def test_convergence_floor_reruns_the_reference_with_the_other_pressure_solver(t
 
 
 @pytest.mark.openfoam
-@pytest.mark.parametrize("mesh", ["coarse", "lean", "medium", "fine"])
+@pytest.mark.parametrize("mesh", ["coarse", "lean", "graded", "medium", "fine"])
 def test_every_named_mesh_builds_and_passes_checkmesh(tmp_path, mesh):
     """blockMesh + checkMesh on each resolution of meshes.toml; the cell count is the spec's,
     and the lean mesh's chordwise cells really are crowded toward the plate's ends."""

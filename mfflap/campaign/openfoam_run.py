@@ -13,7 +13,7 @@ from mfflap.campaign.records import CfdRecord
 from mfflap.cfd.openfoam.forces import read_forces
 from mfflap.cfd.openfoam.loads import imposed_state, to_loads
 from mfflap.cfd.openfoam.runner import run_case
-from mfflap.cfd.openfoam.writer import SolverSettings, write_case
+from mfflap.cfd.openfoam.writer import MeshSpec, SolverSettings, write_case
 from mfflap.errors import CfdRunError
 from mfflap.kinematics.continuous import Motion
 from mfflap.parameters import Fluid, FreeStream, Plate
@@ -133,7 +133,7 @@ def record_from_case(case_dir: str | Path, motion: Motion, name: str,
 
 
 def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict[str, Any],
-               end_time: float, *, mesh: str = "coarse", ramp_time: float = 0.0,
+               end_time: float, *, mesh: str | MeshSpec = "coarse", ramp_time: float = 0.0,
                solver: SolverSettings | None = None, plate: Plate | None = None,
                fluid: Fluid | None = None, stream: FreeStream | None = None,
                timeout_s: float = 6 * 3600.0, y_plus: bool = False,

@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from mfflap.campaign.records import CfdRecord, read_record, write_record
+from mfflap.cfd.openfoam.setups import CfdSetup
 from mfflap.cfd.openfoam.writer import SolverSettings
 from mfflap.cfd.openfoam.yplus import YPlusHistory, read_y_plus
 from mfflap.kinematics.continuous import Motion
@@ -75,6 +76,7 @@ def run_convergence(out_dir: str | Path, motion: Motion, end_time: float, *,
                     compare_from: float | None = None, plate=None, fluid=None, stream=None,
                     timeout_s: float = 6 * 3600.0, n_procs: int = 1,
                     solver: SolverSettings | None = None, floor: bool = False,
+                    setups: Sequence[CfdSetup] = (),
                     progress: Callable[[str], None] | None = None) -> ConvergenceStudy:
     """Run (or resume) every mesh at ``courants[0]`` and ``meshes[0]`` at the other limits.
 
@@ -87,22 +89,28 @@ def run_convergence(out_dir: str | Path, motion: Motion, end_time: float, *,
         to the same tolerance): the NRMSE between the two is the floor under every mesh
         comparison, since they differ only by round-off in the linear solves. A flow whose
         later cycles are sensitive to round-off shows it here.
+    setups
+        Named set-ups (setups.toml) run as well, each with its own mesh and solver settings
+        (``setup_<name>``), and compared with the reference.
     """
     from mfflap.campaign.openfoam_run import run_motion
 
     base = solver or SolverSettings()
     out = Path(out_dir)
-    plan = [(m, courants[0], base.pressure_solver) for m in meshes] + [
-        (meshes[0], c, base.pressure_solver) for c in courants[1:]]
     other = "GAMG" if base.pressure_solver == "PCG" else "PCG"
+    # (label, mesh, solver settings without the time-step limit, Courant limit)
+    plan = [(f"{m}_co{courants[0]:g}", m, base, courants[0]) for m in meshes] + [
+        (f"{meshes[0]}_co{c:g}", meshes[0], base, c) for c in courants[1:]]
     if floor:
-        plan.append((meshes[-1], courants[0], other))
+        plan.append((f"{meshes[-1]}_co{courants[0]:g}_{other}", meshes[-1],
+                     replace(base, pressure_solver=other), courants[0]))
+    for s in setups:
+        plan.append((f"setup_{s.name}", s.mesh, s.solver, s.solver.max_courant))
     runs = []
-    for mesh, co, pressure_solver in plan:
-        label = f"{mesh}_co{co:g}" + ("" if pressure_solver == base.pressure_solver
-                                      else f"_{pressure_solver}")
+    for label, mesh, settings, co in plan:
         path = out / f"{label}.h5"
         case_dir = out / "cases" / label
+        mesh_name = mesh if isinstance(mesh, str) else mesh.name
         if path.exists():
             record = read_record(path)
             if progress:
@@ -110,10 +118,10 @@ def run_convergence(out_dir: str | Path, motion: Motion, end_time: float, *,
         else:
             if progress:
                 progress(f"{label}: running OpenFOAM")
-            settings = replace(base, max_courant=co, write_interval=end_time / 4,
-                               pressure_solver=pressure_solver)
-            record = run_motion(case_dir, motion, label, {"mesh": mesh, "max_courant": co,
-                                                          "pressure_solver": pressure_solver},
+            settings = replace(settings, max_courant=co, write_interval=end_time / 4)
+            record = run_motion(case_dir, motion, label, {"mesh": mesh_name, "max_courant": co,
+                                                          "pressure_solver":
+                                                              settings.pressure_solver},
                                 end_time, mesh=mesh, ramp_time=ramp_time, solver=settings,
                                 plate=plate, fluid=fluid, stream=stream, timeout_s=timeout_s,
                                 y_plus=True, n_procs=n_procs)
@@ -122,7 +130,7 @@ def run_convergence(out_dir: str | Path, motion: Motion, end_time: float, *,
                 progress(f"{label}: {record.provenance.get('cpu_time_s', 0):.0f} s CPU")
         y_plus = read_y_plus(case_dir) if (case_dir / "postProcessing" / "yPlus").is_dir() \
             else None
-        runs.append(ConvergenceRun(label, mesh, co, record, y_plus))
+        runs.append(ConvergenceRun(label, mesh_name, co, record, y_plus))
     reference = f"{meshes[-1]}_co{courants[0]:g}"
     by_label = {r.label: r for r in runs}
     start = compare_from if compare_from is not None else max(ramp_time, 0.1 * end_time)

@@ -17,28 +17,46 @@ def cfd() -> None:
 @cfd.command()
 @click.argument("case_file", type=click.Path(dir_okay=False, path_type=Path))
 @click.argument("case_dir", type=click.Path(file_okay=False, path_type=Path))
-@click.option("--mesh", default="coarse", show_default=True,
-              help="coarse | lean | medium | fine (cfd_templates/openfoam/meshes.toml)")
+@click.option("--mesh", default=None,
+              help="coarse | lean | medium | fine (cfd_templates/openfoam/meshes.toml); "
+                   "default coarse.")
+@click.option("--setup", "setup_name", default=None,
+              help="A named set-up of cfd_templates/openfoam/setups.toml (mesh and solver "
+                   "settings together, e.g. affordable); instead of --mesh.")
 @click.option("--cycles", default=3.0, show_default=True, help="Carrier periods to simulate.")
 @click.option("--ramp-time", default=0.0, show_default=True, help="Smooth start-up ramp, s.")
 @click.option("--y-plus", is_flag=True, help="Add the yPlus function object.")
-@click.option("--far-field", type=click.Choice(["freestream", "inletOutlet"]),
-              default="freestream", show_default=True,
-              help="Far-field conditions (inletOutlet: for heaves much faster than the stream).")
-@click.option("--pressure-solver", type=click.Choice(["PCG", "GAMG"]), default="PCG",
-              show_default=True, help="Linear solver of the pressure equation.")
-def write(case_file: Path, case_dir: Path, mesh: str, cycles: float, ramp_time: float,
-          y_plus: bool, far_field: str, pressure_solver: str) -> None:
+@click.option("--far-field", type=click.Choice(["freestream", "inletOutlet"]), default=None,
+              help="Far-field conditions (inletOutlet: for heaves much faster than the "
+                   "stream); default freestream.")
+@click.option("--pressure-solver", type=click.Choice(["PCG", "GAMG"]), default=None,
+              help="Linear solver of the pressure equation; default PCG (or the set-up's).")
+def write(case_file: Path, case_dir: Path, mesh: str | None, setup_name: str | None,
+          cycles: float, ramp_time: float, y_plus: bool, far_field: str | None,
+          pressure_solver: str | None) -> None:
     """Write an OpenFOAM case for the [motion] of CASE_FILE into CASE_DIR."""
+    from dataclasses import replace
+
+    from mfflap.cfd.openfoam.setups import setup
     from mfflap.cfd.openfoam.writer import SolverSettings, write_case
     from mfflap.config import load_case
 
+    if setup_name is not None and mesh is not None:
+        raise click.UsageError("give --mesh or --setup, not both (a set-up names its mesh)")
     case = load_case(case_file)
     end_time = cycles / case.motion.frequency
-    solver = SolverSettings(far_field=far_field, pressure_solver=pressure_solver)
-    write_case(case_dir, case.motion.build(), end_time, mesh=mesh, plate=case.plate,
+    if setup_name is not None:
+        chosen = setup(setup_name)
+        spec, solver = chosen.mesh, chosen.solver
+    else:
+        spec, solver = mesh or "coarse", SolverSettings()
+    overrides = {k: v for k, v in (("far_field", far_field),
+                                   ("pressure_solver", pressure_solver)) if v is not None}
+    solver = replace(solver, **overrides)
+    write_case(case_dir, case.motion.build(), end_time, mesh=spec, plate=case.plate,
                fluid=case.fluid, stream=case.flow, ramp_time=ramp_time, y_plus=y_plus,
                solver=solver)
+    mesh = spec if isinstance(spec, str) else spec.name
     click.echo(f"wrote {case_dir} (mesh {mesh}, end time {end_time:g} s)")
 
 
@@ -158,13 +176,17 @@ def fluent(case_file: Path, out_dir: Path, cycles: float, ramp_time: float, time
 @click.option("--floor", is_flag=True,
               help="Rerun the reference with the other pressure solver: the round-off floor "
                    "under every NRMSE of the study.")
+@click.option("--setups", "setup_names", default="",
+              help="Named set-ups of setups.toml (comma separated) run as well, each with its "
+                   "own mesh and solver settings, and compared with the reference.")
 @click.option("--json", "as_json", is_flag=True, help="Print the NRMSE table as JSON.")
 def convergence(case_file: Path, out_dir: Path, meshes: str, courants: str, cycles: float,
                 ramp_time: float | None, procs: int, pressure_solver: str, n_correctors: int,
-                floor: bool, as_json: bool) -> None:
+                floor: bool, setup_names: str, as_json: bool) -> None:
     """Mesh and time-step convergence of the [motion] of CASE_FILE: NRMSE between runs and
     the plate's y+ over time (HDF5 records, HTML report, resumable)."""
     from mfflap.cfd.convergence import convergence_figure, run_convergence
+    from mfflap.cfd.openfoam.setups import setup
     from mfflap.cfd.openfoam.writer import SolverSettings
     from mfflap.config import load_case
     from mfflap.reports.html import Report, figure_html, table_html
@@ -177,6 +199,8 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: str, cycl
                             courants=[float(c) for c in courants.split(",")], ramp_time=ramp,
                             plate=case.plate, fluid=case.fluid, stream=case.flow,
                             n_procs=procs, floor=floor,
+                            setups=[setup(n.strip()) for n in setup_names.split(",")
+                                    if n.strip()],
                             solver=SolverSettings(pressure_solver=pressure_solver,
                                                   n_correctors=n_correctors),
                             progress=lambda m: click.echo(m, err=True))

@@ -66,6 +66,10 @@ def mesh_specs() -> dict[str, MeshSpec]:
     return {name: MeshSpec(name=name, **values) for name, values in data.items()}
 
 
+#: Convection schemes of U that the case template accepts (each with ``grad(U)``).
+VELOCITY_CONVECTION_SCHEMES = ("linearUpwind", "LUST")
+
+
 @dataclass(frozen=True)
 class SolverSettings:
     """PIMPLE and time-step settings of a run."""
@@ -83,6 +87,9 @@ class SolverSettings:
     #: "inletOutlet": inletOutlet velocity and a fixed pressure (stable where the whole mesh
     #: heaves much faster than the stream; see :func:`mfflap.campaign.openfoam_run.run_motion`)
     far_field: str = "freestream"
+    #: convection scheme of U: "linearUpwind" (second-order upwind) or "LUST" (75 % linear,
+    #: 25 % linearUpwind: less numerical diffusion of the shed vortices on a coarse mesh)
+    velocity_convection: str = "linearUpwind"
 
     def __post_init__(self) -> None:
         if self.pressure_solver not in ("PCG", "GAMG"):
@@ -91,6 +98,10 @@ class SolverSettings:
         if self.far_field not in ("freestream", "inletOutlet"):
             raise ConfigError(f"far_field must be freestream or inletOutlet, got "
                               f"{self.far_field!r}", key="far_field")
+        if self.velocity_convection not in VELOCITY_CONVECTION_SCHEMES:
+            raise ConfigError(f"velocity_convection must be one of "
+                              f"{', '.join(VELOCITY_CONVECTION_SCHEMES)}, got "
+                              f"{self.velocity_convection!r}", key="velocity_convection")
         if not self.max_courant > 0:
             raise ConfigError(f"max_courant must be > 0, got {self.max_courant!r}",
                               key="max_courant")
@@ -172,11 +183,12 @@ def write_case(case_dir: str | Path, motion: Motion, end_time: float,
         "n_correctors": solver.n_correctors, "y_plus": y_plus, "y_plus_interval": 20,
         "n_procs": 2, "pressure_solver": solver.pressure_solver,
         "pressure_tolerance": solver.pressure_tolerance, "far_field": solver.far_field,
+        "velocity_convection": solver.velocity_convection,
     }
     env = jinja2.Environment(undefined=jinja2.StrictUndefined, keep_trailing_newline=True)
     src = template_dir()
     for path in src.rglob("*"):
-        if path.is_dir() or path.name == "meshes.toml":
+        if path.is_dir() or (path.suffix == ".toml" and path.parent == src):
             continue
         rel = path.relative_to(src)
         out = case_dir / rel.parent / rel.name.removesuffix(".j2")

@@ -1,0 +1,89 @@
+"""Named CFD set-ups: a mesh of meshes.toml together with the solver settings it was measured
+with (``cfd_templates/openfoam/setups.toml``).
+
+A mesh alone does not fix cost or accuracy: the same cells run with another convection scheme
+or corrector count give other forces at another price. A set-up names the pair, so a case
+written with ``--setup affordable`` is the one ``benchmarks/cfd_cost.py`` measured.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields, replace
+from pathlib import Path
+
+from mfflap.cfd.openfoam.writer import MeshSpec, SolverSettings, mesh_specs, template_dir
+from mfflap.errors import ConfigError
+from mfflap.toml_io import read_toml
+
+
+@dataclass(frozen=True)
+class CfdSetup:
+    """A named mesh with its solver settings."""
+
+    name: str
+    mesh: MeshSpec
+    solver: SolverSettings
+    description: str = ""
+
+
+def setups_path() -> Path:
+    """The set-up file (``cfd_templates/openfoam/setups.toml``)."""
+    return template_dir() / "setups.toml"
+
+
+def named_setups(path: str | Path | None = None) -> dict[str, CfdSetup]:
+    """The set-ups of ``path`` (setups.toml by default), keyed by name.
+
+    Each table names a ``mesh`` of meshes.toml, an optional ``description`` and any fields of
+    :class:`~mfflap.cfd.openfoam.writer.SolverSettings`; the rest keep their defaults.
+
+    Raises
+    ------
+    ConfigError
+        Naming the file and the dotted key, for an unknown mesh or setting or an impossible
+        value.
+    """
+    path = Path(path) if path is not None else setups_path()
+    data = read_toml(path)
+    meshes = mesh_specs()
+    allowed = {f.name for f in fields(SolverSettings)}
+    out = {}
+    for name, table in data.items():
+        if not isinstance(table, dict):
+            raise ConfigError(f"set-up {name!r} must be a table", source=str(path), key=name)
+        table = dict(table)
+        mesh = table.pop("mesh", None)
+        if mesh not in meshes:
+            raise ConfigError(f"set-up {name!r}: mesh must be one of {', '.join(meshes)}, got "
+                              f"{mesh!r}", source=str(path), key=f"{name}.mesh")
+        description = str(table.pop("description", ""))
+        unknown = sorted(set(table) - allowed)
+        if unknown:
+            raise ConfigError(f"set-up {name!r}: unknown solver setting {unknown[0]!r}; "
+                              f"allowed: {', '.join(sorted(allowed))}", source=str(path),
+                              key=f"{name}.{unknown[0]}")
+        try:
+            solver = replace(SolverSettings(), **table)
+        except ConfigError as err:
+            raise ConfigError(f"set-up {name!r}: {err}", source=str(path),
+                              key=f"{name}.{err.key}") from err
+        except TypeError as err:  # e.g. a string where a number belongs
+            raise ConfigError(f"set-up {name!r}: a setting has the wrong type ({err})",
+                              source=str(path), key=name) from err
+        out[name] = CfdSetup(name, meshes[mesh], solver, description)
+    return out
+
+
+def setup(name: str) -> CfdSetup:
+    """One set-up of setups.toml by name.
+
+    Raises
+    ------
+    ConfigError
+        If there is no such set-up (the message lists those there are).
+    """
+    setups = named_setups()
+    if name not in setups:
+        raise ConfigError(f"unknown set-up {name!r}; allowed: {', '.join(setups)}",
+                          source=str(setups_path()), key="setup")
+    return setups[name]

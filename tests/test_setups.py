@@ -1,0 +1,66 @@
+"""Named CFD set-ups (cfd_templates/openfoam/setups.toml): parsing, refusals, and the case a
+set-up writes."""
+
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from mfflap.cfd.openfoam.setups import named_setups, setup
+from mfflap.cfd.openfoam.writer import mesh_specs
+from mfflap.cli.main import cli
+from mfflap.errors import ConfigError
+
+CASE = Path(__file__).parents[1] / "cases" / "paper2026.toml"
+
+
+def test_shipped_setups_name_real_meshes_and_valid_settings():
+    setups = named_setups()
+    assert {"reference", "affordable"} <= set(setups)
+    affordable = setups["affordable"]
+    assert affordable.mesh == mesh_specs()["graded"]
+    assert (affordable.solver.n_outer_correctors, affordable.solver.n_correctors) == (1, 2)
+    assert affordable.solver.velocity_convection == "LUST"
+    assert setups["reference"].mesh.name == "medium"
+    assert affordable.description
+
+
+@pytest.mark.parametrize("body, key", [
+    ('[a]\nmesh = "nowhere"\n', "a.mesh"),
+    ('[a]\nmesh = "coarse"\nmax_courrant = 4.0\n', "a.max_courrant"),
+    ('[a]\nmesh = "coarse"\nvelocity_convection = "upwind"\n', "a.velocity_convection"),
+    ('[a]\nmesh = "coarse"\nmax_courant = "four"\n', "a"),
+    ('a = 3\n', "a"),
+])
+def test_bad_setup_file_names_file_and_key(tmp_path, body, key):
+    path = tmp_path / "setups.toml"
+    path.write_text(body)
+    with pytest.raises(ConfigError) as err:
+        named_setups(path)
+    assert err.value.key == key
+    assert str(path) in str(err.value)
+
+
+def test_unknown_setup_lists_the_known_ones():
+    with pytest.raises(ConfigError, match="affordable"):
+        setup("cheapest")
+
+
+def test_cfd_write_with_a_setup_writes_its_mesh_and_solver(tmp_path):
+    res = CliRunner().invoke(cli, ["cfd", "write", str(CASE), str(tmp_path / "c"),
+                                   "--setup", "affordable", "--cycles", "0.1"])
+    assert res.exit_code == 0, res.output
+    case = tmp_path / "c"
+    assert 'mesh = "graded"' in (case / "mfflap_case.toml").read_text()
+    assert "Gauss LUST grad(U)" in (case / "system" / "fvSchemes").read_text()
+    solution = (case / "system" / "fvSolution").read_text()
+    assert "nOuterCorrectors 1;" in solution and "nCorrectors     2;" in solution
+    assert "solver GAMG;" in solution
+    assert not (case / "setups.toml").exists() and not (case / "meshes.toml").exists()
+
+
+def test_cfd_write_refuses_mesh_and_setup_together(tmp_path):
+    res = CliRunner().invoke(cli, ["cfd", "write", str(CASE), str(tmp_path / "c"),
+                                   "--setup", "affordable", "--mesh", "coarse"])
+    assert res.exit_code == 2
+    assert "not both" in res.output
