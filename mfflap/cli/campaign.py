@@ -30,7 +30,7 @@ def campaign() -> None:
 @click.option("--heave-amplitudes", help="Subset of the heave amplitudes, m.")
 @click.option("--phases", help="Subset of the phases, deg.")
 @click.option("--mesh", default="coarse", show_default=True,
-              help="coarse | lean | medium | fine (cfd_templates/openfoam/meshes.toml)")
+              help="coarse | lean | graded | medium | fine (cfd_templates/openfoam/meshes.toml)")
 @click.option("--workers", default=1, show_default=True, help="LocalCluster worker processes.")
 @click.option("--scheduler", default=None,
               help="Address of an existing dask scheduler (tcp://host:8786) instead of a "
