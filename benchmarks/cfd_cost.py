@@ -86,7 +86,7 @@ def main() -> None:
     jobs = [("reference", ref.mesh, ref.solver, cycles, root),
             ("reference-PCG", ref.mesh, replace(ref.solver, pressure_solver="PCG"), cycles,
              root)]
-    jobs += [(name, setup(name).mesh, setup(name).solver, cycles, root) for name in args.setups]
+    jobs += [(s.name, s.mesh, s.solver, cycles, root) for s in map(setup, args.setups)]
     specs = mesh_specs()
     jobs += [(f"{m}-mesh", specs[m], ref.solver, cycles, root)
              for m in (s.strip() for s in args.meshes.split(",")) if m]

@@ -17,7 +17,7 @@ import numpy as np
 
 from mfflap.campaign.records import CfdRecord, read_record, write_record
 from mfflap.cfd.openfoam.setups import CfdSetup
-from mfflap.cfd.openfoam.writer import SolverSettings
+from mfflap.cfd.openfoam.writer import SolverSettings, resolve_mesh
 from mfflap.cfd.openfoam.yplus import YPlusHistory, read_y_plus
 from mfflap.kinematics.continuous import Motion
 from mfflap.metrics import nrmse
@@ -110,7 +110,7 @@ def run_convergence(out_dir: str | Path, motion: Motion, end_time: float, *,
     for label, mesh, settings, co in plan:
         path = out / f"{label}.h5"
         case_dir = out / "cases" / label
-        mesh_name = mesh if isinstance(mesh, str) else mesh.name
+        mesh_name = resolve_mesh(mesh).name
         if path.exists():
             record = read_record(path)
             if progress:

@@ -38,7 +38,7 @@ def write(case_file: Path, case_dir: Path, mesh: str | None, setup_name: str | N
     from dataclasses import replace
 
     from mfflap.cfd.openfoam.setups import setup
-    from mfflap.cfd.openfoam.writer import SolverSettings, write_case
+    from mfflap.cfd.openfoam.writer import SolverSettings, resolve_mesh, write_case
     from mfflap.config import load_case
 
     if setup_name is not None and mesh is not None:
@@ -49,15 +49,14 @@ def write(case_file: Path, case_dir: Path, mesh: str | None, setup_name: str | N
         chosen = setup(setup_name)
         spec, solver = chosen.mesh, chosen.solver
     else:
-        spec, solver = mesh or "coarse", SolverSettings()
+        spec, solver = resolve_mesh(mesh or "coarse"), SolverSettings()
     overrides = {k: v for k, v in (("far_field", far_field),
                                    ("pressure_solver", pressure_solver)) if v is not None}
     solver = replace(solver, **overrides)
     write_case(case_dir, case.motion.build(), end_time, mesh=spec, plate=case.plate,
                fluid=case.fluid, stream=case.flow, ramp_time=ramp_time, y_plus=y_plus,
                solver=solver)
-    mesh = spec if isinstance(spec, str) else spec.name
-    click.echo(f"wrote {case_dir} (mesh {mesh}, end time {end_time:g} s)")
+    click.echo(f"wrote {case_dir} (mesh {spec.name}, end time {end_time:g} s)")
 
 
 @cfd.command()

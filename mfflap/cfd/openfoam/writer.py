@@ -66,6 +66,22 @@ def mesh_specs() -> dict[str, MeshSpec]:
     return {name: MeshSpec(name=name, **values) for name, values in data.items()}
 
 
+def resolve_mesh(mesh: str | MeshSpec) -> MeshSpec:
+    """``mesh`` itself, or the named resolution of meshes.toml.
+
+    Raises
+    ------
+    ConfigError
+        For a name meshes.toml does not have (the message lists those it has).
+    """
+    if isinstance(mesh, MeshSpec):
+        return mesh
+    specs = mesh_specs()
+    if mesh not in specs:
+        raise ConfigError(f"unknown mesh {mesh!r}; allowed: {', '.join(specs)}", key="mesh")
+    return specs[mesh]
+
+
 #: Convection schemes of U that the case template accepts (each with ``grad(U)``).
 VELOCITY_CONVECTION_SCHEMES = ("linearUpwind", "LUST")
 
@@ -157,13 +173,7 @@ def write_case(case_dir: str | Path, motion: Motion, end_time: float,
     """
     plate, fluid, stream = plate or Plate(), fluid or Fluid(), stream or FreeStream()
     solver = solver or SolverSettings()
-    if isinstance(mesh, MeshSpec):
-        spec = mesh
-    else:
-        specs = mesh_specs()
-        if mesh not in specs:
-            raise ConfigError(f"unknown mesh {mesh!r}; allowed: {', '.join(specs)}", key="mesh")
-        spec = specs[mesh]
+    spec = resolve_mesh(mesh)
     depth = plate.span if depth is None else depth
     case_dir = Path(case_dir)
     case_dir.mkdir(parents=True, exist_ok=True)
