@@ -3,8 +3,27 @@
 from __future__ import annotations
 
 
+from typing import Any
+
+
 class MfflapError(Exception):
-    """Base class of every error mfflap raises on purpose."""
+    """Base class of every error mfflap raises on purpose.
+
+    Errors pickle with their keyword arguments (case, key, path, line...), so one raised in
+    a worker process or on a dask worker arrives whole in the process that waits for it.
+    """
+
+    def _keep(self, message: str, **kwargs: Any) -> None:
+        self._message = message
+        self._kwargs = kwargs
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        message = getattr(self, "_message", self.args[0] if self.args else "")
+        return (_rebuild, (type(self), message, getattr(self, "_kwargs", {})))
+
+
+def _rebuild(cls: type[MfflapError], message: str, kwargs: dict[str, Any]) -> MfflapError:
+    return cls(message, **kwargs)
 
 
 class ConfigError(MfflapError, ValueError):
@@ -21,6 +40,7 @@ class ConfigError(MfflapError, ValueError):
     """
 
     def __init__(self, message: str, *, source: str | None = None, key: str | None = None):
+        self._keep(message, source=source, key=key)
         self.source = source
         self.key = key
         where = ": ".join(p for p in (source, key) if p)
@@ -45,6 +65,7 @@ class ParseError(MfflapError, ValueError):
     """
 
     def __init__(self, message: str, *, path: str | None = None, line: int | None = None):
+        self._keep(message, path=path, line=line)
         self.path = path
         self.line = line
         where = str(path) if path else "<text>"
@@ -67,6 +88,7 @@ class CfdRunError(MfflapError, RuntimeError):
     """
 
     def __init__(self, message: str, *, case: str, log_tail: str = ""):
+        self._keep(message, case=case, log_tail=log_tail)
         self.case = case
         self.log_tail = log_tail
         text = f"case {case}: {message}"
