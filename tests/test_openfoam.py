@@ -296,26 +296,39 @@ def test_restart_into_the_same_time_folder_supersedes_a_collapsed_segment(tmp_pa
 
 
 @pytest.mark.openfoam
-def test_gamg_and_pcg_pressure_solvers_give_the_same_forces_on_a_custom_mesh(tmp_path):
-    """A MeshSpec not in meshes.toml runs; the pressure solver changes cost, not forces."""
+def test_pressure_solver_settings_change_cost_not_forces_on_a_custom_mesh(tmp_path):
+    """A MeshSpec not in meshes.toml runs; GAMG instead of PCG, and the last pressure
+    corrector stopped at a relative tolerance of 1 %, change the iterations, not the forces."""
+    import re
     from dataclasses import replace
 
     from mfflap.cfd.openfoam.writer import MeshSpec, SolverSettings
 
     spec = MeshSpec("tiny", n_chord=20, n_edge=4, n_radial=20, radial_expansion=100.0,
                     radius_chords=8.0)
-    forces = {}
-    for solver in ("PCG", "GAMG"):
-        settings = replace(SolverSettings(), pressure_solver=solver)
-        case = write_case(tmp_path / solver, MOTION, end_time=0.03, mesh=spec, solver=settings)
-        assert f"solver {solver};" in (case / "system/fvSolution").read_text()
+    variants = {"PCG": {"pressure_solver": "PCG"}, "GAMG": {"pressure_solver": "GAMG"},
+                "GAMG-final-1%": {"pressure_solver": "GAMG", "pressure_final_rel_tol": 0.01}}
+    forces, final_p_iterations = {}, {}
+    for name, changes in variants.items():
+        settings = replace(SolverSettings(n_outer_correctors=1, n_correctors=2), **changes)
+        case = write_case(tmp_path / name, MOTION, end_time=0.03, mesh=spec, solver=settings)
+        assert f"solver {changes['pressure_solver']};" in (case / "system/fvSolution").read_text()
         assert 'mesh = "tiny"' in (case / "mfflap_case.toml").read_text()
         run_case(case, timeout_s=300)
-        forces[solver] = read_forces(case)
-    a, b = forces["PCG"], forces["GAMG"]
-    t = np.linspace(0.005, min(a.time[-1], b.time[-1]), 50)
-    fa, fb = np.interp(t, a.time, a.force[:, 0]), np.interp(t, b.time, b.force[:, 0])
-    assert np.max(np.abs(fa - fb)) <= 1e-3 * np.max(np.abs(fa))
+        forces[name] = read_forces(case)
+        log = (case / "log.pimpleFoam").read_text()
+        # every second p solve of a time step is the final corrector's
+        iterations = [int(n) for n in re.findall(r"Solving for p,.*No Iterations (\d+)", log)]
+        final_p_iterations[name] = np.mean(iterations[1::2])
+    a = forces["PCG"]
+    t = np.linspace(0.005, 0.03, 50)
+    fa = np.interp(t, a.time, a.force[:, 0])
+    for name, tol in (("GAMG", 1e-3), ("GAMG-final-1%", 1e-2)):
+        b = forces[name]
+        assert b.time[-1] >= 0.03 - 1e-9
+        fb = np.interp(t, b.time, b.force[:, 0])
+        assert np.max(np.abs(fa - fb)) <= tol * np.max(np.abs(fa)), name
+    assert final_p_iterations["GAMG-final-1%"] < 0.6 * final_p_iterations["GAMG"]
 
 
 @pytest.mark.parametrize("changes, key", [
@@ -324,6 +337,8 @@ def test_gamg_and_pcg_pressure_solvers_give_the_same_forces_on_a_custom_mesh(tmp
     ({"n_outer_correctors": 0}, "n_outer_correctors"),
     ({"pressure_tolerance": -1.0}, "pressure_tolerance"),
     ({"velocity_convection": "upwind"}, "velocity_convection"),
+    ({"pressure_final_rel_tol": 1.0}, "pressure_final_rel_tol"),
+    ({"pressure_final_rel_tol": -0.01}, "pressure_final_rel_tol"),
 ])
 def test_impossible_solver_settings_are_refused_by_name(changes, key):
     from mfflap.cfd.openfoam.writer import SolverSettings
@@ -343,6 +358,17 @@ def test_velocity_convection_scheme_reaches_fv_schemes(tmp_path):
         schemes = (case / "system" / "fvSchemes").read_text()
         assert f"div(phi,U)      Gauss {scheme} grad(U);" in schemes
         assert schemes.count("div(phi,U)") == 1
+
+
+def test_final_pressure_tolerance_reaches_fv_solution(tmp_path):
+    """The last corrector's relative tolerance is pFinal's; 0 (the default) converges it."""
+    from mfflap.cfd.openfoam.writer import SolverSettings
+
+    for rel_tol in (0.0, 0.01):
+        case = write_case(tmp_path / str(rel_tol), MOTION, end_time=0.1,
+                          solver=SolverSettings(pressure_final_rel_tol=rel_tol))
+        solution = (case / "system" / "fvSolution").read_text()
+        assert f"pFinal {{ $p; relTol {rel_tol}; }}" in solution
 
 
 def test_impossible_mesh_is_refused_by_name():

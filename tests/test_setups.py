@@ -21,6 +21,8 @@ def test_shipped_setups_name_real_meshes_and_valid_settings():
     assert affordable.mesh == mesh_specs()["graded"]
     assert (affordable.solver.n_outer_correctors, affordable.solver.n_correctors) == (1, 2)
     assert affordable.solver.velocity_convection == "LUST"
+    assert affordable.solver.pressure_final_rel_tol == 0.01
+    assert setups["reference"].solver.pressure_final_rel_tol == 0.0
     assert setups["reference"].mesh.name == "medium"
     assert affordable.description
 
@@ -56,6 +58,7 @@ def test_cfd_write_with_a_setup_writes_its_mesh_and_solver(tmp_path):
     solution = (case / "system" / "fvSolution").read_text()
     assert "nOuterCorrectors 1;" in solution and "nCorrectors     2;" in solution
     assert "solver GAMG;" in solution
+    assert "pFinal { $p; relTol 0.01; }" in solution
     assert not (case / "setups.toml").exists() and not (case / "meshes.toml").exists()
 
 

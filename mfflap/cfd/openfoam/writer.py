@@ -106,6 +106,9 @@ class SolverSettings:
     #: convection scheme of U: "linearUpwind" (second-order upwind) or "LUST" (75 % linear,
     #: 25 % linearUpwind: less numerical diffusion of the shed vortices on a coarse mesh)
     velocity_convection: str = "linearUpwind"
+    #: relative tolerance of the last pressure corrector of a time step (0: converge to
+    #: ``pressure_tolerance``, which costs most of the pressure solve's iterations)
+    pressure_final_rel_tol: float = 0.0
 
     def __post_init__(self) -> None:
         if self.pressure_solver not in ("PCG", "GAMG"):
@@ -124,6 +127,9 @@ class SolverSettings:
         if self.n_outer_correctors < 1 or self.n_correctors < 1:
             raise ConfigError("n_outer_correctors and n_correctors must be >= 1",
                               key="n_outer_correctors")
+        if not 0 <= self.pressure_final_rel_tol < 1:
+            raise ConfigError(f"pressure_final_rel_tol must be in [0, 1), got "
+                              f"{self.pressure_final_rel_tol!r}", key="pressure_final_rel_tol")
         if not self.pressure_tolerance > 0:
             raise ConfigError(f"pressure_tolerance must be > 0, got {self.pressure_tolerance!r}",
                               key="pressure_tolerance")
@@ -194,6 +200,7 @@ def write_case(case_dir: str | Path, motion: Motion, end_time: float,
         "n_procs": 2, "pressure_solver": solver.pressure_solver,
         "pressure_tolerance": solver.pressure_tolerance, "far_field": solver.far_field,
         "velocity_convection": solver.velocity_convection,
+        "pressure_final_rel_tol": solver.pressure_final_rel_tol,
     }
     env = jinja2.Environment(undefined=jinja2.StrictUndefined, keep_trailing_newline=True)
     src = template_dir()
