@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import argparse
 import re
+import shutil
 import tempfile
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import replace
@@ -73,6 +74,7 @@ def run_setup(args):
     label, mesh, solver, cycles, root = args
     case = Path(root) / label
     if not _finished(case):
+        shutil.rmtree(case, ignore_errors=True)  # a half run would time only its last part
         solver = replace(solver, write_interval=0.5)
         case = write_case(case, MOTION, end_time=cycles, mesh=mesh, ramp_time=RAMP_S,
                           solver=solver)
