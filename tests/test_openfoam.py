@@ -438,3 +438,40 @@ def test_every_named_mesh_builds_and_passes_checkmesh(tmp_path, mesh):
         widths = np.diff(x)
         assert widths[len(widths) // 2] / widths[0] == pytest.approx(spec.chord_grading,
                                                                      rel=0.15)
+
+
+@pytest.mark.openfoam
+def test_second_restart_from_a_non_integer_time_is_read_from_its_suffixed_file(tmp_path):
+    """A run restarted twice from t = 0.02 s: the first restart wrote forces/0.02/force.dat
+    and was killed; v1912 writes the second restart's forces to force_0.02.dat beside it.
+    The merged history runs to the end and matches an uninterrupted run (seen on a campaign
+    case that resumed at 0.75 s, whose end was first read as the killed run's 1.263 s)."""
+    from mfflap.cfd.openfoam.writer import MeshSpec, SolverSettings
+
+    spec = MeshSpec("tiny", n_chord=20, n_edge=4, n_radial=20, radial_expansion=100.0,
+                    radius_chords=8.0)
+    settings = SolverSettings(write_interval=0.01)
+    whole = write_case(tmp_path / "whole", MOTION, end_time=0.03, mesh=spec, solver=settings)
+    run_case(whole, timeout_s=300)
+    case = write_case(tmp_path / "restarted", MOTION, end_time=0.03, mesh=spec,
+                      solver=settings)
+    run_case(case, timeout_s=300)
+    for restart in range(2):
+        shutil.rmtree(case / "0.03")  # the fields are kept at 0.02 and 0.03 (purgeWrite 2)
+        run_case(case, timeout_s=300)
+        if restart == 0:  # the first restart was killed at 0.025 s
+            for name in ("force", "moment"):
+                path = case / "postProcessing" / "forces" / "0.02" / f"{name}.dat"
+                lines = path.read_text().splitlines(keepends=True)
+                path.write_text("".join(ln for ln in lines
+                                        if ln.startswith("#") or float(ln.split()[0]) < 0.025))
+    folder = case / "postProcessing" / "forces" / "0.02"
+    assert (folder / "force_0.02.dat").is_file() and (folder / "moment_0.02.dat").is_file()
+    merged, reference = read_forces(case), read_forces(whole)
+    assert merged.time[-1] == pytest.approx(reference.time[-1])
+    assert np.all(np.diff(merged.time) > 0)
+    t = np.linspace(0.002, 0.029, 60)
+    for k in range(2):
+        a = np.interp(t, merged.time, merged.force[:, k])
+        b = np.interp(t, reference.time, reference.force[:, k])
+        assert np.max(np.abs(a - b)) <= 1e-2 * np.max(np.abs(b))

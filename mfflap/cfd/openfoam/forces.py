@@ -110,15 +110,18 @@ def _check_increasing(arr: np.ndarray, path: str) -> None:
 
 
 def _segments(folder: Path, stem: str) -> list[Path]:
-    """``<stem>.dat`` then the restart files ``<stem>_0.dat``, ``<stem>_1.dat``... that
-    OpenFOAM writes when a run restarts into an existing time folder."""
+    """``<stem>.dat`` then the restart files ``<stem>_<time>.dat`` (``force_0.dat``,
+    ``force_0.75.dat``) that v1912 writes when a run restarts into a time folder whose
+    ``<stem>.dat`` already exists; later restarts come later."""
     numbered = []
     for p in folder.glob(f"{stem}_*.dat"):
-        suffix = p.stem[len(stem) + 1:]
-        if suffix.isdigit():
-            numbered.append((int(suffix), p))
+        try:
+            restart_time = float(p.stem[len(stem) + 1:])
+        except ValueError:
+            continue
+        numbered.append((restart_time, p.stat().st_mtime_ns, p))
     first = [folder / f"{stem}.dat"] if (folder / f"{stem}.dat").is_file() else []
-    return first + [p for _, p in sorted(numbered)]
+    return first + [p for *_, p in sorted(numbered)]
 
 
 def _merge(parts: list[np.ndarray]) -> np.ndarray:
