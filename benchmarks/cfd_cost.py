@@ -25,7 +25,6 @@ Run: python benchmarks/cfd_cost.py [setup ...] [--meshes coarse,lean] [--cycles 
 from __future__ import annotations
 
 import argparse
-import re
 import shutil
 import tempfile
 from concurrent.futures import ProcessPoolExecutor
@@ -34,6 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
+from mfflap.campaign.openfoam_run import solver_provenance
 from mfflap.cfd.openfoam.forces import read_forces
 from mfflap.cfd.openfoam.loads import imposed_state, to_loads
 from mfflap.cfd.openfoam.runner import run_case
@@ -53,13 +53,6 @@ def windows(cycles: float) -> dict[str, tuple[float, float]]:
     """Comparison windows: each simulated cycle (1 s at f = 1 Hz) after the ramp."""
     return {f"cycle {k}": (max(RAMP_S, k - 1.0), min(float(k), cycles))
             for k in range(1, int(np.ceil(cycles)) + 1) if min(k, cycles) > max(RAMP_S, k - 1)}
-
-
-def _execution_time_s(log: Path) -> float:
-    """pimpleFoam's CPU time: the last ExecutionTime of its log."""
-    times = re.findall(r"^ExecutionTime = ([0-9.eE+-]+) s", log.read_text(errors="replace"),
-                       re.M)
-    return float(times[-1])
 
 
 def _finished(case: Path) -> bool:
@@ -87,7 +80,8 @@ def run_setup(args):
     loads = to_loads(history, imposed_state(MOTION, history.time, RAMP_S), 0.18, 0.18,
                      source=f"openfoam:{label}")
     series = {k: despike(np.asarray(getattr(loads, k)))[0] for k in COMPONENTS}
-    return label, _execution_time_s(case / "log.pimpleFoam") / cycles, history.time, series
+    cpu_s = solver_provenance(case)["cpu_time_s"]
+    return label, cpu_s / cycles, history.time, series
 
 
 def compare(run, ref, cycles: float) -> str:
