@@ -247,6 +247,19 @@ def test_convergence_command_on_three_meshes_and_two_courant_limits(tmp_path):
         assert 0 <= data["nrmse"][key]["normal_force"] < 1.0
     assert data["runs"]["coarse_co4"]["y_plus_mean"] > 0
     assert (out / "convergence.html").read_text().count("<img") == 1
+    # the grid convergence index is computed from the three meshes' own records
+    from mfflap.campaign.records import read_record
+    from mfflap.cfd.convergence import mesh_gci
+    assert data["gci_meshes"] == ["coarse_co4", "medium_co4", "fine_co4"]
+    gci = mesh_gci([read_record(out / f"{m}.h5") for m in data["gci_meshes"]], 0.005)
+    assert set(data["gci"]) == set(gci) == {"mean_thrust_N", "mean_input_power_W",
+                                             "peak_normal_force_N", "rms_moment_Nm"}
+    for k, g in gci.items():
+        assert data["gci"][k]["values"] == pytest.approx(list(g.values))
+        assert data["gci"][k]["cell_counts"] == [data["runs"][f"{m}_co4"]["n_cells"]
+                                                 for m in ("fine", "medium", "coarse")]
+        assert data["gci"][k]["behaviour"] == g.behaviour
+    assert "Grid convergence index" in (out / "convergence.html").read_text()
     # a second call finds every run finished and reruns nothing
     mtime = (out / "fine_co4.h5").stat().st_mtime_ns
     res = CliRunner().invoke(cli, args)
@@ -383,7 +396,8 @@ def test_impossible_mesh_is_refused_by_name():
 @pytest.mark.openfoam
 def test_convergence_floor_reruns_the_reference_with_the_other_pressure_solver(tmp_path):
     """--floor: the reference again with GAMG; its NRMSE is round-off small on a short run.
-    --setups: a named set-up runs with its own mesh and solver and is compared too."""
+    --setups: a named set-up runs with its own mesh and solver and is compared too;
+    --far-field applies to all of them."""
     import json
 
     from click.testing import CliRunner
@@ -393,7 +407,8 @@ def test_convergence_floor_reruns_the_reference_with_the_other_pressure_solver(t
     case = Path(__file__).parents[1] / "cases" / "paper2026.toml"
     args = ["cfd", "convergence", str(case), str(tmp_path / "c"), "--meshes", "coarse",
             "--courant", "4", "--cycles", "0.02", "--ramp-time", "0.005", "--floor",
-            "--n-correctors", "2", "--setups", "affordable", "--json"]
+            "--n-correctors", "2", "--setups", "affordable", "--far-field", "inletOutlet",
+            "--json"]
     res = CliRunner().invoke(cli, args)
     assert res.exit_code == 0, res.output
     data = json.loads(res.output[res.output.index("{"):])
@@ -403,8 +418,24 @@ def test_convergence_floor_reruns_the_reference_with_the_other_pressure_solver(t
     affordable = tmp_path / "c" / "cases" / "setup_affordable"
     assert "Gauss LUST grad(U)" in (affordable / "system" / "fvSchemes").read_text()
     assert "nOuterCorrectors 1;" in (affordable / "system" / "fvSolution").read_text()
+    # every run of the study, the set-up's too, has the far field asked for
+    for run in data["runs"]:
+        assert "inletOutlet" in (tmp_path / "c" / "cases" / run / "0" / "U").read_text()
     floor = data["nrmse"]["coarse_co4_GAMG vs coarse_co4 (round-off floor)"]
     assert 0 < floor["normal_force"] < 1e-3
+    # the same folder with other settings: refused by file and key, nothing rerun or lost
+    record = tmp_path / "c" / "coarse_co4.h5"
+    mtime = record.stat().st_mtime_ns
+    for change, key in ((["--n-correctors", "1"], "n_correctors"),
+                        (["--far-field", "freestream"], "far_field"),
+                        (["--cycles", "0.03"], "cycles")):
+        changed = list(args)
+        i = changed.index(change[0])
+        changed[i + 1] = change[1]
+        res = CliRunner().invoke(cli, changed)
+        assert res.exit_code != 0
+        assert "coarse_co4.h5" in res.output and f": {key}:" in res.output, res.output
+    assert record.stat().st_mtime_ns == mtime
     solver = (tmp_path / "c" / "cases" / "coarse_co4_GAMG" / "system" / "fvSolution").read_text()
     assert "solver GAMG;" in solver and "nCorrectors     2;" in solver
 

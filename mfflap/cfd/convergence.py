@@ -4,23 +4,28 @@ Every run is an OpenFOAM case under one folder, resumed if stopped and kept as a
 (``<mesh>_co<Co>.h5``) once finished, so the study resumes where it stopped. The reference is
 the finest mesh at the first Courant limit; the time-step study repeats the first mesh at each
 further limit. NRMSE is computed on the reference's time base after the start-up ramp, like
-the paper's mesh study (0.26 % between its chosen and finest meshes).
+the paper's mesh study (0.26 % between its chosen and finest meshes). With three meshes or
+more, the finest three also give the grid convergence index (:mod:`mfflap.cfd.gci`) of the
+cycle's mean thrust and input power, peak normal force and RMS moment.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
 from mfflap.campaign.records import CfdRecord, read_record, write_record
+from mfflap.cfd.gci import GridConvergence, grid_convergence
 from mfflap.cfd.openfoam.setups import CfdSetup
 from mfflap.cfd.openfoam.writer import SolverSettings, resolve_mesh
 from mfflap.cfd.openfoam.yplus import YPlusHistory, read_y_plus
+from mfflap.errors import ConfigError
 from mfflap.kinematics.continuous import Motion
 from mfflap.metrics import nrmse
+from mfflap.performance import thrust_and_power
 
 COMPONENTS = ("normal_force", "tangential_force", "moment")
 
@@ -38,17 +43,26 @@ class ConvergenceRun:
 
 @dataclass
 class ConvergenceStudy:
-    """All runs, the reference and the NRMSE of each against it."""
+    """All runs, the reference, the NRMSE of each against it and the grid convergence index.
+
+    ``gci`` maps each quantity of :func:`integral_quantities` to its
+    :class:`~mfflap.cfd.gci.GridConvergence` over the three finest meshes at the first Courant
+    limit (empty with fewer than three meshes); ``gci_meshes`` names those runs.
+    """
 
     runs: list[ConvergenceRun]
     reference: str
     nrmse: dict[str, dict[str, float]] = field(default_factory=dict)
     pairs: dict[str, tuple[str, str]] = field(default_factory=dict)
+    gci: dict[str, GridConvergence] = field(default_factory=dict)
+    gci_meshes: tuple[str, ...] = ()
 
     def as_dict(self) -> dict:
         """JSON-friendly summary."""
         return {"reference": self.reference, "nrmse": self.nrmse,
                 "pairs": {k: list(v) for k, v in self.pairs.items()},
+                "gci_meshes": list(self.gci_meshes),
+                "gci": {k: v.as_dict() for k, v in self.gci.items()},
                 "runs": {r.label: {"mesh": r.mesh, "max_courant": r.max_courant,
                                    "n_cells": r.record.provenance.get("n_cells"),
                                    "cpu_time_s": r.record.provenance.get("cpu_time_s"),
@@ -70,6 +84,61 @@ def compare(a: CfdRecord, b: CfdRecord, start: float) -> dict[str, float]:
     return out
 
 
+def integral_quantities(record: CfdRecord, start: float,
+                        end: float | None = None) -> dict[str, float]:
+    """Scalars of a run over ``[start, end]`` that a mesh study extrapolates.
+
+    Returns
+    -------
+    dict
+        ``mean_thrust_N`` and ``mean_input_power_W`` (time means), ``peak_normal_force_N``
+        (max |F_n|) and ``rms_moment_Nm``.
+    """
+    t = record.time
+    end = t[-1] if end is None else end
+    keep = (t >= start) & (t <= end)
+    if np.count_nonzero(keep) < 2:
+        raise ValueError(f"{record.name}: fewer than two samples in [{start}, {end}] s")
+    thrust, power = thrust_and_power(record.loads, record.state)
+    tk = t[keep]
+    span = tk[-1] - tk[0]
+    return {"mean_thrust_N": float(np.trapezoid(thrust[keep], tk) / span),
+            "mean_input_power_W": float(np.trapezoid(power[keep], tk) / span),
+            "peak_normal_force_N": float(np.max(np.abs(record.loads.normal_force[keep]))),
+            "rms_moment_Nm": float(np.sqrt(np.trapezoid(record.loads.moment[keep] ** 2, tk)
+                                           / span))}
+
+
+def mesh_gci(records: Sequence[CfdRecord], start: float,
+             end: float | None = None) -> dict[str, GridConvergence]:
+    """Grid convergence index of each :func:`integral_quantities` over three meshes' runs.
+
+    The window ends at ``end`` or where the shortest run ends; cell counts are read from each
+    record's provenance (``n_cells``).
+    """
+    if len(records) != 3:
+        raise ValueError(f"a grid convergence index needs three meshes, got {len(records)}")
+    end = min(r.time[-1] for r in records) if end is None else end
+    cells = [int(r.provenance["n_cells"]) for r in records]
+    scalars = [integral_quantities(r, start, end) for r in records]
+    return {k: grid_convergence([s[k] for s in scalars], cells) for k in scalars[0]}
+
+
+def _check_resumed(path: Path, record: CfdRecord, settings: SolverSettings,
+                   end_time: float) -> None:
+    """Refuse a finished run of an earlier study that this one would compare as its own."""
+    if abs(record.time[-1] - end_time) > 0.02 * end_time:
+        raise ConfigError(f"this run ends at {record.time[-1]:.4g} s, the study at "
+                          f"{end_time:.4g} s (another --cycles?); use another output folder, "
+                          f"or delete the record to rerun it", source=str(path), key="cycles")
+    for key, value in asdict(settings).items():
+        stored = record.provenance.get(f"solver_{key}")
+        if key != "write_interval" and stored is not None and stored != value:
+            raise ConfigError(f"this run was made with {key} = {stored!r}, the study asks for "
+                              f"{value!r}; use another output folder, or delete the record "
+                              f"to rerun it", source=str(path), key=key)
+
+
 def run_convergence(out_dir: str | Path, motion: Motion, end_time: float, *,
                     meshes: Sequence[str] = ("coarse", "medium", "fine"),
                     courants: Sequence[float] = (4.0, 2.0), ramp_time: float = 0.0,
@@ -83,7 +152,8 @@ def run_convergence(out_dir: str | Path, motion: Motion, end_time: float, *,
     Parameters
     ----------
     solver
-        Base solver settings (pressure solver, correctors); the Courant limit is the study's.
+        Base solver settings (pressure solver, correctors, far field); the Courant limit is
+        the study's.
     floor
         Also rerun the reference with the other pressure solver (PCG <-> GAMG, both converged
         to the same tolerance): the NRMSE between the two is the floor under every mesh
@@ -91,7 +161,7 @@ def run_convergence(out_dir: str | Path, motion: Motion, end_time: float, *,
         later cycles are sensitive to round-off shows it here.
     setups
         Named set-ups (setups.toml) run as well, each with its own mesh and solver settings
-        (``setup_<name>``), and compared with the reference.
+        but the study's far field (``setup_<name>``), and compared with the reference.
     """
     from mfflap.campaign.openfoam_run import run_motion
 
@@ -104,21 +174,23 @@ def run_convergence(out_dir: str | Path, motion: Motion, end_time: float, *,
     if floor:
         plan.append((f"{meshes[-1]}_co{courants[0]:g}_{other}", meshes[-1],
                      replace(base, pressure_solver=other), courants[0]))
-    for s in setups:
-        plan.append((f"setup_{s.name}", s.mesh, s.solver, s.solver.max_courant))
+    for s in setups:  # each with its own mesh and solver, in the study's far field
+        plan.append((f"setup_{s.name}", s.mesh, replace(s.solver, far_field=base.far_field),
+                     s.solver.max_courant))
     runs = []
     for label, mesh, settings, co in plan:
         path = out / f"{label}.h5"
         case_dir = out / "cases" / label
         mesh_name = resolve_mesh(mesh).name
+        settings = replace(settings, max_courant=co, write_interval=end_time / 4)
         if path.exists():
             record = read_record(path)
+            _check_resumed(path, record, settings, end_time)
             if progress:
                 progress(f"{label}: already finished")
         else:
             if progress:
                 progress(f"{label}: running OpenFOAM")
-            settings = replace(settings, max_courant=co, write_interval=end_time / 4)
             record = run_motion(case_dir, motion, label, {"mesh": mesh_name, "max_courant": co,
                                                           "pressure_solver":
                                                               settings.pressure_solver},
@@ -152,6 +224,10 @@ def run_convergence(out_dir: str | Path, motion: Motion, end_time: float, *,
         study.nrmse[f"{first} vs {fine_dt}"] = compare(by_label[first].record,
                                                        by_label[fine_dt].record, start)
         study.pairs[f"{first} vs {fine_dt}"] = (first, fine_dt)
+    if len(meshes) >= 3:
+        finest = [f"{m}_co{courants[0]:g}" for m in meshes[-3:]]
+        study.gci = mesh_gci([by_label[k].record for k in finest], start)
+        study.gci_meshes = tuple(finest)
     return study
 
 

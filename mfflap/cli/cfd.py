@@ -172,6 +172,10 @@ def fluent(case_file: Path, out_dir: Path, cycles: float, ramp_time: float, time
               show_default=True, help="Linear solver of the pressure equation.")
 @click.option("--n-correctors", default=1, show_default=True,
               help="PIMPLE pressure correctors per outer iteration.")
+@click.option("--far-field", type=click.Choice(["freestream", "inletOutlet"]),
+              default="freestream", show_default=True,
+              help="Far-field conditions (inletOutlet where the fine mesh's time step "
+                   "collapses with freestream under large, fast heaves).")
 @click.option("--floor", is_flag=True,
               help="Rerun the reference with the other pressure solver: the round-off floor "
                    "under every NRMSE of the study.")
@@ -181,9 +185,10 @@ def fluent(case_file: Path, out_dir: Path, cycles: float, ramp_time: float, time
 @click.option("--json", "as_json", is_flag=True, help="Print the NRMSE table as JSON.")
 def convergence(case_file: Path, out_dir: Path, meshes: str, courants: str, cycles: float,
                 ramp_time: float | None, procs: int, pressure_solver: str, n_correctors: int,
-                floor: bool, setup_names: str, as_json: bool) -> None:
-    """Mesh and time-step convergence of the [motion] of CASE_FILE: NRMSE between runs and
-    the plate's y+ over time (HDF5 records, HTML report, resumable)."""
+                far_field: str, floor: bool, setup_names: str, as_json: bool) -> None:
+    """Mesh and time-step convergence of the [motion] of CASE_FILE: NRMSE between runs, the
+    grid convergence index of mean thrust, power, peak F_n and RMS moment over the three
+    finest meshes, and the plate's y+ over time (HDF5 records, HTML report, resumable)."""
     from mfflap.cfd.convergence import convergence_figure, run_convergence
     from mfflap.cfd.openfoam.setups import setup
     from mfflap.cfd.openfoam.writer import SolverSettings
@@ -201,7 +206,8 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: str, cycl
                             setups=[setup(n.strip()) for n in setup_names.split(",")
                                     if n.strip()],
                             solver=SolverSettings(pressure_solver=pressure_solver,
-                                                  n_correctors=n_correctors),
+                                                  n_correctors=n_correctors,
+                                                  far_field=far_field),
                             progress=lambda m: click.echo(m, err=True))
     rep = Report("Mesh and time-step convergence", f"{case.study.name}: {cycles:g} cycles")
     sec = rep.section("NRMSE between runs")
@@ -212,6 +218,14 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: str, cycl
                                    v["y_plus_max"]] for k, v in
                                   study.as_dict()["runs"].items()]))
     sec.blocks.append(figure_html(convergence_figure(study), "F_n and y+ over the run"))
+    if study.gci:
+        gsec = rep.section(f"Grid convergence index ({', '.join(study.gci_meshes)}; Celik et "
+                           "al. 2008, Fs = 1.25)")
+        gsec.blocks.append(table_html(
+            ["quantity", "fine", "medium", "coarse", "behaviour", "order p", "extrapolated",
+             "GCI fine", "GCI medium"],
+            [[k, *g.values, g.behaviour, g.apparent_order, g.extrapolated, g.gci_fine,
+              g.gci_medium] for k, g in study.gci.items()]))
     rep.write(Path(out_dir) / "convergence.html")
     if as_json:
         click.echo(json.dumps(study.as_dict(), indent=2))
@@ -219,4 +233,8 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: str, cycl
     for k, v in study.nrmse.items():
         click.echo(f"{k:32s} NRMSE F_n {v['normal_force']:.4f}  F_t "
                    f"{v['tangential_force']:.4f}  M {v['moment']:.4f}")
+    for k, g in study.gci.items():
+        click.echo(f"GCI {k:22s} {g.behaviour:12s} p {g.apparent_order:6.2f}  fine "
+                   f"{g.values[0]:10.4g} +- {100 * g.gci_fine:6.2f} %  medium {g.values[1]:10.4g} "
+                   f"+- {100 * g.gci_medium:6.2f} %  extrapolated {g.extrapolated:10.4g}")
     click.echo(f"wrote {Path(out_dir) / 'convergence.html'}")
