@@ -2,6 +2,7 @@
 
 from pathlib import Path
 
+import h5py
 import numpy as np
 import pytest
 
@@ -100,7 +101,7 @@ def test_campaign_on_local_cluster_resumes_and_reports_failures(tmp_path):
     assert openfoam_available()
     out = tmp_path / "camp"
     failing = CfdCase(0.0, 0.2, 90.0, 10.0, duration=1.0, ramp_time=0.5)  # f = 0: refused
-    setup = CampaignSetup(timeout_s=900.0)
+    setup = CampaignSetup(timeout_s=900.0, single_precision=True)
     statuses = run_campaign([SHORT, OTHER, failing], out, setup, n_workers=2, progress=False)
     states = {s.case_id: s.state for s in statuses}
     assert states == {SHORT.case_id: "done", OTHER.case_id: "done", failing.case_id: "failed"}
@@ -112,6 +113,10 @@ def test_campaign_on_local_cluster_resumes_and_reports_failures(tmp_path):
     assert rec.provenance["openfoam_build"].startswith("OPENFOAM=1912")
     assert rec.provenance["mesh"] == "coarse" and rec.provenance["cpu_time_s"] > 0
     assert rec.parameters["frequency"] == 1.0
+    assert rec.provenance["storage"] == "float32"  # written compact, like the fixtures
+    with h5py.File(out / f"{SHORT.case_id}.h5") as h5:
+        assert h5["loads/normal_force"].dtype == np.float32
+        assert h5["loads/time"].dtype == np.float64
     assert not (out / "cases" / SHORT.case_id).exists()  # cleaned after success
     mtime = (out / f"{SHORT.case_id}.h5").stat().st_mtime_ns
     again = run_campaign([SHORT, OTHER, failing], out, setup, n_workers=1, progress=False)

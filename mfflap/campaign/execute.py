@@ -39,9 +39,13 @@ class CampaignSetup:
     stream: FreeStream = field(default_factory=FreeStream)
     timeout_s: float = 6 * 3600.0
     keep_case_dirs: bool = False
+    #: store records in float32 like the shipped fixtures (half the size), so that a fixture
+    #: campaign commits each record once instead of at full precision and again compacted
+    single_precision: bool = False
 
     def as_dict(self) -> dict[str, Any]:
-        """Plain nested values for campaign.toml."""
+        """Plain nested values for campaign.toml (what the runs depend on; not how the case
+        folders and records are kept)."""
         return {"mesh": self.mesh, "timeout_s": self.timeout_s,
                 "solver": asdict(self.solver), "plate": asdict(self.plate),
                 "fluid": asdict(self.fluid), "stream": asdict(self.stream)}
@@ -79,7 +83,7 @@ def run_one(case: CfdCase, out_dir: str, setup: CampaignSetup) -> CaseStatus:
                             mesh=setup.mesh, ramp_time=case.ramp_time, solver=solver,
                             plate=setup.plate, fluid=setup.fluid, stream=setup.stream,
                             timeout_s=setup.timeout_s)
-        write_record(record_path, record)
+        write_record(record_path, record, single_precision=setup.single_precision)
     except Exception as exc:  # a failed case must not stop the campaign
         tail = getattr(exc, "log_tail", "") or traceback.format_exc(limit=3)
         _failed_path(out, case.case_id).write_text(

@@ -37,12 +37,14 @@ def campaign() -> None:
                    "LocalCluster, e.g. one from dask-jobqueue's SLURMCluster.")
 @click.option("--retry-failed", is_flag=True, help="Rerun cases that failed before.")
 @click.option("--keep-cases", is_flag=True, help="Keep the OpenFOAM case folders.")
+@click.option("--single-precision", is_flag=True,
+              help="Store the records in float32, like the shipped fixtures (half the size).")
 @click.option("--timeout", default=6 * 3600.0, show_default=True, help="Seconds per case.")
 @click.option("--dry-run", is_flag=True, help="List the cases and exit.")
 def run_cmd(case_file: Path, out_dir: Path, frequencies: str | None,
             heave_amplitudes: str | None, phases: str | None, mesh: str, workers: int,
-            scheduler: str | None, retry_failed: bool, keep_cases: bool, timeout: float,
-            dry_run: bool) -> None:
+            scheduler: str | None, retry_failed: bool, keep_cases: bool,
+            single_precision: bool, timeout: float, dry_run: bool) -> None:
     """Run the identification grid of CASE_FILE in OpenFOAM.
 
     Finished cases are never rerun: rerun the same command to continue a campaign that was
@@ -60,7 +62,8 @@ def run_cmd(case_file: Path, out_dir: Path, frequencies: str | None,
             click.echo(f"{c.case_id}  duration {c.duration:g} s  ramp {c.ramp_time:g} s")
         return
     setup = CampaignSetup(mesh=mesh, plate=case.plate, fluid=case.fluid, stream=case.flow,
-                          timeout_s=timeout, keep_case_dirs=keep_cases)
+                          timeout_s=timeout, keep_case_dirs=keep_cases,
+                          single_precision=single_precision)
     statuses = run_campaign(cases, out_dir, setup, n_workers=workers,
                             scheduler_address=scheduler, retry_failed=retry_failed)
     done = sum(s.state == "done" for s in statuses)
