@@ -234,3 +234,35 @@ def test_solver_setting_selects_the_far_field_and_refuses_unknown_ones(tmp_path)
     assert "type fixedValue; value uniform 0;" in (case / "0" / "p").read_text()
     default = write_case(tmp_path / "d", SHORT.motion(), end_time=0.02)
     assert "freestreamVelocity" in (default / "0" / "U").read_text()
+
+
+@pytest.mark.openfoam
+def test_campaign_command_runs_a_named_set_up(tmp_path):
+    """--setup affordable: the manifest and the written case carry the set-up's mesh and
+    solver settings (the run itself is cut short by the timeout)."""
+    from click.testing import CliRunner
+
+    from mfflap.cli.main import cli
+    from mfflap.toml_io import read_toml
+
+    case = Path(__file__).parents[1] / "cases" / "paper2026.toml"
+    out = tmp_path / "camp"
+    grid = ["--frequencies", "2", "--heave-amplitudes", "0.1", "--phases", "90"]
+    both = CliRunner().invoke(cli, ["campaign", "run", str(case), "--out", str(out), *grid,
+                                    "--mesh", "coarse", "--setup", "affordable"])
+    assert both.exit_code == 2 and "not both" in both.output
+    unknown = CliRunner().invoke(cli, ["campaign", "run", str(case), "--out", str(out), *grid,
+                                       "--setup", "cheapest", "--dry-run"])
+    assert unknown.exit_code != 0 and "setups.toml" in unknown.output
+    assert "cheapest" in unknown.output
+    res = CliRunner().invoke(cli, ["campaign", "run", str(case), "--out", str(out), *grid,
+                                   "--setup", "affordable", "--timeout", "3", "--keep-cases"])
+    assert res.exit_code == 0, res.output
+    manifest = read_toml(out / "campaign.toml")["setup"]
+    assert manifest["mesh"] == "graded"
+    assert manifest["solver"]["velocity_convection"] == "LUST"
+    assert manifest["solver"]["n_outer_correctors"] == 1
+    assert manifest["solver"]["pressure_final_rel_tol"] == 0.01
+    (case_dir,) = (out / "cases").iterdir()
+    assert "Gauss LUST grad(U)" in (case_dir / "system" / "fvSchemes").read_text()
+    assert "FAILED f2p000_h0p100_phi090p0" in res.output

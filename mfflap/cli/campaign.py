@@ -29,8 +29,13 @@ def campaign() -> None:
 @click.option("--frequencies", help="Subset of the grid's frequencies, Hz (e.g. 0.1,1,2).")
 @click.option("--heave-amplitudes", help="Subset of the heave amplitudes, m.")
 @click.option("--phases", help="Subset of the phases, deg.")
-@click.option("--mesh", default="coarse", show_default=True,
-              help="coarse | lean | graded | medium | fine (cfd_templates/openfoam/meshes.toml)")
+@click.option("--mesh", default=None,
+              help="coarse | lean | graded | medium | fine (cfd_templates/openfoam/meshes.toml); "
+                   "default coarse.")
+@click.option("--setup", "setup_name", default=None,
+              help="A named set-up of cfd_templates/openfoam/setups.toml (mesh and solver "
+                   "settings together, e.g. affordable: about a quarter of the medium mesh's "
+                   "CPU); instead of --mesh.")
 @click.option("--workers", default=1, show_default=True, help="LocalCluster worker processes.")
 @click.option("--scheduler", default=None,
               help="Address of an existing dask scheduler (tcp://host:8786) instead of a "
@@ -42,7 +47,8 @@ def campaign() -> None:
 @click.option("--timeout", default=6 * 3600.0, show_default=True, help="Seconds per case.")
 @click.option("--dry-run", is_flag=True, help="List the cases and exit.")
 def run_cmd(case_file: Path, out_dir: Path, frequencies: str | None,
-            heave_amplitudes: str | None, phases: str | None, mesh: str, workers: int,
+            heave_amplitudes: str | None, phases: str | None, mesh: str | None,
+            setup_name: str | None, workers: int,
             scheduler: str | None, retry_failed: bool, keep_cases: bool,
             single_precision: bool, timeout: float, dry_run: bool) -> None:
     """Run the identification grid of CASE_FILE in OpenFOAM.
@@ -52,19 +58,29 @@ def run_cmd(case_file: Path, out_dir: Path, frequencies: str | None,
     """
     from mfflap.campaign.cases import grid_cases
     from mfflap.campaign.execute import CampaignSetup, run_campaign
+    from mfflap.cfd.openfoam.setups import setup
+    from mfflap.cfd.openfoam.writer import SolverSettings
     from mfflap.config import load_case
 
+    if setup_name is not None and mesh is not None:
+        raise click.UsageError("give --mesh or --setup, not both (a set-up names its mesh)")
     case = load_case(case_file)
     cases = grid_cases(case.identification, _floats(frequencies), _floats(heave_amplitudes),
                        _floats(phases))
+    if setup_name is not None:
+        chosen = setup(setup_name)
+        mesh_name, solver = chosen.mesh.name, chosen.solver
+    else:
+        mesh_name, solver = mesh or "coarse", SolverSettings()
     if dry_run:
         for c in cases:
             click.echo(f"{c.case_id}  duration {c.duration:g} s  ramp {c.ramp_time:g} s")
         return
-    setup = CampaignSetup(mesh=mesh, plate=case.plate, fluid=case.fluid, stream=case.flow,
-                          timeout_s=timeout, keep_case_dirs=keep_cases,
-                          single_precision=single_precision)
-    statuses = run_campaign(cases, out_dir, setup, n_workers=workers,
+    campaign_setup = CampaignSetup(mesh=mesh_name, solver=solver, plate=case.plate,
+                                   fluid=case.fluid, stream=case.flow, timeout_s=timeout,
+                                   keep_case_dirs=keep_cases,
+                                   single_precision=single_precision)
+    statuses = run_campaign(cases, out_dir, campaign_setup, n_workers=workers,
                             scheduler_address=scheduler, retry_failed=retry_failed)
     done = sum(s.state == "done" for s in statuses)
     click.echo(f"{done}/{len(statuses)} cases done in {out_dir}")
