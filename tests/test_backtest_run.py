@@ -8,7 +8,7 @@ from click.testing import CliRunner
 
 from mfflap.backtest.compare import compare_last_cycle
 from mfflap.backtest.run import backtest_motion, cfd_motion, motion_key
-from mfflap.campaign.records import CfdRecord, write_record
+from mfflap.campaign.records import CfdRecord, read_record, write_record
 from mfflap.cfd.openfoam.loads import imposed_state
 from mfflap.cfd.openfoam.runner import openfoam_available
 from mfflap.hydro import MorisonModel
@@ -87,6 +87,19 @@ def test_live_backtest_runs_openfoam_and_saves_a_fixture(tmp_path):
     assert again.source == f"fixture {saved.name}"
     assert again.comparison.cfd_mean_thrust == pytest.approx(out.comparison.cfd_mean_thrust,
                                                              rel=1e-4)
+    # a named set-up: its mesh and solver settings reach the run and its record
+    from mfflap.cfd.openfoam.setups import setup
+
+    affordable = setup("affordable")
+    other = harmonic_to_discrete(2.0, 0.1, np.deg2rad(12), np.deg2rad(90), 20)
+    out = backtest_motion(other, "affordable", MorisonModel(), 50.0, live=True,
+                          work_dir=tmp_path, n_cycles=0.2, save_to=tmp_path / "fx",
+                          mesh=affordable.mesh.name, solver=affordable.solver)
+    assert out.status == "back-tested"
+    record = read_record(tmp_path / "fx" / f"backtest_{out.key}.h5")
+    assert record.provenance["mesh"] == "graded"
+    assert record.provenance["solver_velocity_convection"] == "LUST"
+    assert record.provenance["solver_n_outer_correctors"] == 1
 
 
 def test_vtk_time_series_reads_back_in_pyvista(tmp_path):
@@ -145,3 +158,13 @@ def test_a_failed_cfd_run_is_reported_with_its_reason(tmp_path):
     out = backtest_motion(MOTION, "β = 1", MorisonModel(), 50.0, fixture_folders=[folder])
     assert out.status == "not back-tested"
     assert "failed" in out.source and "time step collapsed" in out.source
+
+
+def test_backtest_command_refuses_a_mesh_and_a_set_up_together():
+    from click.testing import CliRunner
+
+    from mfflap.cli.main import cli
+
+    res = CliRunner().invoke(cli, ["backtest", __file__, "--live", "--mesh", "coarse",
+                                   "--setup", "affordable"])
+    assert res.exit_code == 2 and "not both" in res.output

@@ -10,13 +10,14 @@ from __future__ import annotations
 
 import hashlib
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
 from mfflap.backtest.compare import BacktestComparison, compare_last_cycle
 from mfflap.campaign.records import CfdRecord, read_record, write_record
+from mfflap.cfd.openfoam.writer import SolverSettings
 from mfflap.errors import MfflapError
 from mfflap.kinematics.continuous import PeriodicSplineMotion
 from mfflap.kinematics.convert import to_spline
@@ -89,13 +90,18 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
                     fixture_folders: Sequence[str | Path] = (), live: bool = False,
                     work_dir: str | Path | None = None, n_cycles: float = 3.0,
                     mesh: str = "coarse", plate=None, fluid=None, stream=None,
-                    save_to: str | Path | None = None) -> BacktestOutcome:
+                    save_to: str | Path | None = None,
+                    solver: SolverSettings | None = None) -> BacktestOutcome:
     """Back-test one periodic motion: run or find its CFD, compare the last cycle.
 
     Parameters
     ----------
     live
         Run OpenFOAM (requires it installed and ``work_dir``).
+    mesh, solver
+        Mesh and solver settings of a live run (default: the coarse mesh at the default
+        settings; a named set-up of setups.toml gives both); they are in the record's
+        provenance.
     save_to
         Folder where a live run's record is written as ``backtest_<key>.h5`` (a fixture).
     """
@@ -119,9 +125,11 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
                       "n_steps": motion.n_steps, "ramp_time": 0.5 * period,
                       "n_cycles": n_cycles, "motion_key": key}
             try:
+                settings = None if solver is None else replace(
+                    solver, write_interval=n_cycles * period / 4)
                 record = run_motion(Path(work_dir) / name, spline, name, params,
                                     n_cycles * period, mesh=mesh, ramp_time=0.5 * period,
-                                    plate=plate, fluid=fluid, stream=stream)
+                                    plate=plate, fluid=fluid, stream=stream, solver=settings)
                 source = "live OpenFOAM"
                 if save_to is not None:
                     write_record(Path(save_to) / f"{name}.h5", record, single_precision=True)

@@ -6,6 +6,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from mfflap.backtest.run import BacktestOutcome, backtest_motion
+from mfflap.cfd.openfoam.writer import SolverSettings
 from mfflap.config import CaseConfig
 from mfflap.kinematics.discrete import DiscreteMotion
 
@@ -13,7 +14,8 @@ from mfflap.kinematics.discrete import DiscreteMotion
 def backtest_all(config: CaseConfig, motions: dict[str, DiscreteMotion], model, *,
                  fixture_folders: Sequence[str | Path], live: bool = False,
                  work_dir: str | Path | None = None, save_to: str | Path | None = None,
-                 mesh: str = "coarse", progress: Callable[[str], None] | None = None
+                 mesh: str = "coarse", solver: SolverSettings | None = None,
+                 progress: Callable[[str], None] | None = None
                  ) -> dict[str, BacktestOutcome]:
     """Back-test each labelled motion (a failure of one does not stop the others)."""
     out = {}
@@ -23,7 +25,8 @@ def backtest_all(config: CaseConfig, motions: dict[str, DiscreteMotion], model, 
         out[label] = backtest_motion(
             motion, label, model, config.optimisation.max_power,
             fixture_folders=fixture_folders, live=live, work_dir=work_dir, mesh=mesh,
-            plate=config.plate, fluid=config.fluid, stream=config.flow, save_to=save_to)
+            plate=config.plate, fluid=config.fluid, stream=config.flow, save_to=save_to,
+            solver=solver)
         if progress is not None:
             o = out[label]
             progress(f"back-test {label}: {o.status} ({o.source})")

@@ -19,19 +19,30 @@ import click
               help="Folders of back-test records (default: the shipped ones).")
 @click.option("--save-to", type=click.Path(file_okay=False, path_type=Path), default=None,
               help="Write live runs as back-test records (fixtures) here.")
-@click.option("--mesh", default="coarse", show_default=True)
+@click.option("--mesh", default=None,
+              help="Mesh of live runs (cfd_templates/openfoam/meshes.toml); default coarse.")
+@click.option("--setup", "setup_name", default=None,
+              help="A named set-up of cfd_templates/openfoam/setups.toml for live runs (mesh "
+                   "and solver settings together, e.g. affordable); instead of --mesh.")
 @click.option("--json", "as_json", is_flag=True)
 def backtest(optimisation_file: Path, live: bool, work_dir: Path,
-             fixture_folders: tuple[Path, ...], save_to: Path | None, mesh: str,
-             as_json: bool) -> None:
+             fixture_folders: tuple[Path, ...], save_to: Path | None, mesh: str | None,
+             setup_name: str | None, as_json: bool) -> None:
     """Back-test the optimised motions (and the best sinusoid) of OPTIMISATION_FILE."""
     from mfflap.backtest.workflow import backtest_all, gain_in_cfd
     from mfflap.campaign.records import fixture_dir
+    from mfflap.cfd.openfoam.setups import setup
     from mfflap.config import loads_case
     from mfflap.optimisation.store import read_result, read_sweep
     from mfflap.optimisation.study import sinusoid_motion
     from mfflap.results import ResultsFile
 
+    if setup_name is not None and mesh is not None:
+        raise click.UsageError("give --mesh or --setup, not both (a set-up names its mesh)")
+    solver = None
+    if setup_name is not None:
+        chosen = setup(setup_name)
+        mesh, solver = chosen.mesh.name, chosen.solver
     with ResultsFile(optimisation_file) as rf:
         case = loads_case(rf.config_toml, source=f"{optimisation_file}:/inputs")
         sweep, best = read_sweep(rf, "optimisation/sweep")
@@ -43,7 +54,8 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
     motions = {"best sinusoid": sinusoid_motion(sweep, best, n), **motions}
     folders = list(fixture_folders) or [fixture_dir("backtest")]
     outcomes = backtest_all(case, motions, case.morison_model(), fixture_folders=folders,
-                            live=live, work_dir=work_dir, save_to=save_to, mesh=mesh,
+                            live=live, work_dir=work_dir, save_to=save_to,
+                            mesh=mesh or "coarse", solver=solver,
                             progress=lambda m: click.echo(m, err=True))
     data = {label: {"status": o.status, "source": o.source, "motion_key": o.key,
                     **(o.comparison.as_dict() if o.comparison else {})}
