@@ -19,6 +19,12 @@ def _pair(prediction, reference) -> tuple[np.ndarray, np.ndarray]:
     return p, r
 
 
+def time_mean(time, values) -> float:
+    """Trapezoidal time average of ``values`` over ``time`` (non-uniform steps allowed)."""
+    t = np.asarray(time, dtype=float)
+    return float(np.trapezoid(values, t) / (t[-1] - t[0]))
+
+
 def nrmse(prediction, reference, axis: int = -1) -> np.ndarray:
     """RMS error normalised by the reference's range (the paper's NRMSE).
 

@@ -139,3 +139,51 @@ def test_power_laws_of_any_order_and_ratio(order, r21, r32, phi_exact, c):
     assert g.behaviour == "monotone"
     assert g.apparent_order == pytest.approx(order, rel=1e-6, abs=1e-6)
     assert g.extrapolated == pytest.approx(phi_exact, rel=1e-6, abs=1e-6 * abs(c))
+
+
+def _record(time, normal, tangential, moment, pitch_deg, heave_velocity, n_cells):
+    from mfflap.campaign.records import CfdRecord
+    from mfflap.hydro.loads import Loads
+    from mfflap.kinematics.state import KinematicState
+
+    zero = np.zeros_like(time)
+    state = KinematicState(time=time, pitch_angle=np.full_like(time, np.deg2rad(pitch_deg)),
+                           pitch_rate=zero, pitch_acceleration=zero, heave_position=zero,
+                           heave_velocity=np.full_like(time, heave_velocity),
+                           heave_acceleration=zero)
+    full = np.ones_like(time)
+    return CfdRecord("r", state, Loads(time, normal * full, tangential * full, moment),
+                     {}, {"n_cells": n_cells})
+
+
+def test_mesh_study_quantities_by_hand():
+    from mfflap.cfd.convergence import integral_quantities
+
+    t = np.linspace(0.0, 2.0, 4001)
+    # theta = 30 deg, F_n = 10 N, F_t = 2 N, hdot = 0.5 m/s, M = 3 sin(2 pi t) N m
+    rec = _record(t, 10.0, 2.0, 3 * np.sin(2 * np.pi * t), 30.0, 0.5, 100)
+    q = integral_quantities(rec, 1.0)
+    s, c = np.sin(np.pi / 6), np.cos(np.pi / 6)
+    assert q["mean_thrust_N"] == pytest.approx(10 * s - 2 * c)
+    assert q["mean_input_power_W"] == pytest.approx(-(10 * c + 2 * s) * 0.5)
+    assert q["peak_normal_force_N"] == pytest.approx(10.0)
+    assert q["rms_moment_Nm"] == pytest.approx(3 / np.sqrt(2), rel=1e-6)
+    with pytest.raises(ValueError, match="fewer than two samples"):
+        integral_quantities(rec, 2.5)
+
+
+def test_mesh_gci_reads_cells_from_the_records():
+    from mfflap.cfd.convergence import mesh_gci
+
+    t = np.linspace(0.0, 1.0, 201)
+    cells = (27200, 12880, 5800)
+    # F_n = 100 + 50 h^2 on each mesh: the peak F_n extrapolates to 100 N with order 2
+    recs = [_record(t, 100 + 5e4 * n**-1.0, 0.0, np.zeros_like(t), 10.0, 0.0, n)
+            for n in cells]
+    gci = mesh_gci(recs[::-1], 0.1)
+    g = gci["peak_normal_force_N"]
+    assert g.cell_counts == cells
+    assert g.apparent_order == pytest.approx(2.0) and g.extrapolated == pytest.approx(100.0)
+    assert gci["rms_moment_Nm"].behaviour == "exact"
+    with pytest.raises(ValueError, match="three meshes"):
+        mesh_gci(recs[:2], 0.1)

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mfflap.campaign.records import CfdRecord
-from mfflap.metrics import nrmse, pearson
+from mfflap.metrics import nrmse, pearson, time_mean
 from mfflap.performance import thrust_and_power
 
 
@@ -63,10 +63,6 @@ class BacktestComparison:
                 "cycle_to_cycle_thrust_change": self.cycle_to_cycle_thrust_change}
 
 
-def _time_mean(t: np.ndarray, y: np.ndarray) -> float:
-    return float(np.trapezoid(y, t) / (t[-1] - t[0]))
-
-
 def compare_last_cycle(record: CfdRecord, model, period: float,
                        max_power: float) -> BacktestComparison:
     """Model (on the imposed kinematics) against CFD over the last full period of the record."""
@@ -84,16 +80,16 @@ def compare_last_cycle(record: CfdRecord, model, period: float,
     nr = {k: float(nrmse(m[last], c[last])) for k, (m, c) in signals.items()}
     pe = {k: float(pearson(m[last], c[last])) for k, (m, c) in signals.items()}
     tl = t[last]
-    cfd_mean_thrust = _time_mean(tl, c_thrust[last])
+    cfd_mean_thrust = time_mean(tl, c_thrust[last])
     change = np.nan
     if prev.sum() > 4:
-        before = _time_mean(t[prev], c_thrust[prev])
+        before = time_mean(t[prev], c_thrust[prev])
         change = abs(cfd_mean_thrust - before) / max(abs(cfd_mean_thrust), 1e-12)
     cfd_max = float(np.max(c_power[last]))
     return BacktestComparison(
         time=tl, cfd_thrust=c_thrust[last], model_thrust=m_thrust[last],
         cfd_power=c_power[last], model_power=m_power[last], nrmse=nr, pearson=pe,
-        cfd_mean_thrust=cfd_mean_thrust, model_mean_thrust=_time_mean(tl, m_thrust[last]),
-        cfd_mean_power=_time_mean(tl, c_power[last]),
-        model_mean_power=_time_mean(tl, m_power[last]), cfd_max_power=cfd_max,
+        cfd_mean_thrust=cfd_mean_thrust, model_mean_thrust=time_mean(tl, m_thrust[last]),
+        cfd_mean_power=time_mean(tl, c_power[last]),
+        model_mean_power=time_mean(tl, m_power[last]), cfd_max_power=cfd_max,
         max_power_ok=bool(cfd_max <= max_power), cycle_to_cycle_thrust_change=float(change))

@@ -24,7 +24,7 @@ from mfflap.cfd.openfoam.writer import SolverSettings, resolve_mesh
 from mfflap.cfd.openfoam.yplus import YPlusHistory, read_y_plus
 from mfflap.errors import ConfigError
 from mfflap.kinematics.continuous import Motion
-from mfflap.metrics import nrmse
+from mfflap.metrics import nrmse, time_mean
 from mfflap.performance import thrust_and_power
 
 COMPONENTS = ("normal_force", "tangential_force", "moment")
@@ -101,12 +101,10 @@ def integral_quantities(record: CfdRecord, start: float,
         raise ValueError(f"{record.name}: fewer than two samples in [{start}, {end}] s")
     thrust, power = thrust_and_power(record.loads, record.state)
     tk = t[keep]
-    span = tk[-1] - tk[0]
-    return {"mean_thrust_N": float(np.trapezoid(thrust[keep], tk) / span),
-            "mean_input_power_W": float(np.trapezoid(power[keep], tk) / span),
+    return {"mean_thrust_N": time_mean(tk, thrust[keep]),
+            "mean_input_power_W": time_mean(tk, power[keep]),
             "peak_normal_force_N": float(np.max(np.abs(record.loads.normal_force[keep]))),
-            "rms_moment_Nm": float(np.sqrt(np.trapezoid(record.loads.moment[keep] ** 2, tk)
-                                           / span))}
+            "rms_moment_Nm": float(np.sqrt(time_mean(tk, record.loads.moment[keep] ** 2)))}
 
 
 def mesh_gci(records: Sequence[CfdRecord], start: float,
