@@ -506,3 +506,27 @@ def test_second_restart_from_a_non_integer_time_is_read_from_its_suffixed_file(t
         a = np.interp(t, merged.time, merged.force[:, k])
         b = np.interp(t, reference.time, reference.force[:, k])
         assert np.max(np.abs(a - b)) <= 1e-2 * np.max(np.abs(b))
+
+
+@pytest.mark.openfoam
+def test_convergence_time_step_study_on_a_chosen_mesh(tmp_path):
+    """--time-step-mesh repeats that mesh (not the first) at the further Courant limits; with
+    two meshes there is no grid convergence index."""
+    import json
+
+    from click.testing import CliRunner
+
+    from mfflap.cli.main import cli
+
+    case = Path(__file__).parents[1] / "cases" / "paper2026.toml"
+    args = ["cfd", "convergence", str(case), str(tmp_path / "c"), "--meshes", "coarse,lean",
+            "--courant", "4,2", "--cycles", "0.02", "--ramp-time", "0.005", "--json"]
+    res = CliRunner().invoke(cli, [*args, "--time-step-mesh", "medium"])
+    assert res.exit_code != 0 and "time_step_mesh" in res.output and "medium" in res.output
+    res = CliRunner().invoke(cli, [*args, "--time-step-mesh", "lean"])
+    assert res.exit_code == 0, res.output
+    data = json.loads(res.output[res.output.index("{"):])
+    assert set(data["runs"]) == {"coarse_co4", "lean_co4", "lean_co2"}
+    assert data["runs"]["lean_co2"]["max_courant"] == 2
+    assert "lean_co4 vs lean_co2" in data["nrmse"]
+    assert data["gci"] == {} and data["gci_meshes"] == []

@@ -143,9 +143,9 @@ def run_convergence(out_dir: str | Path, motion: Motion, end_time: float, *,
                     compare_from: float | None = None, plate=None, fluid=None, stream=None,
                     timeout_s: float = 6 * 3600.0, n_procs: int = 1,
                     solver: SolverSettings | None = None, floor: bool = False,
-                    setups: Sequence[CfdSetup] = (),
+                    setups: Sequence[CfdSetup] = (), time_step_mesh: str | None = None,
                     progress: Callable[[str], None] | None = None) -> ConvergenceStudy:
-    """Run (or resume) every mesh at ``courants[0]`` and ``meshes[0]`` at the other limits.
+    """Run (or resume) every mesh at ``courants[0]`` and one mesh at the other limits.
 
     Parameters
     ----------
@@ -157,6 +157,9 @@ def run_convergence(out_dir: str | Path, motion: Motion, end_time: float, *,
         to the same tolerance): the NRMSE between the two is the floor under every mesh
         comparison, since they differ only by round-off in the linear solves. A flow whose
         later cycles are sensitive to round-off shows it here.
+    time_step_mesh
+        The mesh of ``meshes`` repeated at the further Courant limits (default the first,
+        the cheapest; the finest tells whether the reference itself is time-step converged).
     setups
         Named set-ups (setups.toml) run as well, each with its own mesh and solver settings
         but the study's far field (``setup_<name>``), and compared with the reference.
@@ -165,10 +168,14 @@ def run_convergence(out_dir: str | Path, motion: Motion, end_time: float, *,
 
     base = solver or SolverSettings()
     out = Path(out_dir)
+    dt_mesh = meshes[0] if time_step_mesh is None else time_step_mesh
+    if dt_mesh not in meshes:
+        raise ConfigError(f"the time-step mesh {dt_mesh!r} is not one of the study's meshes "
+                          f"({', '.join(meshes)})", key="time_step_mesh")
     other = "GAMG" if base.pressure_solver == "PCG" else "PCG"
     # (label, mesh, solver settings without the time-step limit, Courant limit)
     plan = [(f"{m}_co{courants[0]:g}", m, base, courants[0]) for m in meshes] + [
-        (f"{meshes[0]}_co{c:g}", meshes[0], base, c) for c in courants[1:]]
+        (f"{dt_mesh}_co{c:g}", dt_mesh, base, c) for c in courants[1:]]
     if floor:
         plan.append((f"{meshes[-1]}_co{courants[0]:g}_{other}", meshes[-1],
                      replace(base, pressure_solver=other), courants[0]))
@@ -216,9 +223,9 @@ def run_convergence(out_dir: str | Path, motion: Motion, end_time: float, *,
                                                                by_label[reference].record,
                                                                start)
             study.pairs[f"{r.label} vs {reference}"] = (r.label, reference)
-    first = f"{meshes[0]}_co{courants[0]:g}"
+    first = f"{dt_mesh}_co{courants[0]:g}"
     for co in courants[1:]:
-        fine_dt = f"{meshes[0]}_co{co:g}"
+        fine_dt = f"{dt_mesh}_co{co:g}"
         study.nrmse[f"{first} vs {fine_dt}"] = compare(by_label[first].record,
                                                        by_label[fine_dt].record, start)
         study.pairs[f"{first} vs {fine_dt}"] = (first, fine_dt)

@@ -163,7 +163,10 @@ def fluent(case_file: Path, out_dir: Path, cycles: float, ramp_time: float, time
 @click.option("--meshes", default="coarse,medium,fine", show_default=True,
               help="Mesh resolutions, coarsest first; the last is the reference.")
 @click.option("--courant", "courants", default="4,2", show_default=True,
-              help="Courant limits; the first mesh is repeated at each further one.")
+              help="Courant limits; one mesh (--time-step-mesh) is repeated at each further "
+                   "one.")
+@click.option("--time-step-mesh", default=None,
+              help="The mesh repeated at the further Courant limits (default the first).")
 @click.option("--cycles", default=1.0, show_default=True, help="Carrier periods simulated.")
 @click.option("--ramp-time", default=None, type=float,
               help="Start-up ramp, s (default: a quarter period).")
@@ -185,7 +188,8 @@ def fluent(case_file: Path, out_dir: Path, cycles: float, ramp_time: float, time
 @click.option("--json", "as_json", is_flag=True, help="Print the NRMSE table as JSON.")
 def convergence(case_file: Path, out_dir: Path, meshes: str, courants: str, cycles: float,
                 ramp_time: float | None, procs: int, pressure_solver: str, n_correctors: int,
-                far_field: str, floor: bool, setup_names: str, as_json: bool) -> None:
+                far_field: str, floor: bool, setup_names: str, time_step_mesh: str | None,
+                as_json: bool) -> None:
     """Mesh and time-step convergence of the [motion] of CASE_FILE: NRMSE between runs, the
     grid convergence index of mean thrust, power, peak F_n and RMS moment over the three
     finest meshes, and the plate's y+ over time (HDF5 records, HTML report, resumable)."""
@@ -202,7 +206,7 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: str, cycl
                             meshes=[m.strip() for m in meshes.split(",")],
                             courants=[float(c) for c in courants.split(",")], ramp_time=ramp,
                             plate=case.plate, fluid=case.fluid, stream=case.flow,
-                            n_procs=procs, floor=floor,
+                            n_procs=procs, floor=floor, time_step_mesh=time_step_mesh,
                             setups=[setup(n.strip()) for n in setup_names.split(",")
                                     if n.strip()],
                             solver=SolverSettings(pressure_solver=pressure_solver,
