@@ -109,6 +109,39 @@ def test_gap_and_short_records_are_refused_by_name():
         prepare_case(rec, discard_time=2.9)
 
 
+def _retimed(rec, time, keep=slice(None)):
+    """The samples ``keep`` of ``rec`` moved to ``time``: another time-step history."""
+    from mfflap.kinematics.state import KinematicState
+
+    state = KinematicState(time=time[keep], **{k: getattr(rec.state, k)[keep] for k in (
+        "pitch_angle", "pitch_rate", "pitch_acceleration", "heave_position", "heave_velocity",
+        "heave_acceleration")})
+    return CfdRecord(rec.name, state, Loads(time[keep], rec.loads.normal_force[keep],
+                                            rec.loads.tangential_force[keep],
+                                            rec.loads.moment[keep]), rec.parameters)
+
+
+def test_adaptive_time_step_is_not_a_gap_but_a_missing_stretch_is():
+    # like a real run (fixture f1p000_h0p500_phi135p0): the step grows 20 % a step from
+    # 1.2e-4 s to 2.8e-3 s at the start, then falls to 2.9e-5 s when the flow gets violent,
+    # a hundred times below its early size
+    rng = np.random.default_rng(1)
+    rec = synthetic_records(rng, subset=grid_cases(IdentificationGrid(), [1.0], [0.3], [90]))[0]
+    n = len(rec.time)
+    grow = 1.2e-4 * 1.2 ** np.arange(18)
+    steps = np.concatenate([grow, np.full(12, grow[-1]), np.geomspace(grow[-1], 2.9e-5, 25)])
+    steps = np.concatenate([steps, np.full(n - 1 - len(steps), 2.9e-5)])
+    steps *= 3.0 / steps.sum()  # the same 3 s run
+    time = np.concatenate([[0.0], np.cumsum(steps)])
+    assert steps.max() / np.median(steps) > 50  # the old global-median test refused this
+    assert prepare_case(_retimed(rec, time)).name == rec.name
+    # 40 samples missing among the small steps (a killed run's lost stretch): refused, with
+    # the times of the gap
+    cut = np.r_[0:n // 2, n // 2 + 40:n]
+    with pytest.raises(MfflapError, match=rf"record {rec.name}: gap .* times the steps"):
+        prepare_case(_retimed(rec, time, cut))
+
+
 def test_identify_cli_report_and_hdf5_round_trip(tmp_path):
     """CLI on a folder of real HDF5 records (synthetic forces), a failed case named."""
     from click.testing import CliRunner

@@ -91,6 +91,10 @@ def despike(values: np.ndarray, window: int = 9, threshold: float = 12.0,
     return np.where(mask, med, values), mask
 
 
+#: steps around each step whose median is its expected size (odd)
+_GAP_WINDOW = 11
+
+
 def prepare_case(record: CfdRecord, discard_time: float = 0.75, n_samples: int = 400,
                  max_gap_ratio: float = 25.0) -> CaseData:
     """Drop the start-up transient and resample a record onto a uniform time base.
@@ -102,18 +106,22 @@ def prepare_case(record: CfdRecord, discard_time: float = 0.75, n_samples: int =
     Raises
     ------
     MfflapError
-        If the record has a gap (a step more than ``max_gap_ratio`` times the median step),
-        or too little data after the transient; the message names the record and the time.
+        If the record has a gap (a step more than ``max_gap_ratio`` times the median of the
+        steps around it: the adaptive time step itself may change a hundredfold over a run,
+        but OpenFOAM grows it by at most 20 % a step), or too little data after the
+        transient; the message names the record and the time.
     """
     t = record.time
     start = max(discard_time, float(record.parameters.get("ramp_time", 0.0)))
     dt = np.diff(t)
-    med = float(np.median(dt)) if len(dt) else 0.0
-    if len(dt) and np.any(dt > max_gap_ratio * med):
-        i = int(np.argmax(dt))
-        raise MfflapError(f"record {record.name}: gap in the force history between "
-                          f"t = {t[i]:.6g} s and {t[i + 1]:.6g} s ({dt[i] / med:.0f} median "
-                          "steps); rerun or trim the case")
+    if len(dt):
+        local = median_filter(dt, size=_GAP_WINDOW, mode="nearest")
+        ratio = dt / local
+        if np.any(ratio > max_gap_ratio):
+            i = int(np.argmax(ratio))
+            raise MfflapError(f"record {record.name}: gap in the force history between "
+                              f"t = {t[i]:.6g} s and {t[i + 1]:.6g} s ({ratio[i]:.0f} times "
+                              "the steps around it); rerun or trim the case")
     if t[-1] - start < 0.2 * (t[-1] - t[0]) or t[-1] <= start:
         raise MfflapError(f"record {record.name}: only {max(t[-1] - start, 0):.3g} s of "
                           f"{t[-1] - t[0]:.3g} s remain after discarding {start:.3g} s of "
