@@ -135,6 +135,10 @@ def test_adaptive_time_step_is_not_a_gap_but_a_missing_stretch_is():
     time = np.concatenate([[0.0], np.cumsum(steps)])
     assert steps.max() / np.median(steps) > 50  # the old global-median test refused this
     assert prepare_case(_retimed(rec, time)).name == rec.name
+    # nor is a sudden hundredfold drop of the step
+    sudden = np.concatenate([np.full(40, 2.8e-3), np.full(n - 41, 2.8e-5)])
+    sudden *= 3.0 / sudden.sum()
+    assert prepare_case(_retimed(rec, np.concatenate([[0.0], np.cumsum(sudden)]))).name
     # 40 samples missing among the small steps (a killed run's lost stretch): refused, with
     # the times of the gap
     cut = np.r_[0:n // 2, n // 2 + 40:n]

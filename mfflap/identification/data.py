@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -91,8 +92,21 @@ def despike(values: np.ndarray, window: int = 9, threshold: float = 12.0,
     return np.where(mask, med, values), mask
 
 
-#: steps around each step whose median is its expected size (odd)
-_GAP_WINDOW = 11
+def _neighbour_step(dt: np.ndarray, k: int = 20) -> np.ndarray:
+    """The larger of the medians of the ``k`` steps before and the ``k`` steps after each step.
+
+    A lost stretch of a run is a step far above the steps on both sides; a change of the
+    adaptive time step (a sudden drop when the flow gets violent, growth by at most 20 % a
+    step) has steps of its own size on at least one side.
+    """
+    n = len(dt)
+    pad = np.full(k, np.nan)
+    windows = np.lib.stride_tricks.sliding_window_view(np.concatenate([pad, dt, pad]), k)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN windows at the ends
+        before = np.nanmedian(windows[:n], axis=1)
+        after = np.nanmedian(windows[k + 1:k + 1 + n], axis=1)
+    return np.fmax(before, after)
 
 
 def prepare_case(record: CfdRecord, discard_time: float = 0.75, n_samples: int = 400,
@@ -106,17 +120,16 @@ def prepare_case(record: CfdRecord, discard_time: float = 0.75, n_samples: int =
     Raises
     ------
     MfflapError
-        If the record has a gap (a step more than ``max_gap_ratio`` times the median of the
-        steps around it: the adaptive time step itself may change a hundredfold over a run,
-        but OpenFOAM grows it by at most 20 % a step), or too little data after the
-        transient; the message names the record and the time.
+        If the record has a gap (a step more than ``max_gap_ratio`` times the steps on both
+        sides of it: the adaptive time step itself may change a hundredfold over a run), or
+        too little data after the transient; the message names the record and the time.
     """
     t = record.time
     start = max(discard_time, float(record.parameters.get("ramp_time", 0.0)))
     dt = np.diff(t)
-    if len(dt):
-        local = median_filter(dt, size=_GAP_WINDOW, mode="nearest")
-        ratio = dt / local
+    if len(dt) > 1:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ratio = dt / _neighbour_step(dt)
         if np.any(ratio > max_gap_ratio):
             i = int(np.argmax(ratio))
             raise MfflapError(f"record {record.name}: gap in the force history between "
