@@ -4,15 +4,16 @@ The procedure of Celik et al. (2008), "Procedure for estimation and reporting of
 due to discretization in CFD applications", J. Fluids Eng. 130(7), 078001, which follows
 Roache's GCI and is the one ASME V&V 20 and most journals ask for. Meshes are numbered finest
 first (1 fine, 2 medium, 3 coarse); a mesh's representative cell size is h = N^(-1/d) for N
-cells in d dimensions over the same domain, so only cell counts are needed.
+cells in d dimensions over the same domain, so only cell counts are needed (Celik et al.
+recommend ratios h_coarse / h_fine above 1.3).
 
 With eps21 = phi2 - phi1, eps32 = phi3 - phi2 and s = sign(eps32 / eps21), the apparent order p
 solves
 
     p = |ln|eps32 / eps21| + ln((r21^p - s) / (r32^p - s))| / ln r21
 
-(solved by bracketing rather than the paper's fixed-point iteration, which diverges for
-unequal refinement ratios), the extrapolated value is phi_ext = (r21^p phi1 - phi2) / (r21^p - 1)
+(solved by bracketing rather than the paper's fixed-point iteration, which can diverge
+for unequal refinement ratios), the extrapolated value is phi_ext = (r21^p phi1 - phi2) / (r21^p - 1)
 and the fine-mesh index is GCI21 = Fs |eps21 / phi1| / (r21^p - 1) with the safety factor
 Fs = 1.25 of a three-mesh study. The sign of the convergence ratio R = eps21 / eps32 tells
 monotone from oscillatory convergence; where no positive p solves the equation the errors do
@@ -30,10 +31,6 @@ import numpy as np
 from scipy.optimize import brentq
 
 from mfflap.errors import ConfigError
-
-#: Celik et al.'s smallest recommended refinement ratio between neighbouring meshes.
-MIN_RECOMMENDED_RATIO = 1.3
-
 
 @dataclass(frozen=True)
 class GridConvergence:
