@@ -13,9 +13,10 @@ solves
     p = |ln|eps32 / eps21| + ln((r21^p - s) / (r32^p - s))| / ln r21
 
 (solved by bracketing rather than the paper's fixed-point iteration, which can diverge
-for unequal refinement ratios), the extrapolated value is phi_ext = (r21^p phi1 - phi2) / (r21^p - 1)
-and the fine-mesh index is GCI21 = Fs |eps21 / phi1| / (r21^p - 1) with the safety factor
-Fs = 1.25 of a three-mesh study. The sign of the convergence ratio R = eps21 / eps32 tells
+for unequal refinement ratios), the extrapolated value is
+phi_ext = (r21^p phi1 - phi2) / (r21^p - 1) and the fine-mesh index is
+GCI21 = Fs |eps21 / phi1| / (r21^p - 1) with the safety factor Fs = 1.25 of a three-mesh
+study. The sign of the convergence ratio R = eps21 / eps32 tells
 monotone from oscillatory convergence; where no positive p solves the equation the errors do
 not shrink like any power of the cell size and the behaviour is divergent: no order,
 extrapolation or index is defined. (|R| < 1 is the test only for equal refinement ratios:
@@ -31,6 +32,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from mfflap.errors import ConfigError
+
 
 @dataclass(frozen=True)
 class GridConvergence:
