@@ -67,3 +67,23 @@ def test_cfd_write_refuses_mesh_and_setup_together(tmp_path):
                                    "--setup", "affordable", "--mesh", "coarse"])
     assert res.exit_code == 2
     assert "not both" in res.output
+
+
+def test_mesh_and_solver_of_a_command():
+    from mfflap.cfd.openfoam.setups import mesh_and_solver, setup
+    from mfflap.cfd.openfoam.writer import SolverSettings
+    from mfflap.errors import ConfigError
+
+    mesh, solver = mesh_and_solver()
+    assert mesh.name == "coarse" and solver == SolverSettings()
+    mesh, solver = mesh_and_solver(mesh="medium")
+    assert mesh.name == "medium" and solver == SolverSettings()
+    mesh, solver = mesh_and_solver(setup_name="affordable")
+    assert (mesh, solver) == (setup("affordable").mesh, setup("affordable").solver)
+    with pytest.raises(ConfigError, match="not both") as err:
+        mesh_and_solver(mesh="coarse", setup_name="affordable")
+    assert err.value.key == "setup"
+    with pytest.raises(ConfigError, match="cheapest"):
+        mesh_and_solver(setup_name="cheapest")
+    with pytest.raises(ConfigError, match="finest"):
+        mesh_and_solver(mesh="finest")

@@ -31,18 +31,13 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
     """Back-test the optimised motions (and the best sinusoid) of OPTIMISATION_FILE."""
     from mfflap.backtest.workflow import backtest_all, gain_in_cfd
     from mfflap.campaign.records import fixture_dir
-    from mfflap.cfd.openfoam.setups import setup
+    from mfflap.cfd.openfoam.setups import mesh_and_solver
     from mfflap.config import loads_case
     from mfflap.optimisation.store import read_result, read_sweep
     from mfflap.optimisation.study import sinusoid_motion
     from mfflap.results import ResultsFile
 
-    if setup_name is not None and mesh is not None:
-        raise click.UsageError("give --mesh or --setup, not both (a set-up names its mesh)")
-    solver = None
-    if setup_name is not None:
-        chosen = setup(setup_name)
-        mesh, solver = chosen.mesh.name, chosen.solver
+    spec, solver = mesh_and_solver(mesh, setup_name)
     with ResultsFile(optimisation_file) as rf:
         case = loads_case(rf.config_toml, source=f"{optimisation_file}:/inputs")
         sweep, best = read_sweep(rf, "optimisation/sweep")
@@ -55,7 +50,7 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
     folders = list(fixture_folders) or [fixture_dir("backtest")]
     outcomes = backtest_all(case, motions, case.morison_model(), fixture_folders=folders,
                             live=live, work_dir=work_dir, save_to=save_to,
-                            mesh=mesh or "coarse", solver=solver,
+                            mesh=spec.name, solver=solver,
                             progress=lambda m: click.echo(m, err=True))
     data = {label: {"status": o.status, "source": o.source, "motion_key": o.key,
                     **(o.comparison.as_dict() if o.comparison else {})}

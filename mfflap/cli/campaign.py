@@ -58,25 +58,18 @@ def run_cmd(case_file: Path, out_dir: Path, frequencies: str | None,
     """
     from mfflap.campaign.cases import grid_cases
     from mfflap.campaign.execute import CampaignSetup, run_campaign
-    from mfflap.cfd.openfoam.setups import setup
-    from mfflap.cfd.openfoam.writer import SolverSettings
+    from mfflap.cfd.openfoam.setups import mesh_and_solver
     from mfflap.config import load_case
 
-    if setup_name is not None and mesh is not None:
-        raise click.UsageError("give --mesh or --setup, not both (a set-up names its mesh)")
+    spec, solver = mesh_and_solver(mesh, setup_name)
     case = load_case(case_file)
     cases = grid_cases(case.identification, _floats(frequencies), _floats(heave_amplitudes),
                        _floats(phases))
-    if setup_name is not None:
-        chosen = setup(setup_name)
-        mesh_name, solver = chosen.mesh.name, chosen.solver
-    else:
-        mesh_name, solver = mesh or "coarse", SolverSettings()
     if dry_run:
         for c in cases:
             click.echo(f"{c.case_id}  duration {c.duration:g} s  ramp {c.ramp_time:g} s")
         return
-    campaign_setup = CampaignSetup(mesh=mesh_name, solver=solver, plate=case.plate,
+    campaign_setup = CampaignSetup(mesh=spec.name, solver=solver, plate=case.plate,
                                    fluid=case.fluid, stream=case.flow, timeout_s=timeout,
                                    keep_case_dirs=keep_cases,
                                    single_precision=single_precision)

@@ -37,19 +37,13 @@ def write(case_file: Path, case_dir: Path, mesh: str | None, setup_name: str | N
     """Write an OpenFOAM case for the [motion] of CASE_FILE into CASE_DIR."""
     from dataclasses import replace
 
-    from mfflap.cfd.openfoam.setups import setup
-    from mfflap.cfd.openfoam.writer import SolverSettings, resolve_mesh, write_case
+    from mfflap.cfd.openfoam.setups import mesh_and_solver
+    from mfflap.cfd.openfoam.writer import write_case
     from mfflap.config import load_case
 
-    if setup_name is not None and mesh is not None:
-        raise click.UsageError("give --mesh or --setup, not both (a set-up names its mesh)")
+    spec, solver = mesh_and_solver(mesh, setup_name)
     case = load_case(case_file)
     end_time = cycles / case.motion.frequency
-    if setup_name is not None:
-        chosen = setup(setup_name)
-        spec, solver = chosen.mesh, chosen.solver
-    else:
-        spec, solver = resolve_mesh(mesh or "coarse"), SolverSettings()
     overrides = {k: v for k, v in (("far_field", far_field),
                                    ("pressure_solver", pressure_solver)) if v is not None}
     solver = replace(solver, **overrides)

@@ -11,7 +11,13 @@ from __future__ import annotations
 from dataclasses import dataclass, fields, replace
 from pathlib import Path
 
-from mfflap.cfd.openfoam.writer import MeshSpec, SolverSettings, mesh_specs, template_dir
+from mfflap.cfd.openfoam.writer import (
+    MeshSpec,
+    SolverSettings,
+    mesh_specs,
+    resolve_mesh,
+    template_dir,
+)
 from mfflap.errors import ConfigError
 from mfflap.toml_io import read_toml
 
@@ -87,3 +93,24 @@ def setup(name: str) -> CfdSetup:
         raise ConfigError(f"unknown set-up {name!r}; allowed: {', '.join(setups)}",
                           source=str(setups_path()), key="setup")
     return setups[name]
+
+
+def mesh_and_solver(mesh: str | None = None,
+                    setup_name: str | None = None) -> tuple[MeshSpec, SolverSettings]:
+    """The mesh and solver settings a command asks for with ``--mesh`` or ``--setup``.
+
+    A named set-up gives both; a mesh alone comes with the default solver settings; neither
+    means the coarse mesh.
+
+    Raises
+    ------
+    ConfigError
+        If both are given (a set-up names its mesh), or either is unknown.
+    """
+    if mesh is not None and setup_name is not None:
+        raise ConfigError("give --mesh or --setup, not both (a set-up names its mesh)",
+                          key="setup")
+    if setup_name is not None:
+        chosen = setup(setup_name)
+        return chosen.mesh, chosen.solver
+    return resolve_mesh(mesh or "coarse"), SolverSettings()
