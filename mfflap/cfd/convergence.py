@@ -98,7 +98,8 @@ def integral_quantities(record: CfdRecord, start: float,
     end = t[-1] if end is None else end
     keep = (t >= start) & (t <= end)
     if np.count_nonzero(keep) < 2:
-        raise ValueError(f"{record.name}: fewer than two samples in [{start}, {end}] s")
+        raise ConfigError(f"{record.name}: fewer than two samples in [{start}, {end}] s",
+                          key="compare_from")
     thrust, power = thrust_and_power(record.loads, record.state)
     tk = t[keep]
     return {"mean_thrust_N": time_mean(tk, thrust[keep]),
@@ -115,7 +116,8 @@ def mesh_gci(records: Sequence[CfdRecord], start: float,
     record's provenance (``n_cells``).
     """
     if len(records) != 3:
-        raise ValueError(f"a grid convergence index needs three meshes, got {len(records)}")
+        raise ConfigError(f"a grid convergence index needs three meshes, got {len(records)}",
+                          key="meshes")
     end = min(r.time[-1] for r in records) if end is None else end
     cells = [int(r.provenance["n_cells"]) for r in records]
     scalars = [integral_quantities(r, start, end) for r in records]
