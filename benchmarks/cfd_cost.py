@@ -33,11 +33,11 @@ from pathlib import Path
 
 import numpy as np
 
-from mfflap.campaign.openfoam_run import solver_provenance
 from mfflap.cfd.openfoam.forces import read_forces
 from mfflap.cfd.openfoam.loads import imposed_state, to_loads
 from mfflap.cfd.openfoam.runner import run_case
 from mfflap.cfd.openfoam.setups import setup
+from mfflap.cfd.openfoam.solver_log import solver_provenance
 from mfflap.cfd.openfoam.writer import mesh_specs, write_case
 from mfflap.errors import CfdRunError
 from mfflap.identification.data import despike

@@ -181,15 +181,17 @@ def test_manifest_written_before_the_pressure_solver_setting_still_resumes(tmp_p
     old = setup.as_dict()
     old["solver"] = {k: v for k, v in asdict(setup.solver).items()
                      if k not in ("pressure_solver", "pressure_tolerance", "far_field",
-                                  "velocity_convection", "pressure_final_rel_tol")}
+                                  "velocity_convection", "pressure_final_rel_tol",
+                                  "turbulence_convection")}
     (tmp_path / "campaign.toml").write_text(dumps({"setup": old, "cases": {}}))
     _write_manifest(tmp_path, cases, setup)  # same runs: accepted
     assert read_toml(tmp_path / "campaign.toml")["setup"]["solver"]["pressure_solver"] == "PCG"
     solver = read_toml(tmp_path / "campaign.toml")["setup"]["solver"]
     assert solver["velocity_convection"] == "linearUpwind"
     assert solver["pressure_final_rel_tol"] == 0.0
+    assert solver["turbulence_convection"] == "limitedLinear"
     for change in ({"pressure_solver": "GAMG"}, {"velocity_convection": "LUST"},
-                   {"pressure_final_rel_tol": 0.01}):
+                   {"pressure_final_rel_tol": 0.01}, {"turbulence_convection": "upwind"}):
         other = replace(setup, solver=replace(setup.solver, **change))
         with pytest.raises(ConfigError, match="another setup"):
             _write_manifest(tmp_path, cases, other)

@@ -22,8 +22,19 @@ def test_cfd_write_run_parse_with_real_openfoam(tmp_path, options):
     assert f"type {far};" in (case_dir / "0" / "U").read_text()
     assert f"solver {'GAMG' if options else 'PCG'};" in (case_dir / "system/fvSolution"
                                                          ).read_text()
-    res = runner.invoke(cli, ["cfd", "run", str(case_dir), "--timeout", "300"])
+    res = runner.invoke(cli, ["cfd", "run", str(case_dir), "--timeout", "300", "--json"])
     assert res.exit_code == 0, res.output
+    health = json.loads(res.output)
+    assert health["openfoam_build"].startswith("OPENFOAM=")
+    assert health["n_time_steps"] > 10 and health["cpu_time_s"] > 0
+    assert health["n_steps_bounding_epsilon"] <= health["n_time_steps"]
+    # fields written at the end: running the finished case again adds no time step
+    times = sorted(float(p.name) for p in case_dir.iterdir() if p.name[0].isdigit())
+    # a write every quarter of the run (purgeWrite keeps the last two)
+    assert times[-2:] == pytest.approx([0.0375, 0.05])
+    res = runner.invoke(cli, ["cfd", "run", str(case_dir), "--json"])
+    assert res.exit_code == 0, res.output
+    assert json.loads(res.output)["n_time_steps"] == health["n_time_steps"]
     res = runner.invoke(cli, ["cfd", "parse", str(case_dir), "--case-file", str(CASE), "--json",
                                  "--discard", "0.01"])
     assert res.exit_code == 0, res.output

@@ -350,6 +350,7 @@ def test_pressure_solver_settings_change_cost_not_forces_on_a_custom_mesh(tmp_pa
     ({"n_outer_correctors": 0}, "n_outer_correctors"),
     ({"pressure_tolerance": -1.0}, "pressure_tolerance"),
     ({"velocity_convection": "upwind"}, "velocity_convection"),
+    ({"turbulence_convection": "linearUpwind"}, "turbulence_convection"),
     ({"pressure_final_rel_tol": 1.0}, "pressure_final_rel_tol"),
     ({"pressure_final_rel_tol": -0.01}, "pressure_final_rel_tol"),
 ])
@@ -371,6 +372,53 @@ def test_velocity_convection_scheme_reaches_fv_schemes(tmp_path):
         schemes = (case / "system" / "fvSchemes").read_text()
         assert f"div(phi,U)      Gauss {scheme} grad(U);" in schemes
         assert schemes.count("div(phi,U)") == 1
+
+
+def test_bounding_summary_counts_clipped_solves_and_the_worst_relative_value(tmp_path):
+    from mfflap.cfd.openfoam.solver_log import bounding_summary, solver_provenance
+
+    # two time steps of a real v1912 log (the medium mesh at t = 3-4 ms)
+    summary = bounding_summary((DATA / "log.pimpleFoam.bounding").read_text())
+    assert summary["n_steps_bounding_epsilon"] == 2
+    assert summary["n_steps_bounding_k"] == 2
+    assert summary["worst_bounding_epsilon"] == pytest.approx(-0.010048885 / 0.46637612)
+    assert summary["worst_bounding_k"] == pytest.approx(-3.9241005e-05 / 0.0026761405)
+    case = tmp_path / "case"
+    case.mkdir()
+    shutil.copy(DATA / "log.pimpleFoam.bounding", case / "log.pimpleFoam")
+    provenance = solver_provenance(case)
+    assert provenance["n_time_steps"] == 3  # the excerpt starts three time steps
+    assert provenance["n_steps_bounding_epsilon"] == 2
+    clean = bounding_summary("Time = 1\nsmoothSolver:  Solving for epsilon\n")
+    assert clean == {"n_steps_bounding_k": 0, "n_steps_bounding_epsilon": 0,
+                     "worst_bounding_k": 0.0, "worst_bounding_epsilon": 0.0}
+
+
+@pytest.mark.openfoam
+def test_upwind_turbulence_convection_keeps_epsilon_positive(tmp_path):
+    """With limitedLinear k and epsilon at max Co 4 OpenFOAM clips negative epsilon after
+    most solves (the implicit TVD matrix is not an M-matrix above Co 1); bounded upwind
+    convection needs no clipping. The count is read from the real log."""
+    from mfflap.cfd.openfoam.solver_log import solver_provenance
+    from mfflap.cfd.openfoam.writer import MeshSpec, SolverSettings
+
+    spec = MeshSpec("tiny", n_chord=20, n_edge=4, n_radial=20, radial_expansion=100.0,
+                    radius_chords=8.0)
+    health = {}
+    for scheme, entry in (("limitedLinear", "Gauss limitedLinear 1;"), ("upwind", "Gauss upwind;")):
+        settings = SolverSettings(n_outer_correctors=1, n_correctors=2,
+                                  turbulence_convection=scheme)
+        case = write_case(tmp_path / scheme, MOTION, end_time=0.1, mesh=spec, solver=settings)
+        schemes = (case / "system" / "fvSchemes").read_text()
+        assert f"div(phi,k)      {entry}" in schemes
+        assert f"div(phi,epsilon) {entry}" in schemes
+        run_case(case, timeout_s=300)
+        health[scheme] = solver_provenance(case)
+    clipped = health["limitedLinear"]
+    assert clipped["n_steps_bounding_epsilon"] > clipped["n_time_steps"] / 4
+    assert clipped["worst_bounding_epsilon"] < -1e-3
+    assert health["upwind"]["n_steps_bounding_epsilon"] == 0
+    assert health["upwind"]["worst_bounding_epsilon"] == 0.0
 
 
 def test_final_pressure_tolerance_reaches_fv_solution(tmp_path):

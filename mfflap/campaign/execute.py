@@ -100,7 +100,8 @@ def run_one(case: CfdCase, out_dir: str, setup: CampaignSetup) -> CaseStatus:
 #: a manifest without them describes runs made with these values.
 _ADDED_SOLVER_SETTINGS = {"pressure_solver": "PCG", "pressure_tolerance": 1e-7,
                           "far_field": "freestream", "velocity_convection": "linearUpwind",
-                          "pressure_final_rel_tol": 0.0}
+                          "pressure_final_rel_tol": 0.0,
+                          "turbulence_convection": "limitedLinear"}
 
 
 def _with_added_settings(setup: dict[str, Any]) -> dict[str, Any]:

@@ -13,38 +13,12 @@ from mfflap.campaign.records import CfdRecord
 from mfflap.cfd.openfoam.forces import read_forces
 from mfflap.cfd.openfoam.loads import imposed_state, to_loads
 from mfflap.cfd.openfoam.runner import run_case
+from mfflap.cfd.openfoam.solver_log import solver_provenance
 from mfflap.cfd.openfoam.writer import MeshSpec, SolverSettings, write_case
 from mfflap.errors import CfdRunError
 from mfflap.kinematics.continuous import Motion
 from mfflap.parameters import Fluid, FreeStream, Plate
 from mfflap.toml_io import read_toml
-
-_BUILD = re.compile(r"^Build\s*:\s*(.+)$", re.M)
-_EXEC = re.compile(r"ExecutionTime = ([0-9.eE+-]+) s\s+ClockTime = ([0-9.eE+-]+) s")
-
-
-def solver_provenance(case_dir: str | Path) -> dict[str, Any]:
-    """OpenFOAM build, CPU and clock time, time steps, from the case's pimpleFoam log.
-
-    A restarted run appends to the same log; CPU times of the segments are summed.
-    """
-    log = Path(case_dir) / "log.pimpleFoam"
-    text = log.read_text(errors="replace") if log.exists() else ""
-    build = _BUILD.search(text)
-    cpu = clock = 0.0
-    for segment in text.split("Create time")[1:]:
-        times = _EXEC.findall(segment)
-        if times:
-            cpu += float(times[-1][0])
-            clock += float(times[-1][1])
-    return {
-        "solver": "OpenFOAM pimpleFoam",
-        "openfoam_build": build.group(1).strip() if build else "unknown",
-        "cpu_time_s": cpu,
-        "clock_time_s": clock,
-        "n_time_steps": text.count("\nCourant Number mean"),
-    }
-
 
 _MAX_CO = re.compile(r"^(maxCo\s+)([0-9.eE+-]+)(;)", re.M)
 

@@ -31,9 +31,12 @@ def cfd() -> None:
                    "stream); default freestream.")
 @click.option("--pressure-solver", type=click.Choice(["PCG", "GAMG"]), default=None,
               help="Linear solver of the pressure equation; default PCG (or the set-up's).")
+@click.option("--writes", default=4, show_default=True, type=click.IntRange(min=1),
+              help="Times the fields are written over the run; `cfd run` restarts a killed "
+                   "run from the last one.")
 def write(case_file: Path, case_dir: Path, mesh: str | None, setup_name: str | None,
           cycles: float, ramp_time: float, y_plus: bool, far_field: str | None,
-          pressure_solver: str | None) -> None:
+          pressure_solver: str | None, writes: int) -> None:
     """Write an OpenFOAM case for the [motion] of CASE_FILE into CASE_DIR."""
     from dataclasses import replace
 
@@ -46,7 +49,7 @@ def write(case_file: Path, case_dir: Path, mesh: str | None, setup_name: str | N
     end_time = cycles / case.motion.frequency
     overrides = {k: v for k, v in (("far_field", far_field),
                                    ("pressure_solver", pressure_solver)) if v is not None}
-    solver = replace(solver, **overrides)
+    solver = replace(solver, write_interval=end_time / writes, **overrides)
     write_case(case_dir, case.motion.build(), end_time, mesh=spec, plate=case.plate,
                fluid=case.fluid, stream=case.flow, ramp_time=ramp_time, y_plus=y_plus,
                solver=solver)
@@ -56,12 +59,30 @@ def write(case_file: Path, case_dir: Path, mesh: str | None, setup_name: str | N
 @cfd.command()
 @click.argument("case_dir", type=click.Path(file_okay=False, exists=True, path_type=Path))
 @click.option("--timeout", default=3600.0, show_default=True, help="Seconds for pimpleFoam.")
-def run(case_dir: Path, timeout: float) -> None:
-    """Mesh (once), check and run CASE_DIR with pimpleFoam; restarts from the latest time."""
+@click.option("--json", "as_json", is_flag=True,
+              help="Print the run's summary (build, CPU, time steps, clipping) as JSON.")
+def run(case_dir: Path, timeout: float, as_json: bool) -> None:
+    """Mesh (once), check and run CASE_DIR with pimpleFoam; restarts from the latest time.
+
+    Prints the CPU time, the number of time steps and how many k and epsilon solves
+    OpenFOAM had to clip ("bounding epsilon") from the log.
+    """
     from mfflap.cfd.openfoam.runner import run_case
+    from mfflap.cfd.openfoam.solver_log import solver_provenance
 
     run_case(case_dir, timeout_s=timeout)
-    click.echo(f"finished {case_dir}")
+    summary = {"case": str(case_dir), **solver_provenance(case_dir)}
+    if as_json:
+        click.echo(json.dumps(summary, indent=2))
+        return
+    click.echo(f"finished {case_dir}: {summary['cpu_time_s']:.1f} s CPU, "
+               f"{summary['n_time_steps']} time steps")
+    for field in ("k", "epsilon"):
+        n = summary[f"n_steps_bounding_{field}"]
+        if n:
+            click.echo(f"  {field} clipped after {n} solves (most negative "
+                       f"{100 * summary[f'worst_bounding_{field}']:.2g} % of the maximum); "
+                       "turbulence_convection = \"upwind\" in a set-up avoids it")
 
 
 @cfd.command()

@@ -84,6 +84,8 @@ def resolve_mesh(mesh: str | MeshSpec) -> MeshSpec:
 
 #: Convection schemes of U that the case template accepts (each with ``grad(U)``).
 VELOCITY_CONVECTION_SCHEMES = ("linearUpwind", "LUST")
+#: fvSchemes entry of each turbulence_convection choice
+TURBULENCE_CONVECTION_SCHEMES = {"limitedLinear": "limitedLinear 1", "upwind": "upwind"}
 
 
 @dataclass(frozen=True)
@@ -96,7 +98,9 @@ class SolverSettings:
     max_time_step: float = 5e-3
     initial_time_step: float = 1e-4
     turbulence_intensity: float = 0.01
-    write_interval: float = 1.0e9  # s: fields are written only at the end (and on restart)
+    #: s between field writes (a killed run restarts from the last one); the case writes at
+    #: least at its end time, so that a finished run is not run again and can be continued
+    write_interval: float = 1.0e9
     pressure_solver: str = "PCG"
     pressure_tolerance: float = 1e-7
     #: "freestream": freestreamVelocity/freestreamPressure on the far field;
@@ -109,6 +113,11 @@ class SolverSettings:
     #: relative tolerance of the last pressure corrector of a time step (0: converge to
     #: ``pressure_tolerance``, which costs most of the pressure solve's iterations)
     pressure_final_rel_tol: float = 0.0
+    #: convection scheme of k and epsilon: "limitedLinear" (TVD, second order where smooth)
+    #: or "upwind" (first order, bounded at any Courant number; with limitedLinear the
+    #: implicit matrix is not an M-matrix at max Co 4 and epsilon goes negative in a few
+    #: cells every time step, which OpenFOAM clips with a "bounding epsilon" message)
+    turbulence_convection: str = "limitedLinear"
 
     def __post_init__(self) -> None:
         if self.pressure_solver not in ("PCG", "GAMG"):
@@ -121,6 +130,10 @@ class SolverSettings:
             raise ConfigError(f"velocity_convection must be one of "
                               f"{', '.join(VELOCITY_CONVECTION_SCHEMES)}, got "
                               f"{self.velocity_convection!r}", key="velocity_convection")
+        if self.turbulence_convection not in TURBULENCE_CONVECTION_SCHEMES:
+            raise ConfigError(f"turbulence_convection must be one of "
+                              f"{', '.join(TURBULENCE_CONVECTION_SCHEMES)}, got "
+                              f"{self.turbulence_convection!r}", key="turbulence_convection")
         if not self.max_courant > 0:
             raise ConfigError(f"max_courant must be > 0, got {self.max_courant!r}",
                               key="max_courant")
@@ -193,7 +206,7 @@ def write_case(case_dir: str | Path, motion: Motion, end_time: float,
         "xc": plate.chord / 2, "radius": radius, "r45": radius / math.sqrt(2),
         "end_time": end_time, "initial_time_step": solver.initial_time_step,
         "max_time_step": solver.max_time_step, "max_courant": solver.max_courant,
-        "write_interval": solver.write_interval, "density": fluid.density,
+        "write_interval": min(solver.write_interval, end_time), "density": fluid.density,
         "kinematic_viscosity": fluid.kinematic_viscosity, "velocity": u, "k": k,
         "epsilon": epsilon, "n_outer_correctors": solver.n_outer_correctors,
         "n_correctors": solver.n_correctors, "y_plus": y_plus, "y_plus_interval": 20,
@@ -201,6 +214,7 @@ def write_case(case_dir: str | Path, motion: Motion, end_time: float,
         "pressure_tolerance": solver.pressure_tolerance, "far_field": solver.far_field,
         "velocity_convection": solver.velocity_convection,
         "pressure_final_rel_tol": solver.pressure_final_rel_tol,
+        "turbulence_convection": TURBULENCE_CONVECTION_SCHEMES[solver.turbulence_convection],
     }
     env = jinja2.Environment(undefined=jinja2.StrictUndefined, keep_trailing_newline=True)
     src = template_dir()

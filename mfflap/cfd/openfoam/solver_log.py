@@ -1,0 +1,59 @@
+"""What a pimpleFoam log says about a finished run: OpenFOAM build, CPU and clock time,
+time steps, and how often the turbulence fields had to be clipped."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+from typing import Any
+
+_BUILD = re.compile(r"^Build\s*:\s*(.+)$", re.M)
+_BOUNDING = re.compile(r"^bounding (\w+), min: ([-+0-9.eE]+) max: ([-+0-9.eE]+)", re.M)
+_TIME_STEP = re.compile(r"^Time = ", re.M)
+_EXEC = re.compile(r"ExecutionTime = ([0-9.eE+-]+) s\s+ClockTime = ([0-9.eE+-]+) s")
+
+
+def solver_provenance(case_dir: str | Path) -> dict[str, Any]:
+    """OpenFOAM build, CPU and clock time, time steps and turbulence clipping, from the
+    case's pimpleFoam log.
+
+    A restarted run appends to the same log; CPU times of the segments are summed.
+    ``n_steps_bounding_<field>`` counts the solves after which OpenFOAM clipped negative
+    values of k or epsilon ("bounding epsilon, min: ..."), and ``worst_bounding_<field>`` is
+    the most negative value relative to that step's maximum: a health figure of the
+    turbulence solution (see ``SolverSettings.turbulence_convection``).
+    """
+    log = Path(case_dir) / "log.pimpleFoam"
+    text = log.read_text(errors="replace") if log.exists() else ""
+    build = _BUILD.search(text)
+    cpu = clock = 0.0
+    for segment in text.split("Create time")[1:]:
+        times = _EXEC.findall(segment)
+        if times:
+            cpu += float(times[-1][0])
+            clock += float(times[-1][1])
+    return {
+        "solver": "OpenFOAM pimpleFoam",
+        "openfoam_build": build.group(1).strip() if build else "unknown",
+        "cpu_time_s": cpu,
+        "clock_time_s": clock,
+        # one "Time = " line per time step (the Courant line also precedes the loop)
+        "n_time_steps": len(_TIME_STEP.findall(text)),
+        **bounding_summary(text),
+    }
+
+
+def bounding_summary(log_text: str) -> dict[str, float]:
+    """Number of k and epsilon solves clipped by OpenFOAM's ``bound()`` and the most
+    negative clipped value relative to that solve's maximum (0 when none were clipped)."""
+    counts = {"k": 0, "epsilon": 0}
+    worst = {"k": 0.0, "epsilon": 0.0}
+    for field, low, high in _BOUNDING.findall(log_text):
+        if field not in counts:
+            continue
+        counts[field] += 1
+        scale = abs(float(high))
+        if scale > 0:
+            worst[field] = min(worst[field], float(low) / scale)
+    return {**{f"n_steps_bounding_{f}": n for f, n in counts.items()},
+            **{f"worst_bounding_{f}": w for f, w in worst.items()}}
