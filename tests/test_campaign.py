@@ -112,6 +112,7 @@ def test_campaign_on_local_cluster_resumes_and_reports_failures(tmp_path):
     rec = records[SHORT.case_id]
     assert rec.provenance["openfoam_build"].startswith("OPENFOAM=1912")
     assert rec.provenance["mesh"] == "coarse" and rec.provenance["cpu_time_s"] > 0
+    assert 0 <= rec.provenance["n_steps_bounding_epsilon"] <= rec.provenance["n_time_steps"]
     assert rec.parameters["frequency"] == 1.0
     assert rec.provenance["storage"] == "float32"  # written compact, like the fixtures
     with h5py.File(out / f"{SHORT.case_id}.h5") as h5:

@@ -66,11 +66,20 @@ class ConvergenceStudy:
                 "runs": {r.label: {"mesh": r.mesh, "max_courant": r.max_courant,
                                    "n_cells": r.record.provenance.get("n_cells"),
                                    "cpu_time_s": r.record.provenance.get("cpu_time_s"),
+                                   "epsilon_clipped_step_fraction": _clipped_fraction(r.record),
                                    "y_plus_mean": None if r.y_plus is None else
                                    float(np.mean(r.y_plus.average)),
                                    "y_plus_max": None if r.y_plus is None else
                                    float(np.max(r.y_plus.maximum))}
                          for r in self.runs}}
+
+
+def _clipped_fraction(record: CfdRecord) -> float | None:
+    """Fraction of time steps after which OpenFOAM clipped negative epsilon (None for
+    records written before the count was kept)."""
+    clipped = record.provenance.get("n_steps_bounding_epsilon")
+    steps = record.provenance.get("n_time_steps")
+    return None if clipped is None or not steps else float(clipped) / float(steps)
 
 
 def compare(a: CfdRecord, b: CfdRecord, start: float) -> dict[str, float]:

@@ -232,9 +232,11 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: str, cycl
     sec = rep.section("NRMSE between runs")
     sec.blocks.append(table_html(["comparison", "F_n", "F_t", "M"],
                                  [[k, *v.values()] for k, v in study.nrmse.items()]))
-    sec.blocks.append(table_html(["run", "cells", "CPU [s]", "mean y+", "max y+"],
+    sec.blocks.append(table_html(["run", "cells", "CPU [s]", "mean y+", "max y+",
+                                  "steps with epsilon clipped"],
                                  [[k, v["n_cells"], v["cpu_time_s"], v["y_plus_mean"],
-                                   v["y_plus_max"]] for k, v in
+                                   v["y_plus_max"], v["epsilon_clipped_step_fraction"]]
+                                  for k, v in
                                   study.as_dict()["runs"].items()]))
     sec.blocks.append(figure_html(convergence_figure(study), "F_n and y+ over the run"))
     if study.gci:

@@ -44,8 +44,10 @@ def figure_html(fig: Figure, caption: str = "", dpi: int = 110) -> str:
 
 
 def table_html(header: Sequence[str], rows: Sequence[Sequence[object]]) -> str:
-    """A table; floats are shown with 4 significant digits."""
+    """A table; floats are shown with 4 significant digits, None as a dash."""
     def cell(v):
+        if v is None:
+            return "-"
         return f"{v:.4g}" if isinstance(v, float) else html.escape(str(v))
 
     head = "".join(f"<th>{html.escape(h)}</th>" for h in header)
