@@ -11,7 +11,8 @@ CASE = Path(__file__).resolve().parents[1] / "cases" / "paper2026.toml"
 
 @pytest.mark.openfoam
 @pytest.mark.parametrize("options", [[], ["--far-field", "inletOutlet", "--pressure-solver",
-                                          "GAMG"]], ids=["default", "inletOutlet-GAMG"])
+                                          "GAMG", "--turbulence-convection", "upwind"]],
+                         ids=["default", "inletOutlet-GAMG-upwind"])
 def test_cfd_write_run_parse_with_real_openfoam(tmp_path, options):
     runner = CliRunner()
     case_dir = tmp_path / "of"
@@ -28,6 +29,13 @@ def test_cfd_write_run_parse_with_real_openfoam(tmp_path, options):
     assert health["openfoam_build"].startswith("OPENFOAM=")
     assert health["n_time_steps"] > 10 and health["cpu_time_s"] > 0
     assert health["n_steps_bounding_epsilon"] <= health["n_time_steps"]
+    schemes = (case_dir / "system" / "fvSchemes").read_text()
+    if options:  # bounded upwind k and epsilon: nothing to clip
+        assert "div(phi,k)      Gauss upwind;" in schemes
+        assert health["n_steps_bounding_epsilon"] == 0
+    else:  # the template's limitedLinear at max Co 4 clips epsilon in most steps
+        assert "div(phi,k)      Gauss limitedLinear 1;" in schemes
+        assert health["n_steps_bounding_epsilon"] > health["n_time_steps"] / 4
     # fields written at the end: running the finished case again adds no time step
     times = sorted(float(p.name) for p in case_dir.iterdir() if p.name[0].isdigit())
     # a write every quarter of the run (purgeWrite keeps the last two)

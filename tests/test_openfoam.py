@@ -459,7 +459,7 @@ def test_convergence_floor_reruns_the_reference_with_the_other_pressure_solver(t
     args = ["cfd", "convergence", str(case), str(tmp_path / "c"), "--meshes", "coarse",
             "--courant", "4", "--cycles", "0.02", "--ramp-time", "0.005", "--floor",
             "--n-correctors", "2", "--setups", "affordable", "--far-field", "inletOutlet",
-            "--json"]
+            "--turbulence-convection", "upwind", "--json"]
     res = CliRunner().invoke(cli, args)
     assert res.exit_code == 0, res.output
     data = json.loads(res.output[res.output.index("{"):])
@@ -469,9 +469,13 @@ def test_convergence_floor_reruns_the_reference_with_the_other_pressure_solver(t
     affordable = tmp_path / "c" / "cases" / "setup_affordable"
     assert "Gauss LUST grad(U)" in (affordable / "system" / "fvSchemes").read_text()
     assert "nOuterCorrectors 1;" in (affordable / "system" / "fvSolution").read_text()
-    # every run of the study, the set-up's too, has the far field asked for
+    # every run of the study, the set-up's too, has the far field and the k and epsilon
+    # convection asked for; with upwind no solve needed clipping
     for run in data["runs"]:
         assert "inletOutlet" in (tmp_path / "c" / "cases" / run / "0" / "U").read_text()
+        schemes = (tmp_path / "c" / "cases" / run / "system" / "fvSchemes").read_text()
+        assert "div(phi,epsilon) Gauss upwind;" in schemes
+        assert data["runs"][run]["epsilon_clipped_step_fraction"] == 0.0
     floor = data["nrmse"]["coarse_co4_GAMG vs coarse_co4 (round-off floor)"]
     assert 0 < floor["normal_force"] < 1e-3
     # the same folder with other settings: refused by file and key, nothing rerun or lost
@@ -479,6 +483,7 @@ def test_convergence_floor_reruns_the_reference_with_the_other_pressure_solver(t
     mtime = record.stat().st_mtime_ns
     for change, key in ((["--n-correctors", "1"], "n_correctors"),
                         (["--far-field", "freestream"], "far_field"),
+                        (["--turbulence-convection", "limitedLinear"], "turbulence_convection"),
                         (["--cycles", "0.03"], "cycles")):
         changed = list(args)
         i = changed.index(change[0])

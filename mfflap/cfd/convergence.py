@@ -190,8 +190,11 @@ def run_convergence(out_dir: str | Path, motion: Motion, end_time: float, *,
     if floor:
         plan.append((f"{meshes[-1]}_co{courants[0]:g}_{other}", meshes[-1],
                      replace(base, pressure_solver=other), courants[0]))
-    for s in setups:  # each with its own mesh and solver, in the study's far field
-        plan.append((f"setup_{s.name}", s.mesh, replace(s.solver, far_field=base.far_field),
+    for s in setups:  # each with its own mesh and solver, in the study's far field and
+        # turbulence convection
+        plan.append((f"setup_{s.name}", s.mesh,
+                     replace(s.solver, far_field=base.far_field,
+                             turbulence_convection=base.turbulence_convection),
                      s.solver.max_courant))
     runs = []
     for label, mesh, settings, co in plan:

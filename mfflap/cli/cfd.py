@@ -31,12 +31,15 @@ def cfd() -> None:
                    "stream); default freestream.")
 @click.option("--pressure-solver", type=click.Choice(["PCG", "GAMG"]), default=None,
               help="Linear solver of the pressure equation; default PCG (or the set-up's).")
+@click.option("--turbulence-convection", type=click.Choice(["limitedLinear", "upwind"]),
+              default=None, help="Convection of k and epsilon (upwind: no clipping of "
+                                 "negative epsilon); default limitedLinear (or the set-up's).")
 @click.option("--writes", default=4, show_default=True, type=click.IntRange(min=1),
               help="Times the fields are written over the run; `cfd run` restarts a killed "
                    "run from the last one.")
 def write(case_file: Path, case_dir: Path, mesh: str | None, setup_name: str | None,
           cycles: float, ramp_time: float, y_plus: bool, far_field: str | None,
-          pressure_solver: str | None, writes: int) -> None:
+          pressure_solver: str | None, writes: int, turbulence_convection: str | None) -> None:
     """Write an OpenFOAM case for the [motion] of CASE_FILE into CASE_DIR."""
     from dataclasses import replace
 
@@ -48,7 +51,9 @@ def write(case_file: Path, case_dir: Path, mesh: str | None, setup_name: str | N
     case = load_case(case_file)
     end_time = cycles / case.motion.frequency
     overrides = {k: v for k, v in (("far_field", far_field),
-                                   ("pressure_solver", pressure_solver)) if v is not None}
+                                   ("pressure_solver", pressure_solver),
+                                   ("turbulence_convection", turbulence_convection))
+                 if v is not None}
     solver = replace(solver, write_interval=end_time / writes, **overrides)
     write_case(case_dir, case.motion.build(), end_time, mesh=spec, plate=case.plate,
                fluid=case.fluid, stream=case.flow, ramp_time=ramp_time, y_plus=y_plus,
@@ -194,6 +199,10 @@ def fluent(case_file: Path, out_dir: Path, cycles: float, ramp_time: float, time
               default="freestream", show_default=True,
               help="Far-field conditions (inletOutlet where the fine mesh's time step "
                    "collapses with freestream under large, fast heaves).")
+@click.option("--turbulence-convection", type=click.Choice(["limitedLinear", "upwind"]),
+              default="limitedLinear", show_default=True,
+              help="Convection of k and epsilon in every run, set-ups included (upwind: no "
+                   "clipping of negative epsilon).")
 @click.option("--floor", is_flag=True,
               help="Rerun the reference with the other pressure solver: the round-off floor "
                    "under every NRMSE of the study.")
@@ -203,8 +212,8 @@ def fluent(case_file: Path, out_dir: Path, cycles: float, ramp_time: float, time
 @click.option("--json", "as_json", is_flag=True, help="Print the NRMSE table as JSON.")
 def convergence(case_file: Path, out_dir: Path, meshes: str, courants: str, cycles: float,
                 ramp_time: float | None, procs: int, pressure_solver: str, n_correctors: int,
-                far_field: str, floor: bool, setup_names: str, time_step_mesh: str | None,
-                as_json: bool) -> None:
+                far_field: str, turbulence_convection: str, floor: bool, setup_names: str,
+                time_step_mesh: str | None, as_json: bool) -> None:
     """Mesh and time-step convergence of the [motion] of CASE_FILE: NRMSE between runs, the
     grid convergence index of mean thrust, power, peak F_n and RMS moment over the three
     finest meshes, and the plate's y+ over time (HDF5 records, HTML report, resumable)."""
@@ -226,7 +235,8 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: str, cycl
                                     if n.strip()],
                             solver=SolverSettings(pressure_solver=pressure_solver,
                                                   n_correctors=n_correctors,
-                                                  far_field=far_field),
+                                                  far_field=far_field,
+                                                  turbulence_convection=turbulence_convection),
                             progress=lambda m: click.echo(m, err=True))
     rep = Report("Mesh and time-step convergence", f"{case.study.name}: {cycles:g} cycles")
     sec = rep.section("NRMSE between runs")
