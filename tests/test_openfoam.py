@@ -397,6 +397,30 @@ def test_bounding_summary_counts_clipped_solves_and_the_worst_relative_value(tmp
                      "worst_bounding_k": 0.0, "worst_bounding_epsilon": 0.0}
 
 
+@settings(max_examples=300, deadline=None)
+@given(st.lists(st.sampled_from([
+    "bounding epsilon, min: -0.5 max: 2 average: 0.1", "bounding k, min: - max: e",
+    "bounding epsilon, min: -1e999 max: 1e999", "bounding epsilon, min: -3 max: 0",
+    "bounding nut, min: -1 max: 1", "Time = 0.1", "ExecutionTime = . s  ClockTime = 1 s",
+    "ExecutionTime = 1.5 s  ClockTime = 2 s", "Create time", "bounding epsilon, min: nan max: 1",
+]) | st.text(max_size=40), max_size=30))
+def test_log_summary_never_fails_on_garbled_lines(tmp_path_factory, lines):
+    """A garbled, truncated or diverged log gives counts and finite ratios, never an error."""
+    import math
+
+    from mfflap.cfd.openfoam.solver_log import solver_provenance
+
+    case = tmp_path_factory.mktemp("log")
+    (case / "log.pimpleFoam").write_text("\n".join(lines))
+    summary = solver_provenance(case)
+    for field in ("k", "epsilon"):
+        assert summary[f"n_steps_bounding_{field}"] <= sum(
+            ln.startswith(f"bounding {field},") for ln in lines)
+        assert math.isfinite(summary[f"worst_bounding_{field}"])
+        assert summary[f"worst_bounding_{field}"] <= 0
+    assert summary["cpu_time_s"] >= 0 and summary["n_time_steps"] <= len(lines)
+
+
 @pytest.mark.openfoam
 def test_upwind_turbulence_convection_keeps_epsilon_positive(tmp_path):
     """With limitedLinear k and epsilon at max Co 4 OpenFOAM clips negative epsilon after

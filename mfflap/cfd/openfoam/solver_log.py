@@ -3,14 +3,16 @@ time steps, and how often the turbulence fields had to be clipped."""
 
 from __future__ import annotations
 
+import math
 import re
 from pathlib import Path
 from typing import Any
 
 _BUILD = re.compile(r"^Build\s*:\s*(.+)$", re.M)
-_BOUNDING = re.compile(r"^bounding (\w+), min: ([-+0-9.eE]+) max: ([-+0-9.eE]+)", re.M)
+_NUMBER = r"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)"
+_BOUNDING = re.compile(rf"^bounding (\w+), min: {_NUMBER} max: {_NUMBER}", re.M)
 _TIME_STEP = re.compile(r"^Time = ", re.M)
-_EXEC = re.compile(r"ExecutionTime = ([0-9.eE+-]+) s\s+ClockTime = ([0-9.eE+-]+) s")
+_EXEC = re.compile(rf"ExecutionTime = {_NUMBER} s\s+ClockTime = {_NUMBER} s")
 
 
 def solver_provenance(case_dir: str | Path) -> dict[str, Any]:
@@ -52,8 +54,8 @@ def bounding_summary(log_text: str) -> dict[str, float]:
         if field not in counts:
             continue
         counts[field] += 1
-        scale = abs(float(high))
-        if scale > 0:
-            worst[field] = min(worst[field], float(low) / scale)
+        ratio = float(low) / abs(float(high)) if float(high) != 0 else 0.0
+        if math.isfinite(ratio):
+            worst[field] = min(worst[field], ratio)
     return {**{f"n_steps_bounding_{f}": n for f, n in counts.items()},
             **{f"worst_bounding_{f}": w for f, w in worst.items()}}
