@@ -24,6 +24,18 @@ def solver_provenance(case_dir: str | Path) -> dict[str, Any]:
     values of k or epsilon ("bounding epsilon, min: ..."), and ``worst_bounding_<field>`` is
     the most negative value relative to that step's maximum: a health figure of the
     turbulence solution (see ``SolverSettings.turbulence_convection``).
+
+    Parameters
+    ----------
+    case_dir
+        An OpenFOAM case folder; a missing ``log.pimpleFoam`` gives zeros.
+
+    Returns
+    -------
+    dict
+        ``solver``, ``openfoam_build``, ``cpu_time_s``, ``clock_time_s``, ``n_time_steps``,
+        ``n_steps_bounding_k``, ``n_steps_bounding_epsilon``, ``worst_bounding_k``,
+        ``worst_bounding_epsilon``.
     """
     log = Path(case_dir) / "log.pimpleFoam"
     text = log.read_text(errors="replace") if log.exists() else ""
@@ -47,7 +59,19 @@ def solver_provenance(case_dir: str | Path) -> dict[str, Any]:
 
 def bounding_summary(log_text: str) -> dict[str, float]:
     """Number of k and epsilon solves clipped by OpenFOAM's ``bound()`` and the most
-    negative clipped value relative to that solve's maximum (0 when none were clipped)."""
+    negative clipped value relative to that solve's maximum (0 when none were clipped).
+
+    Parameters
+    ----------
+    log_text
+        Text of a pimpleFoam log; lines that do not parse are ignored.
+
+    Returns
+    -------
+    dict
+        ``n_steps_bounding_<field>`` (int) and ``worst_bounding_<field>`` (a ratio <= 0) for
+        k and epsilon.
+    """
     counts = {"k": 0, "epsilon": 0}
     worst = {"k": 0.0, "epsilon": 0.0}
     for field, low, high in _BOUNDING.findall(log_text):
