@@ -57,7 +57,7 @@ def solver_provenance(case_dir: str | Path) -> dict[str, Any]:
     }
 
 
-def bounding_summary(log_text: str) -> dict[str, float]:
+def bounding_summary(log_text: str) -> dict[str, int | float]:
     """Number of k and epsilon solves clipped by OpenFOAM's ``bound()`` and the most
     negative clipped value relative to that solve's maximum (0 when none were clipped).
 
