@@ -161,8 +161,8 @@ def run_convergence(out_dir: str | Path, motion: Motion, end_time: float, *,
     Parameters
     ----------
     solver
-        Base solver settings (pressure solver, correctors, far field); the Courant limit is
-        the study's.
+        Base solver settings (pressure solver, correctors, far field, k and epsilon
+        convection); the Courant limit is the study's.
     floor
         Also rerun the reference with the other pressure solver (PCG <-> GAMG, both converged
         to the same tolerance): the NRMSE between the two is the floor under every mesh
@@ -173,7 +173,8 @@ def run_convergence(out_dir: str | Path, motion: Motion, end_time: float, *,
         the cheapest; the finest tells whether the reference itself is time-step converged).
     setups
         Named set-ups (setups.toml) run as well, each with its own mesh and solver settings
-        but the study's far field (``setup_<name>``), and compared with the reference.
+        but the study's far field and k and epsilon convection (``setup_<name>``), and
+        compared with the reference.
     """
     from mfflap.campaign.openfoam_run import run_motion
 
