@@ -11,7 +11,12 @@ the floor under any comparison with the medium mesh, since they differ only by r
 the linear solves. It runs a third time at max Co 3 instead of 4: the NRMSE between those is
 the medium mesh's own time-step uncertainty, the scale against which a 2 % target has to be
 read (--no-time-step-floor skips that run; at max Co 5 the medium mesh's time step collapses
-in the second cycle). Forces are compared on the first cycle after the ramp (0.25-1 s) and on
+in the second cycle). Every set-up named on the command line runs a second time too, with the
+other pressure solver (PCG for GAMG, GAMG for PCG) at its own tolerances: the NRMSE between
+those two is that set-up's solver floor, how far its forces move when only the round-off of
+its linear solves changes (--no-solver-floor skips those runs). A set-up whose floor is close
+to its distance from the reference cannot be said to be nearer the reference than that floor.
+Forces are compared on the first cycle after the ramp (0.25-1 s) and on
 the second cycle (1-2 s), de-spiked. CPU is pimpleFoam's own (the last ExecutionTime of its
 log). A run that fails is reported with the reason; the others are still compared.
 
@@ -103,6 +108,8 @@ def main() -> None:
     parser.add_argument("--cycles", type=float, default=2.0, help="cycles simulated")
     parser.add_argument("--no-time-step-floor", action="store_true",
                         help="skip the reference's rerun at max Co 3")
+    parser.add_argument("--no-solver-floor", action="store_true",
+                        help="skip the set-ups' reruns with the other pressure solver")
     parser.add_argument("--far-field", choices=("freestream", "inletOutlet"), default=None,
                         help="far field of every run (default: each set-up's own); the fine "
                         "mesh runs only with inletOutlet")
@@ -120,7 +127,14 @@ def main() -> None:
     if not args.no_time_step_floor:
         jobs.append(("reference-Co3", ref.mesh, replace(ref.solver, max_courant=3.0), cycles,
                      root))
-    jobs += [(s.name, s.mesh, s.solver, cycles, root) for s in map(setup, args.setups)]
+    floors = {}
+    for s in map(setup, args.setups):
+        jobs.append((s.name, s.mesh, s.solver, cycles, root))
+        if not args.no_solver_floor:
+            other = "PCG" if s.solver.pressure_solver == "GAMG" else "GAMG"
+            floors[s.name] = f"{s.name}-{other}"
+            jobs.append((floors[s.name], s.mesh, replace(s.solver, pressure_solver=other),
+                         cycles, root))
     specs = mesh_specs()
     jobs += [(f"{m}-mesh", specs[m], ref.solver, cycles, root)
              for m in (s.strip() for s in args.meshes.split(",")) if m]
@@ -148,6 +162,11 @@ def main() -> None:
     if "reference-Co3" in results:
         print("reference-Co3 against reference is the medium mesh's own time-step uncertainty "
               "(max Co 3 instead of 4).")
+    for name, rerun in floors.items():
+        if results[name][1] is None or results[rerun][1] is None:
+            continue
+        print(f"solver floor of {name} ({rerun} against {name}): "
+              f"{compare(results[rerun], results[name], cycles)}")
     print("Target: <= 90 s per cycle with F_n and M within 2 % NRMSE of the medium mesh.")
 
 

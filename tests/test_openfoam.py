@@ -487,7 +487,8 @@ def test_convergence_floor_reruns_the_reference_with_the_other_pressure_solver(t
     res = CliRunner().invoke(cli, args)
     assert res.exit_code == 0, res.output
     data = json.loads(res.output[res.output.index("{"):])
-    assert set(data["runs"]) == {"coarse_co4", "coarse_co4_GAMG", "setup_affordable"}
+    assert set(data["runs"]) == {"coarse_co4", "coarse_co4_GAMG", "setup_affordable",
+                                 "setup_affordable_PCG"}
     assert data["runs"]["setup_affordable"]["mesh"] == "graded"
     assert "setup_affordable vs coarse_co4" in data["nrmse"]
     affordable = tmp_path / "c" / "cases" / "setup_affordable"
@@ -502,6 +503,15 @@ def test_convergence_floor_reruns_the_reference_with_the_other_pressure_solver(t
         assert data["runs"][run]["epsilon_clipped_step_fraction"] == 0.0
     floor = data["nrmse"]["coarse_co4_GAMG vs coarse_co4 (round-off floor)"]
     assert 0 < floor["normal_force"] < 1e-3
+    # the set-up (GAMG) has its own floor, a rerun with PCG compared with it, not with the
+    # reference
+    assert data["pairs"]["setup_affordable_PCG vs setup_affordable (round-off floor)"] == [
+        "setup_affordable_PCG", "setup_affordable"]
+    assert "setup_affordable_PCG vs coarse_co4" not in data["nrmse"]
+    setup_floor = data["nrmse"]["setup_affordable_PCG vs setup_affordable (round-off floor)"]
+    assert 0 < setup_floor["normal_force"] < 0.05
+    assert "solver PCG;" in (tmp_path / "c" / "cases" / "setup_affordable_PCG" / "system" /
+                             "fvSolution").read_text()
     # the same folder with other settings: refused by file and key, nothing rerun or lost
     record = tmp_path / "c" / "coarse_co4.h5"
     mtime = record.stat().st_mtime_ns

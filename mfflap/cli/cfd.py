@@ -204,8 +204,8 @@ def fluent(case_file: Path, out_dir: Path, cycles: float, ramp_time: float, time
               help="Convection of k and epsilon in every run, set-ups included (upwind: no "
                    "clipping of negative epsilon).")
 @click.option("--floor", is_flag=True,
-              help="Rerun the reference with the other pressure solver: the round-off floor "
-                   "under every NRMSE of the study.")
+              help="Rerun the reference, and each set-up, with the other pressure solver: "
+                   "the round-off floor under every NRMSE of the study.")
 @click.option("--setups", "setup_names", default="",
               help="Named set-ups of setups.toml (comma separated) run as well, each with its "
                    "own mesh and solver settings, and compared with the reference.")
