@@ -16,9 +16,9 @@ other pressure solver (PCG for GAMG, GAMG for PCG) at its own tolerances: the NR
 those two is that set-up's solver floor, how far its forces move when only the round-off of
 its linear solves changes (--no-solver-floor skips those runs). A set-up whose floor is close
 to its distance from the reference cannot be said to be nearer the reference than that floor.
-Forces are compared on the first cycle after the ramp (0.25-1 s) and on
-the second cycle (1-2 s), de-spiked. CPU is pimpleFoam's own (the last ExecutionTime of its
-log). A run that fails is reported with the reason; the others are still compared.
+Forces are compared on the first cycle after the ramp (0.25-1 s) and on the second cycle
+(1-2 s), de-spiked. CPU is pimpleFoam's own (the last ExecutionTime of its log). A run that
+fails is reported with the reason; the others are still compared.
 
 Run: python benchmarks/cfd_cost.py [setup ...] [--meshes coarse,lean] [--cycles 2]
                                    [--work-dir DIR]

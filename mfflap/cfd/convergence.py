@@ -167,10 +167,11 @@ def run_convergence(out_dir: str | Path, motion: Motion, end_time: float, *,
         Also rerun the reference with the other pressure solver (PCG <-> GAMG, both converged
         to the same tolerance): the NRMSE between the two is the floor under every mesh
         comparison, since they differ only by round-off in the linear solves. A flow whose
-        later cycles are sensitive to round-off shows it here. Each set-up is rerun the same
-        way (``setup_<name>_<solver>``): a set-up's distance from the reference means little
-        where its own floor is as large (PISO with LUST convection amplifies round-off to
-        about 2 % NRMSE within one cycle of the paper's motion).
+        later cycles are sensitive to round-off shows it here. Each set-up is rerun with its
+        other pressure solver too, at its own tolerances (``setup_<name>_<solver>``): a
+        set-up's distance from the reference means little where its own floor is as large
+        (PISO with LUST convection amplifies round-off to up to about 2 % NRMSE within one
+        cycle of the paper's motion).
     time_step_mesh
         The mesh of ``meshes`` repeated at the further Courant limits (default the first,
         the cheapest; the finest tells whether the reference itself is time-step converged).
