@@ -531,6 +531,54 @@ def test_convergence_floor_reruns_the_reference_with_the_other_pressure_solver(t
 
 
 @pytest.mark.openfoam
+def test_convergence_compares_mean_cycles_of_a_periodic_motion(tmp_path):
+    """A harmonic motion over three periods: the study also compares the mean cycles of the
+    two Courant limits over the two periods after the first, as recomputed here from the
+    stored records, and reports each run's cycle-to-cycle scatter."""
+    import json
+
+    from click.testing import CliRunner
+
+    from mfflap.campaign.records import read_record
+    from mfflap.cli.main import cli
+    from mfflap.metrics import nrmse
+
+    text = (Path(__file__).parents[1] / "cases" / "paper2026.toml").read_text()
+    period_s = 0.025
+    text = text.replace("frequency = 1.0 ", "frequency = 40.0 ").replace(
+        "heave_amplitude = 0.3 ", "heave_amplitude = 0.0025 ").replace(
+        "pitch_amplitude_deg = 20.0", "pitch_amplitude_deg = 1.0")
+    case = tmp_path / "fast.toml"
+    case.write_text(text)
+    res = CliRunner().invoke(cli, ["cfd", "convergence", str(case), str(tmp_path / "c"),
+                                   "--meshes", "coarse", "--courant", "4,3", "--cycles", "3",
+                                   "--pressure-solver", "GAMG", "--json"])
+    assert res.exit_code == 0, res.output
+    data = json.loads(res.output[res.output.index("{"):])
+    assert data["phase_cycles"] == 2
+    assert set(data["cycle_scatter"]) == {"coarse_co4", "coarse_co3"}
+    # the same pairs as the point-wise NRMSE
+    assert set(data["phase_nrmse"]) == set(data["nrmse"]) == {"coarse_co3 vs coarse_co4",
+                                                              "coarse_co4 vs coarse_co3"}
+    key = "coarse_co4 vs coarse_co3"
+    phase = np.arange(256) / 256
+    means = {}
+    for label in ("coarse_co4", "coarse_co3"):
+        rec = read_record(tmp_path / "c" / f"{label}.h5")
+        # the first period is left out
+        cycles = [np.interp((1 + k + phase) * period_s, rec.time, rec.loads.normal_force)
+                  for k in (0, 1)]
+        means[label] = np.mean(cycles, axis=0)
+        spread = np.std(cycles, axis=0, ddof=1)
+        assert data["cycle_scatter"][label]["normal_force"] == pytest.approx(
+            np.sqrt(np.mean(spread**2)) / np.ptp(means[label]), rel=1e-9)
+    assert data["phase_nrmse"][key]["normal_force"] == pytest.approx(
+        float(nrmse(means["coarse_co4"], means["coarse_co3"])), rel=1e-9)
+    assert 0 < data["phase_nrmse"][key]["normal_force"] < 1
+    assert "Mean cycles (2 periods per run)" in (tmp_path / "c" / "convergence.html").read_text()
+
+
+@pytest.mark.openfoam
 @pytest.mark.parametrize("mesh", ["coarse", "lean", "graded", "medium", "fine"])
 def test_every_named_mesh_builds_and_passes_checkmesh(tmp_path, mesh):
     """blockMesh + checkMesh on each resolution of meshes.toml; the cell count is the spec's,

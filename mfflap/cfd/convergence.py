@@ -6,7 +6,9 @@ the finest mesh at the first Courant limit; the time-step study repeats the firs
 further limit. NRMSE is computed on the reference's time base after the start-up ramp, like
 the paper's mesh study (0.26 % between its chosen and finest meshes). With three meshes or
 more, the finest three also give the grid convergence index (:mod:`mfflap.cfd.gci`) of the
-cycle's mean thrust and input power, peak normal force and RMS moment.
+cycle's mean thrust and input power, peak normal force and RMS moment. For a periodic motion
+whose runs hold two or more whole periods after the start, the same pairs are also compared by
+their mean cycles (:mod:`mfflap.cfd.phase_average`), beside each run's cycle-to-cycle scatter.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ from mfflap.cfd.gci import GridConvergence, grid_convergence
 from mfflap.cfd.openfoam.setups import CfdSetup
 from mfflap.cfd.openfoam.writer import SolverSettings, resolve_mesh
 from mfflap.cfd.openfoam.yplus import YPlusHistory, read_y_plus
+from mfflap.cfd.phase_average import phase_average, whole_periods
 from mfflap.errors import ConfigError
 from mfflap.kinematics.continuous import Motion
 from mfflap.metrics import nrmse, time_mean
@@ -48,6 +51,12 @@ class ConvergenceStudy:
     ``gci`` maps each quantity of :func:`integral_quantities` to its
     :class:`~mfflap.cfd.gci.GridConvergence` over the three finest meshes at the first Courant
     limit (empty with fewer than three meshes); ``gci_meshes`` names those runs.
+
+    ``phase_nrmse`` holds, for the same pairs as ``nrmse``, the NRMSE between the two runs'
+    mean cycles over ``phase_cycles`` whole periods, and ``cycle_scatter`` each run's
+    cycle-to-cycle scatter (:attr:`~mfflap.cfd.phase_average.PhaseAverage.scatter`) per
+    component; both empty unless the motion is periodic and every run holds two or more
+    whole periods after the start of the comparison.
     """
 
     runs: list[ConvergenceRun]
@@ -56,6 +65,9 @@ class ConvergenceStudy:
     pairs: dict[str, tuple[str, str]] = field(default_factory=dict)
     gci: dict[str, GridConvergence] = field(default_factory=dict)
     gci_meshes: tuple[str, ...] = ()
+    phase_nrmse: dict[str, dict[str, float]] = field(default_factory=dict)
+    phase_cycles: int = 0
+    cycle_scatter: dict[str, dict[str, float]] = field(default_factory=dict)
 
     def as_dict(self) -> dict:
         """JSON-friendly summary."""
@@ -63,6 +75,8 @@ class ConvergenceStudy:
                 "pairs": {k: list(v) for k, v in self.pairs.items()},
                 "gci_meshes": list(self.gci_meshes),
                 "gci": {k: v.as_dict() for k, v in self.gci.items()},
+                "phase_cycles": self.phase_cycles, "phase_nrmse": self.phase_nrmse,
+                "cycle_scatter": self.cycle_scatter,
                 "runs": {r.label: {"mesh": r.mesh, "max_courant": r.max_courant,
                                    "n_cells": r.record.provenance.get("n_cells"),
                                    "cpu_time_s": r.record.provenance.get("cpu_time_s"),
@@ -155,6 +169,7 @@ def run_convergence(out_dir: str | Path, motion: Motion, end_time: float, *,
                     timeout_s: float = 6 * 3600.0, n_procs: int = 1,
                     solver: SolverSettings | None = None, floor: bool = False,
                     setups: Sequence[CfdSetup] = (), time_step_mesh: str | None = None,
+                    period: float | None = None, phase_from: float | None = None,
                     progress: Callable[[str], None] | None = None) -> ConvergenceStudy:
     """Run (or resume) every mesh at ``courants[0]`` and one mesh at the other limits.
 
@@ -179,6 +194,14 @@ def run_convergence(out_dir: str | Path, motion: Motion, end_time: float, *,
         Named set-ups (setups.toml) run as well, each with its own mesh and solver settings
         but the study's far field and k and epsilon convection (``setup_<name>``), and
         compared with the reference.
+    period
+        The motion's period, s, if it is periodic (not for a pitch ramp): with two or more
+        whole periods after the start of the comparison in every run, the pairs are also
+        compared by their mean cycles (:func:`compare_mean_cycles`).
+    phase_from
+        Start of the first cycle averaged, s (default: the first multiple of the period after
+        the first cycle and the start of the comparison, so that the start-up cycle is left
+        out; a three-period run then gives two cycles).
     """
     from mfflap.campaign.openfoam_run import run_motion
 
@@ -254,11 +277,34 @@ def run_convergence(out_dir: str | Path, motion: Motion, end_time: float, *,
         study.nrmse[f"{first} vs {fine_dt}"] = compare(by_label[first].record,
                                                        by_label[fine_dt].record, start)
         study.pairs[f"{first} vs {fine_dt}"] = (first, fine_dt)
+    if period is not None:
+        if phase_from is None:
+            phase_from = period * max(1, int(np.ceil(start / period - 1e-9)))
+        compare_mean_cycles(study, period, phase_from)
     if len(meshes) >= 3:
         finest = [f"{m}_co{courants[0]:g}" for m in meshes[-3:]]
         study.gci = mesh_gci([by_label[k].record for k in finest], start)
         study.gci_meshes = tuple(finest)
     return study
+
+
+def compare_mean_cycles(study: ConvergenceStudy, period: float, start: float) -> None:
+    """Fill ``study.phase_nrmse``, ``phase_cycles`` and ``cycle_scatter`` when every run holds
+    two or more whole periods from ``start`` (the same number from each run); else leave them
+    empty."""
+    n = min(whole_periods(start, r.record.time[-1], period) for r in study.runs)
+    if n < 2:
+        return
+    means = {}
+    for r in study.runs:
+        averages = {k: phase_average(r.record.time, getattr(r.record.loads, k), period, start,
+                                     n_cycles=n) for k in COMPONENTS}
+        means[r.label] = {k: a.mean for k, a in averages.items()}
+        study.cycle_scatter[r.label] = {k: a.scatter for k, a in averages.items()}
+    study.phase_cycles = n
+    for key, (a, b) in study.pairs.items():
+        study.phase_nrmse[key] = {k: float(nrmse(means[a][k], means[b][k]))
+                                  for k in COMPONENTS}
 
 
 def convergence_figure(study: ConvergenceStudy):

@@ -209,14 +209,20 @@ def fluent(case_file: Path, out_dir: Path, cycles: float, ramp_time: float, time
 @click.option("--setups", "setup_names", default="",
               help="Named set-ups of setups.toml (comma separated) run as well, each with its "
                    "own mesh and solver settings, and compared with the reference.")
+@click.option("--phase-from", default=None, type=float,
+              help="Periodic motions: start of the mean cycles compared, s (default: the "
+                   "first period boundary after the first cycle; needs two whole periods "
+                   "after it, e.g. --cycles 3).")
 @click.option("--json", "as_json", is_flag=True, help="Print the NRMSE table as JSON.")
 def convergence(case_file: Path, out_dir: Path, meshes: str, courants: str, cycles: float,
                 ramp_time: float | None, procs: int, pressure_solver: str, n_correctors: int,
                 far_field: str, turbulence_convection: str, floor: bool, setup_names: str,
-                time_step_mesh: str | None, as_json: bool) -> None:
+                time_step_mesh: str | None, phase_from: float | None, as_json: bool) -> None:
     """Mesh and time-step convergence of the [motion] of CASE_FILE: NRMSE between runs, the
     grid convergence index of mean thrust, power, peak F_n and RMS moment over the three
-    finest meshes, and the plate's y+ over time (HDF5 records, HTML report, resumable)."""
+    finest meshes, and the plate's y+ over time (HDF5 records, HTML report, resumable). A
+    harmonic motion run over two or more periods after the first is also compared by mean
+    cycles, beside each run's cycle-to-cycle scatter."""
     from mfflap.cfd.convergence import convergence_figure, run_convergence
     from mfflap.cfd.openfoam.setups import setup
     from mfflap.cfd.openfoam.writer import SolverSettings
@@ -237,6 +243,8 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: str, cycl
                                                   n_correctors=n_correctors,
                                                   far_field=far_field,
                                                   turbulence_convection=turbulence_convection),
+                            period=period if case.motion.kind == "harmonic" else None,
+                            phase_from=phase_from,
                             progress=lambda m: click.echo(m, err=True))
     rep = Report("Mesh and time-step convergence", f"{case.study.name}: {cycles:g} cycles")
     sec = rep.section("NRMSE between runs")
@@ -249,6 +257,13 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: str, cycl
                                   for k, v in
                                   study.as_dict()["runs"].items()]))
     sec.blocks.append(figure_html(convergence_figure(study), "F_n and y+ over the run"))
+    if study.phase_nrmse:
+        psec = rep.section(f"Mean cycles ({study.phase_cycles} periods per run)")
+        psec.blocks.append(table_html(["comparison", "F_n", "F_t", "M"],
+                                      [[k, *v.values()] for k, v in study.phase_nrmse.items()]))
+        psec.blocks.append(table_html(["run: cycle-to-cycle scatter", "F_n", "F_t", "M"],
+                                      [[k, *v.values()]
+                                       for k, v in study.cycle_scatter.items()]))
     if study.gci:
         gsec = rep.section(f"Grid convergence index ({', '.join(study.gci_meshes)}; Celik et "
                            "al. 2008, Fs = 1.25)")
@@ -264,6 +279,10 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: str, cycl
     for k, v in study.nrmse.items():
         click.echo(f"{k:32s} NRMSE F_n {v['normal_force']:.4f}  F_t "
                    f"{v['tangential_force']:.4f}  M {v['moment']:.4f}")
+    for k, v in study.phase_nrmse.items():
+        click.echo(f"{k:32s} mean cycles ({study.phase_cycles}) NRMSE F_n "
+                   f"{v['normal_force']:.4f}  F_t {v['tangential_force']:.4f}  M "
+                   f"{v['moment']:.4f}")
     for k, g in study.gci.items():
         click.echo(f"GCI {k:22s} {g.behaviour:12s} p {g.apparent_order:6.2f}  fine "
                    f"{g.values[0]:10.4g} +- {100 * g.gci_fine:6.2f} %  medium {g.values[1]:10.4g} "
