@@ -530,6 +530,32 @@ def test_convergence_floor_reruns_the_reference_with_the_other_pressure_solver(t
     assert "solver GAMG;" in solver and "nCorrectors     2;" in solver
 
 
+def test_mean_cycles_of_a_motion_that_is_not_periodic_are_refused_before_any_run(tmp_path):
+    from click.testing import CliRunner
+
+    from mfflap.cfd.convergence import run_convergence
+    from mfflap.cli.main import cli
+    from mfflap.errors import ConfigError
+
+    text = (Path(__file__).parents[1] / "cases" / "paper2026.toml").read_text()
+    case = tmp_path / "ramp.toml"
+    case.write_text(text.replace('kind = "harmonic"', 'kind = "ramp_harmonic"'))
+    res = CliRunner().invoke(cli, ["cfd", "convergence", str(case), str(tmp_path / "c"),
+                                   "--meshes", "coarse", "--phase-from", "1"])
+    assert res.exit_code != 0
+    assert "--phase-from" in res.output and "'ramp_harmonic'" in res.output
+    assert not (tmp_path / "c").exists()
+    for phase_from in (-0.1, 2.0):
+        with pytest.raises(ConfigError) as err:
+            run_convergence(tmp_path / "d", MOTION, 2.0, meshes=["coarse"], period=1.0,
+                            phase_from=phase_from)
+        assert err.value.key == "phase_from"
+    with pytest.raises(ConfigError) as err:
+        run_convergence(tmp_path / "d", MOTION, 2.0, meshes=["coarse"], period=0.0)
+    assert err.value.key == "period"
+    assert not (tmp_path / "d").exists()
+
+
 @pytest.mark.openfoam
 def test_convergence_compares_mean_cycles_of_a_periodic_motion(tmp_path):
     """A harmonic motion over three periods: the study also compares the mean cycles of the
@@ -576,6 +602,17 @@ def test_convergence_compares_mean_cycles_of_a_periodic_motion(tmp_path):
         float(nrmse(means["coarse_co4"], means["coarse_co3"])), rel=1e-9)
     assert 0 < data["phase_nrmse"][key]["normal_force"] < 1
     assert "Mean cycles (2 periods per run)" in (tmp_path / "c" / "convergence.html").read_text()
+    # the same study from a later start: the finished runs are read, not rerun; one whole
+    # period is left, too few, and the study says so
+    mtime = (tmp_path / "c" / "coarse_co4.h5").stat().st_mtime_ns
+    res = CliRunner().invoke(cli, ["cfd", "convergence", str(case), str(tmp_path / "c"),
+                                   "--meshes", "coarse", "--courant", "4,3", "--cycles", "3",
+                                   "--pressure-solver", "GAMG", "--phase-from", "0.045",
+                                   "--json"])
+    assert res.exit_code == 0, res.output
+    assert "no mean cycles compared" in res.output and "--phase-from 0.045 s" in res.output
+    assert json.loads(res.output[res.output.index("{"):])["phase_nrmse"] == {}
+    assert (tmp_path / "c" / "coarse_co4.h5").stat().st_mtime_ns == mtime
 
 
 @pytest.mark.openfoam

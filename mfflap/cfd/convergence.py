@@ -211,6 +211,11 @@ def run_convergence(out_dir: str | Path, motion: Motion, end_time: float, *,
     if dt_mesh not in meshes:
         raise ConfigError(f"the time-step mesh {dt_mesh!r} is not one of the study's meshes "
                           f"({', '.join(meshes)})", key="time_step_mesh")
+    if period is not None and not period > 0:
+        raise ConfigError(f"the period must be > 0 s, got {period!r}", key="period")
+    if phase_from is not None and not 0 <= phase_from < end_time:
+        raise ConfigError(f"the mean cycles would start at {phase_from!r} s, outside the run "
+                          f"(0-{end_time:.6g} s)", key="phase_from")
     reference = f"{meshes[-1]}_co{courants[0]:g}"
     # (label, mesh, solver settings without the time-step limit, Courant limit)
     plan = [(f"{m}_co{courants[0]:g}", m, base, courants[0]) for m in meshes] + [

@@ -232,6 +232,10 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: str, cycl
     case = load_case(case_file)
     period = 1.0 / case.motion.frequency
     ramp = 0.25 * period if ramp_time is None else ramp_time
+    periodic = case.motion.kind == "harmonic"
+    if phase_from is not None and not periodic:
+        raise click.UsageError(f"--phase-from compares mean cycles of a periodic motion; the "
+                               f"[motion] of {case_file} is {case.motion.kind!r}")
     study = run_convergence(out_dir, case.motion.build(), cycles * period,
                             meshes=[m.strip() for m in meshes.split(",")],
                             courants=[float(c) for c in courants.split(",")], ramp_time=ramp,
@@ -243,9 +247,12 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: str, cycl
                                                   n_correctors=n_correctors,
                                                   far_field=far_field,
                                                   turbulence_convection=turbulence_convection),
-                            period=period if case.motion.kind == "harmonic" else None,
+                            period=period if periodic else None,
                             phase_from=phase_from,
                             progress=lambda m: click.echo(m, err=True))
+    if phase_from is not None and not study.phase_cycles:
+        click.echo(f"no mean cycles compared: the runs hold fewer than two whole periods "
+                   f"({period:.6g} s) after --phase-from {phase_from:g} s", err=True)
     rep = Report("Mesh and time-step convergence", f"{case.study.name}: {cycles:g} cycles")
     sec = rep.section("NRMSE between runs")
     sec.blocks.append(table_html(["comparison", "F_n", "F_t", "M"],
