@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mfflap.errors import ConfigError, MfflapError
+from mfflap.kinematics.continuous import check_times
 
 
 @dataclass(frozen=True)
@@ -84,19 +85,17 @@ def phase_average(time, values, period_s: float, start_s: float, *,
         A non-positive period, a start outside the samples, or fewer whole periods than asked
         for (key ``period``, ``start`` or ``n_cycles``).
     MfflapError
-        Times not strictly increasing or non-finite samples.
+        Times not strictly increasing (a :class:`~mfflap.errors.MotionError`), non-finite
+        samples, or values not one per time.
     """
-    t = np.asarray(time, dtype=float)
+    t = check_times(time, "phase_average's time array")
     v = np.asarray(values, dtype=float)
-    if t.ndim != 1 or v.shape != t.shape or len(t) < 2:
+    if v.shape != t.shape or len(t) < 2:
         raise MfflapError(f"phase_average needs two or more samples of one signal, got time "
                           f"{t.shape} and values {v.shape}")
-    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(v))):
-        raise MfflapError("phase_average got NaN or infinite samples")
-    if np.any(np.diff(t) <= 0):
-        i = int(np.argmax(np.diff(t) <= 0))
-        raise MfflapError(f"phase_average needs strictly increasing times; sample {i + 1} "
-                          f"({t[i + 1]:.9g} s) does not follow {t[i]:.9g} s")
+    if not np.all(np.isfinite(v)):
+        raise MfflapError(f"phase_average got a NaN or infinite value at index "
+                          f"{int(np.argmin(np.isfinite(v)))}")
     if not period_s > 0:
         raise ConfigError(f"the period must be > 0 s, got {period_s!r}", key="period")
     if not t[0] <= start_s < t[-1]:
