@@ -684,6 +684,92 @@ def test_second_restart_from_a_non_integer_time_is_read_from_its_suffixed_file(t
 
 
 @pytest.mark.openfoam
+def test_restart_skips_time_folders_that_hold_only_the_y_plus_field(tmp_path):
+    """The yPlus function object writes its field into a time folder of its own every 20
+    steps. A run killed after such a folder (here: its last full write removed) restarts
+    from the last folder with every field, not from the y+ folder (where pimpleFoam stopped
+    at once: cannot find p); forces and y+ of the restart replace the killed run's from the
+    restart time on."""
+    from mfflap.cfd.openfoam.runner import latest_solution_time
+    from mfflap.cfd.openfoam.writer import MeshSpec, SolverSettings
+    from mfflap.cfd.openfoam.yplus import read_y_plus
+
+    spec = MeshSpec("tiny", n_chord=20, n_edge=4, n_radial=20, radial_expansion=100.0,
+                    radius_chords=8.0)
+    settings = SolverSettings(write_interval=0.01, max_time_step=2e-4)  # 150 steps
+    whole = write_case(tmp_path / "whole", MOTION, end_time=0.03, mesh=spec, solver=settings,
+                       y_plus=True)
+    run_case(whole, timeout_s=300)
+    case = write_case(tmp_path / "killed", MOTION, end_time=0.03, mesh=spec, solver=settings,
+                      y_plus=True)
+    run_case(case, timeout_s=300)
+    shutil.rmtree(case / "0.03")
+    y_plus_only = [p for p in case.iterdir() if p.name.replace(".", "").isdigit()
+                   and 0.02 < float(p.name) and not (p / "p").exists()]
+    assert y_plus_only, "no y+ folder after the last full write: the test needs one"
+    assert latest_solution_time(case) == "0.02"
+    run_case(case, timeout_s=300)
+    assert "startTime       0.02;" in (case / "system" / "controlDict").read_text()
+    merged, reference = read_forces(case), read_forces(whole)
+    assert merged.time[-1] == pytest.approx(reference.time[-1])
+    assert np.all(np.diff(merged.time) > 0)
+    t = np.linspace(0.002, 0.029, 60)
+    for k in range(2):
+        a = np.interp(t, merged.time, merged.force[:, k])
+        b = np.interp(t, reference.time, reference.force[:, k])
+        assert np.max(np.abs(a - b)) <= 1e-2 * np.max(np.abs(b))
+    y_plus = read_y_plus(case)
+    restart_rows = [float(ln.split()[0]) for ln in
+                    (case / "postProcessing" / "yPlus" / "0.02" / "yPlus.dat").read_text()
+                    .splitlines() if ln.strip() and not ln.startswith("#")]
+    assert np.all(np.diff(y_plus.time) > 0)
+    np.testing.assert_array_equal(y_plus.time[y_plus.time >= restart_rows[0]], restart_rows)
+    assert y_plus.time[-1] == pytest.approx(read_y_plus(whole).time[-1])
+
+
+def test_latest_solution_time_needs_every_initial_field(tmp_path):
+    from mfflap.cfd.openfoam.runner import latest_solution_time, set_start_time
+
+    assert latest_solution_time(tmp_path) is None
+    for root in (tmp_path / "serial", tmp_path / "decomposed" / "processor0"):
+        for folder, names in (("0", "U p k epsilon nut"), ("0.5", "U p k epsilon nut phi"),
+                              ("0.7", "yPlus"), ("0.8", "U p"), ("1e-3", "U p k epsilon nut"),
+                              ("constant", "U p k epsilon nut")):
+            (root / folder).mkdir(parents=True)
+            for name in names.split():
+                (root / folder / name).write_text("")
+        (root / "0.6").mkdir()
+        for name in ("U.gz", "p.gz", "k.gz", "epsilon.gz", "nut.gz"):
+            (root / "0.6" / name).write_text("")
+    assert latest_solution_time(tmp_path / "serial") == "0.6"
+    assert latest_solution_time(tmp_path / "decomposed") == "0.6"
+    shutil.rmtree(tmp_path / "serial" / "0.6")
+    assert latest_solution_time(tmp_path / "serial") == "0.5"
+    case = write_case(tmp_path / "case", MOTION, end_time=0.1)
+    set_start_time(case, "0.05")
+    text = (case / "system" / "controlDict").read_text()
+    assert "startFrom       startTime;" in text and "startTime       0.05;" in text
+    assert "latestTime" not in text
+    (case / "system" / "controlDict").write_text(text.replace("startTime       0.05;", ""))
+    with pytest.raises(CfdRunError, match="controlDict has no startFrom or startTime"):
+        set_start_time(case, "0")
+
+
+def test_far_field_switch_reaches_the_processor_folders(tmp_path):
+    from mfflap.campaign.openfoam_run import use_inlet_outlet_far_field
+
+    case = write_case(tmp_path / "case", MOTION, end_time=0.1)
+    for proc in ("processor0", "processor1"):
+        shutil.copytree(case / "0", case / proc / "0.05")
+    assert "freestreamVelocity" in (case / "processor1" / "0.05" / "U").read_text()
+    assert use_inlet_outlet_far_field(case)
+    for folder in (case / "0", case / "processor0" / "0.05", case / "processor1" / "0.05"):
+        assert "inletOutlet" in (folder / "U").read_text()
+        assert "freestream" not in (folder / "U").read_text()
+        assert "freestreamPressure" not in (folder / "p").read_text()
+
+
+@pytest.mark.openfoam
 def test_convergence_time_step_study_on_a_chosen_mesh(tmp_path):
     """--time-step-mesh repeats that mesh (not the first) at the further Courant limits; with
     two meshes there is no grid convergence index."""

@@ -12,7 +12,7 @@ from typing import Any
 from mfflap.campaign.records import CfdRecord
 from mfflap.cfd.openfoam.forces import read_forces
 from mfflap.cfd.openfoam.loads import imposed_state, to_loads
-from mfflap.cfd.openfoam.runner import run_case
+from mfflap.cfd.openfoam.runner import is_time_folder, run_case
 from mfflap.cfd.openfoam.solver_log import solver_provenance
 from mfflap.cfd.openfoam.writer import MeshSpec, SolverSettings, write_case
 from mfflap.errors import CfdRunError
@@ -55,18 +55,11 @@ _FREESTREAM_U = re.compile(
 _FREESTREAM_P = re.compile(rb"type\s+freestreamPressure;\s*freestreamValue\s+uniform\s+[^;]+;")
 
 
-def _is_time_folder(name: str) -> bool:
-    try:
-        float(name)
-    except ValueError:
-        return False
-    return True
-
-
 def use_inlet_outlet_far_field(case_dir: str | Path) -> bool:
     """Switch the far field from freestreamVelocity/freestreamPressure to inletOutlet
-    velocity and a fixed pressure, in 0/ and in every written time folder (ASCII or binary
-    fields: only the dictionary text of the patch changes); True if anything changed.
+    velocity and a fixed pressure, in 0/ and in every written time folder, those of a
+    decomposed case's processor folders too (ASCII or binary fields: only the dictionary text
+    of the patch changes); True if anything changed.
 
     Where the whole mesh heaves several times faster than the stream (h = 0.5 m at
     f = 0.5 Hz, U = 0.3 m/s) the freestream pair let the velocity grow without bound in the
@@ -76,8 +69,9 @@ def use_inlet_outlet_far_field(case_dir: str | Path) -> bool:
     changed = False
     for field, pattern, repl in (("U", _FREESTREAM_U, rb"type inletOutlet;\n        inletValue\1;"),
                                  ("p", _FREESTREAM_P, rb"type fixedValue;")):
-        for path in Path(case_dir).glob(f"*/{field}"):
-            if not _is_time_folder(path.parent.name):
+        case = Path(case_dir)
+        for path in [*case.glob(f"*/{field}"), *case.glob(f"processor*/*/{field}")]:
+            if not is_time_folder(path.parent.name):
                 continue
             data = path.read_bytes()
             new = pattern.sub(repl, data)

@@ -109,7 +109,7 @@ def _check_increasing(arr: np.ndarray, path: str) -> None:
         raise ParseError(f"time does not increase after t = {float(arr[i, 0])!r}", path=path)
 
 
-def _segments(folder: Path, stem: str) -> list[Path]:
+def restart_segments(folder: Path, stem: str) -> list[Path]:
     """``<stem>.dat`` then the restart files ``<stem>_<time>.dat`` (``force_0.dat``,
     ``force_0.75.dat``) that v1912 writes when a run restarts into a time folder whose
     ``<stem>.dat`` already exists; later restarts come later."""
@@ -124,8 +124,9 @@ def _segments(folder: Path, stem: str) -> list[Path]:
     return first + [p for *_, p in sorted(numbered)]
 
 
-def _merge(parts: list[np.ndarray]) -> np.ndarray:
-    """Merge restart segments in order; a later segment replaces the overlap."""
+def merge_restart_segments(parts: list[np.ndarray]) -> np.ndarray:
+    """Merge restart segments (arrays whose first column is time) in order; a later
+    segment replaces everything from its first time on."""
     out = parts[0]
     for nxt in parts[1:]:
         out = np.concatenate([out[out[:, 0] < nxt[0, 0]], nxt])
@@ -142,9 +143,9 @@ def read_forces(case_dir: str | Path, function_name: str = "forces") -> ForceHis
         raise ParseError("no time folders", path=str(base))
     f_parts, m_parts, dialect = [], [], ""
     for folder in folders:
-        forces = _segments(folder, "force")
+        forces = restart_segments(folder, "force")
         if forces:
-            moments = _segments(folder, "moment")
+            moments = restart_segments(folder, "moment")
             for k, path in enumerate(forces):
                 arr, dialect = parse_table(path.read_text(), str(path), check_increasing=False)
                 f_parts.append(arr[:, :4])
@@ -152,17 +153,17 @@ def read_forces(case_dir: str | Path, function_name: str = "forces") -> ForceHis
                     marr, _ = parse_table(moments[k].read_text(), str(moments[k]),
                                           check_increasing=False)
                     m_parts.append(marr[:, :4])
-        elif _segments(folder, "forces"):
-            for path in _segments(folder, "forces"):
+        elif restart_segments(folder, "forces"):
+            for path in restart_segments(folder, "forces"):
                 arr, dialect = parse_table(path.read_text(), str(path), check_increasing=False)
                 # pressure + viscous = total; moments likewise
                 f_parts.append(np.column_stack([arr[:, 0], arr[:, 1:4] + arr[:, 4:7]]))
                 m_parts.append(np.column_stack([arr[:, 0], arr[:, 7:10] + arr[:, 10:13]]))
         else:
             raise ParseError("neither force.dat nor forces.dat", path=str(folder))
-    force = _merge(f_parts)
+    force = merge_restart_segments(f_parts)
     _check_increasing(force, str(base))
-    moment = _merge(m_parts) if len(m_parts) == len(f_parts) else None
+    moment = merge_restart_segments(m_parts) if len(m_parts) == len(f_parts) else None
     if moment is not None:
         n = min(len(force), len(moment))
         force, moment = force[:n], moment[:n]

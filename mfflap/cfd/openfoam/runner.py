@@ -126,13 +126,69 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
     return log
 
 
+def is_time_folder(name: str) -> bool:
+    """True if ``name`` is a number, as OpenFOAM names its time folders."""
+    try:
+        float(name)
+    except ValueError:
+        return False
+    return True
+
+
+def latest_solution_time(case_dir: str | Path) -> str | None:
+    """Name of the latest time folder that holds every field of the initial folder ``0/``.
+
+    A time folder can hold less: the yPlus function object writes its field into a folder of
+    its own every few steps, and a run killed while writing leaves a partial one. OpenFOAM's
+    ``startFrom latestTime`` would restart from such a folder and stop at once for want of
+    p. A decomposed case is judged by ``processor0``. None if no folder qualifies (``0/``
+    missing or empty).
+    """
+    case = Path(case_dir)
+    root = case / "processor0" if (case / "processor0").is_dir() else case
+
+    def fields(folder: Path) -> set[str]:
+        return {p.name.removesuffix(".gz") for p in folder.iterdir() if p.is_file()}
+
+    initial = root / "0"
+    needed = fields(initial) if initial.is_dir() else set()
+    if not needed:
+        return None
+    folders = sorted((p for p in root.iterdir() if p.is_dir() and is_time_folder(p.name)),
+                     key=lambda p: float(p.name), reverse=True)
+    return next((p.name for p in folders if needed <= fields(p)), None)
+
+
+def set_start_time(case_dir: str | Path, time_name: str) -> None:
+    """Make pimpleFoam start from the time folder ``time_name`` (``startFrom startTime``).
+
+    Raises
+    ------
+    CfdRunError
+        If system/controlDict has no ``startFrom`` or ``startTime`` entry.
+    """
+    path = Path(case_dir) / "system" / "controlDict"
+    text = path.read_text()
+    new, n_from = re.subn(r"^startFrom\s+[^;]*;", "startFrom       startTime;", text, flags=re.M)
+    new, n_time = re.subn(r"^startTime\s+[^;]*;", f"startTime       {time_name};", new,
+                          flags=re.M)
+    if not (n_from and n_time):
+        raise CfdRunError(f"{path} has no startFrom or startTime entry at the start of a line",
+                          case=str(case_dir))
+    if new != text:
+        path.write_text(new)
+
+
 def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
              min_time_step: float = 1e-7) -> None:
     """blockMesh (once), checkMesh (once), then pimpleFoam from the latest written time.
 
-    With ``n_procs`` > 1 the case is decomposed once (``method simple``: scotch and metis are
-    stubs in Debian's package) and pimpleFoam runs under mpirun; a restart continues from the
-    processor folders' latest time. The forces function object writes from the master.
+    The latest written time is the latest folder holding every field
+    (:func:`latest_solution_time`), not merely the latest folder: controlDict is set to start
+    there. With ``n_procs`` > 1 the case is decomposed once (``method simple``: scotch and
+    metis are stubs in Debian's package) and pimpleFoam runs under mpirun; a restart
+    continues from the processor folders' latest time. The forces function object writes
+    from the master.
     """
     case_dir = Path(case_dir)
     if not (case_dir / "constant" / "polyMesh" / "points").exists():
@@ -149,5 +205,6 @@ def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
         dict_path.write_text(text)
         if not (case_dir / "processor0").exists():
             run_application(case_dir, "decomposePar", timeout_s=300)
+    set_start_time(case_dir, latest_solution_time(case_dir) or "0")
     run_application(case_dir, "pimpleFoam", timeout_s=timeout_s, n_procs=n_procs,
                     min_time_step=min_time_step)

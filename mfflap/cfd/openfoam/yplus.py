@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from mfflap.cfd.openfoam.forces import merge_restart_segments, restart_segments
 from mfflap.errors import ParseError
 
 
@@ -21,7 +22,10 @@ class YPlusHistory:
 
 
 def read_y_plus(case_dir: str | Path, patch: str = "plate") -> YPlusHistory:
-    """y+ of ``patch``, merged over restart folders (later folders win).
+    """y+ of ``patch``, merged over restart folders and restart files like the forces
+    (:func:`~mfflap.cfd.openfoam.forces.merge_restart_segments`: a restart replaces
+    everything from its first time on, so the rows of a run that was stopped and restarted
+    from an earlier written time do not interleave with the restart's).
 
     Raises
     ------
@@ -33,29 +37,36 @@ def read_y_plus(case_dir: str | Path, patch: str = "plate") -> YPlusHistory:
         if root.is_dir() else []
     if not folders:
         raise ParseError("no yPlus output (write the case with y_plus=True)", path=str(root))
-    rows: dict[float, tuple[float, float, float]] = {}
+    parts = []
     for folder in folders:
-        path = folder / "yPlus.dat"
-        lines = path.read_text().splitlines()
-        for i, line in enumerate(lines, start=1):
-            if not line.strip() or line.lstrip().startswith("#"):
-                continue
-            parts = line.split()
-            if len(parts) != 5:
-                if i == len(lines):
-                    break  # cut last line of a killed run
-                raise ParseError(f"expected 5 columns (time patch min max average), got "
-                                 f"{len(parts)}", path=str(path), line=i)
-            if parts[1] != patch:
-                continue
-            try:
-                t, lo, hi, avg = (float(parts[k]) for k in (0, 2, 3, 4))
-            except ValueError as exc:
-                raise ParseError(f"unreadable number in {line.strip()!r}", path=str(path),
-                                 line=i) from exc
-            rows[t] = (lo, hi, avg)
-    if not rows:
+        for path in restart_segments(folder, "yPlus"):
+            rows = _patch_rows(path, patch)
+            if rows:
+                parts.append(np.array(rows))
+    if not parts:
         raise ParseError(f"no y+ rows for patch {patch!r}", path=str(root))
-    t = np.array(sorted(rows))
-    v = np.array([rows[k] for k in t])
-    return YPlusHistory(t, v[:, 0], v[:, 1], v[:, 2])
+    v = merge_restart_segments(parts)
+    return YPlusHistory(v[:, 0], v[:, 1], v[:, 2], v[:, 3])
+
+
+def _patch_rows(path: Path, patch: str) -> list[tuple[float, float, float, float]]:
+    """(time, min, max, average) of ``patch`` in one yPlus.dat."""
+    rows = []
+    lines = path.read_text().splitlines()
+    for i, line in enumerate(lines, start=1):
+        if not line.strip() or line.lstrip().startswith("#"):
+            continue
+        parts = line.split()
+        if len(parts) != 5:
+            if i == len(lines):
+                break  # cut last line of a killed run
+            raise ParseError(f"expected 5 columns (time patch min max average), got "
+                             f"{len(parts)}", path=str(path), line=i)
+        if parts[1] != patch:
+            continue
+        try:
+            rows.append(tuple(float(parts[k]) for k in (0, 2, 3, 4)))
+        except ValueError as exc:
+            raise ParseError(f"unreadable number in {line.strip()!r}", path=str(path),
+                             line=i) from exc
+    return rows
