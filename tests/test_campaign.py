@@ -165,6 +165,30 @@ def test_collapsed_time_step_is_retried_with_a_lower_courant_limit(tmp_path):
     assert (case_dir / "log.pimpleFoam").read_text().count("Starting time loop") == 4
     assert "type inletOutlet;" in (case_dir / "0" / "U").read_text()
     assert "type fixedValue;" in (case_dir / "0" / "p").read_text()
+    notes = (case_dir / "mfflap_retries.txt").read_text().splitlines()
+    assert [n.split(" with ")[-1] for n in notes] == [
+        "the inletOutlet far field", "maxCo 2", "maxCo 1 and first-order upwind k and epsilon"]
+
+
+@pytest.mark.openfoam
+def test_retries_of_an_earlier_call_reach_the_record_of_the_call_that_finishes(tmp_path):
+    """A first call switches the far field after a 'collapse' and gives up (one retry); a
+    later call resumes the same case to the end. The record says the far field changed,
+    although mfflap_case.toml still says freestream."""
+    from mfflap.errors import CfdRunError
+
+    case_dir = tmp_path / "c"
+    with pytest.raises(CfdRunError, match="time step collapsed"):
+        run_motion(case_dir, SHORT.motion(), "c", {}, 1.0, ramp_time=0.02, min_time_step=1.0,
+                   max_retries=1)
+    control = case_dir / "system" / "controlDict"
+    control.write_text(control.read_text().replace("endTime         1.0;", "endTime 0.02;"))
+    assert "endTime 0.02;" in control.read_text()
+    rec = run_motion(case_dir, SHORT.motion(), "c", {}, 0.02, ramp_time=0.02)
+    assert rec.time[-1] == pytest.approx(0.02, abs=1e-3)
+    assert rec.provenance["retries"] == ("time step collapsed; resumed from the last written "
+                                         "time with the inletOutlet far field")
+    assert rec.provenance["solver_far_field"] == "freestream"
 
 
 def test_manifest_written_before_the_pressure_solver_setting_still_resumes(tmp_path):

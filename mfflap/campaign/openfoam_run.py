@@ -100,6 +100,10 @@ def record_from_case(case_dir: str | Path, motion: Motion, name: str,
     return CfdRecord(name, state, loads, parameters, prov, history.force, history.moment)
 
 
+#: every retry of a case, one line each, across the calls that ran it
+RETRY_LOG = "mfflap_retries.txt"
+
+
 def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict[str, Any],
                end_time: float, *, mesh: str | MeshSpec = "coarse", ramp_time: float = 0.0,
                solver: SolverSettings | None = None, plate: Plate | None = None,
@@ -114,8 +118,9 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
     at the Courant limit) is resumed from its last written time, up to ``max_retries``
     times: first with the inletOutlet far field (:func:`use_inlet_outlet_far_field`) if it
     had the freestream one, then with half the Courant limit, the last time also with
-    first-order upwind convection of k and epsilon; the retries are recorded in the
-    provenance.
+    first-order upwind convection of k and epsilon. The retries are recorded in the case
+    (:data:`RETRY_LOG`) and in the record's provenance, those of earlier calls that resumed
+    the same case included: the case's settings changed there, not in mfflap_case.toml.
     """
     case_dir = Path(case_dir)
     solver = solver or SolverSettings(write_interval=end_time / 4)
@@ -140,18 +145,20 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
             if "time step collapsed" not in str(exc) or len(retries) >= max_retries:
                 raise
             if not retries and use_inlet_outlet_far_field(case_dir):
-                retries.append("time step collapsed; resumed from the last written time with "
-                               "the inletOutlet far field")
-                continue
-            courant = lower_courant_limit(case_dir)
-            note = f"maxCo {courant:g}"
-            if len(retries) == max_retries - 1 and use_upwind_turbulence(case_dir):
-                note += " and first-order upwind k and epsilon"
-            retries.append(f"time step collapsed; resumed from the last written time with "
-                           f"{note}")
+                note = "the inletOutlet far field"
+            else:
+                note = f"maxCo {lower_courant_limit(case_dir):g}"
+                if len(retries) == max_retries - 1 and use_upwind_turbulence(case_dir):
+                    note += " and first-order upwind k and epsilon"
+            retries.append(note)
+            # kept in the case, so that a run resumed by a later call still records them
+            with open(case_dir / RETRY_LOG, "a") as fh:
+                fh.write(f"time step collapsed; resumed from the last written time with "
+                         f"{note}\n")
     record = record_from_case(case_dir, motion, name, parameters, plate)
-    if retries:
-        record.provenance["retries"] = "; ".join(retries)
+    if (case_dir / RETRY_LOG).is_file():
+        record.provenance["retries"] = "; ".join(
+            (case_dir / RETRY_LOG).read_text().splitlines())
     if record.time[-1] < 0.98 * end_time:
         raise CfdRunError(f"the run stopped at t = {record.time[-1]:.4g} s before endTime "
                           f"{end_time:.4g} s", case=str(case_dir))
