@@ -646,6 +646,19 @@ def test_every_named_mesh_builds_and_passes_checkmesh(tmp_path, mesh):
                                                                      rel=0.15)
 
 
+def assert_forces_match_the_uninterrupted_run(case: Path, whole: Path) -> None:
+    """The merged forces of a restarted 0.03 s run end where the uninterrupted run's do,
+    increase in time and match it within 1 % of its peak."""
+    merged, reference = read_forces(case), read_forces(whole)
+    assert merged.time[-1] == pytest.approx(reference.time[-1])
+    assert np.all(np.diff(merged.time) > 0)
+    t = np.linspace(0.002, 0.029, 60)
+    for k in range(2):
+        a = np.interp(t, merged.time, merged.force[:, k])
+        b = np.interp(t, reference.time, reference.force[:, k])
+        assert np.max(np.abs(a - b)) <= 1e-2 * np.max(np.abs(b))
+
+
 @pytest.mark.openfoam
 def test_second_restart_from_a_non_integer_time_is_read_from_its_suffixed_file(tmp_path):
     """A run restarted twice from t = 0.02 s: the first restart wrote forces/0.02/force.dat
@@ -673,14 +686,7 @@ def test_second_restart_from_a_non_integer_time_is_read_from_its_suffixed_file(t
                                         if ln.startswith("#") or float(ln.split()[0]) < 0.025))
     folder = case / "postProcessing" / "forces" / "0.02"
     assert (folder / "force_0.02.dat").is_file() and (folder / "moment_0.02.dat").is_file()
-    merged, reference = read_forces(case), read_forces(whole)
-    assert merged.time[-1] == pytest.approx(reference.time[-1])
-    assert np.all(np.diff(merged.time) > 0)
-    t = np.linspace(0.002, 0.029, 60)
-    for k in range(2):
-        a = np.interp(t, merged.time, merged.force[:, k])
-        b = np.interp(t, reference.time, reference.force[:, k])
-        assert np.max(np.abs(a - b)) <= 1e-2 * np.max(np.abs(b))
+    assert_forces_match_the_uninterrupted_run(case, whole)
 
 
 @pytest.mark.openfoam
@@ -710,14 +716,7 @@ def test_restart_skips_time_folders_that_hold_only_the_y_plus_field(tmp_path):
     assert latest_solution_time(case) == "0.02"
     run_case(case, timeout_s=300)
     assert "startTime       0.02;" in (case / "system" / "controlDict").read_text()
-    merged, reference = read_forces(case), read_forces(whole)
-    assert merged.time[-1] == pytest.approx(reference.time[-1])
-    assert np.all(np.diff(merged.time) > 0)
-    t = np.linspace(0.002, 0.029, 60)
-    for k in range(2):
-        a = np.interp(t, merged.time, merged.force[:, k])
-        b = np.interp(t, reference.time, reference.force[:, k])
-        assert np.max(np.abs(a - b)) <= 1e-2 * np.max(np.abs(b))
+    assert_forces_match_the_uninterrupted_run(case, whole)
     y_plus = read_y_plus(case)
     restart_rows = [float(ln.split()[0]) for ln in
                     (case / "postProcessing" / "yPlus" / "0.02" / "yPlus.dat").read_text()
