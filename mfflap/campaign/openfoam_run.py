@@ -67,9 +67,9 @@ def use_inlet_outlet_far_field(case_dir: str | Path) -> bool:
     the run went on with a normal time step.
     """
     changed = False
+    case = Path(case_dir)
     for field, pattern, repl in (("U", _FREESTREAM_U, rb"type inletOutlet;\n        inletValue\1;"),
                                  ("p", _FREESTREAM_P, rb"type fixedValue;")):
-        case = Path(case_dir)
         for path in [*case.glob(f"*/{field}"), *case.glob(f"processor*/*/{field}")]:
             if not is_time_folder(path.parent.name):
                 continue
