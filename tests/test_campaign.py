@@ -192,9 +192,10 @@ def test_retries_of_an_earlier_call_reach_the_record_of_the_call_that_finishes(t
 
 
 def test_manifest_written_before_the_pressure_solver_setting_still_resumes(tmp_path):
-    """campaign.toml files written before pressure_solver/pressure_tolerance, far_field and
-    velocity_convection existed describe PCG runs at 1e-7 with the freestream far field and
-    linearUpwind U: they resume with those settings and refuse GAMG or LUST."""
+    """campaign.toml files written before pressure_solver/pressure_tolerance, far_field,
+    velocity_convection and frame existed describe PCG runs at 1e-7 with the freestream far
+    field, linearUpwind U and the moving mesh: they resume with those settings and refuse
+    GAMG, LUST or the plate's frame."""
     from dataclasses import asdict, replace
 
     from mfflap.campaign.execute import CampaignSetup, _write_manifest
@@ -207,7 +208,7 @@ def test_manifest_written_before_the_pressure_solver_setting_still_resumes(tmp_p
     old["solver"] = {k: v for k, v in asdict(setup.solver).items()
                      if k not in ("pressure_solver", "pressure_tolerance", "far_field",
                                   "velocity_convection", "pressure_final_rel_tol",
-                                  "turbulence_convection")}
+                                  "turbulence_convection", "frame")}
     (tmp_path / "campaign.toml").write_text(dumps({"setup": old, "cases": {}}))
     _write_manifest(tmp_path, cases, setup)  # same runs: accepted
     assert read_toml(tmp_path / "campaign.toml")["setup"]["solver"]["pressure_solver"] == "PCG"
@@ -215,8 +216,10 @@ def test_manifest_written_before_the_pressure_solver_setting_still_resumes(tmp_p
     assert solver["velocity_convection"] == "linearUpwind"
     assert solver["pressure_final_rel_tol"] == 0.0
     assert solver["turbulence_convection"] == "limitedLinear"
+    assert solver["frame"] == "inertial"
     for change in ({"pressure_solver": "GAMG"}, {"velocity_convection": "LUST"},
-                   {"pressure_final_rel_tol": 0.01}, {"turbulence_convection": "upwind"}):
+                   {"pressure_final_rel_tol": 0.01}, {"turbulence_convection": "upwind"},
+                   {"frame": "plate", "far_field": "inletOutlet"}):
         other = replace(setup, solver=replace(setup.solver, **change))
         with pytest.raises(ConfigError, match="another setup"):
             _write_manifest(tmp_path, cases, other)

@@ -101,7 +101,7 @@ def run_one(case: CfdCase, out_dir: str, setup: CampaignSetup) -> CaseStatus:
 _ADDED_SOLVER_SETTINGS = {"pressure_solver": "PCG", "pressure_tolerance": 1e-7,
                           "far_field": "freestream", "velocity_convection": "linearUpwind",
                           "pressure_final_rel_tol": 0.0,
-                          "turbulence_convection": "limitedLinear"}
+                          "turbulence_convection": "limitedLinear", "frame": "inertial"}
 
 
 def _with_added_settings(setup: dict[str, Any]) -> dict[str, Any]:

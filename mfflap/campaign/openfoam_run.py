@@ -89,7 +89,7 @@ def record_from_case(case_dir: str | Path, motion: Motion, name: str,
     history = read_forces(case_dir)
     state = imposed_state(motion, history.time, float(meta["ramp_time"]))
     loads = to_loads(history, state, float(meta["span"]), float(meta["depth"]),
-                     source=f"openfoam:{name}")
+                     source=f"openfoam:{name}", frame=str(meta.get("frame", "inertial")))
     prov = {**solver_provenance(case_dir), "mesh": meta["mesh"], "n_cells": meta["n_cells"],
             "force_dialect": history.dialect, "depth_m": meta["depth"], "span_m": meta["span"]}
     for key, value in meta.items():

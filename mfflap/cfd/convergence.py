@@ -231,6 +231,10 @@ def run_convergence(out_dir: str | Path, motion: Motion, end_time: float, *,
         add_floor(reference, meshes[-1], base, courants[0])
     for s in setups:  # each with its own mesh and solver, in the study's far field and
         # turbulence convection
+        if s.solver.frame == "plate" and base.far_field != "inletOutlet":
+            raise ConfigError(f"set-up {s.name!r} runs in the plate's frame, which needs the "
+                              f"inletOutlet far field; the study's is {base.far_field} "
+                              "(--far-field inletOutlet)", key="far_field")
         settings = replace(s.solver, far_field=base.far_field,
                            turbulence_convection=base.turbulence_convection)
         plan.append((f"setup_{s.name}", s.mesh, settings, s.solver.max_courant))

@@ -41,3 +41,45 @@ def case_moment_to_model(moment_z: np.ndarray) -> np.ndarray:
     So the model's M equals the case's M_z about the leading edge.
     """
     return np.asarray(moment_z)
+
+
+# The plate's frame (SolverSettings.frame = "plate"): a static mesh whose axes are the case
+# axes of the plate at theta = 0, rotating with the plate about its leading edge (the origin)
+# and translating with its heave. Velocities there are relative to the translating frame,
+# with components along the rotating axes: w = R(theta)^T (U_abs - (0, h')).
+
+
+def plate_frame_inflow(pitch_angle: np.ndarray, heave_velocity: np.ndarray,
+                       stream_velocity: float) -> np.ndarray:
+    """Velocity of the undisturbed stream in the plate's frame, shape (..., 3), m/s.
+
+    The stream (U, 0) minus the heave velocity (0, h'), along the plate's axes:
+    R(theta)^T (U, -h') = (U cos theta - h' sin theta, -U sin theta - h' cos theta).
+    """
+    th = np.asarray(pitch_angle, dtype=float)
+    hd = np.asarray(heave_velocity, dtype=float)
+    c, s = np.cos(th), np.sin(th)
+    return np.stack([stream_velocity * c - hd * s, -stream_velocity * s - hd * c,
+                     np.zeros_like(th)], axis=-1)
+
+
+def plate_frame_acceleration(pitch_angle: np.ndarray, heave_acceleration: np.ndarray
+                             ) -> np.ndarray:
+    """The leading edge's acceleration (0, h'') along the plate's axes, shape (..., 3), m/s^2.
+
+    R(theta)^T (0, h'') = (h'' sin theta, h'' cos theta); the fluid in the plate's frame
+    feels minus this as a body force.
+    """
+    th = np.asarray(pitch_angle, dtype=float)
+    hdd = np.asarray(heave_acceleration, dtype=float)
+    return np.stack([hdd * np.sin(th), hdd * np.cos(th), np.zeros_like(th)], axis=-1)
+
+
+def plate_frame_force_to_model(force_x: np.ndarray, force_y: np.ndarray
+                               ) -> tuple[np.ndarray, np.ndarray]:
+    """(F_n, F_t) from forces along the plate's axes.
+
+    e_t = (cos theta, sin theta) and e_n = (-sin theta, cos theta) in the case's (x, y)
+    are the plate frame's x and y axes, so F_n = F_y and F_t = F_x there.
+    """
+    return np.asarray(force_y), np.asarray(force_x)

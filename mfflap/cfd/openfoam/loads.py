@@ -4,9 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from mfflap.cfd.frames import case_force_to_model, case_moment_to_model
+from mfflap.cfd.frames import (
+    case_force_to_model,
+    case_moment_to_model,
+    plate_frame_force_to_model,
+)
 from mfflap.cfd.openfoam.forces import ForceHistory
-from mfflap.errors import ParseError
+from mfflap.errors import ConfigError, ParseError
 from mfflap.hydro.loads import Loads
 from mfflap.kinematics.continuous import Motion
 from mfflap.kinematics.state import KinematicState
@@ -43,11 +47,15 @@ def imposed_state(motion: Motion, times: np.ndarray, ramp_time: float = 0.0) -> 
 
 
 def to_loads(history: ForceHistory, state: KinematicState, span: float, depth: float,
-             source: str) -> Loads:
+             source: str, frame: str = "inertial") -> Loads:
     """Body-frame loads on the whole span from a force history on the state's time base.
 
-    The forces are scaled by span/depth; the moment is taken about the *moving* leading
-    edge: M_LE = M_CofR - r_LE x F with r_LE = (0, h, 0) in the case frame.
+    The forces are scaled by span/depth. ``frame`` is the case's
+    (:attr:`~mfflap.cfd.openfoam.writer.SolverSettings.frame`): "inertial" (the mesh
+    moves; forces along the case axes, moment about the origin, taken here about the
+    *moving* leading edge: M_LE = M_CofR - r_LE x F with r_LE = (0, h, 0)) or "plate"
+    (static mesh in the plate's frame; forces along the plate's axes, moment about the
+    leading edge at the origin).
     """
     if history.moment is None:
         raise ParseError("the force history has no moments; need moment.dat or forces.dat")
@@ -56,6 +64,11 @@ def to_loads(history: ForceHistory, state: KinematicState, span: float, depth: f
     scale = span / depth
     fx, fy = history.force[:, 0] * scale, history.force[:, 1] * scale
     mz = history.moment[:, 2] * scale
+    if frame == "plate":
+        normal, tangential = plate_frame_force_to_model(fx, fy)
+        return Loads(state.time, normal, tangential, case_moment_to_model(mz), source=source)
+    if frame != "inertial":
+        raise ConfigError(f"unknown frame {frame!r}; allowed: inertial, plate", key="frame")
     y_le = state.heave_position
     mz_le = mz + y_le * fx  # -(x_le fy - y_le fx), x_le = 0
     f_x0, f_y0 = case_force_to_model(fx, fy)

@@ -11,7 +11,8 @@ from typing import Any
 _BUILD = re.compile(r"^Build\s*:\s*(.+)$", re.M)
 _NUMBER = r"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)"
 _BOUNDING = re.compile(rf"^bounding (\w+), min: {_NUMBER} max: {_NUMBER}", re.M)
-_TIME_STEP = re.compile(r"^Time = ", re.M)
+# the time line alone: tabulatedAccelerationSource also starts lines with "Time = "
+_TIME_STEP = re.compile(rf"^Time = {_NUMBER}\s*$", re.M)
 _EXEC = re.compile(rf"ExecutionTime = {_NUMBER} s\s+ClockTime = {_NUMBER} s")
 
 
