@@ -210,3 +210,18 @@ def test_decomposed_plate_frame_run_matches_the_serial_run(tmp_path):
     fy = np.interp(a.time[late], b.time, b.force[:, 1])
     assert np.ptp(a.force[late, 1]) > 0
     assert np.max(np.abs(fy - a.force[late, 1])) < 0.02 * np.ptp(a.force[late, 1]) + 1e-6
+
+
+@pytest.mark.openfoam
+def test_campaign_record_of_a_plate_frame_run_carries_its_frame(tmp_path):
+    """run_motion writes, runs and parses a plate-frame case: the record's loads are the
+    plate-axes conversion and its provenance names the frame."""
+    from mfflap.campaign.openfoam_run import run_motion
+
+    record = run_motion(tmp_path / "case", MOTION, "plate", {}, 0.03, mesh="coarse",
+                        solver=replace(PLATE, write_interval=0.03))
+    assert record.provenance["solver_frame"] == "plate"
+    history = read_forces(tmp_path / "case")
+    np.testing.assert_allclose(record.loads.normal_force, history.force[:, 1])
+    np.testing.assert_allclose(record.loads.tangential_force, history.force[:, 0])
+    np.testing.assert_allclose(record.loads.moment, history.moment[:, 2])
