@@ -615,8 +615,25 @@ def test_convergence_compares_mean_cycles_of_a_periodic_motion(tmp_path):
     assert (tmp_path / "c" / "coarse_co4.h5").stat().st_mtime_ns == mtime
 
 
+def first_radial_cell_m(spec, chord: float = 0.16) -> float:
+    """Height of the first cell off the plate of a radially graded O-grid (geometric series
+    over about the far-field radius), m."""
+    ratio = spec.radial_expansion ** (1 / (spec.n_radial - 1))
+    return spec.radius_chords * chord * (ratio - 1) / (ratio**spec.n_radial - 1)
+
+
+def test_the_larger_domain_keeps_the_medium_mesh_near_the_plate():
+    from mfflap.cfd.openfoam.writer import mesh_specs
+
+    specs = mesh_specs()
+    medium, large = specs["medium"], specs["medium_r20"]
+    assert large.radius_chords == 2 * medium.radius_chords
+    assert (large.n_chord, large.n_edge) == (medium.n_chord, medium.n_edge)
+    assert first_radial_cell_m(large) == pytest.approx(first_radial_cell_m(medium), rel=0.01)
+
+
 @pytest.mark.openfoam
-@pytest.mark.parametrize("mesh", ["coarse", "lean", "graded", "medium", "fine"])
+@pytest.mark.parametrize("mesh", ["coarse", "lean", "graded", "medium", "medium_r20", "fine"])
 def test_every_named_mesh_builds_and_passes_checkmesh(tmp_path, mesh):
     """blockMesh + checkMesh on each resolution of meshes.toml; the cell count is the spec's,
     and the lean mesh's chordwise cells really are crowded toward the plate's ends."""

@@ -30,7 +30,8 @@ def campaign() -> None:
 @click.option("--heave-amplitudes", help="Subset of the heave amplitudes, m.")
 @click.option("--phases", help="Subset of the phases, deg.")
 @click.option("--mesh", default=None,
-              help="coarse | lean | graded | medium | fine (cfd_templates/openfoam/meshes.toml); "
+              help="coarse | lean | graded | medium | medium_r20 | fine "
+                   "(cfd_templates/openfoam/meshes.toml); "
                    "default coarse.")
 @click.option("--setup", "setup_name", default=None,
               help="A named set-up of cfd_templates/openfoam/setups.toml (mesh and solver "

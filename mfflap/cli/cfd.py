@@ -18,7 +18,8 @@ def cfd() -> None:
 @click.argument("case_file", type=click.Path(dir_okay=False, path_type=Path))
 @click.argument("case_dir", type=click.Path(file_okay=False, path_type=Path))
 @click.option("--mesh", default=None,
-              help="coarse | lean | graded | medium | fine (cfd_templates/openfoam/meshes.toml); "
+              help="coarse | lean | graded | medium | medium_r20 | fine "
+                   "(cfd_templates/openfoam/meshes.toml); "
                    "default coarse.")
 @click.option("--setup", "setup_name", default=None,
               help="A named set-up of cfd_templates/openfoam/setups.toml (mesh and solver "
