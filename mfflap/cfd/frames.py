@@ -12,6 +12,10 @@ from __future__ import annotations
 
 import numpy as np
 
+#: The two formulations of the plate's motion in a CFD case: "inertial" (the whole mesh moves
+#: with the plate) and "plate" (a static mesh in the plate's frame, below)
+FRAMES = ("inertial", "plate")
+
 
 def case_displacement(heave_position: np.ndarray) -> np.ndarray:
     """Translation (dx, dy, dz) in the case frame for a heave h, shape (..., 3), m."""

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from mfflap.cfd.frames import (
+    FRAMES,
     case_force_to_model,
     case_moment_to_model,
     plate_frame_force_to_model,
@@ -64,11 +65,11 @@ def to_loads(history: ForceHistory, state: KinematicState, span: float, depth: f
     scale = span / depth
     fx, fy = history.force[:, 0] * scale, history.force[:, 1] * scale
     mz = history.moment[:, 2] * scale
+    if frame not in FRAMES:
+        raise ConfigError(f"unknown frame {frame!r}; allowed: {', '.join(FRAMES)}", key="frame")
     if frame == "plate":
         normal, tangential = plate_frame_force_to_model(fx, fy)
         return Loads(state.time, normal, tangential, case_moment_to_model(mz), source=source)
-    if frame != "inertial":
-        raise ConfigError(f"unknown frame {frame!r}; allowed: inertial, plate", key="frame")
     y_le = state.heave_position
     mz_le = mz + y_le * fx  # -(x_le fy - y_le fx), x_le = 0
     f_x0, f_y0 = case_force_to_model(fx, fy)

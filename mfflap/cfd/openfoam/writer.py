@@ -24,7 +24,7 @@ import jinja2
 import numpy as np
 
 from mfflap.cfd import templates
-from mfflap.cfd.frames import case_displacement, case_rotation_deg
+from mfflap.cfd.frames import FRAMES, case_displacement, case_rotation_deg
 from mfflap.cfd.openfoam.loads import imposed_state
 from mfflap.cfd.openfoam.plate_frame import (
     format_acceleration_table,
@@ -99,8 +99,6 @@ def resolve_mesh(mesh: str | MeshSpec) -> MeshSpec:
 VELOCITY_CONVECTION_SCHEMES = ("linearUpwind", "LUST")
 #: fvSchemes entry of each turbulence_convection choice
 TURBULENCE_CONVECTION_SCHEMES = {"limitedLinear": "limitedLinear 1", "upwind": "upwind"}
-#: Formulations of the plate's motion (module docstring)
-FRAMES = ("inertial", "plate")
 #: The template folder of the files only the plate's frame needs
 PLATE_FRAME_TEMPLATES = "plate_frame"
 
