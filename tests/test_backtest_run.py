@@ -57,6 +57,27 @@ def test_comparison_of_the_model_with_itself_is_perfect():
     assert not compare_last_cycle(rec, MorisonModel(), period, limit).max_power_ok
 
 
+def test_a_numerical_burst_in_the_cfd_is_bridged_and_listed():
+    rec = model_record(MOTION)
+    period = cfd_motion(MOTION).period
+    clean = compare_last_cycle(rec, MorisonModel(), period, max_power=1e9)
+    assert clean.numerical_bursts == []
+    # 30 microsecond steps in the last cycle where the forces go off by 10^4 ranges
+    i = int(np.searchsorted(rec.time, rec.time[-1] - 0.4 * period))
+    burst_t = rec.time[i] + 1e-9 * period * np.arange(1, 31)
+    t = np.concatenate([rec.time[:i + 1], burst_t, rec.time[i + 1:]])
+    state = imposed_state(cfd_motion(MOTION), t, rec.parameters["ramp_time"])
+    loads = MorisonModel().loads(state)
+    bump = 1e4 * np.ptp(loads.normal_force) * np.sin(np.pi * np.arange(1, 31) / 31)
+    for k in ("normal_force", "tangential_force", "moment"):
+        getattr(loads, k)[i + 1:i + 31] += bump
+    hit = compare_last_cycle(CfdRecord(rec.name, state, loads, rec.parameters),
+                             MorisonModel(), period, max_power=1.01 * clean.cfd_max_power)
+    assert len(hit.numerical_bursts) == 1
+    assert hit.nrmse["thrust"] < 0.01 and hit.mean_thrust_error == pytest.approx(0, abs=1e-3)
+    assert hit.max_power_ok  # the burst's 10^4-fold power is not the motion's
+
+
 def test_fixture_lookup_by_key_then_by_tolerance_and_missing_is_reported(tmp_path):
     folder = tmp_path / "bt"
     write_record(folder / f"backtest_{motion_key(MOTION)}.h5", model_record(MOTION))

@@ -29,6 +29,7 @@ def test_cfd_write_run_parse_with_real_openfoam(tmp_path, options):
     assert health["openfoam_build"].startswith("OPENFOAM=")
     assert health["n_time_steps"] > 10 and health["cpu_time_s"] > 0
     assert health["n_steps_bounding_epsilon"] <= health["n_time_steps"]
+    assert health["numerical_bursts"] == []  # the impulsive start's force impulse is real
     schemes = (case_dir / "system" / "fvSchemes").read_text()
     if options:  # bounded upwind k and epsilon: nothing to clip
         assert "div(phi,k)      Gauss upwind;" in schemes
@@ -40,15 +41,34 @@ def test_cfd_write_run_parse_with_real_openfoam(tmp_path, options):
     times = sorted(float(p.name) for p in case_dir.iterdir() if p.name[0].isdigit())
     # a write every quarter of the run (purgeWrite keeps the last two)
     assert times[-2:] == pytest.approx([0.0375, 0.05])
+    _inject_burst(case_dir, 0.03)
     res = runner.invoke(cli, ["cfd", "run", str(case_dir), "--json"])
     assert res.exit_code == 0, res.output
-    assert json.loads(res.output)["n_time_steps"] == health["n_time_steps"]
+    again = json.loads(res.output)
+    assert again["n_time_steps"] == health["n_time_steps"]
+    (burst,) = again["numerical_bursts"]
+    assert 0.025 < float(burst.split()[2].split("-")[0]) <= 0.03
     res = runner.invoke(cli, ["cfd", "parse", str(case_dir), "--case-file", str(CASE), "--json",
                                  "--discard", "0.01"])
     assert res.exit_code == 0, res.output
     out = json.loads(res.output)
-    assert out["dialect"] == "v1912" and out["n_samples"] > 20
+    assert out["dialect"] == "v1912" and out["n_samples"] > 50
+    assert len(out["numerical_bursts"]) == 1  # bridged before the comparison
     assert out["pearson_normal_force"] > 0.5
+
+
+def _inject_burst(case_dir, at_s):
+    """Thirty nanosecond-long rows of 1 MN after the first row at or past ``at_s`` in the
+    force and moment logs: a numerical burst as pimpleFoam would write it."""
+    for name in ("force.dat", "moment.dat"):
+        path = next(case_dir.glob(f"postProcessing/*/*/{name}"))
+        lines = path.read_text().splitlines(keepends=True)
+        i = next(j for j, line in enumerate(lines)
+                 if line[0].isdigit() and float(line.split()[0]) >= at_s)
+        t0 = float(lines[i].split()[0])
+        lines[i + 1:i + 1] = [f"{t0 + 1e-9 * k:.12g}\t(1e6 1e6 1e6)\t(1e6 1e6 1e6)\t(0 0 0)\n"
+                              for k in range(1, 31)]
+        path.write_text("".join(lines))
 
 
 def test_cfd_run_on_missing_folder_is_a_clear_error(tmp_path):

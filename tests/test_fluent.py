@@ -268,3 +268,47 @@ def test_cli_writes_fluent_files_and_parses_a_report(tmp_path):
     assert res.exit_code == 0, res.output
     out = json.loads(res.output)
     assert out["dialect"] == "fluent-report" and out["n_samples"] == 100
+
+
+def test_cli_parse_averages_over_time_and_bridges_a_burst(tmp_path):
+    """`cfd parse` means are time averages (samples crowd where a solver's steps shrink) and
+    a numerical burst is bridged and listed, not averaged in."""
+    from mfflap.cli.main import cli
+
+    case = Path(__file__).parents[1] / "cases" / "paper2026.toml"
+
+    def forces(t):
+        return np.column_stack([40 * np.sin(2 * np.pi * t) + 15, 30 * np.cos(2 * np.pi * t),
+                                2 * np.sin(2 * np.pi * t)])
+
+    def parse(t, f, name):
+        rows = np.column_stack([np.arange(len(t)), f, t])
+        path = tmp_path / f"{name}.out"
+        path.write_text(report_text(["Time Step", "fx-plate", "fy-plate", "mz-plate",
+                                     "flow-time"], rows))
+        res = CliRunner().invoke(cli, ["cfd", "parse", str(path), "--case-file", str(case),
+                                       "--json"])
+        assert res.exit_code == 0, res.output
+        return json.loads(res.output)
+
+    even = np.linspace(0.0, 2.0, 2001)
+    # the same history with ten times as many samples in the first half of each cycle
+    crowded = np.unique(np.concatenate([even, np.linspace(0.0, 0.5, 5001),
+                                        np.linspace(1.0, 1.5, 5001)]))
+    ref, dense = parse(even, forces(even), "even"), parse(crowded, forces(crowded), "dense")
+    assert ref["numerical_bursts"] == []
+    for key in ("cfd_mean_thrust", "cfd_mean_power", "model_mean_thrust"):
+        scale = max(abs(ref[key]), 1.0)
+        assert dense[key] == pytest.approx(ref[key], abs=2e-3 * scale), key
+    # a burst: 30 steps of a microsecond, forces off by 50,000 N
+    i = 1300
+    burst_t = even[i] + 1e-6 * np.arange(1, 31)
+    burst_f = forces(burst_t) + 5e4 * np.sin(np.pi * np.arange(1, 31) / 31)[:, None]
+    t2 = np.concatenate([even[:i + 1], burst_t, even[i + 1:]])
+    f2 = np.concatenate([forces(even[:i + 1]), burst_f, forces(even[i + 1:])])
+    hit = parse(t2, f2, "burst")
+    assert len(hit["numerical_bursts"]) == 1
+    assert re.match(r"t = 1\.29\d*-1\.30", hit["numerical_bursts"][0])
+    assert hit["cfd_mean_thrust"] == pytest.approx(ref["cfd_mean_thrust"],
+                                                   abs=2e-3 * max(abs(ref["cfd_mean_thrust"]), 1))
+    assert hit["nrmse_normal_force"] == pytest.approx(ref["nrmse_normal_force"], rel=0.02)

@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from mfflap.campaign.records import CfdRecord
+from mfflap.cfd.bursts import bridge_load_bursts
 from mfflap.metrics import nrmse, pearson, time_mean
 from mfflap.performance import thrust_and_power
 
@@ -22,6 +23,8 @@ class BacktestComparison:
     cfd_mean_thrust, model_mean_thrust : N; cfd_mean_power, model_mean_power : W
     cfd_max_power : W; max_power_ok : bool (CFD's instantaneous power <= P_max)
     cycle_to_cycle_thrust_change : fraction between the last two cycles (periodicity check)
+    numerical_bursts : the CFD's numerical bursts in the last two cycles
+        (:mod:`mfflap.cfd.bursts`), bridged before any of the numbers above
     """
 
     time: np.ndarray
@@ -38,6 +41,7 @@ class BacktestComparison:
     cfd_max_power: float
     max_power_ok: bool
     cycle_to_cycle_thrust_change: float
+    numerical_bursts: list[str] = field(default_factory=list)
 
     @property
     def mean_thrust_error(self) -> float:
@@ -60,23 +64,28 @@ class BacktestComparison:
                 "mean_thrust_error": self.mean_thrust_error,
                 "mean_power_error": self.mean_power_error, "cfd_max_power": self.cfd_max_power,
                 "max_power_ok": self.max_power_ok,
-                "cycle_to_cycle_thrust_change": self.cycle_to_cycle_thrust_change}
+                "cycle_to_cycle_thrust_change": self.cycle_to_cycle_thrust_change,
+                "numerical_bursts": list(self.numerical_bursts)}
 
 
 def compare_last_cycle(record: CfdRecord, model, period: float,
                        max_power: float) -> BacktestComparison:
-    """Model (on the imposed kinematics) against CFD over the last full period of the record."""
+    """Model (on the imposed kinematics) against CFD over the last full period of the record.
+
+    Numerical bursts of the CFD in the last two periods are bridged first (and listed).
+    """
     t = record.time
     end = t[-1]
     last = t >= end - period
     prev = (t >= end - 2 * period) & (t < end - period)
     state = record.state
     pred = model.loads(state)
+    cfd, bursts = bridge_load_bursts(record.loads, last | prev)
     m_thrust, m_power = thrust_and_power(pred, state)
-    c_thrust, c_power = thrust_and_power(record.loads, state)
+    c_thrust, c_power = thrust_and_power(cfd, state)
     signals = {"thrust": (m_thrust, c_thrust), "input_power": (m_power, c_power),
-               "normal_force": (pred.normal_force, record.loads.normal_force),
-               "moment": (pred.moment, record.loads.moment)}
+               "normal_force": (pred.normal_force, cfd.normal_force),
+               "moment": (pred.moment, cfd.moment)}
     nr = {k: float(nrmse(m[last], c[last])) for k, (m, c) in signals.items()}
     pe = {k: float(pearson(m[last], c[last])) for k, (m, c) in signals.items()}
     tl = t[last]
@@ -92,4 +101,5 @@ def compare_last_cycle(record: CfdRecord, model, period: float,
         cfd_mean_thrust=cfd_mean_thrust, model_mean_thrust=time_mean(tl, m_thrust[last]),
         cfd_mean_power=time_mean(tl, c_power[last]),
         model_mean_power=time_mean(tl, m_power[last]), cfd_max_power=cfd_max,
-        max_power_ok=bool(cfd_max <= max_power), cycle_to_cycle_thrust_change=float(change))
+        max_power_ok=bool(cfd_max <= max_power), cycle_to_cycle_thrust_change=float(change),
+        numerical_bursts=[b.describe() for b in bursts])

@@ -79,19 +79,30 @@ def write(case_file: Path, case_dir: Path, mesh: str | None, setup_name: str | N
 def run(case_dir: Path, timeout: float, as_json: bool) -> None:
     """Mesh (once), check and run CASE_DIR with pimpleFoam; restarts from the latest time.
 
-    Prints the CPU time, the number of time steps and how many k and epsilon solves
-    OpenFOAM had to clip ("bounding epsilon") from the log.
+    Prints the CPU time, the number of time steps, how many k and epsilon solves OpenFOAM
+    had to clip ("bounding epsilon") from the log, and the numerical bursts of the force
+    history (a few time steps where the run lost its pressure coupling, mfflap.cfd.bursts).
     """
+    from mfflap.cfd.bursts import find_numerical_bursts
+    from mfflap.cfd.openfoam.forces import read_forces
     from mfflap.cfd.openfoam.runner import run_case
     from mfflap.cfd.openfoam.solver_log import solver_provenance
 
     run_case(case_dir, timeout_s=timeout)
     summary = {"case": str(case_dir), **solver_provenance(case_dir)}
+    history = read_forces(case_dir)
+    signals = [history.force[:, 0], history.force[:, 1]]
+    if history.moment is not None:
+        signals.append(history.moment[:, 2])
+    summary["numerical_bursts"] = [b.describe()
+                                   for b in find_numerical_bursts(history.time, signals)]
     if as_json:
         click.echo(json.dumps(summary, indent=2))
         return
     click.echo(f"finished {case_dir}: {summary['cpu_time_s']:.1f} s CPU, "
                f"{summary['n_time_steps']} time steps")
+    for burst in summary["numerical_bursts"]:
+        click.echo(f"  numerical burst {burst}")
     for field in ("k", "epsilon"):
         n = summary[f"n_steps_bounding_{field}"]
         if n:
@@ -122,12 +133,15 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
     """Parse forces into F_n, F_t, M, thrust and power, compared with the model.
 
     SOURCE is an OpenFOAM case folder written by mfflap, or a Fluent report file (.out) with
-    force and moment columns and the flow time.
+    force and moment columns and the flow time. Numerical bursts after --discard (a few
+    time steps where the solver lost its pressure coupling, mfflap.cfd.bursts) are bridged
+    before the comparison and listed; means are time averages over the solver's steps.
     """
+    from mfflap.cfd.bursts import bridge_load_bursts
     from mfflap.cfd.openfoam.forces import read_forces
     from mfflap.cfd.openfoam.loads import imposed_state, to_loads
     from mfflap.config import load_case
-    from mfflap.metrics import nrmse, pearson
+    from mfflap.metrics import nrmse, pearson, time_mean
     from mfflap.performance import thrust_and_power
     from mfflap.toml_io import read_toml
 
@@ -151,13 +165,16 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
     keep = history.time >= discard
     if keep.sum() < 2:
         raise click.UsageError(f"--discard {discard} s leaves fewer than two samples")
+    t = history.time[keep]
+    cfd_loads, bursts = bridge_load_bursts(cfd_loads, keep)
     thrust, power = thrust_and_power(cfd_loads, state)
     m_thrust, m_power = thrust_and_power(model_loads, state)
     thrust, power, m_thrust, m_power = (a[keep] for a in (thrust, power, m_thrust, m_power))
     out = {"source": str(source), "dialect": history.dialect,
            "n_samples": len(history.time), "end_time": float(history.time[-1]),
-           "cfd_mean_thrust": float(thrust.mean()), "model_mean_thrust": float(m_thrust.mean()),
-           "cfd_mean_power": float(power.mean()), "model_mean_power": float(m_power.mean())}
+           "cfd_mean_thrust": time_mean(t, thrust), "model_mean_thrust": time_mean(t, m_thrust),
+           "cfd_mean_power": time_mean(t, power), "model_mean_power": time_mean(t, m_power),
+           "numerical_bursts": [b.describe() for b in bursts]}
     for name in ("normal_force", "tangential_force", "moment"):
         a, b = getattr(model_loads, name)[keep], getattr(cfd_loads, name)[keep]
         out[f"nrmse_{name}"] = float(nrmse(a, b))
@@ -269,12 +286,13 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: str, cycl
     sec = rep.section("NRMSE between runs")
     sec.blocks.append(table_html(["comparison", "F_n", "F_t", "M"],
                                  [[k, *v.values()] for k, v in study.nrmse.items()]))
+    runs = study.as_dict()["runs"]
     sec.blocks.append(table_html(["run", "cells", "CPU [s]", "mean y+", "max y+",
-                                  "steps with epsilon clipped"],
+                                  "steps with epsilon clipped", "numerical bursts"],
                                  [[k, v["n_cells"], v["cpu_time_s"], v["y_plus_mean"],
-                                   v["y_plus_max"], v["epsilon_clipped_step_fraction"]]
-                                  for k, v in
-                                  study.as_dict()["runs"].items()]))
+                                   v["y_plus_max"], v["epsilon_clipped_step_fraction"],
+                                   "; ".join(v["numerical_bursts"]) or "-"]
+                                  for k, v in runs.items()]))
     sec.blocks.append(figure_html(convergence_figure(study), "F_n and y+ over the run"))
     if study.phase_nrmse:
         psec = rep.section(f"Mean cycles ({study.phase_cycles} periods per run)")
@@ -295,6 +313,10 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: str, cycl
     if as_json:
         click.echo(json.dumps(study.as_dict(), indent=2))
         return
+    for k, v in runs.items():
+        if v["numerical_bursts"]:
+            click.echo(f"{k}: {len(v['numerical_bursts'])} numerical burst(s), counted in "
+                       f"its NRMSE: {'; '.join(v['numerical_bursts'])}")
     for k, v in study.nrmse.items():
         click.echo(f"{k:32s} NRMSE F_n {v['normal_force']:.4f}  F_t "
                    f"{v['tangential_force']:.4f}  M {v['moment']:.4f}")

@@ -10,6 +10,7 @@ import numpy as np
 from scipy.ndimage import median_filter
 
 from mfflap.campaign.records import CfdRecord
+from mfflap.cfd.bursts import bridge_load_bursts
 from mfflap.errors import MfflapError
 from mfflap.hydro.base import ForceModel
 from mfflap.hydro.loads import Loads
@@ -110,19 +111,23 @@ def _neighbour_step(dt: np.ndarray, k: int = 20) -> np.ndarray:
 
 
 def prepare_case(record: CfdRecord, discard_time: float = 0.75, n_samples: int = 400,
-                 max_gap_ratio: float = 25.0) -> CaseData:
+                 max_gap_ratio: float = 25.0, max_burst_share: float = 0.05) -> CaseData:
     """Drop the start-up transient and resample a record onto a uniform time base.
 
     Adaptive CFD time steps crowd samples where the flow is fast; a uniform base keeps them
     from weighting the fit. The start is the later of ``discard_time`` and the record's own
-    start-up ramp.
+    start-up ramp. Numerical bursts after the start (:mod:`mfflap.cfd.bursts`) are bridged
+    by linear interpolation, then isolated spikes are replaced by the running median
+    (:func:`despike`); both are listed in the case's notes.
 
     Raises
     ------
     MfflapError
         If the record has a gap (a step more than ``max_gap_ratio`` times the steps on both
         sides of it: the adaptive time step itself may change a hundredfold over a run), or
-        too little data after the transient; the message names the record and the time.
+        too little data after the transient, or if numerical bursts cover more than
+        ``max_burst_share`` of the time after the transient; the message names the record
+        and the time.
     """
     t = record.time
     start = max(discard_time, float(record.parameters.get("ramp_time", 0.0)))
@@ -142,9 +147,21 @@ def prepare_case(record: CfdRecord, discard_time: float = 0.75, n_samples: int =
     n = int(min(n_samples, max(8, np.sum(t >= start))))
     tu = np.linspace(start, t[-1], n)
     state = _resample_state(record.state, tu)
+    kept = t >= t[max(int(np.searchsorted(t, start)) - 1, 0)]
+    loads, bursts = bridge_load_bursts(record.loads, kept)
+    t = t[kept]
     notes, cleaned = [], []
+    if bursts:
+        lost = sum(b.duration_s for b in bursts)
+        if lost > max_burst_share * (t[-1] - t[0]):
+            raise MfflapError(f"record {record.name}: numerical bursts cover {lost:.3g} s "
+                              f"of the {t[-1] - t[0]:.3g} s after the start-up "
+                              f"({len(bursts)} of them, first {bursts[0].describe()}); "
+                              "rerun the case (a lower Courant limit)")
+        notes.append(f"{len(bursts)} numerical burst(s) bridged by linear interpolation: "
+                     + "; ".join(b.describe() for b in bursts))
     for k in COMPONENTS:
-        values, mask = despike(getattr(record.loads, k))
+        values, mask = despike(getattr(loads, k)[kept])
         if mask.any():
             first = t[np.argmax(mask)]
             notes.append(f"{k}: {int(mask.sum())} spike sample(s) replaced by the running "
