@@ -133,3 +133,20 @@ def test_a_mesh_study_lists_each_runs_bursts_beside_it():
     assert runs["medium_co4"]["numerical_bursts"] == []
     assert len(runs["coarse_co4"]["numerical_bursts"]) >= 3
     assert any(b.startswith("t = 1.5") for b in runs["coarse_co4"]["numerical_bursts"])
+
+
+def test_campaign_status_names_a_finished_cases_bursts(tmp_path):
+    import shutil
+
+    from mfflap.campaign.execute import campaign_status
+    from mfflap.campaign.records import RECORD_SUFFIX
+
+    names = ("f1p000_h0p500_phi090p0", "f1p000_h0p300_phi090p0")
+    (tmp_path / "campaign.toml").write_text("".join(f"[cases.{n}]\nfrequency = 1.0\n"
+                                                    for n in names))
+    for n in names:
+        shutil.copy(fixture_dir() / f"{n}.h5", tmp_path / f"{n}{RECORD_SUFFIX}")
+    bursty, clean = campaign_status(tmp_path)
+    assert bursty.state == clean.state == "done" and clean.message == ""
+    assert re.match(r"4 numerical burst\(s\), bridged when identified; first t = 1\.53",
+                    bursty.message)

@@ -21,7 +21,8 @@ from pathlib import Path
 from typing import Any
 
 from mfflap.campaign.cases import CfdCase
-from mfflap.campaign.records import RECORD_SUFFIX, write_record
+from mfflap.campaign.records import RECORD_SUFFIX, read_record, write_record
+from mfflap.cfd.bursts import find_load_bursts
 from mfflap.cfd.openfoam.writer import SolverSettings
 from mfflap.errors import ConfigError, MfflapError
 from mfflap.parameters import Fluid, FreeStream, Plate
@@ -135,7 +136,10 @@ def read_toml_text(text: str) -> dict[str, Any]:
 
 
 def campaign_status(out_dir: str | Path) -> list[CaseStatus]:
-    """Status of every case listed in ``out_dir/campaign.toml``."""
+    """Status of every case listed in ``out_dir/campaign.toml``.
+
+    A finished case's message names its numerical bursts (:mod:`mfflap.cfd.bursts`), if any.
+    """
     out = Path(out_dir)
     manifest = out / "campaign.toml"
     if not manifest.exists():
@@ -143,7 +147,10 @@ def campaign_status(out_dir: str | Path) -> list[CaseStatus]:
     statuses = []
     for case_id in read_toml(manifest).get("cases", {}):
         if (out / f"{case_id}{RECORD_SUFFIX}").exists():
-            statuses.append(CaseStatus(case_id, "done"))
+            bursts = find_load_bursts(read_record(out / f"{case_id}{RECORD_SUFFIX}").loads)
+            statuses.append(CaseStatus(case_id, "done", "" if not bursts else
+                                       f"{len(bursts)} numerical burst(s), bridged when "
+                                       f"identified; first {bursts[0].describe()}"))
         elif _failed_path(out, case_id).exists():
             info = read_toml(_failed_path(out, case_id))
             error = str(info.get("error", "")).splitlines()

@@ -107,16 +107,17 @@ def find_numerical_bursts(time: np.ndarray, signals: Sequence[np.ndarray],
 
     Returns
     -------
-    list of NumericalBurst, in time order. The search starts where the time step has first
-    grown to half its median: before, the solver is starting from rest, and the force
-    impulse of an impulsive start is real.
+    list of NumericalBurst, in time order. The search starts where the time step first stops
+    growing: before, the solver is starting from its initial fields.
     """
     t = np.asarray(time, dtype=float)
     values = [np.asarray(v, dtype=float) for v in signals]
-    # the solver's start from rest: its time step grows from the initial one, and an
-    # impulsive start gives a real force impulse there; searched from where it has grown
+    # the solver's start from its initial fields: the time step grows step after step from
+    # the initial one, and the first steps' force impulse (an impulsive start, the initial
+    # pressure field) is not a lost coupling; the search starts where the growth stops
     dt = np.diff(t)
-    first = int(np.argmax(dt >= 0.5 * np.median(dt))) if len(dt) else 0
+    growing = np.append(dt[1:] > 1.01 * dt[:-1], False)
+    first = int(np.argmin(growing)) + 1 if len(dt) and growing[0] else 0
     t, values = t[first:], [v[first:] for v in values]
     if len(t) < 3:
         return []
@@ -183,6 +184,16 @@ def bridge_bursts(time: np.ndarray, values: np.ndarray,
     return bridged
 
 
+def find_load_bursts(loads: Loads, window: np.ndarray | None = None) -> list[NumericalBurst]:
+    """The numerical bursts of a CFD force history, all components searched together.
+
+    ``window`` (bool per sample) limits the search, for example to after the start-up.
+    """
+    window = np.ones(len(loads.time), dtype=bool) if window is None else window
+    return find_numerical_bursts(loads.time[window],
+                                 [getattr(loads, k)[window] for k in LOAD_COMPONENTS])
+
+
 def bridge_load_bursts(loads: Loads, window: np.ndarray | None = None
                        ) -> tuple[Loads, list[NumericalBurst]]:
     """Find the numerical bursts of ``loads`` (all components together) and bridge them.
@@ -201,7 +212,7 @@ def bridge_load_bursts(loads: Loads, window: np.ndarray | None = None
     """
     window = np.ones(len(loads.time), dtype=bool) if window is None else window
     t = loads.time[window]
-    bursts = find_numerical_bursts(t, [getattr(loads, k)[window] for k in LOAD_COMPONENTS])
+    bursts = find_load_bursts(loads, window)
     if not bursts:
         return loads, []
     bridged = {}

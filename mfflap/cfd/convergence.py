@@ -5,7 +5,8 @@ Every run is an OpenFOAM case under one folder, resumed if stopped and kept as a
 the finest mesh at the first Courant limit; the time-step study repeats the first mesh at each
 further limit. NRMSE is computed on the reference's time base after the start-up ramp, like
 the paper's mesh study (0.26 % between its chosen and finest meshes); each run's numerical
-bursts (:mod:`mfflap.cfd.bursts`) are listed beside it, not bridged. With three meshes or
+bursts (:mod:`mfflap.cfd.bursts`) are listed beside it, not bridged: a study compares runs
+as they are, so a burst counts against the run that has it. With three meshes or
 more, the finest three also give the grid convergence index (:mod:`mfflap.cfd.gci`) of the
 cycle's mean thrust and input power, peak normal force and RMS moment. For a periodic motion
 whose runs hold two or more whole periods after the start, the same pairs are also compared by
@@ -21,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from mfflap.campaign.records import CfdRecord, read_record, write_record
-from mfflap.cfd.bursts import NumericalBurst, find_numerical_bursts
+from mfflap.cfd.bursts import find_load_bursts
 from mfflap.cfd.gci import GridConvergence, grid_convergence
 from mfflap.cfd.openfoam.setups import CfdSetup
 from mfflap.cfd.openfoam.writer import SolverSettings, resolve_mesh
@@ -84,18 +85,12 @@ class ConvergenceStudy:
                                    "cpu_time_s": r.record.provenance.get("cpu_time_s"),
                                    "epsilon_clipped_step_fraction": _clipped_fraction(r.record),
                                    "numerical_bursts": [b.describe() for b in
-                                                        record_bursts(r.record)],
+                                                        find_load_bursts(r.record.loads)],
                                    "y_plus_mean": None if r.y_plus is None else
                                    float(np.mean(r.y_plus.average)),
                                    "y_plus_max": None if r.y_plus is None else
                                    float(np.max(r.y_plus.maximum))}
                          for r in self.runs}}
-
-
-def record_bursts(record: CfdRecord) -> list[NumericalBurst]:
-    """The numerical bursts of a run (:mod:`mfflap.cfd.bursts`), shown beside its NRMSE: a
-    study compares runs as they are, so a burst counts against the run that has it."""
-    return find_numerical_bursts(record.time, [getattr(record.loads, k) for k in COMPONENTS])
 
 
 def _clipped_fraction(record: CfdRecord) -> float | None:
