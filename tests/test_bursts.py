@@ -150,3 +150,18 @@ def test_campaign_status_names_a_finished_cases_bursts(tmp_path):
     assert bursty.state == clean.state == "done" and clean.message == ""
     assert re.match(r"4 numerical burst\(s\), bridged when identified; first t = 1\.53",
                     bursty.message)
+
+
+def test_agreement_maps_mark_the_cases_whose_bursts_were_bridged():
+    from mfflap.hydro import MorisonModel
+    from mfflap.identification import identify, prepare_cases
+    from mfflap.reports.identification import map_figure
+
+    names = ("f1p000_h0p500_phi090p0", "f1p000_h0p300_phi090p0", "f0p500_h0p300_phi090p0",
+             "f0p500_h0p100_phi090p0")
+    cases, _ = prepare_cases([read_record(fixture_dir() / f"{n}.h5") for n in names])
+    result = identify(cases, MorisonModel(), n_bootstrap=0)
+    fig = map_figure(result, "normal_force", "nrmse")
+    labels = [t.get_text() for ax in fig.axes for t in ax.texts]
+    assert sum(t.endswith("*") for t in labels) == 2 and len(labels) == 4
+    assert any("numerical bursts in the CFD bridged" in t.get_text() for t in fig.texts)

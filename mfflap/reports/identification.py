@@ -33,9 +33,15 @@ def heave_strouhal(result: IdentificationResult, velocity: float) -> np.ndarray:
 
 def map_figure(result: IdentificationResult, signal: str = "normal_force",
                metric: str = "nrmse") -> Figure:
-    """Heat maps of a metric over (f, h_amp), one panel per phase."""
+    """Heat maps of a metric over (f, h_amp), one panel per phase.
+
+    A value marked * is of a case whose CFD had numerical bursts bridged
+    (:mod:`mfflap.cfd.bursts`).
+    """
     f, h, p = (_param(result, k) for k in ("frequency", "heave_amplitude", "phase_deg"))
     values = result.metrics[signal][metric]
+    bridged = [any("numerical burst" in n for n in result.notes.get(name, ()))
+               for name in result.case_names]
     fs, hs, ps = np.unique(f), np.unique(h), np.unique(p)
     fig, axes = plt.subplots(1, len(ps), figsize=(3.2 * len(ps) + 1, 3.2), squeeze=False)
     cmap = "viridis_r" if metric == "nrmse" else "viridis"
@@ -43,18 +49,23 @@ def map_figure(result: IdentificationResult, signal: str = "normal_force",
     im = None
     for ax, phase in zip(axes[0], ps, strict=True):
         grid = np.full((len(hs), len(fs)), np.nan)
+        marks = np.full(grid.shape, "", dtype=object)
         for i in np.flatnonzero(p == phase):
-            grid[np.searchsorted(hs, h[i]), np.searchsorted(fs, f[i])] = values[i]
+            cell = np.searchsorted(hs, h[i]), np.searchsorted(fs, f[i])
+            grid[cell] = values[i]
+            marks[cell] = "*" if bridged[i] else ""
         im = ax.imshow(grid, origin="lower", cmap=cmap, vmin=vmin, vmax=vmax, aspect="auto")
         for (r, c), v in np.ndenumerate(grid):
             if np.isfinite(v):
-                ax.text(c, r, f"{v:.2f}", ha="center", va="center", fontsize=7,
+                ax.text(c, r, f"{v:.2f}{marks[r, c]}", ha="center", va="center", fontsize=7,
                         color="w" if (v > 0.5 * vmax) == (metric == "nrmse") else "k")
         ax.set_xticks(range(len(fs)), [f"{v:g}" for v in fs])
         ax.set_yticks(range(len(hs)), [f"{v:g}" for v in hs])
         ax.set_xlabel("f [Hz]")
         ax.set_title(f"φ = {phase:g}°")
     axes[0][0].set_ylabel("h_amp [m]")
+    if any(bridged):
+        fig.text(0.01, 0.99, "* numerical bursts in the CFD bridged", fontsize=7, va="top")
     fig.colorbar(im, ax=axes[0].tolist(), label=f"{metric} of {SIGNAL_LABELS[signal]}")
     return fig
 
@@ -218,7 +229,8 @@ def add_identification_sections(rep: Report, results: Mapping[str, Identificatio
                                 "CPU [s]", "solver retries", "NRMSE F_n", "Pearson F_n"],
                                rows))
     if first.notes:
-        s.blocks.append(text_html("Data cleaning (one-step CFD force glitches):"))
+        s.blocks.append(text_html("Data cleaning (numerical bursts of the CFD bridged, "
+                                  "one-step glitches replaced; marked * in the maps):"))
         s.blocks.append(table_html(["case", "what was done"],
                                    [(k, "; ".join(v)) for k, v in sorted(first.notes.items())]))
     if first.excluded:
