@@ -2,7 +2,7 @@
 
 A PIMPLE run held at its Courant limit sometimes loses the pressure-velocity coupling for a
 few time steps and recovers: the adaptive time step drops ten- to a thousandfold and the
-forces jump by up to thousands of times their range within microseconds to milliseconds,
+forces jump by up to 10^5 times their range within microseconds to milliseconds,
 then return to where they were. Such a burst is not flow physics, and a least-squares fit
 or an NRMSE takes it at face value. It is also not a one-sample spike: it spans tens of
 the shortened time steps, which defeats a running median over samples.
