@@ -5,6 +5,8 @@ import re
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from mfflap.campaign.records import fixture_dir, read_record
 from mfflap.cfd.bursts import bridge_bursts, burst_mask, find_numerical_bursts
@@ -165,3 +167,45 @@ def test_agreement_maps_mark_the_cases_whose_bursts_were_bridged():
     labels = [t.get_text() for ax in fig.axes for t in ax.texts]
     assert sum(t.endswith("*") for t in labels) == 2 and len(labels) == 4
     assert any("numerical bursts in the CFD bridged" in t.get_text() for t in fig.texts)
+
+
+def _smooth_history(seed, n, freqs_hz, amps):
+    """A sum of sinusoids on adaptive-like steps (each within 10 % of the one before, 0.5-2 ms:
+    100 or more steps per period up to 5 Hz, as a CFD run at a Courant limit has)."""
+    rng = np.random.default_rng(seed)
+    steps = 1e-3 * np.exp(np.clip(np.cumsum(rng.uniform(-0.1, 0.1, n - 1)), -0.7, 0.7))
+    t = np.concatenate([[0.0], np.cumsum(steps)])
+    phases = rng.uniform(0, 2 * np.pi, len(freqs_hz))
+    return t, sum(a * np.sin(2 * np.pi * f * t + p) for f, a, p in zip(freqs_hz, amps, phases,
+                                                                         strict=True))
+
+
+_SMOOTH = dict(seed=st.integers(0, 10_000), n=st.integers(300, 3000),
+               freqs_hz=st.lists(st.floats(0.2, 5.0), min_size=1, max_size=4),
+               amps=st.lists(st.floats(0.01, 100.0), min_size=4, max_size=4))
+
+
+@settings(max_examples=60, deadline=None)
+@given(**_SMOOTH)
+def test_property_smooth_histories_have_no_bursts(seed, n, freqs_hz, amps):
+    t, v = _smooth_history(seed, n, freqs_hz, amps[:len(freqs_hz)])
+    assert find_numerical_bursts(t, [v]) == []
+
+
+@settings(max_examples=60, deadline=None)
+@given(**_SMOOTH, where=st.floats(0.15, 0.85), length=st.integers(3, 60),
+       shrink=st.floats(1e-4, 0.1), size=st.floats(0.5, 1e4))
+def test_property_an_injected_burst_is_found_and_bridged(seed, n, freqs_hz, amps, where,
+                                                          length, shrink, size):
+    t, v = _smooth_history(seed, n, freqs_hz, amps[:len(freqs_hz)])
+    i = int(where * n)
+    burst_t = t[i] + shrink * (t[i + 1] - t[i]) / length * np.arange(1, length + 1)
+    bump = size * np.ptp(v) * np.sin(np.pi * np.arange(1, length + 1) / (length + 1))
+    t2 = np.concatenate([t[:i + 1], burst_t, t[i + 1:]])
+    v2 = np.interp(t2, t, v)
+    v2[i + 1:i + 1 + length] += bump
+    (burst,) = find_numerical_bursts(t2, [v2])
+    assert burst.start_s <= burst_t[0] and burst_t[-1] <= burst.end_s
+    assert burst.duration_s < 30 * np.median(np.diff(t))
+    bridged = bridge_bursts(t2, v2, [burst])
+    assert np.max(np.abs(bridged - np.interp(t2, t, v))) < 0.05 * np.ptp(v)
