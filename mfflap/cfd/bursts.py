@@ -133,6 +133,7 @@ def find_numerical_bursts(time: np.ndarray, signals: Sequence[np.ndarray],
             spans[-1][1] = max(spans[-1][1], end)
         else:
             spans.append([start, end])
+    ranges = [float(np.subtract(*np.percentile(v, [98.0, 2.0]))) for v in values]
     bursts = []
     for start, end in spans:
         start, end = max(start, t[0]), min(end, t[-1])
@@ -140,17 +141,17 @@ def find_numerical_bursts(time: np.ndarray, signals: Sequence[np.ndarray],
         step_inside = inside[:-1] | inside[1:]
         burst = NumericalBurst(float(start), float(end), int(inside.sum()),
                                float(ratios[step_inside].max()))
-        if any(_departure(t, v, burst) > min_departure for v in values):
+        if any(_departure(t, v, burst) > min_departure * r
+               for v, r in zip(values, ranges, strict=True) if r > 0):
             bursts.append(burst)
     return bursts
 
 
 def _departure(time: np.ndarray, values: np.ndarray, burst: NumericalBurst) -> float:
-    """Largest departure inside ``burst`` from its bridging line, over the signal's range."""
-    low, high = np.percentile(values, [2.0, 98.0])
+    """Largest departure inside ``burst`` from its bridging line."""
     inside = burst_mask(time, [burst])
     gap = np.abs(values - bridge_bursts(time, values, [burst]))[inside]
-    return float(gap.max() / (high - low)) if high > low and gap.size else 0.0
+    return float(gap.max()) if gap.size else 0.0
 
 
 def burst_mask(time: np.ndarray, bursts: Sequence[NumericalBurst]) -> np.ndarray:

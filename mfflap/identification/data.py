@@ -19,6 +19,8 @@ from mfflap.performance import thrust_and_power
 
 #: Load components a fit can use, with their units.
 COMPONENTS = {"normal_force": "N", "tangential_force": "N", "moment": "N*m"}
+#: How a case's notes say that numerical bursts of its CFD were bridged.
+BURST_NOTE = "numerical burst(s) bridged by linear interpolation"
 #: Derived signals that are scored (not fitted directly).
 DERIVED = {"thrust": "N", "input_power": "W"}
 _STATE_KEYS = tuple(KINEMATIC_UNITS)
@@ -158,7 +160,7 @@ def prepare_case(record: CfdRecord, discard_time: float = 0.75, n_samples: int =
                               f"of the {t[-1] - t[0]:.3g} s after the start-up "
                               f"({len(bursts)} of them, first {bursts[0].describe()}); "
                               "rerun the case (a lower Courant limit)")
-        notes.append(f"{len(bursts)} numerical burst(s) bridged by linear interpolation: "
+        notes.append(f"{len(bursts)} {BURST_NOTE}: "
                      + "; ".join(b.describe() for b in bursts))
     for k in COMPONENTS:
         values, mask = despike(getattr(loads, k)[kept])

@@ -13,7 +13,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from mfflap.hydro.base import ForceModel
-from mfflap.identification.data import CaseData
+from mfflap.identification.data import BURST_NOTE, CaseData
 from mfflap.identification.fit import IdentificationResult
 from mfflap.reports.html import Report, figure_html, table_html, text_html
 
@@ -40,7 +40,7 @@ def map_figure(result: IdentificationResult, signal: str = "normal_force",
     """
     f, h, p = (_param(result, k) for k in ("frequency", "heave_amplitude", "phase_deg"))
     values = result.metrics[signal][metric]
-    bridged = [any("numerical burst" in n for n in result.notes.get(name, ()))
+    bridged = [any(BURST_NOTE in n for n in result.notes.get(name, ()))
                for name in result.case_names]
     fs, hs, ps = np.unique(f), np.unique(h), np.unique(p)
     fig, axes = plt.subplots(1, len(ps), figsize=(3.2 * len(ps) + 1, 3.2), squeeze=False)
