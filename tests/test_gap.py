@@ -12,12 +12,12 @@ from mfflap.errors import ParseError
 from mfflap.gap.blindtest import NULL, blind_test, synthesize
 from mfflap.gap.candidates import CandidateEffect, load_all, register
 from mfflap.gap.candidates.base import _REGISTRY
-from mfflap.gap.candidates.wake_lag import JONES, wagner_filter
 from mfflap.gap.diagnose import _predictions, default_candidates, diagnose
 from mfflap.gap.external import read_csv_case
 from mfflap.gap.system import GapSystem, group_folds
 from mfflap.gap.where import correlation_ratio, decompose
 from mfflap.hydro import MorisonModel
+from mfflap.hydro.thin_aerofoil import JONES_WAGNER, wagner_filter
 
 CASE = Path(__file__).parents[1] / "cases" / "paper2026.toml"
 
@@ -42,11 +42,11 @@ def test_wagner_step_response_is_jones_function():
     y = wagner_filter(x, t, u, c)
     s = 2 * u * t / c
     after = t > 0.01
-    phi = 1 - sum(a * np.exp(-b * s[after]) for a, b in JONES)
+    phi = 1 - sum(a * np.exp(-b * s[after]) for a, b in JONES_WAGNER)
     # zero-order hold of the input: a one-sample shift of the step, so compare at s +/- ds
     assert np.max(np.abs(y[after] - phi)) < 2e-3
     assert y[t < 0].max() == 0.0 and y[-1] == pytest.approx(1 - sum(
-        a * np.exp(-b * s[-1]) for a, b in JONES), abs=1e-3)
+        a * np.exp(-b * s[-1]) for a, b in JONES_WAGNER), abs=1e-3)
 
 
 def test_a_new_candidate_is_one_class_and_is_used_by_the_diagnosis():

@@ -127,9 +127,13 @@ def run(case_dir: Path, timeout: float, as_json: bool) -> None:
               help="Fluent: depth the 2D forces are given for, m (Fluent 2D: 1 m).")
 @click.option("--ramp-time", default=0.0, show_default=True,
               help="Fluent: start-up ramp of the UDF, s.")
+@click.option("--thin-aerofoil", is_flag=True,
+              help="Also compare F_n, M and the mean input power with linear unsteady "
+                   "thin-aerofoil theory (Theodorsen/Wagner): the yardstick for small "
+                   "motions (effective incidence of a few degrees, printed).")
 @click.option("--json", "as_json", is_flag=True, help="Print results as JSON.")
 def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: str,
-          depth: float, ramp_time: float, as_json: bool) -> None:
+          depth: float, ramp_time: float, thin_aerofoil: bool, as_json: bool) -> None:
     """Parse forces into F_n, F_t, M, thrust and power, compared with the model.
 
     SOURCE is an OpenFOAM case folder written by mfflap, or a Fluent report file (.out) with
@@ -179,11 +183,40 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
         a, b = getattr(model_loads, name)[keep], getattr(cfd_loads, name)[keep]
         out[f"nrmse_{name}"] = float(nrmse(a, b))
         out[f"pearson_{name}"] = float(pearson(a, b))
+    if thin_aerofoil:
+        out["thin_aerofoil"] = _thin_aerofoil_comparison(case, state, ramp_time, cfd_loads,
+                                                         keep)
     if as_json:
         click.echo(json.dumps(out, indent=2, default=lambda o: np.asarray(o).tolist()))
     else:
         for k, v in out.items():
-            click.echo(f"  {k:24s} {v}")
+            if isinstance(v, dict):
+                click.echo(f"  {k}:")
+                for kk, vv in v.items():
+                    click.echo(f"    {kk:28s} {vv}")
+            else:
+                click.echo(f"  {k:24s} {v}")
+
+
+def _thin_aerofoil_comparison(case, state, ramp_time: float, cfd_loads,
+                              keep: np.ndarray) -> dict:
+    """The CFD's F_n, M and mean input power against linear thin-aerofoil theory."""
+    from mfflap.cfd.openfoam.loads import imposed_state
+    from mfflap.hydro.thin_aerofoil import thin_aerofoil_loads_at
+    from mfflap.metrics import nrmse, pearson, time_mean
+    from mfflap.performance import thrust_and_power
+
+    motion = case.motion.build()
+    theory = thin_aerofoil_loads_at(lambda t: imposed_state(motion, t, ramp_time), state.time,
+                                    case.plate, case.fluid, case.flow)
+    _, power = thrust_and_power(theory, state)
+    out = {"max_effective_incidence_deg": theory.metadata["max_effective_incidence_deg"],
+           "mean_power": time_mean(state.time[keep], power[keep])}
+    for name in ("normal_force", "moment"):
+        a, b = getattr(theory, name)[keep], getattr(cfd_loads, name)[keep]
+        out[f"nrmse_{name}"] = float(nrmse(a, b))
+        out[f"pearson_{name}"] = float(pearson(a, b))
+    return out
 
 
 @cfd.command()

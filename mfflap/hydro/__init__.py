@@ -1,4 +1,5 @@
-"""Hydrodynamic force models: loads, the term mechanism, the Morison strip model."""
+"""Hydrodynamic force models: loads, the term mechanism, the Morison strip model, and linear
+unsteady thin-aerofoil theory as the small-motion yardstick."""
 
 from mfflap.hydro.base import ForceModel, ForceTerm, signed_square
 from mfflap.hydro.loads import LOAD_UNITS, Loads
@@ -9,6 +10,11 @@ from mfflap.hydro.morison import (
     RelativeFlow,
     TangentialAddedMass,
     TangentialDrag,
+)
+from mfflap.hydro.thin_aerofoil import (
+    theodorsen_function,
+    thin_aerofoil_loads,
+    wagner_function,
 )
 
 __all__ = [
@@ -23,4 +29,7 @@ __all__ = [
     "TangentialAddedMass",
     "TangentialDrag",
     "signed_square",
+    "theodorsen_function",
+    "thin_aerofoil_loads",
+    "wagner_function",
 ]

@@ -6,31 +6,7 @@ import numpy as np
 
 from mfflap.gap.candidates.base import CandidateEffect, register
 from mfflap.gap.candidates.circulatory_lift import quasi_steady_normal_force
-
-#: Jones' two-exponential approximation of Wagner's function, s = 2 U t / c.
-JONES = ((0.165, 0.0455), (0.335, 0.3))
-
-
-def wagner_filter(values: np.ndarray, time: np.ndarray, velocity: float,
-                  chord: float) -> np.ndarray:
-    """Response of the Wagner-lag system to ``values`` (last axis is time).
-
-    State-space form of Phi(s) = 1 - sum A_i exp(-b_i s): y = (1 - sum A_i) x +
-    sum A_i b_i z_i with dz_i/ds = x - b_i z_i, integrated exactly for a piecewise-constant
-    input; the states start in equilibrium (y = x at the first sample).
-    """
-    x = np.asarray(values, dtype=float)
-    s = 2 * velocity * (np.asarray(time, dtype=float) - time[..., :1]) / chord
-    ds = np.diff(s, axis=-1)
-    y = (1 - sum(a for a, _ in JONES)) * x
-    for a, b in JONES:
-        z = np.empty_like(x)
-        z[..., 0] = x[..., 0] / b
-        decay = np.exp(-b * ds)
-        for n in range(x.shape[-1] - 1):
-            z[..., n + 1] = z[..., n] * decay[..., n] + x[..., n] * (1 - decay[..., n]) / b
-        y = y + a * b * z
-    return y
+from mfflap.hydro.thin_aerofoil import wagner_filter
 
 
 @register
