@@ -6,10 +6,27 @@ import itertools
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import asdict, dataclass
+from typing import Protocol
 
 from mfflap.config import IdentificationGrid
 from mfflap.errors import ConfigError
-from mfflap.kinematics.continuous import RampHarmonicMotion
+from mfflap.kinematics.continuous import HarmonicMotion, Motion, RampHarmonicMotion
+
+
+class CampaignCase(Protocol):
+    """What a campaign needs of a case: an identifier, the motion, how long, its parameters."""
+
+    #: the record's ``parameters["kind"]``
+    kind: str
+    duration: float
+    ramp_time: float
+
+    @property
+    def case_id(self) -> str: ...
+
+    def motion(self) -> Motion: ...
+
+    def as_dict(self) -> dict[str, float]: ...
 
 
 @dataclass(frozen=True)
@@ -32,6 +49,7 @@ class CfdCase:
     pitch_ramp_rate_deg: float
     duration: float
     ramp_time: float
+    kind = "ramp_harmonic"
 
     @property
     def case_id(self) -> str:
@@ -44,6 +62,46 @@ class CfdCase:
         return RampHarmonicMotion(self.frequency, self.heave_amplitude,
                                   math.radians(self.pitch_ramp_rate_deg),
                                   math.radians(self.phase_deg))
+
+    def as_dict(self) -> dict[str, float]:
+        """Plain values (for TOML and HDF5 attributes)."""
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class HarmonicCase:
+    """A harmonic motion, theta = theta_a sin(2 pi f t), h = h_a sin(2 pi f t + phi).
+
+    Attributes
+    ----------
+    frequency : Hz
+    heave_amplitude : m
+    pitch_amplitude_deg : deg
+    phase_deg : deg, by which heave leads pitch
+    duration : s, simulated time
+    ramp_time : s, C^2 start-up ramp of the imposed motion
+    """
+
+    frequency: float
+    heave_amplitude: float
+    pitch_amplitude_deg: float
+    phase_deg: float
+    duration: float
+    ramp_time: float
+    kind = "harmonic"
+
+    @property
+    def case_id(self) -> str:
+        """E.g. ``harmonic_f1p000_h0p0050_th2p00_phi090p0`` (file-name and TOML-key safe)."""
+        text = (f"harmonic_f{self.frequency:.3f}_h{self.heave_amplitude:.4f}"
+                f"_th{self.pitch_amplitude_deg:.2f}_phi{self.phase_deg:05.1f}")
+        return text.replace(".", "p").replace("-", "m")
+
+    def motion(self) -> HarmonicMotion:
+        """The continuous motion the case imposes (before the start-up ramp)."""
+        return HarmonicMotion(self.frequency, self.heave_amplitude,
+                              math.radians(self.pitch_amplitude_deg),
+                              math.radians(self.phase_deg))
 
     def as_dict(self) -> dict[str, float]:
         """Plain values (for TOML and HDF5 attributes)."""

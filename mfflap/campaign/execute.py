@@ -20,7 +20,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from mfflap.campaign.cases import CfdCase
+from mfflap.campaign.cases import CampaignCase
 from mfflap.campaign.records import RECORD_SUFFIX, read_record, write_record
 from mfflap.cfd.bursts import find_load_bursts
 from mfflap.cfd.openfoam.writer import SolverSettings
@@ -65,7 +65,7 @@ def _failed_path(out: Path, case_id: str) -> Path:
     return out / f"{case_id}.failed.toml"
 
 
-def run_one(case: CfdCase, out_dir: str, setup: CampaignSetup) -> CaseStatus:
+def run_one(case: CampaignCase, out_dir: str, setup: CampaignSetup) -> CaseStatus:
     """Run one case on a worker: resume or start its OpenFOAM run, write its record.
 
     Never raises for a CFD failure: the failure is written beside the records and returned.
@@ -80,7 +80,7 @@ def run_one(case: CfdCase, out_dir: str, setup: CampaignSetup) -> CaseStatus:
     solver = SolverSettings(**{**asdict(setup.solver), "write_interval": case.duration / 4})
     try:
         record = run_motion(case_dir, case.motion(), case.case_id,
-                            {"kind": "ramp_harmonic", **case.as_dict()}, case.duration,
+                            {"kind": case.kind, **case.as_dict()}, case.duration,
                             mesh=setup.mesh, ramp_time=case.ramp_time, solver=solver,
                             plate=setup.plate, fluid=setup.fluid, stream=setup.stream,
                             timeout_s=setup.timeout_s)
@@ -112,7 +112,7 @@ def _with_added_settings(setup: dict[str, Any]) -> dict[str, Any]:
     return setup
 
 
-def _write_manifest(out: Path, cases: Sequence[CfdCase], setup: CampaignSetup) -> None:
+def _write_manifest(out: Path, cases: Sequence[CampaignCase], setup: CampaignSetup) -> None:
     manifest = out / "campaign.toml"
     wanted = {"setup": setup.as_dict(), "cases": {c.case_id: c.as_dict() for c in cases}}
     if manifest.exists():
@@ -160,7 +160,7 @@ def campaign_status(out_dir: str | Path) -> list[CaseStatus]:
     return statuses
 
 
-def run_campaign(cases: Sequence[CfdCase], out_dir: str | Path,
+def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
                  setup: CampaignSetup | None = None, *, n_workers: int = 1,
                  scheduler_address: str | None = None, retry_failed: bool = False,
                  progress: bool = True,

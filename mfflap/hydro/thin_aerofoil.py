@@ -23,6 +23,12 @@ atan(q / U) of a few degrees). It is a yardstick derivable by hand for the CFD a
 frames, span scaling, the moment's reference point) and for the strip model's structure, not a
 model of the paper's large motions. It says nothing about the tangential force (the leading-edge
 suction is of second order and the blunt plate does not realise it), which is returned as zero.
+
+References
+----------
+T. Theodorsen (1935), General theory of aerodynamic instability and the mechanism of flutter,
+NACA Report 496. R. T. Jones (1940), The unsteady lift of a wing of finite aspect ratio, NACA
+Report 681 (the approximation of Wagner's function used here).
 """
 
 from __future__ import annotations

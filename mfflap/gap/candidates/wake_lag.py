@@ -5,13 +5,19 @@ from __future__ import annotations
 import numpy as np
 
 from mfflap.gap.candidates.base import CandidateEffect, register
-from mfflap.gap.candidates.circulatory_lift import quasi_steady_normal_force
 from mfflap.hydro.thin_aerofoil import wagner_filter
 
 
 @register
 class WakeLag(CandidateEffect):
-    """Circulatory lift with the wake's lag (Wagner/Jones), at c/4; coefficient: lift slope."""
+    """Circulatory lift with the wake's lag (Wagner/Jones) of the 3/4-chord normal velocity,
+    F_n = -1/2 rho S a |v_t| (v_n + 3/4 c thetadot) lagged, at c/4; coefficient: lift slope.
+
+    The normal velocity is taken at three quarters of the chord, Theodorsen's downwash
+    point, as in :mod:`mfflap.hydro.thin_aerofoil`: small-motion CFD follows that theory
+    (README, Validation against linear theory), and a point at the leading edge leaves out
+    the pitch rate's share of the circulation.
+    """
 
     name = "wake_lag"
     physical_name = "wake-lagged circulatory lift (Wagner function, Jones approximation)"
@@ -20,7 +26,10 @@ class WakeLag(CandidateEffect):
     typical = 2 * np.pi
 
     def regressor(self, state):
-        qs = quasi_steady_normal_force(self, state)
-        c = self.context.plate.chord
-        fn = wagner_filter(qs, state.time, self.context.stream.velocity, c)
+        f = self.flow(state)
+        ctx = self.context
+        c = ctx.plate.chord
+        downwash = f.normal_velocity_le + 0.75 * c * state.pitch_rate
+        qs = -0.5 * ctx.fluid.density * ctx.area * np.abs(f.tangential_velocity) * downwash
+        fn = wagner_filter(qs, state.time, ctx.stream.velocity, c)
         return self.loads(state, normal=fn, moment=fn * 0.25 * c)
