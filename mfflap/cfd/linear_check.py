@@ -23,7 +23,10 @@ from mfflap.cfd.bursts import bridge_load_bursts
 from mfflap.cfd.openfoam.loads import imposed_state
 from mfflap.errors import MfflapError
 from mfflap.hydro.base import ForceModel
+from mfflap.hydro.loads import Loads
 from mfflap.hydro.thin_aerofoil import thin_aerofoil_loads_at
+from mfflap.kinematics.continuous import Motion
+from mfflap.kinematics.state import KinematicState
 from mfflap.metrics import nrmse, pearson, time_mean
 from mfflap.parameters import Fluid, FreeStream, Plate
 from mfflap.performance import thrust_and_power
@@ -98,6 +101,29 @@ def case_of_record(record: CfdRecord) -> HarmonicCase:
         raise MfflapError(f"record {record.name}: parameter {exc.args[0]!r} missing") from None
 
 
+def compare_with_theory(motion: Motion, ramp_time: float, state: KinematicState,
+                        cfd: Loads, keep: np.ndarray, plate: Plate | None = None,
+                        fluid: Fluid | None = None, stream: FreeStream | None = None
+                        ) -> tuple[dict[str, float], Loads]:
+    """CFD loads of ``motion`` (imposed from rest with ``ramp_time``) against linear theory.
+
+    Returns the theory's effective incidence, its mean input power and its NRMSE and Pearson
+    against the CFD's F_n and M over the samples ``keep`` (keys ``max_effective_incidence_deg``,
+    ``mean_power``, ``nrmse_normal_force``, ``pearson_normal_force``, ``nrmse_moment``,
+    ``pearson_moment``), and the theory's loads on ``state``'s time base.
+    """
+    theory = thin_aerofoil_loads_at(lambda t: imposed_state(motion, t, ramp_time), state.time,
+                                    plate, fluid, stream)
+    _, power = thrust_and_power(theory, state)
+    out = {"max_effective_incidence_deg": theory.metadata["max_effective_incidence_deg"],
+           "mean_power": time_mean(state.time[keep], power[keep])}
+    for name in ("normal_force", "moment"):
+        a, b = getattr(theory, name)[keep], getattr(cfd, name)[keep]
+        out[f"nrmse_{name}"] = float(nrmse(a, b))
+        out[f"pearson_{name}"] = float(pearson(a, b))
+    return out, theory
+
+
 def check_record(record: CfdRecord, model: ForceModel, plate: Plate | None = None,
                  fluid: Fluid | None = None, stream: FreeStream | None = None,
                  discard_time: float = DISCARD_TIME_S) -> LinearCheck:
@@ -109,24 +135,19 @@ def check_record(record: CfdRecord, model: ForceModel, plate: Plate | None = Non
     if keep.sum() < 8:
         raise MfflapError(f"record {record.name}: fewer than 8 samples after "
                           f"t = {discard_time} s")
-    theory = thin_aerofoil_loads_at(lambda tt: imposed_state(motion, tt, case.ramp_time), t,
-                                    plate, fluid, stream)
     cfd, bursts = bridge_load_bursts(record.loads, keep)
+    out, _ = compare_with_theory(motion, case.ramp_time, record.state, cfd, keep, plate, fluid,
+                                 stream)
     strip = model.loads(record.state)
-    out: dict[str, float] = {}
     for name in ("normal_force", "moment"):
-        reference = getattr(cfd, name)[keep]
-        out[f"nrmse_{name}"] = float(nrmse(getattr(theory, name)[keep], reference))
-        out[f"pearson_{name}"] = float(pearson(getattr(theory, name)[keep], reference))
-        out[f"strip_nrmse_{name}"] = float(nrmse(getattr(strip, name)[keep], reference))
+        out[f"strip_nrmse_{name}"] = float(nrmse(getattr(strip, name)[keep],
+                                                 getattr(cfd, name)[keep]))
     _, cfd_power = thrust_and_power(cfd, record.state)
-    _, theory_power = thrust_and_power(theory, record.state)
     return LinearCheck(
         case_id=record.name,
         reduced_frequency=float(np.pi * case.frequency * plate.chord / stream.velocity),
-        max_effective_incidence_deg=theory.metadata["max_effective_incidence_deg"],
         cfd_mean_power_w=time_mean(t[keep], cfd_power[keep]),
-        theory_mean_power_w=time_mean(t[keep], theory_power[keep]),
+        theory_mean_power_w=out.pop("mean_power"),
         n_numerical_bursts=len(bursts), **out)
 
 

@@ -184,8 +184,11 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
         out[f"nrmse_{name}"] = float(nrmse(a, b))
         out[f"pearson_{name}"] = float(pearson(a, b))
     if thin_aerofoil:
-        out["thin_aerofoil"] = _thin_aerofoil_comparison(case, state, ramp_time, cfd_loads,
-                                                         keep)
+        from mfflap.cfd.linear_check import compare_with_theory
+
+        out["thin_aerofoil"], _ = compare_with_theory(case.motion.build(), ramp_time, state,
+                                                      cfd_loads, keep, case.plate, case.fluid,
+                                                      case.flow)
     if as_json:
         click.echo(json.dumps(out, indent=2, default=lambda o: np.asarray(o).tolist()))
     else:
@@ -196,27 +199,6 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
                     click.echo(f"    {kk:28s} {vv}")
             else:
                 click.echo(f"  {k:24s} {v}")
-
-
-def _thin_aerofoil_comparison(case, state, ramp_time: float, cfd_loads,
-                              keep: np.ndarray) -> dict:
-    """The CFD's F_n, M and mean input power against linear thin-aerofoil theory."""
-    from mfflap.cfd.openfoam.loads import imposed_state
-    from mfflap.hydro.thin_aerofoil import thin_aerofoil_loads_at
-    from mfflap.metrics import nrmse, pearson, time_mean
-    from mfflap.performance import thrust_and_power
-
-    motion = case.motion.build()
-    theory = thin_aerofoil_loads_at(lambda t: imposed_state(motion, t, ramp_time), state.time,
-                                    case.plate, case.fluid, case.flow)
-    _, power = thrust_and_power(theory, state)
-    out = {"max_effective_incidence_deg": theory.metadata["max_effective_incidence_deg"],
-           "mean_power": time_mean(state.time[keep], power[keep])}
-    for name in ("normal_force", "moment"):
-        a, b = getattr(theory, name)[keep], getattr(cfd_loads, name)[keep]
-        out[f"nrmse_{name}"] = float(nrmse(a, b))
-        out[f"pearson_{name}"] = float(pearson(a, b))
-    return out
 
 
 @cfd.command()
