@@ -3,16 +3,17 @@
 import json
 from pathlib import Path
 
+import h5py
 import numpy as np
 import pytest
 from click.testing import CliRunner
 
 from mfflap.campaign.records import CfdRecord, write_record
 from mfflap.errors import ParseError
-from mfflap.gap.blindtest import NULL, blind_test, synthesize
+from mfflap.gap.blindtest import NULL, blind_test, synthesize, trial_cases
 from mfflap.gap.candidates import CandidateEffect, load_all, register
 from mfflap.gap.candidates.base import _REGISTRY
-from mfflap.gap.diagnose import _predictions, default_candidates, diagnose
+from mfflap.gap.diagnose import CONFOUNDED_VIF, _predictions, default_candidates, diagnose
 from mfflap.gap.external import read_csv_case
 from mfflap.gap.system import GapSystem, group_folds
 from mfflap.gap.where import correlation_ratio, decompose
@@ -109,6 +110,74 @@ def test_blind_benchmark_meets_its_targets_at_snr_3():
     assert weak.attribution_accuracy < 0.7
 
 
+def _stacked(system, cols):
+    """The fit's rows written out: each case's components scaled by their RMS and weighted
+    by 1/sqrt(n_samples), stacked over all cases (what the Gram blocks summarise)."""
+    a, y = [], []
+    for c, case_cols in zip(system.cases, system.columns, strict=True):
+        w = 1.0 / np.sqrt(c.n_samples)
+        for k, scale in system.scales.items():
+            a.append(case_cols[k][:, cols] * w / scale)
+            y.append(c.cfd_signal(k) * w / scale)
+    return np.vstack(a), np.concatenate(y)
+
+
+def test_held_fit_correlation_and_variance_inflation_equal_direct_least_squares():
+    """Computed from the Gram blocks; checked against least squares on the stacked rows."""
+    data = synthesize(np.random.default_rng(8), "wake_lag", 3.0, n_cases=6)
+    model = MorisonModel()
+    system = GapSystem.build(data, model.terms, list(default_candidates().values()))
+    base, free = list(range(system.n_base)), [system.names.index("wake_lag"),
+                                              system.names.index("pitch_rate_lift")]
+    held_values = np.array([model.coefficients[n] for n in system.names[:system.n_base]])
+    a_base, y = _stacked(system, base)
+    a_free, _ = _stacked(system, free)
+    direct = np.linalg.lstsq(a_free, y - a_base @ held_values, rcond=None)[0]
+    got = system.fit_held(free, base, held_values, np.arange(len(data)))
+    assert got == pytest.approx(direct, rel=1e-6)
+    cols = base + free
+    a, _ = _stacked(system, cols)
+    cosine = (a.T @ a) / np.outer(np.linalg.norm(a, axis=0), np.linalg.norm(a, axis=0))
+    assert system.correlation(cols) == pytest.approx(cosine, abs=1e-9)
+    vif = system.variance_inflation(cols)
+    for j in range(len(cols)):
+        others = np.delete(a, j, axis=1)
+        residual = a[:, j] - others @ np.linalg.lstsq(others, a[:, j], rcond=None)[0]
+        assert vif[j] == pytest.approx(a[:, j] @ a[:, j] / (residual @ residual), rel=1e-6)
+    # a column repeated exactly cannot be told apart from its copy
+    assert np.isinf(system.variance_inflation([free[0], free[0]])).all()
+
+
+def test_a_hidden_effect_on_the_exact_base_model_has_its_coefficient_both_ways():
+    """Loads = the configured model + 4.5 x the wake-lagged lift, no noise: fitted to the
+    base model's residual, or refitted together with it, the coefficient is 4.5."""
+    model = MorisonModel()
+    wake = default_candidates()["wake_lag"]
+    data = trial_cases(np.random.default_rng(9), n_cases=12)
+    for c in data:
+        exact, extra = model.loads(c.state), wake.regressor(c.state)
+        for k in ("normal_force", "tangential_force", "moment"):
+            getattr(c.cfd, k)[:] = getattr(exact, k) + 4.5 * getattr(extra, k)
+    diag = diagnose(data, model)
+    assert diag.chosen is not None and diag.chosen.names == ("wake_lag",), diag.verdict
+    assert diag.chosen.held_coefficients["wake_lag"] == pytest.approx(4.5, rel=1e-6)
+    assert diag.chosen.coefficients["wake_lag"] == pytest.approx(4.5, rel=1e-4)
+    assert diag.chosen.variance_inflation["wake_lag"] < CONFOUNDED_VIF
+    assert "confounded" not in diag.verdict
+
+
+def test_a_claimed_effect_that_the_base_terms_can_mimic_is_called_confounded():
+    """Skin friction, |v_t|^0.8 v_t Re-scaled, is nearly the tangential drag |v_t| v_t: the
+    diagnosis may claim it on clean data, but says its coefficient is uncertain."""
+    data = synthesize(np.random.default_rng(11), "skin_friction", 4.0)
+    diag = diagnose(data, MorisonModel())
+    assert diag.chosen is not None and diag.chosen.names[0] == "skin_friction"
+    name, r = diag.chosen.confounded_with["skin_friction"]
+    assert name == "tangential_drag" and abs(r) > 0.95
+    assert diag.chosen.variance_inflation["skin_friction"] > CONFOUNDED_VIF
+    assert "skin_friction is confounded with tangential_drag" in diag.verdict
+
+
 def test_decomposition_finds_a_phase_locked_residual():
     rng = np.random.default_rng(2)
     data = synthesize(rng, NULL, 0.0)
@@ -166,7 +235,17 @@ def test_gap_cli_on_a_record_folder(tmp_path):
     assert res.exit_code == 0, res.output
     data_out = json.loads(res.output[res.output.index("{"):])
     assert data_out["chosen"] == "circulatory_lift"
-    assert "Which unmodelled effect" in out.with_suffix(".html").read_text()
+    chosen = next(c for c in data_out["candidates"] if c["label"] == "circulatory_lift")
+    assert set(chosen["held_coefficients"]) == set(chosen["variance_inflation"]) == {
+        "circulatory_lift"}
+    assert chosen["significant"] is True and chosen["variance_inflation"]["circulatory_lift"] >= 1
+    html = out.with_suffix(".html").read_text()
+    assert "Which unmodelled effect" in html and "coefficients, base terms held" in html
+    with h5py.File(out) as h5:
+        scores = h5["gap/scores"].attrs
+        labels = json.loads(scores["labels"])
+        held = json.loads(scores["held_coefficients"])[labels.index("circulatory_lift")]
+    assert held == pytest.approx(chosen["held_coefficients"])
     res = CliRunner().invoke(cli, ["gap", "blindtest", "--trials", "5", "--json"])
     assert res.exit_code == 0, res.output
     assert len(json.loads(res.output)["confusion"]) == 7

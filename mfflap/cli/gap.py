@@ -86,6 +86,17 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
         click.echo(json.dumps({"verdict": diag.verdict,
                                "chosen": diag.chosen.label if diag.chosen else None,
                                "ranking": [[s.label, s.gain, s.p_value] for s in diag.scores],
+                               "candidates": [
+                                   {"label": s.label, "heldout_gain": s.gain,
+                                    "p_value": s.p_value, "significant": s.significant,
+                                    "coefficients": s.coefficients,
+                                    "held_coefficients": s.held_coefficients,
+                                    # an exact dependence (inf) as null: JSON has no inf
+                                    "variance_inflation": {
+                                        n: v if np.isfinite(v) else None
+                                        for n, v in s.variance_inflation.items()},
+                                    "confounded_with": s.confounded_with}
+                                   for s in diag.scores],
                                "validation": diag.validation}, indent=2))
         return
     click.echo(diag.verdict)

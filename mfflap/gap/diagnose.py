@@ -6,6 +6,18 @@ when it lowers the held-out error by at least ``min_gain`` of the base model's a
 per-case improvements pass a one-sided Wilcoxon signed-rank test at level ``alpha``;
 otherwise the verdict is "no candidate explains it". A combination is preferred over the
 best single candidate only if it clears the same bar against that candidate.
+
+Beside the claim, each candidate's coefficient is reported two ways, and how far it can be
+told apart from the base terms:
+
+- refitted together with the base terms (what the claim rests on). Where the base model is
+  misspecified the refitted base terms absorb part of the effect, so this value need not be
+  the effect's physical coefficient;
+- fitted alone to the residual of the base model with its coefficients as configured (the
+  base terms held);
+- the variance inflation factor of the candidate among the base terms, and the term it is
+  most correlated with. Above :data:`CONFOUNDED_VIF` the verdict says that its coefficient
+  is confounded with that term.
 """
 
 from __future__ import annotations
@@ -37,6 +49,12 @@ class CandidateScore:
     coefficients: dict[str, float]  # mean over folds
     coefficient_spread: dict[str, float]  # std over folds
     plausible: dict[str, bool]
+    #: fitted on all cases to the base model's residual, its coefficients held as configured
+    held_coefficients: dict[str, float] = field(default_factory=dict)
+    #: variance inflation factor among the base terms and the other candidates of the set
+    variance_inflation: dict[str, float] = field(default_factory=dict)
+    #: the term each candidate is most correlated with, and that (uncentred) correlation
+    confounded_with: dict[str, tuple[str, float]] = field(default_factory=dict)
 
     @property
     def label(self) -> str:
@@ -58,6 +76,11 @@ class Diagnosis:
     case_names: list[str] = field(default_factory=list)
 
 
+#: variance inflation factor above which a coefficient is called confounded (the usual rule
+#: of thumb: its variance ten times what it would be were the regressor orthogonal)
+CONFOUNDED_VIF = 10.0
+
+
 def _significance(before: np.ndarray, after: np.ndarray) -> float:
     d = before - after
     if np.allclose(d, 0):
@@ -70,8 +93,10 @@ def _significance(before: np.ndarray, after: np.ndarray) -> float:
 
 def _score(system: GapSystem, names: tuple[str, ...], folds, base_sse: np.ndarray,
            candidates: dict[str, CandidateEffect], alpha: float, min_gain: float,
-           reference: np.ndarray | None = None) -> CandidateScore:
-    cols = list(range(system.n_base)) + [system.names.index(n) for n in names]
+           base_values: np.ndarray, reference: np.ndarray | None = None) -> CandidateScore:
+    base_cols = list(range(system.n_base))
+    own = [system.names.index(n) for n in names]
+    cols = base_cols + own
     sse, coefs = system.cross_validate(cols, folds)
     ref = base_sse if reference is None else reference
     gain = 1.0 - sse.sum() / base_sse.sum()
@@ -81,8 +106,21 @@ def _score(system: GapSystem, names: tuple[str, ...], folds, base_sse: np.ndarra
     means = dict(zip(names, c.mean(axis=0).tolist(), strict=True))
     spread = dict(zip(names, c.std(axis=0).tolist(), strict=True))
     plausible = {n: candidates[n].is_plausible(means[n]) for n in names}
+    held = system.fit_held(own, base_cols, base_values, np.arange(len(system.cases)))
+    vif = system.variance_inflation(cols)
+    corr = system.correlation(cols)
+    confounded = {}
+    for k, n in enumerate(names):
+        j = system.n_base + k
+        r = np.abs(corr[j]).copy()
+        r[j] = -1.0
+        i = int(np.argmax(r))
+        confounded[n] = (system.names[cols[i]], float(corr[j, i]))
     return CandidateScore(names, sse, float(gain), p, bool(p < alpha and rel >= min_gain),
-                          means, spread, plausible)
+                          means, spread, plausible,
+                          dict(zip(names, held.tolist(), strict=True)),
+                          {n: float(vif[system.n_base + k]) for k, n in enumerate(names)},
+                          confounded)
 
 
 def _predictions(system: GapSystem, cols: list[int], folds) -> list[dict[str, np.ndarray]]:
@@ -148,8 +186,9 @@ def diagnose(cases: Sequence[CaseData], base_model: ForceModel,
     system = system or GapSystem.build(cases, base_model.terms, list(candidates.values()))
     folds = group_folds(range(len(system.cases)), n_folds, seed)
     base_cols = list(range(system.n_base))
+    base_values = np.array([base_model.coefficients[n] for n in system.names[:system.n_base]])
     base_sse, _ = system.cross_validate(base_cols, folds)
-    singles = [_score(system, (n,), folds, base_sse, candidates, alpha, min_gain)
+    singles = [_score(system, (n,), folds, base_sse, candidates, alpha, min_gain, base_values)
                for n in candidates]
     singles.sort(key=lambda s: -s.gain)
     scores = list(singles)
@@ -160,7 +199,7 @@ def diagnose(cases: Sequence[CaseData], base_model: ForceModel,
             if best.names[0] not in combo:
                 continue
             pair = _score(system, combo, folds, base_sse, candidates, alpha, min_gain,
-                          reference=best.heldout_sse)
+                          base_values, reference=best.heldout_sse)
             scores.append(pair)
             if pair.significant and (chosen is best or pair.gain > chosen.gain):
                 chosen = pair
@@ -174,7 +213,12 @@ def diagnose(cases: Sequence[CaseData], base_model: ForceModel,
         implaus = [n for n, ok in chosen.plausible.items() if not ok]
         verdict = (f"{chosen.label}: held-out error {chosen.gain:.1%} lower "
                    f"(p = {chosen.p_value:.2g})"
-                   + (f"; implausible coefficient for {', '.join(implaus)}" if implaus else ""))
+                   + (f"; implausible coefficient for {', '.join(implaus)}" if implaus else "")
+                   + "".join(f"; the coefficient of {n} is confounded with "
+                             f"{chosen.confounded_with[n][0]} (variance inflation "
+                             f"{chosen.variance_inflation[n]:.3g}): its value is uncertain"
+                             for n in chosen.names
+                             if chosen.variance_inflation[n] > CONFOUNDED_VIF))
     n_cases = len(system.cases)
     if 0.5**n_cases > alpha:
         verdict += (f"; with {n_cases} cases no improvement can reach p < {alpha:g} (the "

@@ -10,7 +10,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
-from mfflap.gap.diagnose import Diagnosis
+from mfflap.gap.diagnose import CONFOUNDED_VIF, Diagnosis
 from mfflap.reports.html import Report, figure_html, table_html, text_html
 from mfflap.results import ResultsFile
 
@@ -102,10 +102,25 @@ def add_gap_sections(rep: Report, diag: Diagnosis, where: dict,
         coefs = "; ".join(f"{n} = {v:.3g} ± {sc.coefficient_spread[n]:.2g}"
                           f"{'' if sc.plausible[n] else ' (implausible)'}"
                           for n, v in sc.coefficients.items())
-        rows.append([sc.label, sc.gain, sc.p_value, "yes" if sc.significant else "no", coefs])
+        held = "; ".join(f"{v:.3g}" for v in sc.held_coefficients.values())
+        separable = "; ".join(
+            f"{sc.variance_inflation[n]:.3g} ({sc.confounded_with[n][0]}, r = "
+            f"{sc.confounded_with[n][1]:+.2f})"
+            f"{' confounded' if sc.variance_inflation[n] > CONFOUNDED_VIF else ''}"
+            for n in sc.names)
+        rows.append([sc.label, sc.gain, sc.p_value, "yes" if sc.significant else "no", coefs,
+                     held, separable])
     s.blocks.append(table_html(["candidate(s)", "held-out gain", "p (Wilcoxon)",
-                                "significant", "coefficients (mean ± spread over folds)"],
-                               rows))
+                                "significant", "coefficients, base terms refitted (mean ± "
+                                "spread over folds)", "coefficients, base terms held",
+                                "variance inflation (most correlated term)"], rows))
+    s.blocks.append(text_html(
+        "The refitted coefficients are those the claim rests on. Where the base model is "
+        "misspecified its refitted terms absorb part of an effect, so a candidate's "
+        "coefficient is then better read from its fit to the residual of the base model "
+        "with the base coefficients held as configured. A variance inflation factor above "
+        f"{CONFOUNDED_VIF:g} means the fit cannot tell the candidate's coefficient from the "
+        "named term's."))
     s.blocks.append(figure_html(_candidate_figure(diag), "Held-out gain per candidate"))
     s = rep.section("How far the gap shrinks (held-out cases)")
     rows = []
@@ -142,7 +157,10 @@ def write_diagnosis(rf: ResultsFile, diag: Diagnosis, where: dict, group: str = 
         "base_heldout_sse": diag.base_sse},
         {"heldout_gain": "1", "p_value": "1", "significant": "1", "base_heldout_sse": "1"},
         {"labels": json.dumps([s.label for s in diag.scores]),
-         "coefficients": json.dumps([s.coefficients for s in diag.scores])})
+         "coefficients": json.dumps([s.coefficients for s in diag.scores]),
+         "held_coefficients": json.dumps([s.held_coefficients for s in diag.scores]),
+         "variance_inflation": json.dumps([s.variance_inflation for s in diag.scores]),
+         "confounded_with": json.dumps([s.confounded_with for s in diag.scores])})
     for phase, metrics in diag.gap.items():
         arrays, units = {}, {}
         for sig, val in metrics.items():

@@ -84,6 +84,61 @@ class GapSystem:
         ridge = 1e-10 * np.trace(g) / len(cols)
         return np.linalg.solve(g + ridge * np.eye(len(cols)), b)
 
+    def fit_held(self, cols: Sequence[int], held: Sequence[int], held_values: np.ndarray,
+                 train: np.ndarray) -> np.ndarray:
+        """Least squares on ``cols`` with the ``held`` columns fixed at ``held_values``.
+
+        The fit of the free terms to what the held terms leave unexplained (the residual of
+        the base model with its coefficients as configured), over the ``train`` cases.
+        """
+        cols, held = list(cols), list(held)
+        g = self.grams[train].sum(axis=0)
+        b = self.rhs[train].sum(axis=0)
+        g_free = g[np.ix_(cols, cols)]
+        rhs = b[cols] - g[np.ix_(cols, held)] @ np.asarray(held_values, dtype=float)
+        ridge = 1e-10 * np.trace(g_free) / len(cols)
+        return np.linalg.solve(g_free + ridge * np.eye(len(cols)), rhs)
+
+    def correlation(self, cols: Sequence[int]) -> np.ndarray:
+        """Uncentred correlation (cosine) between the regressor columns ``cols``, in the
+        inner product of the fit (components scaled, cases weighted), over all cases.
+
+        Zero columns (a term that produces no load on these cases) get zero correlation.
+        """
+        cols = list(cols)
+        g = self.grams.sum(axis=0)[np.ix_(cols, cols)]
+        norm = np.sqrt(np.clip(np.diag(g), 0.0, None))
+        safe = np.where(norm > 0, norm, 1.0)
+        r = g / np.outer(safe, safe)
+        r[norm == 0, :] = 0.0
+        r[:, norm == 0] = 0.0
+        return r
+
+    def variance_inflation(self, cols: Sequence[int]) -> np.ndarray:
+        """Variance inflation factor of each column of ``cols`` among the others:
+        1 / (1 - R²) with R² the share of the column explained by the other columns.
+
+        1 for a column orthogonal to the rest; large (conventionally above 10) where the fit
+        cannot tell the column's coefficient from the others'; inf for an exact dependence or
+        a zero column.
+        """
+        cols = list(cols)
+        g = self.grams.sum(axis=0)[np.ix_(cols, cols)]
+        out = np.empty(len(cols))
+        for j in range(len(cols)):
+            others = [i for i in range(len(cols)) if i != j]
+            own = g[j, j]
+            if own <= 0:
+                out[j] = np.inf
+                continue
+            if not others:
+                out[j] = 1.0
+                continue
+            coef, *_ = np.linalg.lstsq(g[np.ix_(others, others)], g[others, j], rcond=None)
+            unexplained = (own - g[j, others] @ coef) / own
+            out[j] = 1.0 / unexplained if unexplained > 1e-14 else np.inf
+        return out
+
     def case_sse(self, cols: Sequence[int], x: np.ndarray, cases: np.ndarray) -> np.ndarray:
         """Weighted scaled squared error of each case in ``cases`` for coefficients ``x``."""
         cols = list(cols)
