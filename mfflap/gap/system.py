@@ -81,8 +81,7 @@ class GapSystem:
         cols = list(cols)
         g = self.grams[train][:, cols][:, :, cols].sum(axis=0)
         b = self.rhs[train][:, cols].sum(axis=0)
-        ridge = 1e-10 * np.trace(g) / len(cols)
-        return np.linalg.solve(g + ridge * np.eye(len(cols)), b)
+        return _solve_normal_equations(g, b)
 
     def fit_held(self, cols: Sequence[int], held: Sequence[int], held_values: np.ndarray,
                  train: np.ndarray) -> np.ndarray:
@@ -96,8 +95,7 @@ class GapSystem:
         b = self.rhs[train].sum(axis=0)
         g_free = g[np.ix_(cols, cols)]
         rhs = b[cols] - g[np.ix_(cols, held)] @ np.asarray(held_values, dtype=float)
-        ridge = 1e-10 * np.trace(g_free) / len(cols)
-        return np.linalg.solve(g_free + ridge * np.eye(len(cols)), rhs)
+        return _solve_normal_equations(g_free, rhs)
 
     def correlation(self, cols: Sequence[int]) -> np.ndarray:
         """Uncentred correlation (cosine) between the regressor columns ``cols``, in the
@@ -163,6 +161,12 @@ class GapSystem:
             sse[held] = self.case_sse(cols, x, held)
             coefs.append(x)
         return sse, coefs
+
+
+def _solve_normal_equations(gram: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    """Solve G x = b with a ridge of 1e-10 of G's mean diagonal (nearly dependent terms)."""
+    ridge = 1e-10 * np.trace(gram) / len(rhs)
+    return np.linalg.solve(gram + ridge * np.eye(len(rhs)), rhs)
 
 
 def group_folds(labels: Sequence[object], n_folds: int | None = None,
