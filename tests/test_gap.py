@@ -106,6 +106,12 @@ def test_blind_benchmark_meets_its_targets_at_snr_3():
     assert res.attribution_accuracy >= 0.9
     assert res.null_correct >= 0.9
     assert res.confusion().sum() == 30
+    # the claimed effect's strength is recovered too (measured: 0.8 % median error)
+    assert res.coefficient_error < 0.05
+    assert all((h == 0.0) == (t == NULL) for t, h in zip(res.truth, res.hidden_coefficient,
+                                                         strict=True))
+    assert np.isfinite(res.fitted_coefficient).sum() == sum(
+        t == c != NULL for t, c in zip(res.truth, res.claimed, strict=True))
     weak = blind_test(n_trials=20, snr=0.2, seed=7)  # the test can fail: at SNR 0.2 it does
     assert weak.attribution_accuracy < 0.7
 
@@ -248,7 +254,8 @@ def test_gap_cli_on_a_record_folder(tmp_path):
     assert held == pytest.approx(chosen["held_coefficients"])
     res = CliRunner().invoke(cli, ["gap", "blindtest", "--trials", "5", "--json"])
     assert res.exit_code == 0, res.output
-    assert len(json.loads(res.output)["confusion"]) == 7
+    blind = json.loads(res.output)
+    assert len(blind["confusion"]) == 7 and "coefficient_error" in blind
 
 
 @pytest.mark.openfoam

@@ -123,6 +123,7 @@ def blindtest_cmd(trials: int, snr: float, seed: int, as_json: bool) -> None:
         click.echo(json.dumps({"attribution_accuracy": result.attribution_accuracy,
                                "null_correct": result.null_correct,
                                "mean_heldout_gain": result.mean_gain,
+                               "coefficient_error": result.coefficient_error,
                                "labels": result.labels,
                                "confusion": result.confusion().tolist()}, indent=2))
         return

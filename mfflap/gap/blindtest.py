@@ -57,6 +57,14 @@ def _ar1(rng, n: int, rho: float = 0.9) -> np.ndarray:
 def synthesize(rng: np.random.Generator, effect: str, snr: float, noise_level: float = 0.05,
                n_cases: int = 20) -> list[CaseData]:
     """A dataset with a hidden ``effect`` (or :data:`NULL`) at signal-to-noise ratio ``snr``."""
+    return synthesize_with_strength(rng, effect, snr, noise_level, n_cases)[0]
+
+
+def synthesize_with_strength(rng: np.random.Generator, effect: str, snr: float,
+                             noise_level: float = 0.05, n_cases: int = 20
+                             ) -> tuple[list[CaseData], float]:
+    """:func:`synthesize`, and the hidden effect's coefficient (0 for :data:`NULL`), which
+    the data given to the diagnosis does not carry."""
     cases = trial_cases(rng, n_cases)
     base = MorisonModel().with_coefficients(
         {k: v * rng.uniform(0.8, 1.2) for k, v in MorisonModel().coefficients.items()})
@@ -79,6 +87,8 @@ def synthesize(rng: np.random.Generator, effect: str, snr: float, noise_level: f
                   for i in range(len(COMPONENTS)))
         strength = snr * noise_level / rms * rng.uniform(0.9, 1.1)
         extra = [(strength, r) for r in regs]
+    else:
+        strength = 0.0
     out = []
     for c, ld, ex in zip(cases, clean, extra, strict=True):
         comps = {}
@@ -91,7 +101,7 @@ def synthesize(rng: np.random.Generator, effect: str, snr: float, noise_level: f
         out.append(CaseData(c.name, c.parameters, c.state,
                             Loads(c.state.time, comps["normal_force"],
                                   comps["tangential_force"], comps["moment"])))
-    return out
+    return out, float(strength)
 
 
 @dataclass
@@ -102,6 +112,10 @@ class BlindTestResult:
     truth: list[str] = field(default_factory=list)
     claimed: list[str] = field(default_factory=list)
     heldout_gain: list[float] = field(default_factory=list)
+    #: the hidden effect's coefficient (0 for null trials)
+    hidden_coefficient: list[float] = field(default_factory=list)
+    #: the claimed effect's refitted coefficient where the right effect was claimed, else nan
+    fitted_coefficient: list[float] = field(default_factory=list)
     snr: float = 3.0
 
     def confusion(self) -> np.ndarray:
@@ -131,6 +145,15 @@ class BlindTestResult:
              if t != NULL and c != NULL]
         return float(np.mean(g)) if g else float("nan")
 
+    @property
+    def coefficient_error(self) -> float:
+        """Median of |fitted / hidden - 1| over the trials whose hidden effect was claimed:
+        how well the claimed effect's strength is recovered, base terms refitted."""
+        err = [abs(f / h - 1.0) for h, f in zip(self.hidden_coefficient,
+                                                self.fitted_coefficient, strict=True)
+               if h != 0.0 and np.isfinite(f)]
+        return float(np.median(err)) if err else float("nan")
+
     def summary(self) -> str:
         """Printable scores and the confusion matrix."""
         m = self.confusion()
@@ -139,6 +162,8 @@ class BlindTestResult:
                  f"  right effect ranked first : {self.attribution_accuracy:.1%} of effect trials",
                  f"  no claim on null datasets : {self.null_correct:.1%} of null trials",
                  f"  held-out gap shrinkage    : {self.mean_gain:.1%} mean error reduction",
+                 f"  right effect's coefficient: {self.coefficient_error:.1%} median error "
+                 f"of the refitted value",
                  "  confusion (rows: hidden, columns: claimed):",
                  " " * (width + 2) + " ".join(f"{lab[:8]:>8s}" for lab in self.labels)]
         for lab, row in zip(self.labels, m, strict=True):
@@ -156,12 +181,15 @@ def blind_test(n_trials: int = 70, snr: float = 3.0, seed: int = 0,
     base = MorisonModel()
     for k in range(n_trials):
         truth = NULL if rng.uniform() < null_share else names[int(rng.integers(len(names)))]
-        data = synthesize(rng, truth, snr)
+        data, strength = synthesize_with_strength(rng, truth, snr)
         diag = diagnose(data, base, validate_by=())
         claimed = NULL if diag.chosen is None else diag.chosen.names[0]
         result.truth.append(truth)
         result.claimed.append(claimed)
         result.heldout_gain.append(diag.chosen.gain if diag.chosen else 0.0)
+        result.hidden_coefficient.append(strength)
+        result.fitted_coefficient.append(
+            diag.chosen.coefficients[truth] if claimed == truth != NULL else float("nan"))
         if progress is not None:
             progress(k + 1, n_trials)
     return result
