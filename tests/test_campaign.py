@@ -129,6 +129,37 @@ def test_campaign_on_local_cluster_resumes_and_reports_failures(tmp_path):
         run_campaign([SHORT], out, CampaignSetup(mesh="medium"), progress=False)
 
 
+def test_status_tells_how_far_a_started_run_got(tmp_path):
+    """A case folder with a solver log and no record is "started"; the message reads the
+    real pimpleFoam log's last time step, the folder a rerun resumes from, the retries."""
+    from mfflap.campaign.openfoam_run import RETRY_LOG
+    from mfflap.cfd.openfoam.runner import solver_progress
+
+    out = tmp_path / "camp"
+    out.mkdir()
+    (out / "campaign.toml").write_text(
+        f'[setup]\nmesh = "coarse"\n\n[cases.{SHORT.case_id}]\nfrequency = 1.0\n\n'
+        f'[cases.{OTHER.case_id}]\nfrequency = 2.0\n')
+    case_dir = out / "cases" / SHORT.case_id
+    for folder in ("0", "0.5", "1.25"):
+        (case_dir / folder).mkdir(parents=True)
+        if folder != "1.25":  # a folder written in part: not one to resume from
+            (case_dir / folder / "U").write_text("")
+        (case_dir / folder / "p").write_text("")
+    (case_dir / "mfflap_case.toml").write_text("end_time = 3.0\n")
+    assert campaign_status(out)[0].state == "pending"  # no solver log yet: not begun
+    log = (Path(__file__).parent / "data" / "openfoam_v1912" / "collapsed_dt.log").read_text()
+    (case_dir / "log.pimpleFoam").write_text(log)
+    (case_dir / RETRY_LOG).write_text("time step collapsed; resumed from the last written "
+                                      "time with the inletOutlet far field\n")
+    assert solver_progress(case_dir) == (pytest.approx(1.3821858), pytest.approx(7.3073054e-26))
+    started, other = campaign_status(out)
+    assert (started.state, other.state) == ("started", "pending")
+    assert started.message == ("t = 1.382 of 3 s simulated (46%), time step 7.3e-26 s; a rerun "
+                               "resumes from t = 0.5 s; 1 retry")
+    assert solver_progress(tmp_path) is None
+
+
 def test_status_of_a_folder_that_is_not_a_campaign(tmp_path):
     with pytest.raises(MfflapError, match=r"no campaign\.toml"):
         campaign_status(Path(tmp_path))

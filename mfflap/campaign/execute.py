@@ -5,7 +5,8 @@ State lives in the output folder only:
 - ``campaign.toml``: the setup and the list of cases (written once; a rerun must match);
 - ``<case_id>.h5``: a finished case (written atomically; never rerun);
 - ``<case_id>.failed.toml``: why a case failed (retried only on request);
-- ``cases/<case_id>/``: the OpenFOAM case while it runs (resumed from its last written time).
+- ``cases/<case_id>/``: the OpenFOAM case while it runs (resumed from its last written time;
+  :func:`campaign_status` reports how far its solver got).
 
 A campaign killed at any moment therefore loses at most the unwritten part of the runs in
 flight and corrupts nothing; rerunning the same command continues it.
@@ -57,7 +58,7 @@ class CaseStatus:
     """Where one case stands."""
 
     case_id: str
-    state: str  # "done" | "failed" | "pending"
+    state: str  # "done" | "failed" | "started" | "pending"
     message: str = ""
 
 
@@ -139,6 +140,10 @@ def campaign_status(out_dir: str | Path) -> list[CaseStatus]:
     """Status of every case listed in ``out_dir/campaign.toml``.
 
     A finished case's message names its numerical bursts (:mod:`mfflap.cfd.bursts`), if any.
+    A case whose OpenFOAM run has begun but has no record yet is "started" (running now, or
+    stopped and to be resumed): its message gives the simulated time the solver's log
+    reached, the time step there, the last written time a rerun resumes from and the
+    retries so far.
     """
     out = Path(out_dir)
     manifest = out / "campaign.toml"
@@ -155,9 +160,29 @@ def campaign_status(out_dir: str | Path) -> list[CaseStatus]:
             info = read_toml(_failed_path(out, case_id))
             error = str(info.get("error", "")).splitlines()
             statuses.append(CaseStatus(case_id, "failed", error[0] if error else ""))
+        elif (progress := _started(out / "cases" / case_id)) is not None:
+            statuses.append(CaseStatus(case_id, "started", progress))
         else:
             statuses.append(CaseStatus(case_id, "pending"))
     return statuses
+
+
+def _started(case_dir: Path) -> str | None:
+    """How far a case's OpenFOAM run got, or None if its solver has not begun."""
+    from mfflap.campaign.openfoam_run import RETRY_LOG
+    from mfflap.cfd.openfoam.runner import latest_solution_time, solver_progress
+
+    reached = solver_progress(case_dir)
+    if reached is None:
+        return None
+    time_s, step_s = reached
+    end_s = float(read_toml(case_dir / "mfflap_case.toml")["end_time"])
+    resume = latest_solution_time(case_dir)
+    retries = (case_dir / RETRY_LOG).read_text().count("\n") if (
+        case_dir / RETRY_LOG).is_file() else 0
+    return (f"t = {time_s:.4g} of {end_s:.4g} s simulated ({time_s / end_s:.0%}), time step "
+            f"{step_s:.2g} s; a rerun resumes from t = {resume or 0} s"
+            + (f"; {retries} retr{'y' if retries == 1 else 'ies'}" if retries else ""))
 
 
 def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,

@@ -87,7 +87,8 @@ def run_cmd(case_file: Path, out_dir: Path, frequencies: str | None,
 @click.argument("out_dir", type=click.Path(file_okay=False, exists=True, path_type=Path))
 @click.option("--json", "as_json", is_flag=True, help="Print the statuses as JSON.")
 def status_cmd(out_dir: Path, as_json: bool) -> None:
-    """Per-case status of the campaign in OUT_DIR (done, failed with why, pending)."""
+    """Per-case status of the campaign in OUT_DIR (done, failed with why, started with how
+    far its solver got, pending)."""
     from mfflap.campaign.execute import campaign_status
 
     statuses = campaign_status(out_dir)
@@ -96,5 +97,6 @@ def status_cmd(out_dir: Path, as_json: bool) -> None:
         return
     for s in statuses:
         click.echo(f"{s.state:8s} {s.case_id}  {s.message}")
-    counts = {k: sum(s.state == k for s in statuses) for k in ("done", "failed", "pending")}
+    counts = {k: sum(s.state == k for s in statuses) for k in ("done", "failed", "started",
+                                                                 "pending")}
     click.echo(", ".join(f"{v} {k}" for k, v in counts.items()))

@@ -65,6 +65,20 @@ def collapsed_time_step(log_text: str, min_time_step: float) -> tuple[float, flo
     return float(steps[-1]), float(times[-1]) if times else float("nan")
 
 
+def solver_progress(case_dir: str | Path, log_name: str = "log.pimpleFoam"
+                    ) -> tuple[float, float] | None:
+    """(time, deltaT) of the last time step the solver's log reports, in s; None if the
+    case has no such log or it has no time step yet. Reads only the log's tail."""
+    path = Path(case_dir) / log_name
+    if not path.is_file():
+        return None
+    text = _read_tail(path)
+    times, steps = _TIME.findall(text), _DELTA_T.findall(text)
+    if not times:
+        return None
+    return float(times[-1]), float(steps[-1]) if steps else float("nan")
+
+
 def run_application(case_dir: str | Path, application: str, timeout_s: float = 3600.0,
                     max_courant_abort: float = 100.0, n_procs: int = 1,
                     extra_args: tuple[str, ...] = (), min_time_step: float = 1e-7,
