@@ -7,7 +7,12 @@ import numpy as np
 import pytest
 
 from mfflap.campaign.cases import CfdCase, grid_cases
-from mfflap.campaign.execute import CampaignSetup, campaign_status, run_campaign
+from mfflap.campaign.execute import (
+    CampaignSetup,
+    campaign_status,
+    fraction_simulated,
+    run_campaign,
+)
 from mfflap.campaign.openfoam_run import run_motion
 from mfflap.campaign.records import CfdRecord, read_record, read_records, write_record
 from mfflap.cfd.openfoam.runner import openfoam_available
@@ -96,13 +101,15 @@ def test_restart_continues_from_last_written_time(tmp_path):
 
 
 @pytest.mark.openfoam
-def test_campaign_on_local_cluster_resumes_and_reports_failures(tmp_path):
+def test_campaign_on_local_cluster_resumes_and_reports_failures(tmp_path, capfd):
     """Real LocalCluster, two worker processes, real pimpleFoam."""
     assert openfoam_available()
     out = tmp_path / "camp"
     failing = CfdCase(0.0, 0.2, 90.0, 10.0, duration=1.0, ramp_time=0.5)  # f = 0: refused
     setup = CampaignSetup(timeout_s=900.0, single_precision=True)
-    statuses = run_campaign([SHORT, OTHER, failing], out, setup, n_workers=2, progress=False)
+    statuses = run_campaign([SHORT, OTHER, failing], out, setup, n_workers=2, poll_s=0.2)
+    bar = capfd.readouterr().err
+    assert "CFD cases: 100%" in bar and "3.00/3" in bar, bar[-500:]
     states = {s.case_id: s.state for s in statuses}
     assert states == {SHORT.case_id: "done", OTHER.case_id: "done", failing.case_id: "failed"}
     failed = next(s for s in statuses if s.state == "failed")
@@ -158,6 +165,8 @@ def test_status_tells_how_far_a_started_run_got(tmp_path):
     assert started.message == ("t = 1.382 of 3 s simulated (46%), time step 7.3e-26 s; a rerun "
                                "resumes from t = 0.5 s; 1 retry")
     assert solver_progress(tmp_path) is None
+    shares = fraction_simulated(out, [SHORT.case_id, OTHER.case_id])
+    assert shares == {SHORT.case_id: pytest.approx(1.3821858 / 3.0)}
 
 
 def test_status_of_a_folder_that_is_not_a_campaign(tmp_path):

@@ -15,6 +15,7 @@ flight and corrupts nothing; rerunning the same command continues it.
 from __future__ import annotations
 
 import shutil
+import time
 import traceback
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
@@ -167,16 +168,37 @@ def campaign_status(out_dir: str | Path) -> list[CaseStatus]:
     return statuses
 
 
+def _simulated(case_dir: Path) -> tuple[float, float, float] | None:
+    """(time reached, time step, end time) of a case's OpenFOAM run in s, or None if its
+    solver has not begun."""
+    from mfflap.cfd.openfoam.runner import solver_progress
+
+    reached = solver_progress(case_dir)
+    if reached is None or not (case_dir / "mfflap_case.toml").is_file():
+        return None
+    return (*reached, float(read_toml(case_dir / "mfflap_case.toml")["end_time"]))
+
+
+def fraction_simulated(out_dir: str | Path, case_ids: Sequence[str]) -> dict[str, float]:
+    """Share of its end time each started case's solver has simulated (0-1), by case id;
+    cases without a run folder or solver log are left out."""
+    shares = {}
+    for case_id in case_ids:
+        reached = _simulated(Path(out_dir) / "cases" / case_id)
+        if reached is not None:
+            shares[case_id] = min(max(reached[0] / reached[2], 0.0), 1.0)
+    return shares
+
+
 def _started(case_dir: Path) -> str | None:
     """How far a case's OpenFOAM run got, or None if its solver has not begun."""
     from mfflap.campaign.openfoam_run import RETRY_LOG
-    from mfflap.cfd.openfoam.runner import latest_solution_time, solver_progress
+    from mfflap.cfd.openfoam.runner import latest_solution_time
 
-    reached = solver_progress(case_dir)
+    reached = _simulated(case_dir)
     if reached is None:
         return None
-    time_s, step_s = reached
-    end_s = float(read_toml(case_dir / "mfflap_case.toml")["end_time"])
+    time_s, step_s, end_s = reached
     resume = latest_solution_time(case_dir)
     retries = (case_dir / RETRY_LOG).read_text().count("\n") if (
         case_dir / RETRY_LOG).is_file() else 0
@@ -189,7 +211,8 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
                  setup: CampaignSetup | None = None, *, n_workers: int = 1,
                  scheduler_address: str | None = None, retry_failed: bool = False,
                  progress: bool = True,
-                 on_result: Callable[[CaseStatus], None] | None = None) -> list[CaseStatus]:
+                 on_result: Callable[[CaseStatus], None] | None = None,
+                 poll_s: float = 10.0) -> list[CaseStatus]:
     """Run the cases that are not finished yet on a dask cluster; return every case's status.
 
     Parameters
@@ -204,6 +227,10 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
         Rerun cases that failed before (otherwise they stay failed and are reported).
     on_result
         Called with each case's status as it finishes (e.g. to commit results).
+    progress
+        Show a progress bar counted in cases, fractions of the runs in flight included
+        (the simulated share of each, read from its solver log every ``poll_s`` seconds), so
+        that runs of an hour show that they move.
     """
     from dask.distributed import Client, LocalCluster, as_completed
 
@@ -240,15 +267,33 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
             if progress:
                 from tqdm import tqdm
 
-                bar = tqdm(total=len(todo), desc="CFD cases", unit="case")
-            for fut in as_completed(futures):
-                status: CaseStatus = fut.result()
-                results[status.case_id] = status
+                bar = tqdm(total=len(todo), desc="CFD cases", unit="case",
+                           bar_format="{l_bar}{bar}| {n:.2f}/{total} [{elapsed}<{remaining}"
+                                      "{postfix}]")
+            finished: list[str] = []
+            last = ""
+            polled = 0.0
+            pending = as_completed(futures)
+            while not pending.is_empty():
+                if not pending.has_ready():
+                    if bar is not None and time.monotonic() - polled >= poll_s:
+                        # the runs in flight count with their simulated share
+                        polled = time.monotonic()
+                        running = [c.case_id for c in todo if c.case_id not in finished]
+                        bar.n = len(finished) + sum(fraction_simulated(out, running).values())
+                        bar.refresh()
+                    time.sleep(0.1)
+                    continue
+                for fut in pending.next_batch(block=False):
+                    status: CaseStatus = fut.result()
+                    results[status.case_id] = status
+                    finished.append(status.case_id)
+                    last = f"{status.case_id}: {status.state} {status.message}"[:60]
+                    if on_result is not None:
+                        on_result(status)
                 if bar is not None:
-                    bar.set_postfix_str(f"{status.case_id}: {status.state} {status.message}"[:60])
-                    bar.update()
-                if on_result is not None:
-                    on_result(status)
+                    bar.n = len(finished)
+                    bar.set_postfix_str(last)
             if bar is not None:
                 bar.close()
         finally:
