@@ -100,3 +100,50 @@ def status_cmd(out_dir: Path, as_json: bool) -> None:
     counts = {k: sum(s.state == k for s in statuses) for k in ("done", "failed", "started",
                                                                  "pending")}
     click.echo(", ".join(f"{v} {k}" for k, v in counts.items()))
+
+
+@campaign.command("compare")
+@click.argument("folder_a", type=click.Path(file_okay=False, exists=True, path_type=Path))
+@click.argument("folder_b", type=click.Path(file_okay=False, exists=True, path_type=Path))
+@click.option("--start", "start_s", type=float, default=None,
+              help="Compare after this time, s (default: each case's start-up ramp).")
+@click.option("--output", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="HDF5 file of the comparison, both manifests beside it.")
+@click.option("--figure", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="PNG: NRMSE of F_n and M and the thrust difference per case.")
+@click.option("--json", "as_json", is_flag=True)
+def compare_cmd(folder_a: Path, folder_b: Path, start_s: float | None, output: Path | None,
+                figure: Path | None, as_json: bool) -> None:
+    """Case by case, the forces of campaign FOLDER_A against FOLDER_B (the reference):
+    NRMSE and Pearson of F_n, F_t, M, mean thrust and power, numerical bursts, CPU."""
+    from dataclasses import asdict
+
+    from mfflap.campaign.compare import compare_campaigns, plot_comparison, write_comparison
+
+    result = compare_campaigns(folder_a, folder_b, start_s)
+    if output is not None:
+        write_comparison(output, result)
+    if figure is not None:
+        plot_comparison(figure, result, (folder_a.name, folder_b.name))
+    if as_json:
+        click.echo(json.dumps({"cases": [asdict(c) for c in result.cases],
+                               "summary": result.summary(), "only_a": result.only_a,
+                               "only_b": result.only_b}, indent=2))
+        return
+    width = max(len(c.case_id) for c in result.cases)
+    click.echo(f"{'case':{width}s} {'F_n':>7s} {'F_t':>7s} {'M':>7s} {'thrust':>8s} "
+               f"{'bursts A/B':>10s} {'CPU A/B':>8s}    (NRMSE; thrust: (A - B) / |B|)")
+    for c in result.cases:
+        click.echo(f"{c.case_id:{width}s} {c.nrmse_normal_force:7.2%} "
+                   f"{c.nrmse_tangential_force:7.2%} {c.nrmse_moment:7.2%} "
+                   f"{c.thrust_difference:+8.1%} {c.n_bursts_a:>5d}/{c.n_bursts_b:<4d} "
+                   f"{c.cpu_time_a_s / c.cpu_time_b_s:8.2f}")
+    s = result.summary()
+    click.echo(f"{len(result.cases)} cases; NRMSE median / max: F_n "
+               f"{s['median_nrmse_normal_force']:.2%} / {s['max_nrmse_normal_force']:.2%}, M "
+               f"{s['median_nrmse_moment']:.2%} / {s['max_nrmse_moment']:.2%}; CPU A / B "
+               f"{s['cpu_ratio']:.2f}")
+    for label, only in (("A", result.only_a), ("B", result.only_b)):
+        if only:
+            click.echo(f"only in {label}: {len(only)} case(s): {', '.join(only[:5])}"
+                       + (", ..." if len(only) > 5 else ""))

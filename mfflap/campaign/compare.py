@@ -1,0 +1,222 @@
+"""Two campaigns of the same motions, case by case: how far one set-up's forces are from
+another's.
+
+For each case both campaigns finished, the loads of campaign A are compared with those of
+campaign B (the reference) on B's time base after the start-up: NRMSE and Pearson of F_n,
+F_t and M, and the relative difference of mean thrust and mean input power. Numerical bursts
+(:mod:`mfflap.cfd.bursts`) are bridged in both before comparing, as identification does, and
+counted, so a comparison of, say, the fixtures at max Co 2 against max Co 4 separates the
+bursts from the time-step error. The CPU time of each run is kept beside.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+from mfflap.campaign.records import CfdRecord, read_records
+from mfflap.cfd.bursts import bridge_load_bursts
+from mfflap.errors import ConfigError, MfflapError
+from mfflap.metrics import nrmse, pearson, time_mean
+from mfflap.performance import thrust_and_power
+
+COMPONENTS = ("normal_force", "tangential_force", "moment")
+#: parameters that describe how a record is kept, not the motion
+_NOT_MOTION = frozenset({"storage"})
+
+
+@dataclass(frozen=True)
+class CaseComparison:
+    """One case run by both campaigns: A against B (B the reference)."""
+
+    case_id: str
+    start_s: float
+    end_s: float
+    nrmse_normal_force: float
+    nrmse_tangential_force: float
+    nrmse_moment: float
+    pearson_normal_force: float
+    pearson_tangential_force: float
+    pearson_moment: float
+    mean_thrust_a_n: float
+    mean_thrust_b_n: float
+    mean_power_a_w: float
+    mean_power_b_w: float
+    n_bursts_a: int
+    n_bursts_b: int
+    cpu_time_a_s: float
+    cpu_time_b_s: float
+
+    @property
+    def thrust_difference(self) -> float:
+        """(A - B) / |B| of the mean thrust."""
+        return (self.mean_thrust_a_n - self.mean_thrust_b_n) / abs(self.mean_thrust_b_n)
+
+    @property
+    def power_difference(self) -> float:
+        """(A - B) / |B| of the mean input power."""
+        return (self.mean_power_a_w - self.mean_power_b_w) / abs(self.mean_power_b_w)
+
+
+@dataclass
+class CampaignComparison:
+    """Every common case, and the cases only one campaign has."""
+
+    folder_a: str
+    folder_b: str
+    cases: list[CaseComparison]
+    only_a: list[str]
+    only_b: list[str]
+
+    def summary(self) -> dict[str, float]:
+        """Median and largest NRMSE per component, and the CPU ratio A / B over all cases."""
+        out: dict[str, float] = {}
+        for k in COMPONENTS:
+            values = np.array([getattr(c, f"nrmse_{k}") for c in self.cases])
+            out[f"median_nrmse_{k}"] = float(np.median(values))
+            out[f"max_nrmse_{k}"] = float(np.max(values))
+        out["median_abs_thrust_difference"] = float(np.median(
+            [abs(c.thrust_difference) for c in self.cases]))
+        out["cpu_ratio"] = (sum(c.cpu_time_a_s for c in self.cases)
+                            / sum(c.cpu_time_b_s for c in self.cases))
+        return out
+
+
+def _motion_parameters(record: CfdRecord) -> dict:
+    return {k: v for k, v in record.parameters.items() if k not in _NOT_MOTION}
+
+
+def compare_records(a: CfdRecord, b: CfdRecord, start_s: float | None = None
+                    ) -> CaseComparison:
+    """A against B for one motion, after ``start_s`` (default: the start-up ramp).
+
+    Raises
+    ------
+    ConfigError
+        If the two records are of different motions, naming the parameter, or if they share
+        fewer than two samples after the start.
+    """
+    pa, pb = _motion_parameters(a), _motion_parameters(b)
+    for key in sorted(set(pa) | set(pb)):
+        if pa.get(key) != pb.get(key):
+            raise ConfigError(f"{a.name}: the two campaigns ran different motions "
+                              f"({pa.get(key)!r} against {pb.get(key)!r})", key=key)
+    start = float(pb.get("ramp_time", 0.0)) if start_s is None else float(start_s)
+    end = min(a.time[-1], b.time[-1])
+    keep = (b.time >= start) & (b.time <= end)
+    if np.count_nonzero(keep) < 2:
+        raise ConfigError(f"{a.name}: fewer than two common samples after t = {start:g} s",
+                          key="start_s")
+    t = b.time[keep]
+    loads_a, bursts_a = bridge_load_bursts(a.loads, a.time >= start)
+    loads_b, bursts_b = bridge_load_bursts(b.loads, b.time >= start)
+    metrics = {}
+    for k in COMPONENTS:
+        ref = getattr(loads_b, k)[keep]
+        val = np.interp(t, a.time, getattr(loads_a, k))
+        metrics[f"nrmse_{k}"] = float(nrmse(val, ref))
+        metrics[f"pearson_{k}"] = float(pearson(val, ref))
+    means = {}
+    for label, record, loads in (("a", a, loads_a), ("b", b, loads_b)):
+        thrust, power = thrust_and_power(loads, record.state)
+        window = (record.time >= start) & (record.time <= end)
+        means[f"mean_thrust_{label}_n"] = time_mean(record.time[window], thrust[window])
+        means[f"mean_power_{label}_w"] = time_mean(record.time[window], power[window])
+    return CaseComparison(a.name, start, float(end), **metrics, **means,
+                          n_bursts_a=len(bursts_a), n_bursts_b=len(bursts_b),
+                          cpu_time_a_s=float(a.provenance.get("cpu_time_s", np.nan)),
+                          cpu_time_b_s=float(b.provenance.get("cpu_time_s", np.nan)))
+
+
+def compare_campaigns(folder_a: str | Path, folder_b: str | Path,
+                      start_s: float | None = None) -> CampaignComparison:
+    """Every case both campaign folders finished, A against B.
+
+    Raises
+    ------
+    MfflapError
+        If the folders have no finished case in common.
+    """
+    records_a = {r.name: r for r in read_records(folder_a)}
+    records_b = {r.name: r for r in read_records(folder_b)}
+    common = sorted(set(records_a) & set(records_b))
+    if not common:
+        raise MfflapError(f"{folder_a} and {folder_b} have no finished case in common "
+                          f"({len(records_a)} and {len(records_b)} records)")
+    cases = [compare_records(records_a[n], records_b[n], start_s) for n in common]
+    return CampaignComparison(str(folder_a), str(folder_b), cases,
+                              sorted(set(records_a) - set(records_b)),
+                              sorted(set(records_b) - set(records_a)))
+
+
+def write_comparison(path: str | Path, comparison: CampaignComparison) -> Path:
+    """The comparison as an HDF5 results file (``kind="campaign_comparison"``), with both
+    campaigns' manifests (campaign.toml) stored beside it."""
+    from mfflap.results import ResultsFile
+
+    manifests = []
+    for label, folder in (("A", comparison.folder_a), ("B", comparison.folder_b)):
+        manifest = Path(folder) / "campaign.toml"
+        text = manifest.read_text() if manifest.is_file() else "# no campaign.toml\n"
+        manifests.append(f"# campaign {label}: {folder}\n{text}")
+    rows = [asdict(c) for c in comparison.cases]
+    units = {k: ("N" if k.endswith("_n") else "W" if k.endswith("_w") else
+                 "s" if k.endswith("_s") else "1")
+             for k in rows[0] if k != "case_id"}
+    arrays = {k: np.array([r[k] for r in rows]) for k in units}
+    with ResultsFile(path, "w", kind="campaign_comparison",
+                     config_toml="\n".join(manifests)) as rf:
+        rf.write_group("cases", arrays, units,
+                       attrs={"case_ids": [c.case_id for c in comparison.cases],
+                              "folder_a": comparison.folder_a,
+                              "folder_b": comparison.folder_b,
+                              "only_a": comparison.only_a, "only_b": comparison.only_b})
+    return Path(path)
+
+
+def plot_comparison(path: str | Path, comparison: CampaignComparison,
+                    labels: Sequence[str] = ("A", "B")) -> Path:
+    """NRMSE of F_n and M per case against frequency, one marker per heave amplitude, and
+    the relative mean-thrust difference."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from mfflap.campaign.records import read_record
+
+    folder_b = Path(comparison.folder_b)
+    params = {c.case_id: read_record(folder_b / f"{c.case_id}.h5").parameters
+              for c in comparison.cases}
+    fig, axes = plt.subplots(1, 3, figsize=(13, 3.6))
+    groups = sorted({params[c.case_id].get("heave_amplitude") for c in comparison.cases},
+                    key=lambda v: (v is None, v))
+    for g_index, amplitude in enumerate(groups):
+        chosen = [c for c in comparison.cases
+                  if params[c.case_id].get("heave_amplitude") == amplitude]
+        f = [params[c.case_id].get("frequency", np.nan) for c in chosen]
+        style = dict(marker="osD^v<>"[g_index % 7], ls="none",
+                     label=f"h = {amplitude} m" if amplitude is not None else "cases")
+        axes[0].plot(f, [100 * c.nrmse_normal_force for c in chosen], **style)
+        axes[1].plot(f, [100 * c.nrmse_moment for c in chosen], **style)
+        axes[2].plot(f, [100 * c.thrust_difference for c in chosen], **style)
+    frequencies = sorted({params[c.case_id].get("frequency", np.nan)
+                          for c in comparison.cases})
+    for ax, title in zip(axes, ("F_n NRMSE [%]", "M NRMSE [%]",
+                                "mean thrust, (A - B) / |B| [%]"), strict=True):
+        ax.set_xscale("log")
+        ax.set_xticks(frequencies, [f"{f:g}" for f in frequencies])
+        ax.minorticks_off()
+        ax.set_xlabel("frequency [Hz]")
+        ax.set_title(title, fontsize=9)
+        ax.grid(alpha=0.3)
+    axes[2].axhline(0, color="0.5", lw=0.8)
+    axes[0].legend(fontsize=7)
+    fig.suptitle(f"{labels[0]} against {labels[1]}", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return Path(path)

@@ -1,0 +1,131 @@
+"""Two campaigns compared case by case: on the shipped real runs of two set-ups, against
+values derived by hand, with a burst bridged, and the refusals."""
+
+import copy
+import json
+import shutil
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from mfflap.campaign.compare import compare_campaigns, compare_records
+from mfflap.campaign.records import fixture_dir, read_record, read_records, write_record
+from mfflap.cfd.bursts import bridge_load_bursts
+from mfflap.cli.main import cli
+from mfflap.errors import ConfigError, MfflapError
+from mfflap.metrics import nrmse, time_mean
+from mfflap.performance import thrust_and_power
+
+AFFORDABLE = fixture_dir("small_motion_affordable")
+COARSE = fixture_dir("small_motion_coarse")
+BURSTS = Path(__file__).parent / "data" / "openfoam_v1912" / "bursts"
+
+
+@pytest.fixture(scope="module")
+def record():
+    return read_record(sorted(COARSE.glob("*.h5"))[6])  # f = 1 Hz, heave with pitch
+
+
+def test_two_set_ups_of_the_small_motions():
+    """Real runs of the same 11 motions with the affordable set-up and on the coarse mesh:
+    F_n within 6 % NRMSE (1-2 % where f >= 1 Hz, measured), in phase, no bursts."""
+    result = compare_campaigns(AFFORDABLE, COARSE, start_s=0.5)
+    assert len(result.cases) == 11 and not result.only_a and not result.only_b
+    for c in result.cases:
+        parameters = read_record(COARSE / f"{c.case_id}.h5").parameters
+        f = parameters["frequency"]
+        fast = f >= 1  # k >= 1.7; the slow motions shed small vortices (README)
+        assert c.nrmse_normal_force < (0.025 if fast else 0.07), c
+        assert c.pearson_normal_force > (0.995 if fast else 0.97), c
+        assert c.pearson_moment > (0.99 if fast else 0.75), c  # slow heave: 0.82
+        assert c.n_bursts_a == c.n_bursts_b == 0
+        assert c.start_s == 0.5 and c.end_s == pytest.approx(parameters["duration"], rel=0.01)
+    summary = result.summary()
+    assert summary["median_nrmse_normal_force"] < 0.03
+    assert summary["max_nrmse_normal_force"] >= summary["median_nrmse_normal_force"]
+    assert 1.0 < summary["cpu_ratio"] < 2.0  # the graded mesh has 40 % more cells
+
+
+def test_against_values_derived_by_hand(record):
+    """A record against itself is 0 / 1; a constant offset d on F_n gives NRMSE d / range;
+    a mean thrust scaled by 1.1 gives +10 %."""
+    same = compare_records(record, record)
+    assert same.nrmse_normal_force == 0 and same.pearson_moment == pytest.approx(1.0)
+    assert same.start_s == record.parameters["ramp_time"] and same.thrust_difference == 0
+    shifted = copy.deepcopy(record)
+    offset = 0.05
+    shifted.loads.normal_force[:] += offset
+    keep = record.time >= record.parameters["ramp_time"]
+    f_n = record.loads.normal_force[keep]
+    result = compare_records(shifted, record)
+    assert result.nrmse_normal_force == pytest.approx(offset / np.ptp(f_n), rel=1e-9)
+    assert result.pearson_normal_force == pytest.approx(1.0)
+    assert result.nrmse_tangential_force == 0
+    scaled = copy.deepcopy(record)
+    scaled.loads.tangential_force[:] *= 1.1
+    scaled.loads.normal_force[:] *= 1.1
+    scaled.loads.moment[:] *= 1.1
+    thrust, _ = thrust_and_power(record.loads, record.state)
+    mean_thrust = time_mean(record.time[keep], thrust[keep])
+    assert result.mean_thrust_b_n == pytest.approx(mean_thrust)
+    assert compare_records(scaled, record).thrust_difference == pytest.approx(
+        0.1 * np.sign(mean_thrust), rel=1e-6)
+
+
+def test_numerical_bursts_are_bridged_and_counted():
+    """A real run with numerical bursts (f = 0.5 Hz, h = 0.3 m, phi = 90 deg, max Co 4)
+    against the same run with them bridged beforehand: counted in B only, and the two then
+    agree, where taken as they are they are orders of magnitude apart."""
+    raw = read_record(BURSTS / "f0p500_h0p300_phi090p0.h5")
+    start = raw.parameters["ramp_time"]
+    clean = copy.deepcopy(raw)
+    clean.loads, found = bridge_load_bursts(raw.loads, raw.time >= start)
+    assert found
+    result = compare_records(clean, raw)
+    assert result.n_bursts_a == 0 and result.n_bursts_b == len(found)
+    assert result.nrmse_normal_force < 1e-9 and result.nrmse_moment < 1e-9
+    keep = raw.time >= start
+    as_they_are = nrmse(clean.loads.normal_force[keep], raw.loads.normal_force[keep])
+    assert as_they_are > 1e-3  # the bursts set the range
+
+
+def test_refusals_name_the_case_and_key(record, tmp_path):
+    other = copy.deepcopy(record)
+    other.parameters = {**record.parameters, "frequency": 2.0}
+    with pytest.raises(ConfigError, match=rf"frequency: {record.name}: .*different motions"):
+        compare_records(other, record)
+    with pytest.raises(ConfigError, match="start_s"):
+        compare_records(record, record, start_s=record.time[-1] + 1.0)
+    single = copy.deepcopy(record)
+    single.parameters = {**record.parameters, "storage": "float32"}
+    assert compare_records(single, record).nrmse_normal_force == 0  # storage is not motion
+    with pytest.raises(MfflapError, match="no finished case in common"):
+        compare_campaigns(COARSE, fixture_dir("backtest"))
+
+
+def test_command_writes_hdf5_with_both_manifests_and_a_figure(tmp_path):
+    a = tmp_path / "a"
+    shutil.copytree(AFFORDABLE, a)
+    extra = read_records(COARSE)[0]
+    write_record(tmp_path / "b_only.h5", extra)  # not in a campaign folder: ignored
+    (a / f"{extra.name}.h5").unlink()  # a case only B has
+    out, fig = tmp_path / "cmp.h5", tmp_path / "cmp.png"
+    res = CliRunner().invoke(cli, ["campaign", "compare", str(a), str(COARSE), "--start",
+                                   "0.5", "--output", str(out), "--figure", str(fig),
+                                   "--json"])
+    assert res.exit_code == 0, res.output
+    data = json.loads(res.output)
+    assert len(data["cases"]) == 10 and data["only_b"] == [extra.name]
+    with h5py.File(out) as h5:
+        assert h5.attrs["kind"] == "campaign_comparison"
+        manifests = h5["inputs"].attrs["config_toml"]
+        assert manifests.count("[setup]") == 2 and 'mesh = "graded"' in manifests
+        assert h5["cases/nrmse_normal_force"].attrs["units"] == "1"
+        assert h5["cases/mean_thrust_a_n"].attrs["units"] == "N"
+        assert len(h5["cases/nrmse_moment"]) == 10
+    assert fig.stat().st_size > 10_000
+    res = CliRunner().invoke(cli, ["campaign", "compare", str(a), str(COARSE)])
+    assert res.exit_code == 0 and "only in B: 1 case(s)" in res.output
