@@ -2,6 +2,7 @@
 values derived by hand, with a burst bridged, and the refusals."""
 
 import copy
+import dataclasses
 import json
 import shutil
 from pathlib import Path
@@ -73,6 +74,11 @@ def test_against_values_derived_by_hand(record):
     assert result.mean_thrust_b_n == pytest.approx(mean_thrust)
     assert compare_records(scaled, record).thrust_difference == pytest.approx(
         0.1 * np.sign(mean_thrust), rel=1e-6)
+    # a reference with no thrust or no CPU time recorded: nan, not a division error
+    still = dataclasses.replace(result, mean_thrust_b_n=0.0, cpu_time_b_s=float("nan"))
+    assert np.isnan(still.thrust_difference) and np.isnan(still.cpu_ratio)
+    assert result.cpu_ratio == 1.0 and result.power_difference == pytest.approx(
+        (result.mean_power_a_w - result.mean_power_b_w) / abs(result.mean_power_b_w))
 
 
 def test_numerical_bursts_are_bridged_and_counted():
@@ -119,6 +125,8 @@ def test_command_writes_hdf5_with_both_manifests_and_a_figure(tmp_path):
     assert res.exit_code == 0, res.output
     data = json.loads(res.output)
     assert len(data["cases"]) == 10 and data["only_b"] == [extra.name]
+    assert all(c["cpu_ratio"] == pytest.approx(c["cpu_time_a_s"] / c["cpu_time_b_s"])
+               for c in data["cases"])
     with h5py.File(out) as h5:
         assert h5.attrs["kind"] == "campaign_comparison"
         manifests = h5["inputs"].attrs["config_toml"]

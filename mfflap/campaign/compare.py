@@ -52,13 +52,26 @@ class CaseComparison:
 
     @property
     def thrust_difference(self) -> float:
-        """(A - B) / |B| of the mean thrust."""
-        return (self.mean_thrust_a_n - self.mean_thrust_b_n) / abs(self.mean_thrust_b_n)
+        """(A - B) / |B| of the mean thrust (nan if B's is zero)."""
+        return _relative(self.mean_thrust_a_n, self.mean_thrust_b_n)
 
     @property
     def power_difference(self) -> float:
-        """(A - B) / |B| of the mean input power."""
-        return (self.mean_power_a_w - self.mean_power_b_w) / abs(self.mean_power_b_w)
+        """(A - B) / |B| of the mean input power (nan if B's is zero)."""
+        return _relative(self.mean_power_a_w, self.mean_power_b_w)
+
+    @property
+    def cpu_ratio(self) -> float:
+        """CPU time of A over B's (nan if B's is unknown or zero)."""
+        return _ratio(self.cpu_time_a_s, self.cpu_time_b_s)
+
+
+def _relative(a: float, b: float) -> float:
+    return (a - b) / abs(b) if b != 0 else float("nan")
+
+
+def _ratio(a: float, b: float) -> float:
+    return a / b if b > 0 else float("nan")
 
 
 @dataclass
@@ -78,10 +91,10 @@ class CampaignComparison:
             values = np.array([getattr(c, f"nrmse_{k}") for c in self.cases])
             out[f"median_nrmse_{k}"] = float(np.median(values))
             out[f"max_nrmse_{k}"] = float(np.max(values))
-        out["median_abs_thrust_difference"] = float(np.median(
+        out["median_abs_thrust_difference"] = float(np.nanmedian(
             [abs(c.thrust_difference) for c in self.cases]))
-        out["cpu_ratio"] = (sum(c.cpu_time_a_s for c in self.cases)
-                            / sum(c.cpu_time_b_s for c in self.cases))
+        out["cpu_ratio"] = _ratio(sum(c.cpu_time_a_s for c in self.cases),
+                                  sum(c.cpu_time_b_s for c in self.cases))
         return out
 
 

@@ -126,7 +126,9 @@ def compare_cmd(folder_a: Path, folder_b: Path, start_s: float | None, output: P
     if figure is not None:
         plot_comparison(figure, result, (folder_a.name, folder_b.name))
     if as_json:
-        click.echo(json.dumps({"cases": [asdict(c) for c in result.cases],
+        click.echo(json.dumps({"cases": [{**asdict(c), "thrust_difference": c.thrust_difference,
+                                          "power_difference": c.power_difference,
+                                          "cpu_ratio": c.cpu_ratio} for c in result.cases],
                                "summary": result.summary(), "only_a": result.only_a,
                                "only_b": result.only_b}, indent=2))
         return
@@ -137,7 +139,7 @@ def compare_cmd(folder_a: Path, folder_b: Path, start_s: float | None, output: P
         click.echo(f"{c.case_id:{width}s} {c.nrmse_normal_force:7.2%} "
                    f"{c.nrmse_tangential_force:7.2%} {c.nrmse_moment:7.2%} "
                    f"{c.thrust_difference:+8.1%} {c.n_bursts_a:>5d}/{c.n_bursts_b:<4d} "
-                   f"{c.cpu_time_a_s / c.cpu_time_b_s:8.2f}")
+                   f"{c.cpu_ratio:8.2f}")
     s = result.summary()
     click.echo(f"{len(result.cases)} cases; NRMSE median / max: F_n "
                f"{s['median_nrmse_normal_force']:.2%} / {s['max_nrmse_normal_force']:.2%}, M "
