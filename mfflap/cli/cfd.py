@@ -42,20 +42,28 @@ def cfd() -> None:
               help="inertial: the whole mesh moves with the plate; plate: a static mesh in "
                    "the plate's frame (about a third less CPU; inletOutlet far field unless "
                    "--far-field says otherwise); default inertial (or the set-up's).")
+@click.option("--motion-table", type=click.Path(dir_okay=False, exists=True, path_type=Path),
+              default=None, help="CSV of any motion instead of the case file's [motion]: "
+                                 "columns time (s, from 0), heave_position (m), pitch_angle "
+                                 "(rad) or pitch_angle_deg; kept in the case. --cycles does "
+                                 "not apply; the run ends at --end-time or the last row.")
+@click.option("--end-time", type=float, default=None,
+              help="With --motion-table: simulated time, s (default: the table's last row).")
 def write(case_file: Path, case_dir: Path, mesh: str | None, setup_name: str | None,
           cycles: float, ramp_time: float, y_plus: bool, far_field: str | None,
           pressure_solver: str | None, writes: int, turbulence_convection: str | None,
-          frame: str | None) -> None:
-    """Write an OpenFOAM case for the [motion] of CASE_FILE into CASE_DIR."""
+          frame: str | None, motion_table: Path | None, end_time: float | None) -> None:
+    """Write an OpenFOAM case for the [motion] of CASE_FILE (or a --motion-table) into
+    CASE_DIR."""
     from dataclasses import replace
 
     from mfflap.cfd.openfoam.setups import mesh_and_solver
-    from mfflap.cfd.openfoam.writer import write_case
+    from mfflap.cfd.openfoam.writer import attach_motion_table, write_case
     from mfflap.config import load_case
 
     spec, solver = mesh_and_solver(mesh, setup_name)
     case = load_case(case_file)
-    end_time = cycles / case.motion.frequency
+    motion, end_time = _motion_and_end_time(case, motion_table, end_time, cycles)
     if frame == "plate" and far_field is None:
         far_field = "inletOutlet"
     overrides = {k: v for k, v in (("far_field", far_field),
@@ -64,11 +72,32 @@ def write(case_file: Path, case_dir: Path, mesh: str | None, setup_name: str | N
                                    ("frame", frame))
                  if v is not None}
     solver = replace(solver, write_interval=end_time / writes, **overrides)
-    write_case(case_dir, case.motion.build(), end_time, mesh=spec, plate=case.plate,
+    write_case(case_dir, motion, end_time, mesh=spec, plate=case.plate,
                fluid=case.fluid, stream=case.flow, ramp_time=ramp_time, y_plus=y_plus,
                solver=solver)
+    if motion_table is not None:
+        attach_motion_table(case_dir, motion_table)
     click.echo(f"wrote {case_dir} (mesh {spec.name}, {solver.frame} frame, end time "
                f"{end_time:g} s)")
+
+
+def _motion_and_end_time(case, motion_table: Path | None, end_time: float | None,
+                         cycles: float):
+    """The motion a command writes or parses, and its end time: the case file's [motion]
+    over ``cycles`` periods, or a user's table up to ``end_time`` (default its last row)."""
+    if motion_table is None:
+        if end_time is not None:
+            raise click.UsageError("--end-time goes with --motion-table; the case file's "
+                                   "motion runs for --cycles periods")
+        return case.motion.build(), cycles / case.motion.frequency
+    from mfflap.errors import MotionError
+    from mfflap.kinematics.table_file import read_motion_table, table_end_time
+
+    motion = read_motion_table(motion_table)
+    try:
+        return motion, table_end_time(motion, end_time)
+    except MotionError as exc:
+        raise click.BadParameter(str(exc), param_hint="--end-time") from exc
 
 
 @cfd.command()
@@ -131,9 +160,13 @@ def run(case_dir: Path, timeout: float, as_json: bool) -> None:
               help="Also compare F_n, M and the mean input power with linear unsteady "
                    "thin-aerofoil theory (Theodorsen/Wagner): the yardstick for small "
                    "motions (effective incidence of a few degrees, printed).")
+@click.option("--motion-table", type=click.Path(dir_okay=False, exists=True, path_type=Path),
+              default=None, help="Fluent: the CSV motion table the UDF was written from "
+                                 "(an OpenFOAM case written from one keeps it).")
 @click.option("--json", "as_json", is_flag=True, help="Print results as JSON.")
 def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: str,
-          depth: float, ramp_time: float, thin_aerofoil: bool, as_json: bool) -> None:
+          depth: float, ramp_time: float, thin_aerofoil: bool, motion_table: Path | None,
+          as_json: bool) -> None:
     """Parse forces into F_n, F_t, M, thrust and power, compared with the model.
 
     SOURCE is an OpenFOAM case folder written by mfflap, or a Fluent report file (.out) with
@@ -152,6 +185,11 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
     case = load_case(case_file)
     if source.is_dir():
         meta = read_toml(source / "mfflap_case.toml")
+        if "motion_table" in meta:
+            if motion_table is not None:
+                raise click.UsageError(f"{source} keeps its own motion table "
+                                       f"({meta['motion_table']}); leave out --motion-table")
+            motion_table = source / str(meta["motion_table"])
         history = read_forces(source)
         depth = float(meta["depth"])
         ramp_time = float(meta.get("ramp_time", 0))
@@ -163,7 +201,13 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
         history = report_forces(source, fx, fy, mz)
         frame = "inertial"
         label = f"fluent:{source}"
-    state = imposed_state(case.motion.build(), history.time, ramp_time)
+    if motion_table is None:
+        motion = case.motion.build()
+    else:
+        from mfflap.kinematics.table_file import read_motion_table
+
+        motion = read_motion_table(motion_table)
+    state = imposed_state(motion, history.time, ramp_time)
     cfd_loads = to_loads(history, state, case.plate.span, depth, source=label, frame=frame)
     model_loads = case.morison_model().loads(state)
     keep = history.time >= discard
@@ -186,7 +230,7 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
     if thin_aerofoil:
         from mfflap.cfd.linear_check import compare_with_theory
 
-        out["thin_aerofoil"], _ = compare_with_theory(case.motion.build(), ramp_time, state,
+        out["thin_aerofoil"], _ = compare_with_theory(motion, ramp_time, state,
                                                       cfd_loads, keep, case.plate, case.fluid,
                                                       case.flow)
     if as_json:
@@ -208,15 +252,21 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
 @click.option("--ramp-time", default=0.0, show_default=True, help="Smooth start-up ramp, s.")
 @click.option("--time-step", default=1e-3, show_default=True, help="Fluent time step, s.")
 @click.option("--table", is_flag=True, help="Table-driven UDF even for a sinusoid.")
+@click.option("--motion-table", type=click.Path(dir_okay=False, exists=True, path_type=Path),
+              default=None, help="CSV of any motion instead of the case file's [motion] "
+                                 "(columns as for `cfd write`); a table-driven UDF.")
+@click.option("--end-time", type=float, default=None,
+              help="With --motion-table: simulated time, s (default: the table's last row).")
 def fluent(case_file: Path, out_dir: Path, cycles: float, ramp_time: float, time_step: float,
-           table: bool) -> None:
-    """Write a DEFINE_CG_MOTION UDF and a batch journal for the [motion] of CASE_FILE."""
+           table: bool, motion_table: Path | None, end_time: float | None) -> None:
+    """Write a DEFINE_CG_MOTION UDF and a batch journal for the [motion] of CASE_FILE (or a
+    --motion-table)."""
     from mfflap.cfd.fluent.udf import write_fluent_case
     from mfflap.config import load_case
 
     case = load_case(case_file)
-    end_time = cycles / case.motion.frequency
-    write_fluent_case(out_dir, case.motion.build(), end_time, ramp_time=ramp_time,
+    motion, end_time = _motion_and_end_time(case, motion_table, end_time, cycles)
+    write_fluent_case(out_dir, motion, end_time, ramp_time=ramp_time,
                       time_step=time_step, velocity=case.flow.velocity, table=table)
     click.echo(f"wrote {out_dir / 'mfflap_motion.c'} and {out_dir / 'mfflap_run.jou'}")
 

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 from scipy.interpolate import make_smoothing_spline
 
+from mfflap.csv_columns import read_csv_columns
 from mfflap.errors import ParseError
 from mfflap.hydro.loads import Loads
 from mfflap.identification.data import CaseData
@@ -45,7 +46,8 @@ def case_from_arrays(name: str, time, pitch_angle, heave_position, normal_force,
 
 
 def read_csv_case(path: str | Path, parameters: dict | None = None) -> CaseData:
-    """A CSV with a header naming the columns of :data:`CSV_COLUMNS` (any order; SI units).
+    """A CSV with a header naming the columns of :data:`CSV_COLUMNS` (any order; SI units;
+    ``#`` comment lines allowed).
 
     Raises
     ------
@@ -53,31 +55,5 @@ def read_csv_case(path: str | Path, parameters: dict | None = None) -> CaseData:
         Naming the file and the line for a missing column or an unreadable value.
     """
     path = Path(path)
-    lines = path.read_text().splitlines()
-    if not lines:
-        raise ParseError("empty file", path=str(path))
-    header = [h.strip() for h in lines[0].split(",")]
-    missing = [c for c in CSV_COLUMNS if c not in header]
-    if missing:
-        raise ParseError(f"missing column(s) {missing}; the header has {header}",
-                         path=str(path), line=1)
-    rows = []
-    for i, line in enumerate(lines[1:], start=2):
-        if not line.strip():
-            continue
-        parts = line.split(",")
-        if len(parts) != len(header):
-            raise ParseError(f"{len(parts)} values for {len(header)} columns", path=str(path),
-                             line=i)
-        try:
-            rows.append([float(p) for p in parts])
-        except ValueError as exc:
-            raise ParseError(f"unreadable number: {exc}", path=str(path), line=i) from exc
-    data = np.array(rows)
-    col = {h: data[:, j] for j, h in enumerate(header)}
-    for c in CSV_COLUMNS:
-        bad = ~np.isfinite(col[c])
-        if bad.any():
-            raise ParseError(f"column {c} is not finite", path=str(path),
-                             line=int(np.argmax(bad)) + 2)
+    col = read_csv_columns(path, CSV_COLUMNS)
     return case_from_arrays(path.stem, *(col[c] for c in CSV_COLUMNS), parameters=parameters)

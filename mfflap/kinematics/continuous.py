@@ -228,28 +228,44 @@ class TabulatedMotion:
         Strictly increasing.
     pitch_angle : ndarray, rad, shape (n,)
     heave_position : ndarray, m, shape (n,)
+    hold_after_end : bool
+        Past the last row, hold the last position at rest instead of refusing. A solver's
+        motion table runs past the simulated end time (OpenFOAM's interpolation needs rows
+        there); a run of a user's table ends at or before its last row, so those rows are
+        never simulated.
     """
 
-    def __init__(self, time: np.ndarray, pitch_angle: np.ndarray, heave_position: np.ndarray):
+    def __init__(self, time: np.ndarray, pitch_angle: np.ndarray, heave_position: np.ndarray,
+                 hold_after_end: bool = False):
         t = check_times(time, "table time column")
         th = _finite_array(pitch_angle, "pitch_angle")
         hp = _finite_array(heave_position, "heave_position")
         if t.size < 4 or th.shape != t.shape or hp.shape != t.shape:
             raise MotionError("a motion table needs >= 4 rows and equal-length columns")
         self.table_time = t
+        self.hold_after_end = hold_after_end
         self._pitch = CubicSpline(t, th)
         self._heave = CubicSpline(t, hp)
 
     def sample(self, times: np.ndarray) -> KinematicState:
-        """State at ``times`` inside the table's range."""
+        """State at ``times`` inside the table's range (or past it, if held)."""
         t = check_times(times)
-        if t[0] < self.table_time[0] - 1e-12 or t[-1] > self.table_time[-1] + 1e-12:
+        end = self.table_time[-1]
+        if t[0] < self.table_time[0] - 1e-12 or (t[-1] > end + 1e-12
+                                                 and not self.hold_after_end):
             raise MotionError(
                 f"times [{t[0]}, {t[-1]}] s leave the table's range "
-                f"[{self.table_time[0]}, {self.table_time[-1]}] s"
+                f"[{self.table_time[0]}, {end}] s"
             )
         p, h = self._pitch, self._heave
+        inside = t <= end
+        tc = np.minimum(t, end)
+
+        def moving(values: np.ndarray) -> np.ndarray:  # rates and accelerations: 0 when held
+            return np.where(inside, values, 0.0)
+
         return KinematicState(
-            time=t, pitch_angle=p(t), pitch_rate=p(t, 1), pitch_acceleration=p(t, 2),
-            heave_position=h(t), heave_velocity=h(t, 1), heave_acceleration=h(t, 2),
+            time=t, pitch_angle=p(tc), pitch_rate=moving(p(tc, 1)),
+            pitch_acceleration=moving(p(tc, 2)), heave_position=h(tc),
+            heave_velocity=moving(h(tc, 1)), heave_acceleration=moving(h(tc, 2)),
         )

@@ -270,6 +270,22 @@ def write_case(case_dir: str | Path, motion: Motion, end_time: float,
     return case_dir
 
 
+#: the copy of a user's motion table (:mod:`mfflap.kinematics.table_file`) that a case
+#: written from it keeps, named in its mfflap_case.toml
+MOTION_TABLE_FILE = "mfflap_motion.csv"
+
+
+def attach_motion_table(case_dir: str | Path, table_path: str | Path) -> Path:
+    """Keep the user's motion table in a case written from it and name it in the case's
+    mfflap_case.toml, so that parsing the case needs nothing from outside it."""
+    case_dir = Path(case_dir)
+    dest = case_dir / MOTION_TABLE_FILE
+    shutil.copyfile(table_path, dest)
+    with open(case_dir / "mfflap_case.toml", "a") as fh:
+        fh.write(f'motion_table = "{MOTION_TABLE_FILE}"\n')
+    return dest
+
+
 def _render_templates(src: Path, case_dir: Path, env: jinja2.Environment,
                       context: dict, skip: Path | None = None) -> None:
     """Copy or render (``.j2``) every template file under ``src`` into ``case_dir``."""

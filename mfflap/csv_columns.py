@@ -1,0 +1,87 @@
+"""Numeric CSV files with a header line naming the columns: what users hand to mfflap
+(motion tables, external force histories).
+
+Lines that are empty or start with ``#`` are skipped; the first other line is the header.
+Every error names the file and the line.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from mfflap.errors import ParseError
+
+
+def read_csv_columns(path: str | Path, required: Sequence[str],
+                     one_of: Sequence[Sequence[str]] = ()) -> dict[str, np.ndarray]:
+    """The columns of a CSV file by header name, as finite float arrays.
+
+    Parameters
+    ----------
+    path
+        The file.
+    required
+        Column names that must be present.
+    one_of
+        Groups of alternative names (for example one column in radians or one in degrees):
+        exactly one name of each group must be present.
+
+    Returns
+    -------
+    dict
+        Every column of the file by its header name (extra columns included), with the
+        line number of each row under the key ``"__line__"``.
+
+    Raises
+    ------
+    ParseError
+        Naming the file and line: no header, a missing or duplicated column, a row with the
+        wrong number of values, an unreadable or non-finite number, no data rows.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except UnicodeDecodeError as exc:
+        raise ParseError(f"not a text file ({exc.reason})", path=str(path)) from exc
+    lines = [(i, line) for i, line in enumerate(text.splitlines(), start=1)
+             if line.strip() and not line.lstrip().startswith("#")]
+    if not lines:
+        raise ParseError("no header line (an empty file)", path=str(path))
+    header_line, header_text = lines[0]
+    header = [h.strip() for h in header_text.split(",")]
+    if len(set(header)) != len(header):
+        raise ParseError(f"a column is named twice in the header {header}", path=str(path),
+                         line=header_line)
+    missing = [c for c in required if c not in header]
+    if missing:
+        raise ParseError(f"missing column(s) {missing}; the header has {header}",
+                         path=str(path), line=header_line)
+    for group in one_of:
+        present = [c for c in group if c in header]
+        if len(present) != 1:
+            raise ParseError(f"exactly one of the columns {list(group)} is needed, the header "
+                             f"has {present or 'none'}", path=str(path), line=header_line)
+    rows, numbers = [], []
+    for i, line in lines[1:]:
+        parts = line.split(",")
+        if len(parts) != len(header):
+            raise ParseError(f"{len(parts)} values for {len(header)} columns",
+                             path=str(path), line=i)
+        try:
+            values = [float(p) for p in parts]
+        except ValueError as exc:
+            raise ParseError(f"unreadable number: {exc}", path=str(path), line=i) from exc
+        bad = [h for h, v in zip(header, values, strict=True) if not np.isfinite(v)]
+        if bad:
+            raise ParseError(f"column {bad[0]} is not finite", path=str(path), line=i)
+        rows.append(values)
+        numbers.append(i)
+    if not rows:
+        raise ParseError("a header but no data rows", path=str(path), line=header_line)
+    data = np.array(rows, dtype=float)
+    out = {h: data[:, j] for j, h in enumerate(header)}
+    out["__line__"] = np.array(numbers)
+    return out

@@ -1,0 +1,75 @@
+"""A user's motion table from a CSV file: any pitch and heave history a solver should
+impose.
+
+The file has a header line naming its columns, in any order:
+
+- ``time`` in s, starting at 0 and strictly increasing;
+- ``heave_position`` in m;
+- ``pitch_angle`` in rad, or ``pitch_angle_deg`` in degrees (one of the two).
+
+Other columns are ignored; lines starting with ``#`` are comments. Between rows the motion
+is a cubic spline (continuous rates and accelerations); past the last row it is held at
+rest, which only the solver's padding rows past the end of a run see.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from mfflap.csv_columns import read_csv_columns
+from mfflap.errors import MotionError, ParseError
+from mfflap.kinematics.continuous import TabulatedMotion
+
+#: the fewest rows a cubic spline through the table needs
+MIN_ROWS = 4
+
+
+def read_motion_table(path: str | Path) -> TabulatedMotion:
+    """The motion of a CSV table (module notes for the columns).
+
+    Raises
+    ------
+    ParseError
+        Naming the file and the line: a missing column, an unreadable or non-finite value,
+        a time that does not increase, a first time other than 0, too few rows.
+    """
+    path = Path(path)
+    col = read_csv_columns(path, ("time", "heave_position"),
+                           one_of=[("pitch_angle", "pitch_angle_deg")])
+    t, lines = col["time"], col["__line__"]
+    if t[0] != 0.0:
+        raise ParseError(f"the table must start at t = 0 s (the solver starts there), "
+                         f"got {t[0]:g} s", path=str(path), line=int(lines[0]))
+    back = np.flatnonzero(np.diff(t) <= 0)
+    if back.size:
+        i = int(back[0]) + 1
+        raise ParseError(f"time {t[i]:g} s does not increase (previous row {t[i - 1]:g} s)",
+                         path=str(path), line=int(lines[i]))
+    if len(t) < MIN_ROWS:
+        raise ParseError(f"{len(t)} data rows; a motion table needs at least {MIN_ROWS}",
+                         path=str(path), line=int(lines[-1]))
+    pitch = col["pitch_angle"] if "pitch_angle" in col else np.radians(col["pitch_angle_deg"])
+    try:
+        return TabulatedMotion(t, pitch, col["heave_position"], hold_after_end=True)
+    except MotionError as exc:  # what the reader has not caught already
+        raise ParseError(str(exc), path=str(path)) from exc
+
+
+def table_end_time(motion: TabulatedMotion, end_time: float | None = None) -> float:
+    """The end time of a run of a table motion: its last row unless ``end_time`` is given,
+    which must not be past it.
+
+    Raises
+    ------
+    MotionError
+        If ``end_time`` is not positive or lies past the table's last row.
+    """
+    last = float(motion.table_time[-1])
+    if end_time is None:
+        return last
+    if not 0 < end_time <= last:
+        raise MotionError(f"end time {end_time:g} s must lie in (0, {last:g}] s, the range of "
+                          f"the motion table")
+    return float(end_time)

@@ -1,0 +1,188 @@
+"""A user's motion table (CSV): reading it, its refusals (file and line), fuzzing, and the
+cases written from it: OpenFOAM (run for real and parsed), Fluent (UDF compiled and run)."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from mfflap.cfd.openfoam.loads import imposed_state
+from mfflap.cfd.openfoam.runner import openfoam_available
+from mfflap.cfd.openfoam.writer import MOTION_TABLE_FILE
+from mfflap.cli.main import cli
+from mfflap.errors import MotionError, ParseError
+from mfflap.kinematics import TabulatedMotion
+from mfflap.kinematics.table_file import read_motion_table, table_end_time
+from mfflap.toml_io import read_toml
+
+CASE = Path(__file__).parents[1] / "cases" / "paper2026.toml"
+T = np.linspace(0.0, 2.0, 81)
+HEAVE = 0.1 * np.sin(2 * np.pi * T) ** 2  # starts at rest at 0
+PITCH_DEG = 8.0 * (1 - np.cos(np.pi * T))
+
+
+def write_table(path: Path, pitch_column: str = "pitch_angle_deg", comment: bool = True) -> Path:
+    pitch = PITCH_DEG if pitch_column == "pitch_angle_deg" else np.radians(PITCH_DEG)
+    lines = ["# heave and pitch of a test motion"] if comment else []
+    lines.append(f"heave_position,time,{pitch_column},note")
+    lines += [f"{float(h)!r},{float(t)!r},{float(p)!r},0"
+              for t, h, p in zip(T, HEAVE, pitch, strict=True)]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_a_table_in_degrees_or_radians_is_the_same_smooth_motion(tmp_path):
+    motion = read_motion_table(write_table(tmp_path / "deg.csv"))
+    radians = read_motion_table(write_table(tmp_path / "rad.csv", "pitch_angle", False))
+    s = motion.sample(T)
+    np.testing.assert_allclose(s.heave_position, HEAVE, atol=1e-15)
+    np.testing.assert_allclose(s.pitch_angle, np.radians(PITCH_DEG), atol=1e-15)
+    np.testing.assert_allclose(radians.sample(T).pitch_angle, s.pitch_angle, atol=1e-15)
+    # the cubic spline's rates: close to the exact ones away from the ends
+    mid = np.linspace(0.2, 1.8, 33)
+    exact_rate = 0.2 * np.pi * np.sin(4 * np.pi * mid)
+    assert np.max(np.abs(motion.sample(mid).heave_velocity - exact_rate)) < 1e-3
+    exact_pitch_rate = np.radians(8.0 * np.pi * np.sin(np.pi * mid))
+    assert np.max(np.abs(motion.sample(mid).pitch_rate - exact_pitch_rate)) < 1e-4
+    # past the last row the table is held at rest: what a solver's padding rows see
+    past = motion.sample(np.array([2.0, 2.1, 3.0]))
+    assert np.all(past.heave_position == past.heave_position[0])
+    assert np.all(past.heave_velocity[1:] == 0) and np.all(past.pitch_acceleration[1:] == 0)
+    with pytest.raises(MotionError, match="leave the table's range"):
+        TabulatedMotion(T, HEAVE, HEAVE).sample(np.array([2.5]))
+    assert table_end_time(motion) == 2.0 and table_end_time(motion, 1.5) == 1.5
+    with pytest.raises(MotionError, match=r"\(0, 2\] s"):
+        table_end_time(motion, 2.5)
+
+
+@pytest.mark.parametrize(("edit", "message", "line"), [
+    (lambda ls: [ls[0], "time,heave_position,note", *ls[2:]], "exactly one of the columns", 2),
+    (lambda ls: [ls[0], "time,pitch_angle_deg,note,x", *ls[2:]], r"missing column.*"
+                                                                  "heave_position", 2),
+    (lambda ls: [*ls[:2], "time,pitch_angle,pitch_angle_deg,heave_position", *ls[3:]],
+     "4 values for 4 columns|unreadable", None),
+    (lambda ls: [*ls[:10], "0.1,0.2,oops,0", *ls[10:]], "unreadable number", 11),
+    (lambda ls: [*ls[:10], "0.1,0.2,nan,0", *ls[10:]], "pitch_angle_deg is not finite", 11),
+    (lambda ls: [*ls[:12], ls[11], *ls[12:]], "does not increase", 13),
+    (lambda ls: [*ls[:2], *ls[3:]], "must start at t = 0 s", 3),
+    (lambda ls: ls[:5], "a motion table needs at least 4", 5),
+    (lambda ls: ls[:2], "no data rows", 2),
+    (lambda ls: ["# only a comment"], "no header line", None),
+    (lambda ls: [*ls[:6], "0.1,0.2", *ls[6:]], "2 values for 4 columns", 7),
+])
+def test_bad_tables_are_refused_naming_file_and_line(tmp_path, edit, message, line):
+    good = write_table(tmp_path / "good.csv").read_text().splitlines()
+    bad = tmp_path / "bad.csv"
+    bad.write_text("\n".join(edit(good)) + "\n")
+    with pytest.raises(ParseError, match=message) as info:
+        read_motion_table(bad)
+    assert "bad.csv" in str(info.value)
+    if line is not None:
+        assert info.value.line == line, str(info.value)
+
+
+def test_a_binary_file_is_refused(tmp_path):
+    path = tmp_path / "motion.csv"
+    path.write_bytes(b"\x89HDF\r\n\x1a\n\xff\xfe")
+    with pytest.raises(ParseError, match=r"motion\.csv"):
+        read_motion_table(path)
+
+
+@settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow,
+                                                                  HealthCheck.function_scoped_fixture])
+@given(cut=st.integers(0, 4000), junk=st.text(max_size=12), pos=st.integers(0, 4000))
+def test_table_reader_fuzz_never_hangs_or_lies(tmp_path, cut, junk, pos):
+    """Truncated or garbled: a clear error naming the file, or a motion that agrees with
+    the intact table on every row it kept."""
+    text = write_table(tmp_path / "t.csv").read_text()
+    text = text[:cut]
+    text = text[:pos] + junk + text[pos:]
+    path = tmp_path / "fuzz.csv"
+    path.write_text(text)
+    try:
+        motion = read_motion_table(path)
+    except ParseError as exc:
+        assert "fuzz.csv" in str(exc)
+        return
+    kept = motion.table_time
+    rows = np.searchsorted(T, kept)
+    exact = (rows < len(T)) & np.isclose(T[np.minimum(rows, len(T) - 1)], kept, rtol=0,
+                                         atol=0)
+    # every row that kept its time kept its values unless the junk edited that row
+    s = motion.sample(kept[exact])
+    changed = np.abs(s.heave_position - HEAVE[rows[exact]]) > 1e-12
+    assert changed.sum() <= 1
+
+
+def test_cfd_write_and_fluent_from_a_table(tmp_path):
+    """The OpenFOAM case imposes the table (heave from zero, pitch in degrees about z) and
+    keeps it; the Fluent UDF is table-driven and follows it."""
+    from test_fluent import compile_syntax, run_udf
+
+    table = write_table(tmp_path / "motion.csv")
+    case_dir = tmp_path / "of"
+    res = CliRunner().invoke(cli, ["cfd", "write", str(CASE), str(case_dir), "--motion-table",
+                                   str(table), "--end-time", "1.5"])
+    assert res.exit_code == 0, res.output
+    meta = read_toml(case_dir / "mfflap_case.toml")
+    assert meta["end_time"] == 1.5 and meta["motion_table"] == MOTION_TABLE_FILE
+    assert (case_dir / MOTION_TABLE_FILE).read_text() == table.read_text()
+    text = (case_dir / "constant" / "motion.dat").read_text().splitlines()
+    rows = np.array([[float(v) for v in line.replace("(", " ").replace(")", " ").split()]
+                     for line in text[2:-1]])
+    imposed = read_motion_table(table).sample(rows[:, 0])  # held past the last row
+    moving = np.abs(rows[:, 1:4]).max(axis=0).argmax()  # the heave axis of the case
+    np.testing.assert_allclose(np.abs(rows[:, 1 + moving]), imposed.heave_position,
+                               rtol=1e-7, atol=1e-9)  # 9 digits written (t too)
+    np.testing.assert_allclose(np.abs(rows[:, 6]), np.degrees(imposed.pitch_angle),
+                               rtol=1e-7, atol=1e-9)
+    assert rows[-1, 0] > 1.5 * 1.1  # padding rows past the end
+    res = CliRunner().invoke(cli, ["cfd", "write", str(CASE), str(tmp_path / "x"),
+                                   "--motion-table", str(table), "--end-time", "3"])
+    assert res.exit_code == 2 and "(0, 2] s" in res.output
+    res = CliRunner().invoke(cli, ["cfd", "write", str(CASE), str(tmp_path / "y"),
+                                   "--end-time", "3"])
+    assert res.exit_code == 2 and "--end-time goes with --motion-table" in res.output
+    fluent_dir = tmp_path / "fl"
+    res = CliRunner().invoke(cli, ["cfd", "fluent", str(CASE), str(fluent_dir),
+                                   "--motion-table", str(table)])
+    assert res.exit_code == 0, res.output
+    source = (fluent_dir / "mfflap_motion.c").read_text()
+    for nd in (2, 3):
+        compile_syntax(source, tmp_path, nd)
+    times = np.linspace(0.0, 1.9, 39)
+    out = run_udf(source, tmp_path, times)
+    exact = imposed_state(read_motion_table(table), times)
+    scale = np.abs(exact.heave_velocity).max()
+    assert np.max(np.abs(np.abs(out[:, 0] + out[:, 1]) - np.abs(exact.heave_velocity))) < (
+        1e-2 * scale)
+    assert np.max(np.abs(np.abs(out[:, 2]) - np.abs(exact.pitch_rate))) < (
+        1e-2 * np.abs(exact.pitch_rate).max())
+
+
+@pytest.mark.openfoam
+def test_a_table_motion_runs_in_openfoam_and_parses_from_its_own_case(tmp_path):
+    """Write from a table, run pimpleFoam on the coarse mesh, parse the case with nothing
+    but the case file (the case keeps its table): the forces follow the model's."""
+    assert openfoam_available()
+    table = write_table(tmp_path / "motion.csv")
+    case_dir = tmp_path / "of"
+    runner = CliRunner()
+    res = runner.invoke(cli, ["cfd", "write", str(CASE), str(case_dir), "--motion-table",
+                              str(table), "--end-time", "0.25"])
+    assert res.exit_code == 0, res.output
+    res = runner.invoke(cli, ["cfd", "run", str(case_dir), "--json"])
+    assert res.exit_code == 0, res.output
+    res = runner.invoke(cli, ["cfd", "parse", str(case_dir), "--case-file", str(CASE),
+                              "--discard", "0.05", "--json"])
+    assert res.exit_code == 0, res.output
+    out = json.loads(res.output)
+    assert out["end_time"] == pytest.approx(0.25, abs=1e-3)
+    assert out["pearson_normal_force"] > 0.9, out
+    res = runner.invoke(cli, ["cfd", "parse", str(case_dir), "--case-file", str(CASE),
+                              "--motion-table", str(table)])
+    assert res.exit_code == 2 and "keeps its own motion table" in res.output
