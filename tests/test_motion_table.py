@@ -186,3 +186,59 @@ def test_a_table_motion_runs_in_openfoam_and_parses_from_its_own_case(tmp_path):
     res = runner.invoke(cli, ["cfd", "parse", str(case_dir), "--case-file", str(CASE),
                               "--motion-table", str(table)])
     assert res.exit_code == 2 and "keeps its own motion table" in res.output
+
+
+@pytest.fixture(scope="module")
+def optimisation_file(tmp_path_factory):
+    """A real optimisation (β = 0.5, one SQP start, about 8 s)."""
+    out = tmp_path_factory.mktemp("opt") / "opt.h5"
+    res = CliRunner().invoke(cli, ["optimise", str(CASE), "--betas", "0.5", "--starts", "1",
+                                   "--no-ipopt", "--output", str(out)])
+    assert res.exit_code == 0, res.output
+    return out
+
+
+@pytest.mark.slow
+def test_an_optimised_motion_becomes_a_table_and_the_same_case_as_the_back_test(
+        tmp_path, optimisation_file):
+    """cfd motion-table then cfd write --motion-table imposes what the back-test imposes
+    (the periodic spline through the optimised cycle), to within the written digits."""
+    from mfflap.backtest.run import cfd_motion
+    from mfflap.cfd.openfoam.writer import motion_table
+    from mfflap.optimisation.store import read_result
+    from mfflap.results import ResultsFile
+
+    table = tmp_path / "opt.csv"
+    res = CliRunner().invoke(cli, ["cfd", "motion-table", str(optimisation_file), str(table),
+                                   "--beta", "0.5", "--cycles", "2"])
+    assert res.exit_code == 0, res.output
+    assert "does not start at rest" in res.output and "--ramp-time" in res.output
+    with ResultsFile(optimisation_file) as rf:
+        spline = cfd_motion(read_result(rf, "optimisation/sqp/beta_0.50").motion)
+    motion = read_motion_table(table)
+    assert motion.table_time[-1] == pytest.approx(2 * spline.period)
+    t = np.linspace(0.0, 2 * spline.period, 977)
+    exact, got = spline.sample(t), motion.sample(t)
+    for name in ("heave_position", "pitch_angle", "heave_velocity", "pitch_rate"):
+        scale = np.abs(getattr(exact, name)).max()
+        assert np.max(np.abs(getattr(got, name) - getattr(exact, name))) < 1e-4 * scale, name
+    ramp = 0.5 * spline.period
+    res = CliRunner().invoke(cli, ["cfd", "write", str(CASE), str(tmp_path / "of"),
+                                   "--motion-table", str(table), "--ramp-time", str(ramp)])
+    assert res.exit_code == 0, res.output
+    end = 2 * spline.period
+    written = (tmp_path / "of" / "constant" / "motion.dat").read_text().splitlines()[2:-1]
+    rows = np.array([[float(v) for v in line.replace("(", " ").replace(")", " ").split()]
+                     for line in written])
+    back_test = motion_table(spline, end, ramp_time=ramp)
+    inside = rows[:, 0] <= end
+    np.testing.assert_allclose(rows[inside], back_test[inside],
+                               atol=1e-6 * np.abs(back_test[:, 1:]).max())
+    res = CliRunner().invoke(cli, ["cfd", "motion-table", str(optimisation_file), str(table),
+                                   "--beta", "0.3"])
+    assert res.exit_code == 2 and "has β = 0.5" in res.output
+    res = CliRunner().invoke(cli, ["cfd", "motion-table", str(optimisation_file), str(table)])
+    assert res.exit_code == 2 and "--beta B or --best-sinusoid" in res.output
+    res = CliRunner().invoke(cli, ["cfd", "motion-table", str(optimisation_file), str(table),
+                                   "--best-sinusoid"])
+    assert res.exit_code == 0 and read_motion_table(table).table_time[-1] > 0

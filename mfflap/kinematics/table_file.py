@@ -20,7 +20,7 @@ import numpy as np
 
 from mfflap.csv_columns import read_csv_columns
 from mfflap.errors import MotionError, ParseError
-from mfflap.kinematics.continuous import TabulatedMotion
+from mfflap.kinematics.continuous import Motion, TabulatedMotion
 
 #: the fewest rows a cubic spline through the table needs
 MIN_ROWS = 4
@@ -73,3 +73,26 @@ def table_end_time(motion: TabulatedMotion, end_time: float | None = None) -> fl
         raise MotionError(f"end time {end_time:g} s must lie in (0, {last:g}] s, the range of "
                           f"the motion table")
     return float(end_time)
+
+
+def write_motion_table(path: str | Path, motion: Motion, end_time: float, n_rows: int,
+                       comment: str = "") -> Path:
+    """Write ``motion`` from 0 to ``end_time`` as a table :func:`read_motion_table` reads
+    (``n_rows`` + 1 evenly spaced rows, pitch in rad, 17 significant digits).
+
+    With rows much closer than the motion's own features (for a periodic optimised motion,
+    a few hundred per period) the spline through them is the motion to round-off, so an
+    optimised motion goes to any solver through the same table as a user's.
+    """
+    if not end_time > 0 or n_rows < MIN_ROWS - 1:
+        raise MotionError(f"need end_time > 0 and at least {MIN_ROWS} rows, got "
+                          f"{end_time!r} s and {n_rows + 1}")
+    t = np.linspace(0.0, end_time, n_rows + 1)
+    s = motion.sample(t).check_finite("motion table")
+    lines = [f"# {line}" for line in comment.splitlines()]
+    lines.append("time,heave_position,pitch_angle")
+    lines += [f"{a!r},{b!r},{c!r}" for a, b, c in zip(t.tolist(), s.heave_position.tolist(),
+                                                     s.pitch_angle.tolist(), strict=True)]
+    path = Path(path)
+    path.write_text("\n".join(lines) + "\n")
+    return path
