@@ -8,6 +8,7 @@ Every error names the file and the line.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -15,8 +16,22 @@ import numpy as np
 from mfflap.errors import ParseError
 
 
+@dataclass(frozen=True)
+class CsvColumns:
+    """The columns of a CSV file by header name, and the file's line number of each row."""
+
+    columns: dict[str, np.ndarray]
+    line_numbers: np.ndarray
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        return self.columns[name]
+
+    def __contains__(self, name: object) -> bool:
+        return name in self.columns
+
+
 def read_csv_columns(path: str | Path, required: Sequence[str],
-                     one_of: Sequence[Sequence[str]] = ()) -> dict[str, np.ndarray]:
+                     one_of: Sequence[Sequence[str]] = ()) -> CsvColumns:
     """The columns of a CSV file by header name, as finite float arrays.
 
     Parameters
@@ -31,9 +46,9 @@ def read_csv_columns(path: str | Path, required: Sequence[str],
 
     Returns
     -------
-    dict
-        Every column of the file by its header name (extra columns included), with the
-        line number of each row under the key ``"__line__"``.
+    CsvColumns
+        Every column of the file by its header name (extra columns included) and the line
+        number of each row.
 
     Raises
     ------
@@ -82,6 +97,4 @@ def read_csv_columns(path: str | Path, required: Sequence[str],
     if not rows:
         raise ParseError("a header but no data rows", path=str(path), line=header_line)
     data = np.array(rows, dtype=float)
-    out = {h: data[:, j] for j, h in enumerate(header)}
-    out["__line__"] = np.array(numbers)
-    return out
+    return CsvColumns({h: data[:, j] for j, h in enumerate(header)}, np.array(numbers))

@@ -38,7 +38,7 @@ def read_motion_table(path: str | Path) -> TabulatedMotion:
     path = Path(path)
     col = read_csv_columns(path, ("time", "heave_position"),
                            one_of=[("pitch_angle", "pitch_angle_deg")])
-    t, lines = col["time"], col["__line__"]
+    t, lines = col["time"], col.line_numbers
     if t[0] != 0.0:
         raise ParseError(f"the table must start at t = 0 s (the solver starts there), "
                          f"got {t[0]:g} s", path=str(path), line=int(lines[0]))
