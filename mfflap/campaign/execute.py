@@ -257,8 +257,10 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
     if todo:
         cluster = None
         if scheduler_address is None:
+            # the scheduler's HTTP server on a free local port: with the default (8787) a
+            # second campaign on the same machine warns that the port is taken
             cluster = LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
-                                   dashboard_address=None)
+                                   dashboard_address="127.0.0.1:0")
         client = Client(scheduler_address or cluster)
         try:
             futures = [client.submit(run_one, c, str(out), setup, key=f"mfflap-{c.case_id}",
