@@ -242,3 +242,21 @@ def test_an_optimised_motion_becomes_a_table_and_the_same_case_as_the_back_test(
     res = CliRunner().invoke(cli, ["cfd", "motion-table", str(optimisation_file), str(table),
                                    "--best-sinusoid"])
     assert res.exit_code == 0 and read_motion_table(table).table_time[-1] > 0
+
+
+@pytest.mark.openfoam
+def test_a_mesh_study_of_a_table_motion(tmp_path):
+    """cfd convergence on a table: two meshes, real pimpleFoam, to the table's given end."""
+    assert openfoam_available()
+    table = write_table(tmp_path / "motion.csv")
+    res = CliRunner().invoke(cli, ["cfd", "convergence", str(CASE), str(tmp_path / "c"),
+                                   "--motion-table", str(table), "--end-time", "0.03",
+                                   "--meshes", "coarse,lean", "--courant", "4", "--json"])
+    assert res.exit_code == 0, res.output
+    data = json.loads(res.output[res.output.index("{"):])
+    assert set(data["runs"]) == {"coarse_co4", "lean_co4"}
+    assert 0 <= data["nrmse"]["coarse_co4 vs lean_co4"]["normal_force"] < 0.5
+    assert "motion table motion.csv, 0.03 s" in (tmp_path / "c" / "convergence.html").read_text()
+    res = CliRunner().invoke(cli, ["cfd", "convergence", str(CASE), str(tmp_path / "d"),
+                                   "--motion-table", str(table), "--phase-from", "1"])
+    assert res.exit_code == 2 and "not of a --motion-table" in res.output

@@ -307,11 +307,17 @@ def fluent(case_file: Path, out_dir: Path, cycles: float, ramp_time: float, time
               help="Periodic motions: start of the mean cycles compared, s (default: the "
                    "first period boundary after the first cycle; needs two whole periods "
                    "after it, e.g. --cycles 3).")
+@click.option("--motion-table", type=click.Path(dir_okay=False, exists=True, path_type=Path),
+              default=None, help="CSV of any motion instead of the case file's [motion] "
+                                 "(columns as for `cfd write`); --cycles does not apply.")
+@click.option("--end-time", type=float, default=None,
+              help="With --motion-table: simulated time, s (default: the table's last row).")
 @click.option("--json", "as_json", is_flag=True, help="Print the NRMSE table as JSON.")
 def convergence(case_file: Path, out_dir: Path, meshes: str, courants: str, cycles: float,
                 ramp_time: float | None, procs: int, pressure_solver: str, n_correctors: int,
                 far_field: str, turbulence_convection: str, floor: bool, setup_names: str,
-                time_step_mesh: str | None, phase_from: float | None, as_json: bool) -> None:
+                time_step_mesh: str | None, phase_from: float | None,
+                motion_table: Path | None, end_time: float | None, as_json: bool) -> None:
     """Mesh and time-step convergence of the [motion] of CASE_FILE: NRMSE between runs, the
     grid convergence index of mean thrust, power, peak F_n and RMS moment over the three
     finest meshes, and the plate's y+ over time (HDF5 records, HTML report, resumable). A
@@ -324,13 +330,22 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: str, cycl
     from mfflap.reports.html import Report, figure_html, table_html
 
     case = load_case(case_file)
+    motion, end = _motion_and_end_time(case, motion_table, end_time, cycles)
     period = 1.0 / case.motion.frequency
-    ramp = 0.25 * period if ramp_time is None else ramp_time
-    periodic = case.motion.kind == "harmonic"
-    if phase_from is not None and not periodic:
-        raise click.UsageError(f"--phase-from compares mean cycles of a periodic motion; the "
-                               f"[motion] of {case_file} is {case.motion.kind!r}")
-    study = run_convergence(out_dir, case.motion.build(), cycles * period,
+    if motion_table is None:
+        ramp = 0.25 * period if ramp_time is None else ramp_time
+        periodic = case.motion.kind == "harmonic"
+        if phase_from is not None and not periodic:
+            raise click.UsageError(f"--phase-from compares mean cycles of a periodic motion; "
+                                   f"the [motion] of {case_file} is {case.motion.kind!r}")
+        described = f"{cycles:g} cycles"
+    else:
+        ramp, periodic = ramp_time or 0.0, False
+        if phase_from is not None:
+            raise click.UsageError("--phase-from compares mean cycles of the case file's "
+                                   "periodic motion, not of a --motion-table")
+        described = f"motion table {motion_table.name}, {end:g} s"
+    study = run_convergence(out_dir, motion, end,
                             meshes=[m.strip() for m in meshes.split(",")],
                             courants=[float(c) for c in courants.split(",")], ramp_time=ramp,
                             plate=case.plate, fluid=case.fluid, stream=case.flow,
@@ -347,7 +362,7 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: str, cycl
     if phase_from is not None and not study.phase_cycles:
         click.echo(f"no mean cycles compared: the runs hold fewer than two whole periods "
                    f"({period:.6g} s) after --phase-from {phase_from:g} s", err=True)
-    rep = Report("Mesh and time-step convergence", f"{case.study.name}: {cycles:g} cycles")
+    rep = Report("Mesh and time-step convergence", f"{case.study.name}: {described}")
     sec = rep.section("NRMSE between runs")
     sec.blocks.append(table_html(["comparison", "F_n", "F_t", "M"],
                                  [[k, *v.values()] for k, v in study.nrmse.items()]))
