@@ -9,6 +9,23 @@ import click
 import numpy as np
 
 
+def _motion_table_options(note: str):
+    """--motion-table and --end-time, for the commands that take any motion."""
+    def decorate(command):
+        command = click.option(
+            "--end-time", type=float, default=None,
+            help="With --motion-table: simulated time, s (default: the table's last row).",
+        )(command)
+        return click.option(
+            "--motion-table", type=click.Path(dir_okay=False, exists=True, path_type=Path),
+            default=None,
+            help="CSV of any motion instead of the case file's [motion]: columns time (s, "
+                 "from 0), heave_position (m), pitch_angle (rad) or pitch_angle_deg. --cycles "
+                 f"does not apply. {note}".strip(),
+        )(command)
+    return decorate
+
+
 @click.group()
 def cfd() -> None:
     """OpenFOAM cases: write a case for a motion, run it, parse its forces."""
@@ -42,13 +59,7 @@ def cfd() -> None:
               help="inertial: the whole mesh moves with the plate; plate: a static mesh in "
                    "the plate's frame (about a third less CPU; inletOutlet far field unless "
                    "--far-field says otherwise); default inertial (or the set-up's).")
-@click.option("--motion-table", type=click.Path(dir_okay=False, exists=True, path_type=Path),
-              default=None, help="CSV of any motion instead of the case file's [motion]: "
-                                 "columns time (s, from 0), heave_position (m), pitch_angle "
-                                 "(rad) or pitch_angle_deg; kept in the case. --cycles does "
-                                 "not apply; the run ends at --end-time or the last row.")
-@click.option("--end-time", type=float, default=None,
-              help="With --motion-table: simulated time, s (default: the table's last row).")
+@_motion_table_options("Kept in the case.")
 def write(case_file: Path, case_dir: Path, mesh: str | None, setup_name: str | None,
           cycles: float, ramp_time: float, y_plus: bool, far_field: str | None,
           pressure_solver: str | None, writes: int, turbulence_convection: str | None,
@@ -252,11 +263,7 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
 @click.option("--ramp-time", default=0.0, show_default=True, help="Smooth start-up ramp, s.")
 @click.option("--time-step", default=1e-3, show_default=True, help="Fluent time step, s.")
 @click.option("--table", is_flag=True, help="Table-driven UDF even for a sinusoid.")
-@click.option("--motion-table", type=click.Path(dir_okay=False, exists=True, path_type=Path),
-              default=None, help="CSV of any motion instead of the case file's [motion] "
-                                 "(columns as for `cfd write`); a table-driven UDF.")
-@click.option("--end-time", type=float, default=None,
-              help="With --motion-table: simulated time, s (default: the table's last row).")
+@_motion_table_options("A table-driven UDF.")
 def fluent(case_file: Path, out_dir: Path, cycles: float, ramp_time: float, time_step: float,
            table: bool, motion_table: Path | None, end_time: float | None) -> None:
     """Write a DEFINE_CG_MOTION UDF and a batch journal for the [motion] of CASE_FILE (or a
@@ -307,11 +314,7 @@ def fluent(case_file: Path, out_dir: Path, cycles: float, ramp_time: float, time
               help="Periodic motions: start of the mean cycles compared, s (default: the "
                    "first period boundary after the first cycle; needs two whole periods "
                    "after it, e.g. --cycles 3).")
-@click.option("--motion-table", type=click.Path(dir_okay=False, exists=True, path_type=Path),
-              default=None, help="CSV of any motion instead of the case file's [motion] "
-                                 "(columns as for `cfd write`); --cycles does not apply.")
-@click.option("--end-time", type=float, default=None,
-              help="With --motion-table: simulated time, s (default: the table's last row).")
+@_motion_table_options("")
 @click.option("--json", "as_json", is_flag=True, help="Print the NRMSE table as JSON.")
 def convergence(case_file: Path, out_dir: Path, meshes: str, courants: str, cycles: float,
                 ramp_time: float | None, procs: int, pressure_solver: str, n_correctors: int,
