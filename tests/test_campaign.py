@@ -173,6 +173,8 @@ def test_status_tells_how_far_a_started_run_got(tmp_path):
     assert solver_progress(case_dir) == (pytest.approx(1.3821858), pytest.approx(7.3073054e-26))
     started, other = campaign_status(out)
     assert (started.state, other.state) == ("started", "pending")
+    assert started.fraction_simulated == pytest.approx(1.3821858 / 3.0)
+    assert other.fraction_simulated is None
     assert started.message == ("t = 1.382 of 3 s simulated (46%), time step 7.3e-26 s; a rerun "
                                "resumes from t = 0.5 s; 1 retry")
     assert solver_progress(tmp_path) is None

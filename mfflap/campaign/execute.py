@@ -61,6 +61,8 @@ class CaseStatus:
     case_id: str
     state: str  # "done" | "failed" | "started" | "pending"
     message: str = ""
+    #: a started case: the share of its end time its solver has simulated (0-1)
+    fraction_simulated: float | None = None
 
 
 def _failed_path(out: Path, case_id: str) -> Path:
@@ -162,7 +164,7 @@ def campaign_status(out_dir: str | Path) -> list[CaseStatus]:
             error = str(info.get("error", "")).splitlines()
             statuses.append(CaseStatus(case_id, "failed", error[0] if error else ""))
         elif (progress := _started(out / "cases" / case_id)) is not None:
-            statuses.append(CaseStatus(case_id, "started", progress))
+            statuses.append(CaseStatus(case_id, "started", *progress))
         else:
             statuses.append(CaseStatus(case_id, "pending"))
     return statuses
@@ -179,6 +181,10 @@ def _simulated(case_dir: Path) -> tuple[float, float, float] | None:
     return (*reached, float(read_toml(case_dir / "mfflap_case.toml")["end_time"]))
 
 
+def _share(time_s: float, end_s: float) -> float:
+    return min(max(time_s / end_s, 0.0), 1.0) if end_s > 0 else 0.0
+
+
 def fraction_simulated(out_dir: str | Path, case_ids: Sequence[str]) -> dict[str, float]:
     """Share of its end time each started case's solver has simulated (0-1), by case id;
     cases without a run folder or solver log are left out."""
@@ -186,12 +192,13 @@ def fraction_simulated(out_dir: str | Path, case_ids: Sequence[str]) -> dict[str
     for case_id in case_ids:
         reached = _simulated(Path(out_dir) / "cases" / case_id)
         if reached is not None:
-            shares[case_id] = min(max(reached[0] / reached[2], 0.0), 1.0)
+            shares[case_id] = _share(reached[0], reached[2])
     return shares
 
 
-def _started(case_dir: Path) -> str | None:
-    """How far a case's OpenFOAM run got, or None if its solver has not begun."""
+def _started(case_dir: Path) -> tuple[str, float] | None:
+    """How far a case's OpenFOAM run got (a message and the simulated share), or None if its
+    solver has not begun."""
     from mfflap.campaign.openfoam_run import RETRY_LOG
     from mfflap.cfd.openfoam.runner import latest_solution_time
 
@@ -202,9 +209,10 @@ def _started(case_dir: Path) -> str | None:
     resume = latest_solution_time(case_dir)
     retries = (case_dir / RETRY_LOG).read_text().count("\n") if (
         case_dir / RETRY_LOG).is_file() else 0
-    return (f"t = {time_s:.4g} of {end_s:.4g} s simulated ({time_s / end_s:.0%}), time step "
+    share = _share(time_s, end_s)
+    return (f"t = {time_s:.4g} of {end_s:.4g} s simulated ({share:.0%}), time step "
             f"{step_s:.2g} s; a rerun resumes from t = {resume or 0} s"
-            + (f"; {retries} retr{'y' if retries == 1 else 'ies'}" if retries else ""))
+            + (f"; {retries} retr{'y' if retries == 1 else 'ies'}" if retries else ""), share)
 
 
 def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
