@@ -181,11 +181,11 @@ def test_a_failed_cfd_run_is_reported_with_its_reason(tmp_path):
     assert "failed" in out.source and "time step collapsed" in out.source
 
 
-def test_backtest_command_refuses_a_mesh_and_a_set_up_together():
+def test_backtest_command_refuses_an_unknown_mesh_for_a_set_up():
     from click.testing import CliRunner
 
     from mfflap.cli.main import cli
 
-    res = CliRunner().invoke(cli, ["backtest", __file__, "--live", "--mesh", "coarse",
+    res = CliRunner().invoke(cli, ["backtest", __file__, "--live", "--mesh", "finest",
                                    "--setup", "affordable"])
-    assert res.exit_code == 2 and "not both" in res.output
+    assert res.exit_code == 2 and "finest" in res.output and "meshes.toml" in res.output

@@ -62,11 +62,26 @@ def test_cfd_write_with_a_setup_writes_its_mesh_and_solver(tmp_path):
     assert not (case / "setups.toml").exists() and not (case / "meshes.toml").exists()
 
 
-def test_cfd_write_refuses_mesh_and_setup_together(tmp_path):
+def test_cfd_write_runs_a_setups_solver_on_another_mesh(tmp_path):
+    """--setup with --mesh: the set-up's solver settings on that mesh, to tell what its
+    mesh does from what its solver settings do."""
     res = CliRunner().invoke(cli, ["cfd", "write", str(CASE), str(tmp_path / "c"),
-                                   "--setup", "affordable", "--mesh", "coarse"])
-    assert res.exit_code == 2
-    assert "not both" in res.output
+                                   "--setup", "affordable", "--mesh", "medium",
+                                   "--cycles", "0.1"])
+    assert res.exit_code == 0, res.output
+    case = tmp_path / "c"
+    assert 'mesh = "medium"' in (case / "mfflap_case.toml").read_text()
+    assert "Gauss LUST grad(U)" in (case / "system" / "fvSchemes").read_text()
+    assert "nOuterCorrectors 1;" in (case / "system" / "fvSolution").read_text()
+    medium = mesh_specs()["medium"]
+    block_mesh = (case / "system" / "blockMeshDict").read_text()
+    assert f"({medium.n_chord} {medium.n_radial} 1)" in block_mesh
+
+
+def test_every_mesh_is_named_in_the_options_help():
+    from mfflap.cli.options import MESH_NAMES
+
+    assert MESH_NAMES.split(" | ") == list(mesh_specs())
 
 
 def test_mesh_and_solver_of_a_command():
@@ -80,9 +95,10 @@ def test_mesh_and_solver_of_a_command():
     assert mesh.name == "medium" and solver == SolverSettings()
     mesh, solver = mesh_and_solver(setup_name="affordable")
     assert (mesh, solver) == (setup("affordable").mesh, setup("affordable").solver)
-    with pytest.raises(ConfigError, match="not both") as err:
-        mesh_and_solver(mesh="coarse", setup_name="affordable")
-    assert err.value.key == "setup"
+    mesh, solver = mesh_and_solver(mesh="medium", setup_name="affordable")
+    assert (mesh, solver) == (mesh_specs()["medium"], setup("affordable").solver)
+    with pytest.raises(ConfigError, match="finest"):
+        mesh_and_solver(mesh="finest", setup_name="affordable")
     with pytest.raises(ConfigError, match="cheapest"):
         mesh_and_solver(setup_name="cheapest")
     with pytest.raises(ConfigError, match="finest"):

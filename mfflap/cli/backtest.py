@@ -7,6 +7,8 @@ from pathlib import Path
 
 import click
 
+from mfflap.cli.options import mesh_and_setup_options
+
 
 @click.command()
 @click.argument("optimisation_file", type=click.Path(dir_okay=False, exists=True,
@@ -19,11 +21,7 @@ import click
               help="Folders of back-test records (default: the shipped ones).")
 @click.option("--save-to", type=click.Path(file_okay=False, path_type=Path), default=None,
               help="Write live runs as back-test records (fixtures) here.")
-@click.option("--mesh", default=None,
-              help="Mesh of live runs (cfd_templates/openfoam/meshes.toml); default coarse.")
-@click.option("--setup", "setup_name", default=None,
-              help="A named set-up of cfd_templates/openfoam/setups.toml for live runs (mesh "
-                   "and solver settings together, e.g. affordable); instead of --mesh.")
+@mesh_and_setup_options(" of live runs")
 @click.option("--json", "as_json", is_flag=True)
 def backtest(optimisation_file: Path, live: bool, work_dir: Path,
              fixture_folders: tuple[Path, ...], save_to: Path | None, mesh: str | None,

@@ -7,6 +7,8 @@ from pathlib import Path
 
 import click
 
+from mfflap.cli.options import mesh_and_setup_options
+
 
 def _floats(text: str | None) -> list[float] | None:
     if text is None:
@@ -29,14 +31,7 @@ def campaign() -> None:
 @click.option("--frequencies", help="Subset of the grid's frequencies, Hz (e.g. 0.1,1,2).")
 @click.option("--heave-amplitudes", help="Subset of the heave amplitudes, m.")
 @click.option("--phases", help="Subset of the phases, deg.")
-@click.option("--mesh", default=None,
-              help="coarse | lean | graded | medium | medium_r20 | fine "
-                   "(cfd_templates/openfoam/meshes.toml); "
-                   "default coarse.")
-@click.option("--setup", "setup_name", default=None,
-              help="A named set-up of cfd_templates/openfoam/setups.toml (mesh and solver "
-                   "settings together, e.g. affordable: about a quarter of the medium mesh's "
-                   "CPU); instead of --mesh.")
+@mesh_and_setup_options()
 @click.option("--workers", default=1, show_default=True, help="LocalCluster worker processes.")
 @click.option("--scheduler", default=None,
               help="Address of an existing dask scheduler (tcp://host:8786) instead of a "

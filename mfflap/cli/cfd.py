@@ -8,6 +8,8 @@ from pathlib import Path
 import click
 import numpy as np
 
+from mfflap.cli.options import mesh_and_setup_options
+
 
 def _motion_table_options(note: str):
     """--motion-table and --end-time, for the commands that take any motion."""
@@ -34,13 +36,7 @@ def cfd() -> None:
 @cfd.command()
 @click.argument("case_file", type=click.Path(dir_okay=False, path_type=Path))
 @click.argument("case_dir", type=click.Path(file_okay=False, path_type=Path))
-@click.option("--mesh", default=None,
-              help="coarse | lean | graded | medium | medium_r20 | fine "
-                   "(cfd_templates/openfoam/meshes.toml); "
-                   "default coarse.")
-@click.option("--setup", "setup_name", default=None,
-              help="A named set-up of cfd_templates/openfoam/setups.toml (mesh and solver "
-                   "settings together, e.g. affordable); instead of --mesh.")
+@mesh_and_setup_options()
 @click.option("--cycles", default=3.0, show_default=True, help="Carrier periods to simulate.")
 @click.option("--ramp-time", default=0.0, show_default=True, help="Smooth start-up ramp, s.")
 @click.option("--y-plus", is_flag=True, help="Add the yPlus function object.")
@@ -419,10 +415,7 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: str, cycl
 @click.option("--case-file", type=click.Path(dir_okay=False, exists=True, path_type=Path),
               default=None, help="Plate, fluid, stream and strip-model coefficients (default: "
                                  "the package's, those of cases/paper2026.toml).")
-@click.option("--mesh", default=None,
-              help="coarse | lean | graded | medium | medium_r20 | fine; default coarse.")
-@click.option("--setup", "setup_name", default=None,
-              help="A named set-up of cfd_templates/openfoam/setups.toml; instead of --mesh.")
+@mesh_and_setup_options()
 @click.option("--cases", "case_ids", default=None,
               help="Comma-separated case ids of the default motions (--list shows them).")
 @click.option("--list", "list_only", is_flag=True, help="List the motions and exit.")

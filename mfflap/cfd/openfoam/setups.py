@@ -97,20 +97,18 @@ def setup(name: str) -> CfdSetup:
 
 def mesh_and_solver(mesh: str | None = None,
                     setup_name: str | None = None) -> tuple[MeshSpec, SolverSettings]:
-    """The mesh and solver settings a command asks for with ``--mesh`` or ``--setup``.
+    """The mesh and solver settings a command asks for with ``--mesh`` and ``--setup``.
 
-    A named set-up gives both; a mesh alone comes with the default solver settings; neither
-    means the coarse mesh.
+    A named set-up gives both; with a mesh as well, its solver settings run on that mesh
+    instead of its own (to tell a set-up's mesh from its solver settings); a mesh alone comes
+    with the default solver settings; neither means the coarse mesh.
 
     Raises
     ------
     ConfigError
-        If both are given (a set-up names its mesh), or either is unknown.
+        If either is unknown.
     """
-    if mesh is not None and setup_name is not None:
-        raise ConfigError("give --mesh or --setup, not both (a set-up names its mesh)",
-                          key="setup")
     if setup_name is not None:
         chosen = setup(setup_name)
-        return chosen.mesh, chosen.solver
+        return (chosen.mesh if mesh is None else resolve_mesh(mesh)), chosen.solver
     return resolve_mesh(mesh or "coarse"), SolverSettings()

@@ -91,7 +91,8 @@ def resolve_mesh(mesh: str | MeshSpec) -> MeshSpec:
         return mesh
     specs = mesh_specs()
     if mesh not in specs:
-        raise ConfigError(f"unknown mesh {mesh!r}; allowed: {', '.join(specs)}", key="mesh")
+        raise ConfigError(f"unknown mesh {mesh!r}; allowed: {', '.join(specs)}", key="mesh",
+                          source=str(template_dir() / "meshes.toml"))
     return specs[mesh]
 
 

@@ -1,0 +1,36 @@
+"""Command-line options that several commands share."""
+
+from collections.abc import Callable
+
+import click
+
+MESH_NAMES = "coarse | lean | medium | medium_r20 | fine | graded"  # meshes.toml's order
+
+
+def mesh_and_setup_options(runs: str = "") -> Callable:
+    """``--mesh`` and ``--setup``: which mesh and solver settings the OpenFOAM runs use.
+
+    Parameters
+    ----------
+    runs
+        Which runs they apply to, for the help text (e.g. ``" of live runs"``).
+
+    Returns
+    -------
+    Callable
+        A decorator adding both options (read with
+        :func:`mfflap.cfd.openfoam.setups.mesh_and_solver`).
+    """
+    def decorate(command):
+        command = click.option(
+            "--setup", "setup_name", default=None,
+            help=f"A named set-up{runs} of cfd_templates/openfoam/setups.toml (mesh and "
+                 "solver settings together, e.g. affordable); with --mesh, its solver "
+                 "settings on that mesh.",
+        )(command)
+        return click.option(
+            "--mesh", default=None,
+            help=f"Mesh{runs}: {MESH_NAMES} (cfd_templates/openfoam/meshes.toml); default "
+                 "coarse, or the --setup's.",
+        )(command)
+    return decorate
