@@ -147,13 +147,16 @@ def test_command_reads_a_finished_campaign(tmp_path, records):
 
 @pytest.mark.openfoam
 def test_command_runs_a_small_motion_in_openfoam(tmp_path):
-    """One case from scratch: the campaign writes, runs and records it, the check follows."""
+    """One case from scratch: the campaign writes, runs and records it, the check follows;
+    --velocity-convection reaches the solver (the coarse mesh with LUST)."""
     case = SMALL_MOTIONS[8]  # f = 2 Hz, heave 2 mm leading pitch 0.75 deg: about 15 s CPU
     res = CliRunner().invoke(cli, ["cfd", "linear-check", str(tmp_path), "--cases",
-                                   case.case_id, "--json"])
+                                   case.case_id, "--velocity-convection", "LUST", "--json"])
     assert res.exit_code == 0, res.output
     (check,) = json.loads(res.output)["checks"]
     assert check["nrmse_normal_force"] < 0.05 and check["pearson_moment"] > 0.99
     record = read_record(tmp_path / f"{case.case_id}.h5")
     assert record.parameters["kind"] == "harmonic"
     assert record.parameters["pitch_amplitude_deg"] == pytest.approx(0.75)
+    assert record.provenance["mesh"] == "coarse"
+    assert record.provenance["solver_velocity_convection"] == "LUST"

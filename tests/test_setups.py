@@ -78,6 +78,16 @@ def test_cfd_write_runs_a_setups_solver_on_another_mesh(tmp_path):
     assert f"({medium.n_chord} {medium.n_radial} 1)" in block_mesh
 
 
+def test_cfd_write_overrides_a_setups_velocity_convection(tmp_path):
+    res = CliRunner().invoke(cli, ["cfd", "write", str(CASE), str(tmp_path / "c"),
+                                   "--setup", "affordable", "--velocity-convection",
+                                   "linearUpwind", "--cycles", "0.1"])
+    assert res.exit_code == 0, res.output
+    schemes = (tmp_path / "c" / "system" / "fvSchemes").read_text()
+    assert "Gauss linearUpwind grad(U)" in schemes and "LUST" not in schemes
+    assert "nOuterCorrectors 1;" in (tmp_path / "c" / "system" / "fvSolution").read_text()
+
+
 def test_every_mesh_is_named_in_the_options_help():
     from mfflap.cli.options import MESH_NAMES
 

@@ -28,6 +28,11 @@ def _motion_table_options(note: str):
     return decorate
 
 
+_velocity_convection_option = click.option(
+    "--velocity-convection", type=click.Choice(["linearUpwind", "LUST"]), default=None,
+    help="Convection scheme of U; default linearUpwind (or the set-up's).")
+
+
 @click.group()
 def cfd() -> None:
     """OpenFOAM cases: write a case for a motion, run it, parse its forces."""
@@ -45,6 +50,7 @@ def cfd() -> None:
                    "stream); default freestream.")
 @click.option("--pressure-solver", type=click.Choice(["PCG", "GAMG"]), default=None,
               help="Linear solver of the pressure equation; default PCG (or the set-up's).")
+@_velocity_convection_option
 @click.option("--turbulence-convection", type=click.Choice(["limitedLinear", "upwind"]),
               default=None, help="Convection of k and epsilon (upwind: no clipping of "
                                  "negative epsilon); default limitedLinear (or the set-up's).")
@@ -58,8 +64,9 @@ def cfd() -> None:
 @_motion_table_options("Kept in the case.")
 def write(case_file: Path, case_dir: Path, mesh: str | None, setup_name: str | None,
           cycles: float, ramp_time: float, y_plus: bool, far_field: str | None,
-          pressure_solver: str | None, writes: int, turbulence_convection: str | None,
-          frame: str | None, motion_table: Path | None, end_time: float | None) -> None:
+          pressure_solver: str | None, velocity_convection: str | None, writes: int,
+          turbulence_convection: str | None, frame: str | None, motion_table: Path | None,
+          end_time: float | None) -> None:
     """Write an OpenFOAM case for the [motion] of CASE_FILE (or a --motion-table) into
     CASE_DIR."""
     from dataclasses import replace
@@ -75,6 +82,7 @@ def write(case_file: Path, case_dir: Path, mesh: str | None, setup_name: str | N
         far_field = "inletOutlet"
     overrides = {k: v for k, v in (("far_field", far_field),
                                    ("pressure_solver", pressure_solver),
+                                   ("velocity_convection", velocity_convection),
                                    ("turbulence_convection", turbulence_convection),
                                    ("frame", frame))
                  if v is not None}
@@ -416,6 +424,7 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: str, cycl
               default=None, help="Plate, fluid, stream and strip-model coefficients (default: "
                                  "the package's, those of cases/paper2026.toml).")
 @mesh_and_setup_options()
+@_velocity_convection_option
 @click.option("--cases", "case_ids", default=None,
               help="Comma-separated case ids of the default motions (--list shows them).")
 @click.option("--list", "list_only", is_flag=True, help="List the motions and exit.")
@@ -424,8 +433,9 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: str, cycl
 @click.option("--single-precision", is_flag=True, help="Store the records in float32.")
 @click.option("--json", "as_json", is_flag=True, help="Print the checks as JSON.")
 def linear_check(out_dir: Path, case_file: Path | None, mesh: str | None,
-                 setup_name: str | None, case_ids: str | None, list_only: bool, workers: int,
-                 timeout: float, single_precision: bool, as_json: bool) -> None:
+                 setup_name: str | None, velocity_convection: str | None,
+                 case_ids: str | None, list_only: bool, workers: int, timeout: float,
+                 single_precision: bool, as_json: bool) -> None:
     """Verify a CFD set-up against linear unsteady thin-aerofoil theory.
 
     Runs small harmonic heaves and pitches (effective incidence of a few degrees, reduced
@@ -435,7 +445,7 @@ def linear_check(out_dir: Path, case_file: Path | None, mesh: str | None,
     lies a few percent from the theory; wrong frames, scaling or moment reference show as
     tens of percent.
     """
-    from dataclasses import asdict
+    from dataclasses import asdict, replace
 
     from mfflap.campaign.execute import CampaignSetup, run_campaign
     from mfflap.campaign.records import read_record
@@ -465,6 +475,8 @@ def linear_check(out_dir: Path, case_file: Path | None, mesh: str | None,
         return
     config = load_case(case_file) if case_file else CaseConfig()
     spec, solver = mesh_and_solver(mesh, setup_name)
+    if velocity_convection is not None:
+        solver = replace(solver, velocity_convection=velocity_convection)
     setup = CampaignSetup(mesh=spec.name, solver=solver, plate=config.plate,
                           fluid=config.fluid, stream=config.flow, timeout_s=timeout,
                           single_precision=single_precision)
