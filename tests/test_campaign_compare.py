@@ -24,6 +24,7 @@ AFFORDABLE = fixture_dir("small_motion_affordable")
 COARSE = fixture_dir("small_motion_coarse")
 MEDIUM = fixture_dir("small_motion_medium")
 BURSTS = Path(__file__).parent / "data" / "openfoam_v1912" / "bursts"
+VARIANTS = Path(__file__).parent / "data" / "openfoam_v1912" / "small_motion_variants"
 
 
 @pytest.fixture(scope="module")
@@ -68,6 +69,41 @@ def test_small_motions_against_the_medium_mesh(folder, thrust_range):
         assert c.pearson_normal_force > (0.995 if fast else 0.97), c
         assert thrust_range[0] < c.thrust_difference < thrust_range[1], c
         assert c.cpu_ratio < 0.75, c  # both cheaper than the medium mesh
+
+
+@pytest.mark.parametrize(("variant", "setup_name", "mesh", "convection", "fast_f_n_limit",
+                          "thrust_range"), [
+    # measured: F_n 0.6-1.8 % where f >= 1 Hz, thrust -0.7 to +3.4 %
+    ("graded_reference_solver", "reference", "graded", None, 0.02, (-0.04, 0.04)),
+    # 1.1-2.3 %, +10.1 to +15.9 %
+    ("graded_pimple_lust", "reference", "graded", "LUST", 0.025, (0.08, 0.18)),
+    # 0.8-2.2 %, -3.4 to +2.6 %
+    ("graded_piso_linearupwind", "affordable", None, "linearUpwind", 0.025, (-0.04, 0.04)),
+    # 1.1-3.5 %, -3.4 to +2.5 %
+    ("medium_affordable_solver", "affordable", "medium", None, 0.04, (-0.04, 0.04)),
+])
+def test_what_moves_affordables_small_motion_drag(variant, setup_name, mesh, convection,
+                                                  fast_f_n_limit, thrust_range):
+    """affordable's three changes from the reference taken apart on the small motions
+    (README, Validation against linear theory): each run set is what its cfd linear-check
+    options make, and the 10-16 % lower drag comes with LUST on the graded mesh only."""
+    from mfflap.cfd.openfoam.setups import mesh_and_solver
+    from mfflap.toml_io import read_toml
+
+    folder = VARIANTS / variant
+    spec, solver = mesh_and_solver(mesh, setup_name)
+    if convection is not None:
+        solver = dataclasses.replace(solver, velocity_convection=convection)
+    made = read_toml(folder / "campaign.toml")["setup"]
+    assert made["mesh"] == spec.name
+    assert made["solver"] == dataclasses.asdict(solver)
+    result = compare_campaigns(folder, MEDIUM, start_s=0.5)
+    assert len(result.cases) == 11 and not result.only_a and not result.only_b
+    for c in result.cases:
+        fast = read_record(MEDIUM / f"{c.case_id}.h5").parameters["frequency"] >= 1
+        assert c.nrmse_normal_force < (fast_f_n_limit if fast else 0.08), c
+        assert thrust_range[0] < c.thrust_difference < thrust_range[1], c
+        assert c.n_bursts_a == c.n_bursts_b == 0
 
 
 def test_against_values_derived_by_hand(record):
