@@ -88,10 +88,12 @@ def test_cfd_write_overrides_a_setups_velocity_convection(tmp_path):
     assert "nOuterCorrectors 1;" in (tmp_path / "c" / "system" / "fvSolution").read_text()
 
 
-def test_every_mesh_is_named_in_the_options_help():
-    from mfflap.cli.options import MESH_NAMES
+def test_every_mesh_and_scheme_is_named_in_the_options():
+    from mfflap.cfd.openfoam.writer import VELOCITY_CONVECTION_SCHEMES
+    from mfflap.cli.options import MESH_NAMES, VELOCITY_CONVECTION_NAMES
 
     assert MESH_NAMES.split(" | ") == list(mesh_specs())
+    assert VELOCITY_CONVECTION_NAMES == VELOCITY_CONVECTION_SCHEMES
 
 
 def test_mesh_and_solver_of_a_command():

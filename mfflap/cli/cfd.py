@@ -8,7 +8,7 @@ from pathlib import Path
 import click
 import numpy as np
 
-from mfflap.cli.options import mesh_and_setup_options
+from mfflap.cli.options import mesh_and_setup_options, velocity_convection_option
 
 
 def _motion_table_options(note: str):
@@ -28,11 +28,6 @@ def _motion_table_options(note: str):
     return decorate
 
 
-_velocity_convection_option = click.option(
-    "--velocity-convection", type=click.Choice(["linearUpwind", "LUST"]), default=None,
-    help="Convection scheme of U; default linearUpwind (or the set-up's).")
-
-
 @click.group()
 def cfd() -> None:
     """OpenFOAM cases: write a case for a motion, run it, parse its forces."""
@@ -50,7 +45,7 @@ def cfd() -> None:
                    "stream); default freestream.")
 @click.option("--pressure-solver", type=click.Choice(["PCG", "GAMG"]), default=None,
               help="Linear solver of the pressure equation; default PCG (or the set-up's).")
-@_velocity_convection_option
+@velocity_convection_option
 @click.option("--turbulence-convection", type=click.Choice(["limitedLinear", "upwind"]),
               default=None, help="Convection of k and epsilon (upwind: no clipping of "
                                  "negative epsilon); default limitedLinear (or the set-up's).")
@@ -424,7 +419,7 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: str, cycl
               default=None, help="Plate, fluid, stream and strip-model coefficients (default: "
                                  "the package's, those of cases/paper2026.toml).")
 @mesh_and_setup_options()
-@_velocity_convection_option
+@velocity_convection_option
 @click.option("--cases", "case_ids", default=None,
               help="Comma-separated case ids of the default motions (--list shows them).")
 @click.option("--list", "list_only", is_flag=True, help="List the motions and exit.")

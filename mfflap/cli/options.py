@@ -5,6 +5,14 @@ from collections.abc import Callable
 import click
 
 MESH_NAMES = "coarse | lean | medium | medium_r20 | fine | graded"  # meshes.toml's order
+#: The U convection schemes of the case template (writer.VELOCITY_CONVECTION_SCHEMES), named
+#: here so that the command line does not import the writer to build its help
+VELOCITY_CONVECTION_NAMES = ("linearUpwind", "LUST")
+
+#: ``--velocity-convection``: a set-up's convection scheme of U swapped
+velocity_convection_option = click.option(
+    "--velocity-convection", type=click.Choice(VELOCITY_CONVECTION_NAMES), default=None,
+    help="Convection scheme of U; default linearUpwind (or the set-up's).")
 
 
 def mesh_and_setup_options(runs: str = "") -> Callable:
