@@ -1,6 +1,7 @@
 """Named CFD set-ups (cfd_templates/openfoam/setups.toml): parsing, refusals, and the case a
 set-up writes."""
 
+import dataclasses
 from pathlib import Path
 
 import pytest
@@ -25,6 +26,20 @@ def test_shipped_setups_name_real_meshes_and_valid_settings():
     assert setups["reference"].solver.pressure_final_rel_tol == 0.0
     assert setups["reference"].mesh.name == "medium"
     assert affordable.description
+
+
+def test_medium_piso_is_the_reference_with_affordables_pressure_velocity_coupling():
+    """medium_piso changes the reference in what PISO 1x2 and the relaxed last corrector
+    need and in nothing else (its measured distance rests on that)."""
+    setups = named_setups()
+    reference, piso, affordable = (setups[n].solver for n in
+                                   ("reference", "medium_piso", "affordable"))
+    assert setups["medium_piso"].mesh == setups["reference"].mesh
+    coupling = ("n_outer_correctors", "n_correctors", "pressure_final_rel_tol")
+    for field, value in dataclasses.asdict(piso).items():
+        expected = getattr(affordable if field in coupling else reference, field)
+        assert value == expected, field
+    assert piso.velocity_convection == "linearUpwind" != affordable.velocity_convection
 
 
 @pytest.mark.parametrize("body, key", [
