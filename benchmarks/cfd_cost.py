@@ -32,7 +32,9 @@ linearUpwind) against that file's set-up of the same solver family (5.63 µs).
 
 Run: python benchmarks/cfd_cost.py [setup ...] [--meshes coarse,lean] [--cycles 2]
                                    [--work-dir DIR]
-     (default: the "affordable" set-up; --meshes adds named meshes at the reference settings;
+     (default: the "affordable" set-up; SETUP@MESH: that set-up's solver settings on a
+     named mesh, as `mfflap cfd write --setup SETUP --mesh MESH`; --meshes adds named meshes
+     at the reference settings;
      with --work-dir, runs that finished there before are read, not rerun; the mesh study
      of the README: affordable --meshes fine --far-field inletOutlet --cycles 1; the
      plate's frame: affordable --plate-frame --far-field inletOutlet --cycles 1)
@@ -52,7 +54,7 @@ import numpy as np
 from mfflap.cfd.openfoam.forces import read_forces
 from mfflap.cfd.openfoam.loads import imposed_state, to_loads
 from mfflap.cfd.openfoam.runner import run_case
-from mfflap.cfd.openfoam.setups import setup
+from mfflap.cfd.openfoam.setups import mesh_and_solver, setup
 from mfflap.cfd.openfoam.solver_log import solver_provenance
 from mfflap.cfd.openfoam.writer import mesh_specs, write_case
 from mfflap.errors import CfdRunError
@@ -121,7 +123,8 @@ def compare(run, ref, cycles: float) -> str:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("setups", nargs="*", default=["affordable"],
-                        help="set-ups of setups.toml")
+                        help="set-ups of setups.toml; SETUP@MESH runs a set-up's solver "
+                        "settings on a named mesh of meshes.toml")
     parser.add_argument("--meshes", default="", help="named meshes run at the reference "
                         "settings, comma separated")
     parser.add_argument("--cycles", type=float, default=2.0, help="cycles simulated")
@@ -150,12 +153,14 @@ def main() -> None:
         jobs.append(("reference-Co3", ref.mesh, replace(ref.solver, max_courant=3.0), cycles,
                      root))
     floors = {}
-    for s in map(setup, args.setups):
-        jobs.append((s.name, s.mesh, s.solver, cycles, root))
+    for label in args.setups:
+        name, _, mesh_name = label.partition("@")
+        mesh, solver = mesh_and_solver(mesh_name or None, name)
+        jobs.append((label, mesh, solver, cycles, root))
         if not args.no_solver_floor:
-            other = "PCG" if s.solver.pressure_solver == "GAMG" else "GAMG"
-            floors[s.name] = f"{s.name}-{other}"
-            jobs.append((floors[s.name], s.mesh, replace(s.solver, pressure_solver=other),
+            other = "PCG" if solver.pressure_solver == "GAMG" else "GAMG"
+            floors[label] = f"{label}-{other}"
+            jobs.append((floors[label], mesh, replace(solver, pressure_solver=other),
                          cycles, root))
     specs = mesh_specs()
     jobs += [(f"{m}-mesh", specs[m], ref.solver, cycles, root)

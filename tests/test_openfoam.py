@@ -1,5 +1,6 @@
 """OpenFOAM adapter: writer, parser (three dialects), loads conversion, and a real run."""
 
+import dataclasses
 import shutil
 from pathlib import Path
 
@@ -632,8 +633,22 @@ def test_the_larger_domain_keeps_the_medium_mesh_near_the_plate():
     assert first_radial_cell_m(large) == pytest.approx(first_radial_cell_m(medium), rel=0.01)
 
 
+def test_the_edge_study_meshes_change_only_the_cells_across_the_plates_ends():
+    from mfflap.cfd.openfoam.writer import mesh_specs
+
+    specs = mesh_specs()
+    medium = dataclasses.asdict(specs["medium"])
+    edges = [dataclasses.asdict(s) for name, s in specs.items() if name.startswith("medium_edge")]
+    assert [e["n_edge"] for e in edges] == [10, 9, 6, 4]
+    for edge in edges:
+        assert edge["n_edge"] < medium["n_edge"]
+        assert {k: v for k, v in edge.items() if k not in ("name", "n_edge")} == {
+            k: v for k, v in medium.items() if k not in ("name", "n_edge")}
+
+
 @pytest.mark.openfoam
-@pytest.mark.parametrize("mesh", ["coarse", "lean", "graded", "medium", "medium_r20", "fine"])
+@pytest.mark.parametrize("mesh", ["coarse", "lean", "graded", "medium", "medium_r20", "fine",
+                                  "medium_edge6"])
 def test_every_named_mesh_builds_and_passes_checkmesh(tmp_path, mesh):
     """blockMesh + checkMesh on each resolution of meshes.toml; the cell count is the spec's,
     and the lean mesh's chordwise cells really are crowded toward the plate's ends."""
@@ -661,6 +676,17 @@ def test_every_named_mesh_builds_and_passes_checkmesh(tmp_path, mesh):
         widths = np.diff(x)
         assert widths[len(widths) // 2] / widths[0] == pytest.approx(spec.chord_grading,
                                                                      rel=0.15)
+    if mesh.startswith("medium_edge"):
+        import pyvista as pv
+
+        (case / "case.foam").touch()
+        reader = pv.POpenFOAMReader(str(case / "case.foam"))
+        reader.enable_all_patch_arrays()
+        xyz = np.asarray(reader.read()["boundary"]["plate"].points)
+        trailing_edge = xyz[(np.abs(xyz[:, 0] - 0.16) < 1e-6) & (np.abs(xyz[:, 2]) < 1e-9)]
+        widths = np.diff(np.unique(np.round(trailing_edge[:, 1], 9)))
+        assert len(widths) == spec.n_edge
+        assert widths == pytest.approx(0.003 / spec.n_edge, rel=1e-3)
 
 
 def assert_forces_match_the_uninterrupted_run(case: Path, whole: Path) -> None:
