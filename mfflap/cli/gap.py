@@ -55,7 +55,7 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
     for folder in folders or ((fixture_dir(),) if not csv_files else ()):
         prepared, excluded = prepare_cases(
             read_records(folder), case.identification.discard_time if discard is None
-            else discard)
+            else discard, plate=case.plate, fluid=case.fluid, stream=case.flow)
         cases += prepared
         sources.append(str(folder))
         for name, why in excluded.items():

@@ -10,17 +10,21 @@ import numpy as np
 from scipy.ndimage import median_filter
 
 from mfflap.campaign.records import CfdRecord
-from mfflap.cfd.bursts import bridge_load_bursts
+from mfflap.cfd.bursts import bridge_bursts, bridge_load_bursts
+from mfflap.cfd.force_envelope import find_envelope_breaches
 from mfflap.errors import MfflapError
 from mfflap.hydro.base import ForceModel
 from mfflap.hydro.loads import Loads
 from mfflap.kinematics.state import KINEMATIC_UNITS, KinematicState
+from mfflap.parameters import Fluid, FreeStream, Plate
 from mfflap.performance import thrust_and_power
 
 #: Load components a fit can use, with their units.
 COMPONENTS = {"normal_force": "N", "tangential_force": "N", "moment": "N*m"}
 #: How a case's notes say that numerical bursts of its CFD were bridged.
 BURST_NOTE = "numerical burst(s) bridged by linear interpolation"
+#: How a case's notes say that stretches beyond the physical force bound were bridged.
+ENVELOPE_NOTE = "stretch(es) beyond the forces the motion can drive bridged"
 #: Derived signals that are scored (not fitted directly).
 DERIVED = {"thrust": "N", "input_power": "W"}
 _STATE_KEYS = tuple(KINEMATIC_UNITS)
@@ -113,23 +117,33 @@ def _neighbour_step(dt: np.ndarray, k: int = 20) -> np.ndarray:
 
 
 def prepare_case(record: CfdRecord, discard_time: float = 0.75, n_samples: int = 400,
-                 max_gap_ratio: float = 25.0, max_burst_share: float = 0.05) -> CaseData:
+                 max_gap_ratio: float = 25.0, max_burst_share: float = 0.05, *,
+                 plate: Plate | None = None, fluid: Fluid | None = None,
+                 stream: FreeStream | None = None) -> CaseData:
     """Drop the start-up transient and resample a record onto a uniform time base.
 
     Adaptive CFD time steps crowd samples where the flow is fast; a uniform base keeps them
     from weighting the fit. The start is the later of ``discard_time`` and the record's own
     start-up ramp. Numerical bursts after the start (:mod:`mfflap.cfd.bursts`) are bridged
-    by linear interpolation, then isolated spikes are replaced by the running median
-    (:func:`despike`); both are listed in the case's notes.
+    by linear interpolation, and so are stretches whose forces the motion cannot have
+    driven (:mod:`mfflap.cfd.force_envelope`: a run that lost its numerics gradually); then
+    isolated spikes are replaced by the running median (:func:`despike`). All are listed in
+    the case's notes.
+
+    Parameters
+    ----------
+    plate, fluid, stream : optional
+        Of the force bound; by default the record's chord and span (its provenance) and the
+        default fluid and stream.
 
     Raises
     ------
     MfflapError
         If the record has a gap (a step more than ``max_gap_ratio`` times the steps on both
         sides of it: the adaptive time step itself may change a hundredfold over a run), or
-        too little data after the transient, or if numerical bursts cover more than
-        ``max_burst_share`` of the time after the transient; the message names the record
-        and the time.
+        too little data after the transient, or if numerical bursts and stretches beyond
+        the force bound together cover more than ``max_burst_share`` of the time after the
+        transient; the message names the record and the time.
     """
     t = record.time
     start = max(discard_time, float(record.parameters.get("ramp_time", 0.0)))
@@ -151,6 +165,8 @@ def prepare_case(record: CfdRecord, discard_time: float = 0.75, n_samples: int =
     state = _resample_state(record.state, tu)
     kept = t >= t[max(int(np.searchsorted(t, start)) - 1, 0)]
     loads, bursts = bridge_load_bursts(record.loads, kept)
+    breaches = find_envelope_breaches(record.state, loads, *_bound_parameters(
+        record, plate, fluid, stream), window=kept)
     t = t[kept]
     notes, cleaned = [], []
     if bursts:
@@ -162,6 +178,17 @@ def prepare_case(record: CfdRecord, discard_time: float = 0.75, n_samples: int =
                               "rerun the case (a lower Courant limit)")
         notes.append(f"{len(bursts)} {BURST_NOTE}: "
                      + "; ".join(b.describe() for b in bursts))
+    if breaches:
+        lost = sum(b.duration_s for b in breaches) + sum(b.duration_s for b in bursts)
+        if lost > max_burst_share * (t[-1] - t[0]):
+            raise MfflapError(f"record {record.name}: its forces leave what the motion can "
+                              f"drive for {lost:.3g} s of the {t[-1] - t[0]:.3g} s after the "
+                              f"start-up, first {breaches[0].describe()}: the run lost its "
+                              "numerics; rerun the case (a lower Courant limit)")
+        loads = Loads(loads.time, *(bridge_bursts(loads.time, getattr(loads, k), breaches)
+                                    for k in COMPONENTS), source=loads.source)
+        notes.append(f"{len(breaches)} {ENVELOPE_NOTE}: "
+                     + "; ".join(b.describe() for b in breaches))
     for k in COMPONENTS:
         values, mask = despike(getattr(loads, k)[kept])
         if mask.any():
@@ -174,13 +201,26 @@ def prepare_case(record: CfdRecord, discard_time: float = 0.75, n_samples: int =
                     dict(record.provenance))
 
 
+def _bound_parameters(record: CfdRecord, plate: Plate | None, fluid: Fluid | None,
+                      stream: FreeStream | None) -> tuple[Plate, Fluid, FreeStream]:
+    """Plate, fluid and stream of a record's force bound: given, or its own and defaults."""
+    if plate is None:
+        prov = record.provenance
+        plate = Plate(chord=float(prov.get("chord_m", Plate().chord)),
+                      span=float(prov.get("span_m", Plate().span)))
+    return plate, fluid or Fluid(), stream or FreeStream()
+
+
 def prepare_cases(records: Sequence[CfdRecord], discard_time: float = 0.75,
-                  n_samples: int = 400) -> tuple[list[CaseData], dict[str, str]]:
+                  n_samples: int = 400, *, plate: Plate | None = None,
+                  fluid: Fluid | None = None, stream: FreeStream | None = None
+                  ) -> tuple[list[CaseData], dict[str, str]]:
     """Prepare every record; records that cannot be used are returned with the reason."""
     cases, excluded = [], {}
     for rec in records:
         try:
-            cases.append(prepare_case(rec, discard_time, n_samples))
+            cases.append(prepare_case(rec, discard_time, n_samples, plate=plate,
+                                      fluid=fluid, stream=stream))
         except MfflapError as exc:
             excluded[rec.name] = str(exc)
     return cases, excluded

@@ -33,7 +33,9 @@ def load_cases(config: CaseConfig, folder: str | Path | None = None,
 
         raise MfflapError(f"{folder}: no CFD records (*.h5) to identify from; run "
                           "`mfflap campaign run` into it or point --fixtures elsewhere")
-    cases, excluded = prepare_cases(records, config.identification.discard_time, n_samples)
+    cases, excluded = prepare_cases(records, config.identification.discard_time, n_samples,
+                                    plate=config.plate, fluid=config.fluid,
+                                    stream=config.flow)
     excluded.update(failed_cases(folder))
     return cases, excluded
 

@@ -1,0 +1,124 @@
+"""The force bound of a moving plate: derived by hand, real runs inside it, runs that lost
+their numerics outside it, and identification leaving those out."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mfflap.campaign.records import fixture_dir, read_record, read_records
+from mfflap.cfd.bursts import bridge_load_bursts, find_load_bursts
+from mfflap.cfd.force_envelope import (
+    BREACH_FACTOR,
+    MAX_NORMAL_FORCE_COEFFICIENT,
+    envelope_ratio,
+    find_envelope_breaches,
+    normal_force_bound_n,
+)
+from mfflap.errors import MfflapError
+from mfflap.hydro.loads import Loads
+from mfflap.identification.data import ENVELOPE_NOTE, prepare_case
+from mfflap.kinematics.state import KinematicState
+from mfflap.parameters import Fluid, FreeStream, Plate
+
+ROOT = Path(__file__).parents[1]
+#: shipped Table 1 fixtures (max Co 4) that lost their numerics, and from when
+LOST = {"f1p000_h0p500_phi135p0": 0.79, "f0p500_h0p500_phi135p0": 4.0}
+#: and the one whose burst's slower aftermath (t = 3.09-3.14 s) leaves the bound briefly
+AFTERMATH = "f0p500_h0p300_phi090p0"
+PLATE, FLUID, STREAM = Plate(), Fluid(), FreeStream()
+
+
+def _state(time, heave=None, pitch=None):
+    """A KinematicState from heave and pitch functions of time returning (x, x', x'')."""
+    zero = np.zeros_like(time)
+    h = heave(time) if heave else (zero, zero, zero)
+    p = pitch(time) if pitch else (zero, zero, zero)
+    return KinematicState(time, p[0], p[1], p[2], h[0], h[1], h[2])
+
+
+def test_a_plate_at_rest_is_bounded_by_its_drag_in_the_stream():
+    time = np.linspace(0.0, 2.0, 201)
+    bound = normal_force_bound_n(_state(time), PLATE, FLUID, STREAM)
+    by_hand = (0.5 * FLUID.density * PLATE.chord * PLATE.span
+               * MAX_NORMAL_FORCE_COEFFICIENT * STREAM.velocity**2)
+    np.testing.assert_allclose(bound, by_hand, rtol=1e-12)
+
+
+def test_a_heaving_plate_is_bounded_by_added_mass_and_drag_over_the_convective_time():
+    omega, amplitude = 2 * np.pi * 0.5, 0.2
+    time = np.sort(np.random.default_rng(0).uniform(0.0, 6.0, 3000))
+    heave = lambda t: (amplitude * np.sin(omega * t), amplitude * omega * np.cos(omega * t),  # noqa: E731
+                       -amplitude * omega**2 * np.sin(omega * t))
+    bound = normal_force_bound_n(_state(time, heave), PLATE, FLUID, STREAM)
+    added_mass_kg = FLUID.density * np.pi * (PLATE.chord / 2) ** 2 * PLATE.span
+    drag = 0.5 * FLUID.density * PLATE.chord * PLATE.span * MAX_NORMAL_FORCE_COEFFICIENT
+    local = (added_mass_kg * amplitude * omega**2 * np.abs(np.sin(omega * time))
+             + drag * (STREAM.velocity + amplitude * omega * np.abs(np.cos(omega * time)))**2)
+    memory_s = PLATE.chord / STREAM.velocity
+    # brute force: the largest local bound within one convective time either side
+    brute = np.array([local[np.abs(time - t) <= memory_s].max() for t in time])
+    np.testing.assert_allclose(bound, brute, rtol=0.01)
+    assert np.all(bound >= local)
+
+
+def test_every_real_run_that_kept_its_numerics_stays_inside_the_bound():
+    """All shipped fixtures and real test records, bursts bridged, but those above."""
+    folders = [p for p in (ROOT / "mfflap" / "data" / "fixtures").iterdir() if p.is_dir()]
+    records = [r for f in folders for r in read_records(f)]
+    records += [read_record(p) for p in sorted((ROOT / "tests" / "data").rglob("*.h5"))
+                if p.parent.name != "bursts"]
+    assert len(records) > 100
+    worst = []
+    for rec in records:
+        if rec.name in LOST or rec.name == AFTERMATH:
+            continue
+        loads, _ = bridge_load_bursts(rec.loads, rec.time >= 0)
+        plate = Plate(chord=rec.provenance.get("chord_m", PLATE.chord),
+                      span=rec.provenance.get("span_m", PLATE.span))
+        worst.append(float(envelope_ratio(rec.state, loads, plate, FLUID, STREAM).max()))
+    # the closest real run (f = 2 Hz, h = 0.5 m) comes within a factor of about 1.1 of the
+    # breach level; the typical run uses about a third of the bound
+    assert max(worst) < BREACH_FACTOR
+    assert np.median(worst) < 0.5
+
+
+def test_a_shipped_run_that_lost_its_numerics_is_found_where_bursts_are_not():
+    # f = 1 Hz, h = 0.5 m, phi = 135 deg at max Co 4: from t = 0.8 s F_n grows to tens of
+    # kN (the motion drives about 0.6 kN) and stays there to the end, with no jump sharp
+    # enough for a numerical burst
+    rec = read_record(fixture_dir("table1_coarse") / "f1p000_h0p500_phi135p0.h5")
+    assert find_load_bursts(rec.loads) == []
+    assert np.abs(rec.loads.normal_force).max() > 5e4
+    breaches = find_envelope_breaches(rec.state, rec.loads, PLATE, FLUID, STREAM)
+    assert len(breaches) == 1
+    assert 0.7 < breaches[0].start_s < LOST[rec.name] + 0.05 and breaches[0].end_s == 3.0
+    assert breaches[0].peak_ratio > 50
+
+
+def test_a_growing_oscillation_injected_into_a_real_run_is_found_from_its_growth():
+    rec = read_record(fixture_dir("table1_coarse") / "f1p000_h0p300_phi090p0.h5")
+    t = rec.time
+    assert find_envelope_breaches(rec.state, rec.loads, PLATE, FLUID, STREAM) == []
+    scale = np.ptp(rec.loads.normal_force)
+    growth = np.where(t > 2.5, np.exp((t - 2.5) / 0.05) - 1.0, 0.0)
+    lost = Loads(t, rec.loads.normal_force + scale * 0.05 * growth * np.sin(2 * np.pi * 150 * t),
+                 rec.loads.tangential_force, rec.loads.moment, source="injected")
+    breaches = find_envelope_breaches(rec.state, lost, PLATE, FLUID, STREAM)
+    assert len(breaches) == 1 and 2.5 < breaches[0].start_s < 2.85
+    assert breaches[0].end_s == t[-1]
+
+
+def test_identification_leaves_a_lost_run_out_and_bridges_a_short_stretch():
+    rec = read_record(fixture_dir("table1_coarse") / "f1p000_h0p500_phi135p0.h5")
+    with pytest.raises(MfflapError, match=r"f1p000_h0p500_phi135p0: its forces leave what "
+                       r"the motion can drive .* first t = 0\.7"):
+        prepare_case(rec)
+    # the slower aftermath of the burst at t = 3.09 s of f = 0.5 Hz, h = 0.3 m, phi = 90 deg
+    # (README, Known limits): 0.04 s beyond the bound, bridged and listed
+    rec = read_record(fixture_dir("table1_coarse") / f"{AFTERMATH}.h5")
+    case = prepare_case(rec)
+    note = next(n for n in case.notes if ENVELOPE_NOTE in n)
+    assert "t = 3.09" in note
+    keep = (case.cfd.time > 3.09) & (case.cfd.time < 3.14)
+    assert np.abs(case.cfd.normal_force[keep]).max() < 100.0  # not the +-270 N swings
