@@ -11,6 +11,7 @@ from mfflap.backtest.run import backtest_motion, cfd_motion, motion_key
 from mfflap.campaign.records import CfdRecord, read_record, write_record
 from mfflap.cfd.openfoam.loads import imposed_state
 from mfflap.cfd.openfoam.runner import openfoam_available
+from mfflap.errors import MfflapError
 from mfflap.hydro import MorisonModel
 from mfflap.kinematics.convert import harmonic_to_discrete
 from mfflap.kinematics.discrete import DiscreteMotion
@@ -76,6 +77,27 @@ def test_a_numerical_burst_in_the_cfd_is_bridged_and_listed():
     assert len(hit.numerical_bursts) == 1
     assert hit.nrmse["thrust"] < 0.01 and hit.mean_thrust_error == pytest.approx(0, abs=1e-3)
     assert hit.max_power_ok  # the burst's 10^4-fold power is not the motion's
+
+
+def test_a_cfd_run_that_lost_its_numerics_gets_no_verdict(tmp_path):
+    """Forces that grow over the last cycle to 20 times what the motion can drive (no jump
+    sharp enough for a burst): the comparison refuses them, and the back-test says why
+    instead of judging the model."""
+    rec = model_record(MOTION)
+    period = cfd_motion(MOTION).period
+    t = rec.time
+    growth = np.exp(np.clip(t - (t[-1] - 0.6 * period), 0, None) / (0.1 * period)) - 1.0
+    grown = rec.loads.normal_force + np.ptp(rec.loads.normal_force) * growth
+    lost = CfdRecord(rec.name, rec.state, type(rec.loads)(
+        t, grown, rec.loads.tangential_force, rec.loads.moment), rec.parameters)
+    assert grown.max() > 20 * np.abs(rec.loads.normal_force).max()
+    with pytest.raises(MfflapError, match="leave what the motion can drive"):
+        compare_last_cycle(lost, MorisonModel(), period, max_power=1e9)
+    folder = tmp_path / "bt"
+    write_record(folder / f"backtest_{motion_key(MOTION)}.h5", lost)
+    outcome = backtest_motion(MOTION, "β = 0", MorisonModel(), 50.0, fixture_folders=[folder])
+    assert outcome.status == "not back-tested" and "lost its numerics" in outcome.source
+    assert outcome.comparison is None
 
 
 def test_fixture_lookup_by_key_then_by_tolerance_and_missing_is_reported(tmp_path):

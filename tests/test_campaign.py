@@ -147,6 +147,35 @@ def test_campaign_on_local_cluster_resumes_and_reports_failures(tmp_path, capfd)
         run_campaign([SHORT], out, CampaignSetup(mesh="medium"), progress=False)
 
 
+@pytest.mark.openfoam
+def test_a_finished_run_that_lost_its_numerics_is_lost_and_rerun_on_request(tmp_path):
+    """A real record whose F_n after the ramp is made 10,000 times larger (what a run that
+    lost its numerics leaves): status "lost" with where; a plain rerun keeps it; with
+    retry_failed it is kept aside as .lost.h5 and the case runs again, to "done"."""
+    from mfflap.campaign.records import LOST_SUFFIX
+
+    out = tmp_path / "camp"
+    setup = CampaignSetup(timeout_s=900.0)
+    run_campaign([SHORT], out, setup, progress=False)
+    path = out / f"{SHORT.case_id}.h5"
+    rec = read_record(path)
+    grown = rec.loads.normal_force * np.where(rec.time > 0.03, 1e4, 1.0)
+    lost = CfdRecord(rec.name, rec.state, type(rec.loads)(
+        rec.time, grown, rec.loads.tangential_force, rec.loads.moment,
+        source=rec.loads.source), rec.parameters, rec.provenance)
+    write_record(path, lost)
+    (status,) = campaign_status(out)
+    assert status.state == "lost"
+    assert "its forces leave what the motion can drive, t = 0.03" in status.message
+    assert run_campaign([SHORT], out, setup, progress=False)[0].message == "already finished"
+    (again,) = run_campaign([SHORT], out, setup, progress=False, retry_failed=True)
+    assert again.state == "done" and again.message.endswith("s CPU")
+    kept = read_record(out / f"{SHORT.case_id}{LOST_SUFFIX}")
+    np.testing.assert_array_equal(kept.loads.normal_force, grown)
+    assert [s.state for s in campaign_status(out)] == ["done"]
+    assert [r.name for r in read_records(out)] == [SHORT.case_id]  # not the one kept aside
+
+
 def test_status_tells_how_far_a_started_run_got(tmp_path):
     """A case folder with a solver log and no record is "started"; the message reads the
     real pimpleFoam log's last time step, the folder a rerun resumes from, the retries."""
@@ -221,6 +250,37 @@ def test_collapsed_time_step_is_retried_with_a_lower_courant_limit(tmp_path):
     notes = (case_dir / "mfflap_retries.txt").read_text().splitlines()
     assert [n.split(" with ")[-1] for n in notes] == [
         "the inletOutlet far field", "maxCo 2", "maxCo 1 and first-order upwind k and epsilon"]
+
+
+@pytest.mark.openfoam
+def test_forces_beyond_the_bound_are_retried_from_the_written_time_before_them(tmp_path):
+    """Every attempt 'loses its numerics' after the ramp (the bound is scaled down a
+    millionfold): each retry rewinds to the last time written before the breach (0.03 s;
+    the case keeps the last two of its four writes), drops the later fields and force
+    output, changes the case like a collapse does and reruns pimpleFoam from there; the
+    fourth breach is reported with where it began."""
+    from mfflap.cfd.openfoam.forces import read_forces
+    from mfflap.errors import CfdRunError
+
+    case_dir = tmp_path / "c"
+    with pytest.raises(CfdRunError, match=r"the forces leave what the motion can drive, "
+                       r"t = 0\.03.*3 retries did not cure it"):
+        run_motion(case_dir, SHORT.motion(), "c", {}, 0.04, ramp_time=0.035,
+                   force_bound_factor=1e-6)
+    notes = (case_dir / "mfflap_retries.txt").read_text().splitlines()
+    assert len(notes) == 3
+    assert all(n.startswith("forces beyond what the motion can drive from t = 0.03")
+               and " resumed from t = 0.03 s with " in n for n in notes)
+    assert [n.split(" with ")[-1] for n in notes] == [
+        "the inletOutlet far field", "maxCo 2", "maxCo 1 and first-order upwind k and epsilon"]
+    log = (case_dir / "log.pimpleFoam").read_text()
+    assert log.count("Starting time loop") == 4
+    assert log.count("Time = 0.01\n") == 1  # the first 0.03 s ran once
+    assert sorted(p.name for p in (case_dir / "postProcessing" / "forces").iterdir()) == [
+        "0", "0.03"]
+    history = read_forces(case_dir)  # the last attempt's forces from 0.03 s on, one history
+    assert np.all(np.diff(history.time) > 0)
+    assert history.time[-1] == pytest.approx(0.04, abs=1e-3)
 
 
 @pytest.mark.openfoam

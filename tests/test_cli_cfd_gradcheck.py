@@ -54,6 +54,7 @@ def test_cfd_write_run_parse_with_real_openfoam(tmp_path, options):
     out = json.loads(res.output)
     assert out["dialect"] == "v1912" and out["n_samples"] > 50
     assert len(out["numerical_bursts"]) == 1  # bridged before the comparison
+    assert out["forces_beyond_what_the_motion_can_drive"] == []  # the bridged burst is not
     assert out["pearson_normal_force"] > 0.5
 
 

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mfflap.campaign.records import fixture_dir, read_record
+from mfflap.campaign.records import fixture_dir, read_record, record_paths
 from mfflap.cfd.bursts import find_numerical_bursts
 from mfflap.cfd.force_envelope import find_envelope_breaches
 from mfflap.cfd.openfoam.setups import setup
@@ -22,7 +22,7 @@ COMPONENTS = ("normal_force", "tangential_force", "moment")
 
 
 def _finished() -> list[Path]:
-    return sorted(CO2.glob("*.h5"))
+    return record_paths(CO2)
 
 
 def test_the_co2_campaign_is_the_shipped_grid_at_max_co_2():

@@ -8,7 +8,10 @@ import numpy as np
 
 from mfflap.campaign.records import CfdRecord
 from mfflap.cfd.bursts import bridge_load_bursts
+from mfflap.cfd.force_envelope import find_envelope_breaches
+from mfflap.errors import MfflapError
 from mfflap.metrics import nrmse, pearson, time_mean
+from mfflap.parameters import Fluid, FreeStream, Plate
 from mfflap.performance import thrust_and_power
 
 
@@ -73,6 +76,13 @@ def compare_last_cycle(record: CfdRecord, model, period: float,
     """Model (on the imposed kinematics) against CFD over the last full period of the record.
 
     Numerical bursts of the CFD in the last two periods are bridged first (and listed).
+
+    Raises
+    ------
+    MfflapError
+        If the CFD forces of the last two periods leave what the motion can drive
+        (:mod:`mfflap.cfd.force_envelope`): the run lost its numerics and says nothing about
+        the model.
     """
     t = record.time
     end = t[-1]
@@ -81,6 +91,14 @@ def compare_last_cycle(record: CfdRecord, model, period: float,
     state = record.state
     pred = model.loads(state)
     cfd, bursts = bridge_load_bursts(record.loads, last | prev)
+    breaches = find_envelope_breaches(state, cfd, getattr(model, "plate", Plate()),
+                                      getattr(model, "fluid", Fluid()),
+                                      getattr(model, "stream", FreeStream()),
+                                      window=last | prev)
+    if breaches:
+        raise MfflapError(f"{record.name}: the CFD forces of the last two periods leave what "
+                          f"the motion can drive, {breaches[0].describe()}: the run lost its "
+                          "numerics; rerun it (a lower Courant limit)")
     m_thrust, m_power = thrust_and_power(pred, state)
     c_thrust, c_power = thrust_and_power(cfd, state)
     signals = {"thrust": (m_thrust, c_thrust), "input_power": (m_power, c_power),

@@ -156,5 +156,8 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
             source += f"; no CFD fixture for motion key {key}"
     if record is None:
         return BacktestOutcome(label, key, "not back-tested", source)
-    comparison = compare_last_cycle(record, model, period, max_power)
+    try:
+        comparison = compare_last_cycle(record, model, period, max_power)
+    except MfflapError as exc:  # the CFD run lost its numerics: no verdict on the model
+        return BacktestOutcome(label, key, "not back-tested", f"{source}; {exc}")
     return BacktestOutcome(label, key, "back-tested", source, record, comparison)

@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from mfflap.campaign.cases import CampaignCase
-from mfflap.campaign.records import RECORD_SUFFIX, read_record, write_record
+from mfflap.campaign.records import LOST_SUFFIX, RECORD_SUFFIX, read_record, write_record
 from mfflap.cfd.bursts import find_load_bursts
 from mfflap.cfd.openfoam.writer import SolverSettings
 from mfflap.errors import ConfigError, MfflapError
@@ -59,7 +59,7 @@ class CaseStatus:
     """Where one case stands."""
 
     case_id: str
-    state: str  # "done" | "failed" | "started" | "pending"
+    state: str  # "done" | "lost" | "failed" | "started" | "pending"
     message: str = ""
     #: a started case: the share of its end time its solver has simulated (0-1)
     fraction_simulated: float | None = None
@@ -67,6 +67,32 @@ class CaseStatus:
 
 def _failed_path(out: Path, case_id: str) -> Path:
     return out / f"{case_id}.failed.toml"
+
+
+
+
+def _bound_setup(manifest: dict[str, Any]) -> tuple[Plate, Fluid, FreeStream]:
+    setup = manifest.get("setup", {})
+    return (Plate(**setup.get("plate", {})), Fluid(**setup.get("fluid", {})),
+            FreeStream(**setup.get("stream", {})))
+
+
+def lost_numerics(record_path: Path, plate: Plate, fluid: Fluid,
+                  stream: FreeStream) -> str | None:
+    """Why a finished record's run lost its numerics after its ramp (forces beyond what the
+    motion can drive, :mod:`mfflap.cfd.force_envelope`), or None if it did not."""
+    from mfflap.cfd.bursts import bridge_load_bursts
+    from mfflap.cfd.force_envelope import find_envelope_breaches
+
+    rec = read_record(record_path)
+    loads, _ = bridge_load_bursts(rec.loads, rec.time >= 0.0)
+    after_ramp = rec.time >= float(rec.parameters.get("ramp_time", 0.0))
+    breaches = find_envelope_breaches(rec.state, loads, plate, fluid, stream,
+                                      window=after_ramp)
+    if not breaches:
+        return None
+    return (f"its forces leave what the motion can drive, {breaches[0].describe()}; "
+            "identification leaves it out; --retry-failed reruns it")
 
 
 def run_one(case: CampaignCase, out_dir: str, setup: CampaignSetup) -> CaseStatus:
@@ -142,7 +168,9 @@ def read_toml_text(text: str) -> dict[str, Any]:
 def campaign_status(out_dir: str | Path) -> list[CaseStatus]:
     """Status of every case listed in ``out_dir/campaign.toml``.
 
-    A finished case's message names its numerical bursts (:mod:`mfflap.cfd.bursts`), if any.
+    A finished case's message names its numerical bursts (:mod:`mfflap.cfd.bursts`), if any;
+    a finished case whose forces leave what the motion can drive is "lost"
+    (:func:`lost_numerics`).
     A case whose OpenFOAM run has begun but has no record yet is "started" (running now, or
     stopped and to be resumed): its message gives the simulated time the solver's log
     reached, the time step there, the last written time a rerun resumes from and the
@@ -153,8 +181,14 @@ def campaign_status(out_dir: str | Path) -> list[CaseStatus]:
     if not manifest.exists():
         raise MfflapError(f"{out}: no campaign.toml (not a campaign folder)")
     statuses = []
-    for case_id in read_toml(manifest).get("cases", {}):
+    manifest_data = read_toml(manifest)
+    bound = _bound_setup(manifest_data)
+    for case_id in manifest_data.get("cases", {}):
         if (out / f"{case_id}{RECORD_SUFFIX}").exists():
+            lost = lost_numerics(out / f"{case_id}{RECORD_SUFFIX}", *bound)
+            if lost is not None:
+                statuses.append(CaseStatus(case_id, "lost", lost))
+                continue
             bursts = find_load_bursts(read_record(out / f"{case_id}{RECORD_SUFFIX}").loads)
             statuses.append(CaseStatus(case_id, "done", "" if not bursts else
                                        f"{len(bursts)} numerical burst(s), bridged when "
@@ -232,7 +266,9 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
         Address of an existing dask scheduler (e.g. one started by dask-jobqueue's
         SLURMCluster); a LocalCluster is started when None.
     retry_failed
-        Rerun cases that failed before (otherwise they stay failed and are reported).
+        Rerun cases that failed before (otherwise they stay failed and are reported), and
+        cases whose finished run lost its numerics (:func:`lost_numerics`; the record is
+        kept as ``<case_id>.lost.h5``).
     on_result
         Called with each case's status as it finishes (e.g. to commit results).
     progress
@@ -253,8 +289,12 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
         shutil.rmtree(stale, ignore_errors=True)
     results: dict[str, CaseStatus] = {}
     todo = []
+    bound = (setup.plate, setup.fluid, setup.stream)
     for c in cases:
-        if (out / f"{c.case_id}{RECORD_SUFFIX}").exists():
+        record = out / f"{c.case_id}{RECORD_SUFFIX}"
+        if record.exists() and retry_failed and lost_numerics(record, *bound) is not None:
+            record.replace(out / f"{c.case_id}{LOST_SUFFIX}")
+        if record.exists():
             results[c.case_id] = CaseStatus(c.case_id, "done", "already finished")
         elif _failed_path(out, c.case_id).exists() and not retry_failed:
             info = read_toml(_failed_path(out, c.case_id))

@@ -10,9 +10,11 @@ from pathlib import Path
 from typing import Any
 
 from mfflap.campaign.records import CfdRecord
+from mfflap.cfd.bursts import bridge_load_bursts
+from mfflap.cfd.force_envelope import BREACH_FACTOR, EnvelopeBreach, find_envelope_breaches
 from mfflap.cfd.openfoam.forces import read_forces
 from mfflap.cfd.openfoam.loads import imposed_state, to_loads
-from mfflap.cfd.openfoam.runner import is_time_folder, run_case
+from mfflap.cfd.openfoam.runner import is_time_folder, latest_solution_time, run_case
 from mfflap.cfd.openfoam.solver_log import solver_provenance
 from mfflap.cfd.openfoam.writer import MeshSpec, SolverSettings, write_case
 from mfflap.errors import CfdRunError
@@ -100,6 +102,80 @@ def record_from_case(case_dir: str | Path, motion: Motion, name: str,
     return CfdRecord(name, state, loads, parameters, prov, history.force, history.moment)
 
 
+def rewind_case(case_dir: str | Path, before_s: float) -> str:
+    """Make a case resume from its last written time before ``before_s``; return that time.
+
+    Later solution folders (the case's and its processor folders') go, and so does the
+    function-object output that began after it (``postProcessing/*/<time>/`` folders and
+    ``<stem>_<time>.dat`` restart files), so that the rerun's output is the only one from
+    there on (:func:`mfflap.cfd.openfoam.forces.merge_restart_segments`). mfflap's cases
+    keep their last two writes (``purgeWrite 2``), so a breach before those resumes from 0.
+
+    Raises
+    ------
+    CfdRunError
+        If no complete solution folder is older than ``before_s`` (not even ``0/``).
+    """
+    case = Path(case_dir)
+    roots = [case, *sorted(case.glob("processor*"))]
+
+    def times(root: Path) -> list[Path]:
+        return [p for p in root.iterdir() if p.is_dir() and is_time_folder(p.name)]
+
+    while (latest := latest_solution_time(case)) is not None and float(latest) >= before_s:
+        if float(latest) == 0.0:
+            break
+        for root in roots:
+            for folder in times(root):
+                if float(folder.name) >= float(latest):
+                    shutil.rmtree(folder)
+    if latest is None or (float(latest) >= before_s and float(latest) != 0.0):
+        raise CfdRunError(f"no written time before t = {before_s:g} s to resume from",
+                          case=str(case))
+    resume = float(latest)
+    for root in roots:  # partial or newer folders (e.g. yPlus output) after the resume time
+        for folder in times(root):
+            if float(folder.name) > resume:
+                shutil.rmtree(folder)
+    for output in (case / "postProcessing").glob("*"):
+        if not output.is_dir():
+            continue
+        for folder in times(output):
+            if float(folder.name) > resume:
+                shutil.rmtree(folder)
+                continue
+            for restart in folder.glob("*_*.dat"):
+                try:
+                    if float(restart.stem.rsplit("_", 1)[1]) > resume:
+                        restart.unlink()
+                except ValueError:
+                    continue
+    return latest
+
+
+def _forces_beyond_bound(record: CfdRecord, ramp_time: float, plate: Plate | None,
+                         fluid: Fluid | None, stream: FreeStream | None,
+                         factor: float) -> EnvelopeBreach | None:
+    """The first stretch after the ramp whose forces the motion cannot have driven."""
+    loads, _ = bridge_load_bursts(record.loads, record.time >= 0.0)
+    breaches = find_envelope_breaches(record.state, loads, plate or Plate(), fluid or Fluid(),
+                                      stream or FreeStream(), window=record.time >= ramp_time,
+                                      factor=factor)
+    return breaches[0] if breaches else None
+
+
+def _apply_next_remedy(case_dir: Path, n_done: int, max_retries: int) -> str:
+    """Change the case for its next retry; return what changed: the inletOutlet far field
+    first (if it had the freestream one), then half the Courant limit, the last time also
+    first-order upwind k and epsilon."""
+    if not n_done and use_inlet_outlet_far_field(case_dir):
+        return "the inletOutlet far field"
+    note = f"maxCo {lower_courant_limit(case_dir):g}"
+    if n_done == max_retries - 1 and use_upwind_turbulence(case_dir):
+        note += " and first-order upwind k and epsilon"
+    return note
+
+
 #: every retry of a case, one line each, across the calls that ran it
 RETRY_LOG = "mfflap_retries.txt"
 
@@ -110,7 +186,8 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
                fluid: Fluid | None = None, stream: FreeStream | None = None,
                timeout_s: float = 6 * 3600.0, y_plus: bool = False,
                n_procs: int = 1, max_retries: int = 3,
-               min_time_step: float = 1e-7) -> CfdRecord:
+               min_time_step: float = 1e-7,
+               force_bound_factor: float = BREACH_FACTOR) -> CfdRecord:
     """Write (unless already written), run or resume, and parse one OpenFOAM case.
 
     Fields are written four times per run so that a killed run resumes from its last
@@ -118,9 +195,19 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
     at the Courant limit) is resumed from its last written time, up to ``max_retries``
     times: first with the inletOutlet far field (:func:`use_inlet_outlet_far_field`) if it
     had the freestream one, then with half the Courant limit, the last time also with
-    first-order upwind convection of k and epsilon. The retries are recorded in the case
-    (:data:`RETRY_LOG`) and in the record's provenance, those of earlier calls that resumed
-    the same case included: the case's settings changed there, not in mfflap_case.toml.
+    first-order upwind convection of k and epsilon. A run that finishes with forces after
+    its ramp beyond ``force_bound_factor`` times what the motion can drive
+    (:mod:`mfflap.cfd.force_envelope`: it lost its numerics gradually) is retried the same
+    way from its last written time before that (:func:`rewind_case`). The retries are
+    recorded in the case (:data:`RETRY_LOG`) and in the record's provenance, those of
+    earlier calls that resumed the same case included: the case's settings changed there,
+    not in mfflap_case.toml.
+
+    Raises
+    ------
+    CfdRunError
+        For a run that fails or diverges otherwise, or still does after ``max_retries``
+        retries, or whose forces still leave the bound then (the message says where).
     """
     case_dir = Path(case_dir)
     solver = solver or SolverSettings(write_interval=end_time / 4)
@@ -140,22 +227,29 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
         try:
             run_case(case_dir, timeout_s=timeout_s, n_procs=n_procs,
                      min_time_step=min_time_step)
-            break
         except CfdRunError as exc:
             if "time step collapsed" not in str(exc) or len(retries) >= max_retries:
                 raise
-            if not retries and use_inlet_outlet_far_field(case_dir):
-                note = "the inletOutlet far field"
-            else:
-                note = f"maxCo {lower_courant_limit(case_dir):g}"
-                if len(retries) == max_retries - 1 and use_upwind_turbulence(case_dir):
-                    note += " and first-order upwind k and epsilon"
-            retries.append(note)
+            retries.append(_apply_next_remedy(case_dir, len(retries), max_retries))
             # kept in the case, so that a run resumed by a later call still records them
             with open(case_dir / RETRY_LOG, "a") as fh:
                 fh.write(f"time step collapsed; resumed from the last written time with "
-                         f"{note}\n")
-    record = record_from_case(case_dir, motion, name, parameters, plate)
+                         f"{retries[-1]}\n")
+            continue
+        record = record_from_case(case_dir, motion, name, parameters, plate)
+        breach = _forces_beyond_bound(record, ramp_time, plate, fluid, stream,
+                                      force_bound_factor)
+        if breach is None:
+            break
+        if len(retries) >= max_retries:
+            raise CfdRunError(f"the forces leave what the motion can drive, {breach.describe()}"
+                              f": the run lost its numerics, and {len(retries)} retries did "
+                              "not cure it", case=str(case_dir))
+        resume = rewind_case(case_dir, breach.start_s)
+        retries.append(_apply_next_remedy(case_dir, len(retries), max_retries))
+        with open(case_dir / RETRY_LOG, "a") as fh:
+            fh.write(f"forces beyond what the motion can drive from t = {breach.start_s:.6g} s;"
+                     f" resumed from t = {resume} s with {retries[-1]}\n")
     if (case_dir / RETRY_LOG).is_file():
         record.provenance["retries"] = "; ".join(
             (case_dir / RETRY_LOG).read_text().splitlines())

@@ -33,6 +33,9 @@ from mfflap.results import ResultsFile
 from mfflap.toml_io import dumps
 
 RECORD_SUFFIX = ".h5"
+#: a record whose run lost its numerics, kept aside when its case is rerun
+#: (:func:`mfflap.campaign.execute.run_campaign`); not a record of the folder
+LOST_SUFFIX = ".lost.h5"
 _STATE_KEYS = tuple(KINEMATIC_UNITS)
 
 
@@ -194,12 +197,18 @@ def read_record(path: str | Path) -> CfdRecord:
 
 
 def read_records(folder: str | Path) -> list[CfdRecord]:
-    """Every record in ``folder`` (sorted by name); an unreadable one raises naming its file."""
+    """Every record in ``folder`` (sorted by name; hidden files and records kept aside as
+    lost left out); an unreadable one raises naming its file."""
     folder = Path(folder)
     if not folder.is_dir():
         raise MfflapError(f"{folder}: no such fixture folder")
-    return [read_record(p) for p in sorted(folder.glob(f"*{RECORD_SUFFIX}"))
-            if not p.name.startswith(".")]
+    return [read_record(p) for p in record_paths(folder)]
+
+
+def record_paths(folder: str | Path) -> list[Path]:
+    """The record files of ``folder``, sorted by name (see :func:`read_records`)."""
+    return [p for p in sorted(Path(folder).glob(f"*{RECORD_SUFFIX}"))
+            if not p.name.startswith(".") and not p.name.endswith(LOST_SUFFIX)]
 
 
 def fixture_dir(name: str = "table1_coarse") -> Path:
@@ -210,9 +219,7 @@ def fixture_dir(name: str = "table1_coarse") -> Path:
 def compact_folder(folder: str | Path) -> list[Path]:
     """Rewrite every full-precision record of ``folder`` in single precision (fixtures)."""
     done = []
-    for path in sorted(Path(folder).glob(f"*{RECORD_SUFFIX}")):
-        if path.name.startswith("."):
-            continue
+    for path in record_paths(folder):
         rec = read_record(path)
         if rec.provenance.get("storage") == "float32":
             continue

@@ -41,7 +41,7 @@ class EnvelopeBreach:
     """One stretch of a force history beyond what the motion can drive.
 
     The stretch is where the forces exceed the bound itself, around a sample that exceeds
-    :data:`BREACH_FACTOR` times it.
+    :data:`BREACH_FACTOR` times it (stretches closer than one convective time are one).
 
     Attributes
     ----------
@@ -129,8 +129,8 @@ def envelope_ratio(state: KinematicState, loads: Loads, plate: Plate, fluid: Flu
 
 
 def find_envelope_breaches(state: KinematicState, loads: Loads, plate: Plate, fluid: Fluid,
-                           stream: FreeStream, window: np.ndarray | None = None
-                           ) -> list[EnvelopeBreach]:
+                           stream: FreeStream, window: np.ndarray | None = None,
+                           factor: float = BREACH_FACTOR) -> list[EnvelopeBreach]:
     """The stretches of a force history that the motion cannot have driven.
 
     Parameters
@@ -142,6 +142,8 @@ def find_envelope_breaches(state: KinematicState, loads: Loads, plate: Plate, fl
         Chord and span, density, stream speed.
     window : ndarray of bool, optional
         Samples to judge (all by default; the start-up transient is within the bound too).
+    factor : float
+        How many times the bound a force must reach to be numerics.
 
     Returns
     -------
@@ -151,13 +153,13 @@ def find_envelope_breaches(state: KinematicState, loads: Loads, plate: Plate, fl
     time = np.asarray(loads.time, dtype=float)
     ratio = envelope_ratio(state, loads, plate, fluid, stream)
     judged = np.ones(len(time), bool) if window is None else np.asarray(window, bool)
-    above = judged & (ratio > 1.0)
+    above = judged & (ratio > min(1.0, factor))
     # runs of consecutive samples above the bound
     edges = np.flatnonzero(np.diff(np.concatenate([[0], above.astype(np.int8), [0]])))
     breaches = []
     for first, stop in zip(edges[::2], edges[1::2], strict=True):
         peak = first + int(np.argmax(ratio[first:stop]))
-        if ratio[peak] <= BREACH_FACTOR:
+        if ratio[peak] <= factor:
             continue
         start_s = time[max(first - 1, 0)]
         end_s = time[min(stop, len(time) - 1)]

@@ -36,7 +36,9 @@ def campaign() -> None:
 @click.option("--scheduler", default=None,
               help="Address of an existing dask scheduler (tcp://host:8786) instead of a "
                    "LocalCluster, e.g. one from dask-jobqueue's SLURMCluster.")
-@click.option("--retry-failed", is_flag=True, help="Rerun cases that failed before.")
+@click.option("--retry-failed", is_flag=True, help="Rerun cases that failed before, and "
+              "finished cases whose forces leave what the motion can drive (status 'lost'; "
+              "their records kept as <case>.lost.h5).")
 @click.option("--keep-cases", is_flag=True, help="Keep the OpenFOAM case folders.")
 @click.option("--single-precision", is_flag=True,
               help="Store the records in float32, like the shipped fixtures (half the size).")
@@ -82,8 +84,9 @@ def run_cmd(case_file: Path, out_dir: Path, frequencies: str | None,
 @click.argument("out_dir", type=click.Path(file_okay=False, exists=True, path_type=Path))
 @click.option("--json", "as_json", is_flag=True, help="Print the statuses as JSON.")
 def status_cmd(out_dir: Path, as_json: bool) -> None:
-    """Per-case status of the campaign in OUT_DIR (done, failed with why, started with how
-    far its solver got, pending)."""
+    """Per-case status of the campaign in OUT_DIR (done, lost: finished with forces beyond
+    what the motion can drive, failed with why, started with how far its solver got,
+    pending)."""
     from mfflap.campaign.execute import campaign_status
 
     statuses = campaign_status(out_dir)
@@ -92,8 +95,8 @@ def status_cmd(out_dir: Path, as_json: bool) -> None:
         return
     for s in statuses:
         click.echo(f"{s.state:8s} {s.case_id}  {s.message}")
-    counts = {k: sum(s.state == k for s in statuses) for k in ("done", "failed", "started",
-                                                                 "pending")}
+    counts = {k: sum(s.state == k for s in statuses) for k in ("done", "lost", "failed",
+                                                                 "started", "pending")}
     click.echo(", ".join(f"{v} {k}" for k, v in counts.items()))
 
 

@@ -182,9 +182,12 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
     SOURCE is an OpenFOAM case folder written by mfflap, or a Fluent report file (.out) with
     force and moment columns and the flow time. Numerical bursts after --discard (a few
     time steps where the solver lost its pressure coupling, mfflap.cfd.bursts) are bridged
-    before the comparison and listed; means are time averages over the solver's steps.
+    before the comparison and listed, and so are stretches whose forces the motion cannot
+    have driven (a run that lost its numerics, mfflap.cfd.force_envelope: listed, not
+    bridged); means are time averages over the solver's steps.
     """
     from mfflap.cfd.bursts import bridge_load_bursts
+    from mfflap.cfd.force_envelope import find_envelope_breaches
     from mfflap.cfd.openfoam.forces import read_forces
     from mfflap.cfd.openfoam.loads import imposed_state, to_loads
     from mfflap.config import load_case
@@ -225,6 +228,8 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
         raise click.UsageError(f"--discard {discard} s leaves fewer than two samples")
     t = history.time[keep]
     cfd_loads, bursts = bridge_load_bursts(cfd_loads, keep)
+    breaches = find_envelope_breaches(state, cfd_loads, case.plate, case.fluid, case.flow,
+                                      window=keep)
     thrust, power = thrust_and_power(cfd_loads, state)
     m_thrust, m_power = thrust_and_power(model_loads, state)
     thrust, power, m_thrust, m_power = (a[keep] for a in (thrust, power, m_thrust, m_power))
@@ -232,7 +237,8 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
            "n_samples": len(history.time), "end_time": float(history.time[-1]),
            "cfd_mean_thrust": time_mean(t, thrust), "model_mean_thrust": time_mean(t, m_thrust),
            "cfd_mean_power": time_mean(t, power), "model_mean_power": time_mean(t, m_power),
-           "numerical_bursts": [b.describe() for b in bursts]}
+           "numerical_bursts": [b.describe() for b in bursts],
+           "forces_beyond_what_the_motion_can_drive": [b.describe() for b in breaches]}
     for name in ("normal_force", "tangential_force", "moment"):
         a, b = getattr(model_loads, name)[keep], getattr(cfd_loads, name)[keep]
         out[f"nrmse_{name}"] = float(nrmse(a, b))
