@@ -195,3 +195,21 @@ def test_command_writes_hdf5_with_both_manifests_and_a_figure(tmp_path):
     assert fig.stat().st_size > 10_000
     res = CliRunner().invoke(cli, ["campaign", "compare", str(a), str(COARSE)])
     assert res.exit_code == 0 and "only in B: 1 case(s)" in res.output
+
+
+def test_a_run_that_lost_its_numerics_is_timed_and_left_out_of_the_medians():
+    """The shipped f = 1 Hz, h = 0.5 m, phi = 135 deg run lost its numerics from t = 0.79 s
+    to its end (mfflap.cfd.force_envelope): compared with itself, both sides carry the lost
+    time, and a campaign comparison's medians are those of the other cases."""
+    from mfflap.campaign.compare import CampaignComparison
+
+    lost = read_record(fixture_dir("table1_coarse") / "f1p000_h0p500_phi135p0.h5")
+    kept = read_record(fixture_dir("table1_coarse") / "f1p000_h0p300_phi090p0.h5")
+    bad = compare_records(lost, lost)
+    assert bad.lost_a_s == bad.lost_b_s == pytest.approx(3.0 - 0.79, abs=0.02)
+    good = compare_records(kept, kept)
+    assert good.lost_a_s == good.lost_b_s == 0.0
+    worse = dataclasses.replace(bad, nrmse_normal_force=5.0)  # what a lost run does to it
+    summary = CampaignComparison("a", "b", [worse, good], [], []).summary()
+    assert summary["n_cases_compared"] == 1
+    assert summary["max_nrmse_normal_force"] == good.nrmse_normal_force

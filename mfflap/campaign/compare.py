@@ -6,7 +6,9 @@ campaign B (the reference) on B's time base after the start-up: NRMSE and Pearso
 F_t and M, and the relative difference of mean thrust and mean input power. Numerical bursts
 (:mod:`mfflap.cfd.bursts`) are bridged in both before comparing, as identification does, and
 counted, so a comparison of, say, the fixtures at max Co 2 against max Co 4 separates the
-bursts from the time-step error. The CPU time of each run is kept beside.
+bursts from the time-step error; so are stretches whose forces the motion cannot have driven
+(:mod:`mfflap.cfd.force_envelope`), timed, and the summary leaves out the cases with them.
+The CPU time of each run is kept beside.
 """
 
 from __future__ import annotations
@@ -17,11 +19,16 @@ from pathlib import Path
 
 import numpy as np
 
+from mfflap.campaign.execute import _bound_setup
 from mfflap.campaign.records import CfdRecord, read_records
-from mfflap.cfd.bursts import bridge_load_bursts
+from mfflap.cfd.bursts import bridge_bursts, bridge_load_bursts
+from mfflap.cfd.force_envelope import find_envelope_breaches
 from mfflap.errors import ConfigError, MfflapError
+from mfflap.hydro.loads import Loads
 from mfflap.metrics import nrmse, pearson, time_mean
+from mfflap.parameters import Fluid, FreeStream, Plate
 from mfflap.performance import thrust_and_power
+from mfflap.toml_io import read_toml
 
 COMPONENTS = ("normal_force", "tangential_force", "moment")
 #: parameters that describe how a record is kept, not the motion
@@ -47,6 +54,10 @@ class CaseComparison:
     mean_power_b_w: float
     n_bursts_a: int
     n_bursts_b: int
+    #: seconds after the start whose forces the motion cannot have driven (a run that lost
+    #: its numerics, :mod:`mfflap.cfd.force_envelope`; bridged like bursts before comparing)
+    lost_a_s: float
+    lost_b_s: float
     cpu_time_a_s: float
     cpu_time_b_s: float
 
@@ -85,14 +96,18 @@ class CampaignComparison:
     only_b: list[str]
 
     def summary(self) -> dict[str, float]:
-        """Median and largest NRMSE per component, and the CPU ratio A / B over all cases."""
+        """Median and largest NRMSE per component and the median thrust difference over the
+        cases where neither run lost its numerics (all cases if every one did), their
+        number, and the CPU ratio A / B over all cases."""
         out: dict[str, float] = {}
+        kept = [c for c in self.cases if c.lost_a_s == 0 and c.lost_b_s == 0] or self.cases
+        out["n_cases_compared"] = len(kept)
         for k in COMPONENTS:
-            values = np.array([getattr(c, f"nrmse_{k}") for c in self.cases])
+            values = np.array([getattr(c, f"nrmse_{k}") for c in kept])
             out[f"median_nrmse_{k}"] = float(np.median(values))
             out[f"max_nrmse_{k}"] = float(np.max(values))
         out["median_abs_thrust_difference"] = float(np.nanmedian(
-            [abs(c.thrust_difference) for c in self.cases]))
+            [abs(c.thrust_difference) for c in kept]))
         out["cpu_ratio"] = _ratio(sum(c.cpu_time_a_s for c in self.cases),
                                   sum(c.cpu_time_b_s for c in self.cases))
         return out
@@ -102,9 +117,12 @@ def _motion_parameters(record: CfdRecord) -> dict:
     return {k: v for k, v in record.parameters.items() if k not in _NOT_MOTION}
 
 
-def compare_records(a: CfdRecord, b: CfdRecord, start_s: float | None = None
-                    ) -> CaseComparison:
+def compare_records(a: CfdRecord, b: CfdRecord, start_s: float | None = None,
+                    bound: tuple[Plate, Fluid, FreeStream] | None = None) -> CaseComparison:
     """A against B for one motion, after ``start_s`` (default: the start-up ramp).
+
+    Stretches whose forces the motion cannot have driven (``bound``: plate, fluid and stream
+    of the force bound, by default the package's) are bridged like bursts and timed.
 
     Raises
     ------
@@ -126,6 +144,20 @@ def compare_records(a: CfdRecord, b: CfdRecord, start_s: float | None = None
     t = b.time[keep]
     loads_a, bursts_a = bridge_load_bursts(a.loads, a.time >= start)
     loads_b, bursts_b = bridge_load_bursts(b.loads, b.time >= start)
+    lost = {}
+    for label, record in (("a", a), ("b", b)):
+        loads = loads_a if label == "a" else loads_b
+        breaches = find_envelope_breaches(record.state, loads,
+                                          *(bound or (Plate(), Fluid(), FreeStream())),
+                                          window=record.time >= start)
+        lost[f"lost_{label}_s"] = float(sum(x.duration_s for x in breaches))
+        if breaches:
+            loads = Loads(loads.time, *(bridge_bursts(loads.time, getattr(loads, k), breaches)
+                                        for k in COMPONENTS), source=loads.source)
+            if label == "a":
+                loads_a = loads
+            else:
+                loads_b = loads
     metrics = {}
     for k in COMPONENTS:
         ref = getattr(loads_b, k)[keep]
@@ -139,7 +171,7 @@ def compare_records(a: CfdRecord, b: CfdRecord, start_s: float | None = None
         means[f"mean_thrust_{label}_n"] = time_mean(record.time[window], thrust[window])
         means[f"mean_power_{label}_w"] = time_mean(record.time[window], power[window])
     return CaseComparison(a.name, start, float(end), **metrics, **means,
-                          n_bursts_a=len(bursts_a), n_bursts_b=len(bursts_b),
+                          n_bursts_a=len(bursts_a), n_bursts_b=len(bursts_b), **lost,
                           cpu_time_a_s=float(a.provenance.get("cpu_time_s", np.nan)),
                           cpu_time_b_s=float(b.provenance.get("cpu_time_s", np.nan)))
 
@@ -159,7 +191,9 @@ def compare_campaigns(folder_a: str | Path, folder_b: str | Path,
     if not common:
         raise MfflapError(f"{folder_a} and {folder_b} have no finished case in common "
                           f"({len(records_a)} and {len(records_b)} records)")
-    cases = [compare_records(records_a[n], records_b[n], start_s) for n in common]
+    manifest = Path(folder_b) / "campaign.toml"
+    bound = _bound_setup(read_toml(manifest)) if manifest.is_file() else None
+    cases = [compare_records(records_a[n], records_b[n], start_s, bound) for n in common]
     return CampaignComparison(str(folder_a), str(folder_b), cases,
                               sorted(set(records_a) - set(records_b)),
                               sorted(set(records_b) - set(records_a)))

@@ -72,6 +72,7 @@ def _failed_path(out: Path, case_id: str) -> Path:
 
 
 def _bound_setup(manifest: dict[str, Any]) -> tuple[Plate, Fluid, FreeStream]:
+    """Plate, fluid and stream of a campaign manifest (the force bound's)."""
     setup = manifest.get("setup", {})
     return (Plate(**setup.get("plate", {})), Fluid(**setup.get("fluid", {})),
             FreeStream(**setup.get("stream", {})))

@@ -132,14 +132,18 @@ def compare_cmd(folder_a: Path, folder_b: Path, start_s: float | None, output: P
         return
     width = max(len(c.case_id) for c in result.cases)
     click.echo(f"{'case':{width}s} {'F_n':>7s} {'F_t':>7s} {'M':>7s} {'thrust':>8s} "
-               f"{'bursts A/B':>10s} {'CPU A/B':>8s}    (NRMSE; thrust: (A - B) / |B|)")
+               f"{'bursts A/B':>10s} {'lost s A/B':>11s} {'CPU A/B':>8s}    "
+               "(NRMSE; thrust: (A - B) / |B|)")
     for c in result.cases:
         click.echo(f"{c.case_id:{width}s} {c.nrmse_normal_force:7.2%} "
                    f"{c.nrmse_tangential_force:7.2%} {c.nrmse_moment:7.2%} "
                    f"{c.thrust_difference:+8.1%} {c.n_bursts_a:>5d}/{c.n_bursts_b:<4d} "
-                   f"{c.cpu_ratio:8.2f}")
+                   f"{c.lost_a_s:>5.2f}/{c.lost_b_s:<5.2f} {c.cpu_ratio:8.2f}")
     s = result.summary()
-    click.echo(f"{len(result.cases)} cases; NRMSE median / max: F_n "
+    lost = len(result.cases) - int(s["n_cases_compared"])
+    click.echo(f"{len(result.cases)} cases" + (f" ({lost} with lost stretches left out of "
+                                               "the medians)" if lost else "")
+               + "; NRMSE median / max: F_n "
                f"{s['median_nrmse_normal_force']:.2%} / {s['max_nrmse_normal_force']:.2%}, M "
                f"{s['median_nrmse_moment']:.2%} / {s['max_nrmse_moment']:.2%}; CPU A / B "
                f"{s['cpu_ratio']:.2f}")
