@@ -198,12 +198,13 @@ def test_command_writes_hdf5_with_both_manifests_and_a_figure(tmp_path):
 
 
 def test_a_run_that_lost_its_numerics_is_timed_and_left_out_of_the_medians():
-    """The shipped f = 1 Hz, h = 0.5 m, phi = 135 deg run lost its numerics from t = 0.79 s
+    """The first shipped f = 1 Hz, h = 0.5 m, phi = 135 deg run lost its numerics from t = 0.79 s
     to its end (mfflap.cfd.force_envelope): compared with itself, both sides carry the lost
     time, and a campaign comparison's medians are those of the other cases."""
     from mfflap.campaign.compare import CampaignComparison
 
-    lost = read_record(fixture_dir("table1_coarse") / "f1p000_h0p500_phi135p0.h5")
+    lost = read_record(Path(__file__).parent / "data" / "openfoam_v1912" / "lost_numerics"
+                       / "f1p000_h0p500_phi135p0.h5")
     kept = read_record(fixture_dir("table1_coarse") / "f1p000_h0p300_phi090p0.h5")
     bad = compare_records(lost, lost)
     assert bad.lost_a_s == bad.lost_b_s == pytest.approx(3.0 - 0.79, abs=0.02)

@@ -122,9 +122,10 @@ def _retimed(rec, time, keep=slice(None)):
 
 
 def test_adaptive_time_step_is_not_a_gap_but_a_missing_stretch_is():
-    # like a real run (fixture f1p000_h0p500_phi135p0): the step grows 20 % a step from
-    # 1.2e-4 s to 2.8e-3 s at the start, then falls to 2.9e-5 s when the flow gets violent,
-    # a hundred times below its early size
+    # like a real run (f1p000_h0p500_phi135p0 of tests/data/openfoam_v1912/lost_numerics):
+    # the step grows 20 % a step from 1.2e-4 s to 2.8e-3 s at the start, then falls to
+    # 2.9e-5 s (there because the run lost its numerics), a hundred times below its early
+    # size; the time base alone must not refuse it
     rng = np.random.default_rng(1)
     rec = synthetic_records(rng, subset=grid_cases(IdentificationGrid(), [1.0], [0.3], [90]))[0]
     n = len(rec.time)

@@ -78,19 +78,26 @@ def _bound_setup(manifest: dict[str, Any]) -> tuple[Plate, Fluid, FreeStream]:
             FreeStream(**setup.get("stream", {})))
 
 
-def lost_numerics(record_path: Path, plate: Plate, fluid: Fluid,
-                  stream: FreeStream) -> str | None:
-    """Why a finished record's run lost its numerics after its ramp (forces beyond what the
-    motion can drive, :mod:`mfflap.cfd.force_envelope`), or None if it did not."""
+def lost_numerics(record_path: Path, plate: Plate, fluid: Fluid, stream: FreeStream,
+                  max_lost_share: float = 0.05) -> str | None:
+    """Why a finished record's run counts as lost, or None.
+
+    A run is lost where its forces leave what the motion can drive
+    (:mod:`mfflap.cfd.force_envelope`) and those stretches with its numerical bursts cover
+    more than ``max_lost_share`` of the time after its ramp: what identification leaves out
+    (:func:`mfflap.identification.data.prepare_case`; shorter stretches it bridges).
+    """
     from mfflap.cfd.bursts import bridge_load_bursts
     from mfflap.cfd.force_envelope import find_envelope_breaches
 
     rec = read_record(record_path)
-    loads, _ = bridge_load_bursts(rec.loads, rec.time >= 0.0)
     after_ramp = rec.time >= float(rec.parameters.get("ramp_time", 0.0))
+    loads, bursts = bridge_load_bursts(rec.loads, after_ramp)
     breaches = find_envelope_breaches(rec.state, loads, plate, fluid, stream,
                                       window=after_ramp)
-    if not breaches:
+    span_s = rec.time[-1] - rec.time[after_ramp][0] if after_ramp.any() else 0.0
+    lost_s = sum(b.duration_s for b in breaches) + sum(b.duration_s for b in bursts)
+    if not breaches or lost_s <= max_lost_share * span_s:
         return None
     return (f"its forces leave what the motion can drive, {breaches[0].describe()}; "
             "identification leaves it out; --retry-failed reruns it")
