@@ -284,6 +284,21 @@ def test_forces_beyond_the_bound_are_retried_from_the_written_time_before_them(t
 
 
 @pytest.mark.openfoam
+def test_a_run_leaving_the_bound_is_stopped_while_it_runs(tmp_path):
+    """The forces are checked while pimpleFoam runs: a run beyond the (scaled-down) bound
+    stops long before its end time instead of computing the lost stretch."""
+    from mfflap.cfd.openfoam.forces import read_forces
+    from mfflap.errors import CfdRunError
+
+    case_dir = tmp_path / "c"
+    with pytest.raises(CfdRunError, match="pimpleFoam stopped: the forces leave what the "
+                       "motion can drive, t = 0.0"):
+        run_motion(case_dir, SHORT.motion(), "c", {}, 0.5, ramp_time=0.02,
+                   force_bound_factor=1e-6, bound_watch_every_s=0.5, max_retries=0)
+    assert read_forces(case_dir).time[-1] < 0.25
+
+
+@pytest.mark.openfoam
 def test_retries_of_an_earlier_call_reach_the_record_of_the_call_that_finishes(tmp_path):
     """A first call switches the far field after a 'collapse' and gives up (one retry); a
     later call resumes the same case to the end. The record says the far field changed,

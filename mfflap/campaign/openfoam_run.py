@@ -5,6 +5,7 @@ from __future__ import annotations
 import re
 import shutil
 import time
+from collections.abc import Callable
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
@@ -17,7 +18,7 @@ from mfflap.cfd.openfoam.loads import imposed_state, to_loads
 from mfflap.cfd.openfoam.runner import is_time_folder, latest_solution_time, run_case
 from mfflap.cfd.openfoam.solver_log import solver_provenance
 from mfflap.cfd.openfoam.writer import MeshSpec, SolverSettings, write_case
-from mfflap.errors import CfdRunError
+from mfflap.errors import CfdRunError, MfflapError
 from mfflap.kinematics.continuous import Motion
 from mfflap.parameters import Fluid, FreeStream, Plate
 from mfflap.toml_io import read_toml
@@ -164,6 +165,30 @@ def _forces_beyond_bound(record: CfdRecord, ramp_time: float, plate: Plate | Non
     return breaches[0] if breaches else None
 
 
+#: how a run stopped by the force bound while running says so (:func:`run_motion`)
+_BOUND_STOP = "the forces leave what the motion can drive"
+
+
+def _bound_watch(case_dir: Path, motion: Motion, ramp_time: float, plate: Plate | None,
+                 fluid: Fluid | None, stream: FreeStream | None, factor: float
+                 ) -> Callable[[], str | None]:
+    """A check of a running case's forces so far against the bound, for
+    :func:`mfflap.cfd.openfoam.runner.run_case`'s ``watch``: the reason to stop, or None."""
+    def watch() -> str | None:
+        try:
+            meta = read_toml(case_dir / "mfflap_case.toml")
+            history = read_forces(case_dir)
+            state = imposed_state(motion, history.time, float(meta["ramp_time"]))
+            loads = to_loads(history, state, float(meta["span"]), float(meta["depth"]),
+                             source="watch", frame=str(meta.get("frame", "inertial")))
+        except (MfflapError, ValueError, OSError):  # no output yet, or a line being written
+            return None
+        record = CfdRecord("watch", state, loads, {})
+        breach = _forces_beyond_bound(record, ramp_time, plate, fluid, stream, factor)
+        return None if breach is None else f"{_BOUND_STOP}, {breach.describe()}"
+    return watch
+
+
 def _apply_next_remedy(case_dir: Path, n_done: int, max_retries: int) -> str:
     """Change the case for its next retry; return what changed: the inletOutlet far field
     first (if it had the freestream one), then half the Courant limit, the last time also
@@ -187,7 +212,8 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
                timeout_s: float = 6 * 3600.0, y_plus: bool = False,
                n_procs: int = 1, max_retries: int = 3,
                min_time_step: float = 1e-7,
-               force_bound_factor: float = BREACH_FACTOR) -> CfdRecord:
+               force_bound_factor: float = BREACH_FACTOR,
+               bound_watch_every_s: float = 60.0) -> CfdRecord:
     """Write (unless already written), run or resume, and parse one OpenFOAM case.
 
     Fields are written four times per run so that a killed run resumes from its last
@@ -198,7 +224,9 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
     first-order upwind convection of k and epsilon. A run that finishes with forces after
     its ramp beyond ``force_bound_factor`` times what the motion can drive
     (:mod:`mfflap.cfd.force_envelope`: it lost its numerics gradually) is retried the same
-    way from its last written time before that (:func:`rewind_case`). The retries are
+    way from its last written time before that (:func:`rewind_case`); its forces are
+    checked every ``bound_watch_every_s`` seconds while it runs, so that such a run stops
+    there instead of computing its lost stretch to the end. The retries are
     recorded in the case (:data:`RETRY_LOG`) and in the record's provenance, those of
     earlier calls that resumed the same case included: the case's settings changed there,
     not in mfflap_case.toml.
@@ -223,19 +251,24 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
         tmp.rename(case_dir)
     started = time.perf_counter()
     retries = []
+    watch = _bound_watch(case_dir, motion, ramp_time, plate, fluid, stream, force_bound_factor)
     while True:
         try:
             run_case(case_dir, timeout_s=timeout_s, n_procs=n_procs,
-                     min_time_step=min_time_step)
+                     min_time_step=min_time_step, watch=watch,
+                     watch_every_s=bound_watch_every_s)
         except CfdRunError as exc:
-            if "time step collapsed" not in str(exc) or len(retries) >= max_retries:
+            if _BOUND_STOP in str(exc) and len(retries) < max_retries:
+                pass  # stopped early by the bound: rewound and retried below
+            elif "time step collapsed" not in str(exc) or len(retries) >= max_retries:
                 raise
-            retries.append(_apply_next_remedy(case_dir, len(retries), max_retries))
-            # kept in the case, so that a run resumed by a later call still records them
-            with open(case_dir / RETRY_LOG, "a") as fh:
-                fh.write(f"time step collapsed; resumed from the last written time with "
-                         f"{retries[-1]}\n")
-            continue
+            else:
+                retries.append(_apply_next_remedy(case_dir, len(retries), max_retries))
+                # kept in the case, so that a run resumed by a later call still records them
+                with open(case_dir / RETRY_LOG, "a") as fh:
+                    fh.write(f"time step collapsed; resumed from the last written time with "
+                             f"{retries[-1]}\n")
+                continue
         record = record_from_case(case_dir, motion, name, parameters, plate)
         breach = _forces_beyond_bound(record, ramp_time, plate, fluid, stream,
                                       force_bound_factor)

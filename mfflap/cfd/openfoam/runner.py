@@ -8,6 +8,7 @@ import re
 import shutil
 import subprocess
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 from mfflap.errors import CfdRunError
@@ -82,12 +83,16 @@ def solver_progress(case_dir: str | Path, log_name: str = "log.pimpleFoam"
 def run_application(case_dir: str | Path, application: str, timeout_s: float = 3600.0,
                     max_courant_abort: float = 100.0, n_procs: int = 1,
                     extra_args: tuple[str, ...] = (), min_time_step: float = 1e-7,
-                    poll_s: float = 2.0) -> Path:
+                    poll_s: float = 2.0, watch: Callable[[], str | None] | None = None,
+                    watch_every_s: float = 60.0) -> Path:
     """Run one OpenFOAM application in a case; return the log path.
 
     The log is watched while the solver runs: a time step that collapses below
     ``min_time_step`` (an instability that the adaptive time step hides: the Courant number
     stays bounded while dt goes to zero and the run never ends) stops the run at once.
+    ``watch``, called every ``watch_every_s`` seconds while it runs, stops it too when it
+    returns a reason (e.g. forces beyond what the motion can drive:
+    :func:`mfflap.campaign.openfoam_run.run_motion`).
 
     Raises
     ------
@@ -106,6 +111,7 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
         command = ["mpirun", "-np", str(n_procs), "--allow-run-as-root", "--oversubscribe",
                    *command, "-parallel"]
     started = time.monotonic()
+    watched = started
     with open(log, "a") as fh:
         proc = subprocess.Popen(command, stdout=fh, stderr=subprocess.STDOUT, env=_env())
         try:
@@ -125,6 +131,12 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
                         f"{application} diverged: the time step collapsed to "
                         f"{collapsed[0]:.3g} s at t = {collapsed[1]:.6g} s (an instability "
                         "held at the Courant limit)", case=str(case_dir), log_tail=_tail(log))
+                if watch is not None and time.monotonic() - watched >= watch_every_s:
+                    watched = time.monotonic()
+                    reason = watch()
+                    if reason is not None:
+                        raise CfdRunError(f"{application} stopped: {reason}",
+                                          case=str(case_dir), log_tail=_tail(log))
         finally:
             if proc.poll() is None:
                 proc.kill()
@@ -194,7 +206,8 @@ def set_start_time(case_dir: str | Path, time_name: str) -> None:
 
 
 def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
-             min_time_step: float = 1e-7) -> None:
+             min_time_step: float = 1e-7, watch: Callable[[], str | None] | None = None,
+             watch_every_s: float = 60.0) -> None:
     """blockMesh (once), checkMesh (once), then pimpleFoam from the latest written time.
 
     The latest written time is the latest folder holding every field
@@ -221,4 +234,4 @@ def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
             run_application(case_dir, "decomposePar", timeout_s=300)
     set_start_time(case_dir, latest_solution_time(case_dir) or "0")
     run_application(case_dir, "pimpleFoam", timeout_s=timeout_s, n_procs=n_procs,
-                    min_time_step=min_time_step)
+                    min_time_step=min_time_step, watch=watch, watch_every_s=watch_every_s)
