@@ -10,6 +10,7 @@ from mfflap.campaign.records import fixture_dir, read_record, read_records
 from mfflap.cfd.bursts import bridge_load_bursts, find_load_bursts
 from mfflap.cfd.force_envelope import (
     BREACH_FACTOR,
+    FLOW_START_STEPS,
     MAX_NORMAL_FORCE_COEFFICIENT,
     envelope_ratio,
     find_envelope_breaches,
@@ -118,6 +119,26 @@ def test_a_growing_oscillation_injected_into_a_real_run_is_found_from_its_growth
     breaches = find_envelope_breaches(rec.state, lost, PLATE, FLUID, STREAM)
     assert len(breaches) == 1 and 2.5 < breaches[0].start_s < 2.85
     assert breaches[0].end_s == t[-1]
+
+
+def test_the_stream_starting_impulsively_is_not_judged_but_the_same_spike_later_is():
+    """A real coarse run of a motion starting at rest (ramp 0) gives 4.5 and 3.3 times the
+    bound at its first two time steps, the flow's start: the first FLOW_START_STEPS samples
+    are left unjudged, the same spike one sample later is found."""
+    time = np.linspace(1.2e-4, 0.03, 60)
+    state = _state(time)
+    bound = normal_force_bound_n(state, PLATE, FLUID, STREAM)
+    normal = 0.5 * bound
+    for first in (0, FLOW_START_STEPS - 2, FLOW_START_STEPS):
+        spiked = normal.copy()
+        spiked[first:first + 2] = [4.5 * bound[first], 3.3 * bound[first + 1]]
+        loads = Loads(time, spiked, np.zeros_like(time), np.zeros_like(time))
+        breaches = find_envelope_breaches(state, loads, PLATE, FLUID, STREAM)
+        if first + 2 <= FLOW_START_STEPS:
+            assert breaches == []
+        else:
+            (breach,) = breaches
+            assert breach.peak_s == time[first] and breach.peak_ratio == pytest.approx(4.5)
 
 
 def test_identification_leaves_a_lost_run_out_and_bridges_a_short_stretch():
