@@ -205,6 +205,15 @@ def _apply_next_remedy(case_dir: Path, n_done: int, max_retries: int) -> str:
 RETRY_LOG = "mfflap_retries.txt"
 
 
+def _retries_tried(case_dir: Path) -> str:
+    """The case's retries so far (:data:`RETRY_LOG`, across calls) in one line, or ''."""
+    log = case_dir / RETRY_LOG
+    lines = log.read_text().splitlines() if log.is_file() else []
+    if not lines:
+        return ""
+    return f"after {len(lines)} retr{'y' if len(lines) == 1 else 'ies'}: " + "; ".join(lines)
+
+
 def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict[str, Any],
                end_time: float, *, mesh: str | MeshSpec = "coarse", ramp_time: float = 0.0,
                solver: SolverSettings | None = None, plate: Plate | None = None,
@@ -261,7 +270,11 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
             if _BOUND_STOP in str(exc) and len(retries) < max_retries:
                 pass  # stopped early by the bound: rewound and retried below
             elif "time step collapsed" not in str(exc) or len(retries) >= max_retries:
-                raise
+                tried = _retries_tried(case_dir)
+                if not tried:
+                    raise
+                raise CfdRunError(f"{getattr(exc, '_message', exc)}; {tried}", case=exc.case,
+                                  log_tail=exc.log_tail) from exc
             else:
                 retries.append(_apply_next_remedy(case_dir, len(retries), max_retries))
                 # kept in the case, so that a run resumed by a later call still records them
@@ -277,7 +290,7 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
         if len(retries) >= max_retries:
             raise CfdRunError(f"the forces leave what the motion can drive, {breach.describe()}"
                               f": the run lost its numerics, and {len(retries)} retries did "
-                              "not cure it", case=str(case_dir))
+                              f"not cure it; {_retries_tried(case_dir)}", case=str(case_dir))
         resume = rewind_case(case_dir, breach.start_s)
         retries.append(_apply_next_remedy(case_dir, len(retries), max_retries))
         with open(case_dir / RETRY_LOG, "a") as fh:
