@@ -258,31 +258,62 @@ def test_forces_beyond_the_bound_are_retried_from_the_written_time_before_them(t
     """Every attempt 'loses its numerics' after the ramp (the bound is scaled down a
     millionfold): each retry rewinds to the last time written before the breach (0.03 s;
     the case keeps the last two of its four writes), drops the later fields and force
-    output, changes the case like a collapse does and reruns pimpleFoam from there; the
-    fourth breach is reported with where it began."""
+    output, changes the case like a collapse does and reruns pimpleFoam from there. The
+    third breach, at the same flow time after the Courant limit was halved, ends the
+    retries: the loss does not move with the time step."""
     from mfflap.cfd.openfoam.forces import read_forces
     from mfflap.errors import CfdRunError
 
     case_dir = tmp_path / "c"
     with pytest.raises(CfdRunError, match=r"the forces leave what the motion can drive, "
-                       r"t = 0\.03.*3 retries did not cure it; after 3 retries: forces beyond "
-                       r".* with maxCo 1 and first-order upwind k and epsilon"):
+                       r"t = 0\.03.*where they left it at max Co 4 \(t = 0\.03.*\): the loss "
+                       r"does not move with the time step \(max Co 2\).*after 2 retries: "
+                       r"forces beyond .* with the inletOutlet far field; forces beyond .* "
+                       r"with maxCo 2"):
         run_motion(case_dir, SHORT.motion(), "c", {}, 0.04, ramp_time=0.035,
                    force_bound_factor=1e-6)
     notes = (case_dir / "mfflap_retries.txt").read_text().splitlines()
-    assert len(notes) == 3
+    assert len(notes) == 2
     assert all(n.startswith("forces beyond what the motion can drive from t = 0.03")
                and " resumed from t = 0.03 s with " in n for n in notes)
-    assert [n.split(" with ")[-1] for n in notes] == [
-        "the inletOutlet far field", "maxCo 2", "maxCo 1 and first-order upwind k and epsilon"]
+    assert [n.split(" with ")[-1] for n in notes] == ["the inletOutlet far field", "maxCo 2"]
     log = (case_dir / "log.pimpleFoam").read_text()
-    assert log.count("Starting time loop") == 4
+    assert log.count("Starting time loop") == 3
     assert log.count("Time = 0.01\n") == 1  # the first 0.03 s ran once
     assert sorted(p.name for p in (case_dir / "postProcessing" / "forces").iterdir()) == [
         "0", "0.03"]
     history = read_forces(case_dir)  # the last attempt's forces from 0.03 s on, one history
     assert np.all(np.diff(history.time) > 0)
     assert history.time[-1] == pytest.approx(0.04, abs=1e-3)
+
+
+@pytest.mark.openfoam
+def test_a_loss_that_moves_with_the_time_step_keeps_being_retried(tmp_path, monkeypatch):
+    """Real pimpleFoam reruns with a scripted bound judgement: a breach that moves by more
+    than SAME_BREACH_FRACTION of c / U after the Courant limit was halved is retried on to
+    the last remedy (max Co 1, upwind k-epsilon), unlike one that stays put."""
+    from mfflap.campaign import openfoam_run
+    from mfflap.cfd.force_envelope import EnvelopeBreach
+    from mfflap.errors import CfdRunError
+
+    starts = iter([0.036, 0.037, 0.012, 0.039])  # the third moved by 25 ms > 0.02 c / U
+
+    def scripted(*args, **kwargs):
+        start = next(starts)
+        return EnvelopeBreach(start, start + 1e-3, 3, start, 5.0)
+
+    monkeypatch.setattr(openfoam_run, "_forces_beyond_bound", scripted)
+    from mfflap.parameters import FreeStream, Plate
+    assert openfoam_run.SAME_BREACH_FRACTION * Plate().chord / FreeStream().velocity < 0.025
+    case_dir = tmp_path / "c"
+    with pytest.raises(CfdRunError, match="3 retries did not cure it"):
+        run_motion(case_dir, SHORT.motion(), "c", {}, 0.04, ramp_time=0.035,
+                   bound_watch_every_s=1e6)
+    notes = (case_dir / "mfflap_retries.txt").read_text().splitlines()
+    assert [n.split(" with ")[-1] for n in notes] == [
+        "the inletOutlet far field", "maxCo 2", "maxCo 1 and first-order upwind k and epsilon"]
+    assert "from t = 0.012 s; resumed from t = 0 s" in notes[2]  # before any kept write
+    assert (case_dir / "log.pimpleFoam").read_text().count("Starting time loop") == 4
 
 
 @pytest.mark.openfoam

@@ -38,6 +38,14 @@ def lower_courant_limit(case_dir: str | Path, factor: float = 0.5) -> float:
     return value
 
 
+def courant_limit(case_dir: str | Path) -> float:
+    """The case's ``maxCo`` (system/controlDict)."""
+    match = _MAX_CO.search((Path(case_dir) / "system" / "controlDict").read_text())
+    if match is None:
+        raise CfdRunError("no maxCo entry in system/controlDict", case=str(case_dir))
+    return float(match.group(2))
+
+
 _TURBULENCE_DIV = re.compile(r"^(\s*div\(phi,(?:k|epsilon)\)\s+)Gauss [^;]+;", re.M)
 
 
@@ -165,6 +173,10 @@ def _forces_beyond_bound(record: CfdRecord, ramp_time: float, plate: Plate | Non
     return breaches[0] if breaches else None
 
 
+#: two breaches of the force bound this close in flow time, as a fraction of the convective
+#: time c / U, are the same loss (:func:`run_motion`)
+SAME_BREACH_FRACTION = 0.02
+
 #: how a run stopped by the force bound while running says so (:func:`run_motion`)
 _BOUND_STOP = "the forces leave what the motion can drive"
 
@@ -235,7 +247,10 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
     (:mod:`mfflap.cfd.force_envelope`: it lost its numerics gradually) is retried the same
     way from its last written time before that (:func:`rewind_case`); its forces are
     checked every ``bound_watch_every_s`` seconds while it runs, so that such a run stops
-    there instead of computing its lost stretch to the end. The retries are
+    there instead of computing its lost stretch to the end. A run that leaves the bound at
+    the same flow time (within :data:`SAME_BREACH_FRACTION` of c / U) after its Courant
+    limit was lowered is not retried further: no smaller time step cures a loss that does
+    not move with the time step. The retries are
     recorded in the case (:data:`RETRY_LOG`) and in the record's provenance, those of
     earlier calls that resumed the same case included: the case's settings changed there,
     not in mfflap_case.toml.
@@ -244,7 +259,8 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
     ------
     CfdRunError
         For a run that fails or diverges otherwise, or still does after ``max_retries``
-        retries, or whose forces still leave the bound then (the message says where).
+        retries, or whose forces still leave the bound then, or leave it again at the same
+        flow time with a lower Courant limit (the message says where, and the retries).
     """
     case_dir = Path(case_dir)
     solver = solver or SolverSettings(write_interval=end_time / 4)
@@ -260,6 +276,9 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
         tmp.rename(case_dir)
     started = time.perf_counter()
     retries = []
+    same_breach_s = (SAME_BREACH_FRACTION * (plate or Plate()).chord
+                     / abs((stream or FreeStream()).velocity))
+    last_breach: tuple[EnvelopeBreach, float] | None = None  # and the Courant limit then
     watch = _bound_watch(case_dir, motion, ramp_time, plate, fluid, stream, force_bound_factor)
     while True:
         try:
@@ -291,6 +310,16 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
             raise CfdRunError(f"the forces leave what the motion can drive, {breach.describe()}"
                               f": the run lost its numerics, and {len(retries)} retries did "
                               f"not cure it; {_retries_tried(case_dir)}", case=str(case_dir))
+        max_co = courant_limit(case_dir)
+        if (last_breach is not None and max_co < last_breach[1]
+                and abs(breach.start_s - last_breach[0].start_s) <= same_breach_s):
+            raise CfdRunError(
+                f"the forces leave what the motion can drive, {breach.describe()}, where they "
+                f"left it at max Co {last_breach[1]:g} (t = {last_breach[0].start_s:.6g} s): "
+                f"the loss does not move with the time step (max Co {max_co:g}), so no "
+                "smaller one cures it; the mesh, the far field or the turbulence model does "
+                f"not hold this motion; {_retries_tried(case_dir)}", case=str(case_dir))
+        last_breach = (breach, max_co)
         resume = rewind_case(case_dir, breach.start_s)
         retries.append(_apply_next_remedy(case_dir, len(retries), max_retries))
         with open(case_dir / RETRY_LOG, "a") as fh:
