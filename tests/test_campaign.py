@@ -312,7 +312,7 @@ def test_a_loss_that_moves_with_the_time_step_keeps_being_retried(tmp_path, monk
     notes = (case_dir / "mfflap_retries.txt").read_text().splitlines()
     assert [n.split(" with ")[-1] for n in notes] == [
         "the inletOutlet far field", "maxCo 2", "maxCo 1 and first-order upwind k and epsilon"]
-    assert "from t = 0.012 s; resumed from t = 0 s" in notes[2]  # before any kept write
+    assert "from t = 0.012 s at max Co 2; resumed from t = 0 s" in notes[2]  # before any kept write
     assert (case_dir / "log.pimpleFoam").read_text().count("Starting time loop") == 4
 
 
@@ -352,6 +352,118 @@ def test_retries_of_an_earlier_call_reach_the_record_of_the_call_that_finishes(t
                                          "time with the inletOutlet far field")
     assert rec.provenance["solver_far_field"] == "freestream"
 
+
+
+@pytest.mark.openfoam
+def test_a_resumed_run_has_what_is_left_of_its_retries_until_a_rerun_is_requested(tmp_path):
+    """Every attempt 'collapses'. A first call spends its one retry; a second call (a killed
+    campaign resumed) allowed two in all has one left, not two; after request_rerun (what
+    --retry-failed does) a third call has a new budget, its remedy following on from the
+    case's settings (max Co 2 -> 1)."""
+    from mfflap.campaign.openfoam_run import RERUN_REQUESTED, request_rerun
+    from mfflap.errors import CfdRunError
+
+    case_dir = tmp_path / "c"
+    with pytest.raises(CfdRunError, match="after 1 retry:"):
+        run_motion(case_dir, SHORT.motion(), "c", {}, 1.0, ramp_time=0.02, min_time_step=1.0,
+                   max_retries=1)
+    with pytest.raises(CfdRunError, match=r"after 2 retries:.*with maxCo 2 and first-order "
+                       r"upwind k and epsilon\n"):
+        run_motion(case_dir, SHORT.motion(), "c", {}, 1.0, ramp_time=0.02, min_time_step=1.0,
+                   max_retries=2)
+    log = case_dir / "log.pimpleFoam"
+    assert log.read_text().count("Starting time loop") == 4  # 2 + 2, not 2 + 3
+    request_rerun(case_dir)
+    with pytest.raises(CfdRunError, match=r"after 3 retries:.*; rerun requested: .*with maxCo 1\n"):
+        run_motion(case_dir, SHORT.motion(), "c", {}, 1.0, ramp_time=0.02, min_time_step=1.0,
+                   max_retries=1)
+    assert log.read_text().count("Starting time loop") == 6
+    notes = (case_dir / "mfflap_retries.txt").read_text().splitlines()
+    assert notes[2] == RERUN_REQUESTED and len(notes) == 4
+    assert "maxCo           1;" in (case_dir / "system" / "controlDict").read_text()
+
+
+@pytest.mark.openfoam
+def test_an_earlier_calls_breach_counts_for_the_same_flow_time_rule(tmp_path, monkeypatch):
+    """Real pimpleFoam reruns with a scripted bound judgement that always finds the loss at
+    t = 0.036 s. A first call (two retries: inletOutlet at max Co 4, then max Co 2) gives up;
+    a second call allowed three finds it again at max Co 2 and stops at once: the breach of
+    the earlier call at max Co 4, read from the case's retry log, is the same flow time."""
+    from mfflap.campaign import openfoam_run
+    from mfflap.cfd.force_envelope import EnvelopeBreach
+    from mfflap.errors import CfdRunError
+
+    def scripted(*args, **kwargs):
+        return EnvelopeBreach(0.036, 0.037, 3, 0.036, 5.0)
+
+    monkeypatch.setattr(openfoam_run, "_forces_beyond_bound", scripted)
+    case_dir = tmp_path / "c"
+    with pytest.raises(CfdRunError, match="2 retries did not cure it"):
+        run_motion(case_dir, SHORT.motion(), "c", {}, 0.04, ramp_time=0.035,
+                   bound_watch_every_s=1e6, max_retries=2)
+    notes = (case_dir / "mfflap_retries.txt").read_text().splitlines()
+    assert [n.split("; resumed")[0][-20:] for n in notes] == ["t = 0.036 s at max Co 4"[-20:]] * 2
+    with pytest.raises(CfdRunError, match=r"where they left it at max Co 4 \(t = 0\.036 s\): "
+                       r"the loss does not move with the time step \(max Co 2\)"):
+        run_motion(case_dir, SHORT.motion(), "c", {}, 0.04, ramp_time=0.035,
+                   bound_watch_every_s=1e6, max_retries=3)
+    assert (case_dir / "mfflap_retries.txt").read_text().splitlines() == notes  # no retry
+    assert (case_dir / "log.pimpleFoam").read_text().count("Starting time loop") == 4
+
+
+def test_retry_failed_gives_a_failed_case_a_new_budget_of_retries(tmp_path):
+    """A failed case's folder is kept; a plain rerun of the campaign leaves it as it is,
+    --retry-failed marks a new budget of retries in its retry log before running it again
+    (on a real LocalCluster; the case fails again at once, its motion being refused)."""
+    from mfflap.campaign.openfoam_run import RERUN_REQUESTED, RETRY_LOG
+
+    out = tmp_path / "camp"
+    failing = CfdCase(0.0, 0.2, 90.0, 10.0, duration=1.0, ramp_time=0.5)  # f = 0: refused
+    setup = CampaignSetup(timeout_s=60.0)
+    (status,) = run_campaign([failing], out, setup, n_workers=1, progress=False)
+    assert status.state == "failed"
+    retry_log = out / "cases" / failing.case_id / RETRY_LOG
+    retry_log.parent.mkdir(parents=True)
+    retry_log.write_text("time step collapsed; resumed with maxCo 1\n")
+    assert run_campaign([failing], out, setup, n_workers=1, progress=False)[0].state == "failed"
+    assert retry_log.read_text().splitlines() == ["time step collapsed; resumed with maxCo 1"]
+    (again,) = run_campaign([failing], out, setup, n_workers=1, progress=False,
+                            retry_failed=True)
+    assert again.state == "failed" and "frequency must be finite" in again.message
+    assert retry_log.read_text().splitlines() == ["time step collapsed; resumed with maxCo 1",
+                                                  RERUN_REQUESTED]
+
+def test_status_counts_retries_not_rerun_requests(tmp_path):
+    """The retry log's rerun requests are not retries, in a started case's status nor in
+    the budget of its next call."""
+    from mfflap.campaign.openfoam_run import (
+        RERUN_REQUESTED,
+        RETRY_LOG,
+        _earlier_breach,
+        _earlier_retries,
+    )
+
+    out = tmp_path / "camp"
+    case_dir = out / "cases" / SHORT.case_id
+    (case_dir / "0").mkdir(parents=True)
+    (out / "campaign.toml").write_text(
+        f'[setup]\nmesh = "coarse"\n\n[cases.{SHORT.case_id}]\nfrequency = 1.0\n')
+    (case_dir / "mfflap_case.toml").write_text("end_time = 3.0\n")
+    (case_dir / "log.pimpleFoam").write_text(
+        (Path(__file__).parent / "data" / "openfoam_v1912" / "collapsed_dt.log").read_text())
+    breach = ("forces beyond what the motion can drive from t = 1.2 s at max Co 2; resumed "
+              "from t = 1 s with maxCo 1")
+    (case_dir / RETRY_LOG).write_text(
+        f"time step collapsed; resumed with the inletOutlet far field\n{breach}\n"
+        f"{RERUN_REQUESTED}\n")
+    assert campaign_status(out)[0].message.endswith("; 2 retries")
+    assert _earlier_retries(case_dir) == []
+    with open(case_dir / RETRY_LOG, "a") as fh:
+        fh.write(breach + "\n")
+    assert campaign_status(out)[0].message.endswith("; 3 retries")
+    assert _earlier_retries(case_dir) == [breach]
+    assert _earlier_breach([breach]) == (1.2, 2.0)
+    assert _earlier_breach(["time step collapsed; resumed with maxCo 1"]) is None
 
 def test_manifest_written_before_the_pressure_solver_setting_still_resumes(tmp_path):
     """campaign.toml files written before pressure_solver/pressure_tolerance, far_field,

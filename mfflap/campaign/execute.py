@@ -241,7 +241,7 @@ def fraction_simulated(out_dir: str | Path, case_ids: Sequence[str]) -> dict[str
 def _started(case_dir: Path) -> tuple[str, float] | None:
     """How far a case's OpenFOAM run got (a message and the simulated share), or None if its
     solver has not begun."""
-    from mfflap.campaign.openfoam_run import RETRY_LOG
+    from mfflap.campaign.openfoam_run import RERUN_REQUESTED, RETRY_LOG
     from mfflap.cfd.openfoam.runner import latest_solution_time
 
     reached = _simulated(case_dir)
@@ -249,8 +249,8 @@ def _started(case_dir: Path) -> tuple[str, float] | None:
         return None
     time_s, step_s, end_s = reached
     resume = latest_solution_time(case_dir)
-    retries = (case_dir / RETRY_LOG).read_text().count("\n") if (
-        case_dir / RETRY_LOG).is_file() else 0
+    retries = sum(line.strip() not in ("", RERUN_REQUESTED) for line in (
+        case_dir / RETRY_LOG).read_text().splitlines()) if (case_dir / RETRY_LOG).is_file() else 0
     share = _share(time_s, end_s)
     return (f"t = {time_s:.4g} of {end_s:.4g} s simulated ({share:.0%}), time step "
             f"{step_s:.2g} s; a rerun resumes from t = {resume or 0} s"
@@ -286,6 +286,8 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
     """
     from dask.distributed import Client, LocalCluster, as_completed
 
+    from mfflap.campaign.openfoam_run import request_rerun
+
     setup = setup or CampaignSetup()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -309,6 +311,8 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
             error = str(info.get("error", "")).splitlines()
             results[c.case_id] = CaseStatus(c.case_id, "failed", error[0] if error else "")
         else:
+            if _failed_path(out, c.case_id).exists():  # asked for: a new budget of retries
+                request_rerun(out / "cases" / c.case_id)
             todo.append(c)
     if todo:
         cluster = None

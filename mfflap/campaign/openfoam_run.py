@@ -217,13 +217,52 @@ def _apply_next_remedy(case_dir: Path, n_done: int, max_retries: int) -> str:
 RETRY_LOG = "mfflap_retries.txt"
 
 
+#: the line :func:`request_rerun` adds to :data:`RETRY_LOG`: the retries before it no longer
+#: count against ``max_retries``
+RERUN_REQUESTED = "rerun requested: a new budget of retries from here"
+
+_LOGGED_BREACH = re.compile(r"^forces beyond what the motion can drive from t = ([0-9.eE+-]+) s"
+                            r" at max Co ([0-9.eE+-]+);")
+
+
+def request_rerun(case_dir: str | Path) -> None:
+    """Give a case that failed after its retries a new budget of retries for its next run
+    (a campaign's ``--retry-failed``). Its earlier retries stay in :data:`RETRY_LOG` and in
+    the record's provenance; its settings keep every remedy they had."""
+    case_dir = Path(case_dir)
+    if case_dir.is_dir():
+        with open(case_dir / RETRY_LOG, "a") as fh:
+            fh.write(RERUN_REQUESTED + "\n")
+
+
+def _earlier_retries(case_dir: Path) -> list[str]:
+    """The retries that earlier calls spent on this case since the last
+    :data:`RERUN_REQUESTED`: a run resumed after its process was killed continues with what
+    is left of its budget, not with a new one."""
+    log = case_dir / RETRY_LOG
+    lines = log.read_text().splitlines() if log.is_file() else []
+    if RERUN_REQUESTED in lines:
+        lines = lines[len(lines) - lines[::-1].index(RERUN_REQUESTED):]
+    return [line for line in lines if line.strip()]
+
+
+def _earlier_breach(retries: list[str]) -> tuple[float, float] | None:
+    """(flow time s, Courant limit) of the last breach of the bound in ``retries``, or None."""
+    for line in reversed(retries):
+        found = _LOGGED_BREACH.match(line)
+        if found:
+            return float(found.group(1)), float(found.group(2))
+    return None
+
+
 def _retries_tried(case_dir: Path) -> str:
     """The case's retries so far (:data:`RETRY_LOG`, across calls) in one line, or ''."""
     log = case_dir / RETRY_LOG
     lines = log.read_text().splitlines() if log.is_file() else []
-    if not lines:
+    n_retries = sum(line != RERUN_REQUESTED for line in lines)
+    if not n_retries:
         return ""
-    return f"after {len(lines)} retr{'y' if len(lines) == 1 else 'ies'}: " + "; ".join(lines)
+    return f"after {n_retries} retr{'y' if n_retries == 1 else 'ies'}: " + "; ".join(lines)
 
 
 def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict[str, Any],
@@ -253,7 +292,9 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
     not move with the time step. The retries are
     recorded in the case (:data:`RETRY_LOG`) and in the record's provenance, those of
     earlier calls that resumed the same case included: the case's settings changed there,
-    not in mfflap_case.toml.
+    not in mfflap_case.toml. They also count against ``max_retries``, and an earlier call's
+    breach against the same-flow-time rule: a run resumed after its process was killed has
+    what is left of its budget, unless :func:`request_rerun` gave it a new one.
 
     Raises
     ------
@@ -275,10 +316,10 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
         shutil.rmtree(case_dir, ignore_errors=True)
         tmp.rename(case_dir)
     started = time.perf_counter()
-    retries = []
+    retries = _earlier_retries(case_dir)
     same_breach_s = (SAME_BREACH_FRACTION * (plate or Plate()).chord
                      / abs((stream or FreeStream()).velocity))
-    last_breach: tuple[EnvelopeBreach, float] | None = None  # and the Courant limit then
+    last_breach = _earlier_breach(retries)  # (flow time s, the Courant limit then)
     watch = _bound_watch(case_dir, motion, ramp_time, plate, fluid, stream, force_bound_factor)
     while True:
         try:
@@ -312,19 +353,20 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
                               f"not cure it; {_retries_tried(case_dir)}", case=str(case_dir))
         max_co = courant_limit(case_dir)
         if (last_breach is not None and max_co < last_breach[1]
-                and abs(breach.start_s - last_breach[0].start_s) <= same_breach_s):
+                and abs(breach.start_s - last_breach[0]) <= same_breach_s):
             raise CfdRunError(
                 f"the forces leave what the motion can drive, {breach.describe()}, where they "
-                f"left it at max Co {last_breach[1]:g} (t = {last_breach[0].start_s:.6g} s): "
+                f"left it at max Co {last_breach[1]:g} (t = {last_breach[0]:.6g} s): "
                 f"the loss does not move with the time step (max Co {max_co:g}), so no "
                 "smaller one cures it; the mesh, the far field or the turbulence model does "
                 f"not hold this motion; {_retries_tried(case_dir)}", case=str(case_dir))
-        last_breach = (breach, max_co)
+        last_breach = (breach.start_s, max_co)
         resume = rewind_case(case_dir, breach.start_s)
         retries.append(_apply_next_remedy(case_dir, len(retries), max_retries))
         with open(case_dir / RETRY_LOG, "a") as fh:
-            fh.write(f"forces beyond what the motion can drive from t = {breach.start_s:.6g} s;"
-                     f" resumed from t = {resume} s with {retries[-1]}\n")
+            fh.write(f"forces beyond what the motion can drive from t = {breach.start_s:.6g} s"
+                     f" at max Co {max_co:g}; resumed from t = {resume} s with "
+                     f"{retries[-1]}\n")
     if (case_dir / RETRY_LOG).is_file():
         record.provenance["retries"] = "; ".join(
             (case_dir / RETRY_LOG).read_text().splitlines())
