@@ -214,3 +214,24 @@ def test_a_run_that_lost_its_numerics_is_timed_and_left_out_of_the_medians():
     summary = CampaignComparison("a", "b", [worse, good], [], []).summary()
     assert summary["n_cases_compared"] == 1
     assert summary["max_nrmse_normal_force"] == good.nrmse_normal_force
+
+
+def test_a_comparison_can_end_before_the_records_do(record):
+    """One period after the ramp, not the whole run: the window's end is kept, the metrics
+    are those of that window alone, and an end before the start is refused by name."""
+    period_s = 1.0 / float(record.parameters["frequency"])
+    start = float(record.parameters["ramp_time"])
+    shifted = copy.deepcopy(record)
+    late = shifted.time > start + period_s
+    shifted.loads.normal_force[late] += 100.0  # differs only after the first period
+    first = compare_records(shifted, record, end_s=start + period_s)
+    assert first.end_s == pytest.approx(start + period_s)
+    assert first.nrmse_normal_force == 0.0
+    assert compare_records(shifted, record).nrmse_normal_force > 0.1
+    with pytest.raises(ConfigError, match="ends") as info:
+        compare_records(record, record, end_s=start)
+    assert info.value.key == "end_s"
+    res = CliRunner().invoke(cli, ["campaign", "compare", str(COARSE), str(COARSE), "--end",
+                                   str(start + period_s), "--json"])
+    assert res.exit_code == 0, res.output
+    assert {c["end_s"] for c in json.loads(res.output)["cases"]} == {start + period_s}

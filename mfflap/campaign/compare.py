@@ -118,8 +118,10 @@ def _motion_parameters(record: CfdRecord) -> dict:
 
 
 def compare_records(a: CfdRecord, b: CfdRecord, start_s: float | None = None,
-                    bound: tuple[Plate, Fluid, FreeStream] | None = None) -> CaseComparison:
-    """A against B for one motion, after ``start_s`` (default: the start-up ramp).
+                    bound: tuple[Plate, Fluid, FreeStream] | None = None,
+                    end_s: float | None = None) -> CaseComparison:
+    """A against B for one motion, after ``start_s`` (default: the start-up ramp) and up to
+    ``end_s`` (default: the shorter record's end), e.g. one period.
 
     Stretches whose forces the motion cannot have driven (``bound``: plate, fluid and stream
     of the force bound, by default the package's) are bridged like bursts and timed.
@@ -137,19 +139,25 @@ def compare_records(a: CfdRecord, b: CfdRecord, start_s: float | None = None,
                               f"({pa.get(key)!r} against {pb.get(key)!r})", key=key)
     start = float(pb.get("ramp_time", 0.0)) if start_s is None else float(start_s)
     end = min(a.time[-1], b.time[-1])
+    if end_s is not None:
+        if float(end_s) <= start:
+            raise ConfigError(f"{a.name}: the comparison ends (t = {end_s:g} s) before it "
+                              f"starts (t = {start:g} s)", key="end_s")
+        end = min(end, float(end_s))
     keep = (b.time >= start) & (b.time <= end)
     if np.count_nonzero(keep) < 2:
         raise ConfigError(f"{a.name}: fewer than two common samples after t = {start:g} s",
                           key="start_s")
     t = b.time[keep]
-    loads_a, bursts_a = bridge_load_bursts(a.loads, a.time >= start)
-    loads_b, bursts_b = bridge_load_bursts(b.loads, b.time >= start)
+    loads_a, bursts_a = bridge_load_bursts(a.loads, (a.time >= start) & (a.time <= end))
+    loads_b, bursts_b = bridge_load_bursts(b.loads, (b.time >= start) & (b.time <= end))
     lost = {}
     for label, record in (("a", a), ("b", b)):
         loads = loads_a if label == "a" else loads_b
         breaches = find_envelope_breaches(record.state, loads,
                                           *(bound or (Plate(), Fluid(), FreeStream())),
-                                          window=record.time >= start)
+                                          window=(record.time >= start)
+                                          & (record.time <= end))
         lost[f"lost_{label}_s"] = float(sum(x.duration_s for x in breaches))
         if breaches:
             loads = Loads(loads.time, *(bridge_bursts(loads.time, getattr(loads, k), breaches)
@@ -177,7 +185,8 @@ def compare_records(a: CfdRecord, b: CfdRecord, start_s: float | None = None,
 
 
 def compare_campaigns(folder_a: str | Path, folder_b: str | Path,
-                      start_s: float | None = None) -> CampaignComparison:
+                      start_s: float | None = None,
+                      end_s: float | None = None) -> CampaignComparison:
     """Every case both campaign folders finished, A against B.
 
     Raises
@@ -193,7 +202,8 @@ def compare_campaigns(folder_a: str | Path, folder_b: str | Path,
                           f"({len(records_a)} and {len(records_b)} records)")
     manifest = Path(folder_b) / "campaign.toml"
     bound = _bound_setup(read_toml(manifest)) if manifest.is_file() else None
-    cases = [compare_records(records_a[n], records_b[n], start_s, bound) for n in common]
+    cases = [compare_records(records_a[n], records_b[n], start_s, bound, end_s)
+             for n in common]
     return CampaignComparison(str(folder_a), str(folder_b), cases,
                               sorted(set(records_a) - set(records_b)),
                               sorted(set(records_b) - set(records_a)))

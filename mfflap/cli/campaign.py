@@ -105,20 +105,22 @@ def status_cmd(out_dir: Path, as_json: bool) -> None:
 @click.argument("folder_b", type=click.Path(file_okay=False, exists=True, path_type=Path))
 @click.option("--start", "start_s", type=float, default=None,
               help="Compare after this time, s (default: each case's start-up ramp).")
+@click.option("--end", "end_s", type=float, default=None,
+              help="Compare up to this time, s (default: the shorter record's end).")
 @click.option("--output", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="HDF5 file of the comparison, both manifests beside it.")
 @click.option("--figure", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="PNG: NRMSE of F_n and M and the thrust difference per case.")
 @click.option("--json", "as_json", is_flag=True)
-def compare_cmd(folder_a: Path, folder_b: Path, start_s: float | None, output: Path | None,
-                figure: Path | None, as_json: bool) -> None:
+def compare_cmd(folder_a: Path, folder_b: Path, start_s: float | None, end_s: float | None,
+                output: Path | None, figure: Path | None, as_json: bool) -> None:
     """Case by case, the forces of campaign FOLDER_A against FOLDER_B (the reference):
     NRMSE and Pearson of F_n, F_t, M, mean thrust and power, numerical bursts, CPU."""
     from dataclasses import asdict
 
     from mfflap.campaign.compare import compare_campaigns, plot_comparison, write_comparison
 
-    result = compare_campaigns(folder_a, folder_b, start_s)
+    result = compare_campaigns(folder_a, folder_b, start_s, end_s)
     if output is not None:
         write_comparison(output, result)
     if figure is not None:
