@@ -215,6 +215,8 @@ def _apply_next_remedy(case_dir: Path, n_done: int, max_retries: int) -> str:
 
 #: every retry of a case, one line each, across the calls that ran it
 RETRY_LOG = "mfflap_retries.txt"
+#: the flow time in :func:`mfflap.cfd.openfoam.runner.run_case`'s collapsed-time-step error
+_COLLAPSED_AT = re.compile(r"time step collapsed to \S+ s at t = (\S+) s")
 
 
 #: the line :func:`request_rerun` adds to :data:`RETRY_LOG`: the retries before it no longer
@@ -338,8 +340,10 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
             else:
                 retries.append(_apply_next_remedy(case_dir, len(retries), max_retries))
                 # kept in the case, so that a run resumed by a later call still records them
+                where = _COLLAPSED_AT.search(str(exc))
                 with open(case_dir / RETRY_LOG, "a") as fh:
-                    fh.write(f"time step collapsed; resumed from the last written time with "
+                    fh.write(f"time step collapsed{f' at t = {where[1]} s' if where else ''}; "
+                             f"resumed from t = {latest_solution_time(case_dir) or 0} s with "
                              f"{retries[-1]}\n")
                 continue
         record = record_from_case(case_dir, motion, name, parameters, plate)
@@ -358,8 +362,10 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
                 f"the forces leave what the motion can drive, {breach.describe()}, where they "
                 f"left it at max Co {last_breach[1]:g} (t = {last_breach[0]:.6g} s): "
                 f"the loss does not move with the time step (max Co {max_co:g}), so no "
-                "smaller one cures it; the mesh, the far field or the turbulence model does "
-                f"not hold this motion; {_retries_tried(case_dir)}", case=str(case_dir))
+                "smaller one from the last written time cures it: the mesh, the far field or "
+                "the turbulence model does not hold this motion, or the flow written then was "
+                "already spoiled (a run from t = 0 at a lower Courant limit, or on a finer "
+                f"mesh, may hold it); {_retries_tried(case_dir)}", case=str(case_dir))
         last_breach = (breach.start_s, max_co)
         resume = rewind_case(case_dir, breach.start_s)
         retries.append(_apply_next_remedy(case_dir, len(retries), max_retries))
