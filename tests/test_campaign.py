@@ -259,32 +259,65 @@ def test_forces_beyond_the_bound_are_retried_from_the_written_time_before_them(t
     millionfold): each retry rewinds to the last time written before the breach (0.03 s;
     the case keeps the last two of its four writes), drops the later fields and force
     output, changes the case like a collapse does and reruns pimpleFoam from there. The
-    third breach, at the same flow time after the Courant limit was halved, ends the
-    retries: the loss does not move with the time step."""
+    third breach, at the same flow time after the Courant limit was halved, has the run
+    rerun from t = 0 at max Co 2 (the flow written at 0.03 s may have been spoiled); the
+    fourth, the same again, ends the retries."""
     from mfflap.cfd.openfoam.forces import read_forces
     from mfflap.errors import CfdRunError
 
     case_dir = tmp_path / "c"
     with pytest.raises(CfdRunError, match=r"the forces leave what the motion can drive, "
-                       r"t = 0\.03.*where they left it at max Co 4 \(t = 0\.03.*\): the loss "
-                       r"does not move with the time step \(max Co 2\).*after 2 retries: "
-                       r"forces beyond .* with the inletOutlet far field; forces beyond .* "
-                       r"with maxCo 2"):
+                       r"t = 0\.03.*where they left it before the run was rerun from t = 0 s "
+                       r"\(t = 0\.03.*\): the mesh, the far field or the turbulence model does "
+                       r"not hold this motion at max Co 2; after 3 retries: forces beyond .* "
+                       r"with the inletOutlet far field; forces beyond .* with maxCo 2; "
+                       r"rerun from t = 0 s with max Co 2"):
         run_motion(case_dir, SHORT.motion(), "c", {}, 0.04, ramp_time=0.035,
                    force_bound_factor=1e-6)
     notes = (case_dir / "mfflap_retries.txt").read_text().splitlines()
-    assert len(notes) == 2
+    assert len(notes) == 3
     assert all(n.startswith("forces beyond what the motion can drive from t = 0.03")
-               and " resumed from t = 0.03 s with " in n for n in notes)
-    assert [n.split(" with ")[-1] for n in notes] == ["the inletOutlet far field", "maxCo 2"]
+               and " resumed from t = 0.03 s with " in n for n in notes[:2])
+    assert [n.split(" with ")[-1] for n in notes[:2]] == ["the inletOutlet far field",
+                                                          "maxCo 2"]
+    assert notes[2].startswith("rerun from t = 0 s with max Co 2: the forces left what the "
+                               "motion can drive from t = 0.03")
     log = (case_dir / "log.pimpleFoam").read_text()
-    assert log.count("Starting time loop") == 3
-    assert log.count("Time = 0.01\n") == 1  # the first 0.03 s ran once
-    assert sorted(p.name for p in (case_dir / "postProcessing" / "forces").iterdir()) == [
-        "0", "0.03"]
-    history = read_forces(case_dir)  # the last attempt's forces from 0.03 s on, one history
+    assert log.count("Starting time loop") == 4
+    assert log.count("Time = 0.01\n") == 2  # the first 0.03 s ran twice: at max Co 4 and 2
+    assert sorted(p.name for p in (case_dir / "postProcessing" / "forces").iterdir()) == ["0"]
+    history = read_forces(case_dir)  # the last attempt's forces from 0 s on, one history
     assert np.all(np.diff(history.time) > 0)
     assert history.time[-1] == pytest.approx(0.04, abs=1e-3)
+
+
+@pytest.mark.openfoam
+def test_a_loss_at_the_same_flow_time_is_rerun_from_the_start_once(tmp_path, monkeypatch):
+    """Real pimpleFoam reruns with a scripted bound judgement: the loss at t = 0.036 s stays
+    put at max Co 4 (inletOutlet) and 2; the rerun from t = 0 at max Co 2 holds, as
+    f = 1 Hz, h = 0.5 m, phi = 135 deg did. The record says so; every field written before
+    the rerun went, so its forces are the rerun's alone."""
+    from mfflap.campaign import openfoam_run
+    from mfflap.cfd.force_envelope import EnvelopeBreach
+
+    verdicts = iter([0.036, 0.0361, 0.0362, None])
+
+    def scripted(*args, **kwargs):
+        start = next(verdicts)
+        return None if start is None else EnvelopeBreach(start, start + 1e-3, 3, start, 5.0)
+
+    monkeypatch.setattr(openfoam_run, "_forces_beyond_bound", scripted)
+    case_dir = tmp_path / "c"
+    rec = run_motion(case_dir, SHORT.motion(), "c", {}, 0.04, ramp_time=0.035,
+                     bound_watch_every_s=1e6)
+    assert rec.provenance["retries"].split("; ")[-1].startswith(
+        "rerun from t = 0 s with max Co 2: the forces left what the motion can drive from "
+        "t = 0.0362 s again, as at max Co 4")
+    assert "maxCo           2;" in (case_dir / "system" / "controlDict").read_text()
+    log = (case_dir / "log.pimpleFoam").read_text()
+    assert log.count("Starting time loop") == 4 and log.count("Time = 0.01\n") == 2
+    assert rec.time[0] < 0.005 and np.all(np.diff(rec.time) > 0)
+    assert rec.time[-1] == pytest.approx(0.04, abs=1e-3)
 
 
 @pytest.mark.openfoam
@@ -388,8 +421,9 @@ def test_a_resumed_run_has_what_is_left_of_its_retries_until_a_rerun_is_requeste
 def test_an_earlier_calls_breach_counts_for_the_same_flow_time_rule(tmp_path, monkeypatch):
     """Real pimpleFoam reruns with a scripted bound judgement that always finds the loss at
     t = 0.036 s. A first call (two retries: inletOutlet at max Co 4, then max Co 2) gives up;
-    a second call allowed three finds it again at max Co 2 and stops at once: the breach of
-    the earlier call at max Co 4, read from the case's retry log, is the same flow time."""
+    a second call allowed three finds it again at max Co 2 and, the breach of the earlier
+    call at max Co 4 (read from the case's retry log) being the same flow time, spends its
+    last retry on a rerun from t = 0, not on max Co 1; the loss there ends it."""
     from mfflap.campaign import openfoam_run
     from mfflap.cfd.force_envelope import EnvelopeBreach
     from mfflap.errors import CfdRunError
@@ -404,12 +438,16 @@ def test_an_earlier_calls_breach_counts_for_the_same_flow_time_rule(tmp_path, mo
                    bound_watch_every_s=1e6, max_retries=2)
     notes = (case_dir / "mfflap_retries.txt").read_text().splitlines()
     assert [n.split("; resumed")[0][-20:] for n in notes] == ["t = 0.036 s at max Co 4"[-20:]] * 2
-    with pytest.raises(CfdRunError, match=r"where they left it at max Co 4 \(t = 0\.036 s\): "
-                       r"the loss does not move with the time step \(max Co 2\)"):
+    with pytest.raises(CfdRunError, match=r"where they left it before the run was rerun from "
+                       r"t = 0 s \(t = 0\.036 s\): .* at max Co 2; after 3 retries"):
         run_motion(case_dir, SHORT.motion(), "c", {}, 0.04, ramp_time=0.035,
                    bound_watch_every_s=1e6, max_retries=3)
-    assert (case_dir / "mfflap_retries.txt").read_text().splitlines() == notes  # no retry
-    assert (case_dir / "log.pimpleFoam").read_text().count("Starting time loop") == 4
+    later = (case_dir / "mfflap_retries.txt").read_text().splitlines()
+    assert later[:2] == notes and len(later) == 3
+    assert later[2].startswith("rerun from t = 0 s with max Co 2: ")
+    assert "as at max Co 4" in later[2]
+    assert "maxCo           2;" in (case_dir / "system" / "controlDict").read_text()
+    assert (case_dir / "log.pimpleFoam").read_text().count("Starting time loop") == 5
 
 
 def test_retry_failed_gives_a_failed_case_a_new_budget_of_retries(tmp_path):

@@ -223,6 +223,11 @@ _COLLAPSED_AT = re.compile(r"time step collapsed to \S+ s at t = (\S+) s")
 #: count against ``max_retries``
 RERUN_REQUESTED = "rerun requested: a new budget of retries from here"
 
+#: how :data:`RETRY_LOG` says a case was rerun from the start (:func:`run_motion`)
+FROM_ZERO = "rerun from t = 0 s"
+
+_LOGGED_RESUME = re.compile(r"; resumed from t = ([0-9.eE+-]+) s with ")
+
 _LOGGED_BREACH = re.compile(r"^forces beyond what the motion can drive from t = ([0-9.eE+-]+) s"
                             r" at max Co ([0-9.eE+-]+);")
 
@@ -255,6 +260,18 @@ def _earlier_breach(retries: list[str]) -> tuple[float, float] | None:
         if found:
             return float(found.group(1)), float(found.group(2))
     return None
+
+
+def _last_resume_s(retries: list[str]) -> float:
+    """The written time the last retry of the bound in ``retries`` (lines of
+    :data:`RETRY_LOG`) resumed from, s (0 if none or from the start)."""
+    for line in reversed(retries):
+        if line.startswith(FROM_ZERO):
+            return 0.0
+        found = _LOGGED_RESUME.search(line)
+        if found and _LOGGED_BREACH.match(line):
+            return float(found.group(1))
+    return 0.0
 
 
 def _retries_tried(case_dir: Path) -> str:
@@ -290,8 +307,12 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
     checked every ``bound_watch_every_s`` seconds while it runs, so that such a run stops
     there instead of computing its lost stretch to the end. A run that leaves the bound at
     the same flow time (within :data:`SAME_BREACH_FRACTION` of c / U) after its Courant
-    limit was lowered is not retried further: no smaller time step cures a loss that does
-    not move with the time step. The retries are
+    limit was lowered is rerun once from t = 0 with the settings it has then (the flow at
+    its last written time may have been spoiled already: f = 1 Hz, h = 0.5 m,
+    phi = 135 deg lost at max Co 4 failed that way from t = 0.75 s at max Co 2 and 1, and
+    ran through at max Co 2 from the start). It is not retried further if it leaves the
+    bound there again, or if its last retry already ran from t = 0: no smaller time step
+    cures a loss that does not move with the time step. The retries are
     recorded in the case (:data:`RETRY_LOG`) and in the record's provenance, those of
     earlier calls that resumed the same case included: the case's settings changed there,
     not in mfflap_case.toml. They also count against ``max_retries``, and an earlier call's
@@ -351,21 +372,39 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
                                       force_bound_factor)
         if breach is None:
             break
+        max_co = courant_limit(case_dir)
+        same_time = (last_breach is not None
+                     and abs(breach.start_s - last_breach[0]) <= same_breach_s)
+        logged = _earlier_retries(case_dir)  # this call's retries too, as logged
+        if same_time and any(line.startswith(FROM_ZERO) for line in logged):
+            raise CfdRunError(
+                f"the forces leave what the motion can drive, {breach.describe()}, where they "
+                f"left it before the run was rerun from t = 0 s (t = {last_breach[0]:.6g} s):"
+                f" the mesh, the far field or the turbulence model does not hold this motion "
+                f"at max Co {max_co:g}; {_retries_tried(case_dir)}", case=str(case_dir))
         if len(retries) >= max_retries:
             raise CfdRunError(f"the forces leave what the motion can drive, {breach.describe()}"
                               f": the run lost its numerics, and {len(retries)} retries did "
                               f"not cure it; {_retries_tried(case_dir)}", case=str(case_dir))
-        max_co = courant_limit(case_dir)
-        if (last_breach is not None and max_co < last_breach[1]
-                and abs(breach.start_s - last_breach[0]) <= same_breach_s):
+        if same_time and max_co < last_breach[1] and _last_resume_s(logged) > 0.0:
+            # the same loss from the last written time whatever the time step: that flow may
+            # have been spoiled already; one rerun from the start with the settings it has now
+            rewind_case(case_dir, 0.0)
+            retries.append(f"{FROM_ZERO} with max Co {max_co:g}")
+            with open(case_dir / RETRY_LOG, "a") as fh:
+                fh.write(f"{FROM_ZERO} with max Co {max_co:g}: the forces left what the motion"
+                         f" can drive from t = {breach.start_s:.6g} s again, as at max Co "
+                         f"{last_breach[1]:g}, so the flow written before may be spoiled\n")
+            last_breach = (breach.start_s, max_co)
+            continue
+        if same_time and max_co < last_breach[1]:  # and the last retry ran from t = 0
             raise CfdRunError(
                 f"the forces leave what the motion can drive, {breach.describe()}, where they "
                 f"left it at max Co {last_breach[1]:g} (t = {last_breach[0]:.6g} s): "
-                f"the loss does not move with the time step (max Co {max_co:g}), so no "
-                "smaller one from the last written time cures it: the mesh, the far field or "
-                "the turbulence model does not hold this motion, or the flow written then was "
-                "already spoiled (a run from t = 0 at a lower Courant limit, or on a finer "
-                f"mesh, may hold it); {_retries_tried(case_dir)}", case=str(case_dir))
+                f"the loss does not move with the time step (max Co {max_co:g}, run from "
+                "t = 0 s), so no smaller one cures it: the mesh, the far field or the "
+                f"turbulence model does not hold this motion; {_retries_tried(case_dir)}",
+                case=str(case_dir))
         last_breach = (breach.start_s, max_co)
         resume = rewind_case(case_dir, breach.start_s)
         retries.append(_apply_next_remedy(case_dir, len(retries), max_retries))
