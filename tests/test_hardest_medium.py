@@ -1,6 +1,8 @@
-"""The grid's hardest motions on the medium mesh (campaigns/hardest_medium, committed as its
-runs finish): whether a finer mesh holds what the coarse one lost, and how far the coarse
-mesh is from it where both hold."""
+"""The grid's hardest motions on the medium mesh (campaigns/hardest_medium) and on the coarse
+mesh at max Co 1 from the start (campaigns/hardest_coarse_co1), committed as their runs
+finish: whether a finer mesh or a smaller time step from t = 0 holds what the coarse mesh
+lost from its last writes, and how far the coarse mesh is from the medium one where both
+hold."""
 
 from pathlib import Path
 
@@ -14,6 +16,7 @@ from mfflap.toml_io import read_toml
 
 CAMPAIGNS = Path(__file__).parents[1] / "campaigns"
 MEDIUM = CAMPAIGNS / "hardest_medium"
+CO1 = CAMPAIGNS / "hardest_coarse_co1"
 
 
 def test_the_medium_campaign_is_the_shipped_set_up_on_the_medium_mesh():
@@ -26,17 +29,41 @@ def test_the_medium_campaign_is_the_shipped_set_up_on_the_medium_mesh():
         assert motion["heave_amplitude"] == 0.5 and motion["phase_deg"] == 135.0
 
 
-@pytest.mark.parametrize("path", record_paths(MEDIUM), ids=lambda p: p.stem)
-def test_a_finished_medium_run_is_done_without_bursts_and_fit_for_identification(path):
+@pytest.mark.parametrize("path", record_paths(MEDIUM) + record_paths(CO1),
+                         ids=lambda p: f"{p.parent.name}/{p.stem}")
+def test_a_finished_run_of_a_hardest_motion_is_done_and_fit_for_identification(path):
     """What campaign status and identification judge: no numerical burst after the ramp,
     not lost (inside the force bound), so identification takes it as it is."""
     rec = read_record(path)
-    assert rec.provenance["mesh"] == "medium"
-    status = {s.case_id: s for s in campaign_status(MEDIUM)}[path.stem]
+    assert rec.provenance["mesh"] == ("medium" if path.parent == MEDIUM else "coarse")
+    status = {s.case_id: s for s in campaign_status(path.parent)}[path.stem]
     assert (status.state, status.message) == ("done", "")
     case = prepare_case(rec)
     assert case.notes == []  # nothing bridged, nothing despiked
     assert case.state.time[-1] == pytest.approx(rec.time[-1], rel=1e-6)
+
+
+def test_the_max_co_1_campaign_is_the_shipped_set_up_at_max_co_1_with_inlet_outlet():
+    co1, shipped = (read_toml(d / "campaign.toml") for d in (CO1, fixture_dir("table1_coarse")))
+    solver = co1["setup"]["solver"]
+    changed = {k: v for k, v in solver.items() if shipped["setup"]["solver"][k] != v}
+    assert changed == {"max_courant": 1.0, "far_field": "inletOutlet"}
+    assert co1["setup"]["mesh"] == shipped["setup"]["mesh"] == "coarse"
+    for case_id, motion in co1["cases"].items():
+        assert motion == shipped["cases"][case_id]
+
+
+def test_f2_held_at_max_co_1_from_the_start_where_max_co_2_lost_it_from_its_writes():
+    """f = 2 Hz, h = 0.5 m, phi = 135 deg lost its numerics at t = 0.464 s at max Co 2, and
+    again from its write at t = 0.375 s at max Co 1, 0.5 and 0.25; from t = 0 at max Co 1
+    (inletOutlet from the start) it runs to its end with no retry, inside the bound."""
+    name = "f2p000_h0p500_phi135p0"
+    failed = read_toml(CAMPAIGNS / "table1_coarse_co2" / f"{name}.failed.toml")
+    assert "from t = 0.464361 s; resumed from t = 0.375 s with maxCo 0.25" in failed["error"]
+    rec = read_record(CO1 / f"{name}.h5")
+    assert rec.provenance["solver_max_courant"] == 1.0
+    assert "retries" not in rec.provenance
+    assert rec.time[-1] == pytest.approx(1.5, abs=1e-3)
 
 
 def test_the_coarse_mesh_is_far_from_the_medium_one_on_the_hardest_motion():
