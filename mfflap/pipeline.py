@@ -24,7 +24,7 @@ Progress = Callable[[str], None]
 class RunOptions:
     """Options of the main job."""
 
-    fixtures: Path | None = None  # identification records (default: shipped table1_coarse)
+    fixtures: tuple[Path, ...] = ()  # identification record folders (default: table1_coarse)
     backtest_fixtures: tuple[Path, ...] = ()  # default: shipped backtest folder
     live: bool = False  # run the back-test CFD with OpenFOAM
     work_dir: Path = Path("mfflap_run_cases")
@@ -109,10 +109,10 @@ def run_study(config: CaseConfig, options: RunOptions, progress: Progress = prin
     from mfflap.optimisation.study import beta_study, gain_table, sinusoid_motion
 
     outcome = RunOutcome()
-    folder = options.fixtures or fixture_dir()
+    folders = options.fixtures or (fixture_dir(),)
 
     def identification():
-        cases, excluded = load_cases(config, folder)
+        cases, excluded = load_cases(config, folders)
         for name, why in excluded.items():
             outcome.problems.append(f"identification: case {name} left out: {why}")
         outcome.cases = cases

@@ -202,3 +202,63 @@ def test_one_step_cfd_glitch_is_removed_and_reported():
     assert "t = 1.9" in glitched.notes[0]
     np.testing.assert_allclose(glitched.cfd.normal_force, clean.cfd.normal_force,
                                atol=2e-2 * np.ptp(clean.cfd.normal_force))
+
+
+def test_several_record_folders_pool_and_fill_failed_cases(tmp_path):
+    """Two folders pool their records; a case failed in one and done in the other is used,
+    one failed everywhere stays out, and one recorded twice is refused naming both files."""
+    from click.testing import CliRunner
+
+    from mfflap.campaign.records import write_record
+    from mfflap.cli.main import cli
+    from mfflap.identification.workflow import load_cases
+    from mfflap.results import ResultsFile
+
+    rng = np.random.default_rng(5)
+    recs = synthetic_records(rng, subset=grid_cases(IdentificationGrid(),
+                                                    heave_amplitudes=[0.2, 0.4],
+                                                    phases_deg=[90, 135]))
+    first, second = tmp_path / "campaign_a", tmp_path / "campaign_b"
+    moved = recs[3].name
+    for i, rec in enumerate(recs):
+        write_record((second if i == 3 else first) / f"{rec.name}.h5", rec)
+    (first / f"{moved}.failed.toml").write_text(
+        f'case_id = "{moved}"\nerror = "forces beyond the bound"\n')
+    (second / "f9p000_h0p100_phi090p0.failed.toml").write_text(
+        'case_id = "f9p000_h0p100_phi090p0"\nerror = "pimpleFoam diverged"\n')
+    config = _paper_case()
+    only_first, excluded_first = load_cases(config, first)
+    assert moved not in {c.name for c in only_first} and moved in excluded_first
+    pooled, excluded = load_cases(config, [first, second])
+    assert {c.name for c in pooled} == {r.name for r in recs}
+    assert moved not in excluded
+    assert "pimpleFoam diverged" in excluded["f9p000_h0p100_phi090p0"]
+    assert str(second) in excluded["f9p000_h0p100_phi090p0"]
+
+    out = tmp_path / "id.h5"
+    runner = CliRunner()
+    res = runner.invoke(cli, ["identify", str(_PAPER), "--fixtures", str(first),
+                              "--fixtures", str(second), "--strategy", "uniform",
+                              "--bootstrap", "20", "--output", str(out)])
+    assert res.exit_code == 0, res.output
+    assert f"{len(recs)} cases from {first}, {second}; 1 left out" in res.output
+    with ResultsFile(out) as rf:
+        assert rf.h5["identification"].attrs["source"] == f"{first}\n{second}"
+    html_path = tmp_path / "id.html"
+    res = runner.invoke(cli, ["report", "identification", str(out), "--out", str(html_path)])
+    assert res.exit_code == 0, res.output
+    assert f"{first}, {second}" in html_path.read_text()
+
+    write_record(second / f"{recs[0].name}.h5", recs[0])
+    with pytest.raises(MfflapError, match=f"{recs[0].name} has a record in {first} and in "
+                                          f"{second}"):
+        load_cases(config, [first, second])
+
+
+_PAPER = Path(__file__).parents[1] / "cases" / "paper2026.toml"
+
+
+def _paper_case():
+    from mfflap.config import load_case
+
+    return load_case(_PAPER)

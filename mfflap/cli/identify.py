@@ -22,8 +22,10 @@ def _strategies(names: tuple[str, ...], weights: str | None, case) -> list:
 
 @click.command()
 @click.argument("case_file", type=click.Path(dir_okay=False, exists=True, path_type=Path))
-@click.option("--fixtures", type=click.Path(file_okay=False, exists=True, path_type=Path),
-              default=None, help="Folder of CFD records (default: the shipped fixtures).")
+@click.option("--fixtures", "folders", multiple=True,
+              type=click.Path(file_okay=False, exists=True, path_type=Path),
+              help="Folder of CFD records (default: the shipped fixtures); repeat to pool "
+                   "several (a case may have a record in one of them only).")
 @click.option("--strategy", "strategies", multiple=True,
               type=click.Choice(["uniform", "low", "high"]),
               help="Weighting strategy; repeat for several (default: all three).")
@@ -37,7 +39,7 @@ def _strategies(names: tuple[str, ...], weights: str | None, case) -> list:
 @click.option("--output", type=click.Path(dir_okay=False, path_type=Path),
               default=Path("identification.h5"), show_default=True, help="HDF5 results.")
 @click.option("--json", "as_json", is_flag=True, help="Print coefficients as JSON.")
-def identify(case_file: Path, fixtures: Path | None, strategies: tuple[str, ...],
+def identify(case_file: Path, folders: tuple[Path, ...], strategies: tuple[str, ...],
              weights: str | None, components: str | None, n_bootstrap: int, output: Path,
              as_json: bool) -> None:
     """Fit the Morison coefficients of CASE_FILE's model to CFD records."""
@@ -47,15 +49,16 @@ def identify(case_file: Path, fixtures: Path | None, strategies: tuple[str, ...]
         identify_strategies,
         load_cases,
         save_identification,
+        source_text,
     )
 
     case = load_case(case_file)
-    folder = fixtures or fixture_dir()
-    cases, excluded = load_cases(case, folder)
+    folders = folders or (fixture_dir(),)
+    cases, excluded = load_cases(case, folders)
     comps = components.split(",") if components else None
     results = identify_strategies(case, cases, excluded, _strategies(strategies, weights, case),
                                   comps, n_bootstrap)
-    save_identification(output, case, results, str(folder))
+    save_identification(output, case, results, source_text(folders))
     summary = {
         label: {"coefficients": r.coefficients, "standard_error": r.standard_error,
                 "median_nrmse_normal_force": float(
@@ -66,7 +69,8 @@ def identify(case_file: Path, fixtures: Path | None, strategies: tuple[str, ...]
     if as_json:
         click.echo(json.dumps(summary, indent=2))
         return
-    click.echo(f"{len(cases)} cases from {folder}; {len(excluded)} left out")
+    where = ", ".join(str(f) for f in folders)
+    click.echo(f"{len(cases)} cases from {where}; {len(excluded)} left out")
     for label, r in results.items():
         coeffs = "  ".join(f"{n} = {v:.3f} ± {r.standard_error[n]:.3f}"
                            for n, v in r.coefficients.items())
@@ -81,11 +85,13 @@ def report() -> None:
 
 @report.command("identification")
 @click.argument("results_file", type=click.Path(dir_okay=False, exists=True, path_type=Path))
-@click.option("--fixtures", type=click.Path(file_okay=False, exists=True, path_type=Path),
-              default=None, help="The record folder (default: the one the results name).")
+@click.option("--fixtures", "folders", multiple=True,
+              type=click.Path(file_okay=False, exists=True, path_type=Path),
+              help="The record folders; repeat for several (default: the ones the results "
+                   "name).")
 @click.option("--out", "out_path", type=click.Path(dir_okay=False, path_type=Path),
               default=None, help="HTML file (default: <results>.html).")
-def report_identification(results_file: Path, fixtures: Path | None,
+def report_identification(results_file: Path, folders: tuple[Path, ...],
                           out_path: Path | None) -> None:
     """Maps of Pearson and NRMSE, overlays, applicability region, weighting sensitivity."""
     from mfflap.config import loads_case
@@ -100,8 +106,9 @@ def report_identification(results_file: Path, fixtures: Path | None,
         source = str(rf.h5["identification"].attrs.get("source", ""))
     if not results:
         raise click.ClickException(f"{results_file}: no identification results")
-    cases, _ = load_cases(case, fixtures or source)
+    cases, _ = load_cases(case, folders or source)
     out_path = out_path or results_file.with_suffix(".html")
+    shown = ", ".join(str(f) for f in folders) if folders else source.replace("\n", ", ")
     identification_report(out_path, results, cases, case.morison_model(), case.flow.velocity,
-                          source)
+                          shown)
     click.echo(f"wrote {out_path}")

@@ -11,8 +11,10 @@ import click
 @click.argument("case_file", type=click.Path(dir_okay=False, exists=True, path_type=Path))
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
               default=None, help="Output folder (default: <study name>_run).")
-@click.option("--fixtures", type=click.Path(file_okay=False, exists=True, path_type=Path),
-              default=None, help="Identification CFD records (default: shipped fixtures).")
+@click.option("--fixtures", multiple=True,
+              type=click.Path(file_okay=False, exists=True, path_type=Path),
+              help="Identification CFD records (default: shipped fixtures); repeat to pool "
+                   "several folders.")
 @click.option("--backtest-fixtures", multiple=True,
               type=click.Path(file_okay=False, path_type=Path),
               help="Back-test CFD records (default: shipped fixtures).")
@@ -25,7 +27,7 @@ import click
               help="Tabulate the beta = 0 gain against N and the smoothing weights.")
 @click.option("--no-ipopt", is_flag=True, help="Skip the hard-constrained IPOPT comparison.")
 @click.option("--json", "as_json", is_flag=True, help="Print the key numbers as JSON.")
-def run_cmd(case_file: Path, out_dir: Path | None, fixtures: Path | None,
+def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
             backtest_fixtures: tuple[Path, ...], live: bool, coefficients: str, starts: int,
             gain_table: bool, no_ipopt: bool, as_json: bool) -> None:
     """Identification, sweep, optimisation, back-test and reports for CASE_FILE.
@@ -49,7 +51,7 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: Path | None,
                          vtk_dir=out_dir / "vtk")
     outcome = run_study(case, options, progress=lambda m: click.echo(m, err=True))
     write_outputs(case, outcome, out_dir / "results.h5", out_dir / "report.html",
-                  str(fixtures or fixture_dir()))
+                  ", ".join(str(f) for f in fixtures or (fixture_dir(),)))
     if as_json:
         import json
 

@@ -1,4 +1,4 @@
-"""Identification from a folder of CFD records, for several weighting strategies, to HDF5."""
+"""Identification from folders of CFD records, for several weighting strategies, to HDF5."""
 
 from __future__ import annotations
 
@@ -13,6 +13,9 @@ from mfflap.identification.store import write_identification
 from mfflap.results import ResultsFile
 from mfflap.toml_io import read_toml
 
+#: separates the record folders in an identification's ``source`` attribute
+SOURCE_SEPARATOR = "\n"
+
 
 def failed_cases(folder: str | Path) -> dict[str, str]:
     """Cases whose CFD failed in a campaign folder, with the reason."""
@@ -23,20 +26,55 @@ def failed_cases(folder: str | Path) -> dict[str, str]:
     return out
 
 
-def load_cases(config: CaseConfig, folder: str | Path | None = None,
-               n_samples: int = 400) -> tuple[list[CaseData], dict[str, str]]:
-    """Prepared cases of a record folder (the shipped fixtures by default) and the excluded."""
-    folder = Path(folder) if folder is not None else fixture_dir()
-    records = read_records(folder)
-    if not records:
-        from mfflap.errors import MfflapError
+def _folder_list(folders: str | Path | Sequence[str | Path] | None) -> list[Path]:
+    if folders is None:
+        return [fixture_dir()]
+    if isinstance(folders, (str, Path)):
+        return [Path(f) for f in str(folders).split(SOURCE_SEPARATOR) if f] or [fixture_dir()]
+    return [Path(f) for f in folders] or [fixture_dir()]
 
-        raise MfflapError(f"{folder}: no CFD records (*.h5) to identify from; run "
+
+def source_text(folders: Sequence[str | Path]) -> str:
+    """The record folders as stored in a result's ``source`` attribute (one per line)."""
+    return SOURCE_SEPARATOR.join(str(f) for f in folders)
+
+
+def load_cases(config: CaseConfig,
+               folders: str | Path | Sequence[str | Path] | None = None,
+               n_samples: int = 400) -> tuple[list[CaseData], dict[str, str]]:
+    """Prepared cases of one or more record folders (the shipped fixtures by default) and
+    the cases left out, with the reason.
+
+    Several folders pool their records, so that a campaign's gaps can be filled from
+    another (a case its set-up lost, rerun with another). A case with a record in two
+    folders is ambiguous and raises naming both files; a case that failed in one folder
+    and has a record in another is identified from that record. A string holding several
+    folders one per line (a result's ``source``, :func:`source_text`) is read as those
+    folders.
+    """
+    from mfflap.errors import MfflapError
+
+    paths = _folder_list(folders)
+    records, origin, failed = [], {}, {}
+    for folder in paths:
+        for rec in read_records(folder):
+            if rec.name in origin:
+                raise MfflapError(
+                    f"case {rec.name} has a record in {origin[rec.name]} and in {folder}: "
+                    "keep one (move the other aside) so the identification knows which "
+                    "CFD to use")
+            origin[rec.name] = folder
+            records.append(rec)
+        for name, why in failed_cases(folder).items():
+            failed.setdefault(name, f"{why} ({folder})")
+    if not records:
+        where = ", ".join(str(f) for f in paths)
+        raise MfflapError(f"{where}: no CFD records (*.h5) to identify from; run "
                           "`mfflap campaign run` into it or point --fixtures elsewhere")
     cases, excluded = prepare_cases(records, config.identification.discard_time, n_samples,
                                     plate=config.plate, fluid=config.fluid,
                                     stream=config.flow)
-    excluded.update(failed_cases(folder))
+    excluded.update({k: v for k, v in failed.items() if k not in origin})
     return cases, excluded
 
 
