@@ -235,3 +235,50 @@ def test_a_comparison_can_end_before_the_records_do(record):
                                    str(start + period_s), "--json"])
     assert res.exit_code == 0, res.output
     assert {c["end_s"] for c in json.loads(res.output)["cases"]} == {start + period_s}
+
+
+CAMPAIGNS = Path(__file__).parents[1] / "campaigns"
+
+
+def test_history_figures_draw_both_records_as_recorded(tmp_path):
+    """The history overlay of a real medium/coarse pair: each panel holds both records'
+    own samples (not resampled, not bridged), the thrust panel the thrust of each record's
+    loads and motion, and the command writes one PNG for the chosen case."""
+    from matplotlib.image import imread
+
+    from mfflap.campaign.history_plot import PANELS, history_figure
+
+    a_dir, b_dir = CAMPAIGNS / "hardest_coarse_co1", CAMPAIGNS / "hardest_medium"
+    name = "f0p500_h0p500_phi135p0"
+    a, b = read_record(a_dir / f"{name}.h5"), read_record(b_dir / f"{name}.h5")
+    case = compare_records(a, b)
+    fig = history_figure(a, b, case, ("coarse", "medium"))
+    for ax, (key, _) in zip(fig.axes, PANELS, strict=True):
+        (line_b, line_a) = ax.lines
+        for line, rec in ((line_a, a), (line_b, b)):
+            expected = (thrust_and_power(rec.loads, rec.state)[0] if key == "thrust"
+                        else getattr(rec.loads, key))
+            np.testing.assert_array_equal(line.get_xdata(), rec.time)
+            np.testing.assert_array_equal(line.get_ydata(), expected)
+        assert line_b.get_label() == "medium" and line_a.get_label() == "coarse"
+    assert f"NRMSE {100 * case.nrmse_normal_force:.1f} %" == fig.axes[0].get_title("right")
+
+    out = tmp_path / "histories"
+    res = CliRunner().invoke(cli, ["campaign", "compare", str(a_dir), str(b_dir),
+                                   "--histories", str(out), "--case", name])
+    assert res.exit_code == 0, res.output
+    assert [p.name for p in out.iterdir()] == [f"{name}.png"]
+    assert imread(out / f"{name}.png").shape[:2] == (900, 1000)
+
+
+def test_history_figures_refuse_a_case_not_run_by_both(tmp_path):
+    a_dir, b_dir = CAMPAIGNS / "hardest_coarse_co1", CAMPAIGNS / "hardest_medium"
+    res = CliRunner().invoke(cli, ["campaign", "compare", str(a_dir), str(b_dir),
+                                   "--histories", str(tmp_path / "h"),
+                                   "--case", "f2p000_h0p500_phi135p0"])
+    assert res.exit_code != 0
+    assert "f2p000_h0p500_phi135p0 not run by both" in res.output
+    assert "compared: f0p500_h0p500_phi135p0" in res.output
+    res = CliRunner().invoke(cli, ["campaign", "compare", str(a_dir), str(b_dir),
+                                   "--case", "f0p500_h0p500_phi135p0"])
+    assert res.exit_code == 2 and "give --histories DIR" in res.output

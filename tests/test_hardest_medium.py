@@ -100,17 +100,18 @@ def test_the_medium_mesh_carries_f05_through_two_collapsed_time_steps():
 
 
 def test_at_f05_the_coarse_mesh_is_nearer_the_medium_one_than_at_f1():
-    """Over the same motion at half the frequency the coarse mesh (max Co 1 from t = 0) is
-    about 12 % NRMSE (F_n) from the medium mesh, and their mean thrust and power agree
-    within 10 %: closer than at f = 1 Hz (19 %, half the thrust)."""
+    """Against the medium mesh (the reference), the coarse mesh's run of the same motion at
+    half the frequency (max Co 1 from t = 0) is about 12 % NRMSE (F_n) away with mean thrust
+    and power within 10 %; at f = 1 Hz (max Co 2) it is 14 % away with half the thrust."""
     name = "f0p500_h0p500_phi135p0.h5"
-    f05 = compare_records(read_record(MEDIUM / name), read_record(CO1 / name))
-    f1 = compare_records(read_record(MEDIUM / "f1p000_h0p500_phi135p0.h5"),
-                         read_record(CAMPAIGNS / "table1_coarse_co2" /
-                                     "f1p000_h0p500_phi135p0.h5"))
+    f05 = compare_records(read_record(CO1 / name), read_record(MEDIUM / name))
+    f1 = compare_records(read_record(CAMPAIGNS / "table1_coarse_co2" /
+                                     "f1p000_h0p500_phi135p0.h5"),
+                         read_record(MEDIUM / "f1p000_h0p500_phi135p0.h5"))
     assert f05.pearson_normal_force > 0.75
-    assert 0.05 < f05.nrmse_normal_force < 0.8 * f1.nrmse_normal_force
+    assert 0.05 < f05.nrmse_normal_force < f1.nrmse_normal_force
     assert abs(f05.thrust_difference) < 0.1 and abs(f05.power_difference) < 0.1
+    assert -0.7 < f1.thrust_difference < -0.3
 
 
 def test_the_two_campaigns_pooled_hold_the_whole_table_1_grid():

@@ -111,20 +111,35 @@ def status_cmd(out_dir: Path, as_json: bool) -> None:
               help="HDF5 file of the comparison, both manifests beside it.")
 @click.option("--figure", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="PNG: NRMSE of F_n and M and the thrust difference per case.")
+@click.option("--histories", "histories_dir", default=None,
+              type=click.Path(file_okay=False, path_type=Path),
+              help="Folder for one PNG per case: F_n, F_t, M and thrust of both runs over "
+                   "time.")
+@click.option("--case", "case_ids", multiple=True,
+              help="With --histories: only this case (repeat for several).")
 @click.option("--json", "as_json", is_flag=True)
 def compare_cmd(folder_a: Path, folder_b: Path, start_s: float | None, end_s: float | None,
-                output: Path | None, figure: Path | None, as_json: bool) -> None:
+                output: Path | None, figure: Path | None, histories_dir: Path | None,
+                case_ids: tuple[str, ...], as_json: bool) -> None:
     """Case by case, the forces of campaign FOLDER_A against FOLDER_B (the reference):
     NRMSE and Pearson of F_n, F_t, M, mean thrust and power, numerical bursts, CPU."""
     from dataclasses import asdict
 
     from mfflap.campaign.compare import compare_campaigns, plot_comparison, write_comparison
 
+    if case_ids and histories_dir is None:
+        raise click.UsageError("--case chooses the cases of --histories; give --histories DIR")
     result = compare_campaigns(folder_a, folder_b, start_s, end_s)
     if output is not None:
         write_comparison(output, result)
     if figure is not None:
         plot_comparison(figure, result, (folder_a.name, folder_b.name))
+    if histories_dir is not None:
+        from mfflap.campaign.history_plot import plot_histories
+
+        written = plot_histories(histories_dir, result, (folder_a.name, folder_b.name),
+                                 case_ids)
+        click.echo(f"wrote {len(written)} history figure(s) to {histories_dir}", err=True)
     if as_json:
         click.echo(json.dumps({"cases": [{**asdict(c), "thrust_difference": c.thrust_difference,
                                           "power_difference": c.power_difference,
