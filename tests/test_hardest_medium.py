@@ -125,3 +125,40 @@ def test_the_two_campaigns_pooled_hold_the_whole_table_1_grid():
     shipped = read_toml(fixture_dir("table1_coarse") / "campaign.toml")["cases"]
     assert {c.name for c in cases} == set(shipped) and len(shipped) == 45
     assert excluded == {}
+
+
+def test_the_pooled_identification_report_names_each_records_set_up(tmp_path):
+    """`identify` from both folders, then its report: every Table 1 motion is listed with
+    the set-up its record came from (max Co 1 and inletOutlet for the two the max Co 2
+    campaign lost, max Co 2 for the rest)."""
+    import re
+
+    from click.testing import CliRunner
+
+    from mfflap.cli.main import cli
+
+    out = tmp_path / "pooled.h5"
+    runner = CliRunner()
+    res = runner.invoke(cli, ["identify", str(Path(__file__).parents[1] / "cases" /
+                                              "paper2026.toml"),
+                              "--fixtures", str(CAMPAIGNS / "table1_coarse_co2"),
+                              "--fixtures", str(CO1), "--strategy", "uniform",
+                              "--bootstrap", "20", "--output", str(out)])
+    assert res.exit_code == 0, res.output
+    assert "45 cases from" in res.output and "0 left out" in res.output
+    res = runner.invoke(cli, ["report", "identification", str(out),
+                              "--out", str(tmp_path / "pooled.html")])
+    assert res.exit_code == 0, res.output
+    text = (tmp_path / "pooled.html").read_text()
+    used = text[text.index("CFD cases used"):]
+    used = used[:used.index("</table>")]
+    rows = dict(re.findall(r"<tr><td>(f[0-9p]+_h[0-9p]+_phi[0-9p]+)</td>(.*?)</tr>", used))
+    assert len(rows) == 45
+    # cells after the case: f, h_amp, phi, mesh, cells, max Co, far field, ...
+    set_ups = {name: [re.findall(r"<td>([^<]*)</td>", row)[i] for i in (3, 5, 6)]
+               for name, row in rows.items()}
+    lost_by_co2 = {"f0p500_h0p500_phi135p0", "f2p000_h0p500_phi135p0"}
+    for name, (mesh, max_co, _far_field) in set_ups.items():
+        assert mesh == "coarse"
+        assert max_co == ("1" if name in lost_by_co2 else "2")
+    assert all(set_ups[n][2] == "inletOutlet" for n in lost_by_co2)

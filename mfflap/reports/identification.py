@@ -219,15 +219,17 @@ def add_identification_sections(rep: Report, results: Mapping[str, Identificatio
         rows.append([name, float(par.get("frequency", np.nan)),
                      float(par.get("heave_amplitude", np.nan)),
                      float(par.get("phase_deg", np.nan)), str(prov.get("mesh", "-")),
-                     prov.get("n_cells", "-"), float(prov.get("cpu_time_s", np.nan)),
+                     prov.get("n_cells", "-"), prov.get("solver_max_courant", "-"),
+                     str(prov.get("solver_far_field", "-")),
+                     float(prov.get("cpu_time_s", np.nan)),
                      str(prov.get("retries", "")) or "-",
                      float(first.metrics["normal_force"]["nrmse"][i]),
                      float(first.metrics["normal_force"]["pearson"][i])])
     s.blocks.append(text_html("CFD cases used (provenance from each record; agreement with "
                               f"the {first.strategy}-weighted fit):"))
     s.blocks.append(table_html(["case", "f [Hz]", "h_amp [m]", "φ [deg]", "mesh", "cells",
-                                "CPU [s]", "solver retries", "NRMSE F_n", "Pearson F_n"],
-                               rows))
+                                "set-up max Co", "set-up far field", "CPU [s]", "solver retries",
+                                "NRMSE F_n", "Pearson F_n"], rows))
     if first.notes:
         s.blocks.append(text_html("Data cleaning (numerical bursts of the CFD bridged, "
                                   "one-step glitches replaced; marked * in the maps):"))
