@@ -256,6 +256,13 @@ def test_gap_cli_on_a_record_folder(tmp_path):
     assert res.exit_code == 0, res.output
     blind = json.loads(res.output)
     assert len(blind["confusion"]) == 7 and "coefficient_error" in blind
+    again = tmp_path / "again"
+    write_record(again / f"{data[0].name}.h5",
+                 CfdRecord(data[0].name, data[0].state, data[0].cfd, data[0].parameters))
+    res = CliRunner().invoke(cli, ["gap", "diagnose", str(CASE), "--fixtures", str(folder),
+                                   "--fixtures", str(again), "--output", str(out)])
+    assert res.exit_code != 0
+    assert f"case {data[0].name} has a record in {folder} and in {again}" in res.output
 
 
 @pytest.mark.openfoam

@@ -41,23 +41,26 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
                  min_gain: float, output: Path, report_path: Path | None,
                  as_json: bool) -> None:
     """Where the model of CASE_FILE departs from CFD, and which effect explains it."""
-    from mfflap.campaign.records import fixture_dir, read_records
+    from mfflap.campaign.records import fixture_dir
     from mfflap.config import load_case
     from mfflap.gap.external import read_csv_case
     from mfflap.gap.report import gap_report, write_diagnosis
     from mfflap.gap.workflow import diagnose_cases
     from mfflap.identification.data import prepare_cases
+    from mfflap.identification.workflow import pooled_records
     from mfflap.results import ResultsFile
 
     case = load_case(case_file)
     cases = []
     sources = []
-    for folder in folders or ((fixture_dir(),) if not csv_files else ()):
+    folders = folders or ((fixture_dir(),) if not csv_files else ())
+    if folders:
+        records, _ = pooled_records(folders)
         prepared, excluded = prepare_cases(
-            read_records(folder), case.identification.discard_time if discard is None
-            else discard, plate=case.plate, fluid=case.fluid, stream=case.flow)
+            records, case.identification.discard_time if discard is None else discard,
+            plate=case.plate, fluid=case.fluid, stream=case.flow)
         cases += prepared
-        sources.append(str(folder))
+        sources += [str(f) for f in folders]
         for name, why in excluded.items():
             click.echo(f"left out {name}: {why}", err=True)
     cases += [read_csv_case(p) for p in csv_files]

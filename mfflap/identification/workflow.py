@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
-from mfflap.campaign.records import fixture_dir, read_records
+from mfflap.campaign.records import CfdRecord, fixture_dir, read_records
 from mfflap.config import CaseConfig
 from mfflap.identification.data import CaseData, prepare_cases
 from mfflap.identification.fit import IdentificationResult, identify
@@ -39,18 +39,20 @@ def source_text(folders: Sequence[str | Path]) -> str:
     return SOURCE_SEPARATOR.join(str(f) for f in folders)
 
 
-def load_cases(config: CaseConfig,
-               folders: str | Path | Sequence[str | Path] | None = None,
-               n_samples: int = 400) -> tuple[list[CaseData], dict[str, str]]:
-    """Prepared cases of one or more record folders (the shipped fixtures by default) and
-    the cases left out, with the reason.
+def pooled_records(folders: str | Path | Sequence[str | Path] | None = None
+                   ) -> tuple[list[CfdRecord], dict[str, str]]:
+    """The records of one or more folders (the shipped fixtures by default), and the cases
+    that failed in a folder without a record in any other, with the reason.
 
     Several folders pool their records, so that a campaign's gaps can be filled from
-    another (a case its set-up lost, rerun with another). A case with a record in two
-    folders is ambiguous and raises naming both files; a case that failed in one folder
-    and has a record in another is identified from that record. A string holding several
-    folders one per line (a result's ``source``, :func:`source_text`) is read as those
-    folders.
+    another (a case its set-up lost, rerun with another). A string holding several folders
+    one per line (a result's ``source``, :func:`source_text`) is read as those folders.
+
+    Raises
+    ------
+    MfflapError
+        If a case has a record in two folders (which CFD to use is ambiguous), naming both,
+        or if the folders hold no record.
     """
     from mfflap.errors import MfflapError
 
@@ -61,20 +63,28 @@ def load_cases(config: CaseConfig,
             if rec.name in origin:
                 raise MfflapError(
                     f"case {rec.name} has a record in {origin[rec.name]} and in {folder}: "
-                    "keep one (move the other aside) so the identification knows which "
-                    "CFD to use")
+                    "keep one (move the other aside) so that it is clear which CFD to use")
             origin[rec.name] = folder
             records.append(rec)
         for name, why in failed_cases(folder).items():
             failed.setdefault(name, f"{why} ({folder})")
     if not records:
         where = ", ".join(str(f) for f in paths)
-        raise MfflapError(f"{where}: no CFD records (*.h5) to identify from; run "
+        raise MfflapError(f"{where}: no CFD records (*.h5); run "
                           "`mfflap campaign run` into it or point --fixtures elsewhere")
+    return records, {k: v for k, v in failed.items() if k not in origin}
+
+
+def load_cases(config: CaseConfig,
+               folders: str | Path | Sequence[str | Path] | None = None,
+               n_samples: int = 400) -> tuple[list[CaseData], dict[str, str]]:
+    """Prepared cases of one or more record folders (:func:`pooled_records`) and the cases
+    left out, with the reason (a failed run, a record identification cannot use)."""
+    records, failed = pooled_records(folders)
     cases, excluded = prepare_cases(records, config.identification.discard_time, n_samples,
                                     plate=config.plate, fluid=config.fluid,
                                     stream=config.flow)
-    excluded.update({k: v for k, v in failed.items() if k not in origin})
+    excluded.update(failed)
     return cases, excluded
 
 
