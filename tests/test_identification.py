@@ -253,6 +253,8 @@ def test_several_record_folders_pool_and_fill_failed_cases(tmp_path):
     with pytest.raises(MfflapError, match=f"{recs[0].name} has a record in {first} and in "
                                           f"{second}"):
         load_cases(config, [first, second])
+    picked, excluded = load_cases(config, [first, second / f"{moved}.h5"])
+    assert {c.name for c in picked} == {r.name for r in recs} and excluded == {}
 
 
 _PAPER = Path(__file__).parents[1] / "cases" / "paper2026.toml"

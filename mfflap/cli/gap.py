@@ -17,8 +17,9 @@ def gap() -> None:
 @gap.command("diagnose")
 @click.argument("case_file", type=click.Path(dir_okay=False, exists=True, path_type=Path))
 @click.option("--fixtures", "folders", multiple=True,
-              type=click.Path(file_okay=False, exists=True, path_type=Path),
-              help="Folders of CFD records (campaign, back-test); default: shipped fixtures.")
+              type=click.Path(exists=True, path_type=Path),
+              help="Folders of CFD records (campaign, back-test) or record files; default: "
+                   "shipped fixtures.")
 @click.option("--csv", "csv_files", multiple=True,
               type=click.Path(dir_okay=False, exists=True, path_type=Path),
               help="External (motion, force) CSV files: time, pitch_angle, heave_position, "

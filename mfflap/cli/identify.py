@@ -23,9 +23,10 @@ def _strategies(names: tuple[str, ...], weights: str | None, case) -> list:
 @click.command()
 @click.argument("case_file", type=click.Path(dir_okay=False, exists=True, path_type=Path))
 @click.option("--fixtures", "folders", multiple=True,
-              type=click.Path(file_okay=False, exists=True, path_type=Path),
-              help="Folder of CFD records (default: the shipped fixtures); repeat to pool "
-                   "several (a case may have a record in one of them only).")
+              type=click.Path(exists=True, path_type=Path),
+              help="Folder of CFD records or one record file, DIR/CASE.h5 (default: the "
+                   "shipped fixtures); repeat to pool several (a case may have a record in "
+                   "one of them only).")
 @click.option("--strategy", "strategies", multiple=True,
               type=click.Choice(["uniform", "low", "high"]),
               help="Weighting strategy; repeat for several (default: all three).")
@@ -86,9 +87,9 @@ def report() -> None:
 @report.command("identification")
 @click.argument("results_file", type=click.Path(dir_okay=False, exists=True, path_type=Path))
 @click.option("--fixtures", "folders", multiple=True,
-              type=click.Path(file_okay=False, exists=True, path_type=Path),
-              help="The record folders; repeat for several (default: the ones the results "
-                   "name).")
+              type=click.Path(exists=True, path_type=Path),
+              help="The record folders or files; repeat for several (default: the ones the "
+                   "results name).")
 @click.option("--out", "out_path", type=click.Path(dir_okay=False, path_type=Path),
               default=None, help="HTML file (default: <results>.html).")
 def report_identification(results_file: Path, folders: tuple[Path, ...],

@@ -12,9 +12,9 @@ import click
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
               default=None, help="Output folder (default: <study name>_run).")
 @click.option("--fixtures", multiple=True,
-              type=click.Path(file_okay=False, exists=True, path_type=Path),
-              help="Identification CFD records (default: shipped fixtures); repeat to pool "
-                   "several folders.")
+              type=click.Path(exists=True, path_type=Path),
+              help="Identification CFD records, a folder or one record file (default: "
+                   "shipped fixtures); repeat to pool several.")
 @click.option("--backtest-fixtures", multiple=True,
               type=click.Path(file_okay=False, path_type=Path),
               help="Back-test CFD records (default: shipped fixtures).")

@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
-from mfflap.campaign.records import CfdRecord, fixture_dir, read_records
+from mfflap.campaign.records import CfdRecord, fixture_dir, read_record, read_records
 from mfflap.config import CaseConfig
 from mfflap.identification.data import CaseData, prepare_cases
 from mfflap.identification.fit import IdentificationResult, identify
@@ -41,33 +41,40 @@ def source_text(folders: Sequence[str | Path]) -> str:
 
 def pooled_records(folders: str | Path | Sequence[str | Path] | None = None
                    ) -> tuple[list[CfdRecord], dict[str, str]]:
-    """The records of one or more folders (the shipped fixtures by default), and the cases
-    that failed in a folder without a record in any other, with the reason.
+    """The records of one or more folders or record files (the shipped fixtures by default),
+    and the cases that failed in a folder without a record anywhere else, with the reason.
 
     Several folders pool their records, so that a campaign's gaps can be filled from
-    another (a case its set-up lost, rerun with another). A string holding several folders
-    one per line (a result's ``source``, :func:`source_text`) is read as those folders.
+    another (a case its set-up lost, rerun with another); a record file (``DIR/CASE.h5``)
+    adds that record alone, so that a few cases can be taken from a folder that also holds
+    others. A string holding several paths one per line (a result's ``source``,
+    :func:`source_text`) is read as those paths.
 
     Raises
     ------
     MfflapError
-        If a case has a record in two folders (which CFD to use is ambiguous), naming both,
-        or if the folders hold no record.
+        If a case has a record in two of the paths (which CFD to use is ambiguous), naming
+        both, or if the paths hold no record.
     """
     from mfflap.errors import MfflapError
 
     paths = _folder_list(folders)
     records, origin, failed = [], {}, {}
-    for folder in paths:
-        for rec in read_records(folder):
+    for path in paths:
+        if path.is_file():
+            found = [read_record(path)]
+        else:
+            found = read_records(path)
+            for name, why in failed_cases(path).items():
+                failed.setdefault(name, f"{why} ({path})")
+        for rec in found:
             if rec.name in origin:
                 raise MfflapError(
-                    f"case {rec.name} has a record in {origin[rec.name]} and in {folder}: "
-                    "keep one (move the other aside) so that it is clear which CFD to use")
-            origin[rec.name] = folder
+                    f"case {rec.name} has a record in {origin[rec.name]} and in {path}: "
+                    "keep one so that it is clear which CFD to use (give the record files "
+                    "wanted from one folder, DIR/CASE.h5, instead of the folder)")
+            origin[rec.name] = path
             records.append(rec)
-        for name, why in failed_cases(folder).items():
-            failed.setdefault(name, f"{why} ({folder})")
     if not records:
         where = ", ".join(str(f) for f in paths)
         raise MfflapError(f"{where}: no CFD records (*.h5); run "
