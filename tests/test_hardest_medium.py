@@ -128,8 +128,8 @@ def test_the_two_campaigns_pooled_hold_the_whole_table_1_grid():
     from mfflap.identification.workflow import load_cases
 
     config = load_case(Path(__file__).parents[1] / "cases" / "paper2026.toml")
-    with pytest.raises(MfflapError, match="f1p000_h0p500_phi135p0 has a record in .*"
-                                          "table1_coarse_co2 and in .*hardest_coarse_co1"):
+    with pytest.raises(MfflapError, match=r"f1p000_h0p500_phi135p0 has a record in .*"
+                                          r"table1_coarse_co2 and in .*hardest_coarse_co1"):
         load_cases(config, [CAMPAIGNS / "table1_coarse_co2", CO1])
     cases, excluded = load_cases(config, POOLED)
     shipped = read_toml(fixture_dir("table1_coarse") / "campaign.toml")["cases"]
