@@ -43,13 +43,14 @@ def test_medium_piso_is_the_reference_with_affordables_pressure_velocity_couplin
 
 
 def test_the_coarse_courant_set_ups_change_the_fixtures_set_up_in_what_they_say_alone():
-    """coarse_co2 and coarse_co1 are the shipped fixtures' set-up (the defaults on the coarse
-    mesh) but for the Courant limit and, for coarse_co1, the far field."""
+    """coarse_co2, coarse_co1 and coarse_co05 are the shipped fixtures' set-up (the defaults
+    on the coarse mesh) but for the Courant limit and, for the last two, the far field."""
     setups = named_setups()
     shipped = dataclasses.asdict(dataclasses.replace(setups["coarse_co2"].solver,
                                                      max_courant=4.0))
     for name, changes in (("coarse_co2", {"max_courant": 2.0}),
-                          ("coarse_co1", {"max_courant": 1.0, "far_field": "inletOutlet"})):
+                          ("coarse_co1", {"max_courant": 1.0, "far_field": "inletOutlet"}),
+                          ("coarse_co05", {"max_courant": 0.5, "far_field": "inletOutlet"})):
         assert setups[name].mesh == mesh_specs()["coarse"]
         solver = dataclasses.asdict(setups[name].solver)
         assert {k: v for k, v in solver.items() if shipped[k] != v} == changes, name
