@@ -17,6 +17,7 @@ from mfflap.toml_io import read_toml
 CAMPAIGNS = Path(__file__).parents[1] / "campaigns"
 MEDIUM = CAMPAIGNS / "hardest_medium"
 CO1 = CAMPAIGNS / "hardest_coarse_co1"
+CO05 = CAMPAIGNS / "hardest_coarse_co05"
 
 
 def test_the_medium_campaign_is_the_shipped_set_up_on_the_medium_mesh():
@@ -29,7 +30,7 @@ def test_the_medium_campaign_is_the_shipped_set_up_on_the_medium_mesh():
         assert motion["heave_amplitude"] == 0.5 and motion["phase_deg"] == 135.0
 
 
-@pytest.mark.parametrize("path", record_paths(MEDIUM) + record_paths(CO1),
+@pytest.mark.parametrize("path", record_paths(MEDIUM) + record_paths(CO1) + record_paths(CO05),
                          ids=lambda p: f"{p.parent.name}/{p.stem}")
 def test_a_finished_run_of_a_hardest_motion_is_done_and_fit_for_identification(path):
     """What campaign status and identification judge: no numerical burst after the ramp,
@@ -191,3 +192,59 @@ def test_at_f1_the_later_periods_are_converged_in_neither_time_step_nor_mesh():
                                                        for c in to_medium)
     thrust_co1, thrust_co2 = (c.mean_thrust_a_n for c in to_medium)
     assert thrust_co2 < to_medium[0].mean_thrust_b_n < thrust_co1
+
+
+def test_the_max_co_05_campaign_is_the_max_co_1_one_at_half_its_courant_limit():
+    co05, co1 = (read_toml(d / "campaign.toml") for d in (CO05, CO1))
+    solver = co05["setup"]["solver"]
+    changed = {k: v for k, v in solver.items() if co1["setup"]["solver"][k] != v}
+    assert changed == {"max_courant": 0.5}
+    assert co05["setup"]["mesh"] == co1["setup"]["mesh"] == "coarse"
+    assert co05["cases"] == {"f1p000_h0p500_phi135p0":
+                             co1["cases"]["f1p000_h0p500_phi135p0"]}
+
+
+def test_at_f1_halving_the_courant_limit_converges_the_first_period_and_not_the_rest():
+    """f = 1 Hz, h = 0.5 m, phi = 135 deg on the coarse mesh at max Co 2, 1 and 0.5: over the
+    first 0.75 s after the ramp each halving brings it nearer the medium mesh; over the whole
+    run max Co 0.5 is as far from max Co 1 as the medium mesh is from the coarse one, and
+    the mean thrust jumps about with the limit instead of settling."""
+    name = "f1p000_h0p500_phi135p0.h5"
+    runs = {co: read_record(folder / name) for co, folder in
+            ((2.0, CAMPAIGNS / "table1_coarse_co2"), (1.0, CO1), (0.5, CO05))}
+    assert runs[0.5].provenance["solver_max_courant"] == 0.5
+    assert "retries" not in runs[0.5].provenance
+    assert runs[0.5].time[-1] == pytest.approx(3.0, abs=1e-3)
+    medium = read_record(MEDIUM / name)
+    early = [compare_records(runs[co], medium, end_s=1.0).nrmse_normal_force
+             for co in (2.0, 1.0, 0.5)]
+    assert early[0] > early[1] > early[2]
+    assert early[2] < 0.06
+    assert compare_records(runs[0.5], runs[1.0], end_s=1.0).nrmse_normal_force < 0.06
+    halved = compare_records(runs[0.5], runs[1.0])
+    assert halved.nrmse_normal_force > 0.08
+    to_medium = compare_records(runs[0.5], medium)
+    assert 0.1 < to_medium.nrmse_normal_force < 0.2
+    thrust = {co: compare_records(rec, medium).mean_thrust_a_n for co, rec in runs.items()}
+    # not monotone in the limit: max Co 1 above the medium mesh, 2 and 0.5 well below it
+    assert thrust[1.0] > to_medium.mean_thrust_b_n > max(thrust[0.5], thrust[2.0])
+    assert abs(thrust[0.5] - thrust[1.0]) > 0.5 * to_medium.mean_thrust_b_n
+
+
+def test_the_medium_mesh_carries_f2_and_the_coarse_one_follows_only_its_first_period():
+    """f = 2 Hz, h = 0.5 m, phi = 135 deg on the medium mesh: two collapsed time steps (the
+    second rerun from t = 0 with inletOutlet, then max Co 2), to its end inside the bound.
+    The coarse mesh at max Co 1 follows it to t = 0.75 s within 10 % NRMSE (F_n), about
+    20 % over the whole run, with mean thrust within 10 %."""
+    name = "f2p000_h0p500_phi135p0.h5"
+    medium = read_record(MEDIUM / name)
+    retries = medium.provenance["retries"]
+    assert retries.count("time step collapsed") == 2
+    assert "resumed from t = 0 s with the inletOutlet far field" in retries
+    assert medium.time[-1] == pytest.approx(1.5, abs=1e-3)
+    coarse = read_record(CO1 / name)
+    early = compare_records(coarse, medium, end_s=0.75)
+    whole = compare_records(coarse, medium)
+    assert early.nrmse_normal_force < 0.1 < whole.nrmse_normal_force < 0.3
+    assert whole.pearson_normal_force > 0.7
+    assert abs(whole.thrust_difference) < 0.1
