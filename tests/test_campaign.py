@@ -314,6 +314,10 @@ def test_a_loss_at_the_same_flow_time_is_rerun_from_the_start_once(tmp_path, mon
         "rerun from t = 0 s with max Co 2: the forces left what the motion can drive from "
         "t = 0.0362 s again, as at max Co 4")
     assert "maxCo           2;" in (case_dir / "system" / "controlDict").read_text()
+    assert (rec.provenance["solver_max_courant"], rec.provenance["as_run_max_courant"]) == (
+        4.0, 2.0)
+    assert (rec.provenance["solver_far_field"], rec.provenance["as_run_far_field"]) == (
+        "freestream", "inletOutlet")
     log = (case_dir / "log.pimpleFoam").read_text()
     assert log.count("Starting time loop") == 4 and log.count("Time = 0.01\n") == 2
     assert rec.time[0] < 0.005 and np.all(np.diff(rec.time) > 0)
@@ -577,6 +581,29 @@ def test_solver_setting_selects_the_far_field_and_refuses_unknown_ones(tmp_path)
     assert "type fixedValue; value uniform 0;" in (case / "0" / "p").read_text()
     default = write_case(tmp_path / "d", SHORT.motion(), end_time=0.02)
     assert "freestreamVelocity" in (default / "0" / "U").read_text()
+
+
+def test_the_settings_as_run_follow_every_remedy_a_retry_applies(tmp_path):
+    """A written case's settings as run are its set-up's; after the three remedies of
+    run_motion's retries (inletOutlet, half maxCo, upwind k-epsilon) they are the new ones."""
+    from mfflap.campaign.openfoam_run import (
+        as_run_settings,
+        lower_courant_limit,
+        use_inlet_outlet_far_field,
+        use_upwind_turbulence,
+    )
+    from mfflap.cfd.openfoam.writer import SolverSettings, write_case
+
+    solver = SolverSettings()
+    case = write_case(tmp_path / "c", SHORT.motion(), end_time=0.02, solver=solver)
+    assert as_run_settings(case) == {
+        "as_run_max_courant": solver.max_courant, "as_run_far_field": solver.far_field,
+        "as_run_turbulence_convection": solver.turbulence_convection}
+    assert use_inlet_outlet_far_field(case) and use_upwind_turbulence(case)
+    lower_courant_limit(case)
+    assert as_run_settings(case) == {
+        "as_run_max_courant": solver.max_courant / 2, "as_run_far_field": "inletOutlet",
+        "as_run_turbulence_convection": "upwind"}
 
 
 @pytest.mark.openfoam

@@ -163,6 +163,7 @@ def test_the_pooled_identification_report_names_each_records_set_up(tmp_path):
     text = (tmp_path / "pooled.html").read_text()
     used = text[text.index("CFD cases used"):]
     used = used[:used.index("</table>")]
+    assert "set-up max Co" in used and "max Co at end" in used
     rows = dict(re.findall(r"<tr><td>(f[0-9p]+_h[0-9p]+_phi[0-9p]+)</td>(.*?)</tr>", used))
     assert len(rows) == 45
     # cells after the case: f, h_amp, phi, mesh, cells, max Co, far field, ...

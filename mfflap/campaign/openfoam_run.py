@@ -17,7 +17,12 @@ from mfflap.cfd.openfoam.forces import read_forces
 from mfflap.cfd.openfoam.loads import imposed_state, to_loads
 from mfflap.cfd.openfoam.runner import is_time_folder, latest_solution_time, run_case
 from mfflap.cfd.openfoam.solver_log import solver_provenance
-from mfflap.cfd.openfoam.writer import MeshSpec, SolverSettings, write_case
+from mfflap.cfd.openfoam.writer import (
+    TURBULENCE_CONVECTION_SCHEMES,
+    MeshSpec,
+    SolverSettings,
+    write_case,
+)
 from mfflap.errors import CfdRunError, MfflapError
 from mfflap.kinematics.continuous import Motion
 from mfflap.parameters import Fluid, FreeStream, Plate
@@ -46,6 +51,35 @@ def courant_limit(case_dir: str | Path) -> float:
     return float(match.group(2))
 
 
+def as_run_settings(case_dir: str | Path) -> dict[str, Any]:
+    """The settings a case ran its last stretch with, after any retry changed them.
+
+    A record's ``solver_*`` provenance is the set-up the case was written with; a retry
+    (:func:`run_motion`) may since have lowered ``maxCo``, switched the far field to
+    inletOutlet or k and epsilon to upwind. These keys say what the case holds now.
+
+    Returns
+    -------
+    dict
+        ``as_run_max_courant`` (system/controlDict), ``as_run_far_field`` ("freestream",
+        "inletOutlet" or "other", from 0/U) and ``as_run_turbulence_convection`` (the
+        ``div(phi,k)`` scheme of system/fvSchemes as a ``SolverSettings.turbulence_convection``
+        name, or "other").
+    """
+    case = Path(case_dir)
+    velocity = (case / "0" / "U").read_bytes() if (case / "0" / "U").is_file() else b""
+    far_field = ("inletOutlet" if b"inletOutlet" in velocity
+                 else "freestream" if b"freestreamVelocity" in velocity else "other")
+    schemes = case / "system" / "fvSchemes"
+    match = _TURBULENCE_K_DIV.search(schemes.read_text()) if schemes.is_file() else None
+    return {"as_run_max_courant": courant_limit(case), "as_run_far_field": far_field,
+            "as_run_turbulence_convection": _SCHEME_NAMES.get(
+                match.group(1).strip() if match else "", "other")}
+
+
+#: SolverSettings.turbulence_convection by the fvSchemes text it writes
+_SCHEME_NAMES = {text: name for name, text in TURBULENCE_CONVECTION_SCHEMES.items()}
+_TURBULENCE_K_DIV = re.compile(r"^\s*div\(phi,k\)\s+Gauss ([^;]+);", re.M)
 _TURBULENCE_DIV = re.compile(r"^(\s*div\(phi,(?:k|epsilon)\)\s+)Gauss [^;]+;", re.M)
 
 
@@ -412,6 +446,7 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
             fh.write(f"forces beyond what the motion can drive from t = {breach.start_s:.6g} s"
                      f" at max Co {max_co:g}; resumed from t = {resume} s with "
                      f"{retries[-1]}\n")
+    record.provenance.update(as_run_settings(case_dir))
     if (case_dir / RETRY_LOG).is_file():
         record.provenance["retries"] = "; ".join(
             (case_dir / RETRY_LOG).read_text().splitlines())

@@ -221,6 +221,7 @@ def add_identification_sections(rep: Report, results: Mapping[str, Identificatio
                      float(par.get("phase_deg", np.nan)), str(prov.get("mesh", "-")),
                      prov.get("n_cells", "-"), prov.get("solver_max_courant", "-"),
                      str(prov.get("solver_far_field", "-")),
+                     prov.get("as_run_max_courant", "-"), str(prov.get("as_run_far_field", "-")),
                      float(prov.get("cpu_time_s", np.nan)),
                      str(prov.get("retries", "")) or "-",
                      float(first.metrics["normal_force"]["nrmse"][i]),
@@ -228,7 +229,8 @@ def add_identification_sections(rep: Report, results: Mapping[str, Identificatio
     s.blocks.append(text_html("CFD cases used (provenance from each record; agreement with "
                               f"the {first.strategy}-weighted fit):"))
     s.blocks.append(table_html(["case", "f [Hz]", "h_amp [m]", "φ [deg]", "mesh", "cells",
-                                "set-up max Co", "set-up far field", "CPU [s]", "solver retries",
+                                "set-up max Co", "set-up far field", "max Co at end",
+                                "far field at end", "CPU [s]", "solver retries",
                                 "NRMSE F_n", "Pearson F_n"], rows))
     if first.notes:
         s.blocks.append(text_html("Data cleaning (numerical bursts of the CFD bridged, "
