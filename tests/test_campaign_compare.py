@@ -272,13 +272,15 @@ def test_history_figures_draw_both_records_as_recorded(tmp_path):
 
 
 def test_history_figures_refuse_a_case_not_run_by_both(tmp_path):
-    a_dir, b_dir = CAMPAIGNS / "hardest_coarse_co1", CAMPAIGNS / "hardest_medium"
+    # the max Co 0.5 campaign ran f = 1 Hz alone
+    a_dir, b_dir = CAMPAIGNS / "hardest_coarse_co05", CAMPAIGNS / "hardest_medium"
     res = CliRunner().invoke(cli, ["campaign", "compare", str(a_dir), str(b_dir),
                                    "--histories", str(tmp_path / "h"),
                                    "--case", "f2p000_h0p500_phi135p0"])
     assert res.exit_code != 0
     assert "f2p000_h0p500_phi135p0 not run by both" in res.output
-    assert "compared: f0p500_h0p500_phi135p0" in res.output
+    assert "compared: f1p000_h0p500_phi135p0" in res.output
+    assert not (tmp_path / "h").exists() or not any((tmp_path / "h").iterdir())
     res = CliRunner().invoke(cli, ["campaign", "compare", str(a_dir), str(b_dir),
-                                   "--case", "f0p500_h0p500_phi135p0"])
+                                   "--case", "f1p000_h0p500_phi135p0"])
     assert res.exit_code == 2 and "give --histories DIR" in res.output
