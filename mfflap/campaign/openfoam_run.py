@@ -62,25 +62,25 @@ def as_run_settings(case_dir: str | Path) -> dict[str, Any]:
     -------
     dict
         ``as_run_max_courant`` (system/controlDict), ``as_run_far_field`` ("freestream",
-        "inletOutlet" or "other", from 0/U) and ``as_run_turbulence_convection`` (the
-        ``div(phi,k)`` scheme of system/fvSchemes as a ``SolverSettings.turbulence_convection``
-        name, or "other").
+        "inletOutlet" or "other", from 0/U) and ``as_run_turbulence_convection`` (the first
+        k or epsilon convection scheme of system/fvSchemes, both written and changed
+        together, as a ``SolverSettings.turbulence_convection`` name, or "other").
     """
     case = Path(case_dir)
     velocity = (case / "0" / "U").read_bytes() if (case / "0" / "U").is_file() else b""
     far_field = ("inletOutlet" if b"inletOutlet" in velocity
                  else "freestream" if b"freestreamVelocity" in velocity else "other")
     schemes = case / "system" / "fvSchemes"
-    match = _TURBULENCE_K_DIV.search(schemes.read_text()) if schemes.is_file() else None
+    match = _TURBULENCE_DIV.search(schemes.read_text()) if schemes.is_file() else None
     return {"as_run_max_courant": courant_limit(case), "as_run_far_field": far_field,
             "as_run_turbulence_convection": _SCHEME_NAMES.get(
-                match.group(1).strip() if match else "", "other")}
+                match.group(2).strip() if match else "", "other")}
 
 
 #: SolverSettings.turbulence_convection by the fvSchemes text it writes
 _SCHEME_NAMES = {text: name for name, text in TURBULENCE_CONVECTION_SCHEMES.items()}
-_TURBULENCE_K_DIV = re.compile(r"^\s*div\(phi,k\)\s+Gauss ([^;]+);", re.M)
-_TURBULENCE_DIV = re.compile(r"^(\s*div\(phi,(?:k|epsilon)\)\s+)Gauss [^;]+;", re.M)
+#: the convection scheme of k or epsilon in fvSchemes (group 2: the scheme after Gauss)
+_TURBULENCE_DIV = re.compile(r"^(\s*div\(phi,(?:k|epsilon)\)\s+)Gauss ([^;]+);", re.M)
 
 
 def use_upwind_turbulence(case_dir: str | Path) -> bool:
@@ -140,6 +140,7 @@ def record_from_case(case_dir: str | Path, motion: Motion, name: str,
     for key, value in meta.items():
         if key.startswith("solver_"):
             prov[key] = value
+    prov.update(as_run_settings(case_dir))
     if plate is not None:
         prov["chord_m"] = plate.chord
     return CfdRecord(name, state, loads, parameters, prov, history.force, history.moment)
@@ -446,7 +447,6 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
             fh.write(f"forces beyond what the motion can drive from t = {breach.start_s:.6g} s"
                      f" at max Co {max_co:g}; resumed from t = {resume} s with "
                      f"{retries[-1]}\n")
-    record.provenance.update(as_run_settings(case_dir))
     if (case_dir / RETRY_LOG).is_file():
         record.provenance["retries"] = "; ".join(
             (case_dir / RETRY_LOG).read_text().splitlines())

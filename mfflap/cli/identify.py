@@ -51,6 +51,7 @@ def identify(case_file: Path, folders: tuple[Path, ...], strategies: tuple[str, 
         load_cases,
         save_identification,
         source_text,
+        sources_shown,
     )
 
     case = load_case(case_file)
@@ -70,8 +71,7 @@ def identify(case_file: Path, folders: tuple[Path, ...], strategies: tuple[str, 
     if as_json:
         click.echo(json.dumps(summary, indent=2))
         return
-    where = ", ".join(str(f) for f in folders)
-    click.echo(f"{len(cases)} cases from {where}; {len(excluded)} left out")
+    click.echo(f"{len(cases)} cases from {sources_shown(folders)}; {len(excluded)} left out")
     for label, r in results.items():
         coeffs = "  ".join(f"{n} = {v:.3f} ± {r.standard_error[n]:.3f}"
                            for n, v in r.coefficients.items())
@@ -97,7 +97,7 @@ def report_identification(results_file: Path, folders: tuple[Path, ...],
     """Maps of Pearson and NRMSE, overlays, applicability region, weighting sensitivity."""
     from mfflap.config import loads_case
     from mfflap.identification.store import read_identification, strategies_in
-    from mfflap.identification.workflow import load_cases
+    from mfflap.identification.workflow import load_cases, sources_shown
     from mfflap.reports.identification import identification_report
     from mfflap.results import ResultsFile
 
@@ -109,7 +109,6 @@ def report_identification(results_file: Path, folders: tuple[Path, ...],
         raise click.ClickException(f"{results_file}: no identification results")
     cases, _ = load_cases(case, folders or source)
     out_path = out_path or results_file.with_suffix(".html")
-    shown = ", ".join(str(f) for f in folders) if folders else source.replace("\n", ", ")
     identification_report(out_path, results, cases, case.morison_model(), case.flow.velocity,
-                          shown)
+                          sources_shown(folders or source))
     click.echo(f"wrote {out_path}")

@@ -36,8 +36,8 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
     and <out>/vtk/*.pvd (the motions for ParaView). A stage that fails is reported and the
     run goes on.
     """
-    from mfflap.campaign.records import fixture_dir
     from mfflap.config import load_case
+    from mfflap.identification.workflow import sources_shown
     from mfflap.pipeline import RunOptions, run_study, write_outputs
 
     case = load_case(case_file)
@@ -51,7 +51,7 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
                          vtk_dir=out_dir / "vtk")
     outcome = run_study(case, options, progress=lambda m: click.echo(m, err=True))
     write_outputs(case, outcome, out_dir / "results.h5", out_dir / "report.html",
-                  ", ".join(str(f) for f in fixtures or (fixture_dir(),)))
+                  sources_shown(fixtures))
     if as_json:
         import json
 

@@ -28,15 +28,21 @@ def failed_cases(folder: str | Path) -> dict[str, str]:
 
 def _folder_list(folders: str | Path | Sequence[str | Path] | None) -> list[Path]:
     if folders is None:
-        return [fixture_dir()]
-    if isinstance(folders, (str, Path)):
-        return [Path(f) for f in str(folders).split(SOURCE_SEPARATOR) if f] or [fixture_dir()]
+        folders = []
+    elif isinstance(folders, (str, Path)):
+        folders = [f for f in str(folders).split(SOURCE_SEPARATOR) if f]
     return [Path(f) for f in folders] or [fixture_dir()]
 
 
 def source_text(folders: Sequence[str | Path]) -> str:
     """The record folders as stored in a result's ``source`` attribute (one per line)."""
     return SOURCE_SEPARATOR.join(str(f) for f in folders)
+
+
+def sources_shown(folders: str | Path | Sequence[str | Path] | None) -> str:
+    """The record folders or files that :func:`pooled_records` reads, comma-separated, for
+    messages and reports (the shipped fixtures if none are given)."""
+    return ", ".join(str(f) for f in _folder_list(folders))
 
 
 def pooled_records(folders: str | Path | Sequence[str | Path] | None = None
