@@ -40,6 +40,10 @@ def test_medium_piso_is_the_reference_with_affordables_pressure_velocity_couplin
         expected = getattr(affordable if field in coupling else reference, field)
         assert value == expected, field
     assert piso.velocity_convection == "linearUpwind" != affordable.velocity_convection
+    co5 = setups["medium_piso_co5"]
+    assert co5.mesh == setups["medium_piso"].mesh
+    assert dataclasses.replace(co5.solver, max_courant=piso.max_courant) == piso
+    assert co5.solver.max_courant == 5.0
 
 
 def test_the_coarse_courant_set_ups_change_the_fixtures_set_up_in_what_they_say_alone():

@@ -19,7 +19,7 @@ from mfflap.cfd.openfoam.runner import is_time_folder, latest_solution_time, run
 from mfflap.cfd.openfoam.solver_log import solver_provenance
 from mfflap.cfd.openfoam.writer import (
     TURBULENCE_CONVECTION_SCHEMES,
-    MeshSpec,
+    AnyMeshSpec,
     SolverSettings,
     write_case,
 )
@@ -320,7 +320,7 @@ def _retries_tried(case_dir: Path) -> str:
 
 
 def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict[str, Any],
-               end_time: float, *, mesh: str | MeshSpec = "coarse", ramp_time: float = 0.0,
+               end_time: float, *, mesh: str | AnyMeshSpec = "coarse", ramp_time: float = 0.0,
                solver: SolverSettings | None = None, plate: Plate | None = None,
                fluid: Fluid | None = None, stream: FreeStream | None = None,
                timeout_s: float = 6 * 3600.0, y_plus: bool = False,

@@ -12,7 +12,7 @@ from dataclasses import dataclass, fields, replace
 from pathlib import Path
 
 from mfflap.cfd.openfoam.writer import (
-    MeshSpec,
+    AnyMeshSpec,
     SolverSettings,
     mesh_specs,
     resolve_mesh,
@@ -27,7 +27,7 @@ class CfdSetup:
     """A named mesh with its solver settings."""
 
     name: str
-    mesh: MeshSpec
+    mesh: AnyMeshSpec
     solver: SolverSettings
     description: str = ""
 
@@ -96,7 +96,7 @@ def setup(name: str) -> CfdSetup:
 
 
 def mesh_and_solver(mesh: str | None = None,
-                    setup_name: str | None = None) -> tuple[MeshSpec, SolverSettings]:
+                    setup_name: str | None = None) -> tuple[AnyMeshSpec, SolverSettings]:
     """The mesh and solver settings a command asks for with ``--mesh`` and ``--setup``.
 
     A named set-up gives both; with a mesh as well, its solver settings run on that mesh

@@ -25,6 +25,7 @@ import numpy as np
 
 from mfflap.cfd import templates
 from mfflap.cfd.frames import FRAMES, case_displacement, case_rotation_deg
+from mfflap.cfd.openfoam.h_grid import HGridSpec
 from mfflap.cfd.openfoam.loads import imposed_state
 from mfflap.cfd.openfoam.plate_frame import (
     format_acceleration_table,
@@ -72,14 +73,40 @@ class MeshSpec:
         return (2 * self.n_chord + 2 * self.n_edge) * self.n_radial
 
 
-def mesh_specs() -> dict[str, MeshSpec]:
-    """The named resolutions of meshes.toml."""
+#: A mesh of meshes.toml: an O-grid, or the H-type baseline (``topology = "H"``)
+AnyMeshSpec = MeshSpec | HGridSpec
+#: The dataclass of each ``topology`` of meshes.toml
+MESH_TOPOLOGIES: dict[str, type] = {"O": MeshSpec, "H": HGridSpec}
+
+
+def mesh_specs() -> dict[str, AnyMeshSpec]:
+    """The named resolutions of meshes.toml.
+
+    Raises
+    ------
+    ConfigError
+        For an unknown ``topology`` or a key its mesh kind does not have (naming the file and
+        the table).
+    """
     path = template_dir() / "meshes.toml"
     data = read_toml(path)
-    return {name: MeshSpec(name=name, **values) for name, values in data.items()}
+    specs = {}
+    for name, values in data.items():
+        values = dict(values)
+        topology = values.pop("topology", "O")
+        if topology not in MESH_TOPOLOGIES:
+            raise ConfigError(f"mesh {name!r}: topology must be one of "
+                              f"{', '.join(MESH_TOPOLOGIES)}, got {topology!r}",
+                              key=f"{name}.topology", source=str(path))
+        try:
+            specs[name] = MESH_TOPOLOGIES[topology](name=name, **values)
+        except TypeError as err:
+            raise ConfigError(f"mesh {name!r} ({topology}-grid): {err}", key=name,
+                              source=str(path)) from err
+    return specs
 
 
-def resolve_mesh(mesh: str | MeshSpec) -> MeshSpec:
+def resolve_mesh(mesh: str | AnyMeshSpec) -> AnyMeshSpec:
     """``mesh`` itself, or the named resolution of meshes.toml.
 
     Raises
@@ -87,7 +114,7 @@ def resolve_mesh(mesh: str | MeshSpec) -> MeshSpec:
     ConfigError
         For a name meshes.toml does not have (the message lists those it has).
     """
-    if isinstance(mesh, MeshSpec):
+    if isinstance(mesh, MeshSpec | HGridSpec):
         return mesh
     specs = mesh_specs()
     if mesh not in specs:
@@ -102,6 +129,8 @@ VELOCITY_CONVECTION_SCHEMES = ("linearUpwind", "LUST")
 TURBULENCE_CONVECTION_SCHEMES = {"limitedLinear": "limitedLinear 1", "upwind": "upwind"}
 #: The template folder of the files only the plate's frame needs
 PLATE_FRAME_TEMPLATES = "plate_frame"
+#: The template folder of the H-type mesh's blockMeshDict (:mod:`~.h_grid`)
+H_GRID_TEMPLATES = "h_grid"
 
 
 @dataclass(frozen=True)
@@ -209,7 +238,7 @@ def format_motion_table(rows: np.ndarray) -> str:
 
 
 def write_case(case_dir: str | Path, motion: Motion, end_time: float,
-               mesh: str | MeshSpec = "coarse",
+               mesh: str | AnyMeshSpec = "coarse",
                plate: Plate | None = None, fluid: Fluid | None = None,
                stream: FreeStream | None = None, solver: SolverSettings | None = None,
                depth: float | None = None, ramp_time: float = 0.0,
@@ -232,10 +261,8 @@ def write_case(case_dir: str | Path, motion: Motion, end_time: float,
     k = 1.5 * (solver.turbulence_intensity * max(u, 1e-3)) ** 2
     length_scale = 0.07 * plate.chord
     epsilon = 0.09**0.75 * k**1.5 / length_scale
-    radius = spec.radius_chords * plate.chord
     context = {
         "mesh": spec, "chord": plate.chord, "half_t": plate.thickness / 2, "depth": depth,
-        "xc": plate.chord / 2, "radius": radius, "r45": radius / math.sqrt(2),
         "end_time": end_time, "initial_time_step": solver.initial_time_step,
         "max_time_step": solver.max_time_step, "max_courant": solver.max_courant,
         "write_interval": min(solver.write_interval, end_time), "density": fluid.density,
@@ -249,9 +276,18 @@ def write_case(case_dir: str | Path, motion: Motion, end_time: float,
         "turbulence_convection": TURBULENCE_CONVECTION_SCHEMES[solver.turbulence_convection],
         "frame": solver.frame,
     }
+    if isinstance(spec, HGridSpec):
+        context["grid"] = spec.block_mesh_context(plate.chord, plate.thickness)
+    else:
+        radius = spec.radius_chords * plate.chord
+        context.update(xc=plate.chord / 2, radius=radius, r45=radius / math.sqrt(2))
     env = jinja2.Environment(undefined=jinja2.StrictUndefined, keep_trailing_newline=True)
     src = template_dir()
-    _render_templates(src, case_dir, env, context, skip=src / PLATE_FRAME_TEMPLATES)
+    skip = [src / PLATE_FRAME_TEMPLATES, src / H_GRID_TEMPLATES]
+    if isinstance(spec, HGridSpec):  # its own blockMeshDict instead of the O-grid's
+        skip.append(src / "system" / "blockMeshDict.j2")
+        _render_templates(src / H_GRID_TEMPLATES, case_dir, env, context)
+    _render_templates(src, case_dir, env, context, skip=skip)
     constant = case_dir / "constant"
     if solver.frame == "plate":
         _render_templates(src / PLATE_FRAME_TEMPLATES, case_dir, env, context)
@@ -288,10 +324,12 @@ def attach_motion_table(case_dir: str | Path, table_path: str | Path) -> Path:
 
 
 def _render_templates(src: Path, case_dir: Path, env: jinja2.Environment,
-                      context: dict, skip: Path | None = None) -> None:
-    """Copy or render (``.j2``) every template file under ``src`` into ``case_dir``."""
+                      context: dict, skip: list[Path] = ()) -> None:
+    """Copy or render (``.j2``) every template file under ``src`` into ``case_dir``, except
+    those at or under a path of ``skip``."""
     for path in src.rglob("*"):
-        if path.is_dir() or path.suffix == ".toml" or (skip and path.is_relative_to(skip)):
+        if (path.is_dir() or path.suffix == ".toml"
+                or any(path.is_relative_to(s) for s in skip)):
             continue
         rel = path.relative_to(src)
         out = case_dir / rel.parent / rel.name.removesuffix(".j2")
