@@ -162,6 +162,9 @@ def main() -> None:
     parser.add_argument("--no-baseline", action="store_true",
                         help="skip the run of openfoam.md's set-up (the machine-speed "
                         "baseline)")
+    parser.add_argument("--max-courant", type=float, default=None,
+                        help="max Co of the named set-ups instead of their own (their labels "
+                        "end in -coX); the reference and the baseline keep theirs")
     parser.add_argument("--pitch-deg", type=float, default=PITCH_DEG,
                         help="pitch amplitude of the motion, deg (the H-type baseline's time "
                         "step is set by how fast it turns)")
@@ -188,10 +191,14 @@ def main() -> None:
     if not args.no_baseline:
         base_setup = setup(BASELINE)
         jobs.append((BASELINE, base_setup.mesh, base_setup.solver, *run))
-    floors = {}
+    floors, named = {}, []
     for label in args.setups:
         name, _, mesh_name = label.partition("@")
         mesh, solver = mesh_and_solver(mesh_name or None, name)
+        if args.max_courant is not None:
+            solver = replace(solver, max_courant=args.max_courant)
+            label = f"{label}-co{args.max_courant:g}"
+        named.append(label)
         jobs.append((label, mesh, solver, *run))
         if not args.no_solver_floor:
             other = "PCG" if solver.pressure_solver == "GAMG" else "GAMG"
@@ -203,7 +210,7 @@ def main() -> None:
              for m in (s.strip() for s in args.meshes.split(",")) if m]
     if args.far_field:
         jobs = [(j[0], j[1], replace(j[2], far_field=args.far_field), *j[3:]) for j in jobs]
-    moving = {"reference", *args.setups} if args.plate_frame else set()
+    moving = {"reference", *named} if args.plate_frame else set()
     jobs += [(f"{j[0]}-plate", j[1],
               replace(j[2], frame="plate", far_field="inletOutlet"), *j[3:])
              for j in jobs if j[0] in moving]
