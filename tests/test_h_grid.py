@@ -9,7 +9,7 @@ import pytest
 from mfflap.cfd.openfoam import writer
 from mfflap.cfd.openfoam.h_grid import HGridSpec, expansion_ratio
 from mfflap.cfd.openfoam.setups import setup
-from mfflap.cfd.openfoam.writer import mesh_specs, write_case
+from mfflap.cfd.openfoam.writer import SolverSettings, mesh_specs, write_case
 from mfflap.errors import ConfigError
 from mfflap.kinematics import HarmonicMotion
 
@@ -97,8 +97,6 @@ def test_the_h_grid_case_has_its_own_block_mesh_and_the_plate_frame_zone(tmp_pat
     assert len(blocks) == 8
     assert sum(int(b[2]) * int(b[3]) for b in blocks) == spec.n_cells
     assert "n_cells = 16480" in (case / "mfflap_case.toml").read_text()
-    from mfflap.cfd.openfoam.writer import SolverSettings
-
     plate = write_case(tmp_path / "p", MOTION, end_time=0.01, mesh="openfoam_md",
                        solver=SolverSettings(frame="plate", far_field="inletOutlet"))
     zones = re.findall(r"hex \([\d ]+\) plateFrame \(", (plate / "system" /

@@ -114,7 +114,7 @@ def resolve_mesh(mesh: str | AnyMeshSpec) -> AnyMeshSpec:
     ConfigError
         For a name meshes.toml does not have (the message lists those it has).
     """
-    if isinstance(mesh, MeshSpec | HGridSpec):
+    if isinstance(mesh, AnyMeshSpec):
         return mesh
     specs = mesh_specs()
     if mesh not in specs:
@@ -276,17 +276,16 @@ def write_case(case_dir: str | Path, motion: Motion, end_time: float,
         "turbulence_convection": TURBULENCE_CONVECTION_SCHEMES[solver.turbulence_convection],
         "frame": solver.frame,
     }
-    if isinstance(spec, HGridSpec):
-        context["grid"] = spec.block_mesh_context(plate.chord, plate.thickness)
-    else:
-        radius = spec.radius_chords * plate.chord
-        context.update(xc=plate.chord / 2, radius=radius, r45=radius / math.sqrt(2))
     env = jinja2.Environment(undefined=jinja2.StrictUndefined, keep_trailing_newline=True)
     src = template_dir()
     skip = [src / PLATE_FRAME_TEMPLATES, src / H_GRID_TEMPLATES]
     if isinstance(spec, HGridSpec):  # its own blockMeshDict instead of the O-grid's
+        context["grid"] = spec.block_mesh_context(plate.chord, plate.thickness)
         skip.append(src / "system" / "blockMeshDict.j2")
         _render_templates(src / H_GRID_TEMPLATES, case_dir, env, context)
+    else:
+        radius = spec.radius_chords * plate.chord
+        context.update(xc=plate.chord / 2, radius=radius, r45=radius / math.sqrt(2))
     _render_templates(src, case_dir, env, context, skip=skip)
     constant = case_dir / "constant"
     if solver.frame == "plate":
