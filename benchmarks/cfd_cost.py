@@ -41,7 +41,9 @@ Run: python benchmarks/cfd_cost.py [setup ...] [--meshes coarse,lean] [--cycles 
      (default: the "affordable" set-up; SETUP@MESH: that set-up's solver settings on a
      named mesh, as `mfflap cfd write --setup SETUP --mesh MESH`; --meshes adds named meshes
      at the reference settings;
-     with --work-dir, runs that finished there before are read, not rerun; the mesh study
+     with --work-dir, runs that finished there before are read, not rerun, and a folder
+     whose runs had another motion, cycle count, far field or k-epsilon convection
+     (--turbulence-convection) is refused; the mesh study
      of the README: affordable --meshes fine --far-field inletOutlet --cycles 1; the
      plate's frame: affordable --plate-frame --far-field inletOutlet --cycles 1)
 """
@@ -52,7 +54,8 @@ import argparse
 import shutil
 import tempfile
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import replace
+from dataclasses import dataclass, field, replace
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -62,7 +65,7 @@ from mfflap.cfd.openfoam.loads import imposed_state, to_loads
 from mfflap.cfd.openfoam.runner import run_case
 from mfflap.cfd.openfoam.setups import mesh_and_solver, setup
 from mfflap.cfd.openfoam.solver_log import solver_provenance
-from mfflap.cfd.openfoam.writer import mesh_specs, write_case
+from mfflap.cfd.openfoam.writer import AnyMeshSpec, SolverSettings, mesh_specs, write_case
 from mfflap.errors import CfdRunError
 from mfflap.identification.data import despike
 from mfflap.kinematics import HarmonicMotion
@@ -97,18 +100,48 @@ def windows(cycles: float) -> dict[str, tuple[float, float]]:
             for k in range(1, int(np.ceil(cycles)) + 1) if min(k, cycles) > max(RAMP_S, k - 1)}
 
 
+@dataclass(frozen=True)
+class SetupRun:
+    """What one set-up's run gave: its CPU and forces, or why it failed."""
+
+    label: str
+    #: pimpleFoam's CPU per simulated cycle, s (None: the run failed)
+    cpu_per_cycle_s: float | None
+    #: the first line of the error of a failed run
+    failure: str = ""
+    time_s: np.ndarray = field(default_factory=lambda: np.empty(0))
+    #: de-spiked F_n, M and F_t (COMPONENTS) at time_s, N and N m
+    loads: dict[str, np.ndarray] = field(default_factory=dict)
+    cpu_per_cell_step_us: float = float("nan")
+    steps_per_cycle: float = float("nan")
+
+    @property
+    def ok(self) -> bool:
+        """Whether the run finished."""
+        return self.cpu_per_cycle_s is not None
+
+
 def _finished(case: Path) -> bool:
     log = case / "log.pimpleFoam"
     return log.is_file() and log.read_text(errors="replace").rstrip().endswith("End")
 
 
-def run_setup(args):
-    """Run (or, when it finished before in the work folder, read) one set-up.
+@dataclass(frozen=True)
+class Job:
+    """One set-up to run: its label (the name of its case folder), mesh and solver settings."""
 
-    Returns (label, CPU s per cycle, time, series, CPU µs per cell and time step, time steps
-    per cycle) or (label, None, why it failed).
-    """
-    label, mesh, solver, cycles, root, pitch_deg = args
+    label: str
+    mesh: AnyMeshSpec
+    solver: SolverSettings
+
+    def with_solver(self, **changes) -> Job:
+        """The same job with some solver settings changed."""
+        return replace(self, solver=replace(self.solver, **changes))
+
+
+def run_setup(job: Job, cycles: float, root: str, pitch_deg: float) -> SetupRun:
+    """Run (or, when it finished before in the work folder, read) one set-up."""
+    label, mesh, solver = job.label, job.mesh, job.solver
     motion = benchmark_motion(pitch_deg)
     case = Path(root) / label
     if not _finished(case):
@@ -119,7 +152,7 @@ def run_setup(args):
         try:
             run_case(case, timeout_s=4 * 3600)
         except CfdRunError as err:
-            return label, None, str(err).splitlines()[0]
+            return SetupRun(label, None, failure=str(err).splitlines()[0])
     history = read_forces(case)
     loads = to_loads(history, imposed_state(motion, history.time, RAMP_S), 0.18, 0.18,
                      source=f"openfoam:{label}", frame=solver.frame)
@@ -127,16 +160,18 @@ def run_setup(args):
     provenance = solver_provenance(case)
     cpu_s = provenance["cpu_time_s"]
     per_cell_step_us = cpu_s / (mesh.n_cells * max(provenance["n_time_steps"], 1)) * 1e6
-    return (label, cpu_s / cycles, history.time, series, per_cell_step_us,
-            provenance["n_time_steps"] / cycles)
+    return SetupRun(label, cpu_s / cycles, time_s=np.asarray(history.time), loads=series,
+                    cpu_per_cell_step_us=per_cell_step_us,
+                    steps_per_cycle=provenance["n_time_steps"] / cycles)
 
 
-def compare(run, ref, cycles: float) -> str:
+def compare(run: SetupRun, ref: SetupRun, cycles: float) -> str:
+    """F_n, M and F_t NRMSE of ``run`` against ``ref`` in each cycle's window."""
     out = []
     for name, (a, b) in windows(cycles).items():
         t = np.linspace(a, b, 500)
-        errs = [100 * nrmse(np.interp(t, run[2], run[3][k]), np.interp(t, ref[2], ref[3][k]))
-                for k in COMPONENTS]
+        errs = [100 * nrmse(np.interp(t, run.time_s, run.loads[k]),
+                            np.interp(t, ref.time_s, ref.loads[k])) for k in COMPONENTS]
         out.append(f"{name}: F_n {errs[0]:5.2f} %  M {errs[1]:5.2f} %  F_t {errs[2]:5.1f} %")
     return "   ".join(out)
 
@@ -156,6 +191,9 @@ def main() -> None:
     parser.add_argument("--far-field", choices=("freestream", "inletOutlet"), default=None,
                         help="far field of every run (default: each set-up's own); the fine "
                         "mesh runs only with inletOutlet")
+    parser.add_argument("--turbulence-convection", choices=("limitedLinear", "upwind"),
+                        default=None, help="convection of k and epsilon in every run "
+                        "(default: each set-up's own; upwind needs no clipping of epsilon)")
     parser.add_argument("--plate-frame", action="store_true",
                         help="also run the reference and every set-up in the plate's frame "
                         "(static mesh, inletOutlet far field)")
@@ -168,6 +206,10 @@ def main() -> None:
     parser.add_argument("--pitch-deg", type=float, default=PITCH_DEG,
                         help="pitch amplitude of the motion, deg (the H-type baseline's time "
                         "step is set by how fast it turns)")
+    parser.add_argument("--yardstick", default="reference",
+                        help="label of the run every NRMSE is measured against (default: "
+                        "the reference; e.g. reference-co1 with reference --max-courant 1, "
+                        "where the medium mesh at max Co 4 is not converged in time)")
     parser.add_argument("--work-dir", default=None,
                         help="folder of the cases (default: a new temporary folder); runs "
                         "that finished there before are read, not rerun")
@@ -176,21 +218,25 @@ def main() -> None:
     root = args.work_dir or tempfile.mkdtemp(prefix="mfflap-cfd-cost-")
     Path(root).mkdir(parents=True, exist_ok=True)
     pitch = args.pitch_deg
-    stamp = Path(root) / "benchmark_motion.txt"
-    said = f"{benchmark_motion(pitch)!r}\n"
+    # what a finished run in the work folder must share to be read instead of rerun
+    stamp = Path(root) / "benchmark_settings.txt"
+    own = "each set-up's own"
+    said = (f"motion {benchmark_motion(pitch)!r}; cycles {cycles!r}; far field "
+            f"{args.far_field or own}; k-epsilon convection "
+            f"{args.turbulence_convection or own}\n")
     if stamp.is_file() and stamp.read_text() != said:
-        raise SystemExit(f"{root} holds runs of another motion ({stamp}: "
+        raise SystemExit(f"{root} holds runs of other settings ({stamp}: "
                          f"{stamp.read_text().strip()}); use another --work-dir")
     stamp.write_text(said)
     ref = setup("reference")
-    run = (cycles, root, pitch)  # what every job shares
-    jobs = [("reference", ref.mesh, ref.solver, *run),
-            ("reference-PCG", ref.mesh, replace(ref.solver, pressure_solver="PCG"), *run)]
+    reference = Job("reference", ref.mesh, ref.solver)
+    jobs = [reference, replace(reference.with_solver(pressure_solver="PCG"),
+                               label="reference-PCG")]
     if not args.no_time_step_floor:
-        jobs.append(("reference-Co3", ref.mesh, replace(ref.solver, max_courant=3.0), *run))
+        jobs.append(replace(reference.with_solver(max_courant=3.0), label="reference-Co3"))
     if not args.no_baseline:
         base_setup = setup(BASELINE)
-        jobs.append((BASELINE, base_setup.mesh, base_setup.solver, *run))
+        jobs.append(Job(BASELINE, base_setup.mesh, base_setup.solver))
     floors, named = {}, []
     for label in args.setups:
         name, _, mesh_name = label.partition("@")
@@ -199,64 +245,78 @@ def main() -> None:
             solver = replace(solver, max_courant=args.max_courant)
             label = f"{label}-co{args.max_courant:g}"
         named.append(label)
-        jobs.append((label, mesh, solver, *run))
+        job = Job(label, mesh, solver)
+        jobs.append(job)
         if not args.no_solver_floor:
             other = "PCG" if solver.pressure_solver == "GAMG" else "GAMG"
             floors[label] = f"{label}-{other}"
-            jobs.append((floors[label], mesh, replace(solver, pressure_solver=other),
-                         *run))
+            jobs.append(replace(job.with_solver(pressure_solver=other), label=floors[label]))
     specs = mesh_specs()
-    jobs += [(f"{m}-mesh", specs[m], ref.solver, *run)
+    jobs += [Job(f"{m}-mesh", specs[m], ref.solver)
              for m in (s.strip() for s in args.meshes.split(",")) if m]
     if args.far_field:
-        jobs = [(j[0], j[1], replace(j[2], far_field=args.far_field), *j[3:]) for j in jobs]
+        jobs = [j.with_solver(far_field=args.far_field) for j in jobs]
+    if args.turbulence_convection:
+        jobs = [j.with_solver(turbulence_convection=args.turbulence_convection) for j in jobs]
     moving = {"reference", *named} if args.plate_frame else set()
-    jobs += [(f"{j[0]}-plate", j[1],
-              replace(j[2], frame="plate", far_field="inletOutlet"), *j[3:])
-             for j in jobs if j[0] in moving]
+    jobs += [replace(j.with_solver(frame="plate", far_field="inletOutlet"),
+                     label=f"{j.label}-plate") for j in jobs if j.label in moving]
     # the longest runs first, so that the two workers finish together
-    jobs.sort(key=lambda j: -j[1].n_cells)
+    jobs.sort(key=lambda j: -j.mesh.n_cells)
+    labels = [j.label for j in jobs]
+    if args.yardstick not in labels:
+        raise SystemExit(f"--yardstick {args.yardstick!r} is not one of this benchmark's runs: "
+                         f"{', '.join(labels)}")
+    run = partial(run_setup, cycles=cycles, root=root, pitch_deg=pitch)
     with ProcessPoolExecutor(2) as pool:
-        results = {r[0]: r for r in pool.map(run_setup, jobs)}
-    base = results["reference"]
-    if base[1] is None:
-        raise SystemExit(f"the reference run failed: {base[2]}")
+        results = {r.label: r for r in pool.map(run, jobs)}
+    base, yardstick = results["reference"], results[args.yardstick]
+    for needed in (base, yardstick):
+        if not needed.ok:
+            raise SystemExit(f"the {needed.label} run failed: {needed.failure}")
     print(f"f = 1 Hz, h = 0.3 m, theta = {pitch:g} deg, U = 0.3 m/s; {cycles:g} cycles; "
           f"cases in {root}")
     baseline = results.get(BASELINE)
-    have_baseline = baseline is not None and baseline[1] is not None
-    scale = OPENFOAM_MD_US_PER_CELL_STEP / baseline[4] if have_baseline else float("nan")
+    have_baseline = baseline is not None and baseline.ok
+    scale = (OPENFOAM_MD_US_PER_CELL_STEP / baseline.cpu_per_cell_step_us if have_baseline
+             else float("nan"))
     print("set-up          cells  CPU per cycle  / reference  / openfoam.md set-up  at "
-          "openfoam.md's speed   NRMSE against the reference (medium mesh)")
-    cells = {j[0]: j[1].n_cells for j in jobs}
+          f"openfoam.md's speed   NRMSE against {args.yardstick} (medium mesh)")
+    cells = {j.label: j.mesh.n_cells for j in jobs}
     for label, res in results.items():
-        if res[1] is None:
-            print(f"{label:14s} {cells[label]:6d}   failed: {res[2]}")
+        if not res.ok:
+            print(f"{label:14s} {cells[label]:6d}   failed: {res.failure}")
             continue
-        errors = compare(res, base, cycles)
-        to_baseline = res[1] / baseline[1] if have_baseline else float("nan")
-        print(f"{label:14s} {cells[label]:6d} {res[1]:10.1f} s   {res[1] / base[1]:7.3f}   "
-              f"{to_baseline:12.3f}   {res[1] * scale:14.1f} s   {errors}")
-    print("reference-PCG against reference is the floor: the same mesh, another linear solver.")
-    if "reference-Co3" in results:
-        print("reference-Co3 against reference is the medium mesh's own time-step uncertainty "
-              "(max Co 3 instead of 4).")
+        errors = compare(res, yardstick, cycles)
+        cpu = res.cpu_per_cycle_s
+        to_baseline = cpu / baseline.cpu_per_cycle_s if have_baseline else float("nan")
+        print(f"{label:14s} {cells[label]:6d} {cpu:10.1f} s   {cpu / base.cpu_per_cycle_s:7.3f}"
+              f"   {to_baseline:12.3f}   {cpu * scale:14.1f} s   {errors}")
+    for rerun, meaning in (("reference-PCG", "the floor: the same mesh, another linear "
+                            "solver"),
+                           ("reference-Co3", "the medium mesh's own time-step uncertainty, "
+                            "max Co 3 instead of 4")):
+        if rerun in results and results[rerun].ok:
+            print(f"{rerun} against reference ({meaning}): "
+                  f"{compare(results[rerun], base, cycles)}")
     for name, rerun in floors.items():
-        if results[name][1] is None or results[rerun][1] is None:
+        if not (results[name].ok and results[rerun].ok):
             continue
         print(f"solver floor of {name} ({rerun} against {name}): "
               f"{compare(results[rerun], results[name], cycles)}")
     for name in moving:
         plate = results.get(f"{name}-plate")
-        if plate is None or plate[1] is None or results[name][1] is None:
+        if plate is None or not (plate.ok and results[name].ok):
             continue
+        ratio = plate.cpu_per_cycle_s / results[name].cpu_per_cycle_s
         print(f"plate's frame of {name} ({name}-plate against {name}): CPU "
-              f"{plate[1] / results[name][1]:.3f}x, {compare(plate, results[name], cycles)}")
+              f"{ratio:.3f}x, {compare(plate, results[name], cycles)}")
     if have_baseline:
-        print(f"This machine: the set-up of shared/design/openfoam.md took {baseline[1]:.1f} s "
-              f"per cycle ({baseline[5]:.0f} time steps; that file: "
+        print(f"This machine: the set-up of shared/design/openfoam.md took "
+              f"{baseline.cpu_per_cycle_s:.1f} s "
+              f"per cycle ({baseline.steps_per_cycle:.0f} time steps; that file: "
               f"{OPENFOAM_MD_CPU_PER_CYCLE_S:.0f} s, about {OPENFOAM_MD_STEPS_PER_CYCLE}) and "
-              f"{baseline[4]:.2f} µs CPU per cell and time step (that file: "
+              f"{baseline.cpu_per_cell_step_us:.2f} µs CPU per cell and time step (that file: "
               f"{OPENFOAM_MD_US_PER_CELL_STEP:.2f} µs), so CPU at openfoam.md's speed is CPU "
               f"here x {scale:.2f}.")
     else:
