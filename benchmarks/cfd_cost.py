@@ -144,6 +144,10 @@ class Job:
         """The same job with some solver settings changed."""
         return replace(self, solver=replace(self.solver, **changes))
 
+    def variant(self, suffix: str, **changes) -> Job:
+        """This job with some solver settings changed, labelled ``<label>-<suffix>``."""
+        return replace(self.with_solver(**changes), label=f"{self.label}-{suffix}")
+
 
 def run_setup(job: Job, cycles: float, root: str, pitch_deg: float) -> SetupRun:
     """Run (or, when it finished before in the work folder, read) one set-up."""
@@ -261,34 +265,33 @@ def main() -> None:
     stamp.write_text(said)
     ref = setup("reference")
     reference = Job("reference", ref.mesh, ref.solver)
-    jobs = [reference, replace(reference.with_solver(pressure_solver="PCG"),
-                               label="reference-PCG")]
+    jobs = [reference, reference.variant("PCG", pressure_solver="PCG")]
     if not args.no_time_step_floor:
-        jobs.append(replace(reference.with_solver(max_courant=3.0), label="reference-co3"))
+        jobs.append(reference.variant("co3", max_courant=3.0))
     yardstick_label = "reference"
     if args.yardstick_courant is not None:
-        yardstick_label = f"reference-co{args.yardstick_courant:g}"
-        jobs.append(replace(reference.with_solver(max_courant=args.yardstick_courant),
-                            label=yardstick_label))
+        yardstick = reference.variant(f"co{args.yardstick_courant:g}",
+                                      max_courant=args.yardstick_courant)
+        yardstick_label = yardstick.label
+        jobs.append(yardstick)
     if not args.no_baseline:
         base_setup = setup(BASELINE)
         jobs.append(Job(BASELINE, base_setup.mesh, base_setup.solver))
     floors, named = {}, []
     for label in args.setups:
         name, _, mesh_name = label.partition("@")
-        mesh, solver = mesh_and_solver(mesh_name or None, name)
+        job = Job(label, *mesh_and_solver(mesh_name or None, name))
         if args.max_courant is not None:
-            solver = replace(solver, max_courant=args.max_courant)
-            label = f"{label}-co{args.max_courant:g}"
-        if label in {j.label for j in jobs}:  # the reference, its max Co 3 run or the yardstick
+            job = job.variant(f"co{args.max_courant:g}", max_courant=args.max_courant)
+        if job.label in {j.label for j in jobs}:  # the reference, its max Co 3 run or the yardstick
             continue
-        named.append(label)
-        job = Job(label, mesh, solver)
+        named.append(job.label)
         jobs.append(job)
         if not args.no_solver_floor:
-            other = "PCG" if solver.pressure_solver == "GAMG" else "GAMG"
-            floors[label] = f"{label}-{other}"
-            jobs.append(replace(job.with_solver(pressure_solver=other), label=floors[label]))
+            other = "PCG" if job.solver.pressure_solver == "GAMG" else "GAMG"
+            floor = job.variant(other, pressure_solver=other)
+            floors[job.label] = floor.label
+            jobs.append(floor)
     specs = mesh_specs()
     jobs += [Job(f"{m}-mesh", specs[m], ref.solver)
              for m in (s.strip() for s in args.meshes.split(",")) if m]
@@ -297,8 +300,8 @@ def main() -> None:
     if args.turbulence_convection:
         jobs = [j.with_solver(turbulence_convection=args.turbulence_convection) for j in jobs]
     moving = {"reference", *named} if args.plate_frame else set()
-    jobs += [replace(j.with_solver(frame="plate", far_field="inletOutlet"),
-                     label=f"{j.label}-plate") for j in jobs if j.label in moving]
+    jobs += [j.variant("plate", frame="plate", far_field="inletOutlet")
+             for j in jobs if j.label in moving]
     # the longest runs first, so that the two workers finish together
     jobs.sort(key=lambda j: -j.mesh.n_cells)
     run = partial(run_setup, cycles=cycles, root=root, pitch_deg=pitch)
