@@ -1,0 +1,140 @@
+"""The pure logic of benchmarks/cfd_cost.py: windows, NRMSE, the time-step band, the verdict.
+
+The benchmark's CFD runs take hours; what it computes from them is checked here on synthetic
+force histories whose NRMSE follow by hand.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mfflap.cfd.openfoam.setups import setup
+
+SCRIPT = Path(__file__).resolve().parents[1] / "benchmarks" / "cfd_cost.py"
+
+
+@pytest.fixture(scope="module")
+def bench():
+    spec = importlib.util.spec_from_file_location("cfd_cost_benchmark", SCRIPT)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # dataclasses look their module up by name
+    spec.loader.exec_module(module)
+    yield module
+    del sys.modules[spec.name]
+
+
+def _run(bench, label, offset=0.0, cpu=100.0, time_s=None):
+    """A run whose F_n, M and F_t are unit sines (range 2) plus ``offset``."""
+    time_s = np.linspace(0.0, 2.0, 4001) if time_s is None else time_s
+    wave = np.sin(2 * np.pi * time_s)
+    loads = {k: wave + offset for k in bench.COMPONENTS}
+    return bench.SetupRun(label, cpu, time_s=time_s, loads=loads)
+
+
+def test_courant_list_parses_one_or_several_and_refuses_nonsense(bench):
+    assert bench.courant_list("1") == [1.0]
+    assert bench.courant_list("4,1,2.5") == [4.0, 1.0, 2.5]
+    for bad, said in (("a", "not a comma-separated"), ("1,,2", "not a comma-separated"),
+                      ("0", "positive"), ("-1", "positive"), ("nan", "positive"),
+                      ("1,2,1", "twice")):
+        with pytest.raises(argparse.ArgumentTypeError, match=said):
+            bench.courant_list(bad)
+
+
+def test_windows_are_each_cycle_after_the_ramp(bench):
+    assert bench.windows(2.0) == {"cycle 1": (0.25, 1.0), "cycle 2": (1.0, 2.0)}
+    assert bench.windows(1.5) == {"cycle 1": (0.25, 1.0), "cycle 2": (1.0, 1.5)}
+    assert bench.windows(0.2) == {}  # nothing simulated after the ramp
+
+
+def test_nrmse_percent_of_a_constant_offset_is_offset_over_range(bench):
+    ref = _run(bench, "ref")
+    assert all(e == [0.0, 0.0, 0.0] for e in bench.nrmse_percent(ref, ref, 2.0).values())
+    shifted = _run(bench, "run", offset=0.04)
+    # the sine has range 2 in every window of whole cycles (cycle 1: 0.25-1 s holds -1 and 1)
+    for errors in bench.nrmse_percent(shifted, ref, 2.0).values():
+        np.testing.assert_allclose(errors, 2.0, rtol=1e-3)
+
+
+def test_ensemble_mean_averages_on_the_time_all_members_cover(bench):
+    a = _run(bench, "a", offset=0.1, cpu=100.0)
+    b = _run(bench, "b", offset=-0.3, cpu=300.0, time_s=np.linspace(0.0, 1.5, 777))
+    mean = bench.ensemble_mean([a, b], "mean")
+    assert mean.time_s[0] == 0.0 and mean.time_s[-1] == 1.5
+    assert mean.cpu_per_cycle_s == 400.0 and mean.ok
+    # off the members' own samples, the mean is of their linear interpolations
+    wave = np.sin(2 * np.pi * mean.time_s)
+    for k in bench.COMPONENTS:
+        np.testing.assert_allclose(mean.loads[k], wave - 0.1, atol=2e-4)
+
+
+def test_time_step_band_is_the_furthest_member_from_the_mean(bench):
+    members = [_run(bench, "a", 0.02), _run(bench, "b", -0.06), _run(bench, "c", 0.04)]
+    mean = bench.ensemble_mean(members, "mean")  # offset 0: b is 0.06 / 2 = 3 % away
+    np.testing.assert_allclose(bench.time_step_band(members, mean, 2.0), (3.0, 3.0),
+                               rtol=1e-3)
+
+
+def test_verdict_reads_the_accuracy_the_band_and_the_three_costs(bench):
+    ref = _run(bench, "ref")
+    baseline = _run(bench, "openfoam_md", cpu=300.0)
+    near = _run(bench, "near", offset=0.03, cpu=80.0)  # 1.5 %, 0.27 of the baseline
+    said = bench.verdict(near, ref, baseline, speed_factor=2.0, cycles=2.0)
+    assert said.startswith("within 2 % (F_n 1.50 %, M 1.50 %)")
+    assert ("this machine's seconds: yes, ratio to openfoam.md's set-up: yes, "
+            "openfoam.md's speed: no") in said  # 80 s x 2 = 160 s > 90 s
+    assert "band" not in said
+    far = _run(bench, "far", offset=0.05, cpu=120.0)  # 2.5 %, 0.4 of the baseline
+    said = bench.verdict(far, ref, baseline, 0.5, 2.0, band=(3.0, 2.4))
+    assert said.startswith("not within 2 % (F_n 2.50 %, M 2.50 %); outside the medium "
+                           "mesh's time-step band (F_n 3.00 %, M 2.40 %)")
+    assert ("this machine's seconds: no, ratio to openfoam.md's set-up: no, "
+            "openfoam.md's speed: yes") in said
+    said = bench.verdict(far, ref, None, float("nan"), 2.0, band=(3.0, 2.6))
+    assert "inside the medium mesh's time-step band" in said
+    assert said.endswith("cost met by this machine's seconds: no")  # no baseline, one reading
+
+
+def test_job_variant_changes_the_solver_and_labels_the_copy(bench):
+    ref = setup("reference")
+    job = bench.Job("reference", ref.mesh, ref.solver)
+    co1 = job.variant("co1", max_courant=1.0)
+    assert co1.label == "reference-co1" and co1.solver.max_courant == 1.0
+    assert job.solver.max_courant == ref.solver.max_courant and co1.mesh is job.mesh
+
+
+def test_finished_needs_a_log_that_ends_in_end(bench, tmp_path):
+    assert not bench._finished(tmp_path)
+    log = tmp_path / "log.pimpleFoam"
+    log.write_text("Time = 0.5\nExecutionTime = 12 s\n")
+    assert not bench._finished(tmp_path)  # killed mid-run: rerun, not read
+    log.write_text("Time = 1\nExecutionTime = 24 s\n\nEnd\n\n")
+    assert bench._finished(tmp_path)
+
+
+def _script(*args):
+    return subprocess.run([sys.executable, str(SCRIPT), *args], capture_output=True,
+                          text=True, timeout=120)
+
+
+def test_a_work_dir_of_other_settings_is_refused_before_anything_runs(tmp_path):
+    stamp = tmp_path / "benchmark_settings.txt"
+    stamp.write_text("motion HarmonicMotion(...); cycles 1.0; far field inletOutlet\n")
+    done = _script("--work-dir", str(tmp_path), "--cycles", "2")
+    assert done.returncode != 0
+    assert "holds runs of other settings" in done.stderr and str(stamp) in done.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["benchmark_settings.txt"]
+    assert "cycles 1.0" in stamp.read_text()  # the stamp of the runs there is kept
+
+
+def test_a_bad_yardstick_courant_is_a_usage_error():
+    done = _script("--yardstick-courant", "1,0")
+    assert done.returncode == 2
+    assert "--yardstick-courant" in done.stderr and "positive" in done.stderr
