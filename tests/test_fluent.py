@@ -165,6 +165,10 @@ def test_columns_by_name_restart_overlap_and_cut_last_line():
     assert rep.columns["fx-plate"][5] == -18  # the restarted rows win
     cut = text + "1.0 3.0 10"  # killed while writing
     assert len(parse_report(cut, "f.out").time) == 9
+    # cut inside the last number: a value for every column, one of them wrong, is dropped
+    cut = text + "1.0 -10.0 10.0 -20.0 -30.0"[:-1]
+    np.testing.assert_array_equal(parse_report(cut, "f.out").columns["fx-plate"],
+                                  rep.columns["fx-plate"])
 
 
 @pytest.mark.parametrize(("text", "message", "line"), [

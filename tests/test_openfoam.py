@@ -100,6 +100,78 @@ def test_truncated_last_line_of_killed_run_is_dropped(tmp_path):
     assert len(arr) == len(full) - 1
 
 
+@settings(max_examples=200, deadline=None)
+@given(dialect=st.sampled_from(["v1912", "com-bare", "foundation"]),
+       keep=st.floats(0.0, 1.0))
+def test_a_cut_file_gives_a_prefix_of_the_whole_files_rows(dialect, keep):
+    """Wherever a killed run cuts a file, every row read is a row of the whole file: a last
+    row cut inside a number is dropped, not read as another number."""
+    text = (DATA / "force.dat").read_text()
+    if dialect == "com-bare":
+        text = to_bare(text)
+    elif dialect == "foundation":
+        text = to_foundation(text, (DATA / "moment.dat").read_text())
+    name = "forces.dat" if dialect == "foundation" else "force.dat"
+    whole, _ = parse_table(text, name)
+    cut = text[:int(keep * len(text))]
+    try:
+        arr, _ = parse_table(cut, name)
+    except ParseError as err:
+        assert "no complete data rows" in str(err) or "no data rows" in str(err)
+        return
+    ended = cut[:cut.rfind("\n") + 1].splitlines()  # the rows written whole, with newline
+    assert len(arr) >= sum(1 for ln in ended if ln.strip() and not ln.startswith("#"))
+    np.testing.assert_array_equal(arr, whole[:len(arr)])
+
+
+def test_a_last_row_cut_inside_its_last_number_is_dropped():
+    text = (DATA / "force.dat").read_text()
+    whole, _ = parse_table(text, "force.dat")
+    for dialect_text in (text, to_bare(text)):
+        # "... 1.63633256e-15)" cut to "... 1.63633256e-1": still ten numbers, one wrong
+        cut = dialect_text.rstrip("\n").rstrip(")")[:-1]
+        arr, _ = parse_table(cut, "force.dat")
+        np.testing.assert_array_equal(arr, whole[:-1])
+    # a whole v1912 row without its newline is kept
+    arr, _ = parse_table(text.rstrip("\n"), "force.dat")
+    np.testing.assert_array_equal(arr, whole)
+
+
+def test_a_folder_that_is_not_a_time_is_named(tmp_path):
+    case = copy_real_case(tmp_path)
+    (case / "postProcessing" / "forces" / "backup").mkdir()
+    with pytest.raises(ParseError, match=r"backup.*not a time folder"):
+        read_forces(case)
+
+
+def _y_plus_case(tmp_path, text, folder="0"):
+    out = tmp_path / "case" / "postProcessing" / "yPlus" / folder
+    out.mkdir(parents=True)
+    (out / "yPlus.dat").write_text(text)
+    return tmp_path / "case"
+
+
+def test_y_plus_rows_of_real_output_and_of_a_run_killed_mid_row(tmp_path):
+    """tests/data/openfoam_v1912/yPlus.dat is v1912's own yPlus output (coarse mesh)."""
+    from mfflap.cfd.openfoam.yplus import read_y_plus
+
+    text = (DATA / "yPlus.dat").read_text()
+    whole = read_y_plus(_y_plus_case(tmp_path / "a", text))
+    assert len(whole.time) == 7 and np.all(np.diff(whole.time) > 0)
+    assert np.all((whole.minimum < whole.average) & (whole.average < whole.maximum))
+    assert whole.average[-1] == pytest.approx(5.70547206)
+    cut = read_y_plus(_y_plus_case(tmp_path / "b", text.rstrip("\n")[:-3]))  # "...5.705472"
+    np.testing.assert_array_equal(cut.average, whole.average[:-1])
+    lines = text.splitlines()
+    lines[-1] = lines[-1].rsplit(maxsplit=1)[0]  # a whole line, one column short
+    with pytest.raises(ParseError, match=r"yPlus.dat, line 9: expected 5 columns"):
+        read_y_plus(_y_plus_case(tmp_path / "c", "\n".join(lines) + "\n"))
+    case = _y_plus_case(tmp_path / "d", text)
+    (case / "postProcessing" / "yPlus" / "old").mkdir()
+    with pytest.raises(ParseError, match=r"old.*not a time folder"):
+        read_y_plus(case)
+
+
 def test_garbled_middle_line_names_file_and_line():
     lines = (DATA / "force.dat").read_text().splitlines()
     lines[10] = lines[10][:25] + " garbage " + lines[10][25:]

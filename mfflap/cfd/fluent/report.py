@@ -4,7 +4,9 @@ Layout: line 1 a quoted title; line 2 starts with ``"Time Step"`` (transient) or
 ``"Iteration"`` (steady); line 3 the column names as quoted tokens in parentheses; then
 whitespace-separated numeric rows. Columns are found by name (their order varies) and the
 time is the ``flow-time`` column, never step x dt (the step may change during a run).
-Restarted runs that append rows again from an earlier time keep the later rows.
+Restarted runs that append rows again from an earlier time keep the later rows. Fluent ends
+every row with a newline: a last line without one is a row cut short by a killed run and is
+dropped, even when it holds a value for every column (its last number may be cut).
 """
 
 from __future__ import annotations
@@ -45,9 +47,10 @@ def parse_report(text: str, path: str = "<text>") -> FluentReport:
     Raises
     ------
     ParseError
-        For a missing or malformed header, a row with a wrong number of values (other than a
-        cut last line, which is dropped), an unreadable number, NaN/inf, or flow time that
-        is not increasing after restarts are resolved; naming the file and line.
+        For a missing or malformed header, a row with a wrong number of values, an
+        unreadable number, NaN/inf, or flow time that is not increasing after restarts are
+        resolved; naming the file and line. A last line without a newline (cut short by a
+        killed run) is dropped, not parsed.
     """
     lines = text.splitlines()
     if len(lines) < 3:
@@ -71,20 +74,16 @@ def parse_report(text: str, path: str = "<text>") -> FluentReport:
     if not names or len(set(names)) != len(names):
         raise ParseError(f"line 3 has no or repeated column names: {names}", path=path, line=3)
     rows, row_lines = [], []
-    body = [(i, ln) for i, ln in enumerate(lines[3:], start=4) if ln.strip()]
-    for pos, (lineno, line) in enumerate(body):
+    cut_last = len(lines) if not text.endswith(("\n", "\r")) else None
+    body = [(i, ln) for i, ln in enumerate(lines[3:], start=4) if ln.strip() and i != cut_last]
+    for lineno, line in body:
         parts = line.split()
-        last = pos == len(body) - 1
         if len(parts) != len(names):
-            if last and 0 < len(parts) < len(names) and not text.endswith("\n"):
-                break  # the cut last line of a killed run
             raise ParseError(f"{len(parts)} values for {len(names)} columns {names}",
                              path=path, line=lineno)
         try:
             values = [float(p) for p in parts]
         except ValueError as exc:
-            if last and not text.endswith("\n"):
-                break
             raise ParseError(f"unreadable number in {line.strip()!r}", path=path,
                              line=lineno) from exc
         if not all(np.isfinite(values)):

@@ -9,7 +9,10 @@ Three dialects are recognised from the header and the rows:
 
 Several time folders (restarts) are merged, later folders winning on overlap. A last line
 cut short by a killed run is dropped; any other malformed line is an error naming the file
-and the line.
+and the line. OpenFOAM ends every row with a newline, so a last line without one is a row
+cut short unless it shows it is whole: its parentheses close (v1912, Foundation). A bare
+row (com-bare) cut inside its last number still holds nine numbers, one of them wrong, so a
+bare last line without a newline is always dropped.
 """
 
 from __future__ import annotations
@@ -66,6 +69,11 @@ def detect_dialect(text: str, name: str = "") -> str:
     raise ParseError("no data rows", path=name or None)
 
 
+def _whole_row(row: str, dialect: str) -> bool:
+    """Whether a row without a final newline shows that it was written whole."""
+    return dialect != "com-bare" and row.endswith(")") and row.count("(") == row.count(")")
+
+
 def parse_table(text: str, path: str = "<text>", columns: int = 9,
                 check_increasing: bool = True) -> tuple[np.ndarray, str]:
     """Rows of a force or moment file as an array (n, 1 + columns) and the dialect.
@@ -76,12 +84,14 @@ def parse_table(text: str, path: str = "<text>", columns: int = 9,
     dialect = detect_dialect(text, Path(path).name)
     ncol = 1 + (12 if dialect == "foundation" else columns)
     lines = text.splitlines()
-    complete_last = text.endswith("\n")
+    complete_last = text.endswith(("\n", "\r"))
     rows = []
     for i, line in enumerate(lines, start=1):
         s = line.strip()
         if not s or s.startswith("#"):
             continue
+        if i == len(lines) and not complete_last and not _whole_row(s, dialect):
+            break  # cut short by a killed run
         try:
             vals = _numbers(s, path, i)
         except ParseError:
@@ -133,12 +143,28 @@ def merge_restart_segments(parts: list[np.ndarray]) -> np.ndarray:
     return out
 
 
+def time_folders(base: Path) -> list[Path]:
+    """The start-time folders of a function object's output folder, earliest first.
+
+    Raises
+    ------
+    ParseError
+        If a folder there is not named by a time (naming it).
+    """
+    folders = [p for p in base.iterdir() if p.is_dir()]
+    for folder in folders:
+        if not _NUMBER.fullmatch(folder.name) or not math.isfinite(float(folder.name)):
+            raise ParseError("not a time folder (its name is not a start time)",
+                             path=str(folder))
+    return sorted(folders, key=lambda p: float(p.name))
+
+
 def read_forces(case_dir: str | Path, function_name: str = "forces") -> ForceHistory:
     """Read every time folder of ``postProcessing/<function_name>`` of a case."""
     base = Path(case_dir) / "postProcessing" / function_name
     if not base.is_dir():
         raise ParseError("no forces output folder", path=str(base))
-    folders = sorted((p for p in base.iterdir() if p.is_dir()), key=lambda p: float(p.name))
+    folders = time_folders(base)
     if not folders:
         raise ParseError("no time folders", path=str(base))
     f_parts, m_parts, dialect = [], [], ""

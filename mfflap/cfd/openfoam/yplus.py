@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mfflap.cfd.openfoam.forces import merge_restart_segments, restart_segments
+from mfflap.cfd.openfoam.forces import merge_restart_segments, restart_segments, time_folders
 from mfflap.errors import ParseError
 
 
@@ -33,8 +33,7 @@ def read_y_plus(case_dir: str | Path, patch: str = "plate") -> YPlusHistory:
         If there is no yPlus output, or a row cannot be read (naming file and line).
     """
     root = Path(case_dir) / "postProcessing" / "yPlus"
-    folders = sorted((p for p in root.iterdir() if p.is_dir()), key=lambda p: float(p.name)) \
-        if root.is_dir() else []
+    folders = time_folders(root) if root.is_dir() else []
     if not folders:
         raise ParseError("no yPlus output (write the case with y_plus=True)", path=str(root))
     parts = []
@@ -50,16 +49,21 @@ def read_y_plus(case_dir: str | Path, patch: str = "plate") -> YPlusHistory:
 
 
 def _patch_rows(path: Path, patch: str) -> list[tuple[float, float, float, float]]:
-    """(time, min, max, average) of ``patch`` in one yPlus.dat."""
+    """(time, min, max, average) of ``patch`` in one yPlus.dat.
+
+    OpenFOAM ends every row with a newline: a last line without one was cut short by a killed
+    run (its last number may be cut) and is dropped.
+    """
     rows = []
-    lines = path.read_text().splitlines()
+    text = path.read_text()
+    lines = text.splitlines()
+    if lines and not text.endswith(("\n", "\r")):
+        lines = lines[:-1]
     for i, line in enumerate(lines, start=1):
         if not line.strip() or line.lstrip().startswith("#"):
             continue
         parts = line.split()
         if len(parts) != 5:
-            if i == len(lines):
-                break  # cut last line of a killed run
             raise ParseError(f"expected 5 columns (time patch min max average), got "
                              f"{len(parts)}", path=str(path), line=i)
         if parts[1] != patch:
