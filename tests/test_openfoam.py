@@ -363,6 +363,19 @@ def test_runner_stops_a_run_whose_time_step_collapses(tmp_path):
     assert "run" in str(info.value)
 
 
+@pytest.mark.openfoam
+def test_an_earlier_runs_divergence_in_the_same_log_does_not_fail_a_rerun(tmp_path):
+    """The log is appended to: a rerun after a collapsed, crashed run is judged on its own
+    lines, not stopped at once by the collapse or the fatal error above them."""
+    case = write_case(tmp_path / "rerun", MOTION, end_time=0.02, mesh="coarse")
+    earlier = (DATA / "collapsed_dt.log").read_text() + "\n--> FOAM FATAL ERROR:\nnan\n"
+    (case / "log.pimpleFoam").write_text(earlier)
+    run_case(case, timeout_s=300)
+    log = (case / "log.pimpleFoam").read_text()
+    assert log.startswith(earlier) and log.rstrip().endswith("End")
+    assert read_forces(case).time[-1] == pytest.approx(0.02, abs=1e-3)
+
+
 def test_restart_into_the_same_time_folder_supersedes_a_collapsed_segment(tmp_path):
     """v1912 writes force_0.dat beside force.dat when a run restarts from the same time. The
     first segment may end in a collapsed run whose times repeat at the written precision

@@ -49,11 +49,12 @@ _DELTA_T = re.compile(r"^deltaT = ([0-9.eE+-]+)\s*$", re.M)
 _TIME = re.compile(r"^Time = ([0-9.eE+-]+)\s*$", re.M)
 
 
-def _read_tail(path: Path, n_bytes: int = 20_000) -> str:
+def _read_tail(path: Path, n_bytes: int = 20_000, start: int = 0) -> str:
+    """The last ``n_bytes`` of a file, none of them before byte ``start``."""
     with open(path, "rb") as fh:
         fh.seek(0, os.SEEK_END)
         size = fh.tell()
-        fh.seek(max(size - n_bytes, 0))
+        fh.seek(max(size - n_bytes, start, 0))
         return fh.read().decode(errors="replace")
 
 
@@ -94,6 +95,9 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
     returns a reason (e.g. forces beyond what the motion can drive:
     :func:`mfflap.campaign.openfoam_run.run_motion`).
 
+    The log is appended to (a restart's log follows the run it restarts); only what this
+    run writes is judged, so an earlier run's divergence in the same log does not fail it.
+
     Raises
     ------
     CfdRunError
@@ -112,6 +116,7 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
                    *command, "-parallel"]
     started = time.monotonic()
     watched = started
+    own_start = log.stat().st_size if log.is_file() else 0  # where this run's lines begin
     with open(log, "a") as fh:
         proc = subprocess.Popen(command, stdout=fh, stderr=subprocess.STDOUT, env=_env())
         try:
@@ -125,7 +130,8 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
                     raise CfdRunError(f"{application} timed out after {timeout_s} s",
                                       case=str(case_dir), log_tail=_tail(log))
                 fh.flush()
-                collapsed = collapsed_time_step(_read_tail(log), min_time_step)
+                collapsed = collapsed_time_step(_read_tail(log, start=own_start),
+                                                min_time_step)
                 if collapsed is not None:
                     raise CfdRunError(
                         f"{application} diverged: the time step collapsed to "
@@ -141,9 +147,8 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
             if proc.poll() is None:
                 proc.kill()
                 proc.wait()
-    text = log.read_text(errors="replace")
-    courants = max_courant(text[-200_000:])
-    if proc.returncode != 0 or _DIVERGED.search(text[-50_000:]):
+    courants = max_courant(_read_tail(log, 200_000, start=own_start))
+    if proc.returncode != 0 or _DIVERGED.search(_read_tail(log, 50_000, start=own_start)):
         raise CfdRunError(f"{application} failed (exit code {proc.returncode}, diverged or "
                           "crashed)", case=str(case_dir), log_tail=_tail(log))
     if courants > max_courant_abort:
