@@ -78,6 +78,11 @@ def test_the_shipped_h_grid_is_openfoam_md_s_mesh():
     ('[m]\ntopology = "C"\nn_chord = 5\n', "m.topology"),
     ('[m]\ntopology = "H"\nn_chord = 5\nn_radial = 5\n', "m"),
     ('[m]\nn_chord = 5\nn_thickness = 4\n', "m"),
+    # a value the resolution refuses: blockMesh cannot make 2.5 cells, nor true of them
+    ('[m]\nn_chord = 2.5\nn_edge = 2\nn_radial = 5\nradial_expansion = 10.0\n'
+     'radius_chords = 5.0\n', "m.n_chord"),
+    ('[m]\ntopology = "H"\nn_chord = 5\nn_thickness = 2\nn_upstream = 5\n'
+     'n_downstream = 5\nn_side = true\nfirst_cell_m = 0.001\n', "m.n_side"),
 ])
 def test_a_bad_mesh_table_names_the_file_and_key(tmp_path, monkeypatch, body, key):
     (tmp_path / "meshes.toml").write_text(body)

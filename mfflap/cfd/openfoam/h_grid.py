@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 from scipy.optimize import brentq
 
+from mfflap.cfd.openfoam.cell_counts import check_cell_counts
 from mfflap.errors import ConfigError
 
 
@@ -84,10 +85,9 @@ class HGridSpec:
     side_chords: float = 10.0
 
     def __post_init__(self) -> None:
-        for key in ("n_chord", "n_thickness", "n_upstream", "n_downstream", "n_side"):
-            if int(getattr(self, key)) < 1:
-                raise ConfigError(f"mesh {self.name!r}: {key} must be >= 1, got "
-                                  f"{getattr(self, key)!r}", key=key)
+        check_cell_counts(self.name, {"n_chord": self.n_chord, "n_thickness": self.n_thickness,
+                                      "n_upstream": self.n_upstream,
+                                      "n_downstream": self.n_downstream, "n_side": self.n_side})
         for key in ("upstream_chords", "downstream_chords", "side_chords"):
             if not getattr(self, key) > 1:
                 raise ConfigError(f"mesh {self.name!r}: {key} must be > 1, got "

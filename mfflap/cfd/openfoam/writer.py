@@ -25,6 +25,7 @@ import numpy as np
 
 from mfflap.cfd import templates
 from mfflap.cfd.frames import FRAMES, case_displacement, case_rotation_deg
+from mfflap.cfd.openfoam.cell_counts import check_cell_counts
 from mfflap.cfd.openfoam.h_grid import HGridSpec
 from mfflap.cfd.openfoam.loads import imposed_state
 from mfflap.cfd.openfoam.plate_frame import (
@@ -56,10 +57,8 @@ class MeshSpec:
     chord_grading: float = 1.0  # mid-chord cell / end cell along the faces (1: uniform)
 
     def __post_init__(self) -> None:
-        for key in ("n_chord", "n_edge", "n_radial"):
-            if int(getattr(self, key)) < 1:
-                raise ConfigError(f"mesh {self.name!r}: {key} must be >= 1, got "
-                                  f"{getattr(self, key)!r}", key=key)
+        check_cell_counts(self.name, {"n_chord": self.n_chord, "n_edge": self.n_edge,
+                                      "n_radial": self.n_radial})
         if not self.chord_grading > 0:
             raise ConfigError(f"mesh {self.name!r}: chord_grading must be > 0, got "
                               f"{self.chord_grading!r}", key="chord_grading")
@@ -102,6 +101,9 @@ def mesh_specs() -> dict[str, AnyMeshSpec]:
             specs[name] = MESH_TOPOLOGIES[topology](name=name, **values)
         except TypeError as err:
             raise ConfigError(f"mesh {name!r} ({topology}-grid): {err}", key=name,
+                              source=str(path)) from err
+        except ConfigError as err:  # a value the mesh refuses: name the file and table too
+            raise ConfigError(err._message, key=f"{name}.{err.key}" if err.key else name,
                               source=str(path)) from err
     return specs
 
