@@ -3,7 +3,8 @@
 f = 1 Hz, h_amp = 0.3 m, theta = 20 deg (--pitch-deg), phi = 90 deg, U = 0.3 m/s, with a
 0.25 s smooth start-up ramp, two cycles. Every set-up runs in this process's pool (two at a
 time, two cores); CPU times are each run's own (blockMesh + pimpleFoam), printed per
-simulated cycle and as a ratio to the medium mesh.
+simulated cycle and as a ratio to the medium mesh. Progress goes to stderr: each run as it
+finishes, and every minute the simulated time of the runs still going.
 
 The reference is the "reference" set-up of setups.toml (the medium mesh, GAMG). It runs a
 second time with PCG instead of GAMG (both converged to 1e-7): the NRMSE between those two is
@@ -62,8 +63,9 @@ from __future__ import annotations
 
 import argparse
 import shutil
+import sys
 import tempfile
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import Future, ProcessPoolExecutor, wait
 from dataclasses import dataclass, field, replace
 from functools import partial
 from pathlib import Path
@@ -72,11 +74,11 @@ import numpy as np
 
 from mfflap.cfd.openfoam.forces import read_forces
 from mfflap.cfd.openfoam.loads import imposed_state, to_loads
-from mfflap.cfd.openfoam.runner import run_case
+from mfflap.cfd.openfoam.runner import run_case, solver_progress
 from mfflap.cfd.openfoam.setups import mesh_and_solver, setup
 from mfflap.cfd.openfoam.solver_log import solver_provenance
 from mfflap.cfd.openfoam.writer import AnyMeshSpec, SolverSettings, mesh_specs, write_case
-from mfflap.errors import CfdRunError
+from mfflap.errors import MfflapError
 from mfflap.identification.data import despike
 from mfflap.kinematics import HarmonicMotion
 from mfflap.metrics import nrmse
@@ -167,9 +169,12 @@ def run_setup(job: Job, cycles: float, root: str, pitch_deg: float) -> SetupRun:
                           solver=solver)
         try:
             run_case(case, timeout_s=4 * 3600)
-        except CfdRunError as err:
+        except MfflapError as err:
             return SetupRun(label, None, failure=str(err).splitlines()[0])
-    history = read_forces(case)
+    try:
+        history = read_forces(case)
+    except MfflapError as err:  # a finished run whose force log cannot be read
+        return SetupRun(label, None, failure=str(err).splitlines()[0])
     loads = to_loads(history, imposed_state(motion, history.time, RAMP_S), 0.18, 0.18,
                      source=f"openfoam:{label}", frame=solver.frame)
     series = {k: despike(np.asarray(getattr(loads, k)))[0] for k in COMPONENTS}
@@ -220,6 +225,32 @@ def time_step_band(members: list[SetupRun], mean: SetupRun, cycles: float) -> tu
     """The furthest any member's first-cycle F_n and M are from their mean, NRMSE %."""
     first = [nrmse_percent(m, mean, cycles)["cycle 1"] for m in members]
     return max(e[0] for e in first), max(e[1] for e in first)
+
+
+def collect(futures: dict[Future, str], root: str, cycles: float,
+            every_s: float = 60.0) -> dict[str, SetupRun]:
+    """The runs' results as they finish, with progress on stderr.
+
+    Each finished run is reported at once (its CPU per cycle, or why it failed), and every
+    ``every_s`` seconds the simulated time of the runs still going.
+    """
+    results: dict[str, SetupRun] = {}
+    pending = set(futures)
+    while pending:
+        done, pending = wait(pending, timeout=every_s)
+        for future in done:
+            res = future.result()
+            results[res.label] = res
+            said = (f"{res.cpu_per_cycle_s:.1f} s CPU per cycle" if res.ok
+                    else f"failed: {res.failure}")
+            print(f"[{len(results)}/{len(futures)}] {res.label}: {said}", file=sys.stderr,
+                  flush=True)
+        going = [(futures[f], solver_progress(Path(root) / futures[f]))
+                 for f in pending if f.running()]
+        going = [f"{label} t = {at[0]:.3f} of {cycles:g} s" for label, at in going if at]
+        if going:
+            print(f"  running: {'; '.join(going)}", file=sys.stderr, flush=True)
+    return results
 
 
 def nrmse_percent(run: SetupRun, ref: SetupRun, cycles: float) -> dict[str, list[float]]:
@@ -362,8 +393,11 @@ def main() -> None:
     # the longest runs first, so that the two workers finish together
     jobs.sort(key=lambda j: -j.mesh.n_cells)
     run = partial(run_setup, cycles=cycles, root=root, pitch_deg=pitch)
+    print(f"{len(jobs)} runs in {root}, two at a time: {', '.join(j.label for j in jobs)}",
+          file=sys.stderr, flush=True)
     with ProcessPoolExecutor(2) as pool:
-        results = {r.label: r for r in pool.map(run, jobs)}
+        finished = collect({pool.submit(run, job): job.label for job in jobs}, root, cycles)
+    results = {j.label: finished[j.label] for j in jobs}
     for needed in ("reference", *members):
         if not results[needed].ok:
             raise SystemExit(f"the {needed} run failed: {results[needed].failure}")

@@ -10,6 +10,8 @@ import argparse
 import importlib.util
 import subprocess
 import sys
+import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -138,3 +140,24 @@ def test_a_bad_yardstick_courant_is_a_usage_error():
     done = _script("--yardstick-courant", "1,0")
     assert done.returncode == 2
     assert "--yardstick-courant" in done.stderr and "positive" in done.stderr
+
+
+def test_collect_reports_each_run_as_it_finishes_and_the_simulated_time_of_the_others(
+        bench, tmp_path, capsys):
+    (tmp_path / "slow").mkdir()
+    (tmp_path / "slow" / "log.pimpleFoam").write_text("Courant Number mean: 0.1 max: 2\n"
+                                                       "deltaT = 0.001\nTime = 0.5\n")
+
+    def slow():
+        time.sleep(0.6)
+        return _run(bench, "slow", cpu=250.0)
+
+    with ThreadPoolExecutor(2) as pool:
+        futures = {pool.submit(lambda: bench.SetupRun("broken", None, failure="diverged")):
+                   "broken", pool.submit(slow): "slow"}
+        results = bench.collect(futures, str(tmp_path), 2.0, every_s=0.1)
+    assert set(results) == {"broken", "slow"} and results["slow"].cpu_per_cycle_s == 250.0
+    err = capsys.readouterr().err
+    assert "[1/2] broken: failed: diverged" in err
+    assert "running: slow t = 0.500 of 2 s" in err
+    assert err.rstrip().endswith("[2/2] slow: 250.0 s CPU per cycle")
