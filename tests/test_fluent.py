@@ -113,8 +113,9 @@ def test_table_udf_interpolates_like_numpy_and_wraps_periodically(tmp_path):
 
 
 def test_udf_settings_are_checked():
-    with pytest.raises(ConfigError, match="not a C identifier"):
-        analytic_udf(SINE, udf_name="my motion")
+    for bad in ("my motion", "bewegung_\u00fc", "double", "2fast", ""):
+        with pytest.raises(ConfigError, match="not a C identifier"):
+            analytic_udf(SINE, udf_name=bad)
     with pytest.raises(ConfigError, match="periodic table cannot carry a start-up ramp"):
         table_udf(SINE, 1.0, ramp_time=0.2, periodic_period=1.0)
 

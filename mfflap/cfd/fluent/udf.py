@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 import jinja2
@@ -37,9 +38,22 @@ def _signs() -> tuple[float, float]:
     return math.copysign(1.0, heave), math.copysign(1.0, pitch)
 
 
+_C_IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+#: C keywords (C17 and the common extensions) that cannot name a UDF function
+_C_KEYWORDS = frozenset(
+    "auto break case char const continue default do double else enum extern float for goto "
+    "if inline int long register restrict return short signed sizeof static struct switch "
+    "typedef union unsigned void volatile while _Alignas _Alignof _Atomic _Bool _Complex "
+    "_Generic _Imaginary _Noreturn _Static_assert _Thread_local asm typeof".split())
+
+
 def _check_name(udf_name: str) -> None:
-    if not udf_name.isidentifier():
-        raise ConfigError(f"UDF name {udf_name!r} is not a C identifier", key="udf_name")
+    """Refuse a UDF name gcc and Fluent's compiler cannot take as a function name (Python's
+    str.isidentifier accepts non-ASCII letters and C keywords)."""
+    if not _C_IDENTIFIER.fullmatch(udf_name) or udf_name in _C_KEYWORDS:
+        raise ConfigError(f"UDF name {udf_name!r} is not a C identifier (ASCII letters, "
+                          "digits and _, not starting with a digit, not a C keyword)",
+                          key="udf_name")
 
 
 def analytic_udf(motion: HarmonicMotion | RampHarmonicMotion, ramp_time: float = 0.0,
