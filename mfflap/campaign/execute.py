@@ -69,8 +69,6 @@ def _failed_path(out: Path, case_id: str) -> Path:
     return out / f"{case_id}.failed.toml"
 
 
-
-
 def _bound_setup(manifest: dict[str, Any]) -> tuple[Plate, Fluid, FreeStream]:
     """Plate, fluid and stream of a campaign manifest (the force bound's)."""
     setup = manifest.get("setup", {})
