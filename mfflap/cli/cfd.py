@@ -30,7 +30,7 @@ def _motion_table_options(note: str):
 
 @click.group()
 def cfd() -> None:
-    """OpenFOAM cases: write a case for a motion, run it, parse its forces."""
+    """CFD adapters: OpenFOAM cases (write, run, mesh study), Fluent UDFs, both solvers' forces."""
 
 
 @cfd.command()
