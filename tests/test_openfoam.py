@@ -259,6 +259,14 @@ def test_real_openfoam_run_end_to_end(tmp_path):
     assert 0.7 < ratio < 1.5
 
 
+def test_running_a_folder_that_is_not_a_case_says_so_and_writes_nothing(tmp_path):
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(CfdRunError, match=r"empty: not an OpenFOAM case: no "
+                                          r"system/controlDict or system/blockMeshDict"):
+        run_case(tmp_path / "empty")
+    assert not any((tmp_path / "empty").iterdir())
+
+
 def test_divergence_signatures():
     from mfflap.cfd.openfoam.runner import _DIVERGED
 

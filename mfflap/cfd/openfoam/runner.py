@@ -223,7 +223,13 @@ def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
     from the master.
     """
     case_dir = Path(case_dir)
-    if not (case_dir / "constant" / "polyMesh" / "points").exists():
+    meshed = (case_dir / "constant" / "polyMesh" / "points").exists()
+    needed = ("system/controlDict",) if meshed else ("system/controlDict", "system/blockMeshDict")
+    missing = [name for name in needed if not (case_dir / name).is_file()]
+    if missing:
+        raise CfdRunError(f"not an OpenFOAM case: no {' or '.join(missing)} (write one with "
+                          "`mfflap cfd write`)", case=str(case_dir))
+    if not meshed:
         run_application(case_dir, "blockMesh", timeout_s=300)
         log = run_application(case_dir, "checkMesh", timeout_s=300)
         if "Mesh OK" not in log.read_text():
