@@ -116,6 +116,11 @@ def test_udf_settings_are_checked():
     for bad in ("my motion", "bewegung_\u00fc", "double", "2fast", ""):
         with pytest.raises(ConfigError, match="not a C identifier"):
             analytic_udf(SINE, udf_name=bad)
+    for ramp_time in (-0.2, float("nan")):
+        with pytest.raises(ConfigError, match="start-up ramp must be a finite time"):
+            analytic_udf(SINE, ramp_time=ramp_time)
+        with pytest.raises(ConfigError, match="start-up ramp must be a finite time"):
+            table_udf(SINE, 1.0, ramp_time=ramp_time)
     with pytest.raises(ConfigError, match="periodic table cannot carry a start-up ramp"):
         table_udf(SINE, 1.0, ramp_time=0.2, periodic_period=1.0)
 

@@ -267,6 +267,29 @@ def test_running_a_folder_that_is_not_a_case_says_so_and_writes_nothing(tmp_path
     assert not any((tmp_path / "empty").iterdir())
 
 
+@pytest.mark.parametrize("ramp_time", [-0.5, float("nan"), float("inf")])
+def test_an_impossible_start_up_ramp_is_refused_not_read_as_none(tmp_path, ramp_time):
+    from mfflap.cfd.openfoam.writer import SolverSettings
+    from mfflap.errors import ConfigError
+
+    for frame in ("inertial", "plate"):
+        solver = SolverSettings(frame=frame, far_field="inletOutlet")
+        with pytest.raises(ConfigError, match="start-up ramp must be a finite time") as err:
+            write_case(tmp_path / "c", MOTION, end_time=1.0, ramp_time=ramp_time, solver=solver)
+        assert err.value.key == "ramp_time"
+        assert not (tmp_path / "c").exists()  # refused before anything was written
+
+
+def test_an_impossible_end_time_or_depth_writes_nothing(tmp_path):
+    from mfflap.errors import ConfigError, MotionError
+
+    with pytest.raises(MotionError, match="end_time must be > 0"):
+        write_case(tmp_path / "c", MOTION, end_time=-1.0)
+    with pytest.raises(ConfigError, match="depth must be > 0") as err:
+        write_case(tmp_path / "c", MOTION, end_time=1.0, depth=0.0)
+    assert err.value.key == "depth" and not (tmp_path / "c").exists()
+
+
 def test_divergence_signatures():
     from mfflap.cfd.openfoam.runner import _DIVERGED
 

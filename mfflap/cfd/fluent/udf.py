@@ -11,7 +11,7 @@ import numpy as np
 
 from mfflap.cfd import templates
 from mfflap.cfd.frames import case_displacement, case_rotation_deg
-from mfflap.cfd.openfoam.loads import imposed_state
+from mfflap.cfd.openfoam.loads import check_ramp_time, imposed_state
 from mfflap.errors import ConfigError, MotionError
 from mfflap.kinematics.continuous import HarmonicMotion, Motion, RampHarmonicMotion
 
@@ -72,7 +72,7 @@ def analytic_udf(motion: HarmonicMotion | RampHarmonicMotion, ramp_time: float =
     return _env().get_template("cg_motion_analytic.c.j2").render(
         version=__version__, ramp=ramp, frequency=float(motion.frequency),
         heave_amplitude=float(motion.heave_amplitude), pitch_coefficient=float(coeff),
-        phase=float(motion.phase), ramp_time=float(ramp_time), udf_name=udf_name,
+        phase=float(motion.phase), ramp_time=check_ramp_time(ramp_time), udf_name=udf_name,
         heave_sign=heave_sign, pitch_sign=pitch_sign)
 
 

@@ -17,9 +17,30 @@ from mfflap.kinematics.continuous import Motion
 from mfflap.kinematics.state import KinematicState
 
 
+def check_ramp_time(ramp_time: float) -> float:
+    """``ramp_time`` as a float, s.
+
+    Raises
+    ------
+    ConfigError
+        If it is negative or not a finite number (0 is no ramp).
+    """
+    value = float(ramp_time)
+    if not (np.isfinite(value) and value >= 0):
+        raise ConfigError(f"the start-up ramp must be a finite time >= 0 s (0: none), got "
+                          f"{ramp_time!r}", key="ramp_time")
+    return value
+
+
 def smooth_ramp(t: np.ndarray, ramp_time: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """C^2 smoothstep r(t) over ``ramp_time`` and its first two derivatives."""
-    if ramp_time <= 0:
+    """C^2 smoothstep r(t) over ``ramp_time`` and its first two derivatives.
+
+    Raises
+    ------
+    ConfigError
+        For a negative or non-finite ``ramp_time`` (:func:`check_ramp_time`).
+    """
+    if check_ramp_time(ramp_time) == 0:
         one = np.ones_like(t)
         return one, 0 * one, 0 * one
     x = np.clip(t / ramp_time, 0, 1)

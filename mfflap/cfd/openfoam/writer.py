@@ -252,14 +252,27 @@ def write_case(case_dir: str | Path, motion: Motion, end_time: float,
     depth : m
         Depth of the one-cell-thick mesh; the plate's span by default, so forces are those of
         the whole plate (:func:`mfflap.cfd.openfoam.forces.to_loads` scales otherwise).
+
+    Raises
+    ------
+    ConfigError, MotionError
+        For an impossible setting (end time, ramp, depth, mesh) or a motion that cannot be
+        sampled, before anything is written.
     """
     plate, fluid, stream = plate or Plate(), fluid or Fluid(), stream or FreeStream()
     solver = solver or SolverSettings()
     spec = resolve_mesh(mesh)
     depth = plate.span if depth is None else depth
+    if not (math.isfinite(depth) and depth > 0):
+        raise ConfigError(f"the mesh depth must be > 0 m, got {depth!r}", key="depth")
+    u = stream.velocity
+    # the motion's tables first: they check the end time, the ramp and the motion
+    if solver.frame == "plate":
+        tables = plate_frame_tables(motion, table_times(end_time), u, ramp_time=ramp_time)
+    else:
+        rows = motion_table(motion, end_time, ramp_time=ramp_time)
     case_dir = Path(case_dir)
     case_dir.mkdir(parents=True, exist_ok=True)
-    u = stream.velocity
     k = 1.5 * (solver.turbulence_intensity * max(u, 1e-3)) ** 2
     length_scale = 0.07 * plate.chord
     epsilon = 0.09**0.75 * k**1.5 / length_scale
@@ -292,14 +305,12 @@ def write_case(case_dir: str | Path, motion: Motion, end_time: float,
     constant = case_dir / "constant"
     if solver.frame == "plate":
         _render_templates(src / PLATE_FRAME_TEMPLATES, case_dir, env, context)
-        tables = plate_frame_tables(motion, table_times(end_time), u, ramp_time=ramp_time)
         (constant / "pitchRate.dat").write_text(format_function1_table(tables["pitch_rate"]))
         (constant / "farFieldVelocity.dat").write_text(
             format_function1_table(tables["inflow"]))
         (constant / "acceleration.dat").write_text(
             format_acceleration_table(tables["acceleration"]))
     else:
-        rows = motion_table(motion, end_time, ramp_time=ramp_time)
         (constant / "motion.dat").write_text(format_motion_table(rows))
     (case_dir / "mfflap_case.toml").write_text(
         f'mesh = "{spec.name}"\nend_time = {end_time!r}\ndepth = {depth!r}\nspan = {plate.span!r}\n'
