@@ -50,7 +50,10 @@ class ResultsFile:
         self.path = Path(path)
         if mode == "r" and not self.path.exists():
             raise MfflapError(f"{self.path}: no such results file")
-        self._h5 = h5py.File(self.path, mode)
+        try:
+            self._h5 = h5py.File(self.path, mode)
+        except OSError as err:  # not HDF5, cut short, or locked by another writer
+            raise MfflapError(f"{self.path}: cannot be opened as an HDF5 file ({err})") from err
         if mode == "r":
             version = self._h5.attrs.get("mfflap_schema_version")
             if version is None:

@@ -123,6 +123,35 @@ def test_results_refuse_unitless_data_and_foreign_files(tmp_path):
         f["x"] = 1
     with pytest.raises(MfflapError, match="not an mfflap results file"):
         ResultsFile(tmp_path / "foreign.h5")
+    (tmp_path / "text.h5").write_text("time,force\n0,1\n")
+    with pytest.raises(MfflapError, match=r"text\.h5: cannot be opened as an HDF5 file"):
+        ResultsFile(tmp_path / "text.h5")
+
+
+def test_a_cut_or_incomplete_cfd_record_is_refused_naming_its_file(tmp_path):
+    """A record cut short (a copy killed midway) or missing a group says which file it is."""
+    import shutil
+
+    import h5py
+
+    from mfflap.campaign.records import read_record
+
+    shipped = sorted((Path(__file__).parents[1] / "mfflap" / "data" / "fixtures"
+                      / "small_motion_coarse").glob("*.h5"))[0]
+    whole = read_record(shipped)
+    cut = tmp_path / "cut.h5"
+    cut.write_bytes(shipped.read_bytes()[: shipped.stat().st_size // 2])
+    with pytest.raises(MfflapError, match=r"cut\.h5: cannot be opened as an HDF5 file"):
+        read_record(cut)
+    for group in ("parameters", "provenance", "loads/moment", "kinematics/pitch_angle"):
+        broken = tmp_path / f"no_{group.replace('/', '_')}.h5"
+        shutil.copyfile(shipped, broken)
+        with h5py.File(broken, "a") as f:
+            del f[group]
+        with pytest.raises(MfflapError, match=rf"{broken.name}: (not a complete CFD record|"
+                                              rf"no group)"):
+            read_record(broken)
+    assert read_record(shipped).name == whole.name  # the shipped file is untouched
 
 
 def test_cli_evaluate_text_json_and_figure(tmp_path):

@@ -168,20 +168,28 @@ def read_record(path: str | Path) -> CfdRecord:
         kind = rf.h5.attrs.get("kind")
         if kind != "cfd_record":
             raise MfflapError(f"{path}: not a CFD record (kind {kind!r})")
-        state = rf.read_state("kinematics")
-        state = KinematicState(**{k: np.asarray(getattr(state, k), dtype=float)
-                                  for k in ("time", *_STATE_KEYS)})
-        loads = rf.read_loads("loads")
-        loads = Loads(loads.time, *(np.asarray(getattr(loads, k), dtype=float) for k in
-                                    ("normal_force", "tangential_force", "moment")),
-                      source=loads.source)
-        raw_force = raw_moment = None
-        if "raw" in rf.h5:
-            raw_force = rf.h5["raw/force"][()]
-            raw_moment = rf.h5["raw/moment"][()] if "moment" in rf.h5["raw"] else None
-        params = {k: _attr(v) for k, v in rf.h5["parameters"].attrs.items()}
-        prov = {k: _attr(v) for k, v in rf.h5["provenance"].attrs.items()}
-        name = str(_attr(rf.h5.attrs.get("name", path.stem)))
+        try:
+            return _read_record(rf, path)
+        except (KeyError, TypeError) as err:  # a group, dataset or field missing
+            raise MfflapError(f"{path}: not a complete CFD record ({err})") from err
+
+
+def _read_record(rf: ResultsFile, path: Path) -> CfdRecord:
+    """The record in an open results file of kind ``cfd_record``."""
+    state = rf.read_state("kinematics")
+    state = KinematicState(**{k: np.asarray(getattr(state, k), dtype=float)
+                              for k in ("time", *_STATE_KEYS)})
+    loads = rf.read_loads("loads")
+    loads = Loads(loads.time, *(np.asarray(getattr(loads, k), dtype=float) for k in
+                                ("normal_force", "tangential_force", "moment")),
+                  source=loads.source)
+    raw_force = raw_moment = None
+    if "raw" in rf.h5:
+        raw_force = rf.h5["raw/force"][()]
+        raw_moment = rf.h5["raw/moment"][()] if "moment" in rf.h5["raw"] else None
+    params = {k: _attr(v) for k, v in rf.h5["parameters"].attrs.items()}
+    prov = {k: _attr(v) for k, v in rf.h5["provenance"].attrs.items()}
+    name = str(_attr(rf.h5.attrs.get("name", path.stem)))
     t = loads.time
     if t.shape != state.time.shape or not np.allclose(t, state.time):
         raise MfflapError(f"{path}: loads and kinematics are on different time bases")
