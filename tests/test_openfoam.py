@@ -166,10 +166,40 @@ def test_y_plus_rows_of_real_output_and_of_a_run_killed_mid_row(tmp_path):
     lines[-1] = lines[-1].rsplit(maxsplit=1)[0]  # a whole line, one column short
     with pytest.raises(ParseError, match=r"yPlus.dat, line 9: expected 5 columns"):
         read_y_plus(_y_plus_case(tmp_path / "c", "\n".join(lines) + "\n"))
+    lines = text.splitlines()
+    lines[5] = lines[5].replace(lines[5].split()[3], "nan")
+    with pytest.raises(ParseError, match=r"yPlus.dat, line 6: non-finite value"):
+        read_y_plus(_y_plus_case(tmp_path / "n", "\n".join(lines) + "\n"))
     case = _y_plus_case(tmp_path / "d", text)
     (case / "postProcessing" / "yPlus" / "old").mkdir()
     with pytest.raises(ParseError, match=r"old.*not a time folder"):
         read_y_plus(case)
+
+
+@settings(max_examples=150, deadline=None)
+@given(cut=st.integers(0, 600), junk=st.text(max_size=20), pos=st.integers(0, 600))
+def test_y_plus_parser_fuzz_never_hangs_or_lies(tmp_path_factory, cut, junk, pos):
+    """Cut and garbled yPlus output: an error naming the file, or rows of the whole file
+    (junk may turn one number into another valid one; it stays finite and in its row)."""
+    from mfflap.cfd.openfoam.yplus import read_y_plus
+
+    text = (DATA / "yPlus.dat").read_text()
+    broken = text[:pos] + junk + text[pos:]
+    broken = broken[:cut] if cut < len(broken) else broken
+    case = _y_plus_case(tmp_path_factory.mktemp("fuzz"), broken)
+    whole = read_y_plus(_y_plus_case(tmp_path_factory.mktemp("whole"), text))
+    try:
+        got = read_y_plus(case)
+    except ParseError as err:
+        assert "yPlus" in str(err)
+        return
+    if not junk:  # only cut: a prefix of the whole file's rows
+        n = len(got.time)
+        np.testing.assert_array_equal(got.average, whole.average[:n])
+        np.testing.assert_array_equal(got.time, whole.time[:n])
+    assert len(got.time) <= len(whole.time) + 1
+    assert all(np.all(np.isfinite(v)) for v in (got.time, got.minimum, got.maximum,
+                                                 got.average))
 
 
 def test_garbled_middle_line_names_file_and_line():

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -30,7 +31,8 @@ def read_y_plus(case_dir: str | Path, patch: str = "plate") -> YPlusHistory:
     Raises
     ------
     ParseError
-        If there is no yPlus output, or a row cannot be read (naming file and line).
+        If there is no yPlus output, or a row cannot be read or holds NaN or inf (naming
+        file and line).
     """
     root = Path(case_dir) / "postProcessing" / "yPlus"
     folders = time_folders(root) if root.is_dir() else []
@@ -69,8 +71,12 @@ def _patch_rows(path: Path, patch: str) -> list[tuple[float, float, float, float
         if parts[1] != patch:
             continue
         try:
-            rows.append(tuple(float(parts[k]) for k in (0, 2, 3, 4)))
+            row = tuple(float(parts[k]) for k in (0, 2, 3, 4))
         except ValueError as exc:
             raise ParseError(f"unreadable number in {line.strip()!r}", path=str(path),
                              line=i) from exc
+        if not all(math.isfinite(v) for v in row):
+            raise ParseError(f"non-finite value in {line.strip()!r} (a diverged run?)",
+                             path=str(path), line=i)
+        rows.append(row)
     return rows
