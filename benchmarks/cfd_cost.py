@@ -2,7 +2,7 @@
 
 f = 1 Hz, h_amp = 0.3 m, theta = 20 deg (--pitch-deg), phi = 90 deg, U = 0.3 m/s, with a
 0.25 s smooth start-up ramp, two cycles. Every set-up runs in this process's pool (two at a
-time, two cores); CPU times are each run's own (blockMesh + pimpleFoam), printed per
+time, two cores; --workers); CPU times are each run's own (blockMesh + pimpleFoam), printed per
 simulated cycle and as a ratio to the medium mesh. Progress goes to stderr: each run as it
 finishes, and every minute the simulated time of the runs still going.
 
@@ -332,10 +332,14 @@ def main() -> None:
                         "is not converged in time on every motion); several, comma "
                         "separated (4: the reference itself): against the mean of those "
                         "runs, with their own distance from it (the time-step band)")
+    parser.add_argument("--workers", type=int, default=2,
+                        help="runs at a time (one core each; default 2, this machine's cores)")
     parser.add_argument("--work-dir", default=None,
                         help="folder of the cases (default: a new temporary folder); runs "
                         "that finished there before are read, not rerun")
     args = parser.parse_args()
+    if args.workers < 1:
+        parser.error(f"--workers must be >= 1, got {args.workers}")
     cycles = args.cycles
     root = args.work_dir or tempfile.mkdtemp(prefix="mfflap-cfd-cost-")
     Path(root).mkdir(parents=True, exist_ok=True)
@@ -390,12 +394,13 @@ def main() -> None:
     moving = {"reference", *named} if args.plate_frame else set()
     jobs += [j.variant("plate", frame="plate", far_field="inletOutlet")
              for j in jobs if j.label in moving]
-    # the longest runs first, so that the two workers finish together
-    jobs.sort(key=lambda j: -j.mesh.n_cells)
+    # the longest runs first (cells times steps, which go as 1 / max Co), so that the workers
+    # finish together
+    jobs.sort(key=lambda j: -j.mesh.n_cells / j.solver.max_courant)
     run = partial(run_setup, cycles=cycles, root=root, pitch_deg=pitch)
-    print(f"{len(jobs)} runs in {root}, two at a time: {', '.join(j.label for j in jobs)}",
-          file=sys.stderr, flush=True)
-    with ProcessPoolExecutor(2) as pool:
+    print(f"{len(jobs)} runs in {root}, {args.workers} at a time: "
+          f"{', '.join(j.label for j in jobs)}", file=sys.stderr, flush=True)
+    with ProcessPoolExecutor(args.workers) as pool:
         finished = collect({pool.submit(run, job): job.label for job in jobs}, root, cycles)
     results = {j.label: finished[j.label] for j in jobs}
     for needed in ("reference", *members):
