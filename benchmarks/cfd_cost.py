@@ -245,8 +245,9 @@ def collect(futures: dict[Future, str], root: str, cycles: float,
                     else f"failed: {res.failure}")
             print(f"[{len(results)}/{len(futures)}] {res.label}: {said}", file=sys.stderr,
                   flush=True)
-        going = [(futures[f], solver_progress(Path(root) / futures[f]))
-                 for f in pending if f.running()]
+        # a queued run counts as running in a process pool: leave out those finished before
+        going = [(futures[f], solver_progress(Path(root) / futures[f])) for f in pending
+                 if f.running() and not _finished(Path(root) / futures[f])]
         going = [f"{label} t = {at[0]:.3f} of {cycles:g} s" for label, at in going if at]
         if going:
             print(f"  running: {'; '.join(going)}", file=sys.stderr, flush=True)

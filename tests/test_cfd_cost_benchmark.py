@@ -152,12 +152,20 @@ def test_collect_reports_each_run_as_it_finishes_and_the_simulated_time_of_the_o
         time.sleep(0.6)
         return _run(bench, "slow", cpu=250.0)
 
-    with ThreadPoolExecutor(2) as pool:
+    (tmp_path / "read").mkdir()  # finished before: read, not run, whatever its future says
+    (tmp_path / "read" / "log.pimpleFoam").write_text("deltaT = 0.001\nTime = 2\n\nEnd\n")
+
+    def read():
+        time.sleep(0.6)
+        return _run(bench, "read", cpu=90.0)
+
+    with ThreadPoolExecutor(3) as pool:
         futures = {pool.submit(lambda: bench.SetupRun("broken", None, failure="diverged")):
-                   "broken", pool.submit(slow): "slow"}
+                   "broken", pool.submit(slow): "slow", pool.submit(read): "read"}
         results = bench.collect(futures, str(tmp_path), 2.0, every_s=0.1)
-    assert set(results) == {"broken", "slow"} and results["slow"].cpu_per_cycle_s == 250.0
+    assert set(results) == {"broken", "slow", "read"}
+    assert results["slow"].cpu_per_cycle_s == 250.0
     err = capsys.readouterr().err
-    assert "[1/2] broken: failed: diverged" in err
-    assert "running: slow t = 0.500 of 2 s" in err
-    assert err.rstrip().endswith("[2/2] slow: 250.0 s CPU per cycle")
+    assert "[1/3] broken: failed: diverged" in err
+    assert "running: slow t = 0.500 of 2 s\n" in err  # not the finished run's t = 2
+    assert "[3/3]" in err.splitlines()[-1] and "slow: 250.0 s" in err
