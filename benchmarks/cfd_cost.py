@@ -74,7 +74,7 @@ import numpy as np
 
 from mfflap.cfd.openfoam.forces import read_forces
 from mfflap.cfd.openfoam.loads import imposed_state, to_loads
-from mfflap.cfd.openfoam.runner import run_case, solver_progress
+from mfflap.cfd.openfoam.runner import read_tail, run_case, solver_progress
 from mfflap.cfd.openfoam.setups import mesh_and_solver, setup
 from mfflap.cfd.openfoam.solver_log import solver_provenance
 from mfflap.cfd.openfoam.writer import AnyMeshSpec, SolverSettings, mesh_specs, write_case
@@ -137,7 +137,7 @@ class SetupRun:
 
 def _finished(case: Path) -> bool:
     log = case / "log.pimpleFoam"
-    return log.is_file() and log.read_text(errors="replace").rstrip().endswith("End")
+    return log.is_file() and read_tail(log, 4096).rstrip().endswith("End")
 
 
 @dataclass(frozen=True)

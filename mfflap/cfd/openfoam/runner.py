@@ -49,8 +49,9 @@ _DELTA_T = re.compile(r"^deltaT = ([0-9.eE+-]+)\s*$", re.M)
 _TIME = re.compile(r"^Time = ([0-9.eE+-]+)\s*$", re.M)
 
 
-def _read_tail(path: Path, n_bytes: int = 20_000, start: int = 0) -> str:
-    """The last ``n_bytes`` of a file, none of them before byte ``start``."""
+def read_tail(path: Path, n_bytes: int = 20_000, start: int = 0) -> str:
+    """The last ``n_bytes`` of a file (a solver log), none of them before byte ``start``:
+    what a watcher reads of a log that may be tens of MB."""
     with open(path, "rb") as fh:
         fh.seek(0, os.SEEK_END)
         size = fh.tell()
@@ -74,7 +75,7 @@ def solver_progress(case_dir: str | Path, log_name: str = "log.pimpleFoam"
     path = Path(case_dir) / log_name
     if not path.is_file():
         return None
-    text = _read_tail(path)
+    text = read_tail(path)
     times, steps = _TIME.findall(text), _DELTA_T.findall(text)
     if not times:
         return None
@@ -130,7 +131,7 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
                     raise CfdRunError(f"{application} timed out after {timeout_s} s",
                                       case=str(case_dir), log_tail=_tail(log))
                 fh.flush()
-                collapsed = collapsed_time_step(_read_tail(log, start=own_start),
+                collapsed = collapsed_time_step(read_tail(log, start=own_start),
                                                 min_time_step)
                 if collapsed is not None:
                     raise CfdRunError(
@@ -147,8 +148,9 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
             if proc.poll() is None:
                 proc.kill()
                 proc.wait()
-    courants = max_courant(_read_tail(log, 200_000, start=own_start))
-    if proc.returncode != 0 or _DIVERGED.search(_read_tail(log, 50_000, start=own_start)):
+    own_tail = read_tail(log, 200_000, start=own_start)
+    courants = max_courant(own_tail)
+    if proc.returncode != 0 or _DIVERGED.search(own_tail[-50_000:]):
         raise CfdRunError(f"{application} failed (exit code {proc.returncode}, diverged or "
                           "crashed)", case=str(case_dir), log_tail=_tail(log))
     if courants > max_courant_abort:
