@@ -1,10 +1,19 @@
 """Campaigns on a real dask LocalCluster running real OpenFOAM; records; resume; failures."""
 
+import os
 import re
+import signal
 import socket
+import subprocess
+import sys
+import threading
+import time
 import warnings
+from dataclasses import dataclass
 from pathlib import Path
 
+import dask
+import distributed  # noqa: F401 (its defaults in dask.config before a test overrides one)
 import h5py
 import numpy as np
 import pytest
@@ -24,6 +33,7 @@ from mfflap.errors import ConfigError, MfflapError
 from mfflap.hydro import MorisonModel
 from mfflap.kinematics import RampHarmonicMotion
 from mfflap.metrics import pearson
+from mfflap.toml_io import read_toml
 
 SHORT = CfdCase(1.0, 0.3, 90.0, 10.0, duration=0.04, ramp_time=0.02)
 OTHER = CfdCase(2.0, 0.1, 45.0, 10.0, duration=0.04, ramp_time=0.02)
@@ -636,3 +646,115 @@ def test_campaign_command_runs_a_named_set_up(tmp_path):
     (case_dir,) = (out / "cases").iterdir()
     assert "Gauss LUST grad(U)" in (case_dir / "system" / "fvSchemes").read_text()
     assert "FAILED f2p000_h0p100_phi090p0" in res.output
+
+
+def _solvers_in(case_dir: Path) -> list[str]:
+    """Command lines of the processes running in ``case_dir`` (read from /proc)."""
+    found = []
+    for proc in Path("/proc").iterdir():
+        try:
+            command = (proc / "cmdline").read_bytes().replace(b"\0", b" ").decode()
+        except OSError:
+            continue
+        if proc.name.isdigit() and f"-case {case_dir}" in command:
+            found.append(command)
+    return found
+
+
+def _wait_for_solver(log: Path, timeout_s: float = 120.0) -> None:
+    deadline = time.monotonic() + timeout_s
+    while not (log.is_file() and "\nTime = " in log.read_text()):
+        assert time.monotonic() < deadline, f"{log}: the solver did not start"
+        time.sleep(0.1)
+
+
+@pytest.mark.openfoam
+@pytest.mark.parametrize("n_procs", [1, 2])
+def test_a_solver_dies_with_the_process_that_runs_it(tmp_path, n_procs):
+    """A Python process running a case, killed with SIGKILL (as the out-of-memory killer or
+    a dask nanny kills a worker), takes its pimpleFoam with it, serial or mpirun and its
+    ranks: no orphan goes on writing into the case that a rerun resumes."""
+    case_dir = tmp_path / "c"
+    script = ("import sys\n"
+              "from mfflap.campaign.cases import CfdCase\n"
+              "from mfflap.campaign.openfoam_run import run_motion\n"
+              "case = CfdCase(1.0, 0.3, 90.0, 10.0, duration=2.0, ramp_time=0.5)\n"
+              "run_motion(sys.argv[1], case.motion(), 'c', {}, end_time=2.0, ramp_time=0.5,\n"
+              "           n_procs=int(sys.argv[2]))\n")
+    runner = subprocess.Popen([sys.executable, "-c", script, str(case_dir), str(n_procs)])
+    try:
+        _wait_for_solver(case_dir / "log.pimpleFoam")
+        assert _solvers_in(case_dir), "no solver found in /proc"
+    finally:
+        runner.kill()
+        runner.wait()
+    deadline = time.monotonic() + 10.0
+    while _solvers_in(case_dir) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    left = _solvers_in(case_dir)
+    for command in left:  # do not leave one running whatever the outcome
+        subprocess.run(["pkill", "-KILL", "-f", command.strip()], check=False)
+    assert not left
+
+
+@dataclass(frozen=True)
+class WorkerKillingCase(CfdCase):
+    """A case whose dask worker is killed (SIGKILL) once its solver runs, as the
+    out-of-memory killer would: every time, or only the first time (``once_marker``)."""
+
+    solver_log: str = ""
+    once_marker: str = ""
+
+    def motion(self) -> RampHarmonicMotion:
+        if not (self.once_marker and Path(self.once_marker).exists()):
+            if self.once_marker:
+                Path(self.once_marker).touch()
+
+            def kill_when_solving() -> None:
+                _wait_for_solver(Path(self.solver_log))
+                os.kill(os.getpid(), signal.SIGKILL)
+
+            threading.Thread(target=kill_when_solving, daemon=True).start()
+        return super().motion()
+
+
+@pytest.mark.openfoam
+def test_a_worker_killed_under_its_run_fails_that_case_only(tmp_path):
+    """Real LocalCluster: a case whose worker process dies under it on every worker it is
+    given (dask's KilledWorker) is written and reported as failed, and its solver is gone;
+    the other case finishes, and the campaign status and a rerun keep the failure."""
+    out = tmp_path / "camp"
+    killer_id = CfdCase(1.0, 0.5, 90.0, 10.0, duration=0.04, ramp_time=0.02).case_id
+    killer = WorkerKillingCase(1.0, 0.5, 90.0, 10.0, duration=0.04, ramp_time=0.02,
+                               solver_log=str(out / "cases" / killer_id / "log.pimpleFoam"))
+    setup = CampaignSetup(timeout_s=600.0, keep_case_dirs=True)
+    with dask.config.set({"distributed.scheduler.allowed-failures": 1}):
+        statuses = run_campaign([killer, SHORT], out, setup, n_workers=2, progress=False)
+    assert [s.state for s in statuses] == ["failed", "done"]
+    assert "dask worker process running it died" in statuses[0].message
+    failed = read_toml(out / f"{killer_id}.failed.toml")
+    assert "KilledWorker" in failed["log_tail"] and "--retry-failed" in failed["error"]
+    assert not _solvers_in(out / "cases" / killer_id)
+    assert [s.state for s in campaign_status(out)] == ["failed", "done"]
+    assert [s.state for s in run_campaign([killer, SHORT], out, setup, n_workers=1,
+                                          progress=False)] == ["failed", "done"]
+
+
+@pytest.mark.openfoam
+def test_a_case_whose_worker_died_once_resumes_on_another_and_finishes(tmp_path):
+    """Real LocalCluster: the worker running a case is killed once its solver has begun;
+    dask gives the case to a new worker, which resumes it in the same folder and writes its
+    record (the first solver having died with its worker, not running beside the second)."""
+    out = tmp_path / "camp"
+    case = WorkerKillingCase(1.0, 0.3, 90.0, 10.0, duration=0.04, ramp_time=0.02,
+                             solver_log=str(out / "cases" / SHORT.case_id / "log.pimpleFoam"),
+                             once_marker=str(tmp_path / "killed_once"))
+    setup = CampaignSetup(timeout_s=600.0, keep_case_dirs=True)
+    (status,) = run_campaign([case], out, setup, n_workers=1, progress=False)
+    assert (tmp_path / "killed_once").exists()
+    assert status.state == "done", status.message
+    log = (out / "cases" / case.case_id / "log.pimpleFoam").read_text()
+    assert log.count("Starting time loop") == 2
+    rec = read_record(out / f"{case.case_id}.h5")
+    assert np.all(np.diff(rec.time) > 0) and rec.time[-1] > 0.038
+    assert not _solvers_in(out / "cases" / case.case_id)

@@ -255,6 +255,34 @@ def _started(case_dir: Path) -> tuple[str, float] | None:
             + (f"; {retries} retr{'y' if retries == 1 else 'ies'}" if retries else ""), share)
 
 
+def _status_of(future: Any, case_id: str, out: Path) -> CaseStatus:
+    """A finished task's case status; a task that did not return one fails its case alone.
+
+    :func:`run_one` returns every CFD failure as a status, so what arrives here as an error is
+    the worker process dying under the run (dask's KilledWorker once it died on
+    ``distributed.scheduler.allowed-failures`` + 1 workers: the out-of-memory killer, a
+    nanny's memory limit) or a bug. It is written beside the records like any failure, and
+    the other cases go on. A task the scheduler cancelled (the scheduler lost) stops the
+    campaign: rerunning the command resumes it.
+    """
+    if future.status == "cancelled":
+        raise MfflapError(f"{out}: the dask scheduler dropped case {case_id} (scheduler "
+                          "lost?); rerun the same command to resume the campaign",
+                          case=case_id)
+    exc = future.exception()
+    if exc is None:
+        return future.result()
+    if type(exc).__name__ == "KilledWorker":
+        error = (f"the dask worker process running it died ({exc}); --retry-failed reruns it "
+                 "from its last written time")
+    else:
+        error = f"its task raised {type(exc).__name__}: {exc}"
+    _failed_path(out, case_id).write_text(dumps({
+        "case_id": case_id, "error": error,
+        "log_tail": "".join(traceback.format_exception(exc))[-4000:]}))
+    return CaseStatus(case_id, "failed", error.splitlines()[0])
+
+
 def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
                  setup: CampaignSetup | None = None, *, n_workers: int = 1,
                  scheduler_address: str | None = None, retry_failed: bool = False,
@@ -321,6 +349,7 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
                                    dashboard_address="127.0.0.1:0")
         client = Client(scheduler_address or cluster)
         try:
+            case_ids = {f"mfflap-{c.case_id}": c.case_id for c in todo}
             futures = [client.submit(run_one, c, str(out), setup, key=f"mfflap-{c.case_id}",
                                      pure=False) for c in todo]
             bar = None
@@ -345,7 +374,7 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
                     time.sleep(0.1)
                     continue
                 for fut in pending.next_batch(block=False):
-                    status: CaseStatus = fut.result()
+                    status = _status_of(fut, case_ids[fut.key], out)
                     results[status.case_id] = status
                     finished.append(status.case_id)
                     last = f"{status.case_id}: {status.state} {status.message}"[:60]

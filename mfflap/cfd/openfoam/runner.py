@@ -34,6 +34,19 @@ def _env() -> dict[str, str]:
     return env
 
 
+def dies_with_caller(command: list[str]) -> list[str]:
+    """``command`` wrapped so that it is stopped (SIGTERM) when the thread that starts it dies.
+
+    A solver outlives a Python process killed with SIGKILL (a dask worker lost to the
+    out-of-memory killer or killed by its nanny): the orphan would go on writing into its
+    case while dask reruns the same case, resumed in the same folder, beside it.
+    util-linux's ``setpriv --pdeathsig`` asks the kernel to stop it instead; mpirun passes
+    SIGTERM on to its ranks. Where setpriv is missing the command is returned as it is.
+    """
+    setpriv = shutil.which("setpriv")
+    return command if setpriv is None else [setpriv, "--pdeathsig", "TERM", "--", *command]
+
+
 def max_courant(log_text: str) -> float:
     """Largest maximum Courant number reported in a pimpleFoam log (0 if none)."""
     return max((float(c) for c in _COURANT.findall(log_text)), default=0.0)
@@ -119,7 +132,8 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
     watched = started
     own_start = log.stat().st_size if log.is_file() else 0  # where this run's lines begin
     with open(log, "a") as fh:
-        proc = subprocess.Popen(command, stdout=fh, stderr=subprocess.STDOUT, env=_env())
+        proc = subprocess.Popen(dies_with_caller(command), stdout=fh, stderr=subprocess.STDOUT,
+                                env=_env())
         try:
             while True:
                 try:
