@@ -27,7 +27,7 @@ from mfflap.campaign.execute import (
 )
 from mfflap.campaign.openfoam_run import run_motion
 from mfflap.campaign.records import CfdRecord, read_record, read_records, write_record
-from mfflap.cfd.openfoam.runner import openfoam_available
+from mfflap.cfd.openfoam.runner import dies_with_caller, openfoam_available
 from mfflap.config import IdentificationGrid
 from mfflap.errors import ConfigError, MfflapError
 from mfflap.hydro import MorisonModel
@@ -661,6 +661,19 @@ def _solvers_in(case_dir: Path) -> list[str]:
     return found
 
 
+def _solvers_left(case_dir: Path, wait_s: float = 10.0) -> list[str]:
+    """The processes still running in ``case_dir`` after waiting up to ``wait_s`` for them
+    to end (a signalled solver takes a moment); those left are killed, whatever the test
+    then asserts."""
+    deadline = time.monotonic() + wait_s
+    while _solvers_in(case_dir) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    left = _solvers_in(case_dir)
+    for command in left:
+        subprocess.run(["pkill", "-KILL", "-f", command.strip()], check=False)
+    return left
+
+
 def _wait_for_solver(log: Path, timeout_s: float = 120.0) -> None:
     deadline = time.monotonic() + timeout_s
     while not (log.is_file() and "\nTime = " in log.read_text()):
@@ -688,13 +701,21 @@ def test_a_solver_dies_with_the_process_that_runs_it(tmp_path, n_procs):
     finally:
         runner.kill()
         runner.wait()
-    deadline = time.monotonic() + 10.0
-    while _solvers_in(case_dir) and time.monotonic() < deadline:
-        time.sleep(0.1)
-    left = _solvers_in(case_dir)
-    for command in left:  # do not leave one running whatever the outcome
-        subprocess.run(["pkill", "-KILL", "-f", command.strip()], check=False)
-    assert not left
+    assert not _solvers_left(case_dir)
+
+
+def test_a_solver_whose_caller_died_before_it_started_does_not_start(tmp_path):
+    """The wrapped command starts only from the process that wrapped it: started by another
+    (as when its caller dies between the fork and the kernel's death-signal request, and
+    init adopts it) it does not run at all."""
+    marker = tmp_path / "ran"
+    command = dies_with_caller(["touch", str(marker)])
+    assert command[0].endswith("setpriv")
+    relay = "import subprocess, sys; subprocess.run(sys.argv[1:], check=False)"
+    subprocess.run([sys.executable, "-c", relay, *command], check=True)
+    assert not marker.exists()
+    subprocess.run(command, check=True)
+    assert marker.exists()
 
 
 @dataclass(frozen=True)
@@ -724,8 +745,8 @@ def test_a_worker_killed_under_its_run_fails_that_case_only(tmp_path):
     given (dask's KilledWorker) is written and reported as failed, and its solver is gone;
     the other case finishes, and the campaign status and a rerun keep the failure."""
     out = tmp_path / "camp"
-    killer_id = CfdCase(1.0, 0.5, 90.0, 10.0, duration=0.04, ramp_time=0.02).case_id
-    killer = WorkerKillingCase(1.0, 0.5, 90.0, 10.0, duration=0.04, ramp_time=0.02,
+    killer_id = CfdCase(1.0, 0.5, 90.0, 10.0, duration=1.0, ramp_time=0.2).case_id
+    killer = WorkerKillingCase(1.0, 0.5, 90.0, 10.0, duration=1.0, ramp_time=0.2,
                                solver_log=str(out / "cases" / killer_id / "log.pimpleFoam"))
     setup = CampaignSetup(timeout_s=600.0, keep_case_dirs=True)
     with dask.config.set({"distributed.scheduler.allowed-failures": 1}):
@@ -734,7 +755,7 @@ def test_a_worker_killed_under_its_run_fails_that_case_only(tmp_path):
     assert "dask worker process running it died" in statuses[0].message
     failed = read_toml(out / f"{killer_id}.failed.toml")
     assert "KilledWorker" in failed["log_tail"] and "--retry-failed" in failed["error"]
-    assert not _solvers_in(out / "cases" / killer_id)
+    assert not _solvers_left(out / "cases" / killer_id)
     assert [s.state for s in campaign_status(out)] == ["failed", "done"]
     assert [s.state for s in run_campaign([killer, SHORT], out, setup, n_workers=1,
                                           progress=False)] == ["failed", "done"]
@@ -757,4 +778,42 @@ def test_a_case_whose_worker_died_once_resumes_on_another_and_finishes(tmp_path)
     assert log.count("Starting time loop") == 2
     rec = read_record(out / f"{case.case_id}.h5")
     assert np.all(np.diff(rec.time) > 0) and rec.time[-1] > 0.038
-    assert not _solvers_in(out / "cases" / case.case_id)
+    assert not _solvers_left(out / "cases" / case.case_id)
+
+
+@pytest.mark.openfoam
+def test_a_lost_scheduler_stops_the_campaign_with_nothing_marked_failed(tmp_path):
+    """An external dask scheduler (as dask-jobqueue starts one) killed while a case runs:
+    the campaign stops with an error naming the folder and the case, which is not written as
+    failed, so that rerunning the command resumes it."""
+    with socket.socket() as free:
+        free.bind(("127.0.0.1", 0))
+        port = free.getsockname()[1]
+    address = f"tcp://127.0.0.1:{port}"
+    dask_cli = [sys.executable, "-m", "dask"]
+    scheduler = subprocess.Popen([*dask_cli, "scheduler", "--host", "127.0.0.1", "--port",
+                                  str(port), "--dashboard-address", "127.0.0.1:0"],
+                                 stderr=subprocess.DEVNULL, start_new_session=True)
+    worker = subprocess.Popen([*dask_cli, "worker", address, "--nthreads", "1"],
+                              stderr=subprocess.DEVNULL, start_new_session=True)
+    out = tmp_path / "camp"
+    case = CfdCase(1.0, 0.3, 90.0, 10.0, duration=1.0, ramp_time=0.2)
+
+    def kill_scheduler_when_solving() -> None:
+        _wait_for_solver(out / "cases" / case.case_id / "log.pimpleFoam")
+        scheduler.kill()
+
+    killer = threading.Thread(target=kill_scheduler_when_solving, daemon=True)
+    killer.start()
+    try:
+        with pytest.raises(MfflapError) as lost:
+            run_campaign([case], out, CampaignSetup(), scheduler_address=address,
+                         progress=False)
+    finally:
+        for process in (scheduler, worker):
+            os.killpg(process.pid, signal.SIGKILL)
+            process.wait()
+    assert str(out) in str(lost.value) and case.case_id in str(lost.value)
+    assert "rerun the same command" in str(lost.value)
+    assert not list(out.glob("*.failed.toml"))
+    assert [s.state for s in campaign_status(out)] == ["started"]

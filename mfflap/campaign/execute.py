@@ -267,8 +267,7 @@ def _status_of(future: Any, case_id: str, out: Path) -> CaseStatus:
     """
     if future.status == "cancelled":
         raise MfflapError(f"{out}: the dask scheduler dropped case {case_id} (scheduler "
-                          "lost?); rerun the same command to resume the campaign",
-                          case=case_id)
+                          "lost?); rerun the same command to resume the campaign")
     exc = future.exception()
     if exc is None:
         return future.result()

@@ -41,10 +41,15 @@ def dies_with_caller(command: list[str]) -> list[str]:
     out-of-memory killer or killed by its nanny): the orphan would go on writing into its
     case while dask reruns the same case, resumed in the same folder, beside it.
     util-linux's ``setpriv --pdeathsig`` asks the kernel to stop it instead; mpirun passes
-    SIGTERM on to its ranks. Where setpriv is missing the command is returned as it is.
+    SIGTERM on to its ranks. A parent that died before the request was made cannot signal
+    it, so the command then starts only if its parent is still this process (prctl(2)'s
+    advice). Where setpriv is missing the command is returned as it is.
     """
     setpriv = shutil.which("setpriv")
-    return command if setpriv is None else [setpriv, "--pdeathsig", "TERM", "--", *command]
+    if setpriv is None:
+        return command
+    parent_alive = f'[ "$PPID" = {os.getpid()} ] && exec "$@"'
+    return [setpriv, "--pdeathsig", "TERM", "--", "sh", "-c", parent_alive, "sh", *command]
 
 
 def max_courant(log_text: str) -> float:
