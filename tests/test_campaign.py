@@ -767,7 +767,7 @@ def test_a_case_whose_worker_died_once_resumes_on_another_and_finishes(tmp_path)
     dask gives the case to a new worker, which resumes it in the same folder and writes its
     record (the first solver having died with its worker, not running beside the second)."""
     out = tmp_path / "camp"
-    case = WorkerKillingCase(1.0, 0.3, 90.0, 10.0, duration=0.04, ramp_time=0.02,
+    case = WorkerKillingCase(1.0, 0.3, 90.0, 10.0, duration=0.1, ramp_time=0.02,
                              solver_log=str(out / "cases" / SHORT.case_id / "log.pimpleFoam"),
                              once_marker=str(tmp_path / "killed_once"))
     setup = CampaignSetup(timeout_s=600.0, keep_case_dirs=True)
@@ -777,7 +777,7 @@ def test_a_case_whose_worker_died_once_resumes_on_another_and_finishes(tmp_path)
     log = (out / "cases" / case.case_id / "log.pimpleFoam").read_text()
     assert log.count("Starting time loop") == 2
     rec = read_record(out / f"{case.case_id}.h5")
-    assert np.all(np.diff(rec.time) > 0) and rec.time[-1] > 0.038
+    assert np.all(np.diff(rec.time) > 0) and rec.time[-1] > 0.098
     assert not _solvers_left(out / "cases" / case.case_id)
 
 
