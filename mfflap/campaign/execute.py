@@ -271,9 +271,12 @@ def _status_of(future: Any, case_id: str, out: Path) -> CaseStatus:
     exc = future.exception()
     if exc is None:
         return future.result()
-    if type(exc).__name__ == "KilledWorker":
-        error = (f"the dask worker process running it died ({exc}); --retry-failed reruns it "
-                 "from its last written time")
+    if type(exc).__name__ == "KilledWorker":  # its text (kept in the log tail) is long
+        retries = getattr(exc, "allowed_failures", None)
+        workers = f" on {retries + 1} workers" if isinstance(retries, int) else ""
+        error = (f"its dask worker process died under the run{workers} (the out-of-memory "
+                 "killer, a nanny's memory limit?); --retry-failed reruns it from its last "
+                 "written time")
     else:
         error = f"its task raised {type(exc).__name__}: {exc}"
     _failed_path(out, case_id).write_text(dumps({
