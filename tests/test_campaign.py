@@ -27,9 +27,10 @@ from mfflap.campaign.execute import (
 )
 from mfflap.campaign.openfoam_run import run_motion
 from mfflap.campaign.records import CfdRecord, read_record, read_records, write_record
-from mfflap.cfd.openfoam.runner import dies_with_caller, openfoam_available
+from mfflap.cfd.openfoam.runner import dies_with_caller, openfoam_available, run_case
+from mfflap.cfd.openfoam.writer import write_case
 from mfflap.config import IdentificationGrid
-from mfflap.errors import ConfigError, MfflapError
+from mfflap.errors import CfdRunError, ConfigError, MfflapError
 from mfflap.hydro import MorisonModel
 from mfflap.kinematics import RampHarmonicMotion
 from mfflap.metrics import pearson
@@ -702,6 +703,22 @@ def test_a_solver_dies_with_the_process_that_runs_it(tmp_path, n_procs):
         runner.kill()
         runner.wait()
     assert not _solvers_left(case_dir)
+
+
+@pytest.mark.openfoam
+def test_a_decomposed_run_stopped_for_its_timeout_leaves_no_rank_running(tmp_path):
+    """mpirun is stopped so that it stops its ranks: when the timeout's error arrives no
+    solver runs in the case any more (killed at once, mpirun left them running a second or
+    two, while a retry could already be resuming the case)."""
+    case_dir = tmp_path / "c"
+    case = CfdCase(1.0, 0.3, 90.0, 10.0, duration=2.0, ramp_time=0.5)
+    write_case(case_dir, case.motion(), 2.0, ramp_time=0.5)
+    with pytest.raises(CfdRunError, match="timed out after 8"):
+        run_case(case_dir, n_procs=2, timeout_s=8.0)
+    assert "Time = " in (case_dir / "log.pimpleFoam").read_text()
+    running = _solvers_in(case_dir)
+    _solvers_left(case_dir, wait_s=0.0)
+    assert not running
 
 
 def test_a_solver_whose_caller_died_before_it_started_does_not_start(tmp_path):

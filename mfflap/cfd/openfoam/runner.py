@@ -52,6 +52,21 @@ def dies_with_caller(command: list[str]) -> list[str]:
     return [setpriv, "--pdeathsig", "TERM", "--", "sh", "-c", parent_alive, "sh", *command]
 
 
+def stop(proc: subprocess.Popen, grace_s: float = 10.0) -> None:
+    """Stop a solver and wait until it has: SIGTERM, then SIGKILL after ``grace_s``.
+
+    SIGTERM lets mpirun stop its ranks before it exits; killed at once, it leaves them
+    running on their own for a second or two, long enough to write into the case that a
+    retry is already resuming.
+    """
+    proc.terminate()
+    try:
+        proc.wait(timeout=grace_s)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait()
+
+
 def max_courant(log_text: str) -> float:
     """Largest maximum Courant number reported in a pimpleFoam log (0 if none)."""
     return max((float(c) for c in _COURANT.findall(log_text)), default=0.0)
@@ -165,8 +180,7 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
                                           case=str(case_dir), log_tail=_tail(log))
         finally:
             if proc.poll() is None:
-                proc.kill()
-                proc.wait()
+                stop(proc)
     own_tail = read_tail(log, 200_000, start=own_start)
     courants = max_courant(own_tail)
     if proc.returncode != 0 or _DIVERGED.search(own_tail[-50_000:]):
