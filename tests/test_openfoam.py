@@ -915,24 +915,64 @@ def test_restart_skips_time_folders_that_hold_only_the_y_plus_field(tmp_path):
     assert y_plus.time[-1] == pytest.approx(read_y_plus(whole).time[-1])
 
 
-def test_latest_solution_time_needs_every_initial_field(tmp_path):
+@pytest.mark.openfoam
+def test_a_run_killed_while_writing_resumes_from_the_last_folder_written_whole(tmp_path):
+    """A run killed while it wrote its last time folder (here: its pressure field and mesh
+    points cut short) resumes from the folder before, where pimpleFoam would stop at once on
+    the field it cannot read; the merged forces match an uninterrupted run."""
+    from mfflap.cfd.openfoam.runner import latest_solution_time
+    from mfflap.cfd.openfoam.writer import MeshSpec, SolverSettings
+
+    spec = MeshSpec("tiny", n_chord=20, n_edge=4, n_radial=20, radial_expansion=100.0,
+                    radius_chords=8.0)
+    settings = SolverSettings(write_interval=0.01, max_time_step=2e-4)
+    whole = write_case(tmp_path / "whole", MOTION, end_time=0.03, mesh=spec, solver=settings)
+    run_case(whole, timeout_s=300)
+    case = write_case(tmp_path / "killed", MOTION, end_time=0.03, mesh=spec, solver=settings)
+    run_case(case, timeout_s=300)
+    for cut in (case / "0.03" / "p", case / "0.03" / "polyMesh" / "points"):
+        data = cut.read_bytes()
+        cut.write_bytes(data[: len(data) // 2])
+    assert latest_solution_time(case) == "0.02"
+    run_case(case, timeout_s=300)
+    assert "startTime       0.02;" in (case / "system" / "controlDict").read_text()
+    assert_forces_match_the_uninterrupted_run(case, whole)
+
+
+def test_latest_solution_time_needs_every_initial_field_written_whole(tmp_path):
+    """The latest time folder with every field of 0/, each file ending with OpenFOAM's end
+    divider (compressed or not; 0/ is mfflap's and has none), in every processor folder."""
+    import gzip
+
     from mfflap.cfd.openfoam.runner import latest_solution_time, set_start_time
 
+    whole = b"FoamFile {}\n(1 2 3)\n\n// " + b"*" * 73 + b" //\n"
     assert latest_solution_time(tmp_path) is None
-    for root in (tmp_path / "serial", tmp_path / "decomposed" / "processor0"):
+    roots = (tmp_path / "serial", tmp_path / "decomposed" / "processor0",
+             tmp_path / "decomposed" / "processor1")
+    for root in roots:
         for folder, names in (("0", "U p k epsilon nut"), ("0.5", "U p k epsilon nut phi"),
                               ("0.7", "yPlus"), ("0.8", "U p"), ("1e-3", "U p k epsilon nut"),
                               ("constant", "U p k epsilon nut")):
             (root / folder).mkdir(parents=True)
             for name in names.split():
-                (root / folder / name).write_text("")
+                (root / folder / name).write_bytes(b"" if folder == "0" else whole)
+        (root / "0.5" / "uniform").mkdir()
+        (root / "0.5" / "uniform" / "time").write_bytes(whole)
         (root / "0.6").mkdir()
         for name in ("U.gz", "p.gz", "k.gz", "epsilon.gz", "nut.gz"):
-            (root / "0.6" / name).write_text("")
+            (root / "0.6" / name).write_bytes(gzip.compress(whole))
     assert latest_solution_time(tmp_path / "serial") == "0.6"
     assert latest_solution_time(tmp_path / "decomposed") == "0.6"
+    cut = tmp_path / "decomposed" / "processor1" / "0.6" / "k.gz"
+    cut.write_bytes(gzip.compress(whole)[:-12])  # a compressed write cut short
+    assert latest_solution_time(tmp_path / "decomposed") == "0.5"
     shutil.rmtree(tmp_path / "serial" / "0.6")
     assert latest_solution_time(tmp_path / "serial") == "0.5"
+    (tmp_path / "serial" / "0.5" / "uniform" / "time").write_bytes(whole[:-20])
+    assert latest_solution_time(tmp_path / "serial") == "1e-3"
+    (tmp_path / "serial" / "1e-3" / "p").write_bytes(whole[:30])
+    assert latest_solution_time(tmp_path / "serial") == "0"
     case = write_case(tmp_path / "case", MOTION, end_time=0.1)
     set_start_time(case, "0.05")
     text = (case / "system" / "controlDict").read_text()

@@ -3,11 +3,13 @@ detection. Logs are kept in the case folder (log.<application>)."""
 
 from __future__ import annotations
 
+import gzip
 import os
 import re
 import shutil
 import subprocess
 import time
+import zlib
 from collections.abc import Callable
 from pathlib import Path
 
@@ -201,28 +203,55 @@ def is_time_folder(name: str) -> bool:
     return True
 
 
+#: the line OpenFOAM ends every file it writes with, ASCII or binary
+_END_DIVIDER = re.compile(rb"// \*{20,} //\s*$")
+
+
+def written_whole(path: Path) -> bool:
+    """True if an OpenFOAM output file ends with its end divider, as every file it writes
+    does (ASCII or binary, compressed or not); a write cut short by a kill does not."""
+    if path.name.endswith(".gz"):
+        try:
+            tail = gzip.decompress(path.read_bytes())[-200:]
+        except (OSError, EOFError, zlib.error):
+            return False
+    else:
+        with open(path, "rb") as fh:
+            fh.seek(max(path.stat().st_size - 200, 0))
+            tail = fh.read()
+    return _END_DIVIDER.search(tail) is not None
+
+
 def latest_solution_time(case_dir: str | Path) -> str | None:
-    """Name of the latest time folder that holds every field of the initial folder ``0/``.
+    """Name of the latest time folder written whole that holds every field of ``0/``.
 
     A time folder can hold less: the yPlus function object writes its field into a folder of
-    its own every few steps, and a run killed while writing leaves a partial one. OpenFOAM's
-    ``startFrom latestTime`` would restart from such a folder and stop at once for want of
-    p. A decomposed case is judged by ``processor0``. None if no folder qualifies (``0/``
-    missing or empty).
+    its own every few steps, and a run killed while writing leaves a partial one, or one
+    whose last file is cut short (every file OpenFOAM writes ends with its end divider).
+    OpenFOAM's ``startFrom latestTime`` would restart from such a folder and stop at once
+    for want of p, or on a field it cannot read. A decomposed case needs the folder whole
+    in every ``processor*`` folder. None if no folder qualifies (``0/`` missing or empty).
     """
     case = Path(case_dir)
-    root = case / "processor0" if (case / "processor0").is_dir() else case
+    roots = sorted(case.glob("processor[0-9]*")) or [case]
 
     def fields(folder: Path) -> set[str]:
         return {p.name.removesuffix(".gz") for p in folder.iterdir() if p.is_file()}
 
-    initial = root / "0"
+    initial = roots[0] / "0"
     needed = fields(initial) if initial.is_dir() else set()
     if not needed:
         return None
-    folders = sorted((p for p in root.iterdir() if p.is_dir() and is_time_folder(p.name)),
-                     key=lambda p: float(p.name), reverse=True)
-    return next((p.name for p in folders if needed <= fields(p)), None)
+
+    def whole(root: Path, name: str) -> bool:
+        folder = root / name
+        if not folder.is_dir() or not needed <= fields(folder):
+            return False
+        return name == "0" or all(written_whole(f) for f in folder.rglob("*") if f.is_file())
+
+    names = sorted((p.name for p in roots[0].iterdir() if p.is_dir() and is_time_folder(p.name)),
+                   key=float, reverse=True)
+    return next((name for name in names if all(whole(root, name) for root in roots)), None)
 
 
 def set_start_time(case_dir: str | Path, time_name: str) -> None:
