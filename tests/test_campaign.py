@@ -223,6 +223,20 @@ def test_status_tells_how_far_a_started_run_got(tmp_path):
     assert shares == {SHORT.case_id: pytest.approx(1.3821858 / 3.0)}
 
 
+def test_a_record_half_written_when_its_worker_died_is_cleared_on_the_next_call(tmp_path):
+    """write_record's temporary file, left when the process writing it was killed, is
+    removed when the campaign is run again; finished records stay."""
+    out = tmp_path / "camp"
+    out.mkdir()
+    rec = synthetic_record(SHORT.case_id)
+    write_record(out / f"{SHORT.case_id}.h5", rec)
+    stale = out / f".{OTHER.case_id}.h5.12345.tmp"
+    stale.write_bytes(b"\x89HDF\r\n")
+    (status,) = run_campaign([SHORT], out, CampaignSetup(), progress=False)
+    assert status.message == "already finished"
+    assert not stale.exists() and (out / f"{SHORT.case_id}.h5").exists()
+
+
 def test_status_of_a_folder_that_is_not_a_campaign(tmp_path):
     with pytest.raises(MfflapError, match=r"no campaign\.toml"):
         campaign_status(Path(tmp_path))

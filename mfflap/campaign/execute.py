@@ -325,6 +325,8 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
     _write_manifest(out, cases, setup)
     for stale in (out / "cases").glob("*.writing"):  # a case folder half-written when killed
         shutil.rmtree(stale, ignore_errors=True)
+    for stale in out.glob(f".*{RECORD_SUFFIX}.*.tmp"):  # a record half-written when killed
+        stale.unlink(missing_ok=True)
     results: dict[str, CaseStatus] = {}
     todo = []
     bound = (setup.plate, setup.fluid, setup.stream)
