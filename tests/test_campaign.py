@@ -200,11 +200,12 @@ def test_status_tells_how_far_a_started_run_got(tmp_path):
         f'[setup]\nmesh = "coarse"\n\n[cases.{SHORT.case_id}]\nfrequency = 1.0\n\n'
         f'[cases.{OTHER.case_id}]\nfrequency = 2.0\n')
     case_dir = out / "cases" / SHORT.case_id
+    written = "FoamFile {}\n\n// " + "*" * 73 + " //\n"  # how OpenFOAM ends a file
     for folder in ("0", "0.5", "1.25"):
         (case_dir / folder).mkdir(parents=True)
         if folder != "1.25":  # a folder written in part: not one to resume from
-            (case_dir / folder / "U").write_text("")
-        (case_dir / folder / "p").write_text("")
+            (case_dir / folder / "U").write_text(written)
+        (case_dir / folder / "p").write_text(written)
     (case_dir / "mfflap_case.toml").write_text("end_time = 3.0\n")
     assert campaign_status(out)[0].state == "pending"  # no solver log yet: not begun
     log = (Path(__file__).parent / "data" / "openfoam_v1912" / "collapsed_dt.log").read_text()
