@@ -23,7 +23,10 @@ and their distance from the same set-up with the moving mesh are printed, which 
 formulation alone changes when --far-field inletOutlet is given too. Forces are compared on
 the first cycle after the ramp (0.25-1 s) and on the second cycle
 (1-2 s), de-spiked. CPU is pimpleFoam's own (the last ExecutionTime of its log). A run that
-fails is reported with the reason; the others are still compared.
+fails is reported with the reason; the others are still compared. A run stopped part-way
+(this process killed) resumes from its last time folder written whole when the same command
+runs again in the same --work-dir; the steps it then takes again are left out of its CPU
+(solver_log.redone_work), though its forces carry the restart's round-off.
 
 CPU seconds depend on the machine (the reference took 318-340 s per cycle on earlier machines
 of this kind and 155 s on a later one). Issue 4's 90 s per cycle was set against the set-up
@@ -52,7 +55,8 @@ Run: python benchmarks/cfd_cost.py [setup ...] [--meshes coarse,lean] [--cycles 
      (default: the "affordable" set-up; SETUP@MESH: that set-up's solver settings on a
      named mesh, as `mfflap cfd write --setup SETUP --mesh MESH`; --meshes adds named meshes
      at the reference settings;
-     with --work-dir, runs that finished there before are read, not rerun, and a folder
+     with --work-dir, runs that finished there before are read, not rerun, runs stopped
+     part-way are resumed, and a folder
      whose runs had another motion, cycle count, far field or k-epsilon convection
      (--turbulence-convection) is refused; the mesh study
      of the README: affordable --meshes fine --far-field inletOutlet --cycles 1; the
@@ -163,10 +167,11 @@ def run_setup(job: Job, cycles: float, root: str, pitch_deg: float) -> SetupRun:
     motion = benchmark_motion(pitch_deg)
     case = Path(root) / label
     if not _finished(case):
-        shutil.rmtree(case, ignore_errors=True)  # a half run would time only its last part
         solver = replace(solver, write_interval=0.5)
-        case = write_case(case, motion, end_time=cycles, mesh=mesh, ramp_time=RAMP_S,
-                          solver=solver)
+        if not (case / "mfflap_case.toml").is_file():  # never written whole: start afresh
+            shutil.rmtree(case, ignore_errors=True)
+            case = write_case(case, motion, end_time=cycles, mesh=mesh, ramp_time=RAMP_S,
+                              solver=solver)
         try:
             run_case(case, timeout_s=4 * 3600)
         except MfflapError as err:
@@ -179,11 +184,11 @@ def run_setup(job: Job, cycles: float, root: str, pitch_deg: float) -> SetupRun:
                      source=f"openfoam:{label}", frame=solver.frame)
     series = {k: despike(np.asarray(getattr(loads, k)))[0] for k in COMPONENTS}
     provenance = solver_provenance(case)
-    cpu_s = provenance["cpu_time_s"]
-    per_cell_step_us = cpu_s / (mesh.n_cells * max(provenance["n_time_steps"], 1)) * 1e6
+    cpu_s = provenance["cpu_time_s"] - provenance["cpu_time_redone_s"]
+    n_steps = provenance["n_time_steps"] - provenance["n_time_steps_redone"]
+    per_cell_step_us = cpu_s / (mesh.n_cells * max(n_steps, 1)) * 1e6
     return SetupRun(label, cpu_s / cycles, time_s=np.asarray(history.time), loads=series,
-                    cpu_per_cell_step_us=per_cell_step_us,
-                    steps_per_cycle=provenance["n_time_steps"] / cycles)
+                    cpu_per_cell_step_us=per_cell_step_us, steps_per_cycle=n_steps / cycles)
 
 
 def courant_list(text: str) -> list[float]:

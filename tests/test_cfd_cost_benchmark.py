@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
+import shutil
 import subprocess
 import sys
 import time
@@ -17,7 +18,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from mfflap.cfd.openfoam.runner import run_case
 from mfflap.cfd.openfoam.setups import setup
+from mfflap.cfd.openfoam.writer import write_case
 
 SCRIPT = Path(__file__).resolve().parents[1] / "benchmarks" / "cfd_cost.py"
 
@@ -119,6 +122,49 @@ def test_finished_needs_a_log_that_ends_in_end(bench, tmp_path):
     assert not bench._finished(tmp_path)  # killed mid-run: rerun, not read
     log.write_text("Time = 1\nExecutionTime = 24 s\n\nEnd\n\n")
     assert bench._finished(tmp_path)
+
+
+@pytest.mark.openfoam
+def test_a_run_stopped_part_way_resumes_and_its_redone_steps_are_not_timed(bench, tmp_path):
+    """Real pimpleFoam on a tiny mesh, 0.3 s of the benchmark motion written every 0.05 s:
+    a run stopped at 0.2 s whose last write was lost resumes from 0.15 s when the benchmark
+    runs again; the steps it takes twice count once in its steps per cycle, which then
+    match an uninterrupted run's."""
+    from dataclasses import replace
+
+    from mfflap.cfd.openfoam.solver_log import solver_provenance
+    from mfflap.cfd.openfoam.writer import MeshSpec
+
+    spec = MeshSpec("tiny", n_chord=20, n_edge=4, n_radial=20, radial_expansion=100.0,
+                    radius_chords=8.0)
+    solver = replace(setup("reference").solver, write_interval=0.05)
+    motion, cycles = bench.benchmark_motion(), 0.3
+    for label in ("stopped", "whole"):
+        write_case(tmp_path / label, motion, end_time=cycles, mesh=spec,
+                   ramp_time=bench.RAMP_S, solver=solver)
+    stopped = tmp_path / "stopped"
+    control = stopped / "system" / "controlDict"
+    text = control.read_text()
+    assert "endTime         0.3;" in text
+    control.write_text(text.replace("endTime         0.3;", "endTime         0.2;"))
+    run_case(stopped, timeout_s=300)
+    control.write_text(text)
+    shutil.rmtree(stopped / "0.2")  # the write a kill cut short (latest_solution_time)
+    log = stopped / "log.pimpleFoam"
+    log.write_text(log.read_text().rstrip().removesuffix("End"))  # a killed run's log
+    assert not bench._finished(stopped)
+
+    resumed = bench.run_setup(bench.Job("stopped", spec, solver), cycles, str(tmp_path), 20.0)
+    whole = bench.run_setup(bench.Job("whole", spec, solver), cycles, str(tmp_path), 20.0)
+    assert resumed.ok and whole.ok, (resumed.failure, whole.failure)
+    assert log.read_text().count("Starting time loop") == 2
+    provenance = solver_provenance(stopped)
+    assert provenance["n_time_steps_redone"] > 0
+    assert provenance["n_time_steps"] > whole.steps_per_cycle * cycles + 1
+    assert resumed.steps_per_cycle * cycles == pytest.approx(whole.steps_per_cycle * cycles,
+                                                             abs=1)
+    assert resumed.cpu_per_cycle_s < provenance["cpu_time_s"] / cycles
+    assert resumed.time_s[-1] == pytest.approx(cycles, abs=1e-3)
 
 
 def _script(*args):

@@ -550,6 +550,8 @@ def test_bounding_summary_counts_clipped_solves_and_the_worst_relative_value(tmp
     "bounding epsilon, min: -1e999 max: 1e999", "bounding epsilon, min: -3 max: 0",
     "bounding nut, min: -1 max: 1", "Time = 0.1", "ExecutionTime = . s  ClockTime = 1 s",
     "ExecutionTime = 1.5 s  ClockTime = 2 s", "Create time", "bounding epsilon, min: nan max: 1",
+    "deltaT = 0.1", "Time = 0.05", "Time = 1e999", "ExecutionTime = 1e999 s  ClockTime = 1 s",
+    "ExecutionTime = 0.5 s  ClockTime = 1 s", "deltaT = -1",
 ]) | st.text(max_size=40), max_size=30))
 def test_log_summary_never_fails_on_garbled_lines(tmp_path_factory, lines):
     """A garbled, truncated or diverged log gives counts and finite ratios, never an error."""
@@ -566,6 +568,38 @@ def test_log_summary_never_fails_on_garbled_lines(tmp_path_factory, lines):
         assert math.isfinite(summary[f"worst_bounding_{field}"])
         assert summary[f"worst_bounding_{field}"] <= 0
     assert summary["cpu_time_s"] >= 0 and summary["n_time_steps"] <= len(lines)
+    assert 0 <= summary["n_time_steps_redone"] <= summary["n_time_steps"]
+    assert math.isfinite(summary["cpu_time_redone_s"]) and summary["cpu_time_redone_s"] >= 0
+
+
+def _log_segment(steps: list[tuple[float, float, float | None]]) -> str:
+    """A run's part of a pimpleFoam log: (deltaT, Time, ExecutionTime or None) per step."""
+    lines = ["Create time", "", "Starting time loop", ""]
+    for delta_t, time_s, cpu_s in steps:
+        lines += [f"deltaT = {delta_t:.8g}", f"Time = {time_s:.8g}", "",
+                  "smoothSolver:  Solving for Ux, Initial residual = 1e-3"]
+        if cpu_s is not None:
+            lines += [f"ExecutionTime = {cpu_s:.4g} s  ClockTime = {cpu_s:.0f} s", ""]
+    return "\n".join(lines) + "\n"
+
+
+def test_redone_work_counts_what_later_runs_took_again():
+    """Worked by hand: a run killed at 0.5 s (its last step printed no CPU time) resumed
+    from its write at 0.3 s repeats its steps at 0.4 and 0.5 s (CPU 3 -> 4 s); a third run
+    rewound to 0 repeats everything before it."""
+    from mfflap.cfd.openfoam.solver_log import redone_work
+
+    killed = _log_segment([(0.1, 0.1, 1.0), (0.1, 0.2, 2.0), (0.1, 0.3, 3.0),
+                           (0.1, 0.4, 4.0), (0.1, 0.5, None)])
+    resumed = _log_segment([(0.1, 0.4, 1.5), (0.1, 0.5, 3.0), (0.1, 0.6, 4.5)])
+    assert redone_work(killed) == (0, 0.0)
+    assert redone_work(killed + resumed) == (2, pytest.approx(1.0))
+    rewound = _log_segment([(0.1, 0.1 * k, float(k)) for k in range(1, 11)])
+    assert redone_work(killed + resumed + rewound) == (8, pytest.approx(4.0 + 4.5))
+    # adaptive steps: the resumed run's first step is smaller than the killed run's last
+    varied = _log_segment([(0.07, 0.07, 1.0), (0.09, 0.16, 2.0), (0.11, 0.27, 3.0)])
+    after = _log_segment([(0.05, 0.21, 1.0), (0.06, 0.27, 2.0)])
+    assert redone_work(varied + after) == (1, pytest.approx(1.0))
 
 
 @pytest.mark.openfoam
@@ -921,6 +955,7 @@ def test_a_run_killed_while_writing_resumes_from_the_last_folder_written_whole(t
     points cut short) resumes from the folder before, where pimpleFoam would stop at once on
     the field it cannot read; the merged forces match an uninterrupted run."""
     from mfflap.cfd.openfoam.runner import latest_solution_time
+    from mfflap.cfd.openfoam.solver_log import solver_provenance
     from mfflap.cfd.openfoam.writer import MeshSpec, SolverSettings
 
     spec = MeshSpec("tiny", n_chord=20, n_edge=4, n_radial=20, radial_expansion=100.0,
@@ -937,6 +972,11 @@ def test_a_run_killed_while_writing_resumes_from_the_last_folder_written_whole(t
     run_case(case, timeout_s=300)
     assert "startTime       0.02;" in (case / "system" / "controlDict").read_text()
     assert_forces_match_the_uninterrupted_run(case, whole)
+    # the steps from 0.02 to 0.03 s were taken twice: once more than the uninterrupted run
+    resumed, uninterrupted = solver_provenance(case), solver_provenance(whole)
+    redone = resumed["n_time_steps_redone"]
+    assert redone >= 0.01 / 2e-4 - 1 and resumed["cpu_time_redone_s"] > 0
+    assert abs(resumed["n_time_steps"] - redone - uninterrupted["n_time_steps"]) <= 1
 
 
 def test_latest_solution_time_needs_every_initial_field_written_whole(tmp_path):

@@ -14,13 +14,19 @@ _BOUNDING = re.compile(rf"^bounding (\w+), min: {_NUMBER} max: {_NUMBER}", re.M)
 # the time line alone: tabulatedAccelerationSource also starts lines with "Time = "
 _TIME_STEP = re.compile(rf"^Time = {_NUMBER}\s*$", re.M)
 _EXEC = re.compile(rf"ExecutionTime = {_NUMBER} s\s+ClockTime = {_NUMBER} s")
+# the lines that give a step's size, its time and the CPU time after it, in log order
+_STEP_LINES = re.compile(rf"^deltaT = {_NUMBER}\s*$|^Time = {_NUMBER}\s*$|"
+                         rf"ExecutionTime = {_NUMBER} s", re.M)
 
 
 def solver_provenance(case_dir: str | Path) -> dict[str, Any]:
     """OpenFOAM build, CPU and clock time, time steps and turbulence clipping, from the
     case's pimpleFoam log.
 
-    A restarted run appends to the same log; CPU times of the segments are summed.
+    A restarted run appends to the same log; CPU times and time steps of the segments are
+    summed. A restart resumes from the last written time, so the steps a segment took past
+    it are taken again: ``n_time_steps_redone`` and ``cpu_time_redone_s`` are that repeated
+    work (:func:`redone_work`), which a cost per simulated second leaves out.
     ``n_steps_bounding_<field>`` counts the solves after which OpenFOAM clipped negative
     values of k or epsilon ("bounding epsilon, min: ..."), and ``worst_bounding_<field>`` is
     the most negative value relative to that step's maximum: a health figure of the
@@ -35,8 +41,8 @@ def solver_provenance(case_dir: str | Path) -> dict[str, Any]:
     -------
     dict
         ``solver``, ``openfoam_build``, ``cpu_time_s``, ``clock_time_s``, ``n_time_steps``,
-        ``n_steps_bounding_k``, ``n_steps_bounding_epsilon``, ``worst_bounding_k``,
-        ``worst_bounding_epsilon``.
+        ``n_time_steps_redone``, ``cpu_time_redone_s``, ``n_steps_bounding_k``,
+        ``n_steps_bounding_epsilon``, ``worst_bounding_k``, ``worst_bounding_epsilon``.
     """
     log = Path(case_dir) / "log.pimpleFoam"
     text = log.read_text(errors="replace") if log.exists() else ""
@@ -54,8 +60,65 @@ def solver_provenance(case_dir: str | Path) -> dict[str, Any]:
         "clock_time_s": clock,
         # one "Time = " line per time step (the Courant line also precedes the loop)
         "n_time_steps": len(_TIME_STEP.findall(text)),
+        **dict(zip(("n_time_steps_redone", "cpu_time_redone_s"), redone_work(text),
+                   strict=True)),
         **bounding_summary(text),
     }
+
+
+def _segment_steps(segment: str) -> tuple[list[float], list[float | None], float | None]:
+    """Each step's time and the CPU time after it (None where the log stops before it is
+    printed) in one run's part of a log, and the time that run started from."""
+    times: list[float] = []
+    cpus: list[float | None] = []
+    step = start = None
+    for match in _STEP_LINES.finditer(segment):
+        delta_t, time_s, cpu_s = match.groups()
+        if delta_t is not None:
+            step = float(delta_t)
+        elif time_s is not None:
+            if not times:
+                start = float(time_s) - (step or 0.0)
+            times.append(float(time_s))
+            cpus.append(None)
+        elif cpus:
+            cpus[-1] = float(cpu_s)
+    return times, cpus, start
+
+
+def redone_work(log_text: str) -> tuple[int, float]:
+    """Time steps and CPU time (s) that later runs in the same log took again.
+
+    A run that resumes from time t repeats what the runs before it simulated past t (a run
+    killed between writes resumes from its last write; a retried run may be rewound
+    further). Those earlier steps are redone work: the run's history holds the later ones.
+
+    Parameters
+    ----------
+    log_text
+        A pimpleFoam log that restarted runs appended to (one ``Create time`` each).
+
+    Returns
+    -------
+    tuple
+        The number of redone steps and the CPU time they took, s.
+    """
+    n_redone, cpu_redone = 0, 0.0
+    resumed_from = math.inf  # the earliest start of the runs after this one
+    for segment in reversed(log_text.split("Create time")[1:]):
+        times, cpus, start = _segment_steps(segment)
+        kept = [i for i, t in enumerate(times) if t <= resumed_from]
+        if len(kept) < len(times):
+            ran = [c for c in cpus if c is not None]
+            before = [cpus[i] for i in kept if cpus[i] is not None]
+            n_redone += len(times) - len(kept)
+            redone_s = (ran[-1] if ran else 0.0) - (before[-1] if before else 0.0)
+            cpu_redone += redone_s if math.isfinite(redone_s) and redone_s > 0 else 0.0
+        if start is not None:
+            # half a step of slack: the log prints times to 8 digits
+            first_step = times[0] - start if times else 0.0
+            resumed_from = min(resumed_from, start + 0.5 * first_step)
+    return n_redone, cpu_redone
 
 
 def bounding_summary(log_text: str) -> dict[str, int | float]:
