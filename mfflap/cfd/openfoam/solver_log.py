@@ -53,6 +53,7 @@ def solver_provenance(case_dir: str | Path) -> dict[str, Any]:
         if times:
             cpu += float(times[-1][0])
             clock += float(times[-1][1])
+    n_redone, cpu_redone = redone_work(text)
     return {
         "solver": "OpenFOAM pimpleFoam",
         "openfoam_build": build.group(1).strip() if build else "unknown",
@@ -60,8 +61,8 @@ def solver_provenance(case_dir: str | Path) -> dict[str, Any]:
         "clock_time_s": clock,
         # one "Time = " line per time step (the Courant line also precedes the loop)
         "n_time_steps": len(_TIME_STEP.findall(text)),
-        **dict(zip(("n_time_steps_redone", "cpu_time_redone_s"), redone_work(text),
-                   strict=True)),
+        "n_time_steps_redone": n_redone,
+        "cpu_time_redone_s": cpu_redone,
         **bounding_summary(text),
     }
 
@@ -114,10 +115,8 @@ def redone_work(log_text: str) -> tuple[int, float]:
             n_redone += len(times) - len(kept)
             redone_s = (ran[-1] if ran else 0.0) - (before[-1] if before else 0.0)
             cpu_redone += redone_s if math.isfinite(redone_s) and redone_s > 0 else 0.0
-        if start is not None:
-            # half a step of slack: the log prints times to 8 digits
-            first_step = times[0] - start if times else 0.0
-            resumed_from = min(resumed_from, start + 0.5 * first_step)
+        if start is not None:  # half a step of slack: the log prints times to 8 digits
+            resumed_from = min(resumed_from, start + 0.5 * (times[0] - start))
     return n_redone, cpu_redone
 
 
