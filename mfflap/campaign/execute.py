@@ -265,13 +265,15 @@ def _status_of(future: Any, case_id: str, out: Path) -> CaseStatus:
     the other cases go on. A task the scheduler cancelled (the scheduler lost) stops the
     campaign: rerunning the command resumes it.
     """
+    from distributed import KilledWorker
+
     if future.status == "cancelled":
         raise MfflapError(f"{out}: the dask scheduler dropped case {case_id} (scheduler "
                           "lost?); rerun the same command to resume the campaign")
     exc = future.exception()
     if exc is None:
         return future.result()
-    if type(exc).__name__ == "KilledWorker":  # its text (kept in the log tail) is long
+    if isinstance(exc, KilledWorker):  # its text (kept in the log tail) is long
         retries = getattr(exc, "allowed_failures", None)
         workers = f" on {retries + 1} workers" if isinstance(retries, int) else ""
         error = (f"its dask worker process died under the run{workers} (the out-of-memory "

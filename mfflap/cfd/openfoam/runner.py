@@ -204,7 +204,7 @@ def is_time_folder(name: str) -> bool:
 
 
 #: the line OpenFOAM ends every file it writes with, ASCII or binary
-_END_DIVIDER = re.compile(rb"// \*{20,} //\s*$")
+_END_DIVIDER = re.compile(r"// \*{20,} //\s*$")
 
 
 def written_whole(path: Path) -> bool:
@@ -212,13 +212,11 @@ def written_whole(path: Path) -> bool:
     does (ASCII or binary, compressed or not); a write cut short by a kill does not."""
     if path.name.endswith(".gz"):
         try:
-            tail = gzip.decompress(path.read_bytes())[-200:]
+            tail = gzip.decompress(path.read_bytes())[-200:].decode(errors="replace")
         except (OSError, EOFError, zlib.error):
             return False
     else:
-        with open(path, "rb") as fh:
-            fh.seek(max(path.stat().st_size - 200, 0))
-            tail = fh.read()
+        tail = read_tail(path, 200)
     return _END_DIVIDER.search(tail) is not None
 
 
