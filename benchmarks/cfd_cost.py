@@ -29,26 +29,29 @@ runs again in the same --work-dir; the steps it then takes again are left out of
 (solver_log.redone_work), though its forces carry the restart's round-off.
 
 CPU seconds depend on the machine (the reference took 318-340 s per cycle on earlier machines
-of this kind and 155 s on a later one). Issue 4's 90 s per cycle was set against the set-up
-of shared/design/openfoam.md, which needed about 4.4 min per cycle on that file's machine.
-That set-up (the "openfoam_md" set-up: its H-type mesh, PIMPLE 2x1, PCG, max Co 2) runs here
-too, as the baseline, and every CPU per cycle is printed two more ways: as a ratio to the
-baseline's on the same motion and machine (the target as a ratio: 90 s / 4.4 min = 0.34),
-and at the speed of openfoam.md's machine, scaled by the baseline's CPU per cell and time
-step against that file's (5.63 µs: 4.4 min, 16,442 cells, about 2,850 steps). The two differ
-where the baseline takes another number of steps per cycle here than that file's 2,850: the
-file does not give its motion's pitch, and the H-type mesh's time step is set by how fast it
-turns (--no-baseline skips it). The output ends with a verdict for each named set-up: whether
-its first-cycle F_n and M are within 2 % NRMSE of the medium mesh, and which of those three
-readings of the 90 s it meets. --yardstick-courant X also runs the reference at max Co X and
-measures every NRMSE against that run instead (the medium mesh at max Co 4 is not converged in
-time on every motion). --yardstick-courant 4,1,2 (several max Co, 4 being the reference's own)
-measures every NRMSE against the mean of the medium mesh's runs at those max Co, and prints
-each of those runs' distance from that mean: the medium mesh's own time-step band. The
-verdict then also says whether a set-up is inside that band (no further from the mean than
-the furthest of the medium mesh's runs), the reading of a validation standard such as ASME
-V&V 20, where a difference below the yardstick's own numerical uncertainty cannot be told
-apart from none.
+of this kind and 155 s on a later one). Issue 4's 90 s per cycle was set against the set-up of
+shared/design/openfoam.md, which needed about 4.4 min per cycle on that file's machine. That
+set-up (the "openfoam_md" set-up: its H-type mesh, PIMPLE 2x1, PCG, max Co 2) runs here too, as
+the baseline, and every CPU per cycle is printed two more ways: as a ratio to the baseline's on
+the same motion and machine (the target as a ratio: 90 s / 4.4 min = 0.34), and at the speed of
+openfoam.md's machine, scaled by the baseline's CPU per cell and time step against that file's
+(5.63 µs: 4.4 min, 16,442 cells, about 2,850 steps). The two differ where the baseline takes
+another number of steps per cycle here than that file's 2,850: the file does not give its
+motion's pitch, and the H-type mesh's time step is set by how fast it turns (--no-baseline
+skips it). The output ends with a verdict for each named set-up: whether its first-cycle F_n
+and M are within 2 % NRMSE of the medium mesh, whether its run with the other pressure solver
+is too (a pass that turns on round-off is not a robust one), and which of those three readings
+of the 90 s it meets. --yardstick-courant X also runs the reference at max Co X and measures
+every NRMSE against that run instead (the medium mesh at max Co 4 is not converged in time on
+every motion). --yardstick-courant 4,1,2 (several max Co, 4 being the reference's own) measures
+every NRMSE against the mean of the medium mesh's runs at those max Co, and prints each of
+those runs' distance from that mean: the medium mesh's own time-step band. The verdict then
+also says whether a set-up is inside that band (no further from the mean than the furthest of
+the medium mesh's runs), the reading of a validation standard such as ASME V&V 20, where a
+difference below the yardstick's own numerical uncertainty cannot be told apart from none.
+--yardstick-floor also reruns each of the yardstick's runs other than the reference with the
+other pressure solver and prints how far it moves: the yardstick's own round-off floor (the
+reference's, reference-PCG, always runs).
 
 Run: python benchmarks/cfd_cost.py [setup ...] [--meshes coarse,lean] [--cycles 2]
                                    [--work-dir DIR]
@@ -191,6 +194,26 @@ def run_setup(job: Job, cycles: float, root: str, pitch_deg: float) -> SetupRun:
                     cpu_per_cell_step_us=per_cell_step_us, steps_per_cycle=n_steps / cycles)
 
 
+def other_solver(job: Job) -> Job:
+    """``job`` with the other pressure solver (PCG for GAMG, GAMG for PCG), labelled so.
+
+    The two runs differ only by the round-off of their linear solves: their NRMSE is the
+    job's round-off (solver) floor.
+    """
+    other = "PCG" if job.solver.pressure_solver == "GAMG" else "GAMG"
+    return job.variant(other, pressure_solver=other)
+
+
+def yardstick_jobs(reference: Job, courants: list[float] | None) -> list[Job]:
+    """The runs of the medium mesh whose mean is the yardstick: the reference at each max Co
+    of --yardstick-courant (labelled ``reference-coX``; the reference itself at its own max
+    Co), or the reference alone."""
+    own = reference.solver.max_courant
+    return [reference if courant == own else reference.variant(f"co{courant:g}",
+                                                                 max_courant=courant)
+            for courant in courants or [own]]
+
+
 def courant_list(text: str) -> list[float]:
     """The max Co values of --yardstick-courant, ``"1"`` or ``"4,1,2"``.
 
@@ -276,17 +299,29 @@ def compare(run: SetupRun, ref: SetupRun, cycles: float) -> str:
 
 
 def verdict(run: SetupRun, yardstick: SetupRun, baseline: SetupRun | None,
-            speed_factor: float, cycles: float, band: tuple[float, float] | None = None) -> str:
+            speed_factor: float, cycles: float, band: tuple[float, float] | None = None,
+            twin: SetupRun | None = None) -> str:
     """Which readings of issue 4's target ``run`` meets, in its first cycle.
 
     The accuracy half: F_n and M within 2 % NRMSE of the yardstick in cycle 1, and, given the
     ``band`` (the F_n and M NRMSE % of the furthest of the runs the yardstick is the mean of),
-    whether they are inside it. The cost half three ways: CPU per cycle on this machine, as a
-    ratio to openfoam.md's set-up on the same motion and machine, and at openfoam.md's speed
-    (``speed_factor`` x CPU here).
+    whether they are inside it. Given the ``twin`` (the same set-up with the other pressure
+    solver), the same for it, and whether the two verdicts differ: a pass that turns on the
+    round-off of the linear solves is not a robust one. The cost half three ways: CPU per
+    cycle on this machine, as a ratio to openfoam.md's set-up on the same motion and
+    machine, and at openfoam.md's speed (``speed_factor`` x CPU here).
     """
     first = nrmse_percent(run, yardstick, cycles)["cycle 1"]
     accurate = max(first[:2]) <= TARGET_NRMSE_PERCENT
+    with_twin = ""
+    if twin is not None and twin.ok:
+        other = nrmse_percent(twin, yardstick, cycles)["cycle 1"]
+        twin_accurate = max(other[:2]) <= TARGET_NRMSE_PERCENT
+        with_twin = (f"; with the other pressure solver "
+                     f"{'within' if twin_accurate else 'not within'} "
+                     f"(F_n {other[0]:.2f} %, M {other[1]:.2f} %)")
+        if twin_accurate != accurate:
+            with_twin += ": the verdict turns on round-off"
     cpu = run.cpu_per_cycle_s
     readings = {"this machine's seconds": cpu <= TARGET_CPU_PER_CYCLE_S}
     if baseline is not None and baseline.ok:
@@ -299,7 +334,8 @@ def verdict(run: SetupRun, yardstick: SetupRun, baseline: SetupRun | None,
         inside = (f"; {'inside' if within_band else 'outside'} the medium mesh's time-step band "
                   f"(F_n {band[0]:.2f} %, M {band[1]:.2f} %)")
     return (f"{'within' if accurate else 'not within'} {TARGET_NRMSE_PERCENT:g} % "
-            f"(F_n {first[0]:.2f} %, M {first[1]:.2f} %){inside}; cost met by {costs}")
+            f"(F_n {first[0]:.2f} %, M {first[1]:.2f} %){with_twin}{inside}; cost met by "
+            f"{costs}")
 
 
 def main() -> None:
@@ -338,6 +374,10 @@ def main() -> None:
                         "is not converged in time on every motion); several, comma "
                         "separated (4: the reference itself): against the mean of those "
                         "runs, with their own distance from it (the time-step band)")
+    parser.add_argument("--yardstick-floor", action="store_true",
+                        help="also rerun each of the yardstick's runs other than the reference "
+                        "with the other pressure solver and print how far it moves: the "
+                        "yardstick's own round-off floor (the reference's is always run)")
     parser.add_argument("--workers", type=int, default=2,
                         help="runs at a time (one core each; default 2, this machine's cores)")
     parser.add_argument("--work-dir", default=None,
@@ -365,13 +405,15 @@ def main() -> None:
     jobs = [reference, reference.variant("PCG", pressure_solver="PCG")]
     if not args.no_time_step_floor:
         jobs.append(reference.variant("co3", max_courant=3.0))
-    members = []  # the runs of the medium mesh whose mean is the yardstick
-    for courant in args.yardstick_courant or [reference.solver.max_courant]:
-        member = reference if courant == reference.solver.max_courant else reference.variant(
-            f"co{courant:g}", max_courant=courant)
+    members, yardstick_floors = [], {}  # the yardstick's runs; their reruns by label
+    for member in yardstick_jobs(reference, args.yardstick_courant):
         members.append(member.label)
         if member.label not in {j.label for j in jobs}:  # the reference or its max Co 3 run
             jobs.append(member)
+        if args.yardstick_floor and member.label != reference.label:  # reference-PCG runs
+            floor = other_solver(member)
+            yardstick_floors[member.label] = floor.label
+            jobs.append(floor)
     if not args.no_baseline:
         base_setup = setup(BASELINE)
         jobs.append(Job(BASELINE, base_setup.mesh, base_setup.solver))
@@ -386,8 +428,7 @@ def main() -> None:
         named.append(job.label)
         jobs.append(job)
         if not args.no_solver_floor:
-            other = "PCG" if job.solver.pressure_solver == "GAMG" else "GAMG"
-            floor = job.variant(other, pressure_solver=other)
+            floor = other_solver(job)
             floors[job.label] = floor.label
             jobs.append(floor)
     specs = mesh_specs()
@@ -445,6 +486,10 @@ def main() -> None:
         if rerun in results and results[rerun].ok:
             print(f"{rerun} against reference ({meaning}): "
                   f"{compare(results[rerun], base, cycles)}")
+    for member, rerun in yardstick_floors.items():
+        if results[rerun].ok:
+            print(f"round-off floor of the yardstick's {member} ({rerun} against {member}): "
+                  f"{compare(results[rerun], results[member], cycles)}")
     if band is not None:
         print(f"the medium mesh's time-step band (each run against the {yardstick_label}):")
         for member in members:
@@ -478,8 +523,9 @@ def main() -> None:
           f"({yardstick_label}) in the first cycle:")
     for name in named:
         if results[name].ok:
+            twin = results.get(floors.get(name, ""))
             print(f"  {name}: "
-                  f"{verdict(results[name], yardstick, baseline, scale, cycles, band)}")
+                  f"{verdict(results[name], yardstick, baseline, scale, cycles, band, twin)}")
 
 
 if __name__ == "__main__":

@@ -13,6 +13,7 @@ import subprocess
 import sys
 import time
 from concurrent.futures import ThreadPoolExecutor
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -105,6 +106,49 @@ def test_verdict_reads_the_accuracy_the_band_and_the_three_costs(bench):
     said = bench.verdict(far, ref, None, float("nan"), 2.0, band=(3.0, 2.6))
     assert "inside the medium mesh's time-step band" in said
     assert said.endswith("cost met by this machine's seconds: no")  # no baseline, one reading
+
+
+def test_verdict_with_the_twin_says_when_the_pass_turns_on_round_off(bench):
+    ref = _run(bench, "ref")
+    baseline = _run(bench, "openfoam_md", cpu=300.0)
+    run = _run(bench, "run", offset=0.038, cpu=80.0)  # 1.9 %
+    near_twin = _run(bench, "run-PCG", offset=0.036)  # 1.8 %
+    far_twin = _run(bench, "run-PCG", offset=0.052)  # 2.6 %
+    said = bench.verdict(run, ref, baseline, 1.0, 2.0, twin=near_twin)
+    assert said.startswith("within 2 % (F_n 1.90 %, M 1.90 %); with the other pressure "
+                           "solver within (F_n 1.80 %, M 1.80 %); cost met by")
+    assert "round-off" not in said
+    said = bench.verdict(run, ref, baseline, 1.0, 2.0, twin=far_twin)
+    assert said.startswith("within 2 % (F_n 1.90 %, M 1.90 %); with the other pressure "
+                           "solver not within (F_n 2.60 %, M 2.60 %): the verdict turns on "
+                           "round-off; cost met by")
+    said = bench.verdict(far_twin, ref, baseline, 1.0, 2.0, band=(3.0, 3.0), twin=run)
+    assert said.startswith("not within 2 % (F_n 2.60 %, M 2.60 %); with the other pressure "
+                           "solver within (F_n 1.90 %, M 1.90 %): the verdict turns on "
+                           "round-off; inside the medium mesh's time-step band")
+    failed = bench.SetupRun("run-PCG", None, failure="diverged")
+    assert "pressure solver" not in bench.verdict(run, ref, baseline, 1.0, 2.0, twin=failed)
+
+
+def test_other_solver_swaps_gamg_and_pcg_and_labels_the_rerun(bench):
+    ref = setup("reference")
+    job = bench.Job("reference-co0.25", ref.mesh, replace(ref.solver, pressure_solver="GAMG"))
+    rerun = bench.other_solver(job)
+    assert rerun.label == "reference-co0.25-PCG" and rerun.solver.pressure_solver == "PCG"
+    back = bench.other_solver(rerun)
+    assert back.label == "reference-co0.25-PCG-GAMG" and back.solver.pressure_solver == "GAMG"
+    assert rerun.solver.max_courant == job.solver.max_courant
+
+
+def test_yardstick_jobs_are_the_reference_at_each_max_courant(bench):
+    ref = setup("reference")
+    reference = bench.Job("reference", ref.mesh, ref.solver)
+    own = ref.solver.max_courant
+    assert bench.yardstick_jobs(reference, None) == [reference]
+    jobs = bench.yardstick_jobs(reference, [own, 0.25])
+    assert [j.label for j in jobs] == ["reference", "reference-co0.25"]
+    assert jobs[0] is reference and jobs[1].solver.max_courant == 0.25
+    assert jobs[1].solver.pressure_solver == ref.solver.pressure_solver
 
 
 def test_job_variant_changes_the_solver_and_labels_the_copy(bench):
