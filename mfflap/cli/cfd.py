@@ -188,9 +188,11 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
     """
     from mfflap.cfd.bursts import bridge_load_bursts
     from mfflap.cfd.force_envelope import find_envelope_breaches
+    from mfflap.cfd.openfoam.case_inputs import check_case_inputs
     from mfflap.cfd.openfoam.forces import read_forces
     from mfflap.cfd.openfoam.loads import imposed_state, to_loads
     from mfflap.config import load_case
+    from mfflap.kinematics.table_file import read_motion_table
     from mfflap.metrics import nrmse, pearson, time_mean
     from mfflap.performance import thrust_and_power
     from mfflap.toml_io import read_toml
@@ -214,12 +216,10 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
         history = report_forces(source, fx, fy, mz)
         frame = "inertial"
         label = f"fluent:{source}"
-    if motion_table is None:
-        motion = case.motion.build()
-    else:
-        from mfflap.kinematics.table_file import read_motion_table
-
-        motion = read_motion_table(motion_table)
+        meta = None
+    motion = case.motion.build() if motion_table is None else read_motion_table(motion_table)
+    if meta is not None:  # an OpenFOAM case: the case file must describe what it ran
+        check_case_inputs(source, meta, case_file, motion, case.plate, case.fluid, case.flow)
     state = imposed_state(motion, history.time, ramp_time)
     cfd_loads = to_loads(history, state, case.plate.span, depth, source=label, frame=frame)
     model_loads = case.morison_model().loads(state)

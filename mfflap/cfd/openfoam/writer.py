@@ -25,6 +25,7 @@ import numpy as np
 
 from mfflap.cfd import templates
 from mfflap.cfd.frames import FRAMES, case_displacement, case_rotation_deg
+from mfflap.cfd.openfoam.case_inputs import recorded_inputs
 from mfflap.cfd.openfoam.cell_counts import check_cell_counts
 from mfflap.cfd.openfoam.h_grid import HGridSpec
 from mfflap.cfd.openfoam.loads import imposed_state
@@ -315,6 +316,7 @@ def write_case(case_dir: str | Path, motion: Motion, end_time: float,
     (case_dir / "mfflap_case.toml").write_text(
         f'mesh = "{spec.name}"\nend_time = {end_time!r}\ndepth = {depth!r}\nspan = {plate.span!r}\n'
         f'ramp_time = {ramp_time!r}\nn_cells = {spec.n_cells}\nframe = "{solver.frame}"\n'
+        + recorded_inputs(motion, end_time, ramp_time, plate, fluid, stream)
     )
     return case_dir
 

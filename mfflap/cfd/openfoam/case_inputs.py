@@ -1,0 +1,109 @@
+"""What an OpenFOAM case was written for, kept in its mfflap_case.toml, and the check that a
+case file read beside it describes the same run.
+
+Forces are turned into F_n, F_t and M with the imposed motion, the plate's span and chord and
+the stream (:func:`mfflap.cfd.openfoam.loads.to_loads`). Parsing a case against a case file
+other than the one it was written from (another pitch amplitude, span or stream velocity)
+would give wrong numbers without any sign of it, so :func:`~mfflap.cfd.openfoam.writer.
+write_case` keeps the plate, fluid and stream it wrote the case for and samples of the
+motion it imposed, and :func:`check_case_inputs` compares a case file with them. The
+Morison coefficients are not kept: comparing a run with another identified model is the
+point of parsing it again.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from mfflap.cfd.openfoam.loads import imposed_state
+from mfflap.errors import ConfigError
+from mfflap.kinematics.continuous import Motion
+from mfflap.parameters import Fluid, FreeStream, Plate
+
+#: mfflap_case.toml key -> (case-file key, where the value lives)
+PHYSICAL_KEYS = {
+    "span": ("plate.span", lambda p, f, s: p.span),
+    "plate_chord_m": ("plate.chord", lambda p, f, s: p.chord),
+    "plate_thickness_m": ("plate.thickness", lambda p, f, s: p.thickness),
+    "fluid_density_kg_per_m3": ("fluid.density", lambda p, f, s: f.density),
+    "fluid_kinematic_viscosity_m2_per_s": ("fluid.kinematic_viscosity",
+                                           lambda p, f, s: f.kinematic_viscosity),
+    "flow_velocity_m_per_s": ("flow.velocity", lambda p, f, s: s.velocity),
+}
+#: samples of the imposed motion kept with a case
+N_MOTION_SAMPLES = 64
+#: relative tolerance of the comparisons (the kept values are exact float reprs)
+RELATIVE_TOLERANCE = 1e-6
+
+
+def motion_sample_times(end_time: float) -> np.ndarray:
+    """Times at which a case keeps its imposed motion, s: evenly over (0, ``end_time``]."""
+    return end_time * np.arange(1, N_MOTION_SAMPLES + 1) / N_MOTION_SAMPLES
+
+
+def recorded_inputs(motion: Motion, end_time: float, ramp_time: float, plate: Plate,
+                    fluid: Fluid, stream: FreeStream) -> str:
+    """The lines of mfflap_case.toml that say what the case was written for (``span`` is
+    written with the other case keys)."""
+    lines = [f"{key} = {getter(plate, fluid, stream)!r}"
+             for key, (_, getter) in PHYSICAL_KEYS.items() if key != "span"]
+    t = motion_sample_times(end_time)
+    state = imposed_state(motion, t, ramp_time)
+    for key, values in (("motion_sample_time_s", t),
+                        ("motion_sample_heave_m", state.heave_position),
+                        ("motion_sample_pitch_rad", state.pitch_angle)):
+        lines.append(f"{key} = [{', '.join(repr(float(v)) for v in values)}]")
+    return "\n".join(lines) + "\n"
+
+
+def _close(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    scale = max(float(np.max(np.abs(b), initial=0.0)), 1e-12)
+    return np.abs(a - b) <= RELATIVE_TOLERANCE * scale
+
+
+def check_case_inputs(case_dir: str | Path, meta: dict[str, Any], case_file: str | Path,
+                      motion: Motion, plate: Plate, fluid: Fluid, stream: FreeStream) -> None:
+    """Raise unless ``case_file``'s plate, fluid, stream and motion are those ``case_dir`` was
+    written for.
+
+    Parameters
+    ----------
+    meta
+        The case's mfflap_case.toml. Keys it lacks (a case written by an earlier mfflap) are
+        not checked.
+    case_file
+        Where ``motion``, ``plate``, ``fluid`` and ``stream`` came from, for the message.
+
+    Raises
+    ------
+    ConfigError
+        Naming the case file's key, its value and the one the case was written for.
+    """
+    kept = Path(case_dir) / "mfflap_case.toml"
+    advice = "parse the case with the case file it was written from"
+    for key, (case_key, getter) in PHYSICAL_KEYS.items():
+        if key not in meta:
+            continue
+        given, written = float(getter(plate, fluid, stream)), float(meta[key])
+        if not _close(np.array([given]), np.array([written]))[0]:
+            raise ConfigError(f"{given!r} in the case file, but {case_dir} was written for "
+                              f"{written!r} ({kept}); {advice}", source=str(case_file),
+                              key=case_key)
+    if "motion_sample_time_s" not in meta:
+        return
+    t = np.asarray(meta["motion_sample_time_s"], dtype=float)
+    state = imposed_state(motion, t, float(meta.get("ramp_time", 0.0)))
+    for name, unit, given, key in (
+            ("heave", "m", state.heave_position, "motion_sample_heave_m"),
+            ("pitch", "rad", state.pitch_angle, "motion_sample_pitch_rad")):
+        written = np.asarray(meta[key], dtype=float)
+        bad = np.flatnonzero(~_close(given, written))
+        if bad.size:
+            i = int(bad[0])
+            raise ConfigError(f"not the motion {case_dir} imposes: at t = {t[i]:.6g} s its "
+                              f"{name} is {given[i]:.6g} {unit}, the case's "
+                              f"{written[i]:.6g} {unit} ({kept}, {key}); {advice}",
+                              source=str(case_file), key="motion")

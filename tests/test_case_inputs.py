@@ -1,0 +1,116 @@
+"""A case keeps what it was written for; parsing it against another case file is an error."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from mfflap.cfd.openfoam.case_inputs import check_case_inputs, motion_sample_times
+from mfflap.cfd.openfoam.loads import imposed_state
+from mfflap.cfd.openfoam.writer import SolverSettings, write_case
+from mfflap.cli.main import cli
+from mfflap.config import load_case
+from mfflap.errors import ConfigError
+from mfflap.kinematics import HarmonicMotion
+from mfflap.toml_io import read_toml
+
+CASE = Path(__file__).resolve().parents[1] / "cases" / "paper2026.toml"
+DATA = Path(__file__).parent / "data" / "openfoam_v1912"
+
+
+@pytest.fixture(scope="module")
+def config():
+    return load_case(CASE)
+
+
+def _write(folder: Path, config, motion, frame="inertial") -> dict:
+    solver = SolverSettings(frame=frame, far_field="inletOutlet")
+    write_case(folder, motion, 0.4, plate=config.plate, fluid=config.fluid,
+               stream=config.flow, ramp_time=0.1, solver=solver)
+    return read_toml(folder / "mfflap_case.toml")
+
+
+@pytest.mark.parametrize("frame", ["inertial", "plate"])
+def test_a_case_keeps_its_physics_and_samples_of_the_motion_it_imposes(tmp_path, config,
+                                                                        frame):
+    motion = config.motion.build()
+    meta = _write(tmp_path / "case", config, motion, frame)
+    assert meta["plate_chord_m"] == config.plate.chord
+    assert meta["flow_velocity_m_per_s"] == config.flow.velocity
+    assert meta["fluid_density_kg_per_m3"] == config.fluid.density
+    t = np.asarray(meta["motion_sample_time_s"])
+    np.testing.assert_array_equal(t, motion_sample_times(0.4))
+    state = imposed_state(motion, t, 0.1)  # the ramp is in the samples
+    np.testing.assert_array_equal(meta["motion_sample_heave_m"], state.heave_position)
+    np.testing.assert_array_equal(meta["motion_sample_pitch_rad"], state.pitch_angle)
+    unramped = imposed_state(motion, t[:1], 0.0).pitch_angle[0]
+    assert abs(meta["motion_sample_pitch_rad"][0]) < 0.1 * abs(unramped)
+    check_case_inputs(tmp_path / "case", meta, CASE, motion, config.plate, config.fluid,
+                      config.flow)  # the case file it was written from passes
+
+
+def test_another_motion_plate_fluid_or_stream_is_named(tmp_path, config):
+    motion = config.motion.build()
+    meta = _write(tmp_path / "case", config, motion)
+    args = (config.plate, config.fluid, config.flow)
+    other = HarmonicMotion(motion.frequency, motion.heave_amplitude,
+                           motion.pitch_amplitude * 1.001, motion.phase)
+    with pytest.raises(ConfigError, match=r"paper2026.toml: motion: not the motion .*case "
+                                          r"imposes: at t = \S+ s its pitch is") as err:
+        check_case_inputs(tmp_path / "case", meta, CASE, other, *args)
+    assert "mfflap_case.toml, motion_sample_pitch_rad" in str(err.value)
+    later = HarmonicMotion(motion.frequency * 1.01, motion.heave_amplitude,
+                           motion.pitch_amplitude, motion.phase)
+    with pytest.raises(ConfigError, match="its heave is"):
+        check_case_inputs(tmp_path / "case", meta, CASE, later, *args)
+    with pytest.raises(ConfigError, match=r"plate.span: 0.2 in the case file, but .* was "
+                                          r"written for 0.18"):
+        check_case_inputs(tmp_path / "case", meta, CASE, motion,
+                          replace(config.plate, span=0.2), config.fluid, config.flow)
+    with pytest.raises(ConfigError, match=r"flow\.velocity: 0\.35 in the case file"):
+        check_case_inputs(tmp_path / "case", meta, CASE, motion, config.plate,
+                          config.fluid, replace(config.flow, velocity=0.35))
+    with pytest.raises(ConfigError, match=r"fluid\.density"):
+        check_case_inputs(tmp_path / "case", meta, CASE, motion, config.plate,
+                          replace(config.fluid, density=998.0), config.flow)
+
+
+def test_a_case_of_an_earlier_mfflap_is_checked_only_for_what_it_kept(tmp_path, config):
+    motion = config.motion.build()
+    meta = _write(tmp_path / "case", config, motion)
+    old = {k: meta[k] for k in ("mesh", "end_time", "depth", "span", "ramp_time", "n_cells")}
+    other = HarmonicMotion(motion.frequency, motion.heave_amplitude, 0.5, motion.phase)
+    check_case_inputs(tmp_path / "case", old, CASE, other, config.plate, config.fluid,
+                      config.flow)
+    with pytest.raises(ConfigError, match=r"plate\.span"):  # span was always kept
+        check_case_inputs(tmp_path / "case", old, CASE, motion,
+                          replace(config.plate, span=0.3), config.fluid, config.flow)
+
+
+def test_cli_parse_refuses_a_case_file_the_case_was_not_written_from(tmp_path):
+    runner = CliRunner()
+    case_dir = tmp_path / "of"
+    res = runner.invoke(cli, ["cfd", "write", str(CASE), str(case_dir), "--cycles", "0.05"])
+    assert res.exit_code == 0, res.output
+    forces = case_dir / "postProcessing" / "forces" / "0"
+    forces.mkdir(parents=True)
+    for name in ("force.dat", "moment.dat"):  # real v1912 output
+        shutil.copy(DATA / name, forces / name)
+    res = runner.invoke(cli, ["cfd", "parse", str(case_dir), "--case-file", str(CASE),
+                              "--json"])
+    assert res.exit_code == 0, res.output
+    assert json.loads(res.output)["dialect"] == "v1912"
+    text = CASE.read_text()
+    assert "\npitch_amplitude_deg = 20.0\n" in text
+    other = tmp_path / "other.toml"
+    other.write_text(text.replace("\npitch_amplitude_deg = 20.0\n",
+                                  "\npitch_amplitude_deg = 25.0\n"))
+    res = runner.invoke(cli, ["cfd", "parse", str(case_dir), "--case-file", str(other)])
+    assert res.exit_code == 2
+    assert "other.toml: motion: not the motion" in res.output
