@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import click
@@ -164,15 +165,19 @@ def run(case_dir: Path, timeout: float, as_json: bool) -> None:
               help="Fluent: report column of the z moment about the origin.")
 @click.option("--depth", default=1.0, show_default=True,
               help="Fluent: depth the 2D forces are given for, m (Fluent 2D: 1 m).")
-@click.option("--ramp-time", default=0.0, show_default=True,
-              help="Fluent: start-up ramp of the UDF, s.")
+@click.option("--ramp-time", type=float, default=None,
+              help="Fluent: start-up ramp of the UDF, s; default: the one of the "
+                   "mfflap_fluent.toml beside the report file (`cfd fluent` writes it), "
+                   "else 0.")
 @click.option("--thin-aerofoil", is_flag=True,
               help="Also compare F_n, M and the mean input power with linear unsteady "
                    "thin-aerofoil theory (Theodorsen/Wagner): the yardstick for small "
                    "motions (effective incidence of a few degrees, printed).")
 @click.option("--motion-table", type=click.Path(dir_okay=False, exists=True, path_type=Path),
-              default=None, help="Fluent: the CSV motion table the UDF was written from "
-                                 "(an OpenFOAM case written from one keeps it).")
+              default=None, help="Fluent: the CSV motion table the UDF was written from, "
+                                 "for a report file without the mfflap_fluent.toml of "
+                                 "`cfd fluent` beside it (that and an OpenFOAM case written "
+                                 "from a table keep it).")
 @click.option("--json", "as_json", is_flag=True, help="Print results as JSON.")
 def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: str,
           depth: float, ramp_time: float, thin_aerofoil: bool, motion_table: Path | None,
@@ -187,8 +192,9 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
     bridged); means are time averages over the solver's steps.
     """
     from mfflap.cfd.bursts import bridge_load_bursts
+    from mfflap.cfd.case_inputs import check_case_inputs
+    from mfflap.cfd.fluent.udf import FLUENT_KEPT_FILE
     from mfflap.cfd.force_envelope import find_envelope_breaches
-    from mfflap.cfd.openfoam.case_inputs import check_case_inputs
     from mfflap.cfd.openfoam.forces import read_forces
     from mfflap.cfd.openfoam.loads import imposed_state, to_loads
     from mfflap.config import load_case
@@ -199,15 +205,10 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
 
     case = load_case(case_file)
     if source.is_dir():
-        meta = read_toml(source / "mfflap_case.toml")
-        if "motion_table" in meta:
-            if motion_table is not None:
-                raise click.UsageError(f"{source} keeps its own motion table "
-                                       f"({meta['motion_table']}); leave out --motion-table")
-            motion_table = source / str(meta["motion_table"])
+        kept = source / "mfflap_case.toml"
+        meta = read_toml(kept)
         history = read_forces(source)
         depth = float(meta["depth"])
-        ramp_time = float(meta.get("ramp_time", 0))
         frame = str(meta.get("frame", "inertial"))
         label = f"openfoam:{source}"
     else:
@@ -216,10 +217,25 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
         history = report_forces(source, fx, fy, mz)
         frame = "inertial"
         label = f"fluent:{source}"
-        meta = None
+        kept = source.parent / FLUENT_KEPT_FILE
+        meta = read_toml(kept) if kept.is_file() else None
+    if meta is not None:  # what the case was written for: its table, its ramp
+        if "motion_table" in meta:
+            if motion_table is not None:
+                raise click.UsageError(f"{kept.parent} keeps its own motion table "
+                                       f"({meta['motion_table']}); leave out --motion-table")
+            motion_table = kept.parent / str(meta["motion_table"])
+        kept_ramp_time = float(meta.get("ramp_time", 0.0))
+        if ramp_time is not None and not math.isclose(ramp_time, kept_ramp_time,
+                                                      rel_tol=1e-9, abs_tol=1e-12):
+            raise click.UsageError(f"--ramp-time {ramp_time:g} s, but the case was written "
+                                   f"with a ramp of {kept_ramp_time:g} s ({kept}); leave out "
+                                   "--ramp-time")
+        ramp_time = kept_ramp_time
+    ramp_time = 0.0 if ramp_time is None else ramp_time
     motion = case.motion.build() if motion_table is None else read_motion_table(motion_table)
-    if meta is not None:  # an OpenFOAM case: the case file must describe what it ran
-        check_case_inputs(source, meta, case_file, motion, case.plate, case.fluid, case.flow)
+    if meta is not None:  # the case file must describe what the case was written for
+        check_case_inputs(kept, meta, case_file, motion, case.plate, case.fluid, case.flow)
     state = imposed_state(motion, history.time, ramp_time)
     cfd_loads = to_loads(history, state, case.plate.span, depth, source=label, frame=frame)
     model_loads = case.morison_model().loads(state)
@@ -268,19 +284,25 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
 @click.option("--ramp-time", default=0.0, show_default=True, help="Smooth start-up ramp, s.")
 @click.option("--time-step", default=1e-3, show_default=True, help="Fluent time step, s.")
 @click.option("--table", is_flag=True, help="Table-driven UDF even for a sinusoid.")
-@_motion_table_options("A table-driven UDF.")
+@_motion_table_options("A table-driven UDF; the table is kept beside it.")
 def fluent(case_file: Path, out_dir: Path, cycles: float, ramp_time: float, time_step: float,
            table: bool, motion_table: Path | None, end_time: float | None) -> None:
     """Write a DEFINE_CG_MOTION UDF and a batch journal for the [motion] of CASE_FILE (or a
     --motion-table)."""
-    from mfflap.cfd.fluent.udf import write_fluent_case
+    from mfflap.cfd.fluent.udf import FLUENT_KEPT_FILE, write_fluent_case
+    from mfflap.cfd.openfoam.writer import attach_motion_table
     from mfflap.config import load_case
 
     case = load_case(case_file)
     motion, end_time = _motion_and_end_time(case, motion_table, end_time, cycles)
     write_fluent_case(out_dir, motion, end_time, ramp_time=ramp_time,
-                      time_step=time_step, velocity=case.flow.velocity, table=table)
-    click.echo(f"wrote {out_dir / 'mfflap_motion.c'} and {out_dir / 'mfflap_run.jou'}")
+                      time_step=time_step, velocity=case.flow.velocity, table=table,
+                      plate=case.plate, fluid=case.fluid)
+    if motion_table is not None:
+        attach_motion_table(out_dir, motion_table, kept_file=FLUENT_KEPT_FILE)
+    click.echo(f"wrote {out_dir / 'mfflap_motion.c'}, {out_dir / 'mfflap_run.jou'} and "
+               f"{out_dir / 'mfflap_fluent.toml'} (what the UDF was written for: `cfd parse` "
+               "reads it beside the report file)")
 
 
 @cfd.command()

@@ -10,10 +10,12 @@ import jinja2
 import numpy as np
 
 from mfflap.cfd import templates
+from mfflap.cfd.case_inputs import recorded_inputs
 from mfflap.cfd.frames import case_displacement, case_rotation_deg
 from mfflap.cfd.openfoam.loads import check_ramp_time, imposed_state
 from mfflap.errors import ConfigError, MotionError
 from mfflap.kinematics.continuous import HarmonicMotion, Motion, RampHarmonicMotion
+from mfflap.parameters import Fluid, FreeStream, Plate
 
 
 def template_dir() -> Path:
@@ -115,7 +117,13 @@ def table_udf(motion: Motion, end_time: float, ramp_time: float = 0.0,
         heave_sign=heave_sign, pitch_sign=pitch_sign, description=description)
 
 
-def journal(udf_file: str, report_file: str = "plate-forces.out", case_file: str = "plate.cas.h5",
+#: the report file the journal makes Fluent write, beside the UDF
+REPORT_FILE = "plate-forces.out"
+#: what a UDF was written for, beside it (:mod:`mfflap.cfd.case_inputs`)
+FLUENT_KEPT_FILE = "mfflap_fluent.toml"
+
+
+def journal(udf_file: str, report_file: str = REPORT_FILE, case_file: str = "plate.cas.h5",
             udf_name: str = "mfflap_motion", time_step: float = 1e-3, n_steps: int = 1000,
             max_iterations: int = 20, velocity: float = 0.3, plate_zone: str = "plate",
             fluid_zone: str = "fluid", journal_name: str = "mfflap_run.jou",
@@ -138,9 +146,17 @@ def journal(udf_file: str, report_file: str = "plate-forces.out", case_file: str
 
 def write_fluent_case(folder: str | Path, motion: Motion, end_time: float, *,
                       ramp_time: float = 0.0, time_step: float = 1e-3, velocity: float = 0.3,
-                      table: bool | None = None, udf_name: str = "mfflap_motion") -> Path:
-    """Write ``mfflap_motion.c`` (analytic for sinusoids, else table-driven) and
-    ``mfflap_run.jou`` into ``folder``."""
+                      table: bool | None = None, udf_name: str = "mfflap_motion",
+                      plate: Plate | None = None, fluid: Fluid | None = None) -> Path:
+    """Write ``mfflap_motion.c`` (analytic for sinusoids, else table-driven),
+    ``mfflap_run.jou`` and ``mfflap_fluent.toml`` into ``folder``.
+
+    mfflap_fluent.toml keeps what the UDF was written for (the start-up ramp, the plate,
+    fluid and stream, samples of the motion: :mod:`mfflap.cfd.case_inputs`), so that the
+    report file the journal writes beside it parses with the same ramp and is checked
+    against the case file it is parsed with.
+    """
+    plate, fluid = plate or Plate(), fluid or Fluid()
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     analytic = isinstance(motion, HarmonicMotion | RampHarmonicMotion) and not table
@@ -151,4 +167,9 @@ def write_fluent_case(folder: str | Path, motion: Motion, end_time: float, *,
     (folder / "mfflap_run.jou").write_text(journal("mfflap_motion.c", time_step=time_step,
                                                    n_steps=n_steps, velocity=velocity,
                                                    udf_name=udf_name))
+    (folder / FLUENT_KEPT_FILE).write_text(
+        f'udf = "mfflap_motion.c"\njournal = "mfflap_run.jou"\n'
+        f'report_file = "{REPORT_FILE}"\nend_time = {end_time!r}\n'
+        f'ramp_time = {ramp_time!r}\ntime_step = {time_step!r}\nspan = {plate.span!r}\n'
+        + recorded_inputs(motion, end_time, ramp_time, plate, fluid, FreeStream(velocity)))
     return folder

@@ -24,8 +24,8 @@ import jinja2
 import numpy as np
 
 from mfflap.cfd import templates
+from mfflap.cfd.case_inputs import recorded_inputs
 from mfflap.cfd.frames import FRAMES, case_displacement, case_rotation_deg
-from mfflap.cfd.openfoam.case_inputs import recorded_inputs
 from mfflap.cfd.openfoam.cell_counts import check_cell_counts
 from mfflap.cfd.openfoam.h_grid import HGridSpec
 from mfflap.cfd.openfoam.loads import imposed_state
@@ -326,13 +326,16 @@ def write_case(case_dir: str | Path, motion: Motion, end_time: float,
 MOTION_TABLE_FILE = "mfflap_motion.csv"
 
 
-def attach_motion_table(case_dir: str | Path, table_path: str | Path) -> Path:
-    """Keep the user's motion table in a case written from it and name it in the case's
-    mfflap_case.toml, so that parsing the case needs nothing from outside it."""
+def attach_motion_table(case_dir: str | Path, table_path: str | Path,
+                        kept_file: str = "mfflap_case.toml") -> Path:
+    """Keep the user's motion table in a case written from it and name it in the file that
+    says what the case was written for (``kept_file``: an OpenFOAM case's mfflap_case.toml,
+    a Fluent UDF's mfflap_fluent.toml), so that parsing the case needs nothing from outside
+    it."""
     case_dir = Path(case_dir)
     dest = case_dir / MOTION_TABLE_FILE
     shutil.copyfile(table_path, dest)
-    with open(case_dir / "mfflap_case.toml", "a") as fh:
+    with open(case_dir / kept_file, "a") as fh:
         fh.write(f'motion_table = "{MOTION_TABLE_FILE}"\n')
     return dest
 

@@ -1,12 +1,14 @@
-"""What an OpenFOAM case was written for, kept in its mfflap_case.toml, and the check that a
-case file read beside it describes the same run.
+"""What a CFD case was written for, kept beside it (an OpenFOAM case's mfflap_case.toml, a
+Fluent UDF's mfflap_fluent.toml), and the check that a case file read with it describes the
+same run.
 
 Forces are turned into F_n, F_t and M with the imposed motion, the plate's span and chord and
 the stream (:func:`mfflap.cfd.openfoam.loads.to_loads`). Parsing a case against a case file
 other than the one it was written from (another pitch amplitude, span or stream velocity)
 would give wrong numbers without any sign of it, so :func:`~mfflap.cfd.openfoam.writer.
-write_case` keeps the plate, fluid and stream it wrote the case for and samples of the
-motion it imposed, and :func:`check_case_inputs` compares a case file with them. The
+write_case` and :func:`~mfflap.cfd.fluent.udf.write_fluent_case` keep the plate, fluid and
+stream they wrote the case for and samples of the motion it imposes (with its start-up
+ramp), and :func:`check_case_inputs` compares a case file with them. The
 Morison coefficients are not kept: comparing a run with another identified model is the
 point of parsing it again.
 """
@@ -64,16 +66,18 @@ def _close(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.abs(a - b) <= RELATIVE_TOLERANCE * scale
 
 
-def check_case_inputs(case_dir: str | Path, meta: dict[str, Any], case_file: str | Path,
+def check_case_inputs(kept: str | Path, meta: dict[str, Any], case_file: str | Path,
                       motion: Motion, plate: Plate, fluid: Fluid, stream: FreeStream) -> None:
-    """Raise unless ``case_file``'s plate, fluid, stream and motion are those ``case_dir`` was
+    """Raise unless ``case_file``'s plate, fluid, stream and motion are those the case was
     written for.
 
     Parameters
     ----------
+    kept
+        The file that says what the case was written for: an OpenFOAM case's
+        mfflap_case.toml, or the mfflap_fluent.toml beside a Fluent UDF.
     meta
-        The case's mfflap_case.toml. Keys it lacks (a case written by an earlier mfflap) are
-        not checked.
+        Its contents. Keys it lacks (a case written by an earlier mfflap) are not checked.
     case_file
         Where ``motion``, ``plate``, ``fluid`` and ``stream`` came from, for the message.
 
@@ -82,7 +86,8 @@ def check_case_inputs(case_dir: str | Path, meta: dict[str, Any], case_file: str
     ConfigError
         Naming the case file's key, its value and the one the case was written for.
     """
-    kept = Path(case_dir) / "mfflap_case.toml"
+    kept = Path(kept)
+    case_dir = kept.parent
     advice = "parse the case with the case file it was written from"
     for key, (case_key, getter) in PHYSICAL_KEYS.items():
         if key not in meta:
