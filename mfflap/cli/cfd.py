@@ -166,9 +166,10 @@ def run(case_dir: Path, timeout: float, as_json: bool) -> None:
 @click.option("--depth", default=1.0, show_default=True,
               help="Fluent: depth the 2D forces are given for, m (Fluent 2D: 1 m).")
 @click.option("--ramp-time", type=float, default=None,
-              help="Fluent: start-up ramp of the UDF, s; default: the one of the "
-                   "mfflap_fluent.toml beside the report file (`cfd fluent` writes it), "
-                   "else 0.")
+              help="Start-up ramp of the case, s; default: the one it was written with "
+                   "(an OpenFOAM case's mfflap_case.toml, the mfflap_fluent.toml `cfd "
+                   "fluent` writes beside a UDF and its report file), else 0. A value "
+                   "other than the kept one is refused.")
 @click.option("--thin-aerofoil", is_flag=True,
               help="Also compare F_n, M and the mean input power with linear unsteady "
                    "thin-aerofoil theory (Theodorsen/Wagner): the yardstick for small "
@@ -180,7 +181,8 @@ def run(case_dir: Path, timeout: float, as_json: bool) -> None:
                                  "from a table keep it).")
 @click.option("--json", "as_json", is_flag=True, help="Print results as JSON.")
 def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: str,
-          depth: float, ramp_time: float, thin_aerofoil: bool, motion_table: Path | None,
+          depth: float, ramp_time: float | None, thin_aerofoil: bool,
+          motion_table: Path | None,
           as_json: bool) -> None:
     """Parse forces into F_n, F_t, M, thrust and power, compared with the model.
 
