@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 
 import click
@@ -182,8 +181,7 @@ def run(case_dir: Path, timeout: float, as_json: bool) -> None:
 @click.option("--json", "as_json", is_flag=True, help="Print results as JSON.")
 def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: str,
           depth: float, ramp_time: float | None, thin_aerofoil: bool,
-          motion_table: Path | None,
-          as_json: bool) -> None:
+          motion_table: Path | None, as_json: bool) -> None:
     """Parse forces into F_n, F_t, M, thrust and power, compared with the model.
 
     SOURCE is an OpenFOAM case folder written by mfflap, or a Fluent report file (.out) with
@@ -191,82 +189,14 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
     time steps where the solver lost its pressure coupling, mfflap.cfd.bursts) are bridged
     before the comparison and listed, and so are stretches whose forces the motion cannot
     have driven (a run that lost its numerics, mfflap.cfd.force_envelope: listed, not
-    bridged); means are time averages over the solver's steps.
+    bridged); means are time averages over the solver's steps. A case file other than the
+    one the case was written from is refused (mfflap.cfd.model_comparison).
     """
-    from mfflap.cfd.bursts import bridge_load_bursts
-    from mfflap.cfd.case_inputs import check_case_inputs
-    from mfflap.cfd.fluent.udf import FLUENT_KEPT_FILE
-    from mfflap.cfd.force_envelope import find_envelope_breaches
-    from mfflap.cfd.openfoam.forces import read_forces
-    from mfflap.cfd.openfoam.loads import imposed_state, to_loads
-    from mfflap.config import load_case
-    from mfflap.kinematics.table_file import read_motion_table
-    from mfflap.metrics import nrmse, pearson, time_mean
-    from mfflap.performance import thrust_and_power
-    from mfflap.toml_io import read_toml
+    from mfflap.cfd.model_comparison import compare_with_model
 
-    case = load_case(case_file)
-    if source.is_dir():
-        kept = source / "mfflap_case.toml"
-        meta = read_toml(kept)
-        history = read_forces(source)
-        depth = float(meta["depth"])
-        frame = str(meta.get("frame", "inertial"))
-        label = f"openfoam:{source}"
-    else:
-        from mfflap.cfd.fluent.report import report_forces
-
-        history = report_forces(source, fx, fy, mz)
-        frame = "inertial"
-        label = f"fluent:{source}"
-        kept = source.parent / FLUENT_KEPT_FILE
-        meta = read_toml(kept) if kept.is_file() else None
-    if meta is not None:  # what the case was written for: its table, its ramp
-        if "motion_table" in meta:
-            if motion_table is not None:
-                raise click.UsageError(f"{kept.parent} keeps its own motion table "
-                                       f"({meta['motion_table']}); leave out --motion-table")
-            motion_table = kept.parent / str(meta["motion_table"])
-        kept_ramp_time = float(meta.get("ramp_time", 0.0))
-        if ramp_time is not None and not math.isclose(ramp_time, kept_ramp_time,
-                                                      rel_tol=1e-9, abs_tol=1e-12):
-            raise click.UsageError(f"--ramp-time {ramp_time:g} s, but the case was written "
-                                   f"with a ramp of {kept_ramp_time:g} s ({kept}); leave out "
-                                   "--ramp-time")
-        ramp_time = kept_ramp_time
-    ramp_time = 0.0 if ramp_time is None else ramp_time
-    motion = case.motion.build() if motion_table is None else read_motion_table(motion_table)
-    if meta is not None:  # the case file must describe what the case was written for
-        check_case_inputs(kept, meta, case_file, motion, case.plate, case.fluid, case.flow)
-    state = imposed_state(motion, history.time, ramp_time)
-    cfd_loads = to_loads(history, state, case.plate.span, depth, source=label, frame=frame)
-    model_loads = case.morison_model().loads(state)
-    keep = history.time >= discard
-    if keep.sum() < 2:
-        raise click.UsageError(f"--discard {discard} s leaves fewer than two samples")
-    t = history.time[keep]
-    cfd_loads, bursts = bridge_load_bursts(cfd_loads, keep)
-    breaches = find_envelope_breaches(state, cfd_loads, case.plate, case.fluid, case.flow,
-                                      window=keep)
-    thrust, power = thrust_and_power(cfd_loads, state)
-    m_thrust, m_power = thrust_and_power(model_loads, state)
-    thrust, power, m_thrust, m_power = (a[keep] for a in (thrust, power, m_thrust, m_power))
-    out = {"source": str(source), "dialect": history.dialect,
-           "n_samples": len(history.time), "end_time": float(history.time[-1]),
-           "cfd_mean_thrust": time_mean(t, thrust), "model_mean_thrust": time_mean(t, m_thrust),
-           "cfd_mean_power": time_mean(t, power), "model_mean_power": time_mean(t, m_power),
-           "numerical_bursts": [b.describe() for b in bursts],
-           "forces_beyond_what_the_motion_can_drive": [b.describe() for b in breaches]}
-    for name in ("normal_force", "tangential_force", "moment"):
-        a, b = getattr(model_loads, name)[keep], getattr(cfd_loads, name)[keep]
-        out[f"nrmse_{name}"] = float(nrmse(a, b))
-        out[f"pearson_{name}"] = float(pearson(a, b))
-    if thin_aerofoil:
-        from mfflap.cfd.linear_check import compare_with_theory
-
-        out["thin_aerofoil"], _ = compare_with_theory(motion, ramp_time, state,
-                                                      cfd_loads, keep, case.plate, case.fluid,
-                                                      case.flow)
+    out = compare_with_model(source, case_file, discard_s=discard, ramp_time_s=ramp_time,
+                             motion_table=motion_table, fluent_columns=(fx, fy, mz),
+                             fluent_depth_m=depth, thin_aerofoil=thin_aerofoil)
     if as_json:
         click.echo(json.dumps(out, indent=2, default=lambda o: np.asarray(o).tolist()))
     else:
