@@ -61,7 +61,8 @@ def recorded_inputs(motion: Motion, end_time: float, ramp_time: float, plate: Pl
     return "\n".join(lines) + "\n"
 
 
-def _close(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+def _close(a: np.ndarray | float, b: np.ndarray | float) -> np.ndarray:
+    """Where ``a`` equals ``b`` to RELATIVE_TOLERANCE of the largest ``|b|``."""
     scale = max(float(np.max(np.abs(b), initial=0.0)), 1e-12)
     return np.abs(a - b) <= RELATIVE_TOLERANCE * scale
 
@@ -93,7 +94,7 @@ def check_case_inputs(kept: str | Path, meta: dict[str, Any], case_file: str | P
         if key not in meta:
             continue
         given, written = float(getter(plate, fluid, stream)), float(meta[key])
-        if not _close(np.array([given]), np.array([written]))[0]:
+        if not _close(given, written):
             raise ConfigError(f"{given!r} in the case file, but {case_dir} was written for "
                               f"{written!r} ({kept}); {advice}", source=str(case_file),
                               key=case_key)
