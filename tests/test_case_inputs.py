@@ -132,8 +132,9 @@ def _report(path: Path) -> Path:
 
 
 def _parse(*args: str) -> tuple[int, str]:
+    """`cfd parse`'s exit code, and its standard output or, when it fails, its error."""
     res = CliRunner().invoke(cli, ["cfd", "parse", *args])
-    return res.exit_code, res.output
+    return res.exit_code, res.stdout if res.exit_code == 0 else res.output
 
 
 def test_a_fluent_report_beside_its_udf_parses_with_the_udf_s_ramp_and_case(tmp_path):
@@ -149,11 +150,16 @@ def test_a_fluent_report_beside_its_udf_parses_with_the_udf_s_ramp_and_case(tmp_
     alone = _report(tmp_path / "alone.out")  # the same forces, no UDF beside them
     code, kept = _parse(str(beside), "--case-file", str(CASE), "--json")
     assert code == 0, kept
+    res = CliRunner().invoke(cli, ["cfd", "parse", str(alone), "--case-file", str(CASE)])
+    assert res.exit_code == 0 and "warning: nothing beside" in res.stderr
+    assert "were not checked" in res.stderr and "were not checked" not in res.stdout
     code, same = _parse(str(alone), "--case-file", str(CASE), "--json", "--ramp-time", "0.25")
     assert code == 0, same
     code, unramped = _parse(str(alone), "--case-file", str(CASE), "--json")
     assert code == 0, unramped
     kept, same, unramped = (json.loads(o) for o in (kept, same, unramped))
+    assert kept.pop("inputs_checked_against") == str(fl / "mfflap_fluent.toml")
+    assert same.pop("inputs_checked_against") is None
     kept.pop("source"), same.pop("source"), unramped.pop("source")
     assert kept == same  # the kept ramp is the one used
     assert kept["model_mean_power"] != unramped["model_mean_power"]

@@ -276,8 +276,9 @@ def test_cli_writes_fluent_files_and_parses_a_report(tmp_path):
     res = CliRunner().invoke(cli, ["cfd", "parse", str(path), "--case-file", str(case),
                                    "--json"])
     assert res.exit_code == 0, res.output
-    out = json.loads(res.output)
+    out = json.loads(res.stdout)  # the report is not beside the UDF: a warning on stderr
     assert out["dialect"] == "fluent-report" and out["n_samples"] == 100
+    assert out["inputs_checked_against"] is None and "not checked" in res.stderr
 
 
 def test_cli_parse_averages_over_time_and_bridges_a_burst(tmp_path):
@@ -299,7 +300,7 @@ def test_cli_parse_averages_over_time_and_bridges_a_burst(tmp_path):
         res = CliRunner().invoke(cli, ["cfd", "parse", str(path), "--case-file", str(case),
                                        "--json"])
         assert res.exit_code == 0, res.output
-        return json.loads(res.output)
+        return json.loads(res.stdout)
 
     even = np.linspace(0.0, 2.0, 2001)
     # the same history with ten times as many samples in the first half of each cycle

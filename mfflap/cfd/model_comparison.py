@@ -63,8 +63,11 @@ def compare_with_model(source: str | Path, case_file: str | Path, *, discard_s: 
     -------
     dict
         The solver dialect, sample count, means of thrust and power of the CFD and the model,
-        the bursts and the stretches beyond the force envelope, and the NRMSE and Pearson of
-        F_n, F_t and M (model against CFD).
+        the bursts and the stretches beyond the force envelope, the NRMSE and Pearson of
+        F_n, F_t and M (model against CFD), and ``inputs_checked_against``: the file of what
+        the run was written for that the case file was checked against, or None for a Fluent
+        report with no mfflap_fluent.toml beside it, whose motion, ramp, plate and stream
+        are then taken on trust.
 
     Raises
     ------
@@ -124,7 +127,8 @@ def compare_with_model(source: str | Path, case_file: str | Path, *, discard_s: 
         "cfd_mean_thrust": time_mean(t, thrust), "model_mean_thrust": time_mean(t, m_thrust),
         "cfd_mean_power": time_mean(t, power), "model_mean_power": time_mean(t, m_power),
         "numerical_bursts": [b.describe() for b in bursts],
-        "forces_beyond_what_the_motion_can_drive": [b.describe() for b in breaches]}
+        "forces_beyond_what_the_motion_can_drive": [b.describe() for b in breaches],
+        "inputs_checked_against": None if meta is None else str(kept)}
     for name in ("normal_force", "tangential_force", "moment"):
         a, b = getattr(model_loads, name)[keep], getattr(cfd_loads, name)[keep]
         out[f"nrmse_{name}"] = float(nrmse(a, b))

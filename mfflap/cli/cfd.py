@@ -190,13 +190,20 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
     before the comparison and listed, and so are stretches whose forces the motion cannot
     have driven (a run that lost its numerics, mfflap.cfd.force_envelope: listed, not
     bridged); means are time averages over the solver's steps. A case file other than the
-    one the case was written from is refused (mfflap.cfd.model_comparison).
+    one the case was written from is refused (mfflap.cfd.model_comparison); a Fluent report
+    with no mfflap_fluent.toml beside it cannot be checked, and a warning says so.
     """
+    from mfflap.cfd.fluent.udf import FLUENT_KEPT_FILE
     from mfflap.cfd.model_comparison import compare_with_model
 
     out = compare_with_model(source, case_file, discard_s=discard, ramp_time_s=ramp_time,
                              motion_table=motion_table, fluent_columns=(fx, fy, mz),
                              fluent_depth_m=depth, thin_aerofoil=thin_aerofoil)
+    if out["inputs_checked_against"] is None:
+        click.echo(f"warning: nothing beside {source} says what the run was written for, so "
+                   f"{case_file} and the ramp and motion table given were not checked against "
+                   f"it (`mfflap cfd fluent` writes {FLUENT_KEPT_FILE} where the journal "
+                   "makes Fluent write its report)", err=True)
     if as_json:
         click.echo(json.dumps(out, indent=2, default=lambda o: np.asarray(o).tolist()))
     else:
