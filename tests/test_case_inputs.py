@@ -121,14 +121,11 @@ def test_cli_parse_refuses_a_case_file_the_case_was_not_written_from(tmp_path):
 
 def _report(path: Path) -> Path:
     """A Fluent report file of 1 s of smooth forces."""
-    from test_fluent import report_text
+    from test_fluent import write_plate_report
 
     t = np.linspace(0.01, 1.0, 100)
-    rows = np.column_stack([np.arange(100), 40 * np.sin(6 * t), 30 * np.cos(6 * t),
-                            2 * np.sin(6 * t), t])
-    path.write_text(report_text(["Time Step", "fx-plate", "fy-plate", "mz-plate",
-                                 "flow-time"], rows))
-    return path
+    return write_plate_report(path, t, 40 * np.sin(6 * t), 30 * np.cos(6 * t),
+                              2 * np.sin(6 * t))
 
 
 def _parse(*args: str) -> tuple[int, str]:

@@ -161,6 +161,14 @@ def report_text(names, rows):
     return head + "\n".join(" ".join(repr(float(v)) for v in r) for r in rows) + "\n"
 
 
+def write_plate_report(path: Path, t, fx, fy, mz) -> Path:
+    """A Fluent report file of the plate's force and moment columns at flow times t."""
+    rows = np.column_stack([np.arange(len(t)), fx, fy, mz, t])
+    path.write_text(report_text(["Time Step", "fx-plate", "fy-plate", "mz-plate",
+                                 "flow-time"], rows))
+    return path
+
+
 def test_columns_by_name_restart_overlap_and_cut_last_line():
     names = ["flow-time", "mz-plate", "Time Step", "fy-plate", "fx-plate"]
     rows = [[0.1 * i, i, i, 2 * i, 3 * i] for i in range(1, 8)]
@@ -269,10 +277,8 @@ def test_cli_writes_fluent_files_and_parses_a_report(tmp_path):
     assert res.exit_code == 0, res.output
     assert (tmp_path / "fl" / "mfflap_motion.c").exists()
     t = np.linspace(0.01, 1.0, 100)
-    rows = np.column_stack([np.arange(100), np.sin(6 * t), np.cos(6 * t), 0.1 * t, t])
-    path = tmp_path / "plate-forces.out"
-    path.write_text(report_text(["Time Step", "fx-plate", "fy-plate", "mz-plate", "flow-time"],
-                                rows))
+    path = write_plate_report(tmp_path / "plate-forces.out", t, np.sin(6 * t), np.cos(6 * t),
+                              0.1 * t)
     res = CliRunner().invoke(cli, ["cfd", "parse", str(path), "--case-file", str(case),
                                    "--json"])
     assert res.exit_code == 0, res.output
@@ -293,10 +299,7 @@ def test_cli_parse_averages_over_time_and_bridges_a_burst(tmp_path):
                                 2 * np.sin(2 * np.pi * t)])
 
     def parse(t, f, name):
-        rows = np.column_stack([np.arange(len(t)), f, t])
-        path = tmp_path / f"{name}.out"
-        path.write_text(report_text(["Time Step", "fx-plate", "fy-plate", "mz-plate",
-                                     "flow-time"], rows))
+        path = write_plate_report(tmp_path / f"{name}.out", t, *f.T)
         res = CliRunner().invoke(cli, ["cfd", "parse", str(path), "--case-file", str(case),
                                        "--json"])
         assert res.exit_code == 0, res.output

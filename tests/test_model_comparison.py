@@ -15,12 +15,9 @@ CASE = Path(__file__).resolve().parents[1] / "cases" / "paper2026.toml"
 
 
 def _report(path: Path, t: np.ndarray, fx: np.ndarray) -> Path:
-    from test_fluent import report_text
+    from test_fluent import write_plate_report
 
-    rows = np.column_stack([np.arange(len(t)), fx, 0 * t, 0 * t, t])
-    path.write_text(report_text(["Time Step", "fx-plate", "fy-plate", "mz-plate",
-                                 "flow-time"], rows))
-    return path
+    return write_plate_report(path, t, fx, 0 * t, 0 * t)
 
 
 def test_a_constant_stream_wise_force_is_a_constant_thrust_and_its_mean(tmp_path):
