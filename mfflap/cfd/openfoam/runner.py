@@ -13,6 +13,7 @@ import zlib
 from collections.abc import Callable
 from pathlib import Path
 
+from mfflap.cfd.openfoam.release import require_supported_release
 from mfflap.errors import CfdRunError
 
 # Crash and divergence signatures (not the banner's "Floating point exception trapping
@@ -137,11 +138,14 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
     Raises
     ------
     CfdRunError
-        On a non-zero exit, a timeout, NaNs or a floating-point exception in the log, a
+        Before it starts, if the OpenFOAM on PATH is of the openfoam.org line, whose cases
+        differ from the ones mfflap writes (:mod:`mfflap.cfd.openfoam.release`). On a
+        non-zero exit, a timeout, NaNs or a floating-point exception in the log, a
         collapsed time step, or a Courant number above ``max_courant_abort``, with the
         log's tail.
     """
     case_dir = Path(case_dir)
+    require_supported_release(str(case_dir))  # openfoam.com's line, not openfoam.org's
     if not openfoam_available():
         raise CfdRunError("OpenFOAM is not installed (apt-get install openfoam)",
                           case=str(case_dir))
