@@ -122,7 +122,8 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
                     max_courant_abort: float = 100.0, n_procs: int = 1,
                     extra_args: tuple[str, ...] = (), min_time_step: float = 1e-7,
                     poll_s: float = 2.0, watch: Callable[[], str | None] | None = None,
-                    watch_every_s: float = 60.0) -> Path:
+                    watch_every_s: float = 60.0, progress: Callable[[], None] | None = None,
+                    progress_every_s: float = 10.0) -> Path:
     """Run one OpenFOAM application in a case; return the log path.
 
     The log is watched while the solver runs: a time step that collapses below
@@ -130,7 +131,9 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
     stays bounded while dt goes to zero and the run never ends) stops the run at once.
     ``watch``, called every ``watch_every_s`` seconds while it runs, stops it too when it
     returns a reason (e.g. forces beyond what the motion can drive:
-    :func:`mfflap.campaign.openfoam_run.run_motion`).
+    :func:`mfflap.campaign.openfoam_run.run_motion`). ``progress`` is called every
+    ``progress_every_s`` seconds while it runs (e.g.
+    :class:`mfflap.cfd.openfoam.run_progress.RunProgress`).
 
     The log is appended to (a restart's log follows the run it restarts); only what this
     run writes is judged, so an earlier run's divergence in the same log does not fail it.
@@ -155,7 +158,7 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
         command = ["mpirun", "-np", str(n_procs), "--allow-run-as-root", "--oversubscribe",
                    *command, "-parallel"]
     started = time.monotonic()
-    watched = started
+    watched = reported = started
     own_start = log.stat().st_size if log.is_file() else 0  # where this run's lines begin
     with open(log, "a") as fh:
         proc = subprocess.Popen(dies_with_caller(command), stdout=fh, stderr=subprocess.STDOUT,
@@ -178,6 +181,9 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
                         f"{application} diverged: the time step collapsed to "
                         f"{collapsed[0]:.3g} s at t = {collapsed[1]:.6g} s (an instability "
                         "held at the Courant limit)", case=str(case_dir), log_tail=_tail(log))
+                if progress is not None and time.monotonic() - reported >= progress_every_s:
+                    reported = time.monotonic()
+                    progress()
                 if watch is not None and time.monotonic() - watched >= watch_every_s:
                     watched = time.monotonic()
                     reason = watch()
@@ -278,7 +284,8 @@ def set_start_time(case_dir: str | Path, time_name: str) -> None:
 
 def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
              min_time_step: float = 1e-7, watch: Callable[[], str | None] | None = None,
-             watch_every_s: float = 60.0) -> None:
+             watch_every_s: float = 60.0, progress: Callable[[str], None] | None = None,
+             progress_every_s: float = 10.0) -> None:
     """blockMesh (once), checkMesh (once), then pimpleFoam from the latest written time.
 
     The latest written time is the latest folder holding every field
@@ -286,8 +293,12 @@ def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
     there. With ``n_procs`` > 1 the case is decomposed once (``method simple``: scotch and
     metis are stubs in Debian's package) and pimpleFoam runs under mpirun; a restart
     continues from the processor folders' latest time. The forces function object writes
-    from the master.
+    from the master. ``progress``, if given, is told what is being done and, every
+    ``progress_every_s`` seconds while pimpleFoam runs, how far it has got
+    (:class:`mfflap.cfd.openfoam.run_progress.RunProgress`).
     """
+    from mfflap.cfd.openfoam.run_progress import RunProgress
+
     case_dir = Path(case_dir)
     meshed = (case_dir / "constant" / "polyMesh" / "points").exists()
     needed = ("system/controlDict",) if meshed else ("system/controlDict", "system/blockMeshDict")
@@ -296,6 +307,8 @@ def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
         raise CfdRunError(f"not an OpenFOAM case: no {' or '.join(missing)} (write one with "
                           "`mfflap cfd write`)", case=str(case_dir))
     if not meshed:
+        if progress is not None:
+            progress(f"meshing {case_dir} (blockMesh, checkMesh)")
         run_application(case_dir, "blockMesh", timeout_s=300)
         log = run_application(case_dir, "checkMesh", timeout_s=300)
         if "Mesh OK" not in log.read_text():
@@ -309,6 +322,14 @@ def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
         dict_path.write_text(text)
         if not (case_dir / "processor0").exists():
             run_application(case_dir, "decomposePar", timeout_s=300)
-    set_start_time(case_dir, latest_solution_time(case_dir) or "0")
+    start = latest_solution_time(case_dir) or "0"
+    set_start_time(case_dir, start)
+    reporter = None
+    if progress is not None:
+        progress(f"pimpleFoam {'from t = ' + start + ' s' if start != '0' else 'started'}"
+                 f"{f' on {n_procs} processes' if n_procs > 1 else ''}; log: "
+                 f"{case_dir / 'log.pimpleFoam'}")
+        reporter = RunProgress(case_dir, progress)
     run_application(case_dir, "pimpleFoam", timeout_s=timeout_s, n_procs=n_procs,
-                    min_time_step=min_time_step, watch=watch, watch_every_s=watch_every_s)
+                    min_time_step=min_time_step, watch=watch, watch_every_s=watch_every_s,
+                    progress=reporter, progress_every_s=progress_every_s)

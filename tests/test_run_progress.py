@@ -1,0 +1,70 @@
+"""Progress of a running pimpleFoam: the lines `mfflap cfd run` prints while it waits."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from mfflap.cfd.openfoam.run_progress import RunProgress, describe_progress, end_time
+
+DATA = Path(__file__).parent / "data" / "openfoam_v1912"
+CASE = Path(__file__).resolve().parents[1] / "cases" / "paper2026.toml"
+
+
+def test_a_progress_line_gives_the_share_and_the_time_left_at_the_rate_so_far():
+    # 0.25 of 1 s simulated at 0.01 s per second: 0.75 s left takes 75 s
+    line = describe_progress(0.25, 2.5e-4, 1.0, 30.0, 0.01)
+    assert line == ("t = 0.25 s of 1 s (25.0 %), time step 0.00025 s, 30 s elapsed, "
+                    "about 1 min 15 s left")
+    assert describe_progress(0.5, 1e-3, None, 4000.0, 0.01) == \
+        "t = 0.5 s, time step 0.001 s, 1 h 06 min elapsed"  # no end time: no share, no ETA
+    assert "left" not in describe_progress(0.1, 1e-3, 1.0, 1.0, None)
+
+
+def test_run_progress_reads_a_growing_real_log(tmp_path):
+    """Two calls while a real v1912 log grows: the second has a rate, so a time left."""
+    real = (DATA / "log.pimpleFoam.bounding").read_text()  # three time steps
+    (tmp_path / "system").mkdir()
+    (tmp_path / "system" / "controlDict").write_text("startTime 0;\nendTime         0.01;\n")
+    assert end_time(tmp_path) == pytest.approx(0.01)
+    steps = [m.start() for m in re.finditer(r"^Time = ", real, re.M)]
+    log = tmp_path / "log.pimpleFoam"
+    log.write_text(real[:steps[1]])  # one step done
+    clock = iter([0.0, 10.0, 20.0])
+    lines: list[str] = []
+    progress = RunProgress(tmp_path, lines.append, clock=lambda: next(clock))
+    progress()
+    log.write_text(real)  # the run goes on
+    progress()
+    times = [float(re.match(r"t = (\S+) s of 0.01 s", line).group(1)) for line in lines]
+    assert len(lines) == 2 and times[0] < times[1]
+    assert "left" not in lines[0] and "left" in lines[1]
+    rate = (times[1] - times[0]) / 10.0
+    left = (0.01 - times[1]) / rate
+    assert f"about {round(left) // 60} min" in lines[1] or f"about {round(left)} s" in lines[1]
+
+
+def test_no_log_yet_reports_nothing(tmp_path):
+    lines: list[str] = []
+    RunProgress(tmp_path, lines.append)()
+    assert lines == [] and end_time(tmp_path) is None
+
+
+def test_cfd_run_prints_progress_on_stderr_while_openfoam_runs(tmp_path):
+    """A real run of a fifth of a cycle on the coarse mesh: meshing, start and at least one
+    progress line go to stderr; stdout keeps the summary."""
+    from mfflap.cli.main import cli
+
+    case = tmp_path / "case"
+    res = CliRunner().invoke(cli, ["cfd", "write", str(CASE), str(case), "--cycles", "0.2"])
+    assert res.exit_code == 0, res.output
+    res = CliRunner().invoke(cli, ["cfd", "run", str(case), "--progress-every", "0.5"])
+    assert res.exit_code == 0, res.output
+    assert f"[cfd run] meshing {case}" in res.stderr
+    assert "[cfd run] pimpleFoam started; log: " in res.stderr
+    shares = [float(s) for s in re.findall(r"of 0.2 s \((\S+) %\)", res.stderr)]
+    assert shares and shares == sorted(shares) and 0 < shares[-1] <= 100
+    assert "[cfd run]" not in res.stdout and res.stdout.startswith(f"finished {case}")
