@@ -121,9 +121,11 @@ def test_fixture_lookup_by_key_then_by_tolerance_and_missing_is_reported(tmp_pat
 def test_live_backtest_runs_openfoam_and_saves_a_fixture(tmp_path):
     assert openfoam_available()
     fast = harmonic_to_discrete(2.0, 0.1, np.deg2rad(10), np.deg2rad(90), 20)
+    told: list[str] = []
     out = backtest_motion(fast, "fast", MorisonModel(), 50.0, live=True, work_dir=tmp_path,
-                          n_cycles=0.2, save_to=tmp_path / "fx")
+                          n_cycles=0.2, save_to=tmp_path / "fx", progress=told.append)
     assert out.status == "back-tested" and out.source == "live OpenFOAM"
+    assert told[0].startswith("meshing ") and told[1].startswith("pimpleFoam started")
     saved = tmp_path / "fx" / f"backtest_{out.key}.h5"
     assert saved.exists()
     again = backtest_motion(fast, "fast", MorisonModel(), 50.0, fixture_folders=[saved.parent])

@@ -376,6 +376,8 @@ def test_convergence_command_on_three_meshes_and_two_courant_limits(tmp_path):
     data = json.loads(res.output[res.output.index("{"):])
     assert data["reference"] == "fine_co4"
     assert set(data["runs"]) == {"coarse_co4", "medium_co4", "fine_co4", "coarse_co2"}
+    for label in data["runs"]:  # each run's own progress, named (stderr)
+        assert f"{label}: meshing " in res.stderr and f"{label}: pimpleFoam started" in res.stderr
     assert data["runs"]["fine_co4"]["n_cells"] > data["runs"]["coarse_co4"]["n_cells"]
     for key in ("coarse_co4 vs fine_co4", "medium_co4 vs fine_co4", "coarse_co4 vs coarse_co2"):
         assert 0 <= data["nrmse"][key]["normal_force"] < 1.0

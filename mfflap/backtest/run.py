@@ -9,7 +9,7 @@ silently.
 from __future__ import annotations
 
 import hashlib
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -91,7 +91,8 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
                     work_dir: str | Path | None = None, n_cycles: float = 3.0,
                     mesh: str = "coarse", plate=None, fluid=None, stream=None,
                     save_to: str | Path | None = None,
-                    solver: SolverSettings | None = None) -> BacktestOutcome:
+                    solver: SolverSettings | None = None,
+                    progress: Callable[[str], None] | None = None) -> BacktestOutcome:
     """Back-test one periodic motion: run or find its CFD, compare the last cycle.
 
     Parameters
@@ -104,6 +105,8 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
         provenance.
     save_to
         Folder where a live run's record is written as ``backtest_<key>.h5`` (a fixture).
+    progress
+        Told every minute how far a live run's solver has got.
     """
     from mfflap.campaign.openfoam_run import run_motion
     from mfflap.cfd.openfoam.runner import openfoam_available
@@ -129,7 +132,8 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
                     solver, write_interval=n_cycles * period / 4)
                 record = run_motion(Path(work_dir) / name, spline, name, params,
                                     n_cycles * period, mesh=mesh, ramp_time=0.5 * period,
-                                    plate=plate, fluid=fluid, stream=stream, solver=settings)
+                                    plate=plate, fluid=fluid, stream=stream, solver=settings,
+                                    progress=progress)
                 source = "live OpenFOAM"
                 if save_to is not None:
                     write_record(Path(save_to) / f"{name}.h5", record, single_precision=True)

@@ -26,7 +26,8 @@ def backtest_all(config: CaseConfig, motions: dict[str, DiscreteMotion], model, 
             motion, label, model, config.optimisation.max_power,
             fixture_folders=fixture_folders, live=live, work_dir=work_dir, mesh=mesh,
             plate=config.plate, fluid=config.fluid, stream=config.flow, save_to=save_to,
-            solver=solver)
+            solver=solver, progress=None if progress is None else (
+                lambda message, label=label: progress(f"back-test {label}: {message}")))
         if progress is not None:
             o = out[label]
             progress(f"back-test {label}: {o.status} ({o.source})")

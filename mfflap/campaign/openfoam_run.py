@@ -327,7 +327,9 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
                n_procs: int = 1, max_retries: int = 3,
                min_time_step: float = 1e-7,
                force_bound_factor: float = BREACH_FACTOR,
-               bound_watch_every_s: float = 60.0) -> CfdRecord:
+               bound_watch_every_s: float = 60.0,
+               progress: Callable[[str], None] | None = None,
+               progress_every_s: float = 60.0) -> CfdRecord:
     """Write (unless already written), run or resume, and parse one OpenFOAM case.
 
     Fields are written four times per run so that a killed run resumes from its last
@@ -353,6 +355,8 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
     not in mfflap_case.toml. They also count against ``max_retries``, and an earlier call's
     breach against the same-flow-time rule: a run resumed after its process was killed has
     what is left of its budget, unless :func:`request_rerun` gave it a new one.
+    ``progress``, if given, is told every ``progress_every_s`` seconds how far the solver
+    has got (:func:`mfflap.cfd.openfoam.runner.run_case`).
 
     Raises
     ------
@@ -383,7 +387,8 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
         try:
             run_case(case_dir, timeout_s=timeout_s, n_procs=n_procs,
                      min_time_step=min_time_step, watch=watch,
-                     watch_every_s=bound_watch_every_s)
+                     watch_every_s=bound_watch_every_s, progress=progress,
+                     progress_every_s=progress_every_s)
         except CfdRunError as exc:
             if _BOUND_STOP in str(exc) and len(retries) < max_retries:
                 pass  # stopped early by the bound: rewound and retried below

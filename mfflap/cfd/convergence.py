@@ -259,12 +259,14 @@ def run_convergence(out_dir: str | Path, motion: Motion, end_time: float, *,
         else:
             if progress:
                 progress(f"{label}: running OpenFOAM")
+            run_progress = None if progress is None else (
+                lambda message, label=label: progress(f"{label}: {message}"))
             record = run_motion(case_dir, motion, label, {"mesh": mesh_name, "max_courant": co,
                                                           "pressure_solver":
                                                               settings.pressure_solver},
                                 end_time, mesh=mesh, ramp_time=ramp_time, solver=settings,
                                 plate=plate, fluid=fluid, stream=stream, timeout_s=timeout_s,
-                                y_plus=True, n_procs=n_procs)
+                                y_plus=True, n_procs=n_procs, progress=run_progress)
             write_record(path, record)
             if progress:
                 progress(f"{label}: {record.provenance.get('cpu_time_s', 0):.0f} s CPU")
