@@ -68,3 +68,23 @@ def test_cfd_run_prints_progress_on_stderr_while_openfoam_runs(tmp_path):
     shares = [float(s) for s in re.findall(r"of 0.2 s \((\S+) %\)", res.stderr)]
     assert shares and shares == sorted(shares) and 0 < shares[-1] <= 100
     assert "[cfd run]" not in res.stdout and res.stdout.startswith(f"finished {case}")
+
+
+def test_cfd_run_decomposed_on_two_ranks(tmp_path):
+    """`cfd run --procs 2`: decomposed once, run under mpirun, forces from the master."""
+    import json
+
+    from mfflap.cli.main import cli
+
+    case = tmp_path / "case"
+    res = CliRunner().invoke(cli, ["cfd", "write", str(CASE), str(case), "--cycles", "0.03"])
+    assert res.exit_code == 0, res.output
+    res = CliRunner().invoke(cli, ["cfd", "run", str(case), "--procs", "0"])
+    assert res.exit_code == 2 and "--procs" in res.output
+    res = CliRunner().invoke(cli, ["cfd", "run", str(case), "--procs", "2", "--json"])
+    assert res.exit_code == 0, res.output
+    assert "pimpleFoam started on 2 processes" in res.stderr
+    assert (case / "processor0").is_dir() and (case / "processor1").is_dir()
+    assert "nProcs : 2" in (case / "log.pimpleFoam").read_text()
+    summary = json.loads(res.stdout)
+    assert summary["n_procs"] == 2 and summary["n_time_steps"] > 10

@@ -113,12 +113,16 @@ def _motion_and_end_time(case, motion_table: Path | None, end_time: float | None
 @cfd.command()
 @click.argument("case_dir", type=click.Path(file_okay=False, exists=True, path_type=Path))
 @click.option("--timeout", default=3600.0, show_default=True, help="Seconds for pimpleFoam.")
+@click.option("--procs", default=1, show_default=True, type=click.IntRange(min=1),
+              help="MPI ranks: above 1 the case is decomposed once (method simple) and "
+              "pimpleFoam runs under mpirun; a restart resumes from the processor folders.")
 @click.option("--progress-every", default=10.0, show_default=True,
               help="Seconds between progress lines on stderr (simulated time of the end "
               "time, time step, time left); 0: none.")
 @click.option("--json", "as_json", is_flag=True,
               help="Print the run's summary (build, CPU, time steps, clipping) as JSON.")
-def run(case_dir: Path, timeout: float, progress_every: float, as_json: bool) -> None:
+def run(case_dir: Path, timeout: float, procs: int, progress_every: float,
+        as_json: bool) -> None:
     """Mesh (once), check and run CASE_DIR with pimpleFoam; restarts from the latest time.
 
     Prints the CPU time, the number of time steps, how many k and epsilon solves OpenFOAM
@@ -132,8 +136,9 @@ def run(case_dir: Path, timeout: float, progress_every: float, as_json: bool) ->
 
     progress = (None if progress_every <= 0 else
                 lambda message: click.echo(f"[cfd run] {message}", err=True))
-    run_case(case_dir, timeout_s=timeout, progress=progress, progress_every_s=progress_every)
-    summary = {"case": str(case_dir), **solver_provenance(case_dir)}
+    run_case(case_dir, timeout_s=timeout, n_procs=procs, progress=progress,
+             progress_every_s=progress_every)
+    summary = {"case": str(case_dir), "n_procs": procs, **solver_provenance(case_dir)}
     history = read_forces(case_dir)
     signals = [history.force[:, 0], history.force[:, 1]]
     if history.moment is not None:
