@@ -2,6 +2,7 @@
 set-up writes."""
 
 import dataclasses
+import re
 from pathlib import Path
 
 import pytest
@@ -148,3 +149,25 @@ def test_mesh_and_solver_of_a_command():
         mesh_and_solver(setup_name="cheapest")
     with pytest.raises(ConfigError, match="finest"):
         mesh_and_solver(mesh="finest")
+
+
+def test_cfd_write_sets_the_courant_limit_and_the_correctors(tmp_path):
+    """--max-courant, --outer-correctors and --correctors override the set-up's; an
+    impossible value is refused naming it, and no case is left behind."""
+    res = CliRunner().invoke(cli, ["cfd", "write", str(CASE), str(tmp_path / "c"),
+                                   "--setup", "affordable", "--cycles", "0.1",
+                                   "--max-courant", "2.5", "--outer-correctors", "3",
+                                   "--correctors", "2"])
+    assert res.exit_code == 0, res.output
+    case = tmp_path / "c"
+    assert re.search(r"^maxCo\s+2.5;", (case / "system" / "controlDict").read_text(), re.M)
+    solution = (case / "system" / "fvSolution").read_text()
+    assert "nOuterCorrectors 3;" in solution and "nCorrectors     2;" in solution
+    assert "Gauss LUST grad(U)" in (case / "system" / "fvSchemes").read_text()  # the rest kept
+    res = CliRunner().invoke(cli, ["cfd", "write", str(CASE), str(tmp_path / "bad"),
+                                   "--max-courant", "0"])
+    assert res.exit_code == 2 and "max_courant must be > 0" in res.output
+    assert not (tmp_path / "bad").exists()
+    res = CliRunner().invoke(cli, ["cfd", "write", str(CASE), str(tmp_path / "bad"),
+                                   "--correctors", "0"])
+    assert res.exit_code == 2 and "--correctors" in res.output

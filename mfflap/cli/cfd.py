@@ -49,6 +49,13 @@ def cfd() -> None:
 @click.option("--turbulence-convection", type=click.Choice(["limitedLinear", "upwind"]),
               default=None, help="Convection of k and epsilon (upwind: no clipping of "
                                  "negative epsilon); default limitedLinear (or the set-up's).")
+@click.option("--max-courant", type=float, default=None,
+              help="Courant limit of the adaptive time step; default 4 (or the set-up's).")
+@click.option("--outer-correctors", type=click.IntRange(min=1), default=None,
+              help="PIMPLE outer iterations per time step (1: PISO); default 2 (or the "
+              "set-up's).")
+@click.option("--correctors", type=click.IntRange(min=1), default=None,
+              help="Pressure correctors per outer iteration; default 1 (or the set-up's).")
 @click.option("--writes", default=4, show_default=True, type=click.IntRange(min=1),
               help="Times the fields are written over the run; `cfd run` restarts a killed "
                    "run from the last one.")
@@ -61,7 +68,8 @@ def write(case_file: Path, case_dir: Path, mesh: str | None, setup_name: str | N
           cycles: float, ramp_time: float, y_plus: bool, far_field: str | None,
           pressure_solver: str | None, velocity_convection: str | None, writes: int,
           turbulence_convection: str | None, frame: str | None, motion_table: Path | None,
-          end_time: float | None) -> None:
+          end_time: float | None, max_courant: float | None, outer_correctors: int | None,
+          correctors: int | None) -> None:
     """Write an OpenFOAM case for the [motion] of CASE_FILE (or a --motion-table) into
     CASE_DIR."""
     from dataclasses import replace
@@ -79,7 +87,9 @@ def write(case_file: Path, case_dir: Path, mesh: str | None, setup_name: str | N
                                    ("pressure_solver", pressure_solver),
                                    ("velocity_convection", velocity_convection),
                                    ("turbulence_convection", turbulence_convection),
-                                   ("frame", frame))
+                                   ("frame", frame), ("max_courant", max_courant),
+                                   ("n_outer_correctors", outer_correctors),
+                                   ("n_correctors", correctors))
                  if v is not None}
     solver = replace(solver, write_interval=end_time / writes, **overrides)
     write_case(case_dir, motion, end_time, mesh=spec, plate=case.plate,
