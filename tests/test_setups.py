@@ -12,6 +12,7 @@ from mfflap.cfd.openfoam.setups import named_setups, setup
 from mfflap.cfd.openfoam.writer import mesh_specs
 from mfflap.cli.main import cli
 from mfflap.errors import ConfigError
+from mfflap.toml_io import read_toml
 
 CASE = Path(__file__).parents[1] / "cases" / "paper2026.toml"
 
@@ -164,6 +165,9 @@ def test_cfd_write_sets_the_courant_limit_and_the_correctors(tmp_path):
     solution = (case / "system" / "fvSolution").read_text()
     assert "nOuterCorrectors 3;" in solution and "nCorrectors     2;" in solution
     assert "Gauss LUST grad(U)" in (case / "system" / "fvSchemes").read_text()  # the rest kept
+    kept = read_toml(case / "mfflap_case.toml")  # the settings asked for, beside the case
+    assert kept["solver_max_courant"] == 2.5 and kept["solver_n_outer_correctors"] == 3
+    assert kept["solver_velocity_convection"] == "LUST"
     res = CliRunner().invoke(cli, ["cfd", "write", str(CASE), str(tmp_path / "bad"),
                                    "--max-courant", "0"])
     assert res.exit_code == 2 and "max_courant must be > 0" in res.output

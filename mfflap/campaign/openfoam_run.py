@@ -6,7 +6,6 @@ import re
 import shutil
 import time
 from collections.abc import Callable
-from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
@@ -372,9 +371,6 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
         shutil.rmtree(tmp, ignore_errors=True)
         write_case(tmp, motion, end_time, mesh=mesh, plate=plate, fluid=fluid, stream=stream,
                    solver=solver, ramp_time=ramp_time, y_plus=y_plus)
-        with open(tmp / "mfflap_case.toml", "a") as fh:
-            for key, value in asdict(solver).items():
-                fh.write(f"solver_{key} = {value!r}\n")
         shutil.rmtree(case_dir, ignore_errors=True)
         tmp.rename(case_dir)
     started = time.perf_counter()

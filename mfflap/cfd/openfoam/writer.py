@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import math
 import shutil
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import jinja2
@@ -317,6 +317,7 @@ def write_case(case_dir: str | Path, motion: Motion, end_time: float,
         f'mesh = "{spec.name}"\nend_time = {end_time!r}\ndepth = {depth!r}\nspan = {plate.span!r}\n'
         f'ramp_time = {ramp_time!r}\nn_cells = {spec.n_cells}\nframe = "{solver.frame}"\n'
         + recorded_inputs(motion, end_time, ramp_time, plate, fluid, stream)
+        + "".join(f"solver_{key} = {value!r}\n" for key, value in asdict(solver).items())
     )
     return case_dir
 
