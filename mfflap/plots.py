@@ -51,3 +51,45 @@ def cycle_figure(evaluation, period: float, half_cycle: bool, title: str = "") -
         fig.suptitle(title)
     fig.tight_layout()
     return fig
+
+
+def model_comparison_figure(comparison, title: str = "") -> Figure:
+    """A CFD run's F_n, F_t, M, thrust and input power beside the model's over time.
+
+    Parameters
+    ----------
+    comparison
+        A :class:`~mfflap.cfd.model_comparison.ModelComparison`. The discarded start is
+        shaded; the load panels' legends give the NRMSE and Pearson of the compared samples.
+    """
+    cfd, model, summary = comparison.cfd_loads, comparison.model_loads, comparison.summary
+    panels = [
+        ("normal_force", "F_n [N]", cfd.normal_force, model.normal_force),
+        ("tangential_force", "F_t [N]", cfd.tangential_force, model.tangential_force),
+        ("moment", "M about LE [N m]", cfd.moment, model.moment),
+        ("thrust", "thrust [N]", comparison.cfd_thrust_n, comparison.model_thrust_n),
+        ("input_power", "input power [W]", comparison.cfd_power_w, comparison.model_power_w),
+    ]
+    t = np.asarray(cfd.time, dtype=float)
+    compared = np.asarray(comparison.compared, dtype=bool)
+    fig, axes = plt.subplots(len(panels), 1, figsize=(8, 11), sharex=True)
+    for ax, (name, label, cfd_y, model_y) in zip(axes, panels, strict=True):
+        ax.plot(t, np.real(np.asarray(cfd_y)), lw=1.2, label="CFD")
+        ax.plot(t, np.real(np.asarray(model_y)), lw=1.2, ls="--", label="model")
+        if not compared.all():  # the scale of the compared samples, not of the start-up
+            ax.axvspan(t[0], t[compared][0], color="0.85", zorder=0)
+            shown = np.concatenate([np.real(np.asarray(y))[compared] for y in (cfd_y, model_y)])
+            low, high = float(shown.min()), float(shown.max())
+            pad = 0.1 * (high - low) or 0.1 * max(abs(high), 1e-12)
+            ax.set_ylim(low - pad, high + pad)
+        if f"nrmse_{name}" in summary:
+            ax.set_title(f"NRMSE {100 * summary[f'nrmse_{name}']:.1f} %, Pearson "
+                         f"{summary[f'pearson_{name}']:.3f}", fontsize=9, loc="right")
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+    axes[0].legend(loc="upper left", fontsize=8)
+    axes[-1].set_xlabel("t [s] (shaded: discarded start, off the scale of the compared "
+                        "samples)" if not compared.all() else "t [s]")
+    fig.suptitle(title or str(summary.get("source", "")), fontsize=10)
+    fig.tight_layout()
+    return fig

@@ -3,6 +3,7 @@ test_case_inputs.py, test_fluent.py, test_motion_table.py and test_cli_cfd_gradc
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -39,3 +40,83 @@ def test_a_discard_past_the_run_names_the_file_and_its_end(tmp_path):
     with pytest.raises(ConfigError, match=r"discard: --discard 2.0 s leaves fewer than two "
                                           r"samples of .*r\.out \(it ends at t = 1 s\)"):
         compare_with_model(report, CASE, discard_s=2.0)
+
+
+def _beside_its_udf(tmp_path: Path) -> Path:
+    """A Fluent report written where `cfd fluent` put its UDF: its inputs are kept."""
+    from click.testing import CliRunner
+    from test_fluent import write_plate_report
+
+    from mfflap.cli.main import cli
+
+    res = CliRunner().invoke(cli, ["cfd", "fluent", str(CASE), str(tmp_path / "fl"),
+                                   "--cycles", "1", "--ramp-time", "0.25"])
+    assert res.exit_code == 0, res.output
+    t = np.linspace(0.01, 1.0, 300)
+    return write_plate_report(tmp_path / "fl" / "plate-forces.out", t, 40 * np.sin(6 * t),
+                              30 * np.cos(6 * t), 2 * np.sin(6 * t))
+
+
+def test_a_comparison_round_trips_through_hdf5_with_its_inputs(tmp_path):
+    from mfflap.cfd.model_comparison import (
+        model_comparison,
+        read_model_comparison,
+        write_model_comparison,
+    )
+    from mfflap.results import ResultsFile
+
+    report = _beside_its_udf(tmp_path)
+    comparison = model_comparison(report, CASE, discard_s=0.3)
+    path = write_model_comparison(tmp_path / "c.h5", comparison, CASE)
+    back = read_model_comparison(path)
+    assert back.summary == json.loads(json.dumps(comparison.summary))
+    for name in ("cfd_loads", "model_loads"):
+        for key in ("time", "normal_force", "tangential_force", "moment"):
+            np.testing.assert_array_equal(getattr(getattr(back, name), key),
+                                          getattr(getattr(comparison, name), key))
+    for key in ("cfd_thrust_n", "cfd_power_w", "model_thrust_n", "model_power_w", "compared"):
+        np.testing.assert_array_equal(getattr(back, key), getattr(comparison, key))
+    assert back.compared.sum() == (comparison.cfd_loads.time >= 0.3).sum() < 300
+    with ResultsFile(path) as stored:
+        assert stored.config_toml == CASE.read_text()
+        assert stored.units("performance")["cfd_power_w"] == "W"
+        _, attrs = stored.read_group("summary")
+    assert attrs["kept_inputs_toml"] == (report.parent / "mfflap_fluent.toml").read_text()
+
+
+def test_the_figure_draws_both_series_on_the_compared_samples_scale(tmp_path):
+    from mfflap.cfd.model_comparison import model_comparison
+    from mfflap.plots import model_comparison_figure
+
+    comparison = model_comparison(_beside_its_udf(tmp_path), CASE, discard_s=0.3)
+    fig = model_comparison_figure(comparison)
+    axes = fig.axes
+    assert [ax.get_ylabel() for ax in axes] == ["F_n [N]", "F_t [N]", "M about LE [N m]",
+                                                "thrust [N]", "input power [W]"]
+    cfd_line, model_line = axes[0].get_lines()[:2]
+    np.testing.assert_array_equal(cfd_line.get_ydata(), comparison.cfd_loads.normal_force)
+    np.testing.assert_array_equal(model_line.get_ydata(), comparison.model_loads.normal_force)
+    keep = comparison.compared
+    low, high = axes[3].get_ylim()
+    shown = np.concatenate([comparison.cfd_thrust_n[keep], comparison.model_thrust_n[keep]])
+    assert low < shown.min() and shown.max() < high
+    assert high - low <= 1.25 * np.ptp(shown)  # the compared samples fill the panel
+    nrmse = 100 * comparison.summary["nrmse_moment"]
+    assert f"NRMSE {nrmse:.1f} %" in axes[2].get_title(loc="right")
+
+
+def test_cfd_parse_writes_the_figure_and_the_hdf5_file(tmp_path):
+    import matplotlib.image
+    from click.testing import CliRunner
+
+    from mfflap.cfd.model_comparison import read_model_comparison
+    from mfflap.cli.main import cli
+
+    report = _beside_its_udf(tmp_path)
+    png, h5 = tmp_path / "parse.png", tmp_path / "parse.h5"
+    res = CliRunner().invoke(cli, ["cfd", "parse", str(report), "--case-file", str(CASE),
+                                   "--discard", "0.3", "--plot", str(png), "--save", str(h5),
+                                   "--json"])
+    assert res.exit_code == 0, res.output
+    assert matplotlib.image.imread(png).shape[:2] == (1320, 960)
+    assert read_model_comparison(h5).summary == json.loads(res.stdout)

@@ -12,9 +12,13 @@ time averages over the solver's steps.
 
 from __future__ import annotations
 
+import json
 import math
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from mfflap.cfd.bursts import bridge_load_bursts
 from mfflap.cfd.case_inputs import check_case_inputs
@@ -25,6 +29,7 @@ from mfflap.cfd.openfoam.forces import read_forces
 from mfflap.cfd.openfoam.loads import imposed_state, to_loads
 from mfflap.config import load_case
 from mfflap.errors import ConfigError
+from mfflap.hydro.loads import Loads
 from mfflap.kinematics.table_file import read_motion_table
 from mfflap.metrics import nrmse, pearson, time_mean
 from mfflap.performance import thrust_and_power
@@ -34,11 +39,49 @@ from mfflap.toml_io import read_toml
 FLUENT_COLUMNS = ("fx-plate", "fy-plate", "mz-plate")
 
 
+@dataclass
+class ModelComparison:
+    """A CFD run's forces beside the model's over the same imposed motion.
+
+    Attributes
+    ----------
+    summary
+        What :func:`compare_with_model` returns (means, NRMSE, Pearson, bursts, ...).
+    cfd_loads, model_loads
+        F_n, F_t and M at the run's samples (the CFD's with its bursts bridged).
+    cfd_thrust_n, cfd_power_w, model_thrust_n, model_power_w
+        Thrust (N) and input power (W) at the same samples.
+    compared
+        The samples after the discarded start, which the NRMSE, Pearson and means are of.
+    """
+
+    summary: dict[str, Any]
+    cfd_loads: Loads
+    model_loads: Loads
+    cfd_thrust_n: np.ndarray
+    cfd_power_w: np.ndarray
+    model_thrust_n: np.ndarray
+    model_power_w: np.ndarray
+    compared: np.ndarray
+
+
 def compare_with_model(source: str | Path, case_file: str | Path, *, discard_s: float = 0.0,
                        ramp_time_s: float | None = None, motion_table: str | Path | None = None,
                        fluent_columns: tuple[str, str, str] = FLUENT_COLUMNS,
                        fluent_depth_m: float = 1.0, thin_aerofoil: bool = False
                        ) -> dict[str, Any]:
+    """Parse a run's forces and compare them with the case file's model: the summary of
+    :func:`model_comparison` (same parameters)."""
+    return model_comparison(source, case_file, discard_s=discard_s, ramp_time_s=ramp_time_s,
+                            motion_table=motion_table, fluent_columns=fluent_columns,
+                            fluent_depth_m=fluent_depth_m, thin_aerofoil=thin_aerofoil).summary
+
+
+def model_comparison(source: str | Path, case_file: str | Path, *, discard_s: float = 0.0,
+                     ramp_time_s: float | None = None, motion_table: str | Path | None = None,
+                     fluent_columns: tuple[str, str, str] = FLUENT_COLUMNS,
+                     fluent_depth_m: float = 1.0, thin_aerofoil: bool = False
+                     ) -> ModelComparison:
     """Parse a run's forces and compare them with the case file's model.
 
     Parameters
@@ -61,8 +104,9 @@ def compare_with_model(source: str | Path, case_file: str | Path, *, discard_s: 
 
     Returns
     -------
-    dict
-        The solver dialect, sample count, means of thrust and power of the CFD and the model,
+    ModelComparison
+        The time series, and as ``summary``: the solver dialect, sample count, means of
+        thrust and power of the CFD and the model,
         the bursts and the stretches beyond the force envelope, the NRMSE and Pearson of
         F_n, F_t and M (model against CFD), and ``inputs_checked_against``: the file of what
         the run was written for that the case file was checked against, or None for a Fluent
@@ -118,9 +162,8 @@ def compare_with_model(source: str | Path, case_file: str | Path, *, discard_s: 
     cfd_loads, bursts = bridge_load_bursts(cfd_loads, keep)
     breaches = find_envelope_breaches(state, cfd_loads, case.plate, case.fluid, case.flow,
                                       window=keep)
-    thrust, power = thrust_and_power(cfd_loads, state)
-    m_thrust, m_power = thrust_and_power(model_loads, state)
-    thrust, power, m_thrust, m_power = (a[keep] for a in (thrust, power, m_thrust, m_power))
+    series = (*thrust_and_power(cfd_loads, state), *thrust_and_power(model_loads, state))
+    thrust, power, m_thrust, m_power = (np.asarray(a)[keep] for a in series)
     out: dict[str, Any] = {
         "source": str(source), "dialect": history.dialect,
         "n_samples": len(history.time), "end_time": float(history.time[-1]),
@@ -138,4 +181,50 @@ def compare_with_model(source: str | Path, case_file: str | Path, *, discard_s: 
 
         out["thin_aerofoil"], _ = compare_with_theory(motion, ramp_time_s, state, cfd_loads,
                                                       keep, case.plate, case.fluid, case.flow)
-    return out
+    return ModelComparison(out, cfd_loads, model_loads,
+                           *(np.asarray(a, dtype=float) for a in series), compared=keep)
+
+
+_SERIES_UNITS = {"time": "s", "cfd_thrust_n": "N", "cfd_power_w": "W", "model_thrust_n": "N",
+                 "model_power_w": "W", "compared": "1"}
+
+
+def write_model_comparison(path: str | Path, comparison: ModelComparison,
+                           case_file: str | Path) -> Path:
+    """Store a comparison in HDF5 with its inputs beside it.
+
+    The case file's text is the file's input configuration; the summary (as JSON) and the
+    kept file of what the run was written for (its text, if there was one) are attributes
+    of the ``summary`` group; F_n, F_t and M of both are ``cfd_loads`` and ``model_loads``,
+    thrust and power ``performance``.
+    """
+    from mfflap.results import ResultsFile
+
+    summary = comparison.summary
+    kept = summary.get("inputs_checked_against")
+    attrs = {"summary_json": json.dumps(summary, default=lambda o: np.asarray(o).tolist()),
+             "source": str(summary["source"])}
+    if kept:
+        attrs["kept_inputs_toml"] = Path(kept).read_text()
+    with ResultsFile(path, "w", kind="cfd_model_comparison",
+                     config_toml=Path(case_file).read_text()) as out:
+        out.write_loads("cfd_loads", comparison.cfd_loads)
+        out.write_loads("model_loads", comparison.model_loads)
+        series = {"time": comparison.cfd_loads.time, "compared": comparison.compared}
+        series.update({k: getattr(comparison, k) for k in _SERIES_UNITS if k not in series})
+        out.write_group("performance", series, _SERIES_UNITS)
+        out.write_group("summary", {}, {}, attrs)
+    return Path(path)
+
+
+def read_model_comparison(path: str | Path) -> ModelComparison:
+    """A comparison stored by :func:`write_model_comparison`."""
+    from mfflap.results import ResultsFile
+
+    with ResultsFile(path) as stored:
+        series, _ = stored.read_group("performance")
+        _, attrs = stored.read_group("summary")
+        return ModelComparison(json.loads(attrs["summary_json"]), stored.read_loads("cfd_loads"),
+                               stored.read_loads("model_loads"), series["cfd_thrust_n"],
+                               series["cfd_power_w"], series["model_thrust_n"],
+                               series["model_power_w"], series["compared"].astype(bool))

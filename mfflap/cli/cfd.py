@@ -198,10 +198,17 @@ def run(case_dir: Path, timeout: float, procs: int, progress_every: float,
                                  "for a report file without the mfflap_fluent.toml of "
                                  "`cfd fluent` beside it (that and an OpenFOAM case written "
                                  "from a table keep it).")
+@click.option("--plot", "plot_path", type=click.Path(dir_okay=False, path_type=Path),
+              default=None, help="Write a figure of F_n, F_t, M, thrust and power, CFD beside "
+              "the model, over time (.png, .pdf or .svg).")
+@click.option("--save", "save_path", type=click.Path(dir_okay=False, path_type=Path),
+              default=None, help="Write the comparison to HDF5: both time series, the summary, "
+              "the case file and what the run was written for.")
 @click.option("--json", "as_json", is_flag=True, help="Print results as JSON.")
 def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: str,
           depth: float, ramp_time: float | None, thin_aerofoil: bool,
-          motion_table: Path | None, as_json: bool) -> None:
+          motion_table: Path | None, plot_path: Path | None, save_path: Path | None,
+          as_json: bool) -> None:
     """Parse forces into F_n, F_t, M, thrust and power, compared with the model.
 
     SOURCE is an OpenFOAM case folder written by mfflap, or a Fluent report file (.out) with
@@ -214,11 +221,20 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
     with no mfflap_fluent.toml beside it cannot be checked, and a warning says so.
     """
     from mfflap.cfd.fluent.udf import FLUENT_KEPT_FILE
-    from mfflap.cfd.model_comparison import compare_with_model
+    from mfflap.cfd.model_comparison import model_comparison, write_model_comparison
 
-    out = compare_with_model(source, case_file, discard_s=discard, ramp_time_s=ramp_time,
-                             motion_table=motion_table, fluent_columns=(fx, fy, mz),
-                             fluent_depth_m=depth, thin_aerofoil=thin_aerofoil)
+    comparison = model_comparison(source, case_file, discard_s=discard, ramp_time_s=ramp_time,
+                                  motion_table=motion_table, fluent_columns=(fx, fy, mz),
+                                  fluent_depth_m=depth, thin_aerofoil=thin_aerofoil)
+    out = comparison.summary
+    if plot_path is not None:
+        from mfflap.plots import model_comparison_figure
+
+        model_comparison_figure(comparison).savefig(plot_path, dpi=120)
+        click.echo(f"wrote {plot_path}", err=True)
+    if save_path is not None:
+        write_model_comparison(save_path, comparison, case_file)
+        click.echo(f"wrote {save_path}", err=True)
     if out["inputs_checked_against"] is None:
         click.echo(f"warning: nothing beside {source} says what the run was written for, so "
                    f"{case_file} and the ramp and motion table given were not checked against "
