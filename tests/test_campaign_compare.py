@@ -181,7 +181,7 @@ def test_command_writes_hdf5_with_both_manifests_and_a_figure(tmp_path):
                                    "0.5", "--output", str(out), "--figure", str(fig),
                                    "--json"])
     assert res.exit_code == 0, res.output
-    data = json.loads(res.output)
+    data = json.loads(res.stdout)
     assert len(data["cases"]) == 10 and data["only_b"] == [extra.name]
     assert all(c["cpu_ratio"] == pytest.approx(c["cpu_time_a_s"] / c["cpu_time_b_s"])
                for c in data["cases"])
@@ -234,7 +234,7 @@ def test_a_comparison_can_end_before_the_records_do(record):
     res = CliRunner().invoke(cli, ["campaign", "compare", str(COARSE), str(COARSE), "--end",
                                    str(start + period_s), "--json"])
     assert res.exit_code == 0, res.output
-    assert {c["end_s"] for c in json.loads(res.output)["cases"]} == {start + period_s}
+    assert {c["end_s"] for c in json.loads(res.stdout)["cases"]} == {start + period_s}
 
 
 CAMPAIGNS = Path(__file__).parents[1] / "campaigns"

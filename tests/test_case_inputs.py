@@ -108,7 +108,7 @@ def test_cli_parse_refuses_a_case_file_the_case_was_not_written_from(tmp_path):
     res = runner.invoke(cli, ["cfd", "parse", str(case_dir), "--case-file", str(CASE),
                               "--json"])
     assert res.exit_code == 0, res.output
-    assert json.loads(res.output)["dialect"] == "v1912"
+    assert json.loads(res.stdout)["dialect"] == "v1912"
     text = CASE.read_text()
     assert "\npitch_amplitude_deg = 20.0\n" in text
     other = tmp_path / "other.toml"

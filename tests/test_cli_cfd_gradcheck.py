@@ -25,7 +25,7 @@ def test_cfd_write_run_parse_with_real_openfoam(tmp_path, options):
                                                          ).read_text()
     res = runner.invoke(cli, ["cfd", "run", str(case_dir), "--timeout", "300", "--json"])
     assert res.exit_code == 0, res.output
-    health = json.loads(res.output)
+    health = json.loads(res.stdout)
     assert health["openfoam_build"].startswith("OPENFOAM=")
     assert health["n_time_steps"] > 10 and health["cpu_time_s"] > 0
     assert health["n_steps_bounding_epsilon"] <= health["n_time_steps"]
@@ -44,14 +44,14 @@ def test_cfd_write_run_parse_with_real_openfoam(tmp_path, options):
     _inject_burst(case_dir, 0.03)
     res = runner.invoke(cli, ["cfd", "run", str(case_dir), "--json"])
     assert res.exit_code == 0, res.output
-    again = json.loads(res.output)
+    again = json.loads(res.stdout)
     assert again["n_time_steps"] == health["n_time_steps"]
     (burst,) = again["numerical_bursts"]
     assert 0.025 < float(burst.split()[2].split("-")[0]) <= 0.03
     res = runner.invoke(cli, ["cfd", "parse", str(case_dir), "--case-file", str(CASE), "--json",
                                  "--discard", "0.01"])
     assert res.exit_code == 0, res.output
-    out = json.loads(res.output)
+    out = json.loads(res.stdout)
     assert out["dialect"] == "v1912" and out["n_samples"] > 50
     assert len(out["numerical_bursts"]) == 1  # bridged before the comparison
     assert out["forces_beyond_what_the_motion_can_drive"] == []  # the bridged burst is not
@@ -83,7 +83,7 @@ def test_gradcheck_cli(tmp_path):
     res = CliRunner().invoke(cli, ["gradcheck", str(CASE), "--n-steps", "12", "--json",
                                    "--figure", str(fig)])
     assert res.exit_code == 0, res.output
-    out = json.loads(res.output)
+    out = json.loads(res.stdout)
     for beta in ("0.0", "0.5", "1.0"):
         assert out[beta]["max_rel_error_complex_step"] <= 1e-10
         assert out[beta]["max_rel_error_casadi"] <= 1e-10

@@ -163,7 +163,7 @@ def test_cli_evaluate_text_json_and_figure(tmp_path):
     res = runner.invoke(cli, ["evaluate", str(ROOT / "cases" / "paper2026.toml"), "--json",
                               "--figure", str(fig), "--output", str(out)])
     assert res.exit_code == 0, res.output
-    data = json.loads(res.output)
+    data = json.loads(res.stdout)
     assert data["mean_thrust"] > 0 and data["mean_power"] > 0
     assert fig.stat().st_size > 10_000
     with ResultsFile(out) as rf:

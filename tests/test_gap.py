@@ -254,7 +254,7 @@ def test_gap_cli_on_a_record_folder(tmp_path):
     assert held == pytest.approx(chosen["held_coefficients"])
     res = CliRunner().invoke(cli, ["gap", "blindtest", "--trials", "5", "--json"])
     assert res.exit_code == 0, res.output
-    blind = json.loads(res.output)
+    blind = json.loads(res.stdout)
     assert len(blind["confusion"]) == 7 and "coefficient_error" in blind
     again = tmp_path / "again"
     write_record(again / f"{data[0].name}.h5",

@@ -170,7 +170,7 @@ def test_identify_cli_report_and_hdf5_round_trip(tmp_path):
     res = runner.invoke(cli, ["identify", str(case_file), "--fixtures", str(folder),
                               "--output", str(out), "--bootstrap", "50", "--json"])
     assert res.exit_code == 0, res.output
-    summary = json.loads(res.output)
+    summary = json.loads(res.stdout)
     assert set(summary) == {"uniform", "low", "high"}
     assert summary["uniform"]["coefficients"]["normal_drag"] == pytest.approx(2.0, rel=0.02)
     assert "f9p000_h0p100_phi090p0" in summary["low"]["excluded"]

@@ -131,7 +131,7 @@ def test_command_reads_a_finished_campaign(tmp_path, records):
     res = CliRunner().invoke(cli, ["cfd", "linear-check", str(out), "--cases", ",".join(ids),
                                    "--json"])
     assert res.exit_code == 0, res.output
-    checks = json.loads(res.output)["checks"]
+    checks = json.loads(res.stdout)["checks"]
     assert [c["case_id"] for c in checks] == ids
     assert all(c["nrmse_normal_force"] < 0.06 for c in checks)
     with h5py.File(out / "linear_check" / "checks.h5") as h5:
@@ -153,7 +153,7 @@ def test_command_runs_a_small_motion_in_openfoam(tmp_path):
     res = CliRunner().invoke(cli, ["cfd", "linear-check", str(tmp_path), "--cases",
                                    case.case_id, "--velocity-convection", "LUST", "--json"])
     assert res.exit_code == 0, res.output
-    (check,) = json.loads(res.output)["checks"]
+    (check,) = json.loads(res.stdout)["checks"]
     assert check["nrmse_normal_force"] < 0.05 and check["pearson_moment"] > 0.99
     record = read_record(tmp_path / f"{case.case_id}.h5")
     assert record.parameters["kind"] == "harmonic"

@@ -180,7 +180,7 @@ def test_a_table_motion_runs_in_openfoam_and_parses_from_its_own_case(tmp_path):
     res = runner.invoke(cli, ["cfd", "parse", str(case_dir), "--case-file", str(CASE),
                               "--discard", "0.05", "--json"])
     assert res.exit_code == 0, res.output
-    out = json.loads(res.output)
+    out = json.loads(res.stdout)
     assert out["end_time"] == pytest.approx(0.25, abs=1e-3)
     assert out["pearson_normal_force"] > 0.9, out
     res = runner.invoke(cli, ["cfd", "parse", str(case_dir), "--case-file", str(CASE),

@@ -195,7 +195,7 @@ def test_real_openfoam_small_motions_match_linear_theory(tmp_path, motion):
     res = runner.invoke(cli, ["cfd", "parse", str(case_dir), "--case-file", str(case),
                               "--discard", "0.5", "--thin-aerofoil", "--json"])
     assert res.exit_code == 0, res.output
-    out = json.loads(res.output)
+    out = json.loads(res.stdout)
     theory = out["thin_aerofoil"]
     assert theory["max_effective_incidence_deg"] < 10
     for name in ("normal_force", "moment"):
