@@ -103,9 +103,12 @@ def test_restart_continues_from_last_written_time(tmp_path):
     control = case_dir / "system" / "controlDict"
     control.write_text(control.read_text().replace("endTime         0.03;",
                                                    "endTime         0.06;"))
-    rec = run_motion(case_dir, motion, "c", {}, end_time=0.06, ramp_time=0.02)
+    told: list[str] = []
+    rec = run_motion(case_dir, motion, "c", {}, end_time=0.06, ramp_time=0.02,
+                     progress=told.append)
     folders = sorted(p.name for p in (case_dir / "postProcessing" / "forces").iterdir())
     assert len(folders) == 2 and folders[0] == "0"
+    assert told[0] == f"pimpleFoam from t = {folders[1]} s; log: {case_dir / 'log.pimpleFoam'}"
     assert np.all(np.diff(rec.time) > 0) and rec.time[-1] > 0.058
     log = (case_dir / "log.pimpleFoam").read_text()
     assert log.count("Starting time loop") == 2
