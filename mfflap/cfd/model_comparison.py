@@ -7,7 +7,9 @@ the motion, ramp and plate the case was written for (:mod:`mfflap.cfd.case_input
 a case file that describes another run). Numerical bursts after the discarded start are
 bridged before the comparison and listed (:mod:`mfflap.cfd.bursts`), stretches whose forces
 the motion cannot have driven are listed (:mod:`mfflap.cfd.force_envelope`), and means are
-time averages over the solver's steps.
+time averages over the solver's steps. :func:`write_model_comparison` stores both time
+series, the summary and the inputs in HDF5; :func:`mfflap.plots.model_comparison_figure`
+draws them.
 """
 
 from __future__ import annotations
@@ -106,12 +108,11 @@ def model_comparison(source: str | Path, case_file: str | Path, *, discard_s: fl
     -------
     ModelComparison
         The time series, and as ``summary``: the solver dialect, sample count, means of
-        thrust and power of the CFD and the model,
-        the bursts and the stretches beyond the force envelope, the NRMSE and Pearson of
-        F_n, F_t and M (model against CFD), and ``inputs_checked_against``: the file of what
-        the run was written for that the case file was checked against, or None for a Fluent
-        report with no mfflap_fluent.toml beside it, whose motion, ramp, plate and stream
-        are then taken on trust.
+        thrust and power of the CFD and the model, the bursts and the stretches beyond the
+        force envelope, the NRMSE and Pearson of F_n, F_t and M (model against CFD), and
+        ``inputs_checked_against``: the file of what the run was written for that the case
+        file was checked against, or None for a Fluent report with no mfflap_fluent.toml
+        beside it, whose motion, ramp, plate and stream are then taken on trust.
 
     Raises
     ------
