@@ -60,7 +60,8 @@ def model_comparison_figure(comparison, title: str = "") -> Figure:
     ----------
     comparison
         A :class:`~mfflap.cfd.model_comparison.ModelComparison`. The discarded start is
-        shaded; the load panels' legends give the NRMSE and Pearson of the compared samples.
+        shaded and left off the scale; the load panels' titles give the NRMSE and Pearson
+        of the compared samples.
     """
     cfd, model, summary = comparison.cfd_loads, comparison.model_loads, comparison.summary
     panels = [

@@ -113,7 +113,10 @@ def test_cfd_parse_writes_the_figure_and_the_hdf5_file(tmp_path):
     from mfflap.cli.main import cli
 
     report = _beside_its_udf(tmp_path)
-    png, h5 = tmp_path / "parse.png", tmp_path / "parse.h5"
+    png, h5 = tmp_path / "figures" / "parse.png", tmp_path / "results" / "parse.h5"
+    res = CliRunner().invoke(cli, ["cfd", "parse", str(report), "--case-file", str(CASE),
+                                   "--plot", str(tmp_path / "parse.xyz")])
+    assert res.exit_code == 2 and "--plot" in res.output and ".png, .pdf or .svg" in res.output
     res = CliRunner().invoke(cli, ["cfd", "parse", str(report), "--case-file", str(CASE),
                                    "--discard", "0.3", "--plot", str(png), "--save", str(h5),
                                    "--json"])

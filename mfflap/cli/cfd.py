@@ -223,6 +223,9 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
     from mfflap.cfd.fluent.udf import FLUENT_KEPT_FILE
     from mfflap.cfd.model_comparison import model_comparison, write_model_comparison
 
+    if plot_path is not None and plot_path.suffix.lower() not in (".png", ".pdf", ".svg"):
+        raise click.BadParameter(f"{plot_path}: a figure is written as .png, .pdf or .svg",
+                                 param_hint="--plot")
     comparison = model_comparison(source, case_file, discard_s=discard, ramp_time_s=ramp_time,
                                   motion_table=motion_table, fluent_columns=(fx, fy, mz),
                                   fluent_depth_m=depth, thin_aerofoil=thin_aerofoil)
@@ -230,9 +233,11 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
     if plot_path is not None:
         from mfflap.plots import model_comparison_figure
 
+        plot_path.parent.mkdir(parents=True, exist_ok=True)
         model_comparison_figure(comparison).savefig(plot_path, dpi=120)
         click.echo(f"wrote {plot_path}", err=True)
     if save_path is not None:
+        save_path.parent.mkdir(parents=True, exist_ok=True)
         write_model_comparison(save_path, comparison, case_file)
         click.echo(f"wrote {save_path}", err=True)
     if out["inputs_checked_against"] is None:
