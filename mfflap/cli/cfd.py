@@ -97,8 +97,10 @@ def write(case_file: Path, case_dir: Path, mesh: str | None, setup_name: str | N
                solver=solver)
     if motion_table is not None:
         attach_motion_table(case_dir, motion_table)
-    click.echo(f"wrote {case_dir} (mesh {spec.name}, {solver.frame} frame, end time "
-               f"{end_time:g} s)")
+    loop = (f"{'PISO' if solver.n_outer_correctors == 1 else 'PIMPLE'} "
+            f"{solver.n_outer_correctors}x{solver.n_correctors}")  # outer x pressure correctors
+    click.echo(f"wrote {case_dir} (mesh {spec.name}, {solver.frame} frame, {loop}, max Co "
+               f"{solver.max_courant:g}, {solver.pressure_solver}, end time {end_time:g} s)")
 
 
 def _motion_and_end_time(case, motion_table: Path | None, end_time: float | None,
