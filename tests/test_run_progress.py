@@ -88,3 +88,45 @@ def test_cfd_run_decomposed_on_two_ranks(tmp_path):
     assert "nProcs : 2" in (case / "log.pimpleFoam").read_text()
     summary = json.loads(res.stdout)
     assert summary["n_procs"] == 2 and summary["n_time_steps"] > 10
+
+
+def test_an_interrupted_cfd_run_stops_its_solver_and_says_where_it_resumes(tmp_path):
+    """Ctrl-C (SIGINT) on `mfflap cfd run`: pimpleFoam is stopped, the message gives the last
+    time written whole, and the next `cfd run` resumes there and finishes."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from mfflap.cfd.openfoam.forces import read_forces
+    from mfflap.cfd.openfoam.runner import latest_solution_time
+    from mfflap.cli.main import cli
+
+    case = tmp_path / "case"
+    res = CliRunner().invoke(cli, ["cfd", "write", str(CASE), str(case), "--cycles", "0.2",
+                                   "--writes", "8"])
+    assert res.exit_code == 0, res.output
+    command = [sys.executable, "-c", "from mfflap.cli.main import cli; cli()", "cfd", "run",
+               str(case)]
+    proc = subprocess.Popen(command,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    deadline = time.monotonic() + 300
+    while latest_solution_time(case) in (None, "0") and time.monotonic() < deadline:
+        time.sleep(0.2)  # until a first time folder is written whole
+    assert proc.poll() is None, proc.communicate()
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 1, err
+    resumed = latest_solution_time(case)
+    assert float(resumed) < 0.2
+    assert re.search(rf"interrupted: pimpleFoam stopped at t = \S+ s; the last time written "
+                     rf"whole is {re.escape(resumed)} s, where `mfflap cfd run {case}` "
+                     "resumes", err), err
+    running = subprocess.run(["pgrep", "-f", f"pimpleFoam -case {case}"], capture_output=True)
+    assert running.returncode == 1  # no solver left writing into the case
+    res = CliRunner().invoke(cli, ["cfd", "run", str(case)])
+    assert res.exit_code == 0, res.output
+    assert f"pimpleFoam from t = {resumed} s" in res.stderr
+    assert read_forces(case).time[-1] == pytest.approx(0.2, abs=1e-3)
+    assert (case / "log.pimpleFoam").read_text().count("Starting time loop") == 2

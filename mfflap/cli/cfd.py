@@ -143,13 +143,22 @@ def run(case_dir: Path, timeout: float, procs: int, progress_every: float,
     """
     from mfflap.cfd.bursts import find_numerical_bursts
     from mfflap.cfd.openfoam.forces import read_forces
-    from mfflap.cfd.openfoam.runner import run_case
+    from mfflap.cfd.openfoam.runner import latest_solution_time, run_case, solver_progress
     from mfflap.cfd.openfoam.solver_log import solver_provenance
 
     progress = (None if progress_every <= 0 else
                 lambda message: click.echo(f"[cfd run] {message}", err=True))
-    run_case(case_dir, timeout_s=timeout, n_procs=procs, progress=progress,
-             progress_every_s=progress_every)
+    try:
+        run_case(case_dir, timeout_s=timeout, n_procs=procs, progress=progress,
+                 progress_every_s=progress_every)
+    except KeyboardInterrupt:  # the solver is stopped by then; say where a rerun resumes
+        reached = solver_progress(case_dir)
+        resume = latest_solution_time(case_dir) or "0"
+        click.echo(f"interrupted: pimpleFoam stopped"
+                   f"{f' at t = {reached[0]:.6g} s' if reached else ''}; the last time "
+                   f"written whole is {resume} s, where `mfflap cfd run {case_dir}` resumes",
+                   err=True)
+        raise click.Abort() from None
     summary = {"case": str(case_dir), "n_procs": procs, **solver_provenance(case_dir)}
     history = read_forces(case_dir)
     signals = [history.force[:, 0], history.force[:, 1]]
