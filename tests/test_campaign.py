@@ -853,3 +853,37 @@ def test_a_lost_scheduler_stops_the_campaign_with_nothing_marked_failed(tmp_path
     assert "rerun the same command" in str(lost.value)
     assert not list(out.glob("*.failed.toml"))
     assert [s.state for s in campaign_status(out)] == ["started"]
+
+
+@pytest.mark.openfoam
+def test_an_interrupted_campaign_stops_its_solvers_and_says_how_to_resume(tmp_path):
+    """Ctrl-C (SIGINT) on `mfflap campaign run`: the LocalCluster and the solver of the case
+    in flight are stopped, the message counts the cases, and `campaign status` lists the one
+    stopped part-way."""
+    assert openfoam_available()
+    from mfflap.campaign.execute import campaign_status
+    from mfflap.cfd.openfoam.runner import solver_progress
+
+    case_file = Path(__file__).parents[1] / "cases" / "paper2026.toml"
+    out = tmp_path / "camp"
+    command = [sys.executable, "-c", "from mfflap.cli.main import cli; cli()", "campaign",
+               "run", str(case_file), "--out", str(out), "--frequencies", "0.5",
+               "--heave-amplitudes", "0.1", "--phases", "90"]
+    proc = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    deadline = time.monotonic() + 300
+    case_dirs = out / "cases"
+    while time.monotonic() < deadline and not any(
+            solver_progress(d) for d in case_dirs.glob("*") if d.is_dir()):
+        time.sleep(0.5)  # until a solver has taken time steps
+    assert proc.poll() is None, proc.communicate()
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 1, err
+    assert re.search(rf"interrupted: 0 of 1 cases done in {re.escape(str(out))}, 1 stopped "
+                     "part-way; the same command resumes them", err), err
+    time.sleep(2)  # pdeathsig's SIGTERM reaches the solver as its worker dies
+    running = subprocess.run(["pgrep", "-f", f"pimpleFoam -case {case_dirs}"],
+                             capture_output=True)
+    assert running.returncode == 1, running.stdout  # no solver left writing into the case
+    assert [s.state for s in campaign_status(out)] == ["started"]

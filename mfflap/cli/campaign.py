@@ -71,8 +71,18 @@ def run_cmd(case_file: Path, out_dir: Path, frequencies: str | None,
                                    fluid=case.fluid, stream=case.flow, timeout_s=timeout,
                                    keep_case_dirs=keep_cases,
                                    single_precision=single_precision)
-    statuses = run_campaign(cases, out_dir, campaign_setup, n_workers=workers,
-                            scheduler_address=scheduler, retry_failed=retry_failed)
+    try:
+        statuses = run_campaign(cases, out_dir, campaign_setup, n_workers=workers,
+                                scheduler_address=scheduler, retry_failed=retry_failed)
+    except KeyboardInterrupt:  # the cluster and its solvers are stopped by then
+        from mfflap.campaign.execute import campaign_status
+
+        states = [s.state for s in campaign_status(out_dir)]
+        click.echo(f"interrupted: {states.count('done')} of {len(states)} cases done in "
+                   f"{out_dir}, {states.count('started')} stopped part-way; the same command "
+                   "resumes them from their last written times (`mfflap campaign status "
+                   f"{out_dir}` lists them)", err=True)
+        raise click.Abort() from None
     done = sum(s.state == "done" for s in statuses)
     click.echo(f"{done}/{len(statuses)} cases done in {out_dir}")
     for s in statuses:
