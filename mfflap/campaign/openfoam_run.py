@@ -12,6 +12,7 @@ from typing import Any
 from mfflap.campaign.records import CfdRecord
 from mfflap.cfd.bursts import bridge_load_bursts
 from mfflap.cfd.force_envelope import BREACH_FACTOR, EnvelopeBreach, find_envelope_breaches
+from mfflap.cfd.openfoam.case_lock import case_lock
 from mfflap.cfd.openfoam.forces import read_forces
 from mfflap.cfd.openfoam.loads import imposed_state, to_loads
 from mfflap.cfd.openfoam.runner import is_time_folder, latest_solution_time, run_case
@@ -373,86 +374,87 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
                    solver=solver, ramp_time=ramp_time, y_plus=y_plus)
         shutil.rmtree(case_dir, ignore_errors=True)
         tmp.rename(case_dir)
-    started = time.perf_counter()
-    retries = _earlier_retries(case_dir)
-    same_breach_s = (SAME_BREACH_FRACTION * (plate or Plate()).chord
-                     / abs((stream or FreeStream()).velocity))
-    last_breach = _earlier_breach(retries)  # (flow time s, the Courant limit then)
-    watch = _bound_watch(case_dir, motion, ramp_time, plate, fluid, stream, force_bound_factor)
-    while True:
-        try:
-            run_case(case_dir, timeout_s=timeout_s, n_procs=n_procs,
-                     min_time_step=min_time_step, watch=watch,
-                     watch_every_s=bound_watch_every_s, progress=progress,
-                     progress_every_s=progress_every_s)
-        except CfdRunError as exc:
-            if _BOUND_STOP in str(exc) and len(retries) < max_retries:
-                pass  # stopped early by the bound: rewound and retried below
-            elif "time step collapsed" not in str(exc) or len(retries) >= max_retries:
-                tried = _retries_tried(case_dir)
-                if not tried:
-                    raise
-                raise CfdRunError(f"{getattr(exc, '_message', exc)}; {tried}", case=exc.case,
-                                  log_tail=exc.log_tail) from exc
-            else:
-                retries.append(_apply_next_remedy(case_dir, len(retries), max_retries))
-                # kept in the case, so that a run resumed by a later call still records them
-                where = _COLLAPSED_AT.search(str(exc))
+    with case_lock(case_dir):  # no other run in this case while this one retries
+        started = time.perf_counter()
+        retries = _earlier_retries(case_dir)
+        same_breach_s = (SAME_BREACH_FRACTION * (plate or Plate()).chord
+                         / abs((stream or FreeStream()).velocity))
+        last_breach = _earlier_breach(retries)  # (flow time s, the Courant limit then)
+        watch = _bound_watch(case_dir, motion, ramp_time, plate, fluid, stream, force_bound_factor)
+        while True:
+            try:
+                run_case(case_dir, timeout_s=timeout_s, n_procs=n_procs,
+                         min_time_step=min_time_step, watch=watch,
+                         watch_every_s=bound_watch_every_s, progress=progress,
+                         progress_every_s=progress_every_s)
+            except CfdRunError as exc:
+                if _BOUND_STOP in str(exc) and len(retries) < max_retries:
+                    pass  # stopped early by the bound: rewound and retried below
+                elif "time step collapsed" not in str(exc) or len(retries) >= max_retries:
+                    tried = _retries_tried(case_dir)
+                    if not tried:
+                        raise
+                    raise CfdRunError(f"{getattr(exc, '_message', exc)}; {tried}", case=exc.case,
+                                      log_tail=exc.log_tail) from exc
+                else:
+                    retries.append(_apply_next_remedy(case_dir, len(retries), max_retries))
+                    # kept in the case, so that a run resumed by a later call still records them
+                    where = _COLLAPSED_AT.search(str(exc))
+                    with open(case_dir / RETRY_LOG, "a") as fh:
+                        fh.write(f"time step collapsed{f' at t = {where[1]} s' if where else ''}; "
+                                 f"resumed from t = {latest_solution_time(case_dir) or 0} s with "
+                                 f"{retries[-1]}\n")
+                    continue
+            record = record_from_case(case_dir, motion, name, parameters, plate)
+            breach = _forces_beyond_bound(record, ramp_time, plate, fluid, stream,
+                                          force_bound_factor)
+            if breach is None:
+                break
+            max_co = courant_limit(case_dir)
+            same_time = (last_breach is not None
+                         and abs(breach.start_s - last_breach[0]) <= same_breach_s)
+            logged = _earlier_retries(case_dir)  # this call's retries too, as logged
+            if same_time and any(line.startswith(FROM_ZERO) for line in logged):
+                raise CfdRunError(
+                    f"the forces leave what the motion can drive, {breach.describe()}, where they "
+                    f"left it before the run was rerun from t = 0 s (t = {last_breach[0]:.6g} s):"
+                    f" the mesh, the far field or the turbulence model does not hold this motion "
+                    f"at max Co {max_co:g}; {_retries_tried(case_dir)}", case=str(case_dir))
+            if len(retries) >= max_retries:
+                raise CfdRunError(f"the forces leave what the motion can drive, {breach.describe()}"
+                                  f": the run lost its numerics, and {len(retries)} retries did "
+                                  f"not cure it; {_retries_tried(case_dir)}", case=str(case_dir))
+            if same_time and max_co < last_breach[1] and _last_resume_s(logged) > 0.0:
+                # the same loss from the last written time whatever the time step: that flow may
+                # have been spoiled already; one rerun from the start with the settings it has now
+                rewind_case(case_dir, 0.0)
+                retries.append(f"{FROM_ZERO} with max Co {max_co:g}")
                 with open(case_dir / RETRY_LOG, "a") as fh:
-                    fh.write(f"time step collapsed{f' at t = {where[1]} s' if where else ''}; "
-                             f"resumed from t = {latest_solution_time(case_dir) or 0} s with "
-                             f"{retries[-1]}\n")
+                    fh.write(f"{FROM_ZERO} with max Co {max_co:g}: the forces left what the motion"
+                             f" can drive from t = {breach.start_s:.6g} s again, as at max Co "
+                             f"{last_breach[1]:g}, so the flow written before may be spoiled\n")
+                last_breach = (breach.start_s, max_co)
                 continue
-        record = record_from_case(case_dir, motion, name, parameters, plate)
-        breach = _forces_beyond_bound(record, ramp_time, plate, fluid, stream,
-                                      force_bound_factor)
-        if breach is None:
-            break
-        max_co = courant_limit(case_dir)
-        same_time = (last_breach is not None
-                     and abs(breach.start_s - last_breach[0]) <= same_breach_s)
-        logged = _earlier_retries(case_dir)  # this call's retries too, as logged
-        if same_time and any(line.startswith(FROM_ZERO) for line in logged):
-            raise CfdRunError(
-                f"the forces leave what the motion can drive, {breach.describe()}, where they "
-                f"left it before the run was rerun from t = 0 s (t = {last_breach[0]:.6g} s):"
-                f" the mesh, the far field or the turbulence model does not hold this motion "
-                f"at max Co {max_co:g}; {_retries_tried(case_dir)}", case=str(case_dir))
-        if len(retries) >= max_retries:
-            raise CfdRunError(f"the forces leave what the motion can drive, {breach.describe()}"
-                              f": the run lost its numerics, and {len(retries)} retries did "
-                              f"not cure it; {_retries_tried(case_dir)}", case=str(case_dir))
-        if same_time and max_co < last_breach[1] and _last_resume_s(logged) > 0.0:
-            # the same loss from the last written time whatever the time step: that flow may
-            # have been spoiled already; one rerun from the start with the settings it has now
-            rewind_case(case_dir, 0.0)
-            retries.append(f"{FROM_ZERO} with max Co {max_co:g}")
-            with open(case_dir / RETRY_LOG, "a") as fh:
-                fh.write(f"{FROM_ZERO} with max Co {max_co:g}: the forces left what the motion"
-                         f" can drive from t = {breach.start_s:.6g} s again, as at max Co "
-                         f"{last_breach[1]:g}, so the flow written before may be spoiled\n")
+            if same_time and max_co < last_breach[1]:  # and the last retry ran from t = 0
+                raise CfdRunError(
+                    f"the forces leave what the motion can drive, {breach.describe()}, where they "
+                    f"left it at max Co {last_breach[1]:g} (t = {last_breach[0]:.6g} s): "
+                    f"the loss does not move with the time step (max Co {max_co:g}, run from "
+                    "t = 0 s), so no smaller one cures it: the mesh, the far field or the "
+                    f"turbulence model does not hold this motion; {_retries_tried(case_dir)}",
+                    case=str(case_dir))
             last_breach = (breach.start_s, max_co)
-            continue
-        if same_time and max_co < last_breach[1]:  # and the last retry ran from t = 0
-            raise CfdRunError(
-                f"the forces leave what the motion can drive, {breach.describe()}, where they "
-                f"left it at max Co {last_breach[1]:g} (t = {last_breach[0]:.6g} s): "
-                f"the loss does not move with the time step (max Co {max_co:g}, run from "
-                "t = 0 s), so no smaller one cures it: the mesh, the far field or the "
-                f"turbulence model does not hold this motion; {_retries_tried(case_dir)}",
-                case=str(case_dir))
-        last_breach = (breach.start_s, max_co)
-        resume = rewind_case(case_dir, breach.start_s)
-        retries.append(_apply_next_remedy(case_dir, len(retries), max_retries))
-        with open(case_dir / RETRY_LOG, "a") as fh:
-            fh.write(f"forces beyond what the motion can drive from t = {breach.start_s:.6g} s"
-                     f" at max Co {max_co:g}; resumed from t = {resume} s with "
-                     f"{retries[-1]}\n")
-    if (case_dir / RETRY_LOG).is_file():
-        record.provenance["retries"] = "; ".join(
-            (case_dir / RETRY_LOG).read_text().splitlines())
-    if record.time[-1] < 0.98 * end_time:
-        raise CfdRunError(f"the run stopped at t = {record.time[-1]:.4g} s before endTime "
-                          f"{end_time:.4g} s", case=str(case_dir))
-    record.provenance["wall_time_this_session_s"] = time.perf_counter() - started
-    return record
+            resume = rewind_case(case_dir, breach.start_s)
+            retries.append(_apply_next_remedy(case_dir, len(retries), max_retries))
+            with open(case_dir / RETRY_LOG, "a") as fh:
+                fh.write(f"forces beyond what the motion can drive from t = {breach.start_s:.6g} s"
+                         f" at max Co {max_co:g}; resumed from t = {resume} s with "
+                         f"{retries[-1]}\n")
+        if (case_dir / RETRY_LOG).is_file():
+            record.provenance["retries"] = "; ".join(
+                (case_dir / RETRY_LOG).read_text().splitlines())
+        if record.time[-1] < 0.98 * end_time:
+            raise CfdRunError(f"the run stopped at t = {record.time[-1]:.4g} s before endTime "
+                              f"{end_time:.4g} s", case=str(case_dir))
+        record.provenance["wall_time_this_session_s"] = time.perf_counter() - started
+        return record

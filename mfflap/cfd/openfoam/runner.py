@@ -13,6 +13,7 @@ import zlib
 from collections.abc import Callable
 from pathlib import Path
 
+from mfflap.cfd.openfoam.case_lock import case_lock
 from mfflap.cfd.openfoam.release import require_supported_release
 from mfflap.errors import CfdRunError
 
@@ -296,6 +297,12 @@ def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
     from the master. ``progress``, if given, is told what is being done and, every
     ``progress_every_s`` seconds while pimpleFoam runs, how far it has got
     (:class:`mfflap.cfd.openfoam.run_progress.RunProgress`).
+
+    Raises
+    ------
+    CfdRunError
+        If the folder is not a case, if another process is running it
+        (:func:`mfflap.cfd.openfoam.case_lock.case_lock`), or as :func:`run_application`.
     """
     from mfflap.cfd.openfoam.run_progress import RunProgress
 
@@ -306,30 +313,31 @@ def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
     if missing:
         raise CfdRunError(f"not an OpenFOAM case: no {' or '.join(missing)} (write one with "
                           "`mfflap cfd write`)", case=str(case_dir))
-    if not meshed:
+    with case_lock(case_dir):  # one run at a time in a case
+        if not meshed:
+            if progress is not None:
+                progress(f"meshing {case_dir} (blockMesh, checkMesh)")
+            run_application(case_dir, "blockMesh", timeout_s=300)
+            log = run_application(case_dir, "checkMesh", timeout_s=300)
+            if "Mesh OK" not in log.read_text():
+                raise CfdRunError("checkMesh did not report 'Mesh OK'", case=str(case_dir),
+                                  log_tail=_tail(log))
+        if n_procs > 1:
+            dict_path = case_dir / "system" / "decomposeParDict"
+            text = dict_path.read_text()
+            text = re.sub(r"numberOfSubdomains\s+\d+;", f"numberOfSubdomains {n_procs};", text)
+            text = re.sub(r"n\s+\(\d+ 1 1\);", f"n           ({n_procs} 1 1);", text)
+            dict_path.write_text(text)
+            if not (case_dir / "processor0").exists():
+                run_application(case_dir, "decomposePar", timeout_s=300)
+        start = latest_solution_time(case_dir) or "0"
+        set_start_time(case_dir, start)
+        reporter = None
         if progress is not None:
-            progress(f"meshing {case_dir} (blockMesh, checkMesh)")
-        run_application(case_dir, "blockMesh", timeout_s=300)
-        log = run_application(case_dir, "checkMesh", timeout_s=300)
-        if "Mesh OK" not in log.read_text():
-            raise CfdRunError("checkMesh did not report 'Mesh OK'", case=str(case_dir),
-                              log_tail=_tail(log))
-    if n_procs > 1:
-        dict_path = case_dir / "system" / "decomposeParDict"
-        text = dict_path.read_text()
-        text = re.sub(r"numberOfSubdomains\s+\d+;", f"numberOfSubdomains {n_procs};", text)
-        text = re.sub(r"n\s+\(\d+ 1 1\);", f"n           ({n_procs} 1 1);", text)
-        dict_path.write_text(text)
-        if not (case_dir / "processor0").exists():
-            run_application(case_dir, "decomposePar", timeout_s=300)
-    start = latest_solution_time(case_dir) or "0"
-    set_start_time(case_dir, start)
-    reporter = None
-    if progress is not None:
-        progress(f"pimpleFoam {'from t = ' + start + ' s' if start != '0' else 'started'}"
-                 f"{f' on {n_procs} processes' if n_procs > 1 else ''}; log: "
-                 f"{case_dir / 'log.pimpleFoam'}")
-        reporter = RunProgress(case_dir, progress)
-    run_application(case_dir, "pimpleFoam", timeout_s=timeout_s, n_procs=n_procs,
-                    min_time_step=min_time_step, watch=watch, watch_every_s=watch_every_s,
-                    progress=reporter, progress_every_s=progress_every_s)
+            progress(f"pimpleFoam {'from t = ' + start + ' s' if start != '0' else 'started'}"
+                     f"{f' on {n_procs} processes' if n_procs > 1 else ''}; log: "
+                     f"{case_dir / 'log.pimpleFoam'}")
+            reporter = RunProgress(case_dir, progress)
+        run_application(case_dir, "pimpleFoam", timeout_s=timeout_s, n_procs=n_procs,
+                        min_time_step=min_time_step, watch=watch, watch_every_s=watch_every_s,
+                        progress=reporter, progress_every_s=progress_every_s)

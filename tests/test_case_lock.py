@@ -1,0 +1,97 @@
+"""One run at a time in a case folder: a second run is refused naming the first, a killed
+holder leaves no stale lock, and the lock is re-entrant within a thread."""
+
+from __future__ import annotations
+
+import os
+import re
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from mfflap.cfd.openfoam.case_lock import LOCK_FILE, case_lock
+from mfflap.errors import CfdRunError
+
+CASE = Path(__file__).resolve().parents[1] / "cases" / "paper2026.toml"
+
+#: a process that holds a case's lock until it is killed
+HOLDER = ("import sys, time\nfrom mfflap.cfd.openfoam.case_lock import case_lock\n"
+          "with case_lock(sys.argv[1]):\n    print('held', flush=True)\n    time.sleep(600)\n")
+
+
+def _holder(case: Path) -> subprocess.Popen:
+    proc = subprocess.Popen([sys.executable, "-c", HOLDER, str(case)], stdout=subprocess.PIPE,
+                            text=True)
+    assert proc.stdout.readline().strip() == "held"
+    return proc
+
+
+def test_another_process_holding_the_case_is_named_and_a_killed_one_frees_it(tmp_path):
+    case = tmp_path / "case"
+    proc = _holder(case)
+    try:
+        with pytest.raises(CfdRunError, match=rf"case {re.escape(str(case))}: the case is "
+                                              rf"being run by another process \(pid {proc.pid} "
+                                              r"since \d{4}-\d\d-\d\dT"):
+            with case_lock(case):
+                pass
+    finally:
+        proc.send_signal(signal.SIGKILL)  # no clean-up: the kernel drops the lock
+        proc.wait()
+    assert (case / LOCK_FILE).is_file()
+    with case_lock(case):  # the file stays, unlocked
+        assert f"pid {os.getpid()} since" in (case / LOCK_FILE).read_text()
+
+
+def test_the_lock_is_reentrant_in_a_thread_and_refused_to_another(tmp_path):
+    case = tmp_path / "case"
+    errors: list[Exception] = []
+
+    def other() -> None:
+        try:
+            with case_lock(case):
+                pass
+        except CfdRunError as err:
+            errors.append(err)
+
+    with case_lock(case), case_lock(case):  # run_motion around run_case
+        thread = threading.Thread(target=other)
+        thread.start()
+        thread.join()
+    assert len(errors) == 1 and "another thread of this process" in str(errors[0])
+    other()  # released: the other thread may take it now
+    assert len(errors) == 1
+
+
+@pytest.mark.openfoam
+def test_a_second_cfd_run_of_a_running_case_is_refused_and_the_first_finishes(tmp_path):
+    from mfflap.cfd.openfoam.forces import read_forces
+    from mfflap.cfd.openfoam.runner import solver_progress
+    from mfflap.cli.main import cli
+
+    case = tmp_path / "case"
+    res = CliRunner().invoke(cli, ["cfd", "write", str(CASE), str(case), "--cycles", "0.1"])
+    assert res.exit_code == 0, res.output
+    first = subprocess.Popen([sys.executable, "-c", "from mfflap.cli.main import cli; cli()",
+                              "cfd", "run", str(case)], stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 300
+    while solver_progress(case) is None and time.monotonic() < deadline:
+        time.sleep(0.2)
+    log_before = (case / "log.pimpleFoam").stat().st_size
+    second = CliRunner().invoke(cli, ["cfd", "run", str(case)])
+    assert first.poll() is None, first.communicate()  # still running when refused
+    assert second.exit_code == 2
+    assert f"being run by another process (pid {first.pid} since" in second.output
+    assert "pimpleFoam started" not in second.output
+    _, err = first.communicate(timeout=300)
+    assert first.returncode == 0, err
+    text = (case / "log.pimpleFoam").read_text()
+    assert text.count("Starting time loop") == 1 and len(text) > log_before
+    assert read_forces(case).time[-1] == pytest.approx(0.1, abs=1e-3)
