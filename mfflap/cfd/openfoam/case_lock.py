@@ -6,7 +6,8 @@ interleave their time folders and force logs, and a restart then resumes from fi
 run wrote whole. :func:`case_lock` holds an exclusive ``flock(2)`` on ``<case>/.mfflap-run.lock``
 while a case is written to, and refuses a second holder with the first one's process id and
 start time. The kernel drops the lock when its process dies, however it dies, so a killed run
-never leaves a stale lock behind (the file stays, unlocked). The lock is re-entrant within a
+never leaves a stale lock behind (the file stays, unlocked). On a file system without
+flock(2) runs go unguarded, as they did before the lock. The lock is re-entrant within a
 thread, so :func:`mfflap.campaign.openfoam_run.run_motion` can hold it around its retries
 while :func:`mfflap.cfd.openfoam.runner.run_case` takes it again.
 """
@@ -75,6 +76,8 @@ def _acquire(case: Path, shown: str | Path) -> int:
         os.close(fd)
         raise CfdRunError(f"the case is being run by another process ({holder}); wait for it "
                           "to finish or stop it first", case=str(shown)) from None
+    except OSError:  # a file system without flock(2): run unguarded, as before the lock
+        return fd
     started = _dt.datetime.now().astimezone().isoformat(timespec="seconds")
     os.ftruncate(fd, 0)
     os.pwrite(fd, f"pid {os.getpid()} since {started}".encode(), 0)
