@@ -313,6 +313,7 @@ def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
     if missing:
         raise CfdRunError(f"not an OpenFOAM case: no {' or '.join(missing)} (write one with "
                           "`mfflap cfd write`)", case=str(case_dir))
+    require_supported_release(str(case_dir))  # before the lock file is written
     with case_lock(case_dir):  # one run at a time in a case
         if not meshed:
             if progress is not None:
