@@ -130,3 +130,32 @@ def test_an_interrupted_cfd_run_stops_its_solver_and_says_where_it_resumes(tmp_p
     assert f"pimpleFoam from t = {resumed} s" in res.stderr
     assert read_forces(case).time[-1] == pytest.approx(0.2, abs=1e-3)
     assert (case / "log.pimpleFoam").read_text().count("Starting time loop") == 2
+
+
+def test_an_interrupted_mesh_study_keeps_its_finished_runs_and_says_so(tmp_path):
+    """Ctrl-C (SIGINT) on `mfflap cfd convergence` after its first run: that run's record is
+    kept and named, the solver in flight is stopped, and the rerun does not redo the first."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    out = tmp_path / "conv"
+    command = [sys.executable, "-c", "from mfflap.cli.main import cli; cli()", "cfd",
+               "convergence", str(CASE), str(out), "--meshes", "coarse,medium",
+               "--courant", "4", "--cycles", "0.3"]
+    proc = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    deadline = time.monotonic() + 600
+    while not (out / "coarse_co4.h5").exists() and time.monotonic() < deadline:
+        time.sleep(0.2)
+    time.sleep(3)  # into the medium mesh's run
+    assert proc.poll() is None, proc.communicate()
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 1, err
+    assert (f"interrupted: the runs finished so far are kept in {out} (coarse_co4); the same "
+            "command reruns none of them") in err
+    running = subprocess.run(["pgrep", "-f", f"pimpleFoam -case {out}"], capture_output=True)
+    assert running.returncode == 1  # no solver left writing into the study
+    assert not (out / "medium_co4.h5").exists()

@@ -366,20 +366,27 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: str, cycl
             raise click.UsageError("--phase-from compares mean cycles of the case file's "
                                    "periodic motion, not of a --motion-table")
         described = f"motion table {motion_table.name}, {end:g} s"
-    study = run_convergence(out_dir, motion, end,
-                            meshes=[m.strip() for m in meshes.split(",")],
-                            courants=[float(c) for c in courants.split(",")], ramp_time=ramp,
-                            plate=case.plate, fluid=case.fluid, stream=case.flow,
-                            n_procs=procs, floor=floor, time_step_mesh=time_step_mesh,
-                            setups=[setup(n.strip()) for n in setup_names.split(",")
-                                    if n.strip()],
-                            solver=SolverSettings(pressure_solver=pressure_solver,
-                                                  n_correctors=n_correctors,
-                                                  far_field=far_field,
-                                                  turbulence_convection=turbulence_convection),
-                            period=period if periodic else None,
-                            phase_from=phase_from,
-                            progress=lambda m: click.echo(m, err=True))
+    try:
+        study = run_convergence(out_dir, motion, end,
+                                meshes=[m.strip() for m in meshes.split(",")],
+                                courants=[float(c) for c in courants.split(",")], ramp_time=ramp,
+                                plate=case.plate, fluid=case.fluid, stream=case.flow,
+                                n_procs=procs, floor=floor, time_step_mesh=time_step_mesh,
+                                setups=[setup(n.strip()) for n in setup_names.split(",")
+                                        if n.strip()],
+                                solver=SolverSettings(pressure_solver=pressure_solver,
+                                                      n_correctors=n_correctors,
+                                                      far_field=far_field,
+                                                      turbulence_convection=turbulence_convection),
+                                period=period if periodic else None,
+                                phase_from=phase_from,
+                                progress=lambda m: click.echo(m, err=True))
+    except KeyboardInterrupt:  # the solver is stopped by then; finished runs are kept
+        kept = sorted(p.stem for p in Path(out_dir).glob("*.h5"))
+        click.echo(f"interrupted: the runs finished so far are kept in {out_dir} "
+                   f"({', '.join(kept) or 'none yet'}); the same command reruns none of "
+                   "them and resumes the one stopped from its last written time", err=True)
+        raise click.Abort() from None
     if phase_from is not None and not study.phase_cycles:
         click.echo(f"no mean cycles compared: the runs hold fewer than two whole periods "
                    f"({period:.6g} s) after --phase-from {phase_from:g} s", err=True)
