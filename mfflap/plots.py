@@ -75,11 +75,12 @@ def model_comparison_figure(comparison, title: str = "") -> Figure:
     compared = np.asarray(comparison.compared, dtype=bool)
     fig, axes = plt.subplots(len(panels), 1, figsize=(8, 11), sharex=True)
     for ax, (name, label, cfd_y, model_y) in zip(axes, panels, strict=True):
-        ax.plot(t, np.real(np.asarray(cfd_y)), lw=1.2, label="CFD")
-        ax.plot(t, np.real(np.asarray(model_y)), lw=1.2, ls="--", label="model")
+        cfd_y, model_y = np.real(np.asarray(cfd_y)), np.real(np.asarray(model_y))
+        ax.plot(t, cfd_y, lw=1.2, label="CFD")
+        ax.plot(t, model_y, lw=1.2, ls="--", label="model")
         if not compared.all():  # the scale of the compared samples, not of the start-up
             ax.axvspan(t[0], t[compared][0], color="0.85", zorder=0)
-            shown = np.concatenate([np.real(np.asarray(y))[compared] for y in (cfd_y, model_y)])
+            shown = np.concatenate([cfd_y[compared], model_y[compared]])
             low, high = float(shown.min()), float(shown.max())
             pad = 0.1 * (high - low) or 0.1 * max(abs(high), 1e-12)
             ax.set_ylim(low - pad, high + pad)

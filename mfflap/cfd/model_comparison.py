@@ -211,9 +211,11 @@ def write_model_comparison(path: str | Path, comparison: ModelComparison,
                      config_toml=Path(case_file).read_text()) as out:
         out.write_loads("cfd_loads", comparison.cfd_loads)
         out.write_loads("model_loads", comparison.model_loads)
-        series = {"time": comparison.cfd_loads.time, "compared": comparison.compared}
-        series.update({k: getattr(comparison, k) for k in _SERIES_UNITS if k not in series})
-        out.write_group("performance", series, _SERIES_UNITS)
+        out.write_group("performance", {
+            "time": comparison.cfd_loads.time, "cfd_thrust_n": comparison.cfd_thrust_n,
+            "cfd_power_w": comparison.cfd_power_w, "model_thrust_n": comparison.model_thrust_n,
+            "model_power_w": comparison.model_power_w, "compared": comparison.compared},
+            _SERIES_UNITS)
         out.write_group("summary", {}, {}, attrs)
     return Path(path)
 
