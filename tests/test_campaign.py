@@ -852,23 +852,33 @@ def test_a_lost_scheduler_stops_the_campaign_with_nothing_marked_failed(tmp_path
     assert str(out) in str(lost.value) and case.case_id in str(lost.value)
     assert "rerun the same command" in str(lost.value)
     assert not list(out.glob("*.failed.toml"))
+    from mfflap.cfd.openfoam.case_lock import lock_holder
+
+    deadline = time.monotonic() + 30  # the nanny's worker process dies a moment after it
+    while lock_holder(out / "cases" / case.case_id) and time.monotonic() < deadline:
+        time.sleep(0.1)
     assert [s.state for s in campaign_status(out)] == ["started"]
 
 
 @pytest.mark.openfoam
-def test_an_interrupted_campaign_stops_its_solvers_and_says_how_to_resume(tmp_path):
-    """Ctrl-C (SIGINT) on `mfflap campaign run`: the LocalCluster and the solver of the case
-    in flight are stopped, the message counts the cases, and `campaign status` lists the one
-    stopped part-way."""
+@pytest.mark.parametrize("command_name", ["campaign run", "cfd linear-check"])
+def test_an_interrupted_campaign_stops_its_solvers_and_says_how_to_resume(tmp_path,
+                                                                          command_name):
+    """Ctrl-C (SIGINT) on `mfflap campaign run` or `mfflap cfd linear-check` (a campaign of
+    small motions): the LocalCluster and the solver of the case in flight are stopped, the
+    message counts the cases, and `campaign status` lists the one stopped part-way."""
     assert openfoam_available()
     from mfflap.campaign.execute import campaign_status
+    from mfflap.cfd.linear_check import SMALL_MOTIONS
     from mfflap.cfd.openfoam.runner import solver_progress
 
     case_file = Path(__file__).parents[1] / "cases" / "paper2026.toml"
     out = tmp_path / "camp"
-    command = [sys.executable, "-c", "from mfflap.cli.main import cli; cli()", "campaign",
-               "run", str(case_file), "--out", str(out), "--frequencies", "0.5",
-               "--heave-amplitudes", "0.1", "--phases", "90"]
+    arguments = {"campaign run": [str(case_file), "--out", str(out), "--frequencies", "0.5",
+                                  "--heave-amplitudes", "0.1", "--phases", "90"],
+                 "cfd linear-check": [str(out), "--cases", SMALL_MOTIONS[0].case_id]}
+    command = [sys.executable, "-c", "from mfflap.cli.main import cli; cli()",
+               *command_name.split(), *arguments[command_name]]
     proc = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     deadline = time.monotonic() + 300
@@ -887,3 +897,91 @@ def test_an_interrupted_campaign_stops_its_solvers_and_says_how_to_resume(tmp_pa
                              capture_output=True)
     assert running.returncode == 1, running.stdout  # no solver left writing into the case
     assert [s.state for s in campaign_status(out)] == ["started"]
+
+
+#: a process that holds a case folder's run lock until it is killed
+_LOCK_HOLDER = ("import sys, time\nfrom mfflap.cfd.openfoam.case_lock import case_lock\n"
+                "with case_lock(sys.argv[1]):\n    print('held', flush=True)\n"
+                "    time.sleep(600)\n")
+
+
+def test_a_case_another_process_runs_is_left_to_it_not_failed(tmp_path):
+    """A campaign meeting a case whose run lock another process holds (a second campaign on
+    the same folder, a `cfd run` of the case) leaves it to that process: status "busy"
+    naming the holder, nothing written into the case, no .failed.toml; `campaign status`
+    lists it as running, and pending once the holder is gone."""
+    from click.testing import CliRunner
+
+    from mfflap.cfd.openfoam.case_lock import LOCK_FILE
+    from mfflap.cli.main import cli
+
+    out = tmp_path / "camp"
+    case_dir = out / "cases" / SHORT.case_id
+    holder = subprocess.Popen([sys.executable, "-c", _LOCK_HOLDER, str(case_dir)],
+                              stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        (status,) = run_campaign([SHORT], out, CampaignSetup(), progress=False)
+        assert status.state == "busy", status
+        assert f"being run by another process (pid {holder.pid} since" in status.message
+        assert [p.name for p in case_dir.iterdir()] == [LOCK_FILE]  # nothing written
+        assert not list(out.glob("*.failed.toml")) and not list(out.glob("cases/*.writing"))
+        (running,) = campaign_status(out)
+        assert running.state == "running" and running.message.startswith(
+            f"by pid {holder.pid} since ")
+        listed = CliRunner().invoke(cli, ["campaign", "status", str(out)])
+        assert listed.exit_code == 0 and "0 failed, 1 running, 0 started" in listed.output
+    finally:
+        holder.kill()
+        holder.wait()
+    assert [s.state for s in campaign_status(out)] == ["pending"]
+
+
+def test_a_case_is_written_whole_under_its_lock(tmp_path):
+    """run_motion writes a new case only while it holds the case's lock: refused, it leaves
+    the folder as it was; a folder a killed write left half-done (files but no
+    mfflap_case.toml, a stale .writing sibling) is replaced by a whole case."""
+    from mfflap.campaign.openfoam_run import _write_case_whole
+    from mfflap.cfd.openfoam.case_lock import LOCK_FILE, CaseBusyError, case_lock
+
+    motion = SHORT.motion()
+    case_dir = tmp_path / "cases" / "c"
+    holder = subprocess.Popen([sys.executable, "-c", _LOCK_HOLDER, str(case_dir)],
+                              stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        with pytest.raises(CaseBusyError):
+            run_motion(case_dir, motion, "c", {}, SHORT.duration, ramp_time=SHORT.ramp_time)
+        assert sorted(p.name for p in tmp_path.joinpath("cases").iterdir()) == ["c"]
+        assert [p.name for p in case_dir.iterdir()] == [LOCK_FILE]
+    finally:
+        holder.kill()
+        holder.wait()
+    (case_dir / "0.01").mkdir()  # what a write killed part-way, or a killed move, leaves
+    (case_dir / "0.01" / "U").write_text("partial")
+    (case_dir / "log.blockMesh").write_text("partial")
+    stale = case_dir.with_name("c.writing")
+    (stale / "system").mkdir(parents=True)
+
+    def write(tmp: Path) -> None:
+        write_case(tmp, motion, SHORT.duration, ramp_time=SHORT.ramp_time)
+
+    with case_lock(case_dir):
+        _write_case_whole(case_dir, write)
+    fresh = tmp_path / "fresh"
+    write(fresh)
+    listing = sorted(p.relative_to(fresh) for p in fresh.rglob("*"))
+    assert sorted(p.relative_to(case_dir) for p in case_dir.rglob("*")
+                  if p.name != LOCK_FILE) == listing
+    assert (case_dir / "system" / "controlDict").read_text() == (
+        fresh / "system" / "controlDict").read_text()
+    assert not stale.exists() and (case_dir / LOCK_FILE).is_file()
+
+    def killed(tmp: Path) -> None:
+        write(tmp)
+        raise KeyboardInterrupt  # killed before the move
+
+    (case_dir / "mfflap_case.toml").unlink()
+    with case_lock(case_dir), pytest.raises(KeyboardInterrupt):
+        _write_case_whole(case_dir, killed)
+    assert not (case_dir / "mfflap_case.toml").exists()  # still not a written case

@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from mfflap.cfd.openfoam.case_lock import LOCK_FILE, case_lock
+from mfflap.cfd.openfoam.case_lock import LOCK_FILE, CaseBusyError, case_lock, lock_holder
 from mfflap.errors import CfdRunError
 
 CASE = Path(__file__).resolve().parents[1] / "cases" / "paper2026.toml"
@@ -36,7 +36,7 @@ def test_another_process_holding_the_case_is_named_and_a_killed_one_frees_it(tmp
     case = tmp_path / "case"
     proc = _holder(case)
     try:
-        with pytest.raises(CfdRunError, match=rf"case {re.escape(str(case))}: the case is "
+        with pytest.raises(CaseBusyError, match=rf"case {re.escape(str(case))}: the case is "
                                               rf"being run by another process \(pid {proc.pid} "
                                               r"since \d{4}-\d\d-\d\dT"):
             with case_lock(case):
@@ -95,3 +95,35 @@ def test_a_second_cfd_run_of_a_running_case_is_refused_and_the_first_finishes(tm
     text = (case / "log.pimpleFoam").read_text()
     assert text.count("Starting time loop") == 1 and len(text) > log_before
     assert read_forces(case).time[-1] == pytest.approx(0.1, abs=1e-3)
+
+
+def test_lock_holder_names_the_holder_without_taking_or_creating_the_lock(tmp_path):
+    """Nobody (no lock file, a free one) is None; a holding process is named; a probe that
+    meets a run taking the lock at that moment does not make the run fail."""
+    case = tmp_path / "case"
+    assert lock_holder(case) is None and not case.exists()  # nothing created
+    proc = _holder(case)
+    try:
+        assert lock_holder(case).startswith(f"pid {proc.pid} since ")
+    finally:
+        proc.send_signal(signal.SIGKILL)
+        proc.wait()
+    assert lock_holder(case) is None  # the file stays, free
+    with case_lock(case):
+        assert lock_holder(case) == (case / LOCK_FILE).read_text()  # this process counts
+        assert issubclass(CaseBusyError, CfdRunError)
+    stop = threading.Event()
+
+    def probe() -> None:
+        while not stop.is_set():
+            lock_holder(case)
+
+    prober = threading.Thread(target=probe)
+    prober.start()
+    try:
+        for _ in range(200):  # each would be refused if a probe's lock counted as a run's
+            with case_lock(case):
+                pass
+    finally:
+        stop.set()
+        prober.join()

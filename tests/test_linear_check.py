@@ -160,3 +160,34 @@ def test_command_runs_a_small_motion_in_openfoam(tmp_path):
     assert record.parameters["pitch_amplitude_deg"] == pytest.approx(0.75)
     assert record.provenance["mesh"] == "coarse"
     assert record.provenance["solver_velocity_convection"] == "LUST"
+
+
+def test_a_motion_another_process_runs_is_reported_busy_not_failed(tmp_path):
+    """A case whose run lock another process holds (a second linear-check on the same
+    folder): left to it, listed under "busy" with the holder, exit status 1, nothing
+    written into its case folder."""
+    import subprocess
+    import sys
+
+    case = SMALL_MOTIONS[8]
+    case_dir = tmp_path / "cases" / case.case_id
+    hold = ("import sys, time\nfrom mfflap.cfd.openfoam.case_lock import case_lock\n"
+            "with case_lock(sys.argv[1]):\n    print('held', flush=True)\n    time.sleep(600)\n")
+    holder = subprocess.Popen([sys.executable, "-c", hold, str(case_dir)],
+                              stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        res = CliRunner().invoke(cli, ["cfd", "linear-check", str(tmp_path), "--cases",
+                                       case.case_id, "--json"])
+        text = CliRunner().invoke(cli, ["cfd", "linear-check", str(tmp_path), "--cases",
+                                        case.case_id])
+    finally:
+        holder.kill()
+        holder.wait()
+    assert res.exit_code == 1, res.output
+    report = json.loads(res.stdout)
+    assert report["checks"] == [] and report["failed"] == {}
+    assert f"being run by another process (pid {holder.pid} since" in report["busy"][
+        case.case_id]
+    assert f"BUSY {case.case_id}: " in text.output and "FAILED" not in text.output
+    assert [p.name for p in case_dir.iterdir()] == [".mfflap-run.lock"]

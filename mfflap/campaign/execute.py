@@ -25,6 +25,7 @@ from typing import Any
 from mfflap.campaign.cases import CampaignCase
 from mfflap.campaign.records import LOST_SUFFIX, RECORD_SUFFIX, read_record, write_record
 from mfflap.cfd.bursts import find_load_bursts
+from mfflap.cfd.openfoam.case_lock import lock_holder
 from mfflap.cfd.openfoam.writer import SolverSettings
 from mfflap.errors import ConfigError, MfflapError
 from mfflap.parameters import Fluid, FreeStream, Plate
@@ -59,7 +60,10 @@ class CaseStatus:
     """Where one case stands."""
 
     case_id: str
-    state: str  # "done" | "lost" | "failed" | "started" | "pending"
+    #: "done" | "lost" | "failed" | "running" (by a process holding its run lock: another
+    #: campaign given the same folder, a ``cfd run`` of its case) | "busy" (this campaign
+    #: left it to that process) | "started" (stopped part-way) | "pending"
+    state: str
     message: str = ""
     #: a started case: the share of its end time its solver has simulated (0-1)
     fraction_simulated: float | None = None
@@ -114,6 +118,8 @@ def run_one(case: CampaignCase, out_dir: str, setup: CampaignSetup) -> CaseStatu
         return CaseStatus(case.case_id, "done", "already finished")
     case_dir = out / "cases" / case.case_id
     solver = SolverSettings(**{**asdict(setup.solver), "write_interval": case.duration / 4})
+    from mfflap.cfd.openfoam.case_lock import CaseBusyError
+
     try:
         record = run_motion(case_dir, case.motion(), case.case_id,
                             {"kind": case.kind, **case.as_dict()}, case.duration,
@@ -121,6 +127,8 @@ def run_one(case: CampaignCase, out_dir: str, setup: CampaignSetup) -> CaseStatu
                             plate=setup.plate, fluid=setup.fluid, stream=setup.stream,
                             timeout_s=setup.timeout_s)
         write_record(record_path, record, single_precision=setup.single_precision)
+    except CaseBusyError as exc:  # not a failure: the process running it records it
+        return CaseStatus(case.case_id, "busy", str(exc).splitlines()[0])
     except Exception as exc:  # a failed case must not stop the campaign
         tail = getattr(exc, "log_tail", "") or traceback.format_exc(limit=3)
         _failed_path(out, case.case_id).write_text(
@@ -177,9 +185,11 @@ def campaign_status(out_dir: str | Path) -> list[CaseStatus]:
     A finished case's message names its numerical bursts (:mod:`mfflap.cfd.bursts`), if any;
     a finished case whose forces leave what the motion can drive is "lost"
     (:func:`lost_numerics`).
-    A case whose OpenFOAM run has begun but has no record yet is "started" (running now, or
-    stopped and to be resumed): its message gives the simulated time the solver's log
-    reached, the time step there, the last written time a rerun resumes from and the
+    A case without a record whose run lock a process holds (:mod:`mfflap.cfd.openfoam.case_lock`)
+    is "running": its message names the process and, once its solver has begun, how far it
+    got. A case whose OpenFOAM run has begun but has no record yet and that nobody runs is
+    "started" (stopped, to be resumed): its message gives the simulated time the solver's
+    log reached, the time step there, the last written time a rerun resumes from and the
     retries so far.
     """
     out = Path(out_dir)
@@ -199,6 +209,11 @@ def campaign_status(out_dir: str | Path) -> list[CaseStatus]:
             statuses.append(CaseStatus(case_id, "done", "" if not bursts else
                                        f"{len(bursts)} numerical burst(s), bridged when "
                                        f"identified; first {bursts[0].describe()}"))
+        elif (holder := lock_holder(out / "cases" / case_id)) is not None:
+            progress = _started(out / "cases" / case_id)
+            statuses.append(CaseStatus(
+                case_id, "running", f"by {holder}" + (f"; {progress[0]}" if progress else ""),
+                progress[1] if progress else None))
         elif _failed_path(out, case_id).exists():
             info = read_toml(_failed_path(out, case_id))
             error = str(info.get("error", "")).splitlines()
@@ -325,8 +340,6 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
     if len(set(ids)) != len(ids):
         raise ConfigError("the campaign lists a case twice", key="cases")
     _write_manifest(out, cases, setup)
-    for stale in (out / "cases").glob("*.writing"):  # a case folder half-written when killed
-        shutil.rmtree(stale, ignore_errors=True)
     for stale in out.glob(f".*{RECORD_SUFFIX}.*.tmp"):  # a record half-written when killed
         stale.unlink(missing_ok=True)
     results: dict[str, CaseStatus] = {}

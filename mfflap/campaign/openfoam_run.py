@@ -12,7 +12,7 @@ from typing import Any
 from mfflap.campaign.records import CfdRecord
 from mfflap.cfd.bursts import bridge_load_bursts
 from mfflap.cfd.force_envelope import BREACH_FACTOR, EnvelopeBreach, find_envelope_breaches
-from mfflap.cfd.openfoam.case_lock import case_lock
+from mfflap.cfd.openfoam.case_lock import LOCK_FILE, case_lock
 from mfflap.cfd.openfoam.forces import read_forces
 from mfflap.cfd.openfoam.loads import imposed_state, to_loads
 from mfflap.cfd.openfoam.runner import is_time_folder, latest_solution_time, run_case
@@ -319,6 +319,27 @@ def _retries_tried(case_dir: Path) -> str:
     return f"after {n_retries} retr{'y' if n_retries == 1 else 'ies'}: " + "; ".join(lines)
 
 
+def _write_case_whole(case_dir: Path, write: Callable[[Path], object]) -> None:
+    """Write a case into ``case_dir``, whose run lock the caller holds, so that a process
+    killed part-way leaves no case that looks written: ``write`` fills a sibling
+    ``<name>.writing`` folder, whatever else the case folder held goes (a half-written or
+    half-moved case; the lock file stays), and the new files move in, mfflap_case.toml last.
+    """
+    tmp = case_dir.with_name(case_dir.name + ".writing")
+    shutil.rmtree(tmp, ignore_errors=True)
+    write(tmp)
+    for old in case_dir.iterdir():
+        if old.name != LOCK_FILE:
+            if old.is_dir() and not old.is_symlink():
+                shutil.rmtree(old)
+            else:
+                old.unlink()
+    marker = "mfflap_case.toml"
+    for new in sorted(tmp.iterdir(), key=lambda path: path.name == marker):
+        new.rename(case_dir / new.name)
+    tmp.rmdir()
+
+
 def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict[str, Any],
                end_time: float, *, mesh: str | AnyMeshSpec = "coarse", ramp_time: float = 0.0,
                solver: SolverSettings | None = None, plate: Plate | None = None,
@@ -367,14 +388,11 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
     """
     case_dir = Path(case_dir)
     solver = solver or SolverSettings(write_interval=end_time / 4)
-    if not (case_dir / "mfflap_case.toml").exists():
-        tmp = case_dir.with_name(case_dir.name + ".writing")
-        shutil.rmtree(tmp, ignore_errors=True)
-        write_case(tmp, motion, end_time, mesh=mesh, plate=plate, fluid=fluid, stream=stream,
-                   solver=solver, ramp_time=ramp_time, y_plus=y_plus)
-        shutil.rmtree(case_dir, ignore_errors=True)
-        tmp.rename(case_dir)
-    with case_lock(case_dir):  # no other run in this case while this one retries
+    with case_lock(case_dir):  # no other run in this case while this one writes or retries
+        if not (case_dir / "mfflap_case.toml").exists():
+            _write_case_whole(case_dir, lambda tmp: write_case(
+                tmp, motion, end_time, mesh=mesh, plate=plate, fluid=fluid, stream=stream,
+                solver=solver, ramp_time=ramp_time, y_plus=y_plus))
         started = time.perf_counter()
         retries = _earlier_retries(case_dir)
         same_breach_s = (SAME_BREACH_FRACTION * (plate or Plate()).chord

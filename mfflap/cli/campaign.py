@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import click
@@ -17,6 +19,23 @@ def _floats(text: str | None) -> list[float] | None:
         return [float(v) for v in text.split(",") if v.strip()]
     except ValueError as exc:
         raise click.BadParameter(f"{text!r}: expected comma-separated numbers") from exc
+
+
+@contextmanager
+def aborted_with_resume_message(out_dir: Path) -> Iterator[None]:
+    """Turn a Ctrl-C during a campaign into a count of its cases and how to resume them
+    (run_campaign has stopped the cluster and its solvers by then)."""
+    try:
+        yield
+    except KeyboardInterrupt:
+        from mfflap.campaign.execute import campaign_status
+
+        states = [s.state for s in campaign_status(out_dir)]
+        click.echo(f"interrupted: {states.count('done')} of {len(states)} cases done in "
+                   f"{out_dir}, {states.count('started')} stopped part-way; the same command "
+                   "resumes them from their last written times (`mfflap campaign status "
+                   f"{out_dir}` lists them)", err=True)
+        raise click.Abort() from None
 
 
 @click.group()
@@ -71,23 +90,17 @@ def run_cmd(case_file: Path, out_dir: Path, frequencies: str | None,
                                    fluid=case.fluid, stream=case.flow, timeout_s=timeout,
                                    keep_case_dirs=keep_cases,
                                    single_precision=single_precision)
-    try:
+    with aborted_with_resume_message(out_dir):
         statuses = run_campaign(cases, out_dir, campaign_setup, n_workers=workers,
                                 scheduler_address=scheduler, retry_failed=retry_failed)
-    except KeyboardInterrupt:  # the cluster and its solvers are stopped by then
-        from mfflap.campaign.execute import campaign_status
-
-        states = [s.state for s in campaign_status(out_dir)]
-        click.echo(f"interrupted: {states.count('done')} of {len(states)} cases done in "
-                   f"{out_dir}, {states.count('started')} stopped part-way; the same command "
-                   "resumes them from their last written times (`mfflap campaign status "
-                   f"{out_dir}` lists them)", err=True)
-        raise click.Abort() from None
     done = sum(s.state == "done" for s in statuses)
     click.echo(f"{done}/{len(statuses)} cases done in {out_dir}")
     for s in statuses:
-        if s.state == "failed":
-            click.echo(f"FAILED {s.case_id}: {s.message}")
+        if s.state in ("failed", "busy"):
+            click.echo(f"{s.state.upper()} {s.case_id}: {s.message}")
+    if any(s.state == "busy" for s in statuses):
+        click.echo("busy cases are left to the process running them; `mfflap campaign status "
+                   f"{out_dir}` follows them")
 
 
 @campaign.command("status")
@@ -95,8 +108,8 @@ def run_cmd(case_file: Path, out_dir: Path, frequencies: str | None,
 @click.option("--json", "as_json", is_flag=True, help="Print the statuses as JSON.")
 def status_cmd(out_dir: Path, as_json: bool) -> None:
     """Per-case status of the campaign in OUT_DIR (done, lost: finished with forces beyond
-    what the motion can drive, failed with why, started with how far its solver got,
-    pending)."""
+    what the motion can drive, failed with why, running: by the process named, started:
+    stopped with how far its solver got, pending)."""
     from mfflap.campaign.execute import campaign_status
 
     statuses = campaign_status(out_dir)
@@ -105,8 +118,8 @@ def status_cmd(out_dir: Path, as_json: bool) -> None:
         return
     for s in statuses:
         click.echo(f"{s.state:8s} {s.case_id}  {s.message}")
-    counts = {k: sum(s.state == k for s in statuses) for k in ("done", "lost", "failed",
-                                                                 "started", "pending")}
+    counts = {k: sum(s.state == k for s in statuses)
+              for k in ("done", "lost", "failed", "running", "started", "pending")}
     click.echo(", ".join(f"{v} {k}" for k, v in counts.items()))
 
 

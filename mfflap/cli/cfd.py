@@ -478,6 +478,7 @@ def linear_check(out_dir: Path, case_file: Path | None, mesh: str | None,
         write_checks,
     )
     from mfflap.cfd.openfoam.setups import mesh_and_solver
+    from mfflap.cli.campaign import aborted_with_resume_message
     from mfflap.config import CaseConfig, load_case
     from mfflap.toml_io import dumps
 
@@ -501,7 +502,9 @@ def linear_check(out_dir: Path, case_file: Path | None, mesh: str | None,
     setup = CampaignSetup(mesh=spec.name, solver=solver, plate=config.plate,
                           fluid=config.fluid, stream=config.flow, timeout_s=timeout,
                           single_precision=single_precision)
-    statuses = run_campaign(motions, out_dir, setup, n_workers=workers, progress=not as_json)
+    with aborted_with_resume_message(out_dir):
+        statuses = run_campaign(motions, out_dir, setup, n_workers=workers,
+                                progress=not as_json)
     failed = [s for s in statuses if s.state != "done"]
     records = [read_record(out_dir / f"{s.case_id}.h5") for s in statuses if s.state == "done"]
     model = config.morison_model()
@@ -517,11 +520,14 @@ def linear_check(out_dir: Path, case_file: Path | None, mesh: str | None,
                     config.flow)
     if as_json:
         click.echo(json.dumps({"checks": [asdict(c) for c in checks],
-                               "failed": {s.case_id: s.message for s in failed}}, indent=2))
+                               "failed": {s.case_id: s.message for s in failed
+                                          if s.state == "failed"},
+                               "busy": {s.case_id: s.message for s in failed
+                                        if s.state == "busy"}}, indent=2))
     else:
         click.echo(summary_table(checks))
-        for s in failed:
-            click.echo(f"FAILED {s.case_id}: {s.message}")
+        for s in failed:  # failed, or busy: being run by another process
+            click.echo(f"{s.state.upper()} {s.case_id}: {s.message}")
         if checks:
             click.echo(f"wrote {summary / 'checks.h5'} and {summary / 'normal_force.png'}")
     if failed:

@@ -8,8 +8,10 @@ while a case is written to, and refuses a second holder with the first one's pro
 start time. The kernel drops the lock when its process dies, however it dies, so a killed run
 never leaves a stale lock behind (the file stays, unlocked). On a file system without
 flock(2) runs go unguarded, as they did before the lock. The lock is re-entrant within a
-thread, so :func:`mfflap.campaign.openfoam_run.run_motion` can hold it around its retries
-while :func:`mfflap.cfd.openfoam.runner.run_case` takes it again.
+thread, so :func:`mfflap.campaign.openfoam_run.run_motion` can hold it around writing the
+case and its retries while :func:`mfflap.cfd.openfoam.runner.run_case` takes it again. A
+refusal is a :class:`CaseBusyError`, so that a campaign tells a case another process is
+running from one that failed; :func:`lock_holder` says who runs a case without taking it.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ import datetime as _dt
 import fcntl
 import os
 import threading
+import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -26,6 +29,12 @@ from mfflap.errors import CfdRunError
 
 #: the lock file in a case folder
 LOCK_FILE = ".mfflap-run.lock"
+
+
+
+class CaseBusyError(CfdRunError):
+    """Another process, or another thread of this one, holds the case's run lock."""
+
 
 _held: dict[Path, tuple[int, int, int]] = {}  # case -> (fd, owning thread, depth)
 _guard = threading.Lock()
@@ -37,7 +46,7 @@ def case_lock(case_dir: str | Path) -> Iterator[None]:
 
     Raises
     ------
-    CfdRunError
+    CaseBusyError
         If another process, or another thread of this one, holds it (naming its process id
         and since when).
     """
@@ -48,8 +57,8 @@ def case_lock(case_dir: str | Path) -> Iterator[None]:
         if held is not None:
             fd, owner, depth = held
             if owner != me:
-                raise CfdRunError("another thread of this process is running the case",
-                                  case=str(case_dir))
+                raise CaseBusyError("another thread of this process is running the case",
+                                    case=str(case_dir))
             _held[case] = (fd, owner, depth + 1)
         else:
             fd = _acquire(case, case_dir)
@@ -70,15 +79,55 @@ def _acquire(case: Path, shown: str | Path) -> int:
     case.mkdir(parents=True, exist_ok=True)
     fd = os.open(case / LOCK_FILE, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
     try:
-        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        _flock_or_wait(fd)
     except BlockingIOError:
         holder = os.pread(fd, 200, 0).decode(errors="replace").strip() or "unknown"
         os.close(fd)
-        raise CfdRunError(f"the case is being run by another process ({holder}); wait for it "
-                          "to finish or stop it first", case=str(shown)) from None
+        raise CaseBusyError(f"the case is being run by another process ({holder}); wait for "
+                            "it to finish or stop it first", case=str(shown)) from None
     except OSError:  # a file system without flock(2): run unguarded, as before the lock
         return fd
     started = _dt.datetime.now().astimezone().isoformat(timespec="seconds")
     os.ftruncate(fd, 0)
     os.pwrite(fd, f"pid {os.getpid()} since {started}".encode(), 0)
     return fd
+
+
+#: tries to take a lock found held, and the pause between them, s: a :func:`lock_holder`
+#: probe holds it for microseconds, a run for minutes
+_TRIES, _PAUSE_S = 5, 0.05
+
+
+def _flock_or_wait(fd: int) -> None:
+    """Take the exclusive lock, trying again for a moment if it is held (raises
+    BlockingIOError if it still is)."""
+    for attempt in range(_TRIES):
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            return
+        except BlockingIOError:
+            if attempt == _TRIES - 1:
+                raise
+            time.sleep(_PAUSE_S)
+
+
+def lock_holder(case_dir: str | Path) -> str | None:
+    """Who holds the run lock of ``case_dir`` ("pid N since <ISO time>"), or None if nobody
+    does (no lock file, a file system without flock(2), or the lock free). A lock held by
+    this process counts as held. The lock is only tested, never kept, and the lock file is
+    not created."""
+    path = Path(case_dir) / LOCK_FILE
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_CLOEXEC)
+    except OSError:
+        return None
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+        except BlockingIOError:
+            return os.pread(fd, 200, 0).decode(errors="replace").strip() or "unknown"
+        except OSError:
+            return None
+        return None  # free (closing the descriptor drops the shared lock just taken)
+    finally:
+        os.close(fd)
