@@ -51,6 +51,8 @@ class RunOutcome:
     cases: list = field(default_factory=list)
     model: object | None = None
     gap: tuple | None = None
+    #: the stage a Ctrl-C stopped (the later ones did not run), or None
+    interrupted: str | None = None
 
 
 def _stage(outcome: RunOutcome, name: str, progress: Progress, fn):
@@ -58,6 +60,11 @@ def _stage(outcome: RunOutcome, name: str, progress: Progress, fn):
     progress(f"[{name}] started")
     try:
         result = fn()
+    except KeyboardInterrupt:  # run_study ends the run with the stages so far
+        outcome.interrupted = name
+        outcome.problems.append(f"{name}: interrupted (Ctrl-C) after "
+                                f"{time.perf_counter() - t0:.1f} s; the later stages did not run")
+        raise
     except MfflapError as exc:
         outcome.problems.append(f"{name}: {exc}")
         progress(f"[{name}] FAILED: {exc}")
@@ -102,13 +109,32 @@ def gap_diagnosis(config: CaseConfig, cases: list) -> tuple:
 
 def run_study(config: CaseConfig, options: RunOptions, progress: Progress = print
               ) -> RunOutcome:
-    """Run every stage; failures are collected in ``outcome.problems``."""
+    """Run every stage; failures are collected in ``outcome.problems``.
+
+    A Ctrl-C (KeyboardInterrupt) ends the run: the outcome holds the stages finished before
+    it, names the stage it stopped in ``outcome.interrupted`` and is returned, so that they
+    can still be written (live back-test cases resume from their last written times when
+    run again).
+    """
+    outcome = RunOutcome()
+    try:
+        _run_stages(config, options, progress, outcome)
+    except KeyboardInterrupt:
+        if outcome.interrupted is None:  # between two stages
+            outcome.interrupted = "between stages"
+            outcome.problems.append("interrupted (Ctrl-C) between stages; the later stages "
+                                    "did not run")
+    return outcome
+
+
+def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
+                outcome: RunOutcome) -> None:
+    """The stages of :func:`run_study`, filling ``outcome``."""
     from mfflap.backtest.workflow import backtest_all
     from mfflap.campaign.records import fixture_dir
     from mfflap.identification.workflow import identify_strategies, load_cases
     from mfflap.optimisation.study import beta_study, gain_table, sinusoid_motion
 
-    outcome = RunOutcome()
     folders = options.fixtures or (fixture_dir(),)
 
     def identification():
@@ -143,9 +169,10 @@ def run_study(config: CaseConfig, options: RunOptions, progress: Progress = prin
         motions = {"best sinusoid": sinusoid_motion(study.sweep, study.best_sinusoid, n)}
         motions.update({f"β = {b:g}": r.motion for b, r in study.sqp.items()})
         folders = list(options.backtest_fixtures) or [fixture_dir("backtest")]
-        outcome.backtests = _stage(outcome, "back-test", progress, lambda: backtest_all(
+        _stage(outcome, "back-test", progress, lambda: backtest_all(
             config, motions, model, fixture_folders=folders, live=options.live,
-            work_dir=options.work_dir, mesh=options.mesh, progress=progress)) or {}
+            work_dir=options.work_dir, mesh=options.mesh, progress=progress,
+            into=outcome.backtests))  # those done before a failure or Ctrl-C are kept
         for label, o in outcome.backtests.items():
             if o.status != "back-tested":
                 outcome.problems.append(f"back-test: {label} not back-tested: {o.source}")
@@ -163,7 +190,6 @@ def run_study(config: CaseConfig, options: RunOptions, progress: Progress = prin
                     export_motion(options.vtk_dir, m, model, config.optimisation.scheme, safe)
 
             _stage(outcome, "VTK export", progress, vtk)
-    return outcome
 
 
 def write_outputs(config: CaseConfig, outcome: RunOutcome, h5_path: Path, html_path: Path,
@@ -191,6 +217,7 @@ def write_outputs(config: CaseConfig, outcome: RunOutcome, h5_path: Path, html_p
             write_diagnosis(rf, *outcome.gap)
         rf.h5.attrs["problems"] = "\n".join(outcome.problems)
         rf.h5.attrs["stage_times_s"] = str(outcome.timings)
+        rf.h5.attrs["interrupted_stage"] = outcome.interrupted or ""  # "": ran to the end
     rep = Report(f"mfflap run: {config.study.name}", config.study.description)
     s = rep.section("Summary")
     if outcome.problems:

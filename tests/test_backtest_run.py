@@ -213,3 +213,47 @@ def test_backtest_command_refuses_an_unknown_mesh_for_a_set_up():
     res = CliRunner().invoke(cli, ["backtest", __file__, "--live", "--mesh", "finest",
                                    "--setup", "affordable"])
     assert res.exit_code == 2 and "finest" in res.output and "meshes.toml" in res.output
+
+
+@pytest.mark.openfoam
+def test_ctrl_c_during_a_live_back_test_writes_the_stages_finished_before(tmp_path):
+    """SIGINT to `mfflap run --live` while OpenFOAM runs a back-test: the solver is
+    stopped, report.html and results.h5 hold identification and optimisation, name the
+    stage stopped, and the message says the cases resume."""
+    import re
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from mfflap.cfd.openfoam.runner import solver_progress
+    from mfflap.results import ResultsFile
+
+    assert openfoam_available()
+    out = tmp_path / "run"
+    proc = subprocess.Popen(
+        [sys.executable, "-c", "from mfflap.cli.main import cli; cli()", "run", str(CASE),
+         "--out", str(out), "--starts", "1", "--no-ipopt", "--no-gain-table", "--live"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    deadline = time.monotonic() + 600
+    while time.monotonic() < deadline and proc.poll() is None and not any(
+            solver_progress(d) for d in (out / "cfd_cases").glob("*") if d.is_dir()):
+        time.sleep(0.5)  # until a back-test's solver has taken time steps
+    assert proc.poll() is None, proc.communicate()
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 1, err
+    assert re.search(rf"interrupted \(back-test\): {re.escape(str(out))}/report.html and "
+                     r".*the same command runs the whole study again, and live back-test cases "
+                     rf"in {re.escape(str(out / 'cfd_cases'))} resume", err), err
+    time.sleep(2)
+    running = subprocess.run(["pgrep", "-f", f"pimpleFoam -case {out}"], capture_output=True)
+    assert running.returncode == 1, running.stdout  # no solver left writing into the case
+    with ResultsFile(out / "results.h5") as rf:
+        assert rf.h5.attrs["interrupted_stage"] == "back-test"
+        assert {"identification", "optimisation"} <= set(rf.h5)
+        assert "back-test: interrupted (Ctrl-C)" in rf.h5.attrs["problems"]
+        assert "sensitivity" not in rf.h5  # a later stage: not run
+    html = (out / "report.html").read_text()
+    assert "Optimised motions" in html and "back-test: interrupted (Ctrl-C)" in html

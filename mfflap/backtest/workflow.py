@@ -15,10 +15,16 @@ def backtest_all(config: CaseConfig, motions: dict[str, DiscreteMotion], model, 
                  fixture_folders: Sequence[str | Path], live: bool = False,
                  work_dir: str | Path | None = None, save_to: str | Path | None = None,
                  mesh: str = "coarse", solver: SolverSettings | None = None,
-                 progress: Callable[[str], None] | None = None
+                 progress: Callable[[str], None] | None = None,
+                 into: dict[str, BacktestOutcome] | None = None
                  ) -> dict[str, BacktestOutcome]:
-    """Back-test each labelled motion (a failure of one does not stop the others)."""
-    out = {}
+    """Back-test each labelled motion (a failure of one does not stop the others).
+
+    ``into``, if given, receives each outcome as soon as it is known and is returned, so
+    that a caller stopped part-way (Ctrl-C during a live run) keeps the back-tests done
+    before.
+    """
+    out = {} if into is None else into
     for label, motion in motions.items():
         if progress is not None:
             progress(f"back-test {label}: {'running OpenFOAM' if live else 'looking up CFD'}")

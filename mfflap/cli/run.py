@@ -34,7 +34,8 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
 
     Writes <out>/report.html (every figure), <out>/results.h5 (every number and the inputs)
     and <out>/vtk/*.pvd (the motions for ParaView). A stage that fails is reported and the
-    run goes on.
+    run goes on. Ctrl-C stops the run and writes the report and results of the stages
+    finished before it.
     """
     from mfflap.config import load_case
     from mfflap.identification.workflow import sources_shown
@@ -52,6 +53,13 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
     outcome = run_study(case, options, progress=lambda m: click.echo(m, err=True))
     write_outputs(case, outcome, out_dir / "results.h5", out_dir / "report.html",
                   sources_shown(fixtures))
+    if outcome.interrupted is not None:
+        click.echo(f"interrupted ({outcome.interrupted}): {out_dir / 'report.html'} and "
+                   f"{out_dir / 'results.h5'} hold the stages finished before; the same command "
+                   "runs the whole study again"
+                   + (f", and live back-test cases in {options.work_dir} resume from their last "
+                      "written times" if live else ""), err=True)
+        raise click.Abort()
     if as_json:
         import json
 
