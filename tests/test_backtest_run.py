@@ -257,3 +257,72 @@ def test_ctrl_c_during_a_live_back_test_writes_the_stages_finished_before(tmp_pa
         assert "sensitivity" not in rf.h5  # a later stage: not run
     html = (out / "report.html").read_text()
     assert "Optimised motions" in html and "back-test: interrupted (Ctrl-C)" in html
+
+
+@pytest.fixture(scope="module")
+def optimisation_file(tmp_path_factory):
+    """A real optimisation (β = 0.5, one SQP start)."""
+    from mfflap.cli.main import cli
+
+    out = tmp_path_factory.mktemp("opt") / "opt.h5"
+    res = CliRunner().invoke(cli, ["optimise", str(CASE), "--betas", "0.5", "--starts", "1",
+                                   "--no-ipopt", "--output", str(out)])
+    assert res.exit_code == 0, res.output
+    return out
+
+
+def test_backtest_command_lists_each_motion_and_why_it_was_not_back_tested(
+        tmp_path, optimisation_file):
+    """Fixture folders without these motions: both motions (the best sinusoid and β = 0.5)
+    are listed as not back-tested, with the folder searched, in text and in JSON."""
+    import json
+
+    from mfflap.cli.main import cli
+
+    empty = tmp_path / "none"
+    empty.mkdir()
+    res = CliRunner().invoke(cli, ["backtest", str(optimisation_file), "--fixtures",
+                                   str(empty), "--json"])
+    assert res.exit_code == 0, res.output
+    data = json.loads(res.stdout)
+    assert list(data["motions"]) == ["best sinusoid", "β = 0.5"]
+    assert {d["status"] for d in data["motions"].values()} == {"not back-tested"}
+    assert data["cfd_thrust_gain"] is None
+    text = CliRunner().invoke(cli, ["backtest", str(optimisation_file), "--fixtures",
+                                    str(empty)])
+    assert text.exit_code == 0 and text.output.count("NOT BACK-TESTED") == 2
+
+
+@pytest.mark.openfoam
+def test_ctrl_c_during_a_live_backtest_command_shows_what_was_done_and_how_to_resume(
+        tmp_path, optimisation_file):
+    """SIGINT to `mfflap backtest --live` while OpenFOAM runs the first motion: the solver
+    is stopped, the message names the motion and the folder its run resumes from."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from mfflap.cfd.openfoam.runner import solver_progress
+
+    assert openfoam_available()
+    work = tmp_path / "work"
+    proc = subprocess.Popen(
+        [sys.executable, "-c", "from mfflap.cli.main import cli; cli()", "backtest",
+         str(optimisation_file), "--live", "--work", str(work), "--fixtures", str(tmp_path)],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    deadline = time.monotonic() + 300
+    while time.monotonic() < deadline and proc.poll() is None and not any(
+            solver_progress(d) for d in work.glob("*") if d.is_dir()):
+        time.sleep(0.5)
+    assert proc.poll() is None, proc.communicate()
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 1, err
+    assert ("interrupted during the back-test of best sinusoid: 0 of 2 motions back-tested; "
+            f"the same command resumes the live runs in {work} from their "
+            "last written times") in err, err
+    time.sleep(2)
+    running = subprocess.run(["pgrep", "-f", f"pimpleFoam -case {work}"], capture_output=True)
+    assert running.returncode == 1, running.stdout

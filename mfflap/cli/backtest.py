@@ -26,8 +26,11 @@ from mfflap.cli.options import mesh_and_setup_options
 def backtest(optimisation_file: Path, live: bool, work_dir: Path,
              fixture_folders: tuple[Path, ...], save_to: Path | None, mesh: str | None,
              setup_name: str | None, as_json: bool) -> None:
-    """Back-test the optimised motions (and the best sinusoid) of OPTIMISATION_FILE."""
-    from mfflap.backtest.workflow import backtest_all, gain_in_cfd
+    """Back-test the optimised motions (and the best sinusoid) of OPTIMISATION_FILE.
+
+    Ctrl-C stops the run in flight and shows the motions back-tested before it.
+    """
+    from mfflap.backtest.workflow import backtest_all
     from mfflap.campaign.records import fixture_dir
     from mfflap.cfd.openfoam.setups import mesh_and_solver
     from mfflap.config import loads_case
@@ -46,10 +49,28 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
     n = next(iter(motions.values())).n_steps
     motions = {"best sinusoid": sinusoid_motion(sweep, best, n), **motions}
     folders = list(fixture_folders) or [fixture_dir("backtest")]
-    outcomes = backtest_all(case, motions, case.morison_model(), fixture_folders=folders,
-                            live=live, work_dir=work_dir, save_to=save_to,
-                            mesh=spec.name, solver=solver,
-                            progress=lambda m: click.echo(m, err=True))
+    outcomes: dict = {}
+    interrupted = None
+    try:
+        backtest_all(case, motions, case.morison_model(), fixture_folders=folders,
+                     live=live, work_dir=work_dir, save_to=save_to, mesh=spec.name,
+                     solver=solver, progress=lambda m: click.echo(m, err=True), into=outcomes)
+    except KeyboardInterrupt:  # the solver is stopped by then; show what was back-tested
+        interrupted = next(label for label in motions if label not in outcomes)
+    _show(outcomes, as_json)
+    if interrupted is not None:
+        click.echo(f"interrupted during the back-test of {interrupted}: {len(outcomes)} of "
+                   f"{len(motions)} motions back-tested{' (shown above)' if outcomes else ''};"
+                   " the same command "
+                   + (f"resumes the live runs in {work_dir} from their last written times"
+                      if live else "back-tests them all again"), err=True)
+        raise click.Abort()
+
+
+def _show(outcomes: dict, as_json: bool) -> None:
+    """Print the back-tests: a line per motion, or JSON."""
+    from mfflap.backtest.workflow import gain_in_cfd
+
     data = {label: {"status": o.status, "source": o.source, "motion_key": o.key,
                     **(o.comparison.as_dict() if o.comparison else {})}
             for label, o in outcomes.items()}
