@@ -731,12 +731,21 @@ def test_a_decomposed_run_stopped_for_its_timeout_leaves_no_rank_running(tmp_pat
     case_dir = tmp_path / "c"
     case = CfdCase(1.0, 0.3, 90.0, 10.0, duration=2.0, ramp_time=0.5)
     write_case(case_dir, case.motion(), 2.0, ramp_time=0.5)
-    with pytest.raises(CfdRunError, match="timed out after 8"):
+    with pytest.raises(CfdRunError, match="timed out after 8") as timed_out:
         run_case(case_dir, n_procs=2, timeout_s=8.0)
     assert "Time = " in (case_dir / "log.pimpleFoam").read_text()
     running = _solvers_in(case_dir)
     _solvers_left(case_dir, wait_s=0.0)
     assert not running
+    # both ranks wrote the time step they had reached, where a rerun resumes: nothing lost
+    from mfflap.cfd.openfoam.runner import latest_solution_time, solver_progress
+
+    written = latest_solution_time(case_dir)
+    reached, time_step = solver_progress(case_dir)
+    assert float(written) == pytest.approx(reached, abs=0.5 * time_step)
+    assert f"it wrote its fields at t = {written} s, where a rerun resumes" in str(
+        timed_out.value)
+    assert (case_dir / "processor1" / written / "U").is_file()
 
 
 def test_a_solver_whose_caller_died_before_it_started_does_not_start(tmp_path):

@@ -154,10 +154,14 @@ def run(case_dir: Path, timeout: float, procs: int, progress_every: float,
     except KeyboardInterrupt:  # the solver is stopped by then; say where a rerun resumes
         reached = solver_progress(case_dir)
         resume = latest_solution_time(case_dir) or "0"
-        click.echo(f"interrupted: pimpleFoam stopped"
-                   f"{f' at t = {reached[0]:.6g} s' if reached else ''}; the last time "
-                   f"written whole is {resume} s, where `mfflap cfd run {case_dir}` resumes",
-                   err=True)
+        if reached and abs(float(resume) - reached[0]) <= 0.5 * reached[1]:
+            click.echo(f"interrupted: pimpleFoam wrote its fields at t = {resume} s and "
+                       f"stopped; `mfflap cfd run {case_dir}` resumes there", err=True)
+        else:  # stopped before it could write (a second Ctrl-C, or before its first step)
+            click.echo(f"interrupted: pimpleFoam stopped"
+                       f"{f' at t = {reached[0]:.6g} s' if reached else ''}; the last time "
+                       f"written whole is {resume} s, where `mfflap cfd run {case_dir}` "
+                       "resumes", err=True)
         raise click.Abort() from None
     summary = {"case": str(case_dir), "n_procs": procs, **solver_provenance(case_dir)}
     history = read_forces(case_dir)

@@ -7,6 +7,7 @@ import gzip
 import os
 import re
 import shutil
+import signal
 import subprocess
 import time
 import zlib
@@ -71,6 +72,24 @@ def stop(proc: subprocess.Popen, grace_s: float = 10.0) -> None:
         proc.wait()
 
 
+#: the signal that makes an OpenFOAM solver write its fields at the end of the time step it
+#: is in and stop (openfoam.com's ``stopAtWriteNowSignal`` optimisation switch, set on the
+#: solver's command line; mpirun passes it on to its ranks, which write the same time)
+WRITE_AND_STOP_SIGNAL = signal.SIGUSR1
+
+
+def write_and_stop(proc: subprocess.Popen, grace_s: float) -> bool:
+    """Ask a solver started with :data:`WRITE_AND_STOP_SIGNAL` set to write its fields and
+    stop; wait up to ``grace_s`` for it. True if it stopped (a solver still running is left
+    to :func:`stop`)."""
+    proc.send_signal(WRITE_AND_STOP_SIGNAL)
+    try:
+        proc.wait(timeout=grace_s)
+    except subprocess.TimeoutExpired:
+        return False
+    return True
+
+
 def max_courant(log_text: str) -> float:
     """Largest maximum Courant number reported in a pimpleFoam log (0 if none)."""
     return max((float(c) for c in _COURANT.findall(log_text)), default=0.0)
@@ -124,7 +143,8 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
                     extra_args: tuple[str, ...] = (), min_time_step: float = 1e-7,
                     poll_s: float = 2.0, watch: Callable[[], str | None] | None = None,
                     watch_every_s: float = 60.0, progress: Callable[[], None] | None = None,
-                    progress_every_s: float = 10.0) -> Path:
+                    progress_every_s: float = 10.0, write_on_stop: bool = False,
+                    write_grace_s: float = 120.0) -> Path:
     """Run one OpenFOAM application in a case; return the log path.
 
     The log is watched while the solver runs: a time step that collapses below
@@ -138,6 +158,14 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
 
     The log is appended to (a restart's log follows the run it restarts); only what this
     run writes is judged, so an earlier run's divergence in the same log does not fail it.
+
+    With ``write_on_stop`` (a solver) a run stopped on purpose loses nothing: on a timeout or
+    Ctrl-C (KeyboardInterrupt) the solver is asked to write its fields at the end of its
+    time step and stop (:data:`WRITE_AND_STOP_SIGNAL`), so that a restart resumes where it
+    stopped, not from its last regular write. It gets ``write_grace_s`` seconds, then is
+    stopped as any other (a second Ctrl-C stops it at once). It runs in a process group of
+    its own, so that a Ctrl-C in the terminal reaches this process and not the solver
+    directly. A run stopped because it diverged or was stopped by ``watch`` is not written.
 
     Raises
     ------
@@ -155,15 +183,18 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
                           case=str(case_dir))
     log = case_dir / f"log.{application}"
     command = [application, "-case", str(case_dir), *extra_args]
+    if write_on_stop:
+        command += ["-opt-switch", f"stopAtWriteNowSignal={int(WRITE_AND_STOP_SIGNAL)}"]
     if n_procs > 1:
         command = ["mpirun", "-np", str(n_procs), "--allow-run-as-root", "--oversubscribe",
                    *command, "-parallel"]
+    written_before = latest_solution_time(case_dir) if write_on_stop else None
     started = time.monotonic()
     watched = reported = started
     own_start = log.stat().st_size if log.is_file() else 0  # where this run's lines begin
     with open(log, "a") as fh:
         proc = subprocess.Popen(dies_with_caller(command), stdout=fh, stderr=subprocess.STDOUT,
-                                env=_env())
+                                env=_env(), process_group=0 if write_on_stop else None)
         try:
             while True:
                 try:
@@ -172,7 +203,11 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
                 except subprocess.TimeoutExpired:
                     pass
                 if time.monotonic() - started > timeout_s:
-                    raise CfdRunError(f"{application} timed out after {timeout_s} s",
+                    kept = ""
+                    if write_on_stop and write_and_stop(proc, write_grace_s) and (
+                            written := latest_solution_time(case_dir)) != written_before:
+                        kept = f"; it wrote its fields at t = {written} s, where a rerun resumes"
+                    raise CfdRunError(f"{application} timed out after {timeout_s} s{kept}",
                                       case=str(case_dir), log_tail=_tail(log))
                 fh.flush()
                 collapsed = collapsed_time_step(read_tail(log, start=own_start),
@@ -191,6 +226,10 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
                     if reason is not None:
                         raise CfdRunError(f"{application} stopped: {reason}",
                                           case=str(case_dir), log_tail=_tail(log))
+        except KeyboardInterrupt:
+            if write_on_stop and proc.poll() is None:
+                write_and_stop(proc, write_grace_s)  # a second Ctrl-C: stopped below
+            raise
         finally:
             if proc.poll() is None:
                 stop(proc)
@@ -341,4 +380,5 @@ def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
             reporter = RunProgress(case_dir, progress)
         run_application(case_dir, "pimpleFoam", timeout_s=timeout_s, n_procs=n_procs,
                         min_time_step=min_time_step, watch=watch, watch_every_s=watch_every_s,
-                        progress=reporter, progress_every_s=progress_every_s)
+                        progress=reporter, progress_every_s=progress_every_s,
+                        write_on_stop=True)
