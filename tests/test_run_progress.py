@@ -91,11 +91,13 @@ def test_cfd_run_decomposed_on_two_ranks(tmp_path):
     assert summary["n_procs"] == 2 and summary["n_time_steps"] > 10
 
 
-def test_an_interrupted_cfd_run_stops_its_solver_and_says_where_it_resumes(tmp_path):
-    """Ctrl-C (SIGINT to the job's process group, as a terminal sends it) on `mfflap cfd
-    run`: pimpleFoam writes its fields at the time step it reached and stops (a second past
-    its last regular write, which a restart would otherwise lose), the message says so, and
-    the next `cfd run` resumes there and finishes."""
+@pytest.mark.parametrize("stop", ["SIGINT to the group", "SIGTERM", "SIGUSR1"])
+def test_an_interrupted_cfd_run_stops_its_solver_and_says_where_it_resumes(tmp_path, stop):
+    """Ctrl-C (SIGINT to the job's process group, as a terminal sends it), SIGTERM (kill,
+    scancel) or SIGUSR1 (SLURM's --signal before a time limit) to `mfflap cfd run`:
+    pimpleFoam writes its fields at the time step it reached and stops (a second past its
+    last regular write, which a restart would otherwise lose), the message says so, and the
+    next `cfd run` resumes there and finishes."""
     import signal
     import subprocess
     import sys
@@ -120,7 +122,10 @@ def test_an_interrupted_cfd_run_stops_its_solver_and_says_where_it_resumes(tmp_p
         time.sleep(0.2)  # until a first time folder is written whole
     time.sleep(1.0)  # past it: a regular write would lose this second
     assert proc.poll() is None, proc.communicate()
-    os.killpg(proc.pid, signal.SIGINT)  # Ctrl-C in a terminal: the whole foreground group
+    if stop == "SIGINT to the group":
+        os.killpg(proc.pid, signal.SIGINT)  # Ctrl-C in a terminal: the whole foreground group
+    else:
+        proc.send_signal(getattr(signal, stop))
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == 1, err
     resumed = latest_solution_time(case)

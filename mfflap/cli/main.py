@@ -13,11 +13,15 @@ from mfflap.errors import MfflapError
 
 
 class MfflapGroup(click.Group):
-    """A click group that turns mfflap's own errors into one clear line and exit code 2."""
+    """A click group that turns mfflap's own errors into one clear line and exit code 2, and
+    SIGTERM and SIGUSR1 into a Ctrl-C (:mod:`mfflap.cli.stop_signals`)."""
 
     def invoke(self, ctx: click.Context):
+        from mfflap.cli.stop_signals import stop_signals_as_interrupt
+
         try:
-            return super().invoke(ctx)
+            with stop_signals_as_interrupt():
+                return super().invoke(ctx)
         except MfflapError as exc:
             click.echo(f"mfflap: error: {exc}", err=True)
             sys.exit(2)
