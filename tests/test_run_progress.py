@@ -91,10 +91,12 @@ def test_cfd_run_decomposed_on_two_ranks(tmp_path):
     assert summary["n_procs"] == 2 and summary["n_time_steps"] > 10
 
 
-@pytest.mark.parametrize("stop", ["SIGINT to the group", "SIGTERM", "SIGUSR1"])
+@pytest.mark.parametrize("stop", ["SIGINT to the group", "SIGTERM", "SIGUSR1",
+                                  "SIGUSR1 to every process"])
 def test_an_interrupted_cfd_run_stops_its_solver_and_says_where_it_resumes(tmp_path, stop):
     """Ctrl-C (SIGINT to the job's process group, as a terminal sends it), SIGTERM (kill,
-    scancel) or SIGUSR1 (SLURM's --signal before a time limit) to `mfflap cfd run`:
+    scancel) or SIGUSR1 (SLURM's --signal before a time limit; under srun it reaches the
+    solver too, which then has it twice) to `mfflap cfd run`:
     pimpleFoam writes its fields at the time step it reached and stops (a second past its
     last regular write, which a restart would otherwise lose), the message says so, and the
     next `cfd run` resumes there and finishes."""
@@ -125,7 +127,9 @@ def test_an_interrupted_cfd_run_stops_its_solver_and_says_where_it_resumes(tmp_p
     if stop == "SIGINT to the group":
         os.killpg(proc.pid, signal.SIGINT)  # Ctrl-C in a terminal: the whole foreground group
     else:
-        proc.send_signal(getattr(signal, stop))
+        proc.send_signal(getattr(signal, stop.split()[0]))
+    if stop == "SIGUSR1 to every process":
+        subprocess.run(["pkill", "-USR1", "-f", f"pimpleFoam -case {case}"], check=True)
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == 1, err
     resumed = latest_solution_time(case)
