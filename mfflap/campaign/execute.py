@@ -25,7 +25,7 @@ from typing import Any
 from mfflap.campaign.cases import CampaignCase
 from mfflap.campaign.records import LOST_SUFFIX, RECORD_SUFFIX, read_record, write_record
 from mfflap.cfd.bursts import find_load_bursts
-from mfflap.cfd.openfoam.case_lock import lock_holder
+from mfflap.cfd.openfoam.case_lock import CaseBusyError, lock_holder
 from mfflap.cfd.openfoam.writer import SolverSettings
 from mfflap.errors import ConfigError, MfflapError
 from mfflap.parameters import Fluid, FreeStream, Plate
@@ -118,8 +118,6 @@ def run_one(case: CampaignCase, out_dir: str, setup: CampaignSetup) -> CaseStatu
         return CaseStatus(case.case_id, "done", "already finished")
     case_dir = out / "cases" / case.case_id
     solver = SolverSettings(**{**asdict(setup.solver), "write_interval": case.duration / 4})
-    from mfflap.cfd.openfoam.case_lock import CaseBusyError
-
     try:
         record = run_motion(case_dir, case.motion(), case.case_id,
                             {"kind": case.kind, **case.as_dict()}, case.duration,

@@ -56,7 +56,7 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
                      live=live, work_dir=work_dir, save_to=save_to, mesh=spec.name,
                      solver=solver, progress=lambda m: click.echo(m, err=True), into=outcomes)
     except KeyboardInterrupt:  # the solver is stopped by then; show what was back-tested
-        interrupted = next(label for label in motions if label not in outcomes)
+        interrupted = next((label for label in motions if label not in outcomes), "the last")
     _show(outcomes, as_json)
     if interrupted is not None:
         click.echo(f"interrupted during the back-test of {interrupted}: {len(outcomes)} of "

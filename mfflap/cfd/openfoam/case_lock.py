@@ -31,7 +31,6 @@ from mfflap.errors import CfdRunError
 LOCK_FILE = ".mfflap-run.lock"
 
 
-
 class CaseBusyError(CfdRunError):
     """Another process, or another thread of this one, holds the case's run lock."""
 
