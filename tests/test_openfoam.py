@@ -1061,3 +1061,29 @@ def test_convergence_time_step_study_on_a_chosen_mesh(tmp_path):
     assert data["runs"]["lean_co2"]["max_courant"] == 2
     assert "lean_co4 vs lean_co2" in data["nrmse"]
     assert data["gci"] == {} and data["gci_meshes"] == []
+
+
+def test_a_run_resumed_between_writes_still_writes_at_its_end(tmp_path):
+    """OpenFOAM counts write times from a run's start: resumed from a time off the write
+    grid, the interval shrinks to the largest one that divides the time left (so the run
+    writes at its end); on the grid, or writing by time step, nothing changes; the function
+    objects' own intervals are never touched."""
+    from mfflap.cfd.openfoam.runner import align_writes_to_end
+
+    from mfflap.cfd.openfoam.writer import SolverSettings
+
+    write_case(tmp_path, MOTION, 1.0, solver=SolverSettings(write_interval=0.25))
+    control = tmp_path / "system" / "controlDict"
+    original = control.read_text()
+    assert align_writes_to_end(tmp_path, 0.5) is None and control.read_text() == original
+    assert align_writes_to_end(tmp_path, 1.0) is None  # nothing left to run
+    aligned = align_writes_to_end(tmp_path, 0.3)  # 0.7 left: 3 writes of 0.2333
+    assert aligned == pytest.approx(0.7 / 3)
+    text = control.read_text()
+    assert f"writeInterval   {aligned:.12g};" in text
+    assert text.count("writeInterval") == original.count("writeInterval")
+    assert text.replace(f"{aligned:.12g}", "0.25", 1) == original  # only that entry
+    assert align_writes_to_end(tmp_path, 0.3) is None  # aligned now: stays
+    control.write_text(original.replace("writeControl    adjustableRunTime;",
+                                        "writeControl    timeStep;"))
+    assert align_writes_to_end(tmp_path, 0.3) is None

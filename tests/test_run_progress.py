@@ -173,3 +173,47 @@ def test_an_interrupted_mesh_study_keeps_its_finished_runs_and_says_so(tmp_path)
     running = subprocess.run(["pgrep", "-f", f"pimpleFoam -case {out}"], capture_output=True)
     assert running.returncode == 1  # no solver left writing into the study
     assert not (out / "medium_co4.h5").exists()
+
+
+def test_a_solver_stopped_by_a_signal_of_its_own_is_not_a_finished_run(tmp_path):
+    """SIGUSR1 sent to pimpleFoam alone (not to mfflap): it writes and ends without an
+    error before its end time; `cfd run` says so with exit status 2 instead of
+    "finished", and the next `cfd run` resumes there and finishes, writing at its end."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from mfflap.cfd.openfoam.forces import read_forces
+    from mfflap.cfd.openfoam.runner import latest_solution_time, solver_progress
+    from mfflap.cli.main import cli
+
+    case = tmp_path / "case"
+    res = CliRunner().invoke(cli, ["cfd", "write", str(CASE), str(case), "--cycles", "0.1"])
+    assert res.exit_code == 0, res.output
+    proc = subprocess.Popen([sys.executable, "-c", "from mfflap.cli.main import cli; cli()",
+                             "cfd", "run", str(case)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    deadline = time.monotonic() + 300
+    while solver_progress(case) is None and time.monotonic() < deadline:
+        time.sleep(0.2)
+    assert proc.poll() is None, proc.communicate()
+    subprocess.run(["pkill", "-USR1", "-f", f"pimpleFoam -case {case}"], check=True)
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode == 2, (out, err)
+    resumed = latest_solution_time(case)
+    assert re.search(r"pimpleFoam stopped without an error at t = \S+ s, before its end time "
+                     rf"0\.1 s \(a stop signal sent to the solver itself\?\); a rerun resumes "
+                     rf"from t = {re.escape(resumed)} s", err), err
+    assert "finished" not in out and 0 < float(resumed) < 0.1
+    res = CliRunner().invoke(cli, ["cfd", "run", str(case)])
+    assert res.exit_code == 0, res.output
+    assert read_forces(case).time[-1] == pytest.approx(0.1, abs=1e-3)
+    # resumed between two writes, OpenFOAM counts its write times from there: the interval
+    # is shortened to divide the time left, so the run still writes at its end time
+    assert latest_solution_time(case) == "0.1"
+    interval = float(re.search(r"^writeInterval\s+(\S+);", (
+        case / "system" / "controlDict").read_text(), re.M).group(1))
+    n_writes = (0.1 - float(resumed)) / interval
+    assert interval <= 0.025 and n_writes == pytest.approx(round(n_writes), abs=1e-6)

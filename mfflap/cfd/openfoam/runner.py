@@ -4,6 +4,7 @@ detection. Logs are kept in the case folder (log.<application>)."""
 from __future__ import annotations
 
 import gzip
+import math
 import os
 import re
 import shutil
@@ -322,6 +323,53 @@ def set_start_time(case_dir: str | Path, time_name: str) -> None:
         path.write_text(new)
 
 
+_WRITE_CONTROL = re.compile(r"^writeControl\s+(\w+);", re.M)
+_WRITE_INTERVAL = re.compile(r"^(writeInterval\s+)([^;\s]+)(;)", re.M)
+
+
+def align_writes_to_end(case_dir: str | Path, start_s: float) -> float | None:
+    """Make a run from ``start_s`` write at its end time; return the new write interval, s,
+    or None if it already does (or writes by time step).
+
+    OpenFOAM counts a run's write times (``adjustableRunTime``) from the time it starts and
+    runs while t < endTime - deltaT / 2. A run resumed between two writes (one stopped by
+    :data:`WRITE_AND_STOP_SIGNAL`) would write on a shifted grid, its last write before the
+    end, and stop short of it unwritten; a rerun would then recompute that stretch. The
+    interval becomes the largest one not above the case's that divides the time left.
+    """
+    from mfflap.cfd.openfoam.run_progress import end_time
+
+    path = Path(case_dir) / "system" / "controlDict"
+    text = path.read_text()
+    control, interval = _WRITE_CONTROL.search(text), _WRITE_INTERVAL.search(text)
+    final = end_time(case_dir)
+    if (control is None or control.group(1) not in ("adjustableRunTime", "runTime")
+            or interval is None or final is None or final <= start_s):
+        return None
+    step = float(interval.group(2))
+    n_writes = (final - start_s) / step
+    if abs(n_writes - round(n_writes)) <= 1e-6 * max(n_writes, 1.0):
+        return None
+    aligned = (final - start_s) / math.ceil(n_writes)
+    path.write_text(_WRITE_INTERVAL.sub(lambda m: f"{m.group(1)}{aligned:.12g}{m.group(3)}",
+                                        text, count=1))
+    return aligned
+
+
+def ran_to_end(case_dir: str | Path) -> bool:
+    """True if the case's last pimpleFoam run ended normally at its end time: its log's last
+    time step within one step of endTime (OpenFOAM runs while t < endTime - deltaT / 2),
+    then "End"."""
+    from mfflap.cfd.openfoam.run_progress import end_time
+
+    log = Path(case_dir) / "log.pimpleFoam"
+    reached, final = solver_progress(case_dir), end_time(case_dir)
+    if reached is None or final is None or not reached[0] >= final - reached[1]:
+        return False
+    last_lines = [line.strip() for line in read_tail(log, 2_000).splitlines() if line.strip()]
+    return "End" in last_lines[-10:]  # "Finalising parallel run", MPI notes may follow
+
+
 def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
              min_time_step: float = 1e-7, watch: Callable[[], str | None] | None = None,
              watch_every_s: float = 60.0, progress: Callable[[str], None] | None = None,
@@ -341,9 +389,11 @@ def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
     ------
     CfdRunError
         If the folder is not a case, if another process is running it
-        (:func:`mfflap.cfd.openfoam.case_lock.case_lock`), or as :func:`run_application`.
+        (:func:`mfflap.cfd.openfoam.case_lock.case_lock`), if pimpleFoam ended without an
+        error before the case's end time (a stop signal sent to it directly: it wrote its
+        fields, and a rerun resumes there), or as :func:`run_application`.
     """
-    from mfflap.cfd.openfoam.run_progress import RunProgress
+    from mfflap.cfd.openfoam.run_progress import RunProgress, end_time
 
     case_dir = Path(case_dir)
     meshed = (case_dir / "constant" / "polyMesh" / "points").exists()
@@ -372,13 +422,22 @@ def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
                 run_application(case_dir, "decomposePar", timeout_s=300)
         start = latest_solution_time(case_dir) or "0"
         set_start_time(case_dir, start)
+        align_writes_to_end(case_dir, float(start))
         reporter = None
         if progress is not None:
             progress(f"pimpleFoam {'from t = ' + start + ' s' if start != '0' else 'started'}"
                      f"{f' on {n_procs} processes' if n_procs > 1 else ''}; log: "
                      f"{case_dir / 'log.pimpleFoam'}")
             reporter = RunProgress(case_dir, progress)
-        run_application(case_dir, "pimpleFoam", timeout_s=timeout_s, n_procs=n_procs,
-                        min_time_step=min_time_step, watch=watch, watch_every_s=watch_every_s,
-                        progress=reporter, progress_every_s=progress_every_s,
-                        write_on_stop=True)
+        log = run_application(case_dir, "pimpleFoam", timeout_s=timeout_s, n_procs=n_procs,
+                              min_time_step=min_time_step, watch=watch,
+                              watch_every_s=watch_every_s, progress=reporter,
+                              progress_every_s=progress_every_s, write_on_stop=True)
+        reached = solver_progress(case_dir)
+        if reached is not None and not ran_to_end(case_dir):
+            raise CfdRunError(  # sent a stop signal by someone else: not a finished run
+                f"pimpleFoam stopped without an error at t = {reached[0]:.6g} s, before its "
+                f"end time {end_time(case_dir):g} s (a stop signal sent to the solver "
+                f"itself?); a rerun resumes from t = {latest_solution_time(case_dir)} s",
+                case=str(case_dir),
+                log_tail=_tail(log))
