@@ -1069,7 +1069,6 @@ def test_a_run_resumed_between_writes_still_writes_at_its_end(tmp_path):
     writes at its end); on the grid, or writing by time step, nothing changes; the function
     objects' own intervals are never touched."""
     from mfflap.cfd.openfoam.runner import align_writes_to_end
-
     from mfflap.cfd.openfoam.writer import SolverSettings
 
     write_case(tmp_path, MOTION, 1.0, solver=SolverSettings(write_interval=0.25))
@@ -1087,3 +1086,27 @@ def test_a_run_resumed_between_writes_still_writes_at_its_end(tmp_path):
     control.write_text(original.replace("writeControl    adjustableRunTime;",
                                         "writeControl    timeStep;"))
     assert align_writes_to_end(tmp_path, 0.3) is None
+
+
+@pytest.mark.parametrize(("steps", "ending", "finished"), [
+    ([(0.98, 0.01), (0.99, 0.01), (1.0, 0.01)], "End", True),
+    ([(0.98, 0.012), (0.992, 0.012)], "End", True),  # within half a step: OpenFOAM stops
+    ([(0.5, 0.01), (0.51, 0.01)], "End", False),  # ended early (a stop signal)
+    ([(0.99, 0.01), (1.0, 0.01)], "PIMPLE: iteration 1", False),  # cut off, no End
+    ([(0.99, None), (1.0, None)], "End", True),  # a fixed time step prints no deltaT
+    ([(0.5, None), (0.51, None)], "End", False),
+    ([(0.99, 0.01), (1.0, 0.01)], "End\n\nFinalising parallel run", True),
+])
+def test_ran_to_end_reads_the_log_against_the_end_time(tmp_path, steps, ending, finished):
+    from mfflap.cfd.openfoam.runner import ran_to_end
+
+    write_case(tmp_path, MOTION, 1.0)
+    lines = []
+    for time_s, step_s in steps:
+        if step_s is not None:
+            lines.append(f"Courant Number mean: 0.01 max: 0.9\ndeltaT = {step_s}")
+        lines.append(f"Time = {time_s}\n\nPIMPLE: iteration 1\nExecutionTime = 1 s\n")
+    (tmp_path / "log.pimpleFoam").write_text("\n".join(lines) + f"\n{ending}\n\n")
+    assert ran_to_end(tmp_path) is finished
+    (tmp_path / "log.pimpleFoam").unlink()
+    assert ran_to_end(tmp_path) is False  # no log: not run

@@ -364,7 +364,13 @@ def ran_to_end(case_dir: str | Path) -> bool:
 
     log = Path(case_dir) / "log.pimpleFoam"
     reached, final = solver_progress(case_dir), end_time(case_dir)
-    if reached is None or final is None or not reached[0] >= final - reached[1]:
+    if reached is None or final is None:
+        return False
+    step = reached[1]
+    if math.isnan(step):  # a fixed time step prints no deltaT: the last two times give it
+        times = [float(t) for t in _TIME.findall(read_tail(log))[-2:]]
+        step = times[1] - times[0] if len(times) == 2 else 0.0
+    if reached[0] < final - step - 1e-9 * abs(final):
         return False
     last_lines = [line.strip() for line in read_tail(log, 2_000).splitlines() if line.strip()]
     return "End" in last_lines[-10:]  # "Finalising parallel run", MPI notes may follow
