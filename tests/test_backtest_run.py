@@ -259,18 +259,6 @@ def test_ctrl_c_during_a_live_back_test_writes_the_stages_finished_before(tmp_pa
     assert "Optimised motions" in html and "back-test: interrupted (Ctrl-C)" in html
 
 
-@pytest.fixture(scope="module")
-def optimisation_file(tmp_path_factory):
-    """A real optimisation (β = 0.5, one SQP start)."""
-    from mfflap.cli.main import cli
-
-    out = tmp_path_factory.mktemp("opt") / "opt.h5"
-    res = CliRunner().invoke(cli, ["optimise", str(CASE), "--betas", "0.5", "--starts", "1",
-                                   "--no-ipopt", "--output", str(out)])
-    assert res.exit_code == 0, res.output
-    return out
-
-
 def test_backtest_command_lists_each_motion_and_why_it_was_not_back_tested(
         tmp_path, optimisation_file):
     """Fixture folders without these motions: both motions (the best sinusoid and β = 0.5)

@@ -188,16 +188,6 @@ def test_a_table_motion_runs_in_openfoam_and_parses_from_its_own_case(tmp_path):
     assert res.exit_code == 2 and "keeps its own motion table" in res.output
 
 
-@pytest.fixture(scope="module")
-def optimisation_file(tmp_path_factory):
-    """A real optimisation (β = 0.5, one SQP start, about 8 s)."""
-    out = tmp_path_factory.mktemp("opt") / "opt.h5"
-    res = CliRunner().invoke(cli, ["optimise", str(CASE), "--betas", "0.5", "--starts", "1",
-                                   "--no-ipopt", "--output", str(out)])
-    assert res.exit_code == 0, res.output
-    return out
-
-
 @pytest.mark.slow
 def test_an_optimised_motion_becomes_a_table_and_the_same_case_as_the_back_test(
         tmp_path, optimisation_file):
