@@ -1066,8 +1066,8 @@ def test_convergence_time_step_study_on_a_chosen_mesh(tmp_path):
 def test_a_run_resumed_between_writes_still_writes_at_its_end(tmp_path):
     """OpenFOAM counts write times from a run's start: resumed from a time off the write
     grid, the interval shrinks to the largest one that divides the time left (so the run
-    writes at its end); on the grid, or writing by time step, nothing changes; the function
-    objects' own intervals are never touched."""
+    writes at its end); from the case's own grid (even one that misses the end), or writing
+    by time step, nothing changes; the function objects' own intervals are never touched."""
     from mfflap.cfd.openfoam.runner import align_writes_to_end
     from mfflap.cfd.openfoam.writer import SolverSettings
 
@@ -1083,6 +1083,9 @@ def test_a_run_resumed_between_writes_still_writes_at_its_end(tmp_path):
     assert text.count("writeInterval") == original.count("writeInterval")
     assert text.replace(f"{aligned:.12g}", "0.25", 1) == original  # only that entry
     assert align_writes_to_end(tmp_path, 0.3) is None  # aligned now: stays
+    control.write_text(original.replace("writeInterval   0.25;", "writeInterval   0.3;"))
+    assert align_writes_to_end(tmp_path, 0.0) is None  # the user's own grid, from the start
+    assert align_writes_to_end(tmp_path, 0.6) is None  # and from one of its writes
     control.write_text(original.replace("writeControl    adjustableRunTime;",
                                         "writeControl    timeStep;"))
     assert align_writes_to_end(tmp_path, 0.3) is None

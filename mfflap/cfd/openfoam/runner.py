@@ -335,7 +335,9 @@ def align_writes_to_end(case_dir: str | Path, start_s: float) -> float | None:
     runs while t < endTime - deltaT / 2. A run resumed between two writes (one stopped by
     :data:`WRITE_AND_STOP_SIGNAL`) would write on a shifted grid, its last write before the
     end, and stop short of it unwritten; a rerun would then recompute that stretch. The
-    interval becomes the largest one not above the case's that divides the time left.
+    interval becomes the largest one not above the case's that divides the time left. A
+    run that starts on the grid of the case's own interval (from 0, or from one of its
+    writes) keeps the interval it was given.
     """
     from mfflap.cfd.openfoam.run_progress import end_time
 
@@ -347,8 +349,12 @@ def align_writes_to_end(case_dir: str | Path, start_s: float) -> float | None:
             or interval is None or final is None or final <= start_s):
         return None
     step = float(interval.group(2))
-    n_writes = (final - start_s) / step
-    if abs(n_writes - round(n_writes)) <= 1e-6 * max(n_writes, 1.0):
+    n_writes, n_before = (final - start_s) / step, start_s / step
+
+    def whole(count: float) -> bool:
+        return abs(count - round(count)) <= 1e-6 * max(count, 1.0)
+
+    if whole(n_writes) or whole(n_before):  # ends on the grid, or starts on the case's own
         return None
     aligned = (final - start_s) / math.ceil(n_writes)
     path.write_text(_WRITE_INTERVAL.sub(lambda m: f"{m.group(1)}{aligned:.12g}{m.group(3)}",
@@ -428,7 +434,10 @@ def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
                 run_application(case_dir, "decomposePar", timeout_s=300)
         start = latest_solution_time(case_dir) or "0"
         set_start_time(case_dir, start)
-        align_writes_to_end(case_dir, float(start))
+        aligned = align_writes_to_end(case_dir, float(start))
+        if aligned is not None and progress is not None:
+            progress(f"write interval {aligned:.6g} s from t = {start} s, so that the run "
+                     "still writes at its end time")
         reporter = None
         if progress is not None:
             progress(f"pimpleFoam {'from t = ' + start + ' s' if start != '0' else 'started'}"
