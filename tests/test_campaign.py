@@ -873,9 +873,10 @@ def test_a_lost_scheduler_stops_the_campaign_with_nothing_marked_failed(tmp_path
 @pytest.mark.parametrize("command_name", ["campaign run", "cfd linear-check"])
 def test_an_interrupted_campaign_stops_its_solvers_and_says_how_to_resume(tmp_path,
                                                                           command_name):
-    """Ctrl-C (SIGINT) on `mfflap campaign run` or `mfflap cfd linear-check` (a campaign of
-    small motions): the LocalCluster and the solver of the case in flight are stopped, the
-    message counts the cases, and `campaign status` lists the one stopped part-way."""
+    """Ctrl-C (SIGINT to the job's process group) on `mfflap campaign run` or `mfflap cfd
+    linear-check` (a campaign of small motions): the dask workers ignore it, the solver of
+    the case in flight writes the step it reached and stops, the LocalCluster is stopped,
+    the message counts the cases, and `campaign status` lists the one stopped part-way."""
     assert openfoam_available()
     from mfflap.campaign.execute import campaign_status
     from mfflap.cfd.linear_check import SMALL_MOTIONS
@@ -889,15 +890,17 @@ def test_an_interrupted_campaign_stops_its_solvers_and_says_how_to_resume(tmp_pa
     command = [sys.executable, "-c", "from mfflap.cli.main import cli; cli()",
                *command_name.split(), *arguments[command_name]]
     proc = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            process_group=0,  # a shell's job: Ctrl-C reaches all of it
                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     deadline = time.monotonic() + 300
     case_dirs = out / "cases"
     while time.monotonic() < deadline and not any(
             solver_progress(d) for d in case_dirs.glob("*") if d.is_dir()):
         time.sleep(0.5)  # until a solver has taken time steps
+    time.sleep(1.0)  # past its first steps: a stop without a write would lose this second
     assert proc.poll() is None, proc.communicate()
-    proc.send_signal(signal.SIGINT)
-    _, err = proc.communicate(timeout=120)
+    os.killpg(proc.pid, signal.SIGINT)  # the campaign and its dask workers, as a terminal does
+    _, err = proc.communicate(timeout=180)
     assert proc.returncode == 1, err
     assert re.search(rf"interrupted: 0 of 1 cases done in {re.escape(str(out))}, 1 stopped "
                      "part-way; the same command resumes them", err), err
@@ -906,6 +909,13 @@ def test_an_interrupted_campaign_stops_its_solvers_and_says_how_to_resume(tmp_pa
                              capture_output=True)
     assert running.returncode == 1, running.stdout  # no solver left writing into the case
     assert [s.state for s in campaign_status(out)] == ["started"]
+    # the solver in flight wrote the step it had reached: the rerun loses nothing
+    from mfflap.cfd.openfoam.runner import latest_solution_time
+
+    (case_dir,) = [d for d in case_dirs.iterdir() if d.is_dir()]
+    reached, time_step = solver_progress(case_dir)
+    assert float(latest_solution_time(case_dir)) == pytest.approx(reached, abs=0.5 * time_step)
+    assert not list(out.glob("*.failed.toml"))
 
 
 #: a process that holds a case folder's run lock until it is killed

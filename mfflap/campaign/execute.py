@@ -22,10 +22,13 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
+from distributed import WorkerPlugin
+
 from mfflap.campaign.cases import CampaignCase
 from mfflap.campaign.records import LOST_SUFFIX, RECORD_SUFFIX, read_record, write_record
 from mfflap.cfd.bursts import find_load_bursts
 from mfflap.cfd.openfoam.case_lock import CaseBusyError, lock_holder
+from mfflap.cfd.openfoam.runner import RunStopped, stop_running_solvers
 from mfflap.cfd.openfoam.writer import SolverSettings
 from mfflap.errors import ConfigError, MfflapError
 from mfflap.parameters import Fluid, FreeStream, Plate
@@ -127,6 +130,8 @@ def run_one(case: CampaignCase, out_dir: str, setup: CampaignSetup) -> CaseStatu
         write_record(record_path, record, single_precision=setup.single_precision)
     except CaseBusyError as exc:  # not a failure: the process running it records it
         return CaseStatus(case.case_id, "busy", str(exc).splitlines()[0])
+    except RunStopped as exc:  # the campaign was stopped: resumed by the next run
+        return CaseStatus(case.case_id, "started", str(exc).splitlines()[0])
     except Exception as exc:  # a failed case must not stop the campaign
         tail = getattr(exc, "log_tail", "") or traceback.format_exc(limit=3)
         _failed_path(out, case.case_id).write_text(
@@ -300,6 +305,27 @@ def _status_of(future: Any, case_id: str, out: Path) -> CaseStatus:
     return CaseStatus(case_id, "failed", error.splitlines()[0])
 
 
+#: how long a Ctrl-C'd campaign waits for the solvers in flight to write and stop, s
+WRITE_GRACE_S = 60.0
+
+
+class IgnoreInterrupt(WorkerPlugin):
+    """A dask worker plugin: the LocalCluster's worker processes ignore SIGINT.
+
+    They share the terminal's process group, so a Ctrl-C would otherwise kill them at once
+    and their solvers with them, unwritten. :func:`run_campaign` catches it in the main
+    process instead and asks every worker to have its solvers write and stop
+    (:func:`mfflap.cfd.openfoam.runner.stop_running_solvers`) before it closes the cluster.
+    """
+
+    def setup(self, worker: object) -> None:
+        import signal
+        import threading
+
+        if threading.current_thread() is threading.main_thread():
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
                  setup: CampaignSetup | None = None, *, n_workers: int = 1,
                  scheduler_address: str | None = None, retry_failed: bool = False,
@@ -366,6 +392,8 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
                                    dashboard_address="127.0.0.1:0")
         client = Client(scheduler_address or cluster)
         try:
+            if cluster is not None:  # its workers share this terminal's Ctrl-C
+                client.register_plugin(IgnoreInterrupt(), name="mfflap-ignore-sigint")
             case_ids = {f"mfflap-{c.case_id}": c.case_id for c in todo}
             futures = [client.submit(run_one, c, str(out), setup, key=f"mfflap-{c.case_id}",
                                      pure=False) for c in todo]
@@ -402,6 +430,12 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
                     bar.set_postfix_str(last)
             if bar is not None:
                 bar.close()
+        except KeyboardInterrupt:  # the cases in flight write where they are, then stop
+            try:
+                client.run(stop_running_solvers, WRITE_GRACE_S)
+            except Exception:  # workers gone: their solvers die with them
+                pass
+            raise
         finally:
             client.close()
             if cluster is not None:

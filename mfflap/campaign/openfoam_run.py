@@ -15,7 +15,12 @@ from mfflap.cfd.force_envelope import BREACH_FACTOR, EnvelopeBreach, find_envelo
 from mfflap.cfd.openfoam.case_lock import LOCK_FILE, case_lock
 from mfflap.cfd.openfoam.forces import read_forces
 from mfflap.cfd.openfoam.loads import imposed_state, to_loads
-from mfflap.cfd.openfoam.runner import is_time_folder, latest_solution_time, run_case
+from mfflap.cfd.openfoam.runner import (
+    RunStopped,
+    is_time_folder,
+    latest_solution_time,
+    run_case,
+)
 from mfflap.cfd.openfoam.solver_log import solver_provenance
 from mfflap.cfd.openfoam.writer import (
     TURBULENCE_CONVECTION_SCHEMES,
@@ -405,6 +410,8 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
                          min_time_step=min_time_step, watch=watch,
                          watch_every_s=bound_watch_every_s, progress=progress,
                          progress_every_s=progress_every_s)
+            except RunStopped:  # asked to write and stop (a campaign's Ctrl-C): no retry
+                raise
             except CfdRunError as exc:
                 if _BOUND_STOP in str(exc) and len(retries) < max_retries:
                     pass  # stopped early by the bound: rewound and retried below

@@ -10,6 +10,7 @@ import re
 import shutil
 import signal
 import subprocess
+import threading
 import time
 import zlib
 from collections.abc import Callable
@@ -89,6 +90,41 @@ def write_and_stop(proc: subprocess.Popen, grace_s: float) -> bool:
     except subprocess.TimeoutExpired:
         return False
     return True
+
+
+class RunStopped(CfdRunError):
+    """A solver asked from outside its run (:func:`stop_running_solvers`) to write its
+    fields and stop: not a failure; a rerun resumes where it stopped."""
+
+
+#: solvers this process runs with ``write_on_stop``, for :func:`stop_running_solvers`
+_solvers: set[subprocess.Popen] = set()
+#: process ids of those asked to write and stop by :func:`stop_running_solvers`
+_stop_requested: set[int] = set()
+_solvers_guard = threading.Lock()
+
+
+def stop_running_solvers(grace_s: float = 60.0) -> int:
+    """Ask every solver this process runs (in any thread) to write its fields and stop, and
+    wait up to ``grace_s`` for them; return how many were asked.
+
+    A campaign's dask workers run their solvers in threads of their own; on Ctrl-C the
+    campaign calls this on every worker (``Client.run``) before it closes the cluster, so
+    that the cases in flight resume where they stopped. Their runs raise
+    :class:`RunStopped`.
+    """
+    with _solvers_guard:
+        running = [proc for proc in _solvers if proc.poll() is None]
+        _stop_requested.update(proc.pid for proc in running)
+    for proc in running:
+        proc.send_signal(WRITE_AND_STOP_SIGNAL)
+    deadline = time.monotonic() + grace_s
+    for proc in running:
+        try:
+            proc.wait(timeout=max(0.0, deadline - time.monotonic()))
+        except subprocess.TimeoutExpired:
+            pass
+    return len(running)
 
 
 def max_courant(log_text: str) -> float:
@@ -196,6 +232,9 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
     with open(log, "a") as fh:
         proc = subprocess.Popen(dies_with_caller(command), stdout=fh, stderr=subprocess.STDOUT,
                                 env=_env(), process_group=0 if write_on_stop else None)
+        if write_on_stop:
+            with _solvers_guard:
+                _solvers.add(proc)
         try:
             while True:
                 try:
@@ -234,6 +273,14 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
         finally:
             if proc.poll() is None:
                 stop(proc)
+            with _solvers_guard:
+                _solvers.discard(proc)
+                asked_to_stop = proc.pid in _stop_requested
+                _stop_requested.discard(proc.pid)
+    if asked_to_stop:
+        raise RunStopped(f"{application} was asked to write its fields and stop; the last time "
+                         f"written whole is {latest_solution_time(case_dir)} s, where a rerun "
+                         "resumes", case=str(case_dir), log_tail=_tail(log))
     own_tail = read_tail(log, 200_000, start=own_start)
     courants = max_courant(own_tail)
     if proc.returncode != 0 or _DIVERGED.search(own_tail[-50_000:]):
