@@ -15,6 +15,8 @@ flight and corrupts nothing; rerunning the same command continues it.
 from __future__ import annotations
 
 import shutil
+import signal
+import threading
 import time
 import traceback
 from collections.abc import Callable, Sequence
@@ -319,9 +321,6 @@ class IgnoreInterrupt(WorkerPlugin):
     """
 
     def setup(self, worker: object) -> None:
-        import signal
-        import threading
-
         if threading.current_thread() is threading.main_thread():
             signal.signal(signal.SIGINT, signal.SIG_IGN)
 

@@ -143,7 +143,12 @@ def run(case_dir: Path, timeout: float, procs: int, progress_every: float,
     """
     from mfflap.cfd.bursts import find_numerical_bursts
     from mfflap.cfd.openfoam.forces import read_forces
-    from mfflap.cfd.openfoam.runner import latest_solution_time, run_case, solver_progress
+    from mfflap.cfd.openfoam.runner import (
+        latest_solution_time,
+        run_case,
+        solver_progress,
+        written_where_stopped,
+    )
     from mfflap.cfd.openfoam.solver_log import solver_provenance
 
     progress = (None if progress_every <= 0 else
@@ -152,12 +157,13 @@ def run(case_dir: Path, timeout: float, procs: int, progress_every: float,
         run_case(case_dir, timeout_s=timeout, n_procs=procs, progress=progress,
                  progress_every_s=progress_every)
     except KeyboardInterrupt:  # the solver is stopped by then; say where a rerun resumes
-        reached = solver_progress(case_dir)
-        resume = latest_solution_time(case_dir) or "0"
-        if reached and abs(float(resume) - reached[0]) <= 0.5 * reached[1]:
-            click.echo(f"interrupted: pimpleFoam wrote its fields at t = {resume} s and "
+        written = written_where_stopped(case_dir)
+        if written is not None:
+            click.echo(f"interrupted: pimpleFoam wrote its fields at t = {written} s and "
                        f"stopped; `mfflap cfd run {case_dir}` resumes there", err=True)
         else:  # stopped before it could write (a second Ctrl-C, or before its first step)
+            reached = solver_progress(case_dir)
+            resume = latest_solution_time(case_dir) or "0"
             click.echo(f"interrupted: pimpleFoam stopped"
                        f"{f' at t = {reached[0]:.6g} s' if reached else ''}; the last time "
                        f"written whole is {resume} s, where `mfflap cfd run {case_dir}` "

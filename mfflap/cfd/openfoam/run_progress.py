@@ -4,25 +4,13 @@ seen so far)."""
 
 from __future__ import annotations
 
-import re
 import time
 from collections.abc import Callable
 from pathlib import Path
 
-from mfflap.cfd.openfoam.runner import solver_progress
+from mfflap.cfd.openfoam.runner import end_time, solver_progress
 
-_END_TIME = re.compile(r"^endTime\s+([^;\s]+)\s*;", re.M)
-
-
-def end_time(case_dir: str | Path) -> float | None:
-    """The ``endTime`` of a case's system/controlDict, s; None if it has none that is a
-    number."""
-    path = Path(case_dir) / "system" / "controlDict"
-    match = _END_TIME.search(path.read_text()) if path.is_file() else None
-    try:
-        return float(match.group(1)) if match else None
-    except ValueError:
-        return None
+__all__ = ["RunProgress", "describe_progress", "end_time"]
 
 
 def _duration(seconds: float) -> str:

@@ -225,7 +225,6 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
     if n_procs > 1:
         command = ["mpirun", "-np", str(n_procs), "--allow-run-as-root", "--oversubscribe",
                    *command, "-parallel"]
-    written_before = latest_solution_time(case_dir) if write_on_stop else None
     started = time.monotonic()
     watched = reported = started
     own_start = log.stat().st_size if log.is_file() else 0  # where this run's lines begin
@@ -245,7 +244,7 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
                 if time.monotonic() - started > timeout_s:
                     kept = ""
                     if write_on_stop and write_and_stop(proc, write_grace_s) and (
-                            written := latest_solution_time(case_dir)) != written_before:
+                            written := written_where_stopped(case_dir)) is not None:
                         kept = f"; it wrote its fields at t = {written} s, where a rerun resumes"
                     raise CfdRunError(f"{application} timed out after {timeout_s} s{kept}",
                                       case=str(case_dir), log_tail=_tail(log))
@@ -370,6 +369,20 @@ def set_start_time(case_dir: str | Path, time_name: str) -> None:
         path.write_text(new)
 
 
+_END_TIME = re.compile(r"^endTime\s+([^;\s]+)\s*;", re.M)
+
+
+def end_time(case_dir: str | Path) -> float | None:
+    """The ``endTime`` of a case's system/controlDict, s; None if it has none that is a
+    number."""
+    path = Path(case_dir) / "system" / "controlDict"
+    match = _END_TIME.search(path.read_text()) if path.is_file() else None
+    try:
+        return float(match.group(1)) if match else None
+    except ValueError:
+        return None
+
+
 _WRITE_CONTROL = re.compile(r"^writeControl\s+(\w+);", re.M)
 _WRITE_INTERVAL = re.compile(r"^(writeInterval\s+)([^;\s]+)(;)", re.M)
 
@@ -386,8 +399,6 @@ def align_writes_to_end(case_dir: str | Path, start_s: float) -> float | None:
     run that starts on the grid of the case's own interval (from 0, or from one of its
     writes) keeps the interval it was given.
     """
-    from mfflap.cfd.openfoam.run_progress import end_time
-
     path = Path(case_dir) / "system" / "controlDict"
     text = path.read_text()
     control, interval = _WRITE_CONTROL.search(text), _WRITE_INTERVAL.search(text)
@@ -413,20 +424,27 @@ def ran_to_end(case_dir: str | Path) -> bool:
     """True if the case's last pimpleFoam run ended normally at its end time: its log's last
     time step within one step of endTime (OpenFOAM runs while t < endTime - deltaT / 2),
     then "End"."""
-    from mfflap.cfd.openfoam.run_progress import end_time
-
     log = Path(case_dir) / "log.pimpleFoam"
-    reached, final = solver_progress(case_dir), end_time(case_dir)
-    if reached is None or final is None:
+    final = end_time(case_dir)
+    text = read_tail(log) if log.is_file() else ""
+    times = [float(t) for t in _TIME.findall(text)]
+    if not times or final is None:
         return False
-    step = reached[1]
-    if math.isnan(step):  # a fixed time step prints no deltaT: the last two times give it
-        times = [float(t) for t in _TIME.findall(read_tail(log))[-2:]]
-        step = times[1] - times[0] if len(times) == 2 else 0.0
-    if reached[0] < final - step - 1e-9 * abs(final):
+    steps = _DELTA_T.findall(text)  # a fixed time step prints none: the last two times
+    step = (float(steps[-1]) if steps else times[-1] - times[-2] if len(times) > 1 else 0.0)
+    if times[-1] < final - step - 1e-9 * abs(final):
         return False
-    last_lines = [line.strip() for line in read_tail(log, 2_000).splitlines() if line.strip()]
+    last_lines = [line.strip() for line in text[-2_000:].splitlines() if line.strip()]
     return "End" in last_lines[-10:]  # "Finalising parallel run", MPI notes may follow
+
+
+def written_where_stopped(case_dir: str | Path) -> str | None:
+    """The latest time written whole if it is the time step the solver's log reached (the
+    solver wrote its fields where it stopped), else None."""
+    reached, written = solver_progress(case_dir), latest_solution_time(case_dir)
+    if reached is None or written is None or math.isnan(reached[1]):
+        return None
+    return written if abs(float(written) - reached[0]) <= 0.5 * reached[1] else None
 
 
 def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
@@ -452,7 +470,7 @@ def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
         error before the case's end time (a stop signal sent to it directly: it wrote its
         fields, and a rerun resumes there), or as :func:`run_application`.
     """
-    from mfflap.cfd.openfoam.run_progress import RunProgress, end_time
+    from mfflap.cfd.openfoam.run_progress import RunProgress
 
     case_dir = Path(case_dir)
     meshed = (case_dir / "constant" / "polyMesh" / "points").exists()
