@@ -9,6 +9,8 @@ import sys
 import threading
 import time
 import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -705,7 +707,8 @@ def _wait_for_solver(log: Path, timeout_s: float = 120.0) -> None:
 def test_a_solver_dies_with_the_process_that_runs_it(tmp_path, n_procs):
     """A Python process running a case, killed with SIGKILL (as the out-of-memory killer or
     a dask nanny kills a worker), takes its pimpleFoam with it, serial or mpirun and its
-    ranks: no orphan goes on writing into the case that a rerun resumes."""
+    ranks: no orphan goes on writing into the case that a rerun resumes. The solver first
+    writes the time step it reached (every rank), so the rerun loses nothing."""
     case_dir = tmp_path / "c"
     script = ("import sys\n"
               "from mfflap.campaign.cases import CfdCase\n"
@@ -717,10 +720,19 @@ def test_a_solver_dies_with_the_process_that_runs_it(tmp_path, n_procs):
     try:
         _wait_for_solver(case_dir / "log.pimpleFoam")
         assert _solvers_in(case_dir), "no solver found in /proc"
+        time.sleep(1.0)  # past its first steps: a stop without a write would lose them
     finally:
         runner.kill()
         runner.wait()
     assert not _solvers_left(case_dir)
+    from mfflap.cfd.openfoam.runner import latest_solution_time, solver_progress
+
+    reached, time_step = solver_progress(case_dir)
+    written = latest_solution_time(case_dir)
+    assert float(written) == pytest.approx(reached, abs=0.5 * time_step)
+    assert reached > 0.01  # not the start: the regular writes are 0.5 s apart
+    if n_procs > 1:
+        assert (case_dir / "processor1" / written / "U").is_file()
 
 
 @pytest.mark.openfoam
@@ -809,28 +821,34 @@ def test_a_worker_killed_under_its_run_fails_that_case_only(tmp_path):
 @pytest.mark.openfoam
 def test_a_case_whose_worker_died_once_resumes_on_another_and_finishes(tmp_path):
     """Real LocalCluster: the worker running a case is killed once its solver has begun;
-    dask gives the case to a new worker, which resumes it in the same folder and writes its
-    record (the first solver having died with its worker, not running beside the second)."""
+    dask gives the case to the other worker, which resumes it in the same folder where the
+    first solver stopped and writes its record. The first solver wrote the time step it had
+    reached as its worker died, and held the case until it had: it did not run beside the
+    second, and the second did not start over from t = 0."""
     out = tmp_path / "camp"
     case = WorkerKillingCase(1.0, 0.3, 90.0, 10.0, duration=0.1, ramp_time=0.02,
                              solver_log=str(out / "cases" / SHORT.case_id / "log.pimpleFoam"),
                              once_marker=str(tmp_path / "killed_once"))
     setup = CampaignSetup(timeout_s=600.0, keep_case_dirs=True)
-    (status,) = run_campaign([case], out, setup, n_workers=1, progress=False)
+    (status,) = run_campaign([case], out, setup, n_workers=2, progress=False)
     assert (tmp_path / "killed_once").exists()
     assert status.state == "done", status.message
     log = (out / "cases" / case.case_id / "log.pimpleFoam").read_text()
     assert log.count("Starting time loop") == 2
+    first_run, second_run = log.split("Starting time loop")[1:]
+    reached = float(re.findall(r"^Time = (\S+)$", first_run, re.M)[-1])
+    resumed = float(re.findall(r"^Time = (\S+)$", second_run, re.M)[0])
+    assert reached > 0 and reached < resumed < reached + 1e-3  # its first step after it
     rec = read_record(out / f"{case.case_id}.h5")
     assert np.all(np.diff(rec.time) > 0) and rec.time[-1] > 0.098
     assert not _solvers_left(out / "cases" / case.case_id)
 
 
-@pytest.mark.openfoam
-def test_a_lost_scheduler_stops_the_campaign_with_nothing_marked_failed(tmp_path):
-    """An external dask scheduler (as dask-jobqueue starts one) killed while a case runs:
-    the campaign stops with an error naming the folder and the case, which is not written as
-    failed, so that rerunning the command resumes it."""
+@contextmanager
+def _external_cluster() -> Iterator[tuple[str, subprocess.Popen, subprocess.Popen]]:
+    """A dask scheduler and one single-threaded worker started from the command line, each
+    in a session of its own (as dask-jobqueue's batch jobs are: a terminal's Ctrl-C does not
+    reach them); both killed on leaving. Yields the address, the scheduler and the worker."""
     with socket.socket() as free:
         free.bind(("127.0.0.1", 0))
         port = free.getsockname()[1]
@@ -841,23 +859,31 @@ def test_a_lost_scheduler_stops_the_campaign_with_nothing_marked_failed(tmp_path
                                  stderr=subprocess.DEVNULL, start_new_session=True)
     worker = subprocess.Popen([*dask_cli, "worker", address, "--nthreads", "1"],
                               stderr=subprocess.DEVNULL, start_new_session=True)
-    out = tmp_path / "camp"
-    case = CfdCase(1.0, 0.3, 90.0, 10.0, duration=1.0, ramp_time=0.2)
-
-    def kill_scheduler_when_solving() -> None:
-        _wait_for_solver(out / "cases" / case.case_id / "log.pimpleFoam")
-        scheduler.kill()
-
-    killer = threading.Thread(target=kill_scheduler_when_solving, daemon=True)
-    killer.start()
     try:
-        with pytest.raises(MfflapError) as lost:
-            run_campaign([case], out, CampaignSetup(), scheduler_address=address,
-                         progress=False)
+        yield address, scheduler, worker
     finally:
         for process in (scheduler, worker):
             os.killpg(process.pid, signal.SIGKILL)
             process.wait()
+
+
+@pytest.mark.openfoam
+def test_a_lost_scheduler_stops_the_campaign_with_nothing_marked_failed(tmp_path):
+    """An external dask scheduler (as dask-jobqueue starts one) killed while a case runs:
+    the campaign stops with an error naming the folder and the case, which is not written as
+    failed, so that rerunning the command resumes it."""
+    out = tmp_path / "camp"
+    case = CfdCase(1.0, 0.3, 90.0, 10.0, duration=1.0, ramp_time=0.2)
+    with _external_cluster() as (address, scheduler, _):
+        def kill_scheduler_when_solving() -> None:
+            _wait_for_solver(out / "cases" / case.case_id / "log.pimpleFoam")
+            scheduler.kill()
+
+        killer = threading.Thread(target=kill_scheduler_when_solving, daemon=True)
+        killer.start()
+        with pytest.raises(MfflapError) as lost:
+            run_campaign([case], out, CampaignSetup(), scheduler_address=address,
+                         progress=False)
     assert str(out) in str(lost.value) and case.case_id in str(lost.value)
     assert "rerun the same command" in str(lost.value)
     assert not list(out.glob("*.failed.toml"))
@@ -1004,3 +1030,81 @@ def test_a_case_is_written_whole_under_its_lock(tmp_path):
     with case_lock(case_dir), pytest.raises(KeyboardInterrupt):
         _write_case_whole(case_dir, killed)
     assert not (case_dir / "mfflap_case.toml").exists()  # still not a written case
+
+
+@pytest.mark.openfoam
+def test_an_interrupted_campaign_on_an_external_cluster_has_its_solvers_write(tmp_path):
+    """Ctrl-C on `mfflap campaign run --scheduler ADDR` (a cluster of dask-jobqueue's kind,
+    whose workers the terminal's Ctrl-C does not reach): the worker's solver writes the step
+    it reached and stops, the worker lives on for the next campaign, and the case is listed
+    as stopped part-way, not failed."""
+    from mfflap.campaign.execute import campaign_status
+    from mfflap.cfd.openfoam.case_lock import lock_holder
+    from mfflap.cfd.openfoam.runner import latest_solution_time, solver_progress
+
+    case_file = Path(__file__).parents[1] / "cases" / "paper2026.toml"
+    out = tmp_path / "camp"
+    with _external_cluster() as (address, scheduler, worker):
+        command = [sys.executable, "-c", "from mfflap.cli.main import cli; cli()", "campaign",
+                   "run", str(case_file), "--out", str(out), "--frequencies", "0.5",
+                   "--heave-amplitudes", "0.1", "--phases", "90", "--scheduler", address]
+        proc = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                text=True, process_group=0,
+                                preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+        deadline = time.monotonic() + 300
+        while time.monotonic() < deadline and not any(
+                solver_progress(d) for d in out.glob("cases/*") if d.is_dir()):
+            time.sleep(0.5)
+        time.sleep(1.0)  # past its first steps: a stop without a write would lose them
+        assert proc.poll() is None, proc.communicate()
+        os.killpg(proc.pid, signal.SIGINT)
+        _, err = proc.communicate(timeout=180)
+        (case_dir,) = [d for d in (out / "cases").iterdir() if d.is_dir()]
+        deadline = time.monotonic() + 60  # the worker's task ends once its solver has
+        while lock_holder(case_dir) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert not _solvers_left(case_dir, wait_s=0.0)
+        assert worker.poll() is None and scheduler.poll() is None  # the cluster lives on
+    assert proc.returncode == 1, err
+    assert "interrupted: 0 of 1 cases done" in err and "1 stopped part-way" in err, err
+    assert [s.state for s in campaign_status(out)] == ["started"]
+    reached, time_step = solver_progress(case_dir)
+    assert float(latest_solution_time(case_dir)) == pytest.approx(reached, abs=0.5 * time_step)
+    assert reached > 0.01 and not list(out.glob("*.failed.toml"))
+
+
+@pytest.mark.openfoam
+def test_a_stopped_campaign_case_starts_no_application_afterwards(tmp_path):
+    """A case whose worker is asked to stop before its solver starts (still writing or
+    meshing its case when the campaign's Ctrl-C arrives; a cluster's worker outlives the
+    campaign) starts nothing more: RunStopped, no mesh, no solver. A case begun after that
+    block (the worker's next campaign) runs as usual."""
+    from mfflap.cfd.openfoam.runner import RunStopped, stop_running_solvers, stoppable
+
+    case_dir = tmp_path / "c"
+    write_case(case_dir, SHORT.motion(), SHORT.duration, ramp_time=SHORT.ramp_time)
+    asked, outcome = threading.Event(), []
+
+    def run_in_a_campaign_block() -> None:
+        with stoppable():
+            asked.wait(30)
+            try:
+                run_case(case_dir)
+            except RunStopped as stopped:
+                outcome.append(stopped)
+
+    worker = threading.Thread(target=run_in_a_campaign_block)
+    worker.start()
+    time.sleep(0.2)  # inside its block
+    assert stop_running_solvers(0.0) == 0  # no solver running yet
+    asked.set()
+    worker.join(60)
+    (stopped,) = outcome
+    assert "blockMesh not started: the run was asked to stop; a rerun resumes from t = 0 s" \
+        in str(stopped)
+    assert not (case_dir / "log.blockMesh").exists()
+    with stoppable():  # the next block is not stopped
+        from mfflap.cfd.openfoam.runner import run_application
+
+        run_application(case_dir, "blockMesh", timeout_s=60)
+    assert (case_dir / "constant" / "polyMesh" / "points").is_file()

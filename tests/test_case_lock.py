@@ -127,3 +127,84 @@ def test_lock_holder_names_the_holder_without_taking_or_creating_the_lock(tmp_pa
     finally:
         stop.set()
         prober.join()
+
+
+#: a process that holds a case's lock and shares it with a child that lives ``argv[2]`` s
+SHARING_HOLDER = (
+    "import subprocess, sys, time\n"
+    "from mfflap.cfd.openfoam.case_lock import case_lock, held_descriptor\n"
+    "with case_lock(sys.argv[1]):\n"
+    "    fd = held_descriptor(sys.argv[1])\n"
+    "    child = subprocess.Popen(['sleep', sys.argv[2]], pass_fds=(fd,),\n"
+    "                             start_new_session=True)\n"
+    "    print(child.pid, flush=True)\n"
+    "    time.sleep(600)\n")
+
+
+def _sharing_holder(case: Path, child_s: float) -> tuple[subprocess.Popen, int]:
+    proc = subprocess.Popen([sys.executable, "-c", SHARING_HOLDER, str(case), str(child_s)],
+                            stdout=subprocess.PIPE, text=True)
+    return proc, int(proc.stdout.readline())
+
+
+def test_a_lock_shared_with_a_solver_outlives_its_killed_holder_until_the_solver_ends(
+        tmp_path):
+    """A holder killed outright while the process it shares the lock with (a solver writing
+    the step it reached) still runs: the case stays locked, `lock_holder` says the holder
+    is gone and its solver is writing, and a run waits for that solver instead of being
+    refused (a dask worker given the case of a worker just killed)."""
+    case = tmp_path / "case"
+    proc, child = _sharing_holder(case, 3.0)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    killed = time.monotonic()
+    holder = lock_holder(case)
+    assert holder is not None and holder.startswith(f"pid {proc.pid} since ")
+    assert holder.endswith("that process is gone, its solver is writing the step it reached")
+    with case_lock(case):
+        waited_s = time.monotonic() - killed
+        assert not _running(child)  # it ended before the lock was given
+    assert waited_s > 1.0
+
+
+def _running(pid: int) -> bool:
+    """True if the process exists and is not a zombie (an orphan init has not reaped)."""
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return False
+    return stat.rsplit(")", 1)[1].split()[0] != "Z"
+
+
+def test_a_solver_left_running_by_its_killed_holder_is_named_after_the_wait(tmp_path,
+                                                                            monkeypatch):
+    """One that does not end within ORPHAN_WAIT_S: the run is refused, the message says the
+    holder is gone and how to stop what still runs; a holder that is alive is refused at
+    once, without that wait."""
+    import mfflap.cfd.openfoam.case_lock as case_lock_module
+
+    monkeypatch.setattr(case_lock_module, "ORPHAN_WAIT_S", 0.5)
+    case = tmp_path / "case"
+    proc, child = _sharing_holder(case, 600.0)
+    try:
+        proc.send_signal(signal.SIGKILL)
+        proc.wait()
+        with pytest.raises(CaseBusyError, match=r"held by a solver whose caller \(pid "
+                                                rf"{proc.pid} since .*\) is gone: asked to "
+                                                r"write its fields and stop, it still runs "
+                                                r"after 0\.5 s; stop it \(pkill -f"):
+            with case_lock(case):
+                pass
+    finally:
+        os.kill(child, signal.SIGKILL)
+    monkeypatch.setattr(case_lock_module, "ORPHAN_WAIT_S", 60.0)
+    alive = _holder(case)
+    try:
+        started = time.monotonic()
+        with pytest.raises(CaseBusyError, match="being run by another process"):
+            with case_lock(case):
+                pass
+        assert time.monotonic() - started < 5.0
+    finally:
+        alive.send_signal(signal.SIGKILL)
+        alive.wait()

@@ -8,8 +8,11 @@ State lives in the output folder only:
 - ``cases/<case_id>/``: the OpenFOAM case while it runs (resumed from its last written time;
   :func:`campaign_status` reports how far its solver got).
 
-A campaign killed at any moment therefore loses at most the unwritten part of the runs in
-flight and corrupts nothing; rerunning the same command continues it.
+A campaign killed at any moment therefore corrupts nothing, and rerunning the same command
+continues it. Its solvers write the time step they reached when it is stopped (Ctrl-C,
+SIGTERM) or its worker processes are killed outright (the kernel signals each solver as its
+worker dies: :func:`mfflap.cfd.openfoam.runner.dies_with_caller`); only a solver killed
+itself, or a machine lost, loses what its run computed since its last regular write.
 """
 
 from __future__ import annotations
@@ -30,7 +33,7 @@ from mfflap.campaign.cases import CampaignCase
 from mfflap.campaign.records import LOST_SUFFIX, RECORD_SUFFIX, read_record, write_record
 from mfflap.cfd.bursts import find_load_bursts
 from mfflap.cfd.openfoam.case_lock import CaseBusyError, lock_holder
-from mfflap.cfd.openfoam.runner import RunStopped, stop_running_solvers
+from mfflap.cfd.openfoam.runner import RunStopped, stop_running_solvers, stoppable
 from mfflap.cfd.openfoam.writer import SolverSettings
 from mfflap.errors import ConfigError, MfflapError
 from mfflap.parameters import Fluid, FreeStream, Plate
@@ -124,11 +127,12 @@ def run_one(case: CampaignCase, out_dir: str, setup: CampaignSetup) -> CaseStatu
     case_dir = out / "cases" / case.case_id
     solver = SolverSettings(**{**asdict(setup.solver), "write_interval": case.duration / 4})
     try:
-        record = run_motion(case_dir, case.motion(), case.case_id,
-                            {"kind": case.kind, **case.as_dict()}, case.duration,
-                            mesh=setup.mesh, ramp_time=case.ramp_time, solver=solver,
-                            plate=setup.plate, fluid=setup.fluid, stream=setup.stream,
-                            timeout_s=setup.timeout_s)
+        with stoppable():  # a stopped campaign starts nothing more of it on this worker
+            record = run_motion(case_dir, case.motion(), case.case_id,
+                                {"kind": case.kind, **case.as_dict()}, case.duration,
+                                mesh=setup.mesh, ramp_time=case.ramp_time, solver=solver,
+                                plate=setup.plate, fluid=setup.fluid, stream=setup.stream,
+                                timeout_s=setup.timeout_s)
         write_record(record_path, record, single_precision=setup.single_precision)
     except CaseBusyError as exc:  # not a failure: the process running it records it
         return CaseStatus(case.case_id, "busy", str(exc).splitlines()[0])

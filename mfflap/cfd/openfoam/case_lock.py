@@ -12,6 +12,13 @@ thread, so :func:`mfflap.campaign.openfoam_run.run_motion` can hold it around wr
 case and its retries while :func:`mfflap.cfd.openfoam.runner.run_case` takes it again. A
 refusal is a :class:`CaseBusyError`, so that a campaign tells a case another process is
 running from one that failed; :func:`lock_holder` says who runs a case without taking it.
+
+A solver shares its caller's lock (:func:`held_descriptor`, passed to it by
+:func:`mfflap.cfd.openfoam.runner.run_application`): when the caller is killed outright (a
+dask worker lost to the out-of-memory killer) the kernel asks the solver to write the time
+step it reached and stop, and the case stays locked until it has. A run that meets such a
+lock, whose holder named in it is gone from this host, waits for that write
+(:data:`ORPHAN_WAIT_S`) instead of refusing at once.
 """
 
 from __future__ import annotations
@@ -19,6 +26,8 @@ from __future__ import annotations
 import datetime as _dt
 import fcntl
 import os
+import re
+import socket
 import threading
 import time
 from collections.abc import Iterator
@@ -74,22 +83,78 @@ def case_lock(case_dir: str | Path) -> Iterator[None]:
                 os.close(fd)  # closing the descriptor releases the flock
 
 
+def held_descriptor(case_dir: str | Path) -> int | None:
+    """The file descriptor of the run lock of ``case_dir`` that this thread holds, or None.
+
+    A process given it (``subprocess.Popen(pass_fds=...)``) holds the lock with this one:
+    the kernel drops it only when every holder has closed it or died.
+    """
+    with _guard:
+        held = _held.get(Path(case_dir).resolve())
+    return held[0] if held is not None and held[1] == threading.get_ident() else None
+
+
+#: how long a run waits for a lock whose named holder is gone from this host (its solver
+#: writing the step it reached, :data:`mfflap.cfd.openfoam.runner.WRITE_AND_STOP_SIGNAL`),
+#: s: the write grace a stopped solver gets
+ORPHAN_WAIT_S = 120.0
+
+_HOLDER = re.compile(r"^pid (\d+) since \S+ on (\S+)")
+
+
+def _holder_gone(holder: str) -> bool:
+    """True if the lock text names a process of this host that no longer exists."""
+    match = _HOLDER.match(holder)
+    if match is None or match.group(2) != socket.gethostname():
+        return False
+    try:
+        os.kill(int(match.group(1)), 0)
+    except ProcessLookupError:
+        return True
+    except OSError:  # exists, another user's
+        return False
+    return False
+
+
+def _read_holder(fd: int) -> str:
+    return os.pread(fd, 200, 0).decode(errors="replace").strip() or "unknown"
+
+
 def _acquire(case: Path, shown: str | Path) -> int:
     case.mkdir(parents=True, exist_ok=True)
     fd = os.open(case / LOCK_FILE, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
     try:
         _flock_or_wait(fd)
     except BlockingIOError:
-        holder = os.pread(fd, 200, 0).decode(errors="replace").strip() or "unknown"
-        os.close(fd)
-        raise CaseBusyError(f"the case is being run by another process ({holder}); wait for "
-                            "it to finish or stop it first", case=str(shown)) from None
+        holder = _read_holder(fd)
+        gone = _holder_gone(holder)
+        if not (gone and _flock_within(fd, ORPHAN_WAIT_S)):
+            os.close(fd)
+            raise CaseBusyError(
+                f"the case is being run by another process ({holder}); wait for it to "
+                "finish or stop it first" if not gone else
+                f"the case is held by a solver whose caller ({holder}) is gone: asked to "
+                f"write its fields and stop, it still runs after {ORPHAN_WAIT_S:g} s; stop "
+                f"it (pkill -f 'Foam -case {case}')", case=str(shown)) from None
     except OSError:  # a file system without flock(2): run unguarded, as before the lock
         return fd
     started = _dt.datetime.now().astimezone().isoformat(timespec="seconds")
     os.ftruncate(fd, 0)
-    os.pwrite(fd, f"pid {os.getpid()} since {started}".encode(), 0)
+    os.pwrite(fd, f"pid {os.getpid()} since {started} on {socket.gethostname()}".encode(), 0)
     return fd
+
+
+def _flock_within(fd: int, wait_s: float) -> bool:
+    """Take the exclusive lock within ``wait_s`` seconds; True if it was taken."""
+    deadline = time.monotonic() + wait_s
+    while True:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            return True
+        except BlockingIOError:
+            if time.monotonic() >= deadline:
+                return False
+            time.sleep(0.1)
 
 
 #: tries to take a lock found held, and the pause between them, s: a :func:`lock_holder`
@@ -111,10 +176,11 @@ def _flock_or_wait(fd: int) -> None:
 
 
 def lock_holder(case_dir: str | Path) -> str | None:
-    """Who holds the run lock of ``case_dir`` ("pid N since <ISO time>"), or None if nobody
-    does (no lock file, a file system without flock(2), or the lock free). A lock held by
-    this process counts as held. The lock is only tested, never kept, and the lock file is
-    not created."""
+    """Who holds the run lock of ``case_dir`` ("pid N since <ISO time> on <host>", and
+    whether that process is gone while its solver writes), or None if nobody does (no lock
+    file, a file system without flock(2), or the lock free). A lock held by this process
+    counts as held. The lock is only tested, never kept, and the lock file is not
+    created."""
     path = Path(case_dir) / LOCK_FILE
     try:
         fd = os.open(path, os.O_RDONLY | os.O_CLOEXEC)
@@ -124,7 +190,9 @@ def lock_holder(case_dir: str | Path) -> str | None:
         try:
             fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
         except BlockingIOError:
-            return os.pread(fd, 200, 0).decode(errors="replace").strip() or "unknown"
+            holder = _read_holder(fd)
+            return holder + ("; that process is gone, its solver is writing the step it "
+                             "reached" if _holder_gone(holder) else "")
         except OSError:
             return None
         return None  # free (closing the descriptor drops the shared lock just taken)

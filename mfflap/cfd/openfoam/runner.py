@@ -13,10 +13,11 @@ import subprocess
 import threading
 import time
 import zlib
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
-from mfflap.cfd.openfoam.case_lock import case_lock
+from mfflap.cfd.openfoam.case_lock import case_lock, held_descriptor
 from mfflap.cfd.openfoam.release import require_supported_release
 from mfflap.errors import CfdRunError
 
@@ -41,22 +42,26 @@ def _env() -> dict[str, str]:
     return env
 
 
-def dies_with_caller(command: list[str]) -> list[str]:
-    """``command`` wrapped so that it is stopped (SIGTERM) when the thread that starts it dies.
+def dies_with_caller(command: list[str], death_signal: str = "TERM") -> list[str]:
+    """``command`` wrapped so that it gets ``death_signal`` (SIGTERM: it stops) when the
+    thread that starts it dies.
 
     A solver outlives a Python process killed with SIGKILL (a dask worker lost to the
     out-of-memory killer or killed by its nanny): the orphan would go on writing into its
     case while dask reruns the same case, resumed in the same folder, beside it.
-    util-linux's ``setpriv --pdeathsig`` asks the kernel to stop it instead; mpirun passes
-    SIGTERM on to its ranks. A parent that died before the request was made cannot signal
-    it, so the command then starts only if its parent is still this process (prctl(2)'s
-    advice). Where setpriv is missing the command is returned as it is.
+    util-linux's ``setpriv --pdeathsig`` asks the kernel to signal it instead; mpirun passes
+    SIGTERM and SIGUSR1 on to its ranks. A solver started with :data:`WRITE_AND_STOP_SIGNAL`
+    set is given that one, so that it writes the time step it reached before it stops. A
+    parent that died before the request was made cannot signal it, so the command then
+    starts only if its parent is still this process (prctl(2)'s advice). Where setpriv is
+    missing the command is returned as it is.
     """
     setpriv = shutil.which("setpriv")
     if setpriv is None:
         return command
     parent_alive = f'[ "$PPID" = {os.getpid()} ] && exec "$@"'
-    return [setpriv, "--pdeathsig", "TERM", "--", "sh", "-c", parent_alive, "sh", *command]
+    return [setpriv, "--pdeathsig", death_signal, "--", "sh", "-c", parent_alive, "sh",
+            *command]
 
 
 def stop(proc: subprocess.Popen, grace_s: float = 10.0) -> None:
@@ -101,12 +106,44 @@ class RunStopped(CfdRunError):
 _solvers: set[subprocess.Popen] = set()
 #: process ids of those asked to write and stop by :func:`stop_running_solvers`
 _stop_requested: set[int] = set()
+#: threads inside :func:`stoppable`, and whether :func:`stop_running_solvers` stopped them
+_stoppable: dict[int, bool] = {}
 _solvers_guard = threading.Lock()
+
+
+@contextmanager
+def stoppable() -> Iterator[None]:
+    """Make the block (a campaign case's run with its retries) stop as a whole on
+    :func:`stop_running_solvers`: once that was called, no OpenFOAM application starts in
+    this thread before the block ends (:func:`run_application` raises :class:`RunStopped`).
+
+    A worker of a cluster that outlives the campaign (an external scheduler's) goes on
+    with the task it runs when the campaign is stopped; a case still meshing then would
+    otherwise start its solver and run to its end unattended.
+    """
+    me = threading.get_ident()
+    with _solvers_guard:
+        _stoppable[me] = False
+    try:
+        yield
+    finally:
+        with _solvers_guard:
+            _stoppable.pop(me, None)
+
+
+def _raise_if_stopped(case_dir: Path, application: str) -> None:
+    with _solvers_guard:
+        stopped = _stoppable.get(threading.get_ident(), False)
+    if stopped:
+        raise RunStopped(f"{application} not started: the run was asked to stop; a rerun "
+                         f"resumes from t = {latest_solution_time(case_dir) or 0} s",
+                         case=str(case_dir))
 
 
 def stop_running_solvers(grace_s: float = 60.0) -> int:
     """Ask every solver this process runs (in any thread) to write its fields and stop, and
-    wait up to ``grace_s`` for them; return how many were asked.
+    wait up to ``grace_s`` for them; return how many were asked. The runs inside
+    :func:`stoppable` blocks start no other application.
 
     A campaign's dask workers run their solvers in threads of their own; on Ctrl-C the
     campaign calls this on every worker (``Client.run``) before it closes the cluster, so
@@ -116,6 +153,7 @@ def stop_running_solvers(grace_s: float = 60.0) -> int:
     with _solvers_guard:
         running = [proc for proc in _solvers if proc.poll() is None]
         _stop_requested.update(proc.pid for proc in running)
+        _stoppable.update(dict.fromkeys(_stoppable, True))
     for proc in running:
         proc.send_signal(WRITE_AND_STOP_SIGNAL)
     deadline = time.monotonic() + grace_s
@@ -203,6 +241,10 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
     stopped as any other (a second Ctrl-C stops it at once). It runs in a process group of
     its own, so that a Ctrl-C in the terminal reaches this process and not the solver
     directly. A run stopped because it diverged or was stopped by ``watch`` is not written.
+    If this process is killed outright (SIGKILL, the out-of-memory killer), the kernel sends
+    the solver that signal too (:func:`dies_with_caller`), and the solver, which shares the
+    case's run lock when this thread holds it, keeps the case locked until it has written
+    and stopped.
 
     Raises
     ------
@@ -214,6 +256,7 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
         log's tail.
     """
     case_dir = Path(case_dir)
+    _raise_if_stopped(case_dir, application)
     require_supported_release(str(case_dir))  # openfoam.com's line, not openfoam.org's
     if not openfoam_available():
         raise CfdRunError("OpenFOAM is not installed (apt-get install openfoam)",
@@ -228,9 +271,15 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
     started = time.monotonic()
     watched = reported = started
     own_start = log.stat().st_size if log.is_file() else 0  # where this run's lines begin
+    # a solver that writes on a stop shares the case's lock: killed, its caller leaves the
+    # case locked until the solver has written the step it reached and stopped
+    lock_fd = held_descriptor(case_dir) if write_on_stop else None
+    death_signal = WRITE_AND_STOP_SIGNAL.name.removeprefix("SIG") if write_on_stop else "TERM"
     with open(log, "a") as fh:
-        proc = subprocess.Popen(dies_with_caller(command), stdout=fh, stderr=subprocess.STDOUT,
-                                env=_env(), process_group=0 if write_on_stop else None)
+        proc = subprocess.Popen(dies_with_caller(command, death_signal), stdout=fh,
+                                stderr=subprocess.STDOUT, env=_env(),
+                                process_group=0 if write_on_stop else None,
+                                pass_fds=() if lock_fd is None else (lock_fd,))
         if write_on_stop:
             with _solvers_guard:
                 _solvers.add(proc)
