@@ -124,18 +124,17 @@ def _acquire(case: Path, shown: str | Path) -> int:
     case.mkdir(parents=True, exist_ok=True)
     fd = os.open(case / LOCK_FILE, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
     try:
-        _flock_or_wait(fd)
-    except BlockingIOError:
-        holder = _read_holder(fd)
-        gone = _holder_gone(holder)
-        if not (gone and _flock_within(fd, ORPHAN_WAIT_S)):
-            os.close(fd)
-            raise CaseBusyError(
-                f"the case is being run by another process ({holder}); wait for it to "
-                "finish or stop it first" if not gone else
-                f"the case is held by a solver whose caller ({holder}) is gone: asked to "
-                f"write its fields and stop, it still runs after {ORPHAN_WAIT_S:g} s; stop "
-                f"it (pkill -f 'Foam -case {case}')", case=str(shown)) from None
+        if not _flock_within(fd, _QUICK_WAIT_S):
+            holder = _read_holder(fd)
+            gone = _holder_gone(holder)
+            if not (gone and _flock_within(fd, ORPHAN_WAIT_S)):
+                os.close(fd)
+                raise CaseBusyError(
+                    f"the case is being run by another process ({holder}); wait for it to "
+                    "finish or stop it first" if not gone else
+                    f"the case is held by a solver whose caller ({holder}) is gone: asked to "
+                    f"write its fields and stop, it still runs after {ORPHAN_WAIT_S:g} s; "
+                    f"stop it (pkill -f 'Foam -case {case}')", case=str(shown))
     except OSError:  # a file system without flock(2): run unguarded, as before the lock
         return fd
     started = _dt.datetime.now().astimezone().isoformat(timespec="seconds")
@@ -144,8 +143,14 @@ def _acquire(case: Path, shown: str | Path) -> int:
     return fd
 
 
+#: how long a run tries again to take a lock found held, and the pause between tries, s: a
+#: :func:`lock_holder` probe holds it for microseconds, a run for minutes
+_QUICK_WAIT_S, _PAUSE_S = 0.2, 0.05
+
+
 def _flock_within(fd: int, wait_s: float) -> bool:
-    """Take the exclusive lock within ``wait_s`` seconds; True if it was taken."""
+    """Take the exclusive lock, trying again every :data:`_PAUSE_S` while it is held, for up
+    to ``wait_s`` seconds; True if it was taken (OSError where flock(2) is missing)."""
     deadline = time.monotonic() + wait_s
     while True:
         try:
@@ -154,24 +159,6 @@ def _flock_within(fd: int, wait_s: float) -> bool:
         except BlockingIOError:
             if time.monotonic() >= deadline:
                 return False
-            time.sleep(0.1)
-
-
-#: tries to take a lock found held, and the pause between them, s: a :func:`lock_holder`
-#: probe holds it for microseconds, a run for minutes
-_TRIES, _PAUSE_S = 5, 0.05
-
-
-def _flock_or_wait(fd: int) -> None:
-    """Take the exclusive lock, trying again for a moment if it is held (raises
-    BlockingIOError if it still is)."""
-    for attempt in range(_TRIES):
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            return
-        except BlockingIOError:
-            if attempt == _TRIES - 1:
-                raise
             time.sleep(_PAUSE_S)
 
 
