@@ -54,10 +54,11 @@ other pressure solver and prints how far it moves: the yardstick's own round-off
 reference's, reference-PCG, always runs).
 
 Run: python benchmarks/cfd_cost.py [setup ...] [--meshes coarse,lean] [--cycles 2]
-                                   [--work-dir DIR]
+                                   [--work-dir DIR] [--figure F.png] [--output F.h5]
      (default: the "affordable" set-up; SETUP@MESH: that set-up's solver settings on a
-     named mesh, as `mfflap cfd write --setup SETUP --mesh MESH`; --meshes adds named meshes
-     at the reference settings;
+     named mesh, as `mfflap cfd write --setup SETUP --mesh MESH`; either with -coX: at max
+     Co X; --meshes adds named meshes at the reference settings; --figure draws every run's
+     cost against its accuracy, --output keeps the numbers in HDF5 with the command line;
      with --work-dir, runs that finished there before are read, not rerun, runs stopped
      part-way are resumed, and a folder
      whose runs had another motion, cycle count, far field or k-epsilon convection
@@ -69,6 +70,7 @@ Run: python benchmarks/cfd_cost.py [setup ...] [--meshes coarse,lean] [--cycles 
 from __future__ import annotations
 
 import argparse
+import re
 import shutil
 import sys
 import tempfile
@@ -214,6 +216,34 @@ def yardstick_jobs(reference: Job, courants: list[float] | None) -> list[Job]:
             for courant in courants or [own]]
 
 
+_SETUP_LABEL = re.compile(r"^(?P<name>[^@\s-]+)(?:@(?P<mesh>[^@\s-]+))?"
+                          r"(?:-co(?P<courant>[0-9.eE+]+))?$")
+
+
+def setup_label(label: str) -> tuple[str, str, float | None]:
+    """(set-up, mesh or "", max Co or None) of a set-up named on the command line:
+    ``SETUP``, ``SETUP@MESH``, either with ``-coX`` (the set-up at max Co X, as
+    ``--max-courant X`` labels it), so that one study holds set-ups at several max Co.
+
+    Raises
+    ------
+    argparse.ArgumentTypeError
+        If the label is not of that form or its max Co is not a positive number.
+    """
+    match = _SETUP_LABEL.match(label)
+    courant = None
+    if match is not None and match.group("courant") is not None:
+        try:
+            courant = float(match.group("courant"))
+        except ValueError:
+            courant = float("nan")
+    if match is None or (courant is not None and not (np.isfinite(courant) and courant > 0)):
+        raise argparse.ArgumentTypeError(
+            f"{label!r}: a set-up is named SETUP, SETUP@MESH or either with -coX (X a "
+            "positive max Courant number)")
+    return match.group("name"), match.group("mesh") or "", courant
+
+
 def courant_list(text: str) -> list[float]:
     """The max Co values of --yardstick-courant, ``"1"`` or ``"4,1,2"``.
 
@@ -338,11 +368,156 @@ def verdict(run: SetupRun, yardstick: SetupRun, baseline: SetupRun | None,
             f"{costs}")
 
 
+@dataclass(frozen=True)
+class Study:
+    """What one run of this benchmark measured, for its figure and its HDF5 file."""
+
+    results: dict[str, SetupRun]
+    yardstick: SetupRun
+    cycles: float
+    #: the named set-ups, and each one's rerun with the other pressure solver by label
+    named: list[str]
+    floors: dict[str, str]
+    cells: dict[str, int]
+    baseline: SetupRun | None = None
+    #: the medium mesh's time-step band, F_n and M NRMSE %, when the yardstick is a mean
+    band: tuple[float, float] | None = None
+    #: the motion and settings every run shares (the work folder's stamp)
+    settings: str = ""
+
+    def cost_ratio(self, run: SetupRun) -> float:
+        """CPU per cycle as a ratio to openfoam.md's set-up (to the reference without it)."""
+        base = self.baseline if self.baseline is not None and self.baseline.ok else \
+            self.results["reference"]
+        return run.cpu_per_cycle_s / base.cpu_per_cycle_s
+
+    def first_cycle_error(self, run: SetupRun) -> float:
+        """The larger of F_n and M NRMSE against the yardstick in cycle 1, %."""
+        return max(nrmse_percent(run, self.yardstick, self.cycles)["cycle 1"][:2])
+
+
+def write_study(study: Study, path: str | Path, argv: list[str]) -> None:
+    """Every run's CPU and NRMSE against the yardstick in an HDF5 file, with the inputs
+    beside them (the command line, the shared settings, the yardstick and the targets)."""
+    import h5py
+
+    names = list(windows(study.cycles))
+    with h5py.File(path, "w") as h5:
+        h5.attrs.update({"command": " ".join(argv), "settings": study.settings,
+                         "yardstick": study.yardstick.label, "cycles": study.cycles,
+                         "components": list(COMPONENTS), "windows": names,
+                         "target_cpu_per_cycle_s": TARGET_CPU_PER_CYCLE_S,
+                         "target_ratio": TARGET_RATIO,
+                         "target_nrmse_percent": TARGET_NRMSE_PERCENT,
+                         "cost_ratio_to": BASELINE if study.baseline is not None
+                         and study.baseline.ok else "reference"})
+        if study.band is not None:
+            h5.attrs["time_step_band_percent"] = list(study.band)
+        for label, run in study.results.items():
+            group = h5.create_group(label)
+            group.attrs["n_cells"] = study.cells[label]
+            group.attrs["named"] = label in study.named
+            if label in study.floors:
+                group.attrs["other_pressure_solver_run"] = study.floors[label]
+            if not run.ok:
+                group.attrs["failure"] = run.failure
+                continue
+            group.attrs.update({"cpu_per_cycle_s": run.cpu_per_cycle_s,
+                                "cost_ratio": study.cost_ratio(run),
+                                "steps_per_cycle": run.steps_per_cycle,
+                                "cpu_per_cell_step_us": run.cpu_per_cell_step_us})
+            errors = nrmse_percent(run, study.yardstick, study.cycles)
+            group["nrmse_percent"] = np.array([errors[n] for n in names])
+
+
+def cost_accuracy_figure(study: Study, path: str | Path, title: str = ""
+                         ) -> dict[str, tuple[float, float]]:
+    """Cost against accuracy: every finished run's CPU per cycle (as a ratio to
+    openfoam.md's set-up) against the larger of its F_n and M NRMSE from the yardstick in
+    cycle 1, issue 4's target as a shaded box, the medium mesh's time-step band as a line,
+    and each named set-up joined to its rerun with the other pressure solver (the length of
+    that line is its round-off floor seen from the yardstick). Returns the points drawn,
+    (cost ratio, NRMSE %) by label."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(8.0, 5.5))
+    have_baseline = study.baseline is not None and study.baseline.ok
+    shown = [run for label, run in study.results.items()
+             if run.ok and label != study.yardstick.label]
+    ratios = [study.cost_ratio(run) for run in shown] + [TARGET_RATIO]
+    x_range = (min(ratios) / 1.3, max(ratios) * 1.3)
+    if have_baseline:
+        ax.fill_between([x_range[0], TARGET_RATIO], 0, TARGET_NRMSE_PERCENT, color="tab:green",
+                        alpha=0.15, label=f"target: <= {TARGET_RATIO:.2f} of openfoam.md's "
+                        f"set-up, <= {TARGET_NRMSE_PERCENT:g} %")
+    if study.band is not None:
+        ax.axhline(max(study.band), color="tab:grey", linestyle="--",
+                   label="the medium mesh's time-step band")
+    twins = set(study.floors.values())
+    drawn: dict[str, tuple[float, float]] = {}
+    y_top = max([study.first_cycle_error(run) for run in shown] + [TARGET_NRMSE_PERCENT])
+    placed: list[tuple[float, float]] = []  # labels' anchors: log10 of the ratio, NRMSE %
+    for label, run in study.results.items():
+        if not run.ok or label == study.yardstick.label:
+            continue
+        x, y = drawn[label] = study.cost_ratio(run), study.first_cycle_error(run)
+        if label in study.named:
+            style = {"color": "tab:blue", "marker": "o"}
+        elif label in twins:
+            style = {"color": "tab:blue", "marker": "o", "markerfacecolor": "none"}
+        else:  # the medium mesh's own runs and the baseline
+            style = {"color": "tab:grey", "marker": "s"}
+        ax.plot([x], [y], linestyle="none", markersize=6, **style)
+        if label not in twins:  # a twin is the open marker joined to its set-up
+            lift = 0  # one line up for each label already near this one's place
+            while any(abs(np.log10(x) - px) < 0.25 and abs(y + lift * 0.035 * y_top - py)
+                      < 0.03 * y_top for px, py in placed):
+                lift += 1
+            placed.append((float(np.log10(x)), y + lift * 0.035 * y_top))
+            ax.annotate(label, (x, y), textcoords="offset points", xytext=(5, -3 + 9 * lift),
+                        fontsize=7)
+    for label, twin in study.floors.items():
+        a, b = study.results[label], study.results[twin]
+        if a.ok and b.ok:
+            ax.plot([study.cost_ratio(a), study.cost_ratio(b)],
+                    [study.first_cycle_error(a), study.first_cycle_error(b)],
+                    color="tab:blue", linewidth=0.8)
+    ax.plot([], [], "o", color="tab:blue", label="set-up (GAMG or its own pressure solver)")
+    ax.plot([], [], "o-", color="tab:blue", markerfacecolor="none", linewidth=0.8,
+            label="the same with the other pressure solver (its round-off)")
+    ax.plot([], [], "s", color="tab:grey", label="the medium mesh, openfoam.md's set-up")
+    ax.set_xscale("log")
+    ax.set_xlim(*x_range)
+    ticks = [t for t in (0.1, 0.2, round(TARGET_RATIO, 2), 0.5, 1, 2, 5, 10, 20, 50)
+             if x_range[0] <= t <= x_range[1]]
+    ax.set_xticks(ticks, [f"{t:g}" for t in ticks])
+    ax.minorticks_off()
+    ax.set_xlabel("CPU per cycle / openfoam.md's set-up" if have_baseline
+                  else "CPU per cycle / the reference")
+    ax.set_ylabel(f"max(F_n, M) NRMSE against {study.yardstick.label}, cycle 1 (%)")
+    ax.set_ylim(0, 1.4 * max(y_top, *(study.band or (0.0,))))  # room for the legend above
+    ax.set_title(title or study.settings, fontsize=9)
+    ax.legend(fontsize=7, loc="upper right")
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+    return drawn
+
+
+def _checked_label(label: str) -> str:
+    setup_label(label)
+    return label
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("setups", nargs="*", default=["affordable"],
+    parser.add_argument("setups", nargs="*", default=["affordable"], type=_checked_label,
                         help="set-ups of setups.toml; SETUP@MESH runs a set-up's solver "
-                        "settings on a named mesh of meshes.toml")
+                        "settings on a named mesh of meshes.toml; -coX after either runs it "
+                        "at max Co X")
     parser.add_argument("--meshes", default="", help="named meshes run at the reference "
                         "settings, comma separated")
     parser.add_argument("--cycles", type=float, default=2.0, help="cycles simulated")
@@ -380,6 +555,11 @@ def main() -> None:
                         "yardstick's own round-off floor (the reference's is always run)")
     parser.add_argument("--workers", type=int, default=2,
                         help="runs at a time (one core each; default 2, this machine's cores)")
+    parser.add_argument("--figure", default=None,
+                        help="draw cost against accuracy of every run into this image file")
+    parser.add_argument("--output", default=None,
+                        help="write every run's CPU and NRMSE, with the command line and "
+                        "settings, into this HDF5 file")
     parser.add_argument("--work-dir", default=None,
                         help="folder of the cases (default: a new temporary folder); runs "
                         "that finished there before are read, not rerun")
@@ -419,10 +599,12 @@ def main() -> None:
         jobs.append(Job(BASELINE, base_setup.mesh, base_setup.solver))
     floors, named = {}, []
     for label in args.setups:
-        name, _, mesh_name = label.partition("@")
-        job = Job(label, *mesh_and_solver(mesh_name or None, name))
-        if args.max_courant is not None:
-            job = job.variant(f"co{args.max_courant:g}", max_courant=args.max_courant)
+        name, mesh_name, courant = setup_label(label)
+        job = Job(f"{name}@{mesh_name}" if mesh_name else name,
+                  *mesh_and_solver(mesh_name or None, name))
+        courant = courant if courant is not None else args.max_courant
+        if courant is not None:
+            job = job.variant(f"co{courant:g}", max_courant=courant)
         if job.label in {j.label for j in jobs}:  # the reference, its max Co 3 run or the yardstick
             continue
         named.append(job.label)
@@ -526,6 +708,16 @@ def main() -> None:
             twin = results.get(floors.get(name, ""))
             print(f"  {name}: "
                   f"{verdict(results[name], yardstick, baseline, scale, cycles, band, twin)}")
+    study = Study(results, yardstick, cycles, named, floors, cells, baseline, band,
+                  said.strip())
+    if args.output:
+        write_study(study, args.output, sys.argv)
+        print(f"wrote {args.output}")
+    if args.figure:
+        cost_accuracy_figure(study, args.figure,
+                             f"f = 1 Hz, h = 0.3 m, pitch {pitch:g} deg, {cycles:g} "
+                             f"cycle{'' if cycles == 1 else 's'}")
+        print(f"wrote {args.figure}")
 
 
 if __name__ == "__main__":

@@ -259,3 +259,68 @@ def test_collect_reports_each_run_as_it_finishes_and_the_simulated_time_of_the_o
     assert "[1/3] broken: failed: diverged" in err
     assert "running: slow t = 0.500 of 2 s\n" in err  # not the finished run's t = 2
     assert "[3/3]" in err.splitlines()[-1] and "slow: 250.0 s" in err
+
+
+def test_setup_labels_name_a_set_up_its_mesh_and_a_max_courant(bench):
+    assert bench.setup_label("affordable") == ("affordable", "", None)
+    assert bench.setup_label("medium_piso@graded") == ("medium_piso", "graded", None)
+    assert bench.setup_label("medium_piso@graded-co3") == ("medium_piso", "graded", 3.0)
+    assert bench.setup_label("medium_piso-co0.25") == ("medium_piso", "", 0.25)
+    for bad in ("a@b@c", "a-co", "a-co0", "a-co1e999", "a-cox", "a b", "-co3", "a@-co3"):
+        with pytest.raises(argparse.ArgumentTypeError, match="SETUP, SETUP@MESH or either"):
+            bench.setup_label(bad)
+
+
+def test_a_bad_setup_label_is_a_usage_error():
+    done = _script("medium_piso@graded-cox")
+    assert done.returncode == 2 and "'medium_piso@graded-cox'" in done.stderr
+
+
+def _study(bench, tmp_path):
+    """A study whose NRMSE against the reference follow by hand: a unit sine (range 2)
+    offset by 0.02 is 1 % off, by 0.06 3 %."""
+    results = {"reference": _run(bench, "reference", cpu=300.0),
+               "openfoam_md": _run(bench, "openfoam_md", offset=0.1, cpu=200.0),
+               "cheap": _run(bench, "cheap", offset=0.02, cpu=50.0),
+               "cheap-PCG": _run(bench, "cheap-PCG", offset=0.06, cpu=52.0),
+               "broken": bench.SetupRun("broken", None, failure="diverged")}
+    cells = dict.fromkeys(results, 1000)
+    return bench.Study(results, results["reference"], 2.0, ["cheap", "broken"],
+                       {"cheap": "cheap-PCG"}, cells, results["openfoam_md"], None,
+                       "motion X; cycles 2.0")
+
+
+def test_the_study_file_keeps_every_run_with_the_inputs(bench, tmp_path):
+    import h5py
+
+    study = _study(bench, tmp_path)
+    bench.write_study(study, tmp_path / "s.h5", ["cfd_cost.py", "cheap"])
+    with h5py.File(tmp_path / "s.h5") as h5:
+        assert h5.attrs["command"] == "cfd_cost.py cheap"
+        assert h5.attrs["settings"] == "motion X; cycles 2.0"
+        assert h5.attrs["yardstick"] == "reference" and h5.attrs["cost_ratio_to"] == "openfoam_md"
+        assert list(h5.attrs["windows"]) == ["cycle 1", "cycle 2"]
+        cheap = h5["cheap"]
+        assert cheap.attrs["cost_ratio"] == pytest.approx(0.25)
+        assert cheap.attrs["other_pressure_solver_run"] == "cheap-PCG" and cheap.attrs["named"]
+        np.testing.assert_allclose(cheap["nrmse_percent"][()], 1.0, rtol=1e-4)
+        np.testing.assert_allclose(h5["cheap-PCG/nrmse_percent"][()], 3.0, rtol=1e-4)
+        broken = h5["broken"].attrs
+        assert broken["failure"] == "diverged" and "cost_ratio" not in broken
+
+
+def test_the_cost_accuracy_figure_draws_each_run_where_its_numbers_put_it(bench, tmp_path):
+    import matplotlib.image
+
+    study = _study(bench, tmp_path)
+    drawn = bench.cost_accuracy_figure(study, tmp_path / "f.png")
+    assert set(drawn) == {"openfoam_md", "cheap", "cheap-PCG"}  # not the yardstick, failures
+    assert drawn["cheap"] == pytest.approx((0.25, 1.0), rel=1e-4)
+    assert drawn["cheap-PCG"] == pytest.approx((0.26, 3.0), rel=1e-4)
+    assert drawn["openfoam_md"] == pytest.approx((1.0, 5.0), rel=1e-4)
+    image = matplotlib.image.imread(tmp_path / "f.png")
+    assert image.shape[0] > 500 and image.shape[1] > 800
+    study = replace(study, baseline=None, band=(2.5, 2.0))  # ratios to the reference
+    drawn = bench.cost_accuracy_figure(study, tmp_path / "g.png", title="t")
+    assert drawn["cheap"] == pytest.approx((50 / 300, 1.0), rel=1e-4)
+    assert (tmp_path / "g.png").stat().st_size > 10_000
