@@ -1108,3 +1108,40 @@ def test_a_stopped_campaign_case_starts_no_application_afterwards(tmp_path):
 
         run_application(case_dir, "blockMesh", timeout_s=60)
     assert (case_dir / "constant" / "polyMesh" / "points").is_file()
+
+
+def test_a_stopped_campaign_waits_for_its_workers_to_let_go_of_their_cases(tmp_path,
+                                                                           monkeypatch):
+    """A worker that outlives the campaign lets go of its case a moment after its solver
+    stopped: the campaign waits for that (its last status then says stopped part-way, not
+    running; seen under load in CI), and no longer than RELEASE_WAIT_S for a case another
+    process keeps."""
+    import mfflap.campaign.execute as execute
+    from mfflap.cfd.openfoam.case_lock import lock_holder
+
+    holder_code = ("import sys, time\nfrom mfflap.cfd.openfoam.case_lock import case_lock\n"
+                   "with case_lock(sys.argv[1]):\n    print('held', flush=True)\n"
+                   "    time.sleep(float(sys.argv[2]))\n")
+    out = tmp_path / "camp"
+
+    def hold(case_id: str, seconds: float) -> subprocess.Popen:
+        proc = subprocess.Popen([sys.executable, "-c", holder_code,
+                                 str(out / "cases" / case_id), str(seconds)],
+                                stdout=subprocess.PIPE, text=True)
+        assert proc.stdout.readline().strip() == "held"
+        return proc
+
+    letting_go = hold("a", 1.0)
+    started = time.monotonic()
+    execute._wait_for_release(out, ["a", "never-run"])
+    assert time.monotonic() - started > 0.5 and lock_holder(out / "cases" / "a") is None
+    letting_go.wait()
+    monkeypatch.setattr(execute, "RELEASE_WAIT_S", 0.5)
+    keeping = hold("b", 600.0)
+    try:
+        started = time.monotonic()
+        execute._wait_for_release(out, ["b"])
+        assert 0.5 <= time.monotonic() - started < 5.0
+    finally:
+        keeping.kill()
+        keeping.wait()

@@ -315,6 +315,24 @@ def _status_of(future: Any, case_id: str, out: Path) -> CaseStatus:
 WRITE_GRACE_S = 60.0
 
 
+#: how long a stopped campaign waits for its workers to let go of the cases they ran, s
+RELEASE_WAIT_S = 10.0
+
+
+def _wait_for_release(out: Path, case_ids: Sequence[str]) -> None:
+    """Wait up to :data:`RELEASE_WAIT_S` for the run locks of ``case_ids`` to be free.
+
+    A worker lets go of its case a moment after its solver stopped. The workers of a
+    cluster that outlives the campaign (``scheduler_address``) are not stopped with it, so
+    without this wait the campaign's last status could still call such a case running
+    rather than stopped part-way. A case another campaign runs costs the whole wait.
+    """
+    deadline = time.monotonic() + RELEASE_WAIT_S
+    while (any(lock_holder(out / "cases" / case_id) for case_id in case_ids)
+           and time.monotonic() < deadline):
+        time.sleep(0.1)
+
+
 class IgnoreInterrupt(WorkerPlugin):
     """A dask worker plugin: the LocalCluster's worker processes ignore SIGINT.
 
@@ -438,6 +456,7 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
                 client.run(stop_running_solvers, WRITE_GRACE_S)
             except Exception:  # workers gone: their solvers die with them
                 pass
+            _wait_for_release(out, [c.case_id for c in todo if c.case_id not in results])
             raise
         finally:
             client.close()
