@@ -1037,7 +1037,8 @@ def test_an_interrupted_campaign_on_an_external_cluster_has_its_solvers_write(tm
     """Ctrl-C on `mfflap campaign run --scheduler ADDR` (a cluster of dask-jobqueue's kind,
     whose workers the terminal's Ctrl-C does not reach): the worker's solver writes the step
     it reached and stops, the worker lives on for the next campaign, and the case is listed
-    as stopped part-way, not failed."""
+    as stopped part-way, not failed. The case queued behind it does not start on the worker
+    it frees (it would run to its end unattended)."""
     from mfflap.campaign.execute import campaign_status
     from mfflap.cfd.openfoam.case_lock import lock_holder
     from mfflap.cfd.openfoam.runner import latest_solution_time, solver_progress
@@ -1047,7 +1048,8 @@ def test_an_interrupted_campaign_on_an_external_cluster_has_its_solvers_write(tm
     with _external_cluster() as (address, scheduler, worker):
         command = [sys.executable, "-c", "from mfflap.cli.main import cli; cli()", "campaign",
                    "run", str(case_file), "--out", str(out), "--frequencies", "0.5",
-                   "--heave-amplitudes", "0.1", "--phases", "90", "--scheduler", address]
+                   "--heave-amplitudes", "0.1", "--phases", "90,135", "--scheduler",
+                   address]
         proc = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                 text=True, process_group=0,
                                 preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
@@ -1059,6 +1061,7 @@ def test_an_interrupted_campaign_on_an_external_cluster_has_its_solvers_write(tm
         assert proc.poll() is None, proc.communicate()
         os.killpg(proc.pid, signal.SIGINT)
         _, err = proc.communicate(timeout=180)
+        time.sleep(3.0)  # time for the queued case to start, had it been left queued
         (case_dir,) = [d for d in (out / "cases").iterdir() if d.is_dir()]
         deadline = time.monotonic() + 60  # the worker's task ends once its solver has
         while lock_holder(case_dir) and time.monotonic() < deadline:
@@ -1066,8 +1069,8 @@ def test_an_interrupted_campaign_on_an_external_cluster_has_its_solvers_write(tm
         assert not _solvers_left(case_dir, wait_s=0.0)
         assert worker.poll() is None and scheduler.poll() is None  # the cluster lives on
     assert proc.returncode == 1, err
-    assert "interrupted: 0 of 1 cases done" in err and "1 stopped part-way" in err, err
-    assert [s.state for s in campaign_status(out)] == ["started"]
+    assert "interrupted: 0 of 2 cases done" in err and "1 stopped part-way" in err, err
+    assert sorted(s.state for s in campaign_status(out)) == ["pending", "started"]
     reached, time_step = solver_progress(case_dir)
     assert float(latest_solution_time(case_dir)) == pytest.approx(reached, abs=0.5 * time_step)
     assert reached > 0.01 and not list(out.glob("*.failed.toml"))

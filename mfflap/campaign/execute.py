@@ -412,6 +412,7 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
             cluster = LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
                                    dashboard_address="127.0.0.1:0")
         client = Client(scheduler_address or cluster)
+        futures: list[Any] = []
         try:
             if cluster is not None:  # its workers share this terminal's Ctrl-C
                 client.register_plugin(IgnoreInterrupt(), name="mfflap-ignore-sigint")
@@ -452,6 +453,10 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
             if bar is not None:
                 bar.close()
         except KeyboardInterrupt:  # the cases in flight write where they are, then stop
+            try:  # first the queued cases: a worker a stopped case frees starts none of them
+                client.cancel(futures)
+            except Exception:  # scheduler gone: nothing more starts
+                pass
             try:
                 client.run(stop_running_solvers, WRITE_GRACE_S)
             except Exception:  # workers gone: their solvers die with them
