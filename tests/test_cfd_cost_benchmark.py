@@ -271,6 +271,26 @@ def test_setup_labels_name_a_set_up_its_mesh_and_a_max_courant(bench):
             bench.setup_label(bad)
 
 
+def test_a_labelled_job_is_its_set_up_on_its_mesh_at_its_max_courant(bench):
+    baseline = setup("openfoam_md")
+    job = bench.labelled_job("openfoam_md@openfoam_md_medium")
+    assert job.label == "openfoam_md@openfoam_md_medium"
+    assert job.solver == baseline.solver and job.mesh.n_cells == 32_368
+    assert job.mesh != baseline.mesh
+    faster = bench.labelled_job("openfoam_md@openfoam_md_medium", max_courant=3.0)
+    assert faster.label == "openfoam_md@openfoam_md_medium-co3"
+    assert faster.solver == replace(baseline.solver, max_courant=3.0)
+    own = bench.labelled_job("medium_piso-co6", max_courant=3.0)  # the label's -coX wins
+    assert own.label == "medium_piso-co6" and own.solver.max_courant == 6.0
+    assert own.mesh == setup("medium_piso").mesh
+
+
+def test_two_yardsticks_are_a_usage_error():
+    done = _script("--yardstick", "openfoam_md@openfoam_md_medium", "--yardstick-courant", "1")
+    assert done.returncode == 2
+    assert "--yardstick and --yardstick-courant" in done.stderr
+
+
 def test_a_bad_setup_label_is_a_usage_error():
     done = _script("medium_piso@graded-cox")
     assert done.returncode == 2 and "'medium_piso@graded-cox'" in done.stderr

@@ -74,6 +74,20 @@ def test_the_shipped_h_grid_is_openfoam_md_s_mesh():
         "PCG", "linearUpwind", "freestream")
 
 
+def test_the_medium_h_grid_is_openfoam_md_s_medium_mesh():
+    """openfoam.md's cost table gives its medium mesh only as 32,452 cells: the shipped
+    medium H-grid has the coarse one's far field and first cell, is finer in every block
+    row and column, and has that many cells within 0.5 %."""
+    specs = mesh_specs()
+    coarse, medium = specs["openfoam_md"], specs["openfoam_md_medium"]
+    assert isinstance(medium, HGridSpec)
+    assert medium.n_cells == pytest.approx(32_452, rel=0.005)
+    for key in ("upstream_chords", "downstream_chords", "side_chords", "first_cell_m"):
+        assert getattr(medium, key) == getattr(coarse, key)
+    for key in ("n_chord", "n_thickness", "n_upstream", "n_downstream", "n_side"):
+        assert 1.3 < getattr(medium, key) / getattr(coarse, key) < 1.6, key
+
+
 @pytest.mark.parametrize("body, key", [
     ('[m]\ntopology = "C"\nn_chord = 5\n', "m.topology"),
     ('[m]\ntopology = "H"\nn_chord = 5\nn_radial = 5\n', "m"),
@@ -151,3 +165,16 @@ def test_the_h_grid_builds_passes_checkmesh_and_runs(tmp_path):
     history = read_forces(case)
     assert history.time[-1] == pytest.approx(0.004, abs=5e-4)
     assert np.all(np.isfinite(history.force))
+
+
+@pytest.mark.openfoam
+def test_the_medium_h_grid_builds_and_passes_checkmesh(tmp_path):
+    from mfflap.cfd.openfoam.runner import run_application
+
+    spec = mesh_specs()["openfoam_md_medium"]
+    case = write_case(tmp_path / "h", MOTION, end_time=0.004, mesh=spec,
+                      solver=setup("openfoam_md").solver)
+    run_application(case, "blockMesh", timeout_s=120)
+    log = run_application(case, "checkMesh", timeout_s=120).read_text()
+    assert "Mesh OK" in log
+    assert int(re.search(r"cells:\s+(\d+)", log).group(1)) == spec.n_cells
