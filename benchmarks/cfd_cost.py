@@ -491,7 +491,7 @@ def cost_accuracy_figure(study: Study, path: str | Path, title: str = ""
     ax.plot([], [], "o", color="tab:blue", label="set-up (GAMG or its own pressure solver)")
     ax.plot([], [], "o-", color="tab:blue", markerfacecolor="none", linewidth=0.8,
             label="the same with the other pressure solver (its round-off)")
-    ax.plot([], [], "s", color="tab:grey", label="the medium mesh, openfoam.md's set-up")
+    ax.plot([], [], "s", color="tab:grey", label="the medium meshes, openfoam.md's set-up")
     ax.set_xscale("log")
     ax.set_xlim(*x_range)
     ticks = [t for t in (0.1, 0.2, round(TARGET_RATIO, 2), 0.5, 1, 2, 5, 10, 20, 50)
@@ -500,7 +500,7 @@ def cost_accuracy_figure(study: Study, path: str | Path, title: str = ""
     ax.minorticks_off()
     ax.set_xlabel("CPU per cycle / openfoam.md's set-up" if have_baseline
                   else "CPU per cycle / the reference")
-    ax.set_ylabel(f"max(F_n, M) NRMSE against {study.yardstick.label}, cycle 1 (%)")
+    ax.set_ylabel(f"max(F_n, M) NRMSE, cycle 1 (%),\nagainst {study.yardstick.label}")
     ax.set_ylim(0, 1.4 * max(y_top, *(study.band or (0.0,))))  # room for the legend above
     ax.set_title(title or study.settings, fontsize=9)
     ax.legend(fontsize=7, loc="upper right")
@@ -667,18 +667,20 @@ def main() -> None:
     have_baseline = baseline is not None and baseline.ok
     scale = (OPENFOAM_MD_US_PER_CELL_STEP / baseline.cpu_per_cell_step_us if have_baseline
              else float("nan"))
-    print("set-up          cells  CPU per cycle  / reference  / openfoam.md set-up  at "
+    width = max(len(label) for label in results)
+    print(f"{'set-up':{width}s}  cells  CPU per cycle  / reference  / openfoam.md set-up  at "
           f"openfoam.md's speed   NRMSE against {yardstick_is}")
     cells = {j.label: j.mesh.n_cells for j in jobs}
     for label, res in results.items():
         if not res.ok:
-            print(f"{label:14s} {cells[label]:6d}   failed: {res.failure}")
+            print(f"{label:{width}s} {cells[label]:6d}   failed: {res.failure}")
             continue
         errors = compare(res, yardstick, cycles)
         cpu = res.cpu_per_cycle_s
         to_baseline = cpu / baseline.cpu_per_cycle_s if have_baseline else float("nan")
-        print(f"{label:14s} {cells[label]:6d} {cpu:10.1f} s   {cpu / base.cpu_per_cycle_s:7.3f}"
-              f"   {to_baseline:12.3f}   {cpu * scale:14.1f} s   {errors}")
+        print(f"{label:{width}s} {cells[label]:6d} {cpu:10.1f} s   "
+              f"{cpu / base.cpu_per_cycle_s:7.3f}   {to_baseline:12.3f}   "
+              f"{cpu * scale:14.1f} s   {errors}")
     for rerun, meaning in (("reference-PCG", "the floor: the same mesh, another linear "
                             "solver"),
                            ("reference-co3", "the medium mesh's own time-step uncertainty, "
