@@ -61,7 +61,8 @@ Run: python benchmarks/cfd_cost.py [setup ...] [--meshes coarse,lean] [--cycles 
      (default: the "affordable" set-up; SETUP@MESH: that set-up's solver settings on a
      named mesh, as `mfflap cfd write --setup SETUP --mesh MESH`; either with -coX: at max
      Co X; --meshes adds named meshes at the reference settings; --figure draws every run's
-     cost against its accuracy, --output keeps the numbers in HDF5 with the command line;
+     cost against its accuracy, --histories their F_n and M over time, --output keeps the
+     numbers in HDF5 with the command line;
      with --work-dir, runs that finished there before are read, not rerun, runs stopped
      part-way are resumed, and a folder
      whose runs had another motion, cycle count, far field or k-epsilon convection
@@ -510,6 +511,38 @@ def cost_accuracy_figure(study: Study, path: str | Path, title: str = ""
     return drawn
 
 
+def force_histories_figure(study: Study, path: str | Path, title: str = "") -> list[str]:
+    """F_n and M over the simulated time after the ramp: the yardstick (black), the medium
+    mesh (the reference), openfoam.md's set-up and each named set-up, so that where and how
+    far they part can be seen. A set-up's rerun with the other pressure solver is left out.
+    Returns the labels drawn, in the order drawn."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    wanted = [study.yardstick.label, "reference", BASELINE, *study.named]
+    runs = {study.yardstick.label: study.yardstick,
+            **{label: study.results[label] for label in wanted[1:]
+               if label in study.results and study.results[label].ok}}
+    fig, axes = plt.subplots(2, 1, figsize=(9.0, 6.5), sharex=True)
+    for ax, component, unit in zip(axes, COMPONENTS[:2], ("F_n (N)", "M (N m)"), strict=True):
+        for label, run in runs.items():
+            shown = run.time_s >= RAMP_S
+            style = ({"color": "black", "linewidth": 2.0, "zorder": 3}
+                     if label == study.yardstick.label else {"linewidth": 0.9})
+            ax.plot(run.time_s[shown], run.loads[component][shown], label=label, **style)
+        ax.set_ylabel(unit)
+        ax.grid(alpha=0.3)
+    axes[-1].set_xlabel("t (s)")
+    axes[0].legend(fontsize=7, ncol=2)
+    axes[0].set_title(title or study.settings, fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+    return list(runs)
+
+
 def _checked_label(label: str) -> str:
     setup_label(label)
     return label
@@ -574,6 +607,9 @@ def main() -> None:
                         help="runs at a time (one core each; default 2, this machine's cores)")
     parser.add_argument("--figure", default=None,
                         help="draw cost against accuracy of every run into this image file")
+    parser.add_argument("--histories", default=None,
+                        help="draw F_n and M over time of the yardstick, the medium mesh, "
+                        "openfoam.md's set-up and the named set-ups into this image file")
     parser.add_argument("--output", default=None,
                         help="write every run's CPU and NRMSE, with the command line and "
                         "settings, into this HDF5 file")
@@ -738,6 +774,11 @@ def main() -> None:
                              f"f = 1 Hz, h = 0.3 m, pitch {pitch:g} deg, {cycles:g} "
                              f"cycle{'' if cycles == 1 else 's'}")
         print(f"wrote {args.figure}")
+    if args.histories:
+        force_histories_figure(study, args.histories,
+                               f"f = 1 Hz, h = 0.3 m, pitch {pitch:g} deg: F_n and M against "
+                               f"{yardstick_label} (black)")
+        print(f"wrote {args.histories}")
 
 
 if __name__ == "__main__":

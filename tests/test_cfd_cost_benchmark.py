@@ -379,3 +379,19 @@ def test_the_shipped_cost_studies_say_what_readme_says_of_them(pitch):
             band_m = attrs["time_step_band_percent"][1]
             assert h5["medium_piso-PCG/nrmse_percent"][0][1] > band_m
             assert h5["medium_piso/nrmse_percent"][0][1] <= band_m
+
+
+def test_the_force_histories_show_the_yardstick_the_medium_mesh_and_the_named_set_ups(
+        bench, tmp_path):
+    import matplotlib.image
+
+    study = _study(bench, tmp_path)
+    drawn = bench.force_histories_figure(study, tmp_path / "h.png")
+    # not the rerun with the other pressure solver, not the failed run; the yardstick first
+    assert drawn == ["reference", "openfoam_md", "cheap"]
+    image = matplotlib.image.imread(tmp_path / "h.png")
+    assert image.shape[0] > 600 and image.shape[1] > 900
+    other = bench.SetupRun("H-medium", 700.0, time_s=study.yardstick.time_s,
+                           loads=study.yardstick.loads)
+    drawn = bench.force_histories_figure(replace(study, yardstick=other), tmp_path / "i.png")
+    assert drawn == ["H-medium", "reference", "openfoam_md", "cheap"]
