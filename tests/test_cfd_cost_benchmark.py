@@ -395,3 +395,23 @@ def test_the_force_histories_show_the_yardstick_the_medium_mesh_and_the_named_se
                            loads=study.yardstick.loads)
     drawn = bench.force_histories_figure(replace(study, yardstick=other), tmp_path / "i.png")
     assert drawn == ["H-medium", "reference", "openfoam_md", "cheap"]
+
+
+@pytest.mark.parametrize("pitch", [5, 10, 20])
+def test_the_shipped_studies_against_openfoam_md_s_medium_mesh_say_what_readme_says(pitch):
+    """README (Known limits) reads the studies against openfoam.md's own medium mesh: no run
+    within the cost is within 2 % of it, openfoam.md's own set-up is not either (that file
+    found 1-2 %), and medium_piso@openfoam_md meets the cost with both pressure solvers."""
+    import h5py
+
+    with h5py.File(FIGURES / f"cost_accuracy_pitch{pitch}_h_medium.h5") as h5:
+        attrs = dict(h5.attrs)
+        assert attrs["yardstick"] == "openfoam_md@openfoam_md_medium"
+        assert "--yardstick openfoam_md@openfoam_md_medium" in attrs["command"]
+        assert f"{np.deg2rad(pitch)!r}" in attrs["settings"]
+        assert not any(_in_target(h5[name], attrs) for name in h5 if "cost_ratio" in
+                       h5[name].attrs)
+        assert min(h5["openfoam_md/nrmse_percent"][0][:2]) > attrs["target_nrmse_percent"]
+        for run in ("medium_piso@openfoam_md", "medium_piso@openfoam_md-PCG"):
+            assert h5[run].attrs["cost_ratio"] <= attrs["target_ratio"]
+            assert min(h5[run]["nrmse_percent"][0][:2]) > attrs["target_nrmse_percent"]
