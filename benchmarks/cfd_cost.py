@@ -495,7 +495,7 @@ def cost_accuracy_figure(study: Study, path: str | Path, title: str = ""
     ax.plot([], [], "s", color="tab:grey", label="the medium meshes, openfoam.md's set-up")
     ax.set_xscale("log")
     ax.set_xlim(*x_range)
-    ticks = [t for t in (0.1, 0.2, round(TARGET_RATIO, 2), 0.5, 1, 2, 5, 10, 20, 50)
+    ticks = [t for t in (0.1, 0.15, 0.2, round(TARGET_RATIO, 2), 0.5, 1, 2, 5, 10, 20, 50)
              if x_range[0] <= t <= x_range[1]]
     ax.set_xticks(ticks, [f"{t:g}" for t in ticks])
     ax.minorticks_off()
