@@ -123,6 +123,20 @@ def test_the_h_grid_case_has_its_own_block_mesh_and_the_plate_frame_zone(tmp_pat
     assert len(zones) == 8
 
 
+def _meshed_and_checked(spec: HGridSpec, tmp_path):
+    """A case of ``spec`` with the openfoam_md set-up's solver, meshed by blockMesh; checkMesh
+    passes it and counts the spec's cells."""
+    from mfflap.cfd.openfoam.runner import run_application
+
+    case = write_case(tmp_path / "h", MOTION, end_time=0.004, mesh=spec,
+                      solver=setup("openfoam_md").solver)
+    run_application(case, "blockMesh", timeout_s=120)
+    log = run_application(case, "checkMesh", timeout_s=120).read_text()
+    assert "Mesh OK" in log
+    assert int(re.search(r"cells:\s+(\d+)", log).group(1)) == spec.n_cells
+    return case
+
+
 @pytest.mark.openfoam
 def test_the_h_grid_builds_passes_checkmesh_and_runs(tmp_path):
     """blockMesh builds the spec's cells inside the stated far field, with the first cell
@@ -131,15 +145,10 @@ def test_the_h_grid_builds_passes_checkmesh_and_runs(tmp_path):
     import pyvista as pv
 
     from mfflap.cfd.openfoam.forces import read_forces
-    from mfflap.cfd.openfoam.runner import run_application, run_case
+    from mfflap.cfd.openfoam.runner import run_case
 
     spec = mesh_specs()["openfoam_md"]
-    baseline = setup("openfoam_md")
-    case = write_case(tmp_path / "h", MOTION, end_time=0.004, mesh=spec, solver=baseline.solver)
-    run_application(case, "blockMesh", timeout_s=120)
-    log = run_application(case, "checkMesh", timeout_s=120).read_text()
-    assert "Mesh OK" in log
-    assert int(re.search(r"cells:\s+(\d+)", log).group(1)) == spec.n_cells
+    case = _meshed_and_checked(spec, tmp_path)
     (case / "case.foam").touch()
     reader = pv.POpenFOAMReader(str(case / "case.foam"))
     reader.enable_all_patch_arrays()
@@ -169,12 +178,4 @@ def test_the_h_grid_builds_passes_checkmesh_and_runs(tmp_path):
 
 @pytest.mark.openfoam
 def test_the_medium_h_grid_builds_and_passes_checkmesh(tmp_path):
-    from mfflap.cfd.openfoam.runner import run_application
-
-    spec = mesh_specs()["openfoam_md_medium"]
-    case = write_case(tmp_path / "h", MOTION, end_time=0.004, mesh=spec,
-                      solver=setup("openfoam_md").solver)
-    run_application(case, "blockMesh", timeout_s=120)
-    log = run_application(case, "checkMesh", timeout_s=120).read_text()
-    assert "Mesh OK" in log
-    assert int(re.search(r"cells:\s+(\d+)", log).group(1)) == spec.n_cells
+    _meshed_and_checked(mesh_specs()["openfoam_md_medium"], tmp_path)
