@@ -60,6 +60,32 @@ def test_windows_are_each_cycle_after_the_ramp(bench):
     assert bench.windows(0.2) == {}  # nothing simulated after the ramp
 
 
+def test_a_time_window_is_compared_after_the_cycles_and_named_by_its_times(bench):
+    assert bench.windows(1.0, (0.25, 0.55)) == {"cycle 1": (0.25, 1.0),
+                                                "t = 0.25-0.55 s": (0.25, 0.55)}
+    assert bench.time_window("0.25:0.55") == (0.25, 0.55)
+    for bad, said in (("0.25", "START:END"), ("a:b", "START:END"), ("1:2:3", "START:END"),
+                      ("0.5:0.25", "START < END"), ("-1:1", "0 <= START"),
+                      ("0:nan", "START < END")):
+        with pytest.raises(argparse.ArgumentTypeError, match=said):
+            bench.time_window(bad)
+
+
+def test_nrmse_in_a_window_sees_only_the_forces_inside_it(bench):
+    ref = _run(bench, "ref")
+    # off by 0.1 from t = 0.6 s on only: nothing in the first stroke, 5 % in the rest
+    late = bench.SetupRun("late", 100.0, time_s=ref.time_s,
+                          loads={k: v + 0.1 * (ref.time_s >= 0.6) for k, v in ref.loads.items()})
+    errors = bench.nrmse_percent(late, ref, 1.0, (0.25, 0.55))
+    assert errors["t = 0.25-0.55 s"] == [0.0, 0.0, 0.0]
+    # cycle 1 is 0.25-1 s: 0.1 off over 0.4 of its 0.75 s, range 2
+    np.testing.assert_allclose(errors["cycle 1"], 100 * 0.1 * np.sqrt(0.4 / 0.75) / 2,
+                               rtol=2e-2)
+    said = bench.verdict(late, ref, None, float("nan"), 1.0, window=(0.25, 0.55))
+    assert said.startswith("not within 2 % (F_n 3.65 %, M 3.65 %); over t = 0.25-0.55 s "
+                           "within (F_n 0.00 %, M 0.00 %); cost met by")
+
+
 def test_nrmse_percent_of_a_constant_offset_is_offset_over_range(bench):
     ref = _run(bench, "ref")
     assert all(e == [0.0, 0.0, 0.0] for e in bench.nrmse_percent(ref, ref, 2.0).values())
@@ -291,6 +317,14 @@ def test_two_yardsticks_are_a_usage_error():
     assert "--yardstick and --yardstick-courant" in done.stderr
 
 
+def test_a_window_past_the_simulated_time_or_malformed_is_a_usage_error():
+    done = _script("--cycles", "1", "--window", "0.25:1.5")
+    assert done.returncode == 2
+    assert "--window ends at 1.5 s, after the 1 s simulated" in done.stderr
+    done = _script("--window", "0.55:0.25")
+    assert done.returncode == 2 and "--window" in done.stderr and "START < END" in done.stderr
+
+
 def test_a_bad_setup_label_is_a_usage_error():
     done = _script("medium_piso@graded-cox")
     assert done.returncode == 2 and "'medium_piso@graded-cox'" in done.stderr
@@ -327,6 +361,21 @@ def test_the_study_file_keeps_every_run_with_the_inputs(bench, tmp_path):
         np.testing.assert_allclose(h5["cheap-PCG/nrmse_percent"][()], 3.0, rtol=1e-4)
         broken = h5["broken"].attrs
         assert broken["failure"] == "diverged" and "cost_ratio" not in broken
+
+
+def test_the_study_file_keeps_the_window_beside_the_cycles(bench, tmp_path):
+    import h5py
+
+    study = replace(_study(bench, tmp_path), window=(0.25, 0.55))
+    bench.write_study(study, tmp_path / "s.h5", ["cfd_cost.py", "--window", "0.25:0.55"])
+    with h5py.File(tmp_path / "s.h5") as h5:
+        assert list(h5.attrs["windows"]) == ["cycle 1", "cycle 2", "t = 0.25-0.55 s"]
+        # a constant offset is the same NRMSE in any window holding the sine's range; the
+        # first stroke holds only part of it (sin from 0.25 to 0.55 s: 1 down to -0.31)
+        errors = h5["cheap/nrmse_percent"][()]
+        np.testing.assert_allclose(errors[:2], 1.0, rtol=1e-4)
+        span = 1 - np.sin(2 * np.pi * 0.55)
+        np.testing.assert_allclose(errors[2], 100 * 0.02 / span, rtol=1e-3)
 
 
 def test_the_cost_accuracy_figure_draws_each_run_where_its_numbers_put_it(bench, tmp_path):
