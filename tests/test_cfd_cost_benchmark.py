@@ -398,10 +398,11 @@ def test_the_cost_accuracy_figure_draws_each_run_where_its_numbers_put_it(bench,
 FIGURES = Path(__file__).resolve().parents[1] / "docs" / "figures"
 
 
-def _in_target(group, attrs) -> bool:
-    first_cycle = group["nrmse_percent"][0]
+def _in_target(group, attrs, window: int = 0) -> bool:
+    """Within the cost, with F_n and M within the NRMSE target in that window (0: cycle 1)."""
+    errors = group["nrmse_percent"][window]
     return bool(group.attrs["cost_ratio"] <= attrs["target_ratio"]
-                and max(first_cycle[:2]) <= attrs["target_nrmse_percent"])
+                and max(errors[:2]) <= attrs["target_nrmse_percent"])
 
 
 @pytest.mark.parametrize("pitch", [5, 10, 20])
@@ -450,7 +451,9 @@ def test_the_force_histories_show_the_yardstick_the_medium_mesh_and_the_named_se
 def test_the_shipped_studies_against_openfoam_md_s_medium_mesh_say_what_readme_says(pitch):
     """README (Known limits) reads the studies against openfoam.md's own medium mesh: no run
     within the cost is within 2 % of it, openfoam.md's own set-up is not either (that file
-    found 1-2 %), and medium_piso@openfoam_md meets the cost with both pressure solvers."""
+    found 1-2 %), and medium_piso@openfoam_md meets the cost with both pressure solvers. The
+    same holds over the first stroke alone (t = 0.25-0.55 s, before the shed vortex passes
+    the plate), where the runs are closest."""
     import h5py
 
     with h5py.File(FIGURES / f"cost_accuracy_pitch{pitch}_h_medium.h5") as h5:
@@ -464,3 +467,8 @@ def test_the_shipped_studies_against_openfoam_md_s_medium_mesh_say_what_readme_s
         for run in ("medium_piso@openfoam_md", "medium_piso@openfoam_md-PCG"):
             assert h5[run].attrs["cost_ratio"] <= attrs["target_ratio"]
             assert min(h5[run]["nrmse_percent"][0][:2]) > attrs["target_nrmse_percent"]
+        stroke = list(attrs["windows"]).index("t = 0.25-0.55 s")
+        assert "--window 0.25:0.55" in attrs["command"]
+        assert not any(_in_target(h5[name], attrs, stroke) for name in h5 if "cost_ratio" in
+                       h5[name].attrs)
+        assert max(h5["openfoam_md/nrmse_percent"][stroke][:2]) > attrs["target_nrmse_percent"]
