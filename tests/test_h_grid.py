@@ -74,18 +74,22 @@ def test_the_shipped_h_grid_is_openfoam_md_s_mesh():
         "PCG", "linearUpwind", "freestream")
 
 
-def test_the_medium_h_grid_is_openfoam_md_s_medium_mesh():
-    """openfoam.md's cost table gives its medium mesh only as 32,452 cells: the shipped
-    medium H-grid has the coarse one's far field and first cell, is finer in every block
-    row and column, and has that many cells within 0.5 %."""
+@pytest.mark.parametrize("coarser, finer, n_cells_there, rel", [
+    ("openfoam_md", "openfoam_md_medium", 32_452, 0.005),
+    ("openfoam_md_medium", "openfoam_md_fine", 67_320, 0.025)])
+def test_the_finer_h_grids_are_openfoam_md_s_medium_and_fine_meshes(coarser, finer,
+                                                                     n_cells_there, rel):
+    """openfoam.md's cost table gives its medium and fine meshes only as 32,452 and 67,320
+    cells: each shipped H-grid has the next coarser one's far field and first cell, is finer
+    in every block row and column, and has about that many cells."""
     specs = mesh_specs()
-    coarse, medium = specs["openfoam_md"], specs["openfoam_md_medium"]
-    assert isinstance(medium, HGridSpec)
-    assert medium.n_cells == pytest.approx(32_452, rel=0.005)
+    coarse, fine = specs[coarser], specs[finer]
+    assert isinstance(fine, HGridSpec)
+    assert fine.n_cells == pytest.approx(n_cells_there, rel=rel)
     for key in ("upstream_chords", "downstream_chords", "side_chords", "first_cell_m"):
-        assert getattr(medium, key) == getattr(coarse, key)
+        assert getattr(fine, key) == getattr(coarse, key)
     for key in ("n_chord", "n_thickness", "n_upstream", "n_downstream", "n_side"):
-        assert 1.3 < getattr(medium, key) / getattr(coarse, key) < 1.6, key
+        assert 1.3 < getattr(fine, key) / getattr(coarse, key) < 1.6, key
 
 
 @pytest.mark.parametrize("body, key", [
@@ -177,5 +181,6 @@ def test_the_h_grid_builds_passes_checkmesh_and_runs(tmp_path):
 
 
 @pytest.mark.openfoam
-def test_the_medium_h_grid_builds_and_passes_checkmesh(tmp_path):
-    _meshed_and_checked(mesh_specs()["openfoam_md_medium"], tmp_path)
+@pytest.mark.parametrize("name", ["openfoam_md_medium", "openfoam_md_fine"])
+def test_the_finer_h_grids_build_and_pass_checkmesh(tmp_path, name):
+    _meshed_and_checked(mesh_specs()[name], tmp_path)
