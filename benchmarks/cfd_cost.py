@@ -510,7 +510,7 @@ def cost_accuracy_figure(study: Study, path: str | Path, title: str = ""
     twins = set(study.floors.values())
     drawn: dict[str, tuple[float, float]] = {}
     y_top = max([study.first_cycle_error(run) for run in shown] + [TARGET_NRMSE_PERCENT])
-    placed: list[tuple[float, float]] = []  # labels' anchors: log10 of the ratio, NRMSE %
+    labels, unlabelled = [], []  # the points drawn without a label: the twins
     for label, run in study.results.items():
         if not run.ok or label == study.yardstick.label:
             continue
@@ -523,13 +523,10 @@ def cost_accuracy_figure(study: Study, path: str | Path, title: str = ""
             style = {"color": "tab:grey", "marker": "s"}
         ax.plot([x], [y], linestyle="none", markersize=6, **style)
         if label not in twins:  # a twin is the open marker joined to its set-up
-            lift = 0  # one line up for each label already near this one's place
-            while any(abs(np.log10(x) - px) < 0.25 and abs(y + lift * 0.035 * y_top - py)
-                      < 0.03 * y_top for px, py in placed):
-                lift += 1
-            placed.append((float(np.log10(x)), y + lift * 0.035 * y_top))
-            ax.annotate(label, (x, y), textcoords="offset points", xytext=(5, -3 + 9 * lift),
-                        fontsize=7)
+            labels.append(ax.annotate(label, (x, y), textcoords="offset points",
+                                      xytext=(5, -3), fontsize=7))
+        else:
+            unlabelled.append((x, y))
     for label, twin in study.floors.items():
         a, b = study.results[label], study.results[twin]
         if a.ok and b.ok:
@@ -553,10 +550,60 @@ def cost_accuracy_figure(study: Study, path: str | Path, title: str = ""
     ax.set_title(title or study.settings, fontsize=9)
     ax.legend(fontsize=7, loc="upper right")
     fig.tight_layout()
+    unstack_labels(fig, labels, unlabelled)
     fig.savefig(path, dpi=130)
     plt.close(fig)
     return drawn
 
+
+def unstack_labels(fig, labels: list, points: list[tuple[float, float]] = (),
+                   line_pt: float = 9.0, most_lines: int = 4, marker_pt: float = 4.0) -> None:
+    """Place each point label beside its point where its text overlaps neither the labels
+    placed before it nor any point drawn: right of the point, else left of it, else a line
+    (``line_pt`` points) higher or lower, right or left, up to ``most_lines`` lines away,
+    inside the axes; where every place is taken, the one that overlaps least. Labels of
+    runs close in cost and accuracy (a long label reaches the next run's point) stay
+    legible. ``points`` are the points drawn without a label (data coordinates), each
+    label's own point counts too, a marker being ``marker_pt`` points in radius. A label
+    moved off its point's line gets a thin leader to it. Measured on the figure as drawn, so
+    it is called after the layout."""
+    from matplotlib.transforms import Bbox
+
+    renderer = fig.canvas.get_renderer()
+    radius = marker_pt * fig.dpi / 72.0
+    markers = []
+    for text in labels:
+        x, y = text.axes.transData.transform(text.xy)
+        markers.append(Bbox([[x - radius, y - radius], [x + radius, y + radius]]))
+    if labels:
+        for x, y in labels[0].axes.transData.transform(np.asarray(points).reshape(-1, 2)):
+            markers.append(Bbox([[x - radius, y - radius], [x + radius, y + radius]]))
+    places = [(dx, -3.0 + line_pt * lift, ha)
+              for lift in sorted(range(-most_lines, most_lines + 1), key=lambda k: (abs(k), -k))
+              for dx, ha in ((5.0, "left"), (-5.0, "right"))]
+    placed: list = []
+    inside = labels[0].axes.get_window_extent(renderer) if labels else None
+    for text in labels:
+        best, best_overlaps = places[0], None
+        for dx, dy, ha in places:
+            text.xyann = (dx, dy)
+            text.set_horizontalalignment(ha)
+            box = text.get_window_extent(renderer)
+            overlaps = sum(box.overlaps(other) for other in placed + markers)
+            overlaps += 10 * (not inside.contains(box.x0, box.y0)
+                              or not inside.contains(box.x1, box.y1))
+            if best_overlaps is None or overlaps < best_overlaps:
+                best, best_overlaps = (dx, dy, ha), overlaps
+            if overlaps == 0:
+                break
+        text.xyann = best[:2]
+        text.set_horizontalalignment(best[2])
+        placed.append(text.get_window_extent(renderer))
+        if best[1] != places[0][1]:  # off its point's line: a leader from its near end
+            text.axes.annotate("", text.xy, xytext=(best[0], best[1] + 2.5),
+                               textcoords="offset points",
+                               arrowprops={"arrowstyle": "-", "color": "0.6",
+                                           "linewidth": 0.5, "shrinkA": 0, "shrinkB": 3})
 
 def force_histories_figure(study: Study, path: str | Path, title: str = "") -> list[str]:
     """F_n and M over the simulated time after the ramp: the yardstick (black), the medium

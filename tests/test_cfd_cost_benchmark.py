@@ -378,6 +378,44 @@ def test_the_study_file_keeps_the_window_beside_the_cycles(bench, tmp_path):
         np.testing.assert_allclose(errors[2], 100 * 0.02 / span, rtol=1e-3)
 
 
+def test_labels_that_would_overlap_are_lifted_apart_and_others_left_alone(bench):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots()
+    ax.set_xscale("log")
+    ax.set_xlim(0.1, 10)
+    ax.set_ylim(0, 10)
+    # a long label reaching the next run's place, one at the same place, one far away
+    labels = [ax.annotate(text, xy, textcoords="offset points", xytext=(5, -3), fontsize=7)
+              for text, xy in (("medium_piso@openfoam_md", (0.29, 5.13)),
+                               ("medium_piso", (0.53, 5.12)),
+                               ("medium_piso-co8", (0.53, 5.12)),
+                               ("affordable", (0.27, 1.0)))]
+    renderer = fig.canvas.get_renderer()
+    assert labels[0].get_window_extent(renderer).overlaps(labels[1].get_window_extent(renderer))
+    twin = (0.3, 5.6)  # a point drawn without a label
+    ax.plot(*twin, "o")
+    bench.unstack_labels(fig, labels, [twin])
+    boxes = [t.get_window_extent(renderer) for t in labels]
+    assert not any(a.overlaps(b) for i, a in enumerate(boxes) for b in boxes[i + 1:])
+    # no label covers a point: the long label clears the next run's, all clear the twin
+    for xy in [t.xy for t in labels] + [twin]:
+        x, y = ax.transData.transform(xy)
+        assert not any(b.x0 <= x <= b.x1 and b.y0 <= y <= b.y1 for b in boxes), xy
+    for text in labels:  # each stays within a few lines of its point
+        assert abs(text.xyann[0]) == 5 and abs(text.xyann[1] + 3) <= 4 * 9
+    assert labels[-1].xyann == (5, -3)  # nothing near it: where it was
+    # a label moved off its point's line has a leader to that point
+    moved = {t.xy for t in labels if t.xyann[1] != -3}
+    leaders = [a for a in ax.texts if a not in labels]
+    assert moved and {a.xy for a in leaders} == moved
+    assert all(a.arrow_patch is not None and a.get_text() == "" for a in leaders)
+    plt.close(fig)
+
+
 def test_the_cost_accuracy_figure_draws_each_run_where_its_numbers_put_it(bench, tmp_path):
     import matplotlib.image
 
