@@ -569,20 +569,19 @@ def unstack_labels(fig, labels: list, points: list[tuple[float, float]] = (),
     it is called after the layout."""
     from matplotlib.transforms import Bbox
 
+    if not labels:
+        return
     renderer = fig.canvas.get_renderer()
+    ax = labels[0].axes
     radius = marker_pt * fig.dpi / 72.0
-    markers = []
-    for text in labels:
-        x, y = text.axes.transData.transform(text.xy)
-        markers.append(Bbox([[x - radius, y - radius], [x + radius, y + radius]]))
-    if labels:
-        for x, y in labels[0].axes.transData.transform(np.asarray(points).reshape(-1, 2)):
-            markers.append(Bbox([[x - radius, y - radius], [x + radius, y + radius]]))
+    every_point = np.asarray([t.xy for t in labels] + list(points), dtype=float)
+    markers = [Bbox([[x - radius, y - radius], [x + radius, y + radius]])
+               for x, y in ax.transData.transform(every_point)]
     places = [(dx, -3.0 + line_pt * lift, ha)
               for lift in sorted(range(-most_lines, most_lines + 1), key=lambda k: (abs(k), -k))
               for dx, ha in ((5.0, "left"), (-5.0, "right"))]
     placed: list = []
-    inside = labels[0].axes.get_window_extent(renderer) if labels else None
+    inside = ax.get_window_extent(renderer)
     for text in labels:
         best, best_overlaps = places[0], None
         for dx, dy, ha in places:
@@ -600,10 +599,10 @@ def unstack_labels(fig, labels: list, points: list[tuple[float, float]] = (),
         text.set_horizontalalignment(best[2])
         placed.append(text.get_window_extent(renderer))
         if best[1] != places[0][1]:  # off its point's line: a leader from its near end
-            text.axes.annotate("", text.xy, xytext=(best[0], best[1] + 2.5),
-                               textcoords="offset points",
-                               arrowprops={"arrowstyle": "-", "color": "0.6",
-                                           "linewidth": 0.5, "shrinkA": 0, "shrinkB": 3})
+            ax.annotate("", text.xy, xytext=(best[0], best[1] + 2.5), textcoords="offset points",
+                        arrowprops={"arrowstyle": "-", "color": "0.6", "linewidth": 0.5,
+                                    "shrinkA": 0, "shrinkB": 3})
+
 
 def force_histories_figure(study: Study, path: str | Path, title: str = "") -> list[str]:
     """F_n and M over the simulated time after the ramp: the yardstick (black), the medium
