@@ -378,7 +378,7 @@ def test_the_study_file_keeps_the_window_beside_the_cycles(bench, tmp_path):
         np.testing.assert_allclose(errors[2], 100 * 0.02 / span, rtol=1e-3)
 
 
-def test_labels_that_would_overlap_are_lifted_apart_and_others_left_alone(bench):
+def test_labels_that_would_overlap_are_placed_apart_and_others_left_alone(bench):
     import matplotlib
 
     matplotlib.use("Agg")
