@@ -1,0 +1,228 @@
+"""Issue 4's cost target under every reading measured, from the studies of cfd_cost.py.
+
+Each study that ``benchmarks/cfd_cost.py --output F.h5`` wrote measures every run against
+one yardstick on one motion: mfflap's O-grid medium mesh at its smallest time step or
+the mean of several (``cost_accuracy_pitch<P>.h5``), openfoam.md's H-type medium mesh
+(``cost_accuracy_pitch<P>_h_medium.h5``) or its fine one (``cost_accuracy_pitch<P>_h_fine.h5``).
+For each study and each time window it holds (cycle 1, and the first stroke where
+``--window`` gave it), this prints the set-up within the cost that comes nearest the
+yardstick and whether that meets the target: F_n and M within 2 % NRMSE with both pressure
+solvers where the study reran the set-up with the other one (a pass that turns on round-off
+is not a pass). "Within the cost" is the set-up's CPU per cycle as a ratio to openfoam.md's
+set-up on the same motion and machine, at most 90 s / 4.4 min = 0.34. --figure draws the
+same as a grid, reading against pitch, one panel per window.
+
+    python benchmarks/cost_readings.py [--studies docs/figures] [--figure F.png]
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import re
+import textwrap
+from dataclasses import dataclass
+from pathlib import Path
+
+STUDIES = Path(__file__).resolve().parents[1] / "docs" / "figures"
+#: the study files by the yardstick they measure against, in the order drawn
+YARDSTICKS = {"": "mfflap's O-grid medium mesh (its smallest time step or the mean of several)",
+              "_h_medium": "openfoam.md's H-type medium mesh",
+              "_h_fine": "openfoam.md's H-type fine mesh"}
+_STUDY_FILE = re.compile(r"^cost_accuracy_pitch(?P<pitch>\d+(?:\.\d+)?)"
+                         r"(?P<yardstick>_h_medium|_h_fine)?\.h5$")
+#: the windows drawn, by their names in the studies
+WINDOWS = {"cycle 1": "cycle 1", "t = 0.25-0.55 s": "first stroke, t = 0.25-0.55 s"}
+
+
+@dataclass(frozen=True)
+class Reading:
+    """The nearest set-up within the cost under one reading of the target."""
+
+    pitch_deg: float
+    #: the key of YARDSTICKS the study measures against
+    yardstick: str
+    #: the yardstick run's (or runs') label in the study
+    yardstick_label: str
+    window: str
+    #: the nearest set-up within the cost, None if no named set-up is within it
+    setup: str | None
+    #: the larger of its F_n and M NRMSE, %, the worse of its runs (both pressure solvers)
+    nrmse_percent: float
+    #: its cost as a ratio to openfoam.md's set-up
+    cost_ratio: float
+    #: whether it ran with both pressure solvers
+    both_solvers: bool
+    #: openfoam.md's set-up's larger F_n and M NRMSE, %, for scale (nan if not run)
+    baseline_nrmse_percent: float
+    target_nrmse_percent: float
+
+    @property
+    def met(self) -> bool:
+        """Within the cost and within the NRMSE target (with both solvers where run)."""
+        return self.setup is not None and self.nrmse_percent <= self.target_nrmse_percent
+
+
+def _worst_error(group, window: int) -> float:
+    """The larger of a run's F_n and M NRMSE in a window, %."""
+    return float(max(group["nrmse_percent"][window][:2]))
+
+
+def study_readings(path: str | Path) -> list[Reading]:
+    """The nearest set-up within the cost in each window of one study file.
+
+    Parameters
+    ----------
+    path
+        A ``cost_accuracy_pitch<P>[_h_medium|_h_fine].h5`` written by cfd_cost.py --output.
+
+    Returns
+    -------
+    list of Reading
+        One per window of the study that WINDOWS names, in the study's order.
+    """
+    import h5py
+
+    path = Path(path)
+    name = _STUDY_FILE.match(path.name)
+    if name is None:
+        raise ValueError(f"{path}: not a cost study file (cost_accuracy_pitch<P>"
+                         "[_h_medium|_h_fine].h5)")
+    readings = []
+    with h5py.File(path, "r") as h5:
+        attrs = dict(h5.attrs)
+        for key in ("target_ratio", "target_nrmse_percent", "yardstick", "windows"):
+            if key not in attrs:
+                raise ValueError(f"{path}: the study has no attribute {key!r}")
+        target_ratio = float(attrs["target_ratio"])
+        named = [label for label in h5 if h5[label].attrs.get("named", False)
+                 and "cost_ratio" in h5[label].attrs]
+        for index, window in enumerate(str(w) for w in attrs["windows"]):
+            if window not in WINDOWS:
+                continue
+            best: tuple[float, str, float, bool] | None = None
+            for label in named:
+                group = h5[label]
+                cost = float(group.attrs["cost_ratio"])
+                if not cost <= target_ratio:
+                    continue
+                twin = group.attrs.get("other_pressure_solver_run")
+                runs = [group] + ([h5[twin]] if twin is not None and twin in h5 else [])
+                error = max(_worst_error(run, index) for run in runs)
+                if best is None or error < best[0]:
+                    best = (error, label, cost, len(runs) == 2)
+            baseline = (_worst_error(h5["openfoam_md"], index) if "openfoam_md" in h5
+                        else math.nan)
+            error, setup, cost, both = best or (math.nan, None, math.nan, False)
+            readings.append(Reading(float(name["pitch"]), name["yardstick"] or "",
+                                    str(attrs["yardstick"]), window, setup, error, cost,
+                                    both, baseline, float(attrs["target_nrmse_percent"])))
+    return readings
+
+
+def all_readings(studies: str | Path = STUDIES) -> list[Reading]:
+    """Every reading of every cost study in a folder, by yardstick, then pitch, then window.
+
+    Raises
+    ------
+    FileNotFoundError
+        If there is no such folder, or it holds no cost study.
+    """
+    if not Path(studies).is_dir():
+        raise FileNotFoundError(f"{studies}: no such folder")
+    paths = sorted(p for p in Path(studies).iterdir() if _STUDY_FILE.match(p.name))
+    if not paths:
+        raise FileNotFoundError(f"{studies}: no cost study (cost_accuracy_pitch<P>*.h5)")
+    readings = [r for p in paths for r in study_readings(p)]
+    order = list(YARDSTICKS)
+    return sorted(readings, key=lambda r: (order.index(r.yardstick), r.pitch_deg,
+                                           list(WINDOWS).index(r.window)))
+
+
+def describe(reading: Reading) -> str:
+    """One line: the reading, the nearest set-up within the cost and the verdict."""
+    where = (f"{reading.pitch_deg:g} deg, {YARDSTICKS[reading.yardstick]} "
+             f"({reading.yardstick_label}), {reading.window}")
+    if reading.setup is None:
+        return f"{where}: no set-up within the cost"
+    solvers = "both pressure solvers" if reading.both_solvers else "one pressure solver"
+    return (f"{where}: {reading.setup} ({reading.cost_ratio:.2f} of openfoam.md's set-up) "
+            f"{reading.nrmse_percent:.1f} % ({solvers}; openfoam.md's set-up "
+            f"{reading.baseline_nrmse_percent:.1f} %): "
+            f"{'met' if reading.met else 'not met'}")
+
+
+def readings_figure(readings: list[Reading], path: str | Path):
+    """A grid per window: yardstick against pitch, each cell the nearest set-up within the
+    cost and its NRMSE, green where the target is met, red where not, grey where not
+    measured. Returns the Figure."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    pitches = sorted({r.pitch_deg for r in readings})
+    rows = [y for y in YARDSTICKS if any(r.yardstick == y for r in readings)]
+    windows = [w for w in WINDOWS if any(r.window == w for r in readings)]
+    cell = {(r.window, r.yardstick, r.pitch_deg): r for r in readings}
+    fig, axes = plt.subplots(1, len(windows), figsize=(6.8 * len(windows), 1.2 + 1.5 * len(rows)),
+                             squeeze=False)
+    for ax, window in zip(axes[0], windows, strict=True):
+        for i, yardstick in enumerate(rows):
+            for j, pitch in enumerate(pitches):
+                r = cell.get((window, yardstick, pitch))
+                if r is None:
+                    colour, text = "0.85", "not measured"
+                elif r.setup is None:
+                    colour, text = "#f4a6a6", "nothing within the cost"
+                else:
+                    colour = "#9bd69b" if r.met else "#f4a6a6"
+                    twin = "" if r.both_solvers else ", one solver"
+                    against = (textwrap.fill(f"against {r.yardstick_label}", 24) + "\n"
+                               if yardstick == "" else "")
+                    text = (f"{against}{r.setup.replace('@', chr(10) + '@')}\n"
+                            f"{r.nrmse_percent:.1f} %{twin}\n"
+                            f"(openfoam.md's set-up {r.baseline_nrmse_percent:.1f} %)")
+                ax.add_patch(plt.Rectangle((j, i), 1, 1, facecolor=colour, edgecolor="white",
+                                           linewidth=2))
+                ax.text(j + 0.5, i + 0.5, text, ha="center", va="center", fontsize=7.5)
+        ax.set_xlim(0, len(pitches))
+        ax.set_ylim(len(rows), 0)
+        ax.set_xticks([j + 0.5 for j in range(len(pitches))],
+                      [f"pitch {p:g}°" for p in pitches])
+        ax.set_yticks([i + 0.5 for i in range(len(rows))],
+                      [textwrap.fill(YARDSTICKS[y], 24) for y in rows], fontsize=8)
+        ax.tick_params(length=0, pad=8)
+        ax.set_title(WINDOWS[window], fontsize=10)
+    fig.suptitle("Issue 4: the nearest set-up within the cost (≤ 0.34 of openfoam.md's "
+                 "set-up) and its larger F_n / M NRMSE\nagainst each yardstick "
+                 "(the worse of its two pressure solvers; green: within 2 %)", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return fig
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--studies", default=str(STUDIES),
+                        help="folder of the cost studies (default: docs/figures)")
+    parser.add_argument("--figure", default=None, help="draw the readings into this image")
+    args = parser.parse_args()
+    try:
+        readings = all_readings(args.studies)
+    except (FileNotFoundError, ValueError) as error:
+        raise SystemExit(str(error)) from None
+    for reading in readings:
+        print(describe(reading))
+    met = [r for r in readings if r.met]
+    print(f"{len(met)} of {len(readings)} readings met"
+          + (": " + "; ".join(f"{r.pitch_deg:g} deg against {r.yardstick_label}, {r.window}"
+                              for r in met) if met else ""))
+    if args.figure:
+        readings_figure(readings, args.figure)
+        print(f"wrote {args.figure}")
+
+
+if __name__ == "__main__":
+    main()
