@@ -107,12 +107,14 @@ def study_readings(path: str | Path) -> list[Reading]:
                 if not cost <= target_ratio:
                     continue
                 twin = group.attrs.get("other_pressure_solver_run")
-                runs = [group] + ([h5[twin]] if twin is not None and twin in h5 else [])
+                # a twin that failed (no NRMSE) leaves the set-up judged by one solver
+                runs = [group] + ([h5[twin]] if twin is not None and twin in h5
+                                  and "nrmse_percent" in h5[twin] else [])
                 error = max(_worst_error(run, index) for run in runs)
                 if best is None or error < best[0]:
                     best = (error, label, cost, len(runs) == 2)
-            baseline = (_worst_error(h5["openfoam_md"], index) if "openfoam_md" in h5
-                        else math.nan)
+            baseline = (_worst_error(h5["openfoam_md"], index)
+                        if "nrmse_percent" in h5.get("openfoam_md", {}) else math.nan)
             error, setup, cost, both = best or (math.nan, None, math.nan, False)
             readings.append(Reading(float(name["pitch"]), name["yardstick"] or "",
                                     str(attrs["yardstick"]), window, setup, error, cost,

@@ -47,12 +47,13 @@ def _run(bench, label, offset, cpu):
                           loads={k: wave + offset for k in bench.COMPONENTS})
 
 
-def _write(bench, path, runs, named, floors, window=None):
+def _write(bench, path, runs, named, floors, window=None, failed=()):
     """A one-cycle study against "reference" (openfoam_md's CPU 200 s: a cost ratio of 0.34
-    is 68 s) written by cfd_cost.py's writer."""
+    is 68 s) written by cfd_cost.py's writer; the runs labelled in ``failed`` failed."""
     results = {"reference": _run(bench, "reference", 0.0, 300.0),
                "openfoam_md": _run(bench, "openfoam_md", 0.1, 200.0),
-               **{label: _run(bench, label, offset, cpu) for label, (offset, cpu) in runs.items()}}
+               **{label: _run(bench, label, offset, cpu) for label, (offset, cpu) in runs.items()},
+               **{label: bench.SetupRun(label, None, failure="diverged") for label in failed}}
     study = bench.Study(results, results["reference"], 1.0, named, floors,
                         dict.fromkeys(results, 1000), results["openfoam_md"], None, "motion X",
                         window)
@@ -91,6 +92,13 @@ def test_a_reading_with_nothing_near_enough_or_cheap_enough_is_not_met(bench, re
     (reading,) = readings.study_readings(path)
     assert reading.setup is None and math.isnan(reading.nrmse_percent) and not reading.met
     assert readings.describe(reading).endswith("no set-up within the cost")
+    # a failed rerun with the other solver leaves one solver; a failed baseline no scale
+    _write(bench, path, {"near": (0.02, 50.0)}, ["near"], {"near": "near-PCG"},
+           failed=("near-PCG", "openfoam_md"))
+    (reading,) = readings.study_readings(path)
+    assert reading.setup == "near" and not reading.both_solvers
+    assert reading.nrmse_percent == pytest.approx(1.0, rel=1e-3)
+    assert math.isnan(reading.baseline_nrmse_percent)
 
 
 def test_a_file_that_is_not_a_study_is_refused_by_name(bench, readings, tmp_path):
