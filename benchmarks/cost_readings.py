@@ -1,16 +1,18 @@
 """Issue 4's cost target under every reading measured, from the studies of cfd_cost.py.
 
 Each study that ``benchmarks/cfd_cost.py --output F.h5`` wrote measures every run against
-one yardstick on one motion: mfflap's O-grid medium mesh at its smallest time step or
-the mean of several (``cost_accuracy_pitch<P>.h5``), openfoam.md's H-type medium mesh
-(``cost_accuracy_pitch<P>_h_medium.h5``) or its fine one (``cost_accuracy_pitch<P>_h_fine.h5``).
-For each study and each time window it holds (cycle 1, and the first stroke where
-``--window`` gave it), this prints the set-up within the cost that comes nearest the
-yardstick and whether that meets the target: F_n and M within 2 % NRMSE with both pressure
-solvers where the study reran the set-up with the other one (a pass that turns on round-off
-is not a pass). "Within the cost" is the set-up's CPU per cycle as a ratio to openfoam.md's
-set-up on the same motion and machine, at most 90 s / 4.4 min = 0.34. --figure draws the
-same as a grid, reading against pitch, one panel per window.
+one yardstick on one motion, and is named ``cost_accuracy_pitch<P>[<suffix>].h5`` after the
+motion's pitch amplitude (deg). The yardstick it names sorts it into one of four kinds:
+mfflap's O-grid medium mesh at one time step (``reference-coX``; where several studies of a
+motion have one, the smallest max Co counts), the mean of that mesh's runs at several time
+steps (``mean of max Co ...``), openfoam.md's H-type medium mesh or its fine one. For each
+study and each time window it holds (cycle 1, and the first stroke where ``--window`` gave
+it), this prints the set-up within the cost that comes nearest the yardstick and whether that
+meets the target: F_n and M within 2 % NRMSE with both pressure solvers where the study
+reran the set-up with the other one (a pass that turns on round-off is not a pass). "Within
+the cost" is the set-up's CPU per cycle as a ratio to openfoam.md's set-up on the same
+motion and machine, at most 90 s / 4.4 min = 0.34. --figure draws the same as a grid,
+yardstick against pitch, one panel per window.
 
     python benchmarks/cost_readings.py [--studies docs/figures] [--figure F.png]
 """
@@ -25,12 +27,41 @@ from dataclasses import dataclass
 from pathlib import Path
 
 STUDIES = Path(__file__).resolve().parents[1] / "docs" / "figures"
-#: the study files by the yardstick they measure against, in the order drawn
-YARDSTICKS = {"": "mfflap's O-grid medium mesh (its smallest time step or the mean of several)",
-              "_h_medium": "openfoam.md's H-type medium mesh",
-              "_h_fine": "openfoam.md's H-type fine mesh"}
-_STUDY_FILE = re.compile(r"^cost_accuracy_pitch(?P<pitch>\d+(?:\.\d+)?)"
-                         r"(?P<yardstick>_h_medium|_h_fine)?\.h5$")
+#: the kinds of yardstick, in the order drawn
+YARDSTICKS = {"o_grid_time_step": "mfflap's O-grid medium mesh at its smallest time step run",
+              "o_grid_mean": "mfflap's O-grid medium mesh, the mean of its time steps",
+              "h_medium": "openfoam.md's H-type medium mesh",
+              "h_fine": "openfoam.md's H-type fine mesh"}
+_STUDY_FILE = re.compile(r"^cost_accuracy_pitch(?P<pitch>\d+(?:\.\d+)?)(?:_[\w.]+)?\.h5$")
+_O_GRID_TIME_STEP = re.compile(r"^reference-co(?P<courant>\d+(?:\.\d+)?)$")
+
+
+def yardstick_kind(label: str) -> str:
+    """The kind of yardstick (a key of YARDSTICKS) a study's ``yardstick`` label names.
+
+    Raises
+    ------
+    ValueError
+        If the label is none of them.
+    """
+    if _O_GRID_TIME_STEP.match(label) or label == "reference":
+        return "o_grid_time_step"
+    if label.startswith("mean of max Co"):
+        return "o_grid_mean"
+    kinds = {"openfoam_md@openfoam_md_medium": "h_medium",
+             "openfoam_md@openfoam_md_fine": "h_fine"}
+    if label not in kinds:
+        raise ValueError(f"yardstick {label!r} is none of: reference-coX, mean of max Co "
+                         f"..., {', '.join(kinds)}")
+    return kinds[label]
+
+
+def _max_courant(label: str) -> float:
+    """The max Co of an O-grid time-step yardstick (the reference's own, 4, for "reference")."""
+    found = _O_GRID_TIME_STEP.match(label)
+    return float(found["courant"]) if found else 4.0
+
+
 #: the windows drawn, by their names in the studies
 WINDOWS = {"cycle 1": "cycle 1", "t = 0.25-0.55 s": "first stroke, t = 0.25-0.55 s"}
 
@@ -40,7 +71,7 @@ class Reading:
     """The nearest set-up within the cost under one reading of the target."""
 
     pitch_deg: float
-    #: the key of YARDSTICKS the study measures against
+    #: the kind of yardstick the study measures against, a key of YARDSTICKS
     yardstick: str
     #: the yardstick run's (or runs') label in the study
     yardstick_label: str
@@ -74,7 +105,7 @@ def study_readings(path: str | Path) -> list[Reading]:
     Parameters
     ----------
     path
-        A ``cost_accuracy_pitch<P>[_h_medium|_h_fine].h5`` written by cfd_cost.py --output.
+        A ``cost_accuracy_pitch<P>[<suffix>].h5`` written by cfd_cost.py --output.
 
     Returns
     -------
@@ -87,7 +118,7 @@ def study_readings(path: str | Path) -> list[Reading]:
     name = _STUDY_FILE.match(path.name)
     if name is None:
         raise ValueError(f"{path}: not a cost study file (cost_accuracy_pitch<P>"
-                         "[_h_medium|_h_fine].h5)")
+                         "[<suffix>].h5)")
     readings = []
     with h5py.File(path, "r") as h5:
         attrs = dict(h5.attrs)
@@ -95,6 +126,10 @@ def study_readings(path: str | Path) -> list[Reading]:
             if key not in attrs:
                 raise ValueError(f"{path}: the study has no attribute {key!r}")
         target_ratio = float(attrs["target_ratio"])
+        try:
+            kind = yardstick_kind(str(attrs["yardstick"]))
+        except ValueError as error:
+            raise ValueError(f"{path}: {error}") from None
         named = [label for label in h5 if h5[label].attrs.get("named", False)
                  and "cost_ratio" in h5[label].attrs]
         for index, window in enumerate(str(w) for w in attrs["windows"]):
@@ -116,7 +151,7 @@ def study_readings(path: str | Path) -> list[Reading]:
             baseline = (_worst_error(h5["openfoam_md"], index)
                         if "nrmse_percent" in h5.get("openfoam_md", {}) else math.nan)
             error, setup, cost, both = best or (math.nan, None, math.nan, False)
-            readings.append(Reading(float(name["pitch"]), name["yardstick"] or "",
+            readings.append(Reading(float(name["pitch"]), kind,
                                     str(attrs["yardstick"]), window, setup, error, cost,
                                     both, baseline, float(attrs["target_nrmse_percent"])))
     return readings
@@ -129,16 +164,32 @@ def all_readings(studies: str | Path = STUDIES) -> list[Reading]:
     ------
     FileNotFoundError
         If there is no such folder, or it holds no cost study.
+    ValueError
+        If a study is malformed, or two measure one motion against the same yardstick
+        (other than the O-grid medium mesh at two time steps).
     """
     if not Path(studies).is_dir():
         raise FileNotFoundError(f"{studies}: no such folder")
     paths = sorted(p for p in Path(studies).iterdir() if _STUDY_FILE.match(p.name))
     if not paths:
         raise FileNotFoundError(f"{studies}: no cost study (cost_accuracy_pitch<P>*.h5)")
-    readings = [r for p in paths for r in study_readings(p)]
+    readings = {}
+    for path in paths:
+        for r in study_readings(path):
+            key = (r.yardstick, r.pitch_deg, r.window)
+            if key in readings and r.yardstick == "o_grid_time_step":
+                # the smallest time step of the O-grid medium mesh a motion was run at
+                keep = min(readings[key], r, key=lambda x: _max_courant(x.yardstick_label))
+                readings[key] = keep
+            elif key in readings:
+                raise ValueError(f"{path}: a second study of {r.pitch_deg:g} deg against "
+                                 f"{YARDSTICKS[r.yardstick]} (one is "
+                                 f"{readings[key].yardstick_label})")
+            else:
+                readings[key] = r
     order = list(YARDSTICKS)
-    return sorted(readings, key=lambda r: (order.index(r.yardstick), r.pitch_deg,
-                                           list(WINDOWS).index(r.window)))
+    return sorted(readings.values(), key=lambda r: (order.index(r.yardstick), r.pitch_deg,
+                                                    list(WINDOWS).index(r.window)))
 
 
 def describe(reading: Reading) -> str:
@@ -180,8 +231,8 @@ def readings_figure(readings: list[Reading], path: str | Path):
                 else:
                     colour = "#9bd69b" if r.met else "#f4a6a6"
                     twin = "" if r.both_solvers else ", one solver"
-                    against = (textwrap.fill(f"against {r.yardstick_label}", 24) + "\n"
-                               if yardstick == "" else "")
+                    against = (f"against {r.yardstick_label}\n"
+                               if yardstick == "o_grid_time_step" else "")
                     text = (f"{against}{r.setup.replace('@', chr(10) + '@')}\n"
                             f"{r.nrmse_percent:.1f} %{twin}\n"
                             f"(openfoam.md's set-up {r.baseline_nrmse_percent:.1f} %)")

@@ -47,14 +47,14 @@ def _run(bench, label, offset, cpu):
                           loads={k: wave + offset for k in bench.COMPONENTS})
 
 
-def _write(bench, path, runs, named, floors, window=None, failed=()):
-    """A one-cycle study against "reference" (openfoam_md's CPU 200 s: a cost ratio of 0.34
+def _write(bench, path, runs, named, floors, window=None, failed=(), yardstick="reference"):
+    """A one-cycle study against ``yardstick`` (openfoam_md's CPU 200 s: a cost ratio of 0.34
     is 68 s) written by cfd_cost.py's writer; the runs labelled in ``failed`` failed."""
-    results = {"reference": _run(bench, "reference", 0.0, 300.0),
+    results = {yardstick: _run(bench, yardstick, 0.0, 300.0),
                "openfoam_md": _run(bench, "openfoam_md", 0.1, 200.0),
                **{label: _run(bench, label, offset, cpu) for label, (offset, cpu) in runs.items()},
                **{label: bench.SetupRun(label, None, failure="diverged") for label in failed}}
-    study = bench.Study(results, results["reference"], 1.0, named, floors,
+    study = bench.Study(results, results[yardstick], 1.0, named, floors,
                         dict.fromkeys(results, 1000), results["openfoam_md"], None, "motion X",
                         window)
     bench.write_study(study, path, ["cfd_cost.py"])
@@ -70,7 +70,8 @@ def test_the_nearest_set_up_within_the_cost_is_judged_by_its_worse_solver(bench,
             "far": (0.1, 40.0), "dear": (0.01, 100.0)},
            ["near", "steady", "far", "dear"], {"near": "near-PCG", "steady": "steady-PCG"})
     (reading,) = readings.study_readings(tmp_path / "cost_accuracy_pitch5.h5")
-    assert (reading.pitch_deg, reading.yardstick, reading.window) == (5.0, "", "cycle 1")
+    assert (reading.pitch_deg, reading.yardstick, reading.window) == (
+        5.0, "o_grid_time_step", "cycle 1")
     assert reading.setup == "steady" and reading.both_solvers
     assert reading.nrmse_percent == pytest.approx(1.8, rel=1e-3)
     assert reading.cost_ratio == pytest.approx(0.3)
@@ -83,9 +84,10 @@ def test_the_nearest_set_up_within_the_cost_is_judged_by_its_worse_solver(bench,
 def test_a_reading_with_nothing_near_enough_or_cheap_enough_is_not_met(bench, readings,
                                                                        tmp_path):
     path = tmp_path / "cost_accuracy_pitch10_h_fine.h5"
-    _write(bench, path, {"far": (0.1, 40.0)}, ["far"], {}, window=(0.25, 0.55))
+    _write(bench, path, {"far": (0.1, 40.0)}, ["far"], {}, window=(0.25, 0.55),
+           yardstick="openfoam_md@openfoam_md_fine")
     cycle, stroke = readings.study_readings(path)
-    assert cycle.yardstick == "_h_fine" and cycle.pitch_deg == 10.0
+    assert cycle.yardstick == "h_fine" and cycle.pitch_deg == 10.0
     assert stroke.window == "t = 0.25-0.55 s"
     assert cycle.setup == "far" and not cycle.both_solvers and not cycle.met
     _write(bench, path, {"dear": (0.0, 100.0)}, ["dear"], {})
@@ -99,6 +101,34 @@ def test_a_reading_with_nothing_near_enough_or_cheap_enough_is_not_met(bench, re
     assert reading.setup == "near" and not reading.both_solvers
     assert reading.nrmse_percent == pytest.approx(1.0, rel=1e-3)
     assert math.isnan(reading.baseline_nrmse_percent)
+
+
+def test_each_yardstick_is_sorted_into_its_kind_and_others_are_refused(readings):
+    kind = readings.yardstick_kind
+    assert kind("reference-co0.25") == kind("reference") == "o_grid_time_step"
+    assert kind("mean of max Co 4, 3, 2, 1") == "o_grid_mean"
+    assert kind("openfoam_md@openfoam_md_medium") == "h_medium"
+    assert kind("openfoam_md@openfoam_md_fine") == "h_fine"
+    with pytest.raises(ValueError, match="'affordable' is none of"):
+        kind("affordable")
+
+
+def test_of_two_studies_at_two_time_steps_the_smaller_counts_and_other_twins_are_refused(
+        bench, readings, tmp_path):
+    # the same set-up 1 % from the medium mesh at max Co 1 and 3 % from it at max Co 0.5
+    _write(bench, tmp_path / "cost_accuracy_pitch20_co1.h5", {"cheap": (0.02, 50.0)},
+           ["cheap"], {}, yardstick="reference-co1")
+    _write(bench, tmp_path / "cost_accuracy_pitch20_co0.5.h5", {"cheap": (0.06, 50.0)},
+           ["cheap"], {}, yardstick="reference-co0.5")
+    (reading,) = readings.all_readings(tmp_path)
+    assert reading.yardstick_label == "reference-co0.5"
+    assert reading.nrmse_percent == pytest.approx(3.0, rel=1e-3) and not reading.met
+    for name in ("cost_accuracy_pitch20_h_medium.h5", "cost_accuracy_pitch20_h_medium2.h5"):
+        _write(bench, tmp_path / name, {"cheap": (0.02, 50.0)}, ["cheap"], {},
+               yardstick="openfoam_md@openfoam_md_medium")
+    with pytest.raises(ValueError, match=r"a second study of 20 deg against openfoam\.md's "
+                       r"H-type medium mesh"):
+        readings.all_readings(tmp_path)
 
 
 def test_a_file_that_is_not_a_study_is_refused_by_name(bench, readings, tmp_path):
@@ -129,15 +159,17 @@ def test_the_shipped_studies_meet_the_target_only_at_20_deg_against_the_o_grid(r
     solver; against openfoam.md's H-type meshes nothing within the cost comes within 2 %."""
     every = readings.all_readings(FIGURES)
     met = [(r.yardstick, r.pitch_deg, r.window) for r in every if r.met]
-    assert met == [("", 20.0, "cycle 1"), ("", 20.0, "t = 0.25-0.55 s")]
+    assert met == [("o_grid_mean", 20.0, "cycle 1"), ("o_grid_mean", 20.0, "t = 0.25-0.55 s")]
     assert {r.setup for r in every if r.met} == {"medium_piso"}
     assert all(r.both_solvers for r in every if r.met)
-    five = next(r for r in every if (r.yardstick, r.pitch_deg, r.window) == ("", 5.0, "cycle 1"))
+    five = next(r for r in every
+                if (r.yardstick, r.pitch_deg, r.window) == ("o_grid_time_step", 5.0, "cycle 1"))
     assert five.yardstick_label == "reference-co0.25"
     assert 2.0 < five.nrmse_percent < 3.0
     assert {(r.yardstick, r.pitch_deg) for r in every} == {
-        ("", 5.0), ("", 10.0), ("", 20.0), ("_h_medium", 5.0), ("_h_medium", 10.0),
-        ("_h_medium", 20.0), ("_h_fine", 5.0), ("_h_fine", 10.0)}
+        ("o_grid_time_step", 5.0), ("o_grid_time_step", 10.0), ("o_grid_mean", 10.0),
+        ("o_grid_mean", 20.0), ("h_medium", 5.0), ("h_medium", 10.0), ("h_medium", 20.0),
+        ("h_fine", 5.0), ("h_fine", 10.0)}
     readme = " ".join((ROOT / "README.md").read_text().split())
     assert f"{len(met)} of {len(every)} are met" in readme
     assert readings.readings_figure(every, tmp_path / "r.png") is not None
