@@ -153,10 +153,11 @@ def test_a_file_that_is_not_a_study_is_refused_by_name(bench, readings, tmp_path
 
 def test_the_shipped_studies_meet_the_target_only_at_20_deg_against_the_o_grid(readings,
                                                                               tmp_path):
-    """README's verdict, read from the shipped studies: the one reading met is the O-grid
-    medium mesh at 20 deg (medium_piso, with both pressure solvers, in cycle 1 and over the
-    first stroke); at 5 deg the nearest set-up within the cost is 2.5 % off with its worse
-    solver; against openfoam.md's H-type meshes nothing within the cost comes within 2 %."""
+    """README's verdict, read from the shipped studies: the one reading met is the mean of
+    the O-grid medium mesh's time steps at 20 deg (medium_piso, with both pressure solvers,
+    in cycle 1 and over the first stroke); against that mesh's smallest time step run the
+    nearest set-up within the cost is 2.5 % off at 5 deg (its worse solver) and 2.2 % at
+    20 deg; against openfoam.md's H-type meshes nothing within the cost comes within 2 %."""
     every = readings.all_readings(FIGURES)
     met = [(r.yardstick, r.pitch_deg, r.window) for r in every if r.met]
     assert met == [("o_grid_mean", 20.0, "cycle 1"), ("o_grid_mean", 20.0, "t = 0.25-0.55 s")]
@@ -166,8 +167,14 @@ def test_the_shipped_studies_meet_the_target_only_at_20_deg_against_the_o_grid(r
                 if (r.yardstick, r.pitch_deg, r.window) == ("o_grid_time_step", 5.0, "cycle 1"))
     assert five.yardstick_label == "reference-co0.25"
     assert 2.0 < five.nrmse_percent < 3.0
+    # at 20 deg against the smallest time step run (max Co 0.5) medium_piso misses on M
+    twenty = next(r for r in every if (r.yardstick, r.pitch_deg, r.window)
+                  == ("o_grid_time_step", 20.0, "cycle 1"))
+    assert twenty.yardstick_label == "reference-co0.5" and twenty.setup == "medium_piso"
+    assert 2.0 < twenty.nrmse_percent < 2.5
     assert {(r.yardstick, r.pitch_deg) for r in every} == {
-        ("o_grid_time_step", 5.0), ("o_grid_time_step", 10.0), ("o_grid_mean", 10.0),
+        ("o_grid_time_step", 5.0), ("o_grid_time_step", 10.0), ("o_grid_time_step", 20.0),
+        ("o_grid_mean", 10.0),
         ("o_grid_mean", 20.0), ("h_medium", 5.0), ("h_medium", 10.0), ("h_medium", 20.0),
         ("h_fine", 5.0), ("h_fine", 10.0)}
     readme = " ".join((ROOT / "README.md").read_text().split())
