@@ -3,9 +3,11 @@
 Each study that ``benchmarks/cfd_cost.py --output F.h5`` wrote measures every run against
 one yardstick on one motion, and is named ``cost_accuracy_pitch<P>[<suffix>].h5`` after the
 motion's pitch amplitude (deg). The yardstick it names sorts it into one of four kinds:
-mfflap's O-grid medium mesh at one time step (``reference-coX``; where several studies of a
-motion have one, the smallest max Co counts), the mean of that mesh's runs at several time
-steps (``mean of max Co ...``), openfoam.md's H-type medium mesh or its fine one. For each
+mfflap's O-grid medium mesh at one time step (``reference[-coX]``), the mean of that mesh's
+runs at several time steps (``mean of max Co ...``), openfoam.md's H-type medium mesh or its
+fine one (``openfoam_md@openfoam_md_medium[-coX]``, ``..._fine[-coX]``). Where several
+studies of one motion measure against one mesh at different time steps, the smallest max
+Co counts; two studies of one motion against the same yardstick are refused. For each
 study and each time window it holds (cycle 1, and the first stroke where ``--window`` gave
 it), this prints the set-up within the cost that comes nearest the yardstick and whether that
 meets the target: F_n and M within 2 % NRMSE with both pressure solvers where the study
@@ -30,36 +32,43 @@ STUDIES = Path(__file__).resolve().parents[1] / "docs" / "figures"
 #: the kinds of yardstick, in the order drawn
 YARDSTICKS = {"o_grid_time_step": "mfflap's O-grid medium mesh at its smallest time step run",
               "o_grid_mean": "mfflap's O-grid medium mesh, the mean of its time steps",
-              "h_medium": "openfoam.md's H-type medium mesh",
-              "h_fine": "openfoam.md's H-type fine mesh"}
+              "h_medium": "openfoam.md's H-type medium mesh at its smallest time step run",
+              "h_fine": "openfoam.md's H-type fine mesh at its smallest time step run"}
 _STUDY_FILE = re.compile(r"^cost_accuracy_pitch(?P<pitch>\d+(?:\.\d+)?)(?:_[\w.]+)?\.h5$")
-_O_GRID_TIME_STEP = re.compile(r"^reference-co(?P<courant>\d+(?:\.\d+)?)$")
+#: a run's label: a set-up, maybe on a named mesh, maybe at another max Co
+_RUN_LABEL = re.compile(r"^(?P<run>[^-\s]+?)(?:-co(?P<courant>\d+(?:\.\d+)?))?$")
+#: the runs that are each kind of yardstick (at any max Co), and their own max Co
+_SINGLE_RUNS = {"reference": ("o_grid_time_step", 4.0),
+                "openfoam_md@openfoam_md_medium": ("h_medium", 2.0),
+                "openfoam_md@openfoam_md_fine": ("h_fine", 2.0)}
 
 
 def yardstick_kind(label: str) -> str:
-    """The kind of yardstick (a key of YARDSTICKS) a study's ``yardstick`` label names.
+    """The kind of yardstick (a key of YARDSTICKS) a study's ``yardstick`` label names: the
+    O-grid medium mesh (``reference``), openfoam.md's H-type medium or fine mesh, each at
+    its own max Co or another (``-coX``), or the mean of the O-grid's runs at several.
 
     Raises
     ------
     ValueError
         If the label is none of them.
     """
-    if _O_GRID_TIME_STEP.match(label) or label == "reference":
-        return "o_grid_time_step"
     if label.startswith("mean of max Co"):
         return "o_grid_mean"
-    kinds = {"openfoam_md@openfoam_md_medium": "h_medium",
-             "openfoam_md@openfoam_md_fine": "h_fine"}
-    if label not in kinds:
-        raise ValueError(f"yardstick {label!r} is none of: reference-coX, mean of max Co "
-                         f"..., {', '.join(kinds)}")
-    return kinds[label]
+    found = _RUN_LABEL.match(label)
+    if found is None or found["run"] not in _SINGLE_RUNS:
+        raise ValueError(f"yardstick {label!r} is none of: mean of max Co ..., "
+                         f"{', '.join(_SINGLE_RUNS)} (each maybe -coX)")
+    return _SINGLE_RUNS[found["run"]][0]
 
 
 def _max_courant(label: str) -> float:
-    """The max Co of an O-grid time-step yardstick (the reference's own, 4, for "reference")."""
-    found = _O_GRID_TIME_STEP.match(label)
-    return float(found["courant"]) if found else 4.0
+    """The max Co of a single-run yardstick (its set-up's own unless it ends in -coX); nan
+    for a mean of several."""
+    found = _RUN_LABEL.match(label)
+    if found is None or found["run"] not in _SINGLE_RUNS:
+        return math.nan
+    return float(found["courant"]) if found["courant"] else _SINGLE_RUNS[found["run"]][1]
 
 
 #: the windows drawn, by their names in the studies
@@ -177,10 +186,12 @@ def all_readings(studies: str | Path = STUDIES) -> list[Reading]:
     for path in paths:
         for r in study_readings(path):
             key = (r.yardstick, r.pitch_deg, r.window)
-            if key in readings and r.yardstick == "o_grid_time_step":
-                # the smallest time step of the O-grid medium mesh a motion was run at
-                keep = min(readings[key], r, key=lambda x: _max_courant(x.yardstick_label))
-                readings[key] = keep
+            steps = (_max_courant(r.yardstick_label),
+                     _max_courant(readings[key].yardstick_label)) if key in readings else ()
+            if steps and steps[0] != steps[1] and not any(map(math.isnan, steps)):
+                # one mesh at two time steps: the smaller one counts
+                readings[key] = min(readings[key], r,
+                                    key=lambda x: _max_courant(x.yardstick_label))
             elif key in readings:
                 raise ValueError(f"{path}: a second study of {r.pitch_deg:g} deg against "
                                  f"{YARDSTICKS[r.yardstick]} (one is "
@@ -231,8 +242,8 @@ def readings_figure(readings: list[Reading], path: str | Path):
                 else:
                     colour = "#9bd69b" if r.met else "#f4a6a6"
                     twin = "" if r.both_solvers else ", one solver"
-                    against = (f"against {r.yardstick_label}\n"
-                               if yardstick == "o_grid_time_step" else "")
+                    courant = _max_courant(r.yardstick_label)
+                    against = "" if math.isnan(courant) else f"its max Co {courant:g}:\n"
                     text = (f"{against}{r.setup.replace('@', chr(10) + '@')}\n"
                             f"{r.nrmse_percent:.1f} %{twin}\n"
                             f"(openfoam.md's set-up {r.baseline_nrmse_percent:.1f} %)")

@@ -108,9 +108,11 @@ def test_each_yardstick_is_sorted_into_its_kind_and_others_are_refused(readings)
     assert kind("reference-co0.25") == kind("reference") == "o_grid_time_step"
     assert kind("mean of max Co 4, 3, 2, 1") == "o_grid_mean"
     assert kind("openfoam_md@openfoam_md_medium") == "h_medium"
-    assert kind("openfoam_md@openfoam_md_fine") == "h_fine"
-    with pytest.raises(ValueError, match="'affordable' is none of"):
-        kind("affordable")
+    assert kind("openfoam_md@openfoam_md_fine") == kind("openfoam_md@openfoam_md_fine-co1") \
+        == "h_fine"
+    for other in ("affordable", "reference@graded", "openfoam_md", "reference-cox"):
+        with pytest.raises(ValueError, match=f"'{other}' is none of"):
+            kind(other)
 
 
 def test_of_two_studies_at_two_time_steps_the_smaller_counts_and_other_twins_are_refused(
@@ -123,6 +125,14 @@ def test_of_two_studies_at_two_time_steps_the_smaller_counts_and_other_twins_are
     (reading,) = readings.all_readings(tmp_path)
     assert reading.yardstick_label == "reference-co0.5"
     assert reading.nrmse_percent == pytest.approx(3.0, rel=1e-3) and not reading.met
+    # the H-type fine mesh at its own max Co 2 and at 1: the latter counts
+    for name, label in (("cost_accuracy_pitch20_h_fine.h5", "openfoam_md@openfoam_md_fine"),
+                        ("cost_accuracy_pitch20_h_fine_co1.h5",
+                         "openfoam_md@openfoam_md_fine-co1")):
+        _write(bench, tmp_path / name, {"cheap": (0.02, 50.0)}, ["cheap"], {},
+               yardstick=label)
+    assert [r.yardstick_label for r in readings.all_readings(tmp_path)] == [
+        "reference-co0.5", "openfoam_md@openfoam_md_fine-co1"]
     for name in ("cost_accuracy_pitch20_h_medium.h5", "cost_accuracy_pitch20_h_medium2.h5"):
         _write(bench, tmp_path / name, {"cheap": (0.02, 50.0)}, ["cheap"], {},
                yardstick="openfoam_md@openfoam_md_medium")
@@ -174,7 +184,7 @@ def test_the_shipped_studies_meet_the_target_only_at_20_deg_against_the_o_grid(r
     assert 2.0 < twenty.nrmse_percent < 2.5
     assert {(r.yardstick, r.pitch_deg) for r in every} == {
         ("o_grid_time_step", 5.0), ("o_grid_time_step", 10.0), ("o_grid_time_step", 20.0),
-        ("o_grid_mean", 10.0),
+        ("o_grid_mean", 5.0), ("o_grid_mean", 10.0),
         ("o_grid_mean", 20.0), ("h_medium", 5.0), ("h_medium", 10.0), ("h_medium", 20.0),
         ("h_fine", 5.0), ("h_fine", 10.0)}
     readme = " ".join((ROOT / "README.md").read_text().split())
