@@ -37,10 +37,10 @@ YARDSTICKS = {"o_grid_time_step": "mfflap's O-grid medium mesh at its smallest t
 _STUDY_FILE = re.compile(r"^cost_accuracy_pitch(?P<pitch>\d+(?:\.\d+)?)(?:_[\w.]+)?\.h5$")
 #: a run's label: a set-up, maybe on a named mesh, maybe at another max Co
 _RUN_LABEL = re.compile(r"^(?P<run>[^-\s]+?)(?:-co(?P<courant>\d+(?:\.\d+)?))?$")
-#: the runs that are each kind of yardstick (at any max Co), and their own max Co
-_SINGLE_RUNS = {"reference": ("o_grid_time_step", 4.0),
-                "openfoam_md@openfoam_md_medium": ("h_medium", 2.0),
-                "openfoam_md@openfoam_md_fine": ("h_fine", 2.0)}
+#: the runs that are each kind of yardstick (at any max Co), and the set-up they run
+_SINGLE_RUNS = {"reference": ("o_grid_time_step", "reference"),
+                "openfoam_md@openfoam_md_medium": ("h_medium", "openfoam_md"),
+                "openfoam_md@openfoam_md_fine": ("h_fine", "openfoam_md")}
 
 
 def yardstick_kind(label: str) -> str:
@@ -63,12 +63,16 @@ def yardstick_kind(label: str) -> str:
 
 
 def _max_courant(label: str) -> float:
-    """The max Co of a single-run yardstick (its set-up's own unless it ends in -coX); nan
-    for a mean of several."""
+    """The max Co of a single-run yardstick (its set-up's own in setups.toml unless it ends
+    in -coX); nan for a mean of several."""
+    from mfflap.cfd.openfoam.setups import setup
+
     found = _RUN_LABEL.match(label)
     if found is None or found["run"] not in _SINGLE_RUNS:
         return math.nan
-    return float(found["courant"]) if found["courant"] else _SINGLE_RUNS[found["run"]][1]
+    if found["courant"]:
+        return float(found["courant"])
+    return setup(_SINGLE_RUNS[found["run"]][1]).solver.max_courant
 
 
 #: the windows drawn, by their names in the studies
