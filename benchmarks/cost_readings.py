@@ -179,7 +179,7 @@ def all_readings(studies: str | Path = STUDIES) -> list[Reading]:
         If there is no such folder, or it holds no cost study.
     ValueError
         If a study is malformed, or two measure one motion against the same yardstick
-        (other than the O-grid medium mesh at two time steps).
+        (other than one mesh at two time steps).
     """
     if not Path(studies).is_dir():
         raise FileNotFoundError(f"{studies}: no such folder")
@@ -190,18 +190,17 @@ def all_readings(studies: str | Path = STUDIES) -> list[Reading]:
     for path in paths:
         for r in study_readings(path):
             key = (r.yardstick, r.pitch_deg, r.window)
-            steps = (_max_courant(r.yardstick_label),
-                     _max_courant(readings[key].yardstick_label)) if key in readings else ()
-            if steps and steps[0] != steps[1] and not any(map(math.isnan, steps)):
-                # one mesh at two time steps: the smaller one counts
-                readings[key] = min(readings[key], r,
-                                    key=lambda x: _max_courant(x.yardstick_label))
-            elif key in readings:
-                raise ValueError(f"{path}: a second study of {r.pitch_deg:g} deg against "
-                                 f"{YARDSTICKS[r.yardstick]} (one is "
-                                 f"{readings[key].yardstick_label})")
-            else:
+            before = readings.get(key)
+            if before is None:
                 readings[key] = r
+                continue
+            courant = _max_courant(r.yardstick_label)
+            courant_before = _max_courant(before.yardstick_label)
+            if math.isnan(courant) or math.isnan(courant_before) or courant == courant_before:
+                raise ValueError(f"{path}: a second study of {r.pitch_deg:g} deg against "
+                                 f"{YARDSTICKS[r.yardstick]} (one is {before.yardstick_label})")
+            # one mesh at two time steps: the smaller one counts
+            readings[key] = r if courant < courant_before else before
     order = list(YARDSTICKS)
     return sorted(readings.values(), key=lambda r: (order.index(r.yardstick), r.pitch_deg,
                                                     list(WINDOWS).index(r.window)))
