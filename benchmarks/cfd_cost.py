@@ -90,7 +90,7 @@ import numpy as np
 
 from mfflap.cfd.openfoam.forces import read_forces
 from mfflap.cfd.openfoam.loads import imposed_state, to_loads
-from mfflap.cfd.openfoam.runner import read_tail, run_case, solver_progress
+from mfflap.cfd.openfoam.runner import ran_to_end, run_case, solver_progress
 from mfflap.cfd.openfoam.setups import mesh_and_solver, setup
 from mfflap.cfd.openfoam.solver_log import solver_provenance
 from mfflap.cfd.openfoam.writer import AnyMeshSpec, SolverSettings, mesh_specs, write_case
@@ -180,11 +180,6 @@ class SetupRun:
         return self.cpu_per_cycle_s is not None
 
 
-def _finished(case: Path) -> bool:
-    log = case / "log.pimpleFoam"
-    return log.is_file() and read_tail(log, 4096).rstrip().endswith("End")
-
-
 @dataclass(frozen=True)
 class Job:
     """One set-up to run: its label (the name of its case folder), mesh and solver settings."""
@@ -207,7 +202,7 @@ def run_setup(job: Job, cycles: float, root: str, pitch_deg: float) -> SetupRun:
     label, mesh, solver = job.label, job.mesh, job.solver
     motion = benchmark_motion(pitch_deg)
     case = Path(root) / label
-    if not _finished(case):
+    if not ran_to_end(case):  # a run stopped early (written and stopped) ends in End too
         solver = replace(solver, write_interval=0.5)
         if not (case / "mfflap_case.toml").is_file():  # never written whole: start afresh
             shutil.rmtree(case, ignore_errors=True)
@@ -341,7 +336,7 @@ def collect(futures: dict[Future, str], root: str, cycles: float,
                   flush=True)
         # a queued run counts as running in a process pool: leave out those finished before
         going = [(futures[f], solver_progress(Path(root) / futures[f])) for f in pending
-                 if f.running() and not _finished(Path(root) / futures[f])]
+                 if f.running() and not ran_to_end(Path(root) / futures[f])]
         going = [f"{label} t = {at[0]:.3f} of {cycles:g} s" for label, at in going if at]
         if going:
             print(f"  running: {'; '.join(going)}", file=sys.stderr, flush=True)

@@ -185,13 +185,19 @@ def test_job_variant_changes_the_solver_and_labels_the_copy(bench):
     assert job.solver.max_courant == ref.solver.max_courant and co1.mesh is job.mesh
 
 
-def test_finished_needs_a_log_that_ends_in_end(bench, tmp_path):
-    assert not bench._finished(tmp_path)
+def test_a_run_is_read_only_when_it_reached_its_end_time(bench, tmp_path):
+    """Regression: a run stopped early by the write-and-stop signal also ends its log in
+    "End"; read as finished, its 0.3 s of 1 s gave 51 % NRMSE and a CPU per cycle of a
+    third of a cycle. Only a log that reached endTime is read; the rest resume."""
+    write_case(tmp_path, bench.benchmark_motion(), end_time=1.0)
+    assert not bench.ran_to_end(tmp_path)
     log = tmp_path / "log.pimpleFoam"
-    log.write_text("Time = 0.5\nExecutionTime = 12 s\n")
-    assert not bench._finished(tmp_path)  # killed mid-run: rerun, not read
-    log.write_text("Time = 1\nExecutionTime = 24 s\n\nEnd\n\n")
-    assert bench._finished(tmp_path)
+    log.write_text("deltaT = 0.001\nTime = 0.5\nExecutionTime = 12 s\n")
+    assert not bench.ran_to_end(tmp_path)  # killed mid-run: rerun, not read
+    log.write_text("deltaT = 0.001\nTime = 0.297\nExecutionTime = 12 s\n\nEnd\n\n")
+    assert not bench.ran_to_end(tmp_path)  # written and stopped at 0.297 s: resumed
+    log.write_text("deltaT = 0.001\nTime = 1\nExecutionTime = 24 s\n\nEnd\n\n")
+    assert bench.ran_to_end(tmp_path)
 
 
 @pytest.mark.openfoam
@@ -219,10 +225,11 @@ def test_a_run_stopped_part_way_resumes_and_its_redone_steps_are_not_timed(bench
     control.write_text(text.replace("endTime         0.3;", "endTime         0.2;"))
     run_case(stopped, timeout_s=300)
     control.write_text(text)
+    assert not bench.ran_to_end(stopped)  # its log ends in End, 0.1 s short of endTime
     shutil.rmtree(stopped / "0.2")  # the write a kill cut short (latest_solution_time)
     log = stopped / "log.pimpleFoam"
     log.write_text(log.read_text().rstrip().removesuffix("End"))  # a killed run's log
-    assert not bench._finished(stopped)
+    assert not bench.ran_to_end(stopped)
 
     resumed = bench.run_setup(bench.Job("stopped", spec, solver), cycles, str(tmp_path), 20.0)
     whole = bench.run_setup(bench.Job("whole", spec, solver), cycles, str(tmp_path), 20.0)
@@ -268,7 +275,9 @@ def test_collect_reports_each_run_as_it_finishes_and_the_simulated_time_of_the_o
         time.sleep(0.6)
         return _run(bench, "slow", cpu=250.0)
 
-    (tmp_path / "read").mkdir()  # finished before: read, not run, whatever its future says
+    # finished before (its end time reached): read, not run, whatever its future says
+    (tmp_path / "read" / "system").mkdir(parents=True)
+    (tmp_path / "read" / "system" / "controlDict").write_text("endTime         2;\n")
     (tmp_path / "read" / "log.pimpleFoam").write_text("deltaT = 0.001\nTime = 2\n\nEnd\n")
 
     def read():
