@@ -1,4 +1,7 @@
+import importlib.util
+import sys
 from pathlib import Path
+from types import ModuleType
 
 import numpy as np
 import pytest
@@ -29,3 +32,26 @@ def optimisation_file(tmp_path_factory) -> Path:
                                    "--no-ipopt", "--output", str(out)])
     assert res.exit_code == 0, res.output
     return out
+
+
+@pytest.fixture(scope="session")
+def load_benchmark():
+    """A loader of the scripts in benchmarks/ (not a package) by file name, each loaded once
+    per session and registered in sys.modules (dataclasses look their module up by name)
+    until the session ends."""
+    loaded: dict[str, ModuleType] = {}
+
+    def load(script: str) -> ModuleType:
+        if script not in loaded:
+            name = f"benchmarks_{Path(script).stem}"
+            path = Path(__file__).resolve().parents[1] / "benchmarks" / script
+            spec = importlib.util.spec_from_file_location(name, path)
+            module = importlib.util.module_from_spec(spec)
+            sys.modules[name] = module
+            spec.loader.exec_module(module)
+            loaded[script] = module
+        return loaded[script]
+
+    yield load
+    for module in loaded.values():
+        sys.modules.pop(module.__name__, None)

@@ -7,7 +7,6 @@ force histories whose NRMSE follow by hand.
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import shutil
 import subprocess
 import sys
@@ -27,13 +26,8 @@ SCRIPT = Path(__file__).resolve().parents[1] / "benchmarks" / "cfd_cost.py"
 
 
 @pytest.fixture(scope="module")
-def bench():
-    spec = importlib.util.spec_from_file_location("cfd_cost_benchmark", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look their module up by name
-    spec.loader.exec_module(module)
-    yield module
-    del sys.modules[spec.name]
+def bench(load_benchmark):
+    return load_benchmark("cfd_cost.py")
 
 
 def _run(bench, label, offset=0.0, cpu=100.0, time_s=None):

@@ -7,7 +7,6 @@ as README reads them.
 
 from __future__ import annotations
 
-import importlib.util
 import math
 import subprocess
 import sys
@@ -20,24 +19,14 @@ ROOT = Path(__file__).resolve().parents[1]
 FIGURES = ROOT / "docs" / "figures"
 
 
-def _load(name: str, script: str):
-    spec = importlib.util.spec_from_file_location(name, ROOT / "benchmarks" / script)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look their module up by name
-    spec.loader.exec_module(module)
-    return module
+@pytest.fixture(scope="module")
+def bench(load_benchmark):
+    return load_benchmark("cfd_cost.py")
 
 
 @pytest.fixture(scope="module")
-def bench():
-    yield _load("cfd_cost_for_readings", "cfd_cost.py")
-    del sys.modules["cfd_cost_for_readings"]
-
-
-@pytest.fixture(scope="module")
-def readings():
-    yield _load("cost_readings", "cost_readings.py")
-    del sys.modules["cost_readings"]
+def readings(load_benchmark):
+    return load_benchmark("cost_readings.py")
 
 
 def _run(bench, label, offset, cpu):
