@@ -646,7 +646,8 @@ def labelled_job(label: str, max_courant: float | None = None) -> Job:
     return job if courant is None else job.variant(f"co{courant:g}", max_courant=courant)
 
 
-def main() -> None:
+def argument_parser() -> argparse.ArgumentParser:
+    """The command line of this benchmark."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("setups", nargs="*", default=["affordable"], type=_checked_label,
                         help="set-ups of setups.toml; SETUP@MESH runs a set-up's solver "
@@ -708,34 +709,76 @@ def main() -> None:
     parser.add_argument("--work-dir", default=None,
                         help="folder of the cases (default: a new temporary folder); runs "
                         "that finished there before are read, not rerun")
-    args = parser.parse_args()
+    return parser
+
+
+def parsed_arguments(argv: list[str] | None = None) -> argparse.Namespace:
+    """The command line, checked: an impossible combination exits with the reason."""
+    parser = argument_parser()
+    args = parser.parse_args(argv)
     if args.workers < 1:
         parser.error(f"--workers must be >= 1, got {args.workers}")
     if args.yardstick and args.yardstick_courant:
         parser.error("--yardstick and --yardstick-courant name two yardsticks: give one")
-    cycles = args.cycles
-    window = args.window
-    if window is not None and window[1] > cycles:
-        parser.error(f"--window ends at {window[1]:g} s, after the {cycles:g} s simulated")
-    root = args.work_dir or tempfile.mkdtemp(prefix="mfflap-cfd-cost-")
-    Path(root).mkdir(parents=True, exist_ok=True)
-    pitch = args.pitch_deg
-    # what a finished run in the work folder must share to be read instead of rerun
-    stamp = Path(root) / "benchmark_settings.txt"
+    if args.window is not None and args.window[1] > args.cycles:
+        parser.error(f"--window ends at {args.window[1]:g} s, after the {args.cycles:g} s "
+                     "simulated")
+    return args
+
+
+def settings_stamp(args: argparse.Namespace) -> str:
+    """What every run of a work folder shares: the motion, the cycles simulated, the far
+    field and the k-epsilon convection."""
     own = "each set-up's own"
-    said = (f"motion {benchmark_motion(pitch)!r}; cycles {cycles!r}; far field "
+    return (f"motion {benchmark_motion(args.pitch_deg)!r}; cycles {args.cycles!r}; far field "
             f"{args.far_field or own}; k-epsilon convection "
             f"{args.turbulence_convection or own}\n")
+
+
+def claim_work_dir(root: str | Path, said: str) -> None:
+    """Stamp the work folder with ``said`` (:func:`settings_stamp`), so that its finished runs
+    are read instead of rerun only by a command of the same settings.
+
+    Raises
+    ------
+    SystemExit
+        When the folder holds runs of other settings; naming the stamp file and what it says.
+    """
+    Path(root).mkdir(parents=True, exist_ok=True)
+    stamp = Path(root) / "benchmark_settings.txt"
     if stamp.is_file() and stamp.read_text() != said:
         raise SystemExit(f"{root} holds runs of other settings ({stamp}: "
                          f"{stamp.read_text().strip()}); use another --work-dir")
     stamp.write_text(said)
+
+
+@dataclass
+class RunPlan:
+    """The runs one command asks for, and what each is for."""
+
+    #: every run, the longest first
+    jobs: list[Job]
+    #: labels of the yardstick's runs (several: the yardstick is their mean)
+    members: list[str]
+    #: the named set-ups' labels, and each one's rerun with the other pressure solver
+    named: list[str]
+    floors: dict[str, str]
+    #: each yardstick run's rerun with the other pressure solver (--yardstick-floor)
+    yardstick_floors: dict[str, str]
+    #: labels also run in the plate's frame (--plate-frame), as ``<label>-plate``
+    moving: set[str]
+
+
+def plan_runs(args: argparse.Namespace) -> RunPlan:
+    """The runs of a command: the reference and its reruns, the yardstick's runs, the
+    baseline, the named set-ups with their reruns, the named meshes and the plate's-frame
+    variants, each label once, the longest first."""
     ref = setup("reference")
     reference = Job("reference", ref.mesh, ref.solver)
     jobs = [reference, reference.variant("PCG", pressure_solver="PCG")]
     if not args.no_time_step_floor:
         jobs.append(reference.variant("co3", max_courant=3.0))
-    members, yardstick_floors = [], {}  # the yardstick's runs; their reruns by label
+    members, yardstick_floors = [], {}
     chosen = [labelled_job(args.yardstick)] if args.yardstick else None
     for member in chosen or yardstick_jobs(reference, args.yardstick_courant):
         members.append(member.label)
@@ -772,28 +815,41 @@ def main() -> None:
     # the longest runs first (cells times steps, which go as 1 / max Co), so that the workers
     # finish together
     jobs.sort(key=lambda j: -j.mesh.n_cells / j.solver.max_courant)
-    run = partial(run_setup, cycles=cycles, root=root, pitch_deg=pitch)
-    print(f"{len(jobs)} runs in {root}, {args.workers} at a time: "
-          f"{', '.join(j.label for j in jobs)}", file=sys.stderr, flush=True)
-    with ProcessPoolExecutor(args.workers) as pool:
-        finished = collect({pool.submit(run, job): job.label for job in jobs}, root, cycles)
-    results = {j.label: finished[j.label] for j in jobs}
-    for needed in ("reference", *members):
+    return RunPlan(jobs, members, named, floors, yardstick_floors, moving)
+
+
+def yardstick_of(results: dict[str, SetupRun], plan: RunPlan,
+                 courants: list[float] | None, cycles: float
+                 ) -> tuple[SetupRun, tuple[float, float] | None]:
+    """The yardstick every run is measured against, and the time-step band when it is the
+    mean of several runs of the medium mesh (--yardstick-courant with several max Co).
+
+    Raises
+    ------
+    SystemExit
+        When the reference or a run of the yardstick failed.
+    """
+    for needed in ("reference", *plan.members):
         if not results[needed].ok:
             raise SystemExit(f"the {needed} run failed: {results[needed].failure}")
-    base, band = results["reference"], None
-    if len(members) > 1:
-        courants = ", ".join(f"{c:g}" for c in args.yardstick_courant)
-        yardstick = ensemble_mean([results[m] for m in members], f"mean of max Co {courants}")
-        band = time_step_band([results[m] for m in members], yardstick, cycles)
-    else:
-        yardstick = results[members[0]]
+    members = [results[m] for m in plan.members]
+    if len(members) == 1:
+        return members[0], None
+    said = ", ".join(f"{c:g}" for c in courants)
+    mean = ensemble_mean(members, f"mean of max Co {said}")
+    return mean, time_step_band(members, mean, cycles)
+
+
+def print_report(results: dict[str, SetupRun], plan: RunPlan, yardstick: SetupRun,
+                 yardstick_is: str, band: tuple[float, float] | None, cells: dict[str, int],
+                 cycles: float, window: tuple[float, float] | None) -> None:
+    """Print every run's cost and distance from the yardstick, the floors, the time-step band,
+    the plate's-frame comparisons, the machine's speed against openfoam.md's and the verdict
+    on each named set-up."""
+    members, named, floors = plan.members, plan.named, plan.floors
+    yardstick_floors, moving = plan.yardstick_floors, plan.moving
     yardstick_label = yardstick.label
-    # what the yardstick is: the medium mesh (one or several of its time steps) or --yardstick
-    yardstick_is = (f"{yardstick_label}, the --yardstick" if args.yardstick
-                    else f"{yardstick_label}, the medium mesh")
-    print(f"f = 1 Hz, h = 0.3 m, theta = {pitch:g} deg, U = 0.3 m/s; {cycles:g} cycles; "
-          f"cases in {root}")
+    base = results["reference"]
     baseline = results.get(BASELINE)
     have_baseline = baseline is not None and baseline.ok
     scale = (OPENFOAM_MD_US_PER_CELL_STEP / baseline.cpu_per_cell_step_us if have_baseline
@@ -801,7 +857,6 @@ def main() -> None:
     width = max(len(label) for label in results)
     print(f"{'set-up':{width}s}  cells  CPU per cycle  / reference  / openfoam.md set-up  at "
           f"openfoam.md's speed   NRMSE against {yardstick_is}")
-    cells = {j.label: j.mesh.n_cells for j in jobs}
     for label, res in results.items():
         if not res.ok:
             print(f"{label:{width}s} {cells[label]:6d}   failed: {res.failure}")
@@ -860,7 +915,34 @@ def main() -> None:
             said_of = verdict(results[name], yardstick, baseline, scale, cycles, band, twin,
                               window)
             print(f"  {name}: {said_of}")
-    study = Study(results, yardstick, cycles, named, floors, cells, baseline, band,
+
+
+def main(argv: list[str] | None = None) -> None:
+    args = parsed_arguments(argv)
+    cycles = args.cycles
+    window = args.window
+    root = args.work_dir or tempfile.mkdtemp(prefix="mfflap-cfd-cost-")
+    pitch = args.pitch_deg
+    said = settings_stamp(args)
+    claim_work_dir(root, said)
+    plan = plan_runs(args)
+    jobs = plan.jobs
+    run = partial(run_setup, cycles=cycles, root=root, pitch_deg=pitch)
+    print(f"{len(jobs)} runs in {root}, {args.workers} at a time: "
+          f"{', '.join(j.label for j in jobs)}", file=sys.stderr, flush=True)
+    with ProcessPoolExecutor(args.workers) as pool:
+        finished = collect({pool.submit(run, job): job.label for job in jobs}, root, cycles)
+    results = {j.label: finished[j.label] for j in jobs}
+    yardstick, band = yardstick_of(results, plan, args.yardstick_courant, cycles)
+    # what the yardstick is: the medium mesh (one or several of its time steps) or --yardstick
+    yardstick_is = (f"{yardstick.label}, the --yardstick" if args.yardstick
+                    else f"{yardstick.label}, the medium mesh")
+    print(f"f = 1 Hz, h = 0.3 m, theta = {pitch:g} deg, U = 0.3 m/s; {cycles:g} cycles; "
+          f"cases in {root}")
+    cells = {j.label: j.mesh.n_cells for j in jobs}
+    print_report(results, plan, yardstick, yardstick_is, band, cells, cycles, window)
+    baseline = results.get(BASELINE)
+    study = Study(results, yardstick, cycles, plan.named, plan.floors, cells, baseline, band,
                   said.strip(), window)
     if args.output:
         write_study(study, args.output, sys.argv)
@@ -873,7 +955,7 @@ def main() -> None:
     if args.histories:
         force_histories_figure(study, args.histories,
                                f"f = 1 Hz, h = 0.3 m, pitch {pitch:g} deg: F_n and M against "
-                               f"{yardstick_label} (black)")
+                               f"{yardstick.label} (black)")
         print(f"wrote {args.histories}")
 
 

@@ -333,6 +333,87 @@ def test_a_bad_setup_label_is_a_usage_error():
     assert done.returncode == 2 and "'medium_piso@graded-cox'" in done.stderr
 
 
+def _labels(plan):
+    return [j.label for j in plan.jobs]
+
+
+def test_the_plan_runs_the_reference_its_floors_the_baseline_and_each_set_up_with_its_twin(
+        bench):
+    plan = bench.plan_runs(bench.parsed_arguments(["medium_piso", "affordable-co3"]))
+    assert sorted(_labels(plan)) == sorted([
+        "reference", "reference-PCG", "reference-co3", "openfoam_md", "medium_piso",
+        "medium_piso-PCG", "affordable-co3", "affordable-co3-PCG"])
+    assert plan.members == ["reference"] and plan.named == ["medium_piso", "affordable-co3"]
+    assert plan.floors == {"medium_piso": "medium_piso-PCG",
+                           "affordable-co3": "affordable-co3-PCG"}
+    assert plan.yardstick_floors == {} and plan.moving == set()
+    jobs = {j.label: j for j in plan.jobs}
+    assert jobs["affordable-co3"].solver.max_courant == 3.0
+    assert jobs["medium_piso-PCG"].solver.pressure_solver == "PCG"
+    # the longest first: cells over max Co never rises along the list
+    cost = [j.mesh.n_cells / j.solver.max_courant for j in plan.jobs]
+    assert cost == sorted(cost, reverse=True)
+
+
+def test_the_plan_runs_each_label_once_and_skips_what_the_options_skip(bench):
+    # the reference's max Co 3 run named as a set-up, and again as a member of the yardstick
+    args = bench.parsed_arguments(["reference-co3", "medium_piso", "--yardstick-courant",
+                                   "4,3,1", "--no-solver-floor", "--no-baseline"])
+    plan = bench.plan_runs(args)
+    labels = _labels(plan)
+    assert len(labels) == len(set(labels))
+    assert sorted(labels) == sorted(["reference", "reference-PCG", "reference-co3",
+                                     "reference-co1", "medium_piso"])
+    assert plan.members == ["reference", "reference-co3", "reference-co1"]
+    assert plan.named == ["medium_piso"] and plan.floors == {}
+
+
+def test_the_plan_reruns_a_yardstick_with_the_other_solver_and_moves_set_ups_to_the_plate(
+        bench):
+    args = bench.parsed_arguments(["medium_piso", "--yardstick",
+                                   "openfoam_md@openfoam_md_medium", "--yardstick-floor",
+                                   "--no-time-step-floor", "--no-solver-floor",
+                                   "--plate-frame", "--far-field", "inletOutlet",
+                                   "--meshes", "coarse"])
+    plan = bench.plan_runs(args)
+    assert plan.members == ["openfoam_md@openfoam_md_medium"]
+    # openfoam.md's settings are PCG: the yardstick's twin runs GAMG
+    assert plan.yardstick_floors == {
+        "openfoam_md@openfoam_md_medium": "openfoam_md@openfoam_md_medium-GAMG"}
+    assert plan.moving == {"reference", "medium_piso"}
+    jobs = {j.label: j for j in plan.jobs}
+    assert {"reference-plate", "medium_piso-plate", "coarse-mesh"} <= set(jobs)
+    assert "reference-co3" not in jobs
+    assert jobs["medium_piso-plate"].solver.frame == "plate"
+    assert all(j.solver.far_field == "inletOutlet" for j in plan.jobs)
+
+
+def test_the_yardstick_is_one_run_or_the_mean_of_several_with_their_band(bench):
+    args = bench.parsed_arguments(["--yardstick-courant", "4,1", "--no-baseline"])
+    plan = bench.plan_runs(args)
+    results = {"reference": _run(bench, "reference", 0.1),
+               "reference-co1": _run(bench, "reference-co1", -0.1)}
+    mean, band = bench.yardstick_of(results, plan, args.yardstick_courant, 1.0)
+    assert mean.label == "mean of max Co 4, 1"
+    for k in bench.COMPONENTS:  # the offsets cancel, off the samples too (interpolation)
+        np.testing.assert_allclose(mean.loads[k], np.sin(2 * np.pi * mean.time_s), atol=2e-4)
+    # each member is 0.1 off the mean, whose range is 2: 5 %
+    np.testing.assert_allclose(band, (5.0, 5.0), rtol=1e-3)
+    one = bench.parsed_arguments(["--no-baseline"])
+    run, band = bench.yardstick_of(results, bench.plan_runs(one), None, 1.0)
+    assert run is results["reference"] and band is None
+
+
+def test_a_failed_yardstick_run_stops_the_study_with_its_reason(bench):
+    args = bench.parsed_arguments(["--yardstick-courant", "4,1"])
+    plan = bench.plan_runs(args)
+    results = {"reference": _run(bench, "reference"),
+               "reference-co1": bench.SetupRun("reference-co1", None,
+                                               failure="pimpleFoam diverged at t = 0.4")}
+    with pytest.raises(SystemExit, match="the reference-co1 run failed: pimpleFoam diverged"):
+        bench.yardstick_of(results, plan, args.yardstick_courant, 1.0)
+
+
 def _study(bench, tmp_path):
     """A study whose NRMSE against the reference follow by hand: a unit sine (range 2)
     offset by 0.02 is 1 % off, by 0.06 3 %."""
