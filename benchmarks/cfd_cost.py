@@ -15,8 +15,9 @@ read (--no-time-step-floor skips that run; at max Co 5 the medium mesh's time st
 in the second cycle). Every set-up named on the command line runs a second time too, with the
 other pressure solver (PCG for GAMG, GAMG for PCG) at its own tolerances: the NRMSE between
 those two is that set-up's solver floor, how far its forces move when only the round-off of
-its linear solves changes (--no-solver-floor skips those runs). A set-up whose floor is close
-to its distance from the reference cannot be said to be nearer the reference than that floor.
+its linear solves changes (--no-solver-floor skips those runs, but reads those that finished
+in --work-dir before). A set-up whose floor is close to its distance from the reference
+cannot be said to be nearer the reference than that floor.
 With --plate-frame the reference and every named set-up also run in the plate's frame (a
 static mesh; SolverSettings.frame = "plate", which needs the inletOutlet far field): their CPU
 and their distance from the same set-up with the moving mesh are printed, which is what the
@@ -659,7 +660,8 @@ def argument_parser() -> argparse.ArgumentParser:
     parser.add_argument("--no-time-step-floor", action="store_true",
                         help="skip the reference's rerun at max Co 3")
     parser.add_argument("--no-solver-floor", action="store_true",
-                        help="skip the set-ups' reruns with the other pressure solver")
+                        help="skip the set-ups' reruns with the other pressure solver (those "
+                        "that finished in --work-dir before are still read)")
     parser.add_argument("--far-field", choices=("freestream", "inletOutlet"), default=None,
                         help="far field of every run (default: each set-up's own); the fine "
                         "mesh runs only with inletOutlet")
@@ -769,10 +771,15 @@ class RunPlan:
     moving: set[str]
 
 
-def plan_runs(args: argparse.Namespace) -> RunPlan:
+def plan_runs(args: argparse.Namespace, root: str | Path | None = None) -> RunPlan:
     """The runs of a command: the reference and its reruns, the yardstick's runs, the
     baseline, the named set-ups with their reruns, the named meshes and the plate's-frame
-    variants, each label once, the longest first."""
+    variants, each label once, the longest first.
+
+    With --no-solver-floor a named set-up's rerun with the other pressure solver is left out
+    unless it finished before in the work folder ``root``: then it costs nothing and is read,
+    so that the set-up is still judged by both solvers.
+    """
     ref = setup("reference")
     reference = Job("reference", ref.mesh, ref.solver)
     jobs = [reference, reference.variant("PCG", pressure_solver="PCG")]
@@ -798,8 +805,9 @@ def plan_runs(args: argparse.Namespace) -> RunPlan:
             continue
         named.append(job.label)
         jobs.append(job)
-        if not args.no_solver_floor:
-            floor = other_solver(job)
+        floor = other_solver(job)
+        if not args.no_solver_floor or (root is not None
+                                        and ran_to_end(Path(root) / floor.label)):
             floors[job.label] = floor.label
             jobs.append(floor)
     specs = mesh_specs()
@@ -925,7 +933,7 @@ def main(argv: list[str] | None = None) -> None:
     pitch = args.pitch_deg
     said = settings_stamp(args)
     claim_work_dir(root, said)
-    plan = plan_runs(args)
+    plan = plan_runs(args, root)
     jobs = plan.jobs
     run = partial(run_setup, cycles=cycles, root=root, pitch_deg=pitch)
     print(f"{len(jobs)} runs in {root}, {args.workers} at a time: "

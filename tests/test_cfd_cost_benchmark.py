@@ -388,6 +388,22 @@ def test_the_plan_reruns_a_yardstick_with_the_other_solver_and_moves_set_ups_to_
     assert all(j.solver.far_field == "inletOutlet" for j in plan.jobs)
 
 
+def test_without_the_solver_floor_a_twin_that_finished_before_is_still_read(bench, tmp_path):
+    """--no-solver-floor runs no new reruns, but a set-up's rerun with the other pressure
+    solver that finished in the work folder costs nothing and is read, so the set-up is
+    still judged by both solvers; one stopped part-way is not resumed."""
+    args = bench.parsed_arguments(["medium_piso", "affordable", "--no-solver-floor"])
+    assert bench.plan_runs(args, tmp_path).floors == {}
+    for label, reached in (("medium_piso-PCG", 1.0), ("affordable-PCG", 0.5)):
+        write_case(tmp_path / label, bench.benchmark_motion(), end_time=1.0)
+        (tmp_path / label / "log.pimpleFoam").write_text(
+            f"deltaT = 0.001\nTime = {reached:g}\nExecutionTime = 24 s\n\nEnd\n\n")
+    plan = bench.plan_runs(args, tmp_path)
+    assert plan.floors == {"medium_piso": "medium_piso-PCG"}
+    assert "medium_piso-PCG" in _labels(plan) and "affordable-PCG" not in _labels(plan)
+    assert bench.plan_runs(args).floors == {}  # no work folder: nothing to read
+
+
 def test_the_yardstick_is_one_run_or_the_mean_of_several_with_their_band(bench):
     args = bench.parsed_arguments(["--yardstick-courant", "4,1", "--no-baseline"])
     plan = bench.plan_runs(args)
