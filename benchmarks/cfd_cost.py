@@ -926,6 +926,8 @@ def print_report(results: dict[str, SetupRun], plan: RunPlan, yardstick: SetupRu
 
 
 def main(argv: list[str] | None = None) -> None:
+    """Run (or read) the runs of the command line, print the report and write what it asks
+    for: the HDF5 study, the cost-accuracy figure, the force histories."""
     args = parsed_arguments(argv)
     cycles = args.cycles
     window = args.window
