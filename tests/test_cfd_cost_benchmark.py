@@ -618,7 +618,9 @@ def test_the_shipped_studies_against_openfoam_md_s_fine_mesh_say_what_readme_say
     of the H-type medium mesh (max Co 2 at 5°, 1 at 10°) is nearer it than any other mesh,
     the O-grid medium mesh is further, and no run within the cost is within 2 % of it, in
     cycle 1 or over the first stroke. At 5° the fine mesh itself at max Co 1 lies within 2 %
-    of it in cycle 1 (1.8 / 1.6 %), nearer than any other run."""
+    of it in cycle 1 (1.8 / 1.6 %), nearer than any other run; at 10° it lies 5.8 / 8.9 %
+    away, further than the medium mesh at either time step: there the fine mesh is not
+    settled in time."""
     import h5py
 
     with h5py.File(FIGURES / f"cost_accuracy_pitch{pitch}_h_fine.h5") as h5:
@@ -631,10 +633,13 @@ def test_the_shipped_studies_against_openfoam_md_s_fine_mesh_say_what_readme_say
         for window in (0, stroke):
             assert not any(_in_target(h5[name], attrs, window) for name in runs)
         error = {name: max(h5[name]["nrmse_percent"][0][:2]) for name in runs}
-        own_time_step = error.pop("openfoam_md@openfoam_md_fine-co1", None)
+        own_time_step = error.pop("openfoam_md@openfoam_md_fine-co1")
         if pitch == 5:
-            assert own_time_step is not None and own_time_step < 2.0
+            assert own_time_step < 2.0
             assert own_time_step < min(error.values())
+        else:
+            assert own_time_step > 5.0
+            assert own_time_step > error["openfoam_md@openfoam_md_medium"]
         nearest = {5: "openfoam_md@openfoam_md_medium", 10: "openfoam_md@openfoam_md_medium-co1"}
         assert min(error, key=error.get) == nearest[pitch]
         assert error["reference"] > error["openfoam_md@openfoam_md_medium"]
