@@ -175,7 +175,7 @@ def test_the_shipped_studies_meet_the_target_only_at_20_deg_against_the_o_grid(r
         ("o_grid_time_step", 5.0), ("o_grid_time_step", 10.0), ("o_grid_time_step", 20.0),
         ("o_grid_mean", 5.0), ("o_grid_mean", 10.0),
         ("o_grid_mean", 20.0), ("h_medium", 5.0), ("h_medium", 10.0), ("h_medium", 20.0),
-        ("h_fine", 5.0), ("h_fine", 10.0)}
+        ("h_fine", 5.0), ("h_fine", 10.0), ("h_fine", 20.0)}
     readme = " ".join((ROOT / "README.md").read_text().split())
     assert f"{len(met)} of {len(every)} are met" in readme
     assert readings.readings_figure(every, tmp_path / "r.png") is not None
