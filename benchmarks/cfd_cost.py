@@ -955,7 +955,9 @@ def main(argv: list[str] | None = None) -> None:
     study = Study(results, yardstick, cycles, plan.named, plan.floors, cells, baseline, band,
                   said.strip(), window)
     if args.output:
-        write_study(study, args.output, sys.argv)
+        # the command as typed; called with argv (a test, another script), that argv
+        command = sys.argv if argv is None else ["benchmarks/cfd_cost.py", *argv]
+        write_study(study, args.output, command)
         print(f"wrote {args.output}")
     if args.figure:
         cost_accuracy_figure(study, args.figure,
