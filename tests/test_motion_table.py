@@ -16,7 +16,7 @@ from mfflap.cfd.openfoam.writer import MOTION_TABLE_FILE
 from mfflap.cli.main import cli
 from mfflap.errors import MotionError, ParseError
 from mfflap.kinematics import TabulatedMotion
-from mfflap.kinematics.table_file import read_motion_table, table_end_time
+from mfflap.kinematics.table_file import largest_pitch, read_motion_table, table_end_time
 from mfflap.toml_io import read_toml
 
 CASE = Path(__file__).parents[1] / "cases" / "paper2026.toml"
@@ -162,6 +162,41 @@ def test_cfd_write_and_fluent_from_a_table(tmp_path):
         1e-2 * scale)
     assert np.max(np.abs(np.abs(out[:, 2]) - np.abs(exact.pitch_rate))) < (
         1e-2 * np.abs(exact.pitch_rate).max())
+
+
+def test_degrees_in_the_radian_column_are_flagged_with_the_file_and_the_time(tmp_path):
+    """A table whose pitch reaches 90 deg (here degrees written under ``pitch_angle``, which
+    is in rad: up to 16 rad) is still written, with a warning naming the file, the pitch
+    and its time; the same numbers under ``pitch_angle_deg`` give none."""
+    degrees = write_table(tmp_path / "deg.csv")
+    wrong = tmp_path / "wrong.csv"
+    wrong.write_text(degrees.read_text().replace("pitch_angle_deg", "pitch_angle"))
+    pitch, time = largest_pitch(read_motion_table(wrong), 2.0)
+    assert pitch == pytest.approx(16.0) and time == pytest.approx(1.0)
+    # up to an end time, only the rows up to it count
+    pitch, time = largest_pitch(read_motion_table(wrong), 0.5)
+    assert pitch == pytest.approx(8.0) and time == pytest.approx(0.5)
+    assert largest_pitch(read_motion_table(degrees), 2.0)[0] == pytest.approx(np.radians(16))
+    runner = CliRunner()
+    res = runner.invoke(cli, ["cfd", "write", str(CASE), str(tmp_path / "w"),
+                              "--motion-table", str(wrong)])
+    assert res.exit_code == 0, res.output
+    assert f"warning: {wrong}: the pitch reaches 916.7 deg at t = 1 s" in res.stderr
+    assert "pitch_angle_deg in degrees" in res.stderr
+    res = runner.invoke(cli, ["cfd", "write", str(CASE), str(tmp_path / "d"),
+                              "--motion-table", str(degrees)])
+    assert res.exit_code == 0 and "warning" not in res.stderr
+    # a pitch of -90 deg or less counts as well; the Fluent UDF's writer warns the same way
+    upright = tmp_path / "upright.csv"
+    rows = [line.split(",") for line in degrees.read_text().splitlines()]
+    rows = [[*row[:2], "-90.0", *row[3:]] if row[1:2] == ["0.5"] else row for row in rows]
+    upright.write_text("\n".join(",".join(row) for row in rows) + "\n")
+    assert largest_pitch(read_motion_table(upright), 2.0) == (pytest.approx(-np.pi / 2),
+                                                              pytest.approx(0.5))
+    res = runner.invoke(cli, ["cfd", "fluent", str(CASE), str(tmp_path / "f"),
+                              "--motion-table", str(upright)])
+    assert res.exit_code == 0, res.output
+    assert "the pitch reaches -90 deg at t = 0.5 s" in res.stderr
 
 
 @pytest.mark.openfoam

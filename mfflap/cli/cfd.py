@@ -4,11 +4,15 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 import numpy as np
 
 from mfflap.cli.options import mesh_and_setup_options, velocity_convection_option
+
+if TYPE_CHECKING:
+    from mfflap.kinematics.continuous import TabulatedMotion
 
 
 def _motion_table_options(note: str):
@@ -117,9 +121,25 @@ def _motion_and_end_time(case, motion_table: Path | None, end_time: float | None
 
     motion = read_motion_table(motion_table)
     try:
-        return motion, table_end_time(motion, end_time)
+        end_time = table_end_time(motion, end_time)
     except MotionError as exc:
         raise click.BadParameter(str(exc), param_hint="--end-time") from exc
+    _warn_pitch_past_upright(motion, motion_table, end_time)
+    return motion, end_time
+
+
+def _warn_pitch_past_upright(motion: TabulatedMotion, motion_table: Path,
+                             end_time: float) -> None:
+    """Warn on stderr when a table's pitch reaches 90 deg or more up to ``end_time``: most
+    likely degrees in the ``pitch_angle`` column, which is in rad."""
+    from mfflap.kinematics.table_file import UPRIGHT_PITCH, largest_pitch
+
+    pitch, time = largest_pitch(motion, end_time)
+    if abs(pitch) >= UPRIGHT_PITCH:
+        click.echo(f"warning: {motion_table}: the pitch reaches {np.degrees(pitch):.4g} deg at "
+                   f"t = {time:g} s, past the {np.degrees(UPRIGHT_PITCH):g} deg at which the "
+                   "plate stands across the stream (the column pitch_angle is in rad, "
+                   "pitch_angle_deg in degrees)", err=True)
 
 
 @cfd.command()

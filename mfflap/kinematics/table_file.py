@@ -5,7 +5,9 @@ The file has a header line naming its columns, in any order:
 
 - ``time`` in s, starting at 0 and strictly increasing;
 - ``heave_position`` in m;
-- ``pitch_angle`` in rad, or ``pitch_angle_deg`` in degrees (one of the two).
+- ``pitch_angle`` in rad, or ``pitch_angle_deg`` in degrees (one of the two). A flapping
+  plate pitches less than 90 deg (:data:`UPRIGHT_PITCH`); the commands that write a case
+  from a table warn when it does not (:func:`largest_pitch`).
 
 Other columns are ignored; lines starting with ``#`` are comments. Between rows the motion
 is a cubic spline (continuous rates and accelerations); past the last row it is held at
@@ -24,6 +26,9 @@ from mfflap.kinematics.continuous import Motion, TabulatedMotion
 
 #: the fewest rows a cubic spline through the table needs
 MIN_ROWS = 4
+#: the pitch at which the plate stands across the stream, rad; a flapping plate stays within
+#: it (the case file's pitch amplitude is bounded by it)
+UPRIGHT_PITCH = np.pi / 2
 
 
 def read_motion_table(path: str | Path) -> TabulatedMotion:
@@ -73,6 +78,20 @@ def table_end_time(motion: TabulatedMotion, end_time: float | None = None) -> fl
         raise MotionError(f"end time {end_time:g} s must lie in (0, {last:g}] s, the range of "
                           f"the motion table")
     return float(end_time)
+
+
+def largest_pitch(motion: TabulatedMotion, end_time: float) -> tuple[float, float]:
+    """The largest pitch in magnitude among a table's rows up to ``end_time``, and its time.
+
+    Returns
+    -------
+    tuple
+        The pitch (rad, with its sign) and the time of its row (s).
+    """
+    times = motion.table_time[motion.table_time <= end_time]
+    pitch = motion.sample(times).pitch_angle
+    worst = int(np.argmax(np.abs(pitch)))
+    return float(pitch[worst]), float(times[worst])
 
 
 def write_motion_table(path: str | Path, motion: Motion, end_time: float, n_rows: int,
