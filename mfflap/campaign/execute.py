@@ -33,6 +33,7 @@ from mfflap.campaign.cases import CampaignCase
 from mfflap.campaign.records import LOST_SUFFIX, RECORD_SUFFIX, read_record, write_record
 from mfflap.cfd.bursts import find_load_bursts
 from mfflap.cfd.openfoam.case_lock import CaseBusyError, lock_holder
+from mfflap.cfd.openfoam.case_path import check_case_path
 from mfflap.cfd.openfoam.runner import RunStopped, stop_running_solvers, stoppable
 from mfflap.cfd.openfoam.writer import SolverSettings
 from mfflap.errors import ConfigError, MfflapError
@@ -379,7 +380,7 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
     from mfflap.campaign.openfoam_run import request_rerun
 
     setup = setup or CampaignSetup()
-    out = Path(out_dir)
+    out = check_case_path(out_dir)  # every case runs below it
     out.mkdir(parents=True, exist_ok=True)
     ids = [c.case_id for c in cases]
     if len(set(ids)) != len(ids):

@@ -18,6 +18,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from mfflap.cfd.openfoam.case_lock import case_lock, held_descriptor
+from mfflap.cfd.openfoam.case_path import check_case_path
 from mfflap.cfd.openfoam.release import require_supported_release
 from mfflap.errors import CfdRunError
 
@@ -248,6 +249,9 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
 
     Raises
     ------
+    ConfigError
+        Before it starts, if the case's path holds characters OpenFOAM strips
+        (:func:`~mfflap.cfd.openfoam.case_path.check_case_path`).
     CfdRunError
         Before it starts, if the OpenFOAM on PATH is of the openfoam.org line, whose cases
         differ from the ones mfflap writes (:mod:`mfflap.cfd.openfoam.release`). On a
@@ -255,7 +259,7 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
         collapsed time step, or a Courant number above ``max_courant_abort``, with the
         log's tail.
     """
-    case_dir = Path(case_dir)
+    case_dir = check_case_path(case_dir)
     _raise_if_stopped(case_dir, application)
     require_supported_release(str(case_dir))  # openfoam.com's line, not openfoam.org's
     if not openfoam_available():

@@ -26,6 +26,7 @@ import numpy as np
 from mfflap.cfd import templates
 from mfflap.cfd.case_inputs import recorded_inputs
 from mfflap.cfd.frames import FRAMES, case_displacement, case_rotation_deg
+from mfflap.cfd.openfoam.case_path import check_case_path
 from mfflap.cfd.openfoam.cell_counts import check_cell_counts
 from mfflap.cfd.openfoam.h_grid import HGridSpec
 from mfflap.cfd.openfoam.loads import imposed_state
@@ -257,9 +258,11 @@ def write_case(case_dir: str | Path, motion: Motion, end_time: float,
     Raises
     ------
     ConfigError, MotionError
-        For an impossible setting (end time, ramp, depth, mesh) or a motion that cannot be
-        sampled, before anything is written.
+        For an impossible setting (end time, ramp, depth, mesh, a case folder whose path
+        OpenFOAM cannot read: :func:`~mfflap.cfd.openfoam.case_path.check_case_path`) or a
+        motion that cannot be sampled, before anything is written.
     """
+    check_case_path(case_dir)  # OpenFOAM could not run it: nothing written
     plate, fluid, stream = plate or Plate(), fluid or Fluid(), stream or FreeStream()
     solver = solver or SolverSettings()
     spec = resolve_mesh(mesh)
