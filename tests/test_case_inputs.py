@@ -157,6 +157,9 @@ def test_a_fluent_report_beside_its_udf_parses_with_the_udf_s_ramp_and_case(tmp_
     kept, same, unramped = (json.loads(o) for o in (kept, same, unramped))
     assert kept.pop("inputs_checked_against") == str(fl / "mfflap_fluent.toml")
     assert same.pop("inputs_checked_against") is None
+    # 1 s of forces for the 1 s (one cycle) the UDF was written for: they get there
+    assert kept.pop("written_end_time") == 1.0 and kept.pop("forces_reach_end_time") is True
+    assert same.pop("written_end_time") is None and same.pop("forces_reach_end_time") is None
     kept.pop("source"), same.pop("source"), unramped.pop("source")
     assert kept == same  # the kept ramp is the one used
     assert kept["model_mean_power"] != unramped["model_mean_power"]

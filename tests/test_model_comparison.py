@@ -123,3 +123,73 @@ def test_cfd_parse_writes_the_figure_and_the_hdf5_file(tmp_path):
     assert res.exit_code == 0, res.output
     assert matplotlib.image.imread(png).shape[:2] == (1320, 960)
     assert read_model_comparison(h5).summary == json.loads(res.stdout)
+
+
+@pytest.mark.parametrize(("times", "end", "reached"), [
+    (np.linspace(0.0, 1.0, 101), 1.0, True),  # lands on it
+    (np.linspace(0.0, 0.996, 84), 1.0, True),  # stopped within half a step of it
+    (np.r_[np.linspace(0.0, 0.99, 100), 0.995], 1.0, True),  # a last step shortened to it
+    (np.linspace(0.0, 0.6, 61), 1.0, False),  # still going, or stopped early
+    (np.linspace(0.0, 0.97, 98), 1.0, False),  # three steps short
+    (np.array([0.5]), 1.0, False), (np.empty(0), 1.0, False)])
+def test_a_history_reaches_its_end_time_within_its_last_steps(times, end, reached):
+    from mfflap.cfd.model_comparison import reaches_end_time
+
+    assert reaches_end_time(times, end) is reached
+
+
+def test_forces_that_stop_short_of_the_end_time_are_flagged(tmp_path):
+    """A Fluent report of 0.6 s beside a UDF written for 1 s: the summary says so, and
+    `cfd parse` warns that its numbers cover only that; the whole second gives no warning."""
+    from click.testing import CliRunner
+    from test_fluent import write_plate_report
+
+    from mfflap.cli.main import cli
+
+    report = _beside_its_udf(tmp_path)
+    whole = compare_with_model(report, CASE)
+    assert whole["written_end_time"] == 1.0 and whole["forces_reach_end_time"] is True
+    t = np.linspace(0.01, 0.6, 100)
+    write_plate_report(report, t, 40 * np.sin(6 * t), 30 * np.cos(6 * t), 2 * np.sin(6 * t))
+    short = compare_with_model(report, CASE)
+    assert short["written_end_time"] == 1.0 and short["forces_reach_end_time"] is False
+    res = CliRunner().invoke(cli, ["cfd", "parse", str(report), "--case-file", str(CASE)])
+    assert res.exit_code == 0, res.output
+    assert (f"warning: {report}: its forces end at t = 0.6 s, before the 1 s the run was "
+            "written for (the run is still going or stopped there)") in res.stderr
+    assert "warning" not in res.stdout
+
+
+@pytest.mark.openfoam
+def test_a_case_still_running_is_named_with_the_process_that_runs_it(tmp_path):
+    """A real OpenFOAM case whose force log ends half-way, its run lock held (as while
+    pimpleFoam runs in it): `cfd parse` says a run is still going and names the process."""
+    import os
+
+    from click.testing import CliRunner
+
+    from mfflap.cfd.openfoam.case_lock import case_lock
+    from mfflap.cfd.openfoam.runner import openfoam_available, run_case
+    from mfflap.cfd.openfoam.writer import write_case
+    from mfflap.cli.main import cli
+    from mfflap.config import load_case
+
+    assert openfoam_available(), "OpenFOAM must be installed (.ci/run installs it)"
+    case_file = load_case(CASE)
+    case = write_case(tmp_path / "run", case_file.motion.build(), end_time=0.004,
+                      plate=case_file.plate, fluid=case_file.fluid, stream=case_file.flow)
+    run_case(case, timeout_s=120)
+    parse = ["cfd", "parse", str(case), "--case-file", str(CASE)]
+    res = CliRunner().invoke(cli, parse)
+    assert res.exit_code == 0 and "warning" not in res.stderr, res.output
+    (force_file,) = case.glob("postProcessing/forces/*/force.dat")
+    lines = force_file.read_text().splitlines()
+    kept = [line for line in lines if line.startswith("#") or float(line.split()[0]) <= 0.002]
+    assert len(kept) < len(lines)
+    force_file.write_text("\n".join(kept) + "\n")
+    with case_lock(case):
+        res = CliRunner().invoke(cli, [*parse, "--json"])
+    assert res.exit_code == 0, res.output
+    assert json.loads(res.stdout)["forces_reach_end_time"] is False
+    assert "before the 0.004 s the run was written for (a run is still going: pid " \
+           f"{os.getpid()} since" in res.stderr

@@ -112,7 +112,11 @@ def model_comparison(source: str | Path, case_file: str | Path, *, discard_s: fl
         force envelope, the NRMSE and Pearson of F_n, F_t and M (model against CFD), and
         ``inputs_checked_against``: the file of what the run was written for that the case
         file was checked against, or None for a Fluent report with no mfflap_fluent.toml
-        beside it, whose motion, ramp, plate and stream are then taken on trust.
+        beside it, whose motion, ramp, plate and stream are then taken on trust;
+        ``written_end_time``, the end time the run was written for, and
+        ``forces_reach_end_time``, whether its forces get there (:func:`reaches_end_time`;
+        False for a run still going or stopped early, whose numbers cover only what it ran);
+        both None where nothing says what it was written for.
 
     Raises
     ------
@@ -170,6 +174,9 @@ def model_comparison(source: str | Path, case_file: str | Path, *, discard_s: fl
         "n_samples": len(history.time), "end_time": float(history.time[-1]),
         "cfd_mean_thrust": time_mean(t, thrust), "model_mean_thrust": time_mean(t, m_thrust),
         "cfd_mean_power": time_mean(t, power), "model_mean_power": time_mean(t, m_power),
+        "written_end_time": None if meta is None else float(meta["end_time"]),
+        "forces_reach_end_time": None if meta is None else reaches_end_time(
+            history.time, float(meta["end_time"])),
         "numerical_bursts": [b.describe() for b in bursts],
         "forces_beyond_what_the_motion_can_drive": [b.describe() for b in breaches],
         "inputs_checked_against": None if meta is None else str(kept)}
@@ -184,6 +191,25 @@ def model_comparison(source: str | Path, case_file: str | Path, *, discard_s: fl
                                                       keep, case.plate, case.fluid, case.flow)
     return ModelComparison(out, cfd_loads, model_loads,
                            *(np.asarray(a, dtype=float) for a in series), compared=keep)
+
+
+def reaches_end_time(time_s: np.ndarray, end_time_s: float) -> bool:
+    """Whether a force history gets to the end time its run was written for: its last
+    sample within one and a half of its last time steps of it (a solver stops once it is
+    within half a step; the last step may have been shortened to land on it).
+
+    Parameters
+    ----------
+    time_s
+        The history's times, s, increasing.
+    end_time_s
+        The run's end time, s.
+    """
+    time_s = np.asarray(time_s, dtype=float)
+    if time_s.size == 0:
+        return False
+    last_step = float(np.diff(time_s[-3:]).max()) if time_s.size > 1 else 0.0
+    return bool(time_s[-1] >= end_time_s - 1.5 * last_step - 1e-9 * abs(end_time_s))
 
 
 _SERIES_UNITS = {"time": "s", "cfd_thrust_n": "N", "cfd_power_w": "W", "model_thrust_n": "N",

@@ -107,6 +107,17 @@ def write(case_file: Path, case_dir: Path, mesh: str | None, setup_name: str | N
                f"{solver.max_courant:g}, {solver.pressure_solver}, end time {end_time:g} s)")
 
 
+def _run_state(source: Path) -> str:
+    """Why a run's forces stop short, as far as its folder tells: a solver still running in
+    an OpenFOAM case (who holds its lock), or a run that stopped."""
+    from mfflap.cfd.openfoam.case_lock import lock_holder
+
+    holder = lock_holder(source) if source.is_dir() else None
+    if holder is not None:
+        return f"a run is still going: {holder}"
+    return "the run is still going or stopped there"
+
+
 def _motion_and_end_time(case, motion_table: Path | None, end_time: float | None,
                          cycles: float):
     """The motion a command writes or parses, and its end time: the case file's [motion]
@@ -281,6 +292,11 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
         save_path.parent.mkdir(parents=True, exist_ok=True)
         write_model_comparison(save_path, comparison, case_file)
         click.echo(f"wrote {save_path}", err=True)
+    if out["forces_reach_end_time"] is False:
+        click.echo(f"warning: {source}: its forces end at t = {out['end_time']:.6g} s, before "
+                   f"the {out['written_end_time']:g} s the run was written for "
+                   f"({_run_state(source)}); the means, NRMSE and Pearson cover only that",
+                   err=True)
     if out["inputs_checked_against"] is None:
         click.echo(f"warning: nothing beside {source} says what the run was written for, so "
                    f"{case_file} and the ramp and motion table given were not checked against "
