@@ -1063,6 +1063,24 @@ def test_convergence_time_step_study_on_a_chosen_mesh(tmp_path):
     assert data["gci"] == {} and data["gci_meshes"] == []
 
 
+@pytest.mark.parametrize(("meshes", "courants", "key", "said"), [
+    (["coarse", "bogus"], [4.0], None, "unknown mesh 'bogus'"),
+    (["coarse"], [4.0, -1.0], "max_courant", "max_courant must be > 0"),
+    (["coarse", "coarse"], [4.0], "meshes/courants", "coarse_co4 twice"),
+    (["coarse"], [4.0, 4.0], "meshes/courants", "coarse_co4 twice")])
+def test_convergence_checks_every_run_before_the_first_starts(tmp_path, meshes, courants,
+                                                              key, said):
+    """A typo in the last mesh or Courant limit used to surface after the first runs had
+    taken their CPU; now nothing is written or run."""
+    from mfflap.cfd.convergence import run_convergence
+    from mfflap.errors import ConfigError
+
+    with pytest.raises(ConfigError, match=said) as err:
+        run_convergence(tmp_path / "study", MOTION, 0.02, meshes=meshes, courants=courants)
+    assert key is None or err.value.key == key
+    assert not (tmp_path / "study").exists()
+
+
 def test_a_run_resumed_between_writes_still_writes_at_its_end(tmp_path):
     """OpenFOAM counts write times from a run's start: resumed from a time off the write
     grid, the interval shrinks to the largest one that divides the time left (so the run

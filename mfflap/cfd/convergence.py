@@ -245,12 +245,20 @@ def run_convergence(out_dir: str | Path, motion: Motion, end_time: float, *,
         plan.append((f"setup_{s.name}", s.mesh, settings, s.solver.max_courant))
         if floor:
             add_floor(f"setup_{s.name}", s.mesh, settings, s.solver.max_courant)
+    labels = [label for label, *_ in plan]
+    twice = sorted({label for label in labels if labels.count(label) > 1})
+    if twice:
+        raise ConfigError(f"the study would run {', '.join(twice)} twice: name each mesh and "
+                          "Courant limit once", key="meshes/courants")
+    # every mesh and setting checked before the first run starts: none is lost to a typo
+    plan = [(label, mesh, replace(settings, max_courant=co, write_interval=end_time / 4), co)
+            for label, mesh, settings, co in plan]
+    mesh_names = {label: resolve_mesh(mesh).name for label, mesh, _, _ in plan}
     runs = []
     for label, mesh, settings, co in plan:
         path = out / f"{label}.h5"
         case_dir = out / "cases" / label
-        mesh_name = resolve_mesh(mesh).name
-        settings = replace(settings, max_courant=co, write_interval=end_time / 4)
+        mesh_name = mesh_names[label]
         if path.exists():
             record = read_record(path)
             _check_resumed(path, record, settings, end_time)
