@@ -326,3 +326,36 @@ def test_cli_parse_averages_over_time_and_bridges_a_burst(tmp_path):
     assert hit["cfd_mean_thrust"] == pytest.approx(ref["cfd_mean_thrust"],
                                                    abs=2e-3 * max(abs(ref["cfd_mean_thrust"]), 1))
     assert hit["nrmse_normal_force"] == pytest.approx(ref["nrmse_normal_force"], rel=0.02)
+
+
+def test_a_new_udf_is_not_written_beside_the_report_of_an_earlier_run(tmp_path):
+    """Beside a new UDF an earlier run's report would parse as the new motion's forces: it
+    is refused (other files, such as the Fluent case the journal reads, stay welcome); a
+    failed write deletes nothing; --overwrite deletes the report only."""
+    from mfflap.cfd.fluent.udf import REPORT_FILE
+    from mfflap.cli.main import cli
+    from mfflap.errors import MotionError
+    from mfflap.toml_io import read_toml
+
+    case = Path(__file__).parents[1] / "cases" / "paper2026.toml"
+    motion = HarmonicMotion(1.0, 0.3, np.radians(20.0), np.pi / 2)
+    folder = tmp_path / "fl"
+    write_fluent_case(folder, motion, 1.0)
+    (folder / "plate.cas.h5").write_text("the user's Fluent case")
+    write_fluent_case(folder, motion, 2.0)  # no report yet: written again, the case kept
+    t = np.linspace(0.01, 2.0, 50)
+    write_plate_report(folder / REPORT_FILE, t, np.sin(t), np.cos(t), 0 * t)
+    with pytest.raises(ConfigError, match=f"holds {REPORT_FILE}, the report of a run"):
+        write_fluent_case(folder, motion, 1.0)
+    with pytest.raises(MotionError):
+        write_fluent_case(folder, motion, -1.0, table=True, overwrite=True)
+    assert (folder / REPORT_FILE).exists()
+    assert read_toml(folder / "mfflap_fluent.toml")["end_time"] == 2.0
+    res = CliRunner().invoke(cli, ["cfd", "fluent", str(case), str(folder), "--cycles", "1"])
+    assert res.exit_code == 2 and "--overwrite deletes the report" in res.output
+    res = CliRunner().invoke(cli, ["cfd", "fluent", str(case), str(folder), "--cycles", "1",
+                                   "--overwrite"])
+    assert res.exit_code == 0, res.output
+    assert not (folder / REPORT_FILE).exists()
+    assert (folder / "plate.cas.h5").read_text() == "the user's Fluent case"
+    assert read_toml(folder / "mfflap_fluent.toml")["end_time"] == 1.0

@@ -12,7 +12,8 @@ from typing import Any
 from mfflap.campaign.records import CfdRecord
 from mfflap.cfd.bursts import bridge_load_bursts
 from mfflap.cfd.force_envelope import BREACH_FACTOR, EnvelopeBreach, find_envelope_breaches
-from mfflap.cfd.openfoam.case_lock import LOCK_FILE, case_lock
+from mfflap.cfd.openfoam.case_lock import case_lock
+from mfflap.cfd.openfoam.case_path import empty_case_folder
 from mfflap.cfd.openfoam.forces import read_forces
 from mfflap.cfd.openfoam.loads import imposed_state, to_loads
 from mfflap.cfd.openfoam.runner import (
@@ -333,12 +334,7 @@ def _write_case_whole(case_dir: Path, write: Callable[[Path], object]) -> None:
     tmp = case_dir.with_name(case_dir.name + ".writing")
     shutil.rmtree(tmp, ignore_errors=True)
     write(tmp)
-    for old in case_dir.iterdir():
-        if old.name != LOCK_FILE:
-            if old.is_dir() and not old.is_symlink():
-                shutil.rmtree(old)
-            else:
-                old.unlink()
+    empty_case_folder(case_dir)
     marker = "mfflap_case.toml"
     for new in sorted(tmp.iterdir(), key=lambda path: path.name == marker):
         new.rename(case_dir / new.name)

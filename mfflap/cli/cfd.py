@@ -68,14 +68,17 @@ def cfd() -> None:
                    "the plate's frame (about a third less CPU; inletOutlet far field unless "
                    "--far-field says otherwise); default inertial (or the set-up's).")
 @_motion_table_options("Kept in the case.")
+@click.option("--overwrite", is_flag=True,
+              help="Delete a case written into CASE_DIR before (its results, mesh and logs "
+                   "too) and write this one; without it such a folder is refused.")
 def write(case_file: Path, case_dir: Path, mesh: str | None, setup_name: str | None,
           cycles: float, ramp_time: float, y_plus: bool, far_field: str | None,
           pressure_solver: str | None, velocity_convection: str | None, writes: int,
           turbulence_convection: str | None, frame: str | None, motion_table: Path | None,
           end_time: float | None, max_courant: float | None, outer_correctors: int | None,
-          correctors: int | None) -> None:
+          correctors: int | None, overwrite: bool) -> None:
     """Write an OpenFOAM case for the [motion] of CASE_FILE (or a --motion-table) into
-    CASE_DIR."""
+    CASE_DIR, a new or empty folder (or a case written before, with --overwrite)."""
     from dataclasses import replace
 
     from mfflap.cfd.openfoam.setups import mesh_and_solver
@@ -98,7 +101,7 @@ def write(case_file: Path, case_dir: Path, mesh: str | None, setup_name: str | N
     solver = replace(solver, write_interval=end_time / writes, **overrides)
     write_case(case_dir, motion, end_time, mesh=spec, plate=case.plate,
                fluid=case.fluid, stream=case.flow, ramp_time=ramp_time, y_plus=y_plus,
-               solver=solver)
+               solver=solver, overwrite=overwrite)
     if motion_table is not None:
         attach_motion_table(case_dir, motion_table)
     loop = (f"{'PISO' if solver.n_outer_correctors == 1 else 'PIMPLE'} "
@@ -322,8 +325,12 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
 @click.option("--time-step", default=1e-3, show_default=True, help="Fluent time step, s.")
 @click.option("--table", is_flag=True, help="Table-driven UDF even for a sinusoid.")
 @_motion_table_options("A table-driven UDF; the table is kept beside it.")
+@click.option("--overwrite", is_flag=True,
+              help="Delete the report file of an earlier run in OUT_DIR (refused without "
+                   "it: beside the new UDF its forces would parse as the new motion's).")
 def fluent(case_file: Path, out_dir: Path, cycles: float, ramp_time: float, time_step: float,
-           table: bool, motion_table: Path | None, end_time: float | None) -> None:
+           table: bool, motion_table: Path | None, end_time: float | None,
+           overwrite: bool) -> None:
     """Write a DEFINE_CG_MOTION UDF and a batch journal for the [motion] of CASE_FILE (or a
     --motion-table)."""
     from mfflap.cfd.fluent.udf import FLUENT_KEPT_FILE, write_fluent_case
@@ -334,7 +341,7 @@ def fluent(case_file: Path, out_dir: Path, cycles: float, ramp_time: float, time
     motion, end_time = _motion_and_end_time(case, motion_table, end_time, cycles)
     write_fluent_case(out_dir, motion, end_time, ramp_time=ramp_time,
                       time_step=time_step, velocity=case.flow.velocity, table=table,
-                      plate=case.plate, fluid=case.fluid)
+                      plate=case.plate, fluid=case.fluid, overwrite=overwrite)
     if motion_table is not None:
         attach_motion_table(out_dir, motion_table, kept_file=FLUENT_KEPT_FILE)
     click.echo(f"wrote {out_dir / 'mfflap_motion.c'}, {out_dir / 'mfflap_run.jou'} and "

@@ -147,26 +147,41 @@ def journal(udf_file: str, report_file: str = REPORT_FILE, case_file: str = "pla
 def write_fluent_case(folder: str | Path, motion: Motion, end_time: float, *,
                       ramp_time: float = 0.0, time_step: float = 1e-3, velocity: float = 0.3,
                       table: bool | None = None, udf_name: str = "mfflap_motion",
-                      plate: Plate | None = None, fluid: Fluid | None = None) -> Path:
+                      plate: Plate | None = None, fluid: Fluid | None = None,
+                      overwrite: bool = False) -> Path:
     """Write ``mfflap_motion.c`` (analytic for sinusoids, else table-driven),
     ``mfflap_run.jou`` and ``mfflap_fluent.toml`` into ``folder``.
 
     mfflap_fluent.toml keeps what the UDF was written for (the start-up ramp, the plate,
     fluid and stream, samples of the motion: :mod:`mfflap.cfd.case_inputs`), so that the
     report file the journal writes beside it parses with the same ramp and is checked
-    against the case file it is parsed with.
+    against the case file it is parsed with. The folder may hold other files (the Fluent
+    case the journal reads), but not the report of an earlier run: beside a new UDF its
+    forces would parse as the new motion's. ``overwrite`` deletes that report.
+
+    Raises
+    ------
+    ConfigError
+        If ``folder`` holds the report file of an earlier run and ``overwrite`` is not set.
     """
     plate, fluid = plate or Plate(), fluid or Fluid()
     folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
+    report = folder / REPORT_FILE
+    if report.exists() and not overwrite:
+        raise ConfigError(f"{folder} holds {REPORT_FILE}, the report of a run of the UDF "
+                          "written there before; beside a new UDF `cfd parse` would read its "
+                          "forces as the new motion's: move it away, write into another "
+                          "folder, or overwrite (--overwrite deletes the report)")
     analytic = isinstance(motion, HarmonicMotion | RampHarmonicMotion) and not table
     source = (analytic_udf(motion, ramp_time, udf_name) if analytic  # type: ignore[arg-type]
               else table_udf(motion, end_time, ramp_time, udf_name))
-    (folder / "mfflap_motion.c").write_text(source)
     n_steps = max(math.ceil(end_time / time_step), 1)
-    (folder / "mfflap_run.jou").write_text(journal("mfflap_motion.c", time_step=time_step,
-                                                   n_steps=n_steps, velocity=velocity,
-                                                   udf_name=udf_name))
+    run_journal = journal("mfflap_motion.c", time_step=time_step, n_steps=n_steps,
+                          velocity=velocity, udf_name=udf_name)
+    folder.mkdir(parents=True, exist_ok=True)
+    report.unlink(missing_ok=True)  # only once the new UDF is sure to be written
+    (folder / "mfflap_motion.c").write_text(source)
+    (folder / "mfflap_run.jou").write_text(run_journal)
     (folder / FLUENT_KEPT_FILE).write_text(
         f'udf = "mfflap_motion.c"\njournal = "mfflap_run.jou"\n'
         f'report_file = "{REPORT_FILE}"\nend_time = {end_time!r}\n'

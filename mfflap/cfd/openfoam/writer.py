@@ -26,7 +26,7 @@ import numpy as np
 from mfflap.cfd import templates
 from mfflap.cfd.case_inputs import recorded_inputs
 from mfflap.cfd.frames import FRAMES, case_displacement, case_rotation_deg
-from mfflap.cfd.openfoam.case_path import check_case_path
+from mfflap.cfd.openfoam.case_path import check_case_path, prepare_case_folder
 from mfflap.cfd.openfoam.cell_counts import check_cell_counts
 from mfflap.cfd.openfoam.h_grid import HGridSpec
 from mfflap.cfd.openfoam.loads import imposed_state
@@ -246,7 +246,7 @@ def write_case(case_dir: str | Path, motion: Motion, end_time: float,
                plate: Plate | None = None, fluid: Fluid | None = None,
                stream: FreeStream | None = None, solver: SolverSettings | None = None,
                depth: float | None = None, ramp_time: float = 0.0,
-               y_plus: bool = False) -> Path:
+               y_plus: bool = False, overwrite: bool = False) -> Path:
     """Write a complete OpenFOAM case folder for ``motion`` up to ``end_time`` seconds.
 
     Parameters
@@ -254,13 +254,17 @@ def write_case(case_dir: str | Path, motion: Motion, end_time: float,
     depth : m
         Depth of the one-cell-thick mesh; the plate's span by default, so forces are those of
         the whole plate (:func:`mfflap.cfd.openfoam.forces.to_loads` scales otherwise).
+    overwrite
+        Delete a case written into ``case_dir`` before (its results, mesh and logs too)
+        instead of refusing it (:func:`~mfflap.cfd.openfoam.case_path.prepare_case_folder`).
 
     Raises
     ------
     ConfigError, MotionError
         For an impossible setting (end time, ramp, depth, mesh, a case folder whose path
-        OpenFOAM cannot read: :func:`~mfflap.cfd.openfoam.case_path.check_case_path`) or a
-        motion that cannot be sampled, before anything is written.
+        OpenFOAM cannot read: :func:`~mfflap.cfd.openfoam.case_path.check_case_path`), a
+        folder that is not empty (a case written before, unless ``overwrite``), or a motion
+        that cannot be sampled, before anything is written or deleted.
     """
     check_case_path(case_dir)  # OpenFOAM could not run it: nothing written
     plate, fluid, stream = plate or Plate(), fluid or Fluid(), stream or FreeStream()
@@ -275,7 +279,7 @@ def write_case(case_dir: str | Path, motion: Motion, end_time: float,
         tables = plate_frame_tables(motion, table_times(end_time), u, ramp_time=ramp_time)
     else:
         rows = motion_table(motion, end_time, ramp_time=ramp_time)
-    case_dir = Path(case_dir)
+    case_dir = prepare_case_folder(case_dir, "mfflap_case.toml", overwrite)
     case_dir.mkdir(parents=True, exist_ok=True)
     k = 1.5 * (solver.turbulence_intensity * max(u, 1e-3)) ** 2
     length_scale = 0.07 * plate.chord
