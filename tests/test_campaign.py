@@ -709,6 +709,8 @@ def test_a_solver_dies_with_the_process_that_runs_it(tmp_path, n_procs):
     a dask nanny kills a worker), takes its pimpleFoam with it, serial or mpirun and its
     ranks: no orphan goes on writing into the case that a rerun resumes. The solver first
     writes the time step it reached (every rank), so the rerun loses nothing."""
+    from mfflap.cfd.openfoam.runner import latest_solution_time, solver_progress
+
     case_dir = tmp_path / "c"
     script = ("import sys\n"
               "from mfflap.campaign.cases import CfdCase\n"
@@ -720,12 +722,16 @@ def test_a_solver_dies_with_the_process_that_runs_it(tmp_path, n_procs):
     try:
         _wait_for_solver(case_dir / "log.pimpleFoam")
         assert _solvers_in(case_dir), "no solver found in /proc"
-        time.sleep(1.0)  # past its first steps: a stop without a write would lose them
+        # past its first steps (however loaded the machine): a stop without a write would
+        # lose them
+        deadline = time.monotonic() + 120.0
+        while (solver_progress(case_dir) or (0.0,))[0] <= 0.012:
+            assert time.monotonic() < deadline, "the solver did not get to t = 0.012 s"
+            time.sleep(0.1)
     finally:
         runner.kill()
         runner.wait()
     assert not _solvers_left(case_dir)
-    from mfflap.cfd.openfoam.runner import latest_solution_time, solver_progress
 
     reached, time_step = solver_progress(case_dir)
     written = latest_solution_time(case_dir)
