@@ -26,7 +26,7 @@ import numpy as np
 from mfflap.cfd import templates
 from mfflap.cfd.case_inputs import recorded_inputs
 from mfflap.cfd.frames import FRAMES, case_displacement, case_rotation_deg
-from mfflap.cfd.openfoam.case_path import check_case_path, prepare_case_folder
+from mfflap.cfd.openfoam.case_path import prepare_case_folder
 from mfflap.cfd.openfoam.cell_counts import check_cell_counts
 from mfflap.cfd.openfoam.h_grid import HGridSpec
 from mfflap.cfd.openfoam.loads import imposed_state
@@ -266,7 +266,6 @@ def write_case(case_dir: str | Path, motion: Motion, end_time: float,
         folder that is not empty (a case written before, unless ``overwrite``), or a motion
         that cannot be sampled, before anything is written or deleted.
     """
-    check_case_path(case_dir)  # OpenFOAM could not run it: nothing written
     plate, fluid, stream = plate or Plate(), fluid or Fluid(), stream or FreeStream()
     solver = solver or SolverSettings()
     spec = resolve_mesh(mesh)
