@@ -313,7 +313,7 @@ def test_an_impossible_start_up_ramp_is_refused_not_read_as_none(tmp_path, ramp_
 def test_an_impossible_end_time_or_depth_writes_nothing(tmp_path):
     from mfflap.errors import ConfigError, MotionError
 
-    with pytest.raises(MotionError, match="end_time must be > 0"):
+    with pytest.raises(MotionError, match="end_time must be a finite time > 0"):
         write_case(tmp_path / "c", MOTION, end_time=-1.0)
     with pytest.raises(ConfigError, match="depth must be > 0") as err:
         write_case(tmp_path / "c", MOTION, end_time=1.0, depth=0.0)

@@ -17,6 +17,7 @@ itself, or a machine lost, loses what its run computed since its last regular wr
 
 from __future__ import annotations
 
+import math
 import shutil
 import signal
 import threading
@@ -374,12 +375,24 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
         Show a progress bar counted in cases, fractions of the runs in flight included
         (the simulated share of each, read from its solver log every ``poll_s`` seconds), so
         that runs of an hour show that they move.
+
+    Raises
+    ------
+    ConfigError
+        Before any case runs: no worker, a time limit that is not a finite time > 0 s, a
+        folder path OpenFOAM cannot read, or a case listed twice.
     """
     from dask.distributed import Client, LocalCluster, as_completed
 
     from mfflap.campaign.openfoam_run import request_rerun
 
     setup = setup or CampaignSetup()
+    if scheduler_address is None and n_workers < 1:
+        raise ConfigError(f"a campaign needs at least one worker, got {n_workers!r}",
+                          key="n_workers")
+    if not (math.isfinite(setup.timeout_s) and setup.timeout_s > 0):
+        raise ConfigError(f"the time limit per case must be a finite time > 0 s, got "
+                          f"{setup.timeout_s!r}", key="timeout_s")
     out = check_case_path(out_dir)  # every case runs below it
     out.mkdir(parents=True, exist_ok=True)
     ids = [c.case_id for c in cases]

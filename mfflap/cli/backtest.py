@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import click
 
+from mfflap.cli.json_output import echo_json
 from mfflap.cli.options import mesh_and_setup_options
 
 
@@ -76,7 +76,7 @@ def _show(outcomes: dict, as_json: bool) -> None:
             for label, o in outcomes.items()}
     gain = gain_in_cfd(outcomes)
     if as_json:
-        click.echo(json.dumps({"motions": data, "cfd_thrust_gain": gain}, indent=2))
+        echo_json({"motions": data, "cfd_thrust_gain": gain})
         return
     for label, d in data.items():
         if d["status"] != "back-tested":

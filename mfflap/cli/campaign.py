@@ -2,14 +2,14 @@
 
 from __future__ import annotations
 
-import json
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
 import click
 
-from mfflap.cli.options import mesh_and_setup_options
+from mfflap.cli.json_output import echo_json
+from mfflap.cli.options import POSITIVE, mesh_and_setup_options
 
 
 def _floats(text: str | None) -> list[float] | None:
@@ -51,7 +51,8 @@ def campaign() -> None:
 @click.option("--heave-amplitudes", help="Subset of the heave amplitudes, m.")
 @click.option("--phases", help="Subset of the phases, deg.")
 @mesh_and_setup_options()
-@click.option("--workers", default=1, show_default=True, help="LocalCluster worker processes.")
+@click.option("--workers", default=1, show_default=True, type=click.IntRange(min=1),
+              help="LocalCluster worker processes.")
 @click.option("--scheduler", default=None,
               help="Address of an existing dask scheduler (tcp://host:8786) instead of a "
                    "LocalCluster, e.g. one from dask-jobqueue's SLURMCluster.")
@@ -61,7 +62,8 @@ def campaign() -> None:
 @click.option("--keep-cases", is_flag=True, help="Keep the OpenFOAM case folders.")
 @click.option("--single-precision", is_flag=True,
               help="Store the records in float32, like the shipped fixtures (half the size).")
-@click.option("--timeout", default=6 * 3600.0, show_default=True, help="Seconds per case.")
+@click.option("--timeout", default=6 * 3600.0, show_default=True, type=POSITIVE,
+              help="Seconds per case.")
 @click.option("--dry-run", is_flag=True, help="List the cases and exit.")
 def run_cmd(case_file: Path, out_dir: Path, frequencies: str | None,
             heave_amplitudes: str | None, phases: str | None, mesh: str | None,
@@ -114,7 +116,7 @@ def status_cmd(out_dir: Path, as_json: bool) -> None:
 
     statuses = campaign_status(out_dir)
     if as_json:
-        click.echo(json.dumps([vars(s) for s in statuses], indent=2))
+        echo_json([vars(s) for s in statuses])
         return
     for s in statuses:
         click.echo(f"{s.state:8s} {s.case_id}  {s.message}")
@@ -164,11 +166,11 @@ def compare_cmd(folder_a: Path, folder_b: Path, start_s: float | None, end_s: fl
                                  case_ids)
         click.echo(f"wrote {len(written)} history figure(s) to {histories_dir}", err=True)
     if as_json:
-        click.echo(json.dumps({"cases": [{**asdict(c), "thrust_difference": c.thrust_difference,
-                                          "power_difference": c.power_difference,
-                                          "cpu_ratio": c.cpu_ratio} for c in result.cases],
-                               "summary": result.summary(), "only_a": result.only_a,
-                               "only_b": result.only_b}, indent=2))
+        echo_json({"cases": [{**asdict(c), "thrust_difference": c.thrust_difference,
+                              "power_difference": c.power_difference,
+                              "cpu_ratio": c.cpu_ratio} for c in result.cases],
+                   "summary": result.summary(), "only_a": result.only_a,
+                   "only_b": result.only_b})
         return
     width = max(len(c.case_id) for c in result.cases)
     click.echo(f"{'case':{width}s} {'F_n':>7s} {'F_t':>7s} {'M':>7s} {'thrust':>8s} "

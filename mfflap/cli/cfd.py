@@ -2,14 +2,19 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import click
 import numpy as np
 
-from mfflap.cli.options import mesh_and_setup_options, velocity_convection_option
+from mfflap.cli.json_output import echo_json
+from mfflap.cli.options import (
+    NON_NEGATIVE,
+    POSITIVE,
+    mesh_and_setup_options,
+    velocity_convection_option,
+)
 
 if TYPE_CHECKING:
     from mfflap.kinematics.continuous import TabulatedMotion
@@ -19,7 +24,7 @@ def _motion_table_options(note: str):
     """--motion-table and --end-time, for the commands that take any motion."""
     def decorate(command):
         command = click.option(
-            "--end-time", type=float, default=None,
+            "--end-time", type=POSITIVE, default=None,
             help="With --motion-table: simulated time, s (default: the table's last row).",
         )(command)
         return click.option(
@@ -41,8 +46,10 @@ def cfd() -> None:
 @click.argument("case_file", type=click.Path(dir_okay=False, path_type=Path))
 @click.argument("case_dir", type=click.Path(file_okay=False, path_type=Path))
 @mesh_and_setup_options()
-@click.option("--cycles", default=3.0, show_default=True, help="Carrier periods to simulate.")
-@click.option("--ramp-time", default=0.0, show_default=True, help="Smooth start-up ramp, s.")
+@click.option("--cycles", default=3.0, show_default=True, type=POSITIVE,
+              help="Carrier periods to simulate.")
+@click.option("--ramp-time", default=0.0, show_default=True, type=NON_NEGATIVE,
+              help="Smooth start-up ramp, s.")
 @click.option("--y-plus", is_flag=True, help="Add the yPlus function object.")
 @click.option("--far-field", type=click.Choice(["freestream", "inletOutlet"]), default=None,
               help="Far-field conditions (inletOutlet: for heaves much faster than the "
@@ -53,7 +60,7 @@ def cfd() -> None:
 @click.option("--turbulence-convection", type=click.Choice(["limitedLinear", "upwind"]),
               default=None, help="Convection of k and epsilon (upwind: no clipping of "
                                  "negative epsilon); default limitedLinear (or the set-up's).")
-@click.option("--max-courant", type=float, default=None,
+@click.option("--max-courant", type=POSITIVE, default=None,
               help="Courant limit of the adaptive time step; default 4 (or the set-up's).")
 @click.option("--outer-correctors", type=click.IntRange(min=1), default=None,
               help="PIMPLE outer iterations per time step (1: PISO); default 2 (or the "
@@ -158,11 +165,12 @@ def _warn_pitch_past_upright(motion: TabulatedMotion, motion_table: Path,
 
 @cfd.command()
 @click.argument("case_dir", type=click.Path(file_okay=False, exists=True, path_type=Path))
-@click.option("--timeout", default=3600.0, show_default=True, help="Seconds for pimpleFoam.")
+@click.option("--timeout", default=3600.0, show_default=True, type=POSITIVE,
+              help="Seconds for pimpleFoam.")
 @click.option("--procs", default=1, show_default=True, type=click.IntRange(min=1),
               help="MPI ranks: above 1 the case is decomposed once (method simple) and "
               "pimpleFoam runs under mpirun; a restart resumes from the processor folders.")
-@click.option("--progress-every", default=10.0, show_default=True,
+@click.option("--progress-every", default=10.0, show_default=True, type=NON_NEGATIVE,
               help="Seconds between progress lines on stderr (simulated time of the end "
               "time, time step, time left); 0: none.")
 @click.option("--json", "as_json", is_flag=True,
@@ -211,7 +219,7 @@ def run(case_dir: Path, timeout: float, procs: int, progress_every: float,
     summary["numerical_bursts"] = [b.describe()
                                    for b in find_numerical_bursts(history.time, signals)]
     if as_json:
-        click.echo(json.dumps(summary, indent=2))
+        echo_json(summary)
         return
     click.echo(f"finished {case_dir}: {summary['cpu_time_s']:.1f} s CPU, "
                f"{summary['n_time_steps']} time steps")
@@ -229,7 +237,7 @@ def run(case_dir: Path, timeout: float, procs: int, progress_every: float,
 @click.argument("source", type=click.Path(exists=True, path_type=Path))
 @click.option("--case-file", type=click.Path(dir_okay=False, path_type=Path), required=True,
               help="The case file whose [motion] the CFD case imposes.")
-@click.option("--discard", default=0.0, show_default=True,
+@click.option("--discard", default=0.0, show_default=True, type=NON_NEGATIVE,
               help="Seconds of start-up transient left out of the comparison.")
 @click.option("--fx", default="fx-plate", show_default=True,
               help="Fluent: report column of the x force.")
@@ -237,9 +245,9 @@ def run(case_dir: Path, timeout: float, procs: int, progress_every: float,
               help="Fluent: report column of the y force.")
 @click.option("--mz", default="mz-plate", show_default=True,
               help="Fluent: report column of the z moment about the origin.")
-@click.option("--depth", default=1.0, show_default=True,
+@click.option("--depth", default=1.0, show_default=True, type=POSITIVE,
               help="Fluent: depth the 2D forces are given for, m (Fluent 2D: 1 m).")
-@click.option("--ramp-time", type=float, default=None,
+@click.option("--ramp-time", type=NON_NEGATIVE, default=None,
               help="Start-up ramp of the case, s; default: the one it was written with "
                    "(an OpenFOAM case's mfflap_case.toml, the mfflap_fluent.toml `cfd "
                    "fluent` writes beside a UDF and its report file), else 0. A value "
@@ -306,7 +314,7 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
                    f"it (`mfflap cfd fluent` writes {FLUENT_KEPT_FILE} where the journal "
                    "makes Fluent write its report)", err=True)
     if as_json:
-        click.echo(json.dumps(out, indent=2, default=lambda o: np.asarray(o).tolist()))
+        echo_json(out)
     else:
         for k, v in out.items():
             if isinstance(v, dict):
@@ -320,9 +328,12 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
 @cfd.command()
 @click.argument("case_file", type=click.Path(dir_okay=False, exists=True, path_type=Path))
 @click.argument("out_dir", type=click.Path(file_okay=False, path_type=Path))
-@click.option("--cycles", default=3.0, show_default=True, help="Carrier periods to simulate.")
-@click.option("--ramp-time", default=0.0, show_default=True, help="Smooth start-up ramp, s.")
-@click.option("--time-step", default=1e-3, show_default=True, help="Fluent time step, s.")
+@click.option("--cycles", default=3.0, show_default=True, type=POSITIVE,
+              help="Carrier periods to simulate.")
+@click.option("--ramp-time", default=0.0, show_default=True, type=NON_NEGATIVE,
+              help="Smooth start-up ramp, s.")
+@click.option("--time-step", default=1e-3, show_default=True, type=POSITIVE,
+              help="Fluent time step, s.")
 @click.option("--table", is_flag=True, help="Table-driven UDF even for a sinusoid.")
 @_motion_table_options("A table-driven UDF; the table is kept beside it.")
 @click.option("--overwrite", is_flag=True,
@@ -359,13 +370,15 @@ def fluent(case_file: Path, out_dir: Path, cycles: float, ramp_time: float, time
                    "one.")
 @click.option("--time-step-mesh", default=None,
               help="The mesh repeated at the further Courant limits (default the first).")
-@click.option("--cycles", default=1.0, show_default=True, help="Carrier periods simulated.")
-@click.option("--ramp-time", default=None, type=float,
+@click.option("--cycles", default=1.0, show_default=True, type=POSITIVE,
+              help="Carrier periods simulated.")
+@click.option("--ramp-time", default=None, type=NON_NEGATIVE,
               help="Start-up ramp, s (default: a quarter period).")
-@click.option("--procs", default=1, show_default=True, help="MPI ranks per run.")
+@click.option("--procs", default=1, show_default=True, type=click.IntRange(min=1),
+              help="MPI ranks per run.")
 @click.option("--pressure-solver", type=click.Choice(["PCG", "GAMG"]), default="PCG",
               show_default=True, help="Linear solver of the pressure equation.")
-@click.option("--n-correctors", default=1, show_default=True,
+@click.option("--n-correctors", default=1, show_default=True, type=click.IntRange(min=1),
               help="PIMPLE pressure correctors per outer iteration.")
 @click.option("--far-field", type=click.Choice(["freestream", "inletOutlet"]),
               default="freestream", show_default=True,
@@ -472,7 +485,7 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: str, cycl
               g.gci_medium] for k, g in study.gci.items()]))
     rep.write(Path(out_dir) / "convergence.html")
     if as_json:
-        click.echo(json.dumps(study.as_dict(), indent=2))
+        echo_json(study.as_dict())
         return
     for k, v in runs.items():
         if v["numerical_bursts"]:
@@ -502,8 +515,10 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: str, cycl
 @click.option("--cases", "case_ids", default=None,
               help="Comma-separated case ids of the default motions (--list shows them).")
 @click.option("--list", "list_only", is_flag=True, help="List the motions and exit.")
-@click.option("--workers", default=1, show_default=True, help="LocalCluster worker processes.")
-@click.option("--timeout", default=3600.0, show_default=True, help="Seconds per case.")
+@click.option("--workers", default=1, show_default=True, type=click.IntRange(min=1),
+              help="LocalCluster worker processes.")
+@click.option("--timeout", default=3600.0, show_default=True, type=POSITIVE,
+              help="Seconds per case.")
 @click.option("--single-precision", is_flag=True, help="Store the records in float32.")
 @click.option("--json", "as_json", is_flag=True, help="Print the checks as JSON.")
 def linear_check(out_dir: Path, case_file: Path | None, mesh: str | None,
@@ -572,11 +587,11 @@ def linear_check(out_dir: Path, case_file: Path | None, mesh: str | None,
         plot_checks(summary / "normal_force.png", records, model, config.plate, config.fluid,
                     config.flow)
     if as_json:
-        click.echo(json.dumps({"checks": [asdict(c) for c in checks],
-                               "failed": {s.case_id: s.message for s in failed
-                                          if s.state == "failed"},
-                               "busy": {s.case_id: s.message for s in failed
-                                        if s.state == "busy"}}, indent=2))
+        echo_json({"checks": [asdict(c) for c in checks],
+                   "failed": {s.case_id: s.message for s in failed
+                              if s.state == "failed"},
+                   "busy": {s.case_id: s.message for s in failed
+                            if s.state == "busy"}})
     else:
         click.echo(summary_table(checks))
         for s in failed:  # failed, or busy: being run by another process
@@ -594,7 +609,8 @@ def linear_check(out_dir: Path, case_file: Path | None, mesh: str | None,
               help="The optimised motion of this β (from `mfflap optimise` or `mfflap run`).")
 @click.option("--best-sinusoid", is_flag=True,
               help="The best sinusoid of the sweep instead of an optimised motion.")
-@click.option("--cycles", default=3.0, show_default=True, help="Periods in the table.")
+@click.option("--cycles", default=3.0, show_default=True, type=POSITIVE,
+              help="Periods in the table.")
 @click.option("--rows-per-period", default=400, show_default=True,
               type=click.IntRange(min=8), help="Table rows per period.")
 def motion_table_cmd(results_file: Path, table_file: Path, beta: float | None,

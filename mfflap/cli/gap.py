@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import click
 import numpy as np
+
+from mfflap.cli.json_output import echo_json
+from mfflap.cli.options import NON_NEGATIVE, POSITIVE
 
 
 @click.group()
@@ -27,7 +29,7 @@ def gap() -> None:
 @click.option("--flow", "flow_dirs", multiple=True,
               help="CASE=DIR: an OpenFOAM case folder with written fields for record CASE; the "
                    "report shows its vorticity where the model misses most.")
-@click.option("--discard", default=None, type=float,
+@click.option("--discard", default=None, type=NON_NEGATIVE,
               help="Start-up time left out, s (default: the case's identification.discard_time).")
 @click.option("--alpha", default=0.01, show_default=True, help="Significance level.")
 @click.option("--min-gain", default=0.02, show_default=True,
@@ -87,21 +89,19 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
     html = gap_report(report_path or output.with_suffix(".html"), diag, where,
                       ", ".join(sources), snapshots)
     if as_json:
-        click.echo(json.dumps({"verdict": diag.verdict,
-                               "chosen": diag.chosen.label if diag.chosen else None,
-                               "ranking": [[s.label, s.gain, s.p_value] for s in diag.scores],
-                               "candidates": [
-                                   {"label": s.label, "heldout_gain": s.gain,
-                                    "p_value": s.p_value, "significant": s.significant,
-                                    "coefficients": s.coefficients,
-                                    "held_coefficients": s.held_coefficients,
-                                    # an exact dependence (inf) as null: JSON has no inf
-                                    "variance_inflation": {
-                                        n: v if np.isfinite(v) else None
-                                        for n, v in s.variance_inflation.items()},
-                                    "confounded_with": s.confounded_with}
-                                   for s in diag.scores],
-                               "validation": diag.validation}, indent=2))
+        echo_json({"verdict": diag.verdict,
+                   "chosen": diag.chosen.label if diag.chosen else None,
+                   "ranking": [[s.label, s.gain, s.p_value] for s in diag.scores],
+                   "candidates": [
+                       {"label": s.label, "heldout_gain": s.gain,
+                        "p_value": s.p_value, "significant": s.significant,
+                        "coefficients": s.coefficients,
+                        "held_coefficients": s.held_coefficients,
+                        # an exact dependence (inf) is printed as null
+                        "variance_inflation": s.variance_inflation,
+                        "confounded_with": s.confounded_with}
+                       for s in diag.scores],
+                   "validation": diag.validation})
         return
     click.echo(diag.verdict)
     for name, share in where["ranking"][:5]:
@@ -110,8 +110,9 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
 
 
 @gap.command("blindtest")
-@click.option("--trials", default=70, show_default=True)
-@click.option("--snr", default=3.0, show_default=True, help="Signal-to-noise ratio.")
+@click.option("--trials", default=70, show_default=True, type=click.IntRange(min=1))
+@click.option("--snr", default=3.0, show_default=True, type=POSITIVE,
+              help="Signal-to-noise ratio.")
 @click.option("--seed", default=0, show_default=True)
 @click.option("--json", "as_json", is_flag=True)
 def blindtest_cmd(trials: int, snr: float, seed: int, as_json: bool) -> None:
@@ -124,11 +125,11 @@ def blindtest_cmd(trials: int, snr: float, seed: int, as_json: bool) -> None:
     result = blind_test(trials, snr, seed, progress=lambda done, total: bar.update())
     bar.close()
     if as_json:
-        click.echo(json.dumps({"attribution_accuracy": result.attribution_accuracy,
-                               "null_correct": result.null_correct,
-                               "mean_heldout_gain": result.mean_gain,
-                               "coefficient_error": result.coefficient_error,
-                               "labels": result.labels,
-                               "confusion": result.confusion().tolist()}, indent=2))
+        echo_json({"attribution_accuracy": result.attribution_accuracy,
+                   "null_correct": result.null_correct,
+                   "mean_heldout_gain": result.mean_gain,
+                   "coefficient_error": result.coefficient_error,
+                   "labels": result.labels,
+                   "confusion": result.confusion().tolist()})
         return
     click.echo(result.summary())

@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import click
+import numpy as np
+
+from mfflap.cli.json_output import echo_json
 
 
 def _strategies(names: tuple[str, ...], weights: str | None, case) -> list:
@@ -36,6 +38,7 @@ def _strategies(names: tuple[str, ...], weights: str | None, case) -> list:
               help="Fitted components, comma-separated (default normal_force,"
                    "tangential_force,moment).")
 @click.option("--bootstrap", "n_bootstrap", default=200, show_default=True,
+              type=click.IntRange(min=0),
               help="Case-bootstrap replicates.")
 @click.option("--output", type=click.Path(dir_okay=False, path_type=Path),
               default=Path("identification.h5"), show_default=True, help="HDF5 results.")
@@ -69,11 +72,12 @@ def identify(case_file: Path, folders: tuple[Path, ...], strategies: tuple[str, 
         for label, r in results.items()
     }
     if as_json:
-        click.echo(json.dumps(summary, indent=2))
+        echo_json(summary)
         return
     click.echo(f"{len(cases)} cases from {sources_shown(folders)}; {len(excluded)} left out")
     for label, r in results.items():
-        coeffs = "  ".join(f"{n} = {v:.3f} ± {r.standard_error[n]:.3f}"
+        coeffs = "  ".join(f"{n} = {v:.3f}" + (f" ± {r.standard_error[n]:.3f}"
+                                                 if np.isfinite(r.standard_error[n]) else "")
                            for n, v in r.coefficients.items())
         click.echo(f"{label:8s} {coeffs}")
     click.echo(f"wrote {output}")

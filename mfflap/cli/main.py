@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 
 import click
 import numpy as np
 
+from mfflap.cli.json_output import echo_json
 from mfflap.errors import MfflapError
 
 
@@ -53,9 +53,6 @@ def _register_subgroups() -> None:
     cli.add_command(gap)
 
 
-def _echo_json(data) -> None:
-    click.echo(json.dumps(data, indent=2, default=lambda o: np.asarray(o).tolist()))
-
 
 @cli.command()
 @click.argument("case_file", type=click.Path(dir_okay=False, path_type=Path))
@@ -82,7 +79,7 @@ def evaluate(case_file: Path, as_json: bool, figure: Path | None, output: Path |
     if output is not None:
         result.save(output)
     if as_json:
-        _echo_json({"case": str(case_file), "scheme": result.scheme, **result.summary_dict(),
+        echo_json({"case": str(case_file), "scheme": result.scheme, **result.summary_dict(),
                     "figure": str(figure)})
         return
     click.echo(f"case {case_file} ({result.description}, scheme {result.scheme})")
@@ -124,7 +121,7 @@ def gradcheck(case_file: Path, n_steps: int, as_json: bool, figure: Path | None)
     figure = figure or case_file.with_suffix(".gradcheck.png")
     scatter_figure(checks).savefig(figure, dpi=120)
     if as_json:
-        _echo_json({str(b): c.as_dict() for b, c in checks.items()} | {"figure": str(figure)})
+        echo_json({str(b): c.as_dict() for b, c in checks.items()} | {"figure": str(figure)})
         return
     for beta, c in checks.items():
         ok = "ok" if c.max_rel_error_complex_step <= 1e-10 else "FAILED"

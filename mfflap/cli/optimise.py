@@ -2,16 +2,17 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import click
+
+from mfflap.cli.json_output import echo_json
 
 
 @click.command()
 @click.argument("case_file", type=click.Path(dir_okay=False, exists=True, path_type=Path))
 @click.option("--betas", default=None, help="Comma-separated betas (default: the case's).")
-@click.option("--starts", default=3, show_default=True,
+@click.option("--starts", default=3, show_default=True, type=click.IntRange(min=1),
               help="Multi-start: best sinusoid plus points along the Pareto front.")
 @click.option("--ipopt/--no-ipopt", default=True, show_default=True,
               help="Also solve the hard-constrained problem with IPOPT.")
@@ -60,9 +61,8 @@ def optimise(case_file: Path, betas: str | None, starts: int, ipopt: bool, gain_
                       "converged": r.converged, "flags": r.flags}
            for b, r in study.sqp.items()}
     if as_json:
-        click.echo(json.dumps({"optimised": out, "thrust_gain_beta0": study.thrust_gain,
-                               "thrust_gain_beta0_refined": study.thrust_gain_refined},
-                              indent=2))
+        echo_json({"optimised": out, "thrust_gain_beta0": study.thrust_gain,
+                   "thrust_gain_beta0_refined": study.thrust_gain_refined})
         return
     for b, r in study.sqp.items():
         s = r.summary

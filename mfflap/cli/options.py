@@ -1,5 +1,6 @@
 """Command-line options that several commands share."""
 
+import math
 from collections.abc import Callable
 
 import click
@@ -10,6 +11,43 @@ MESH_NAMES = ("coarse | lean | medium | medium_r20 | fine | graded | medium_edge
 #: The U convection schemes of the case template (writer.VELOCITY_CONVECTION_SCHEMES), named
 #: here so that the command line does not import the writer to build its help
 VELOCITY_CONVECTION_NAMES = ("linearUpwind", "LUST")
+
+
+
+class FiniteFloat(click.ParamType):
+    """A finite number above a bound (a time, a number of periods), refused with the option's
+    name otherwise: ``inf`` and ``nan`` pass click's own FloatRange.
+
+    Parameters
+    ----------
+    minimum
+        The bound.
+    inclusive
+        Whether the bound itself is allowed.
+    """
+
+    name = "float"
+
+    def __init__(self, minimum: float = 0.0, inclusive: bool = False) -> None:
+        self.minimum, self.inclusive = minimum, inclusive
+
+    def convert(self, value, param, ctx) -> float:
+        try:
+            number = float(value)
+        except (TypeError, ValueError):
+            self.fail(f"{value!r} is not a number", param, ctx)
+        above = number >= self.minimum if self.inclusive else number > self.minimum
+        if not (math.isfinite(number) and above):
+            relation = ">=" if self.inclusive else ">"
+            self.fail(f"must be a finite number {relation} {self.minimum:g}, got {value}",
+                      param, ctx)
+        return number
+
+
+#: a finite number > 0: a time span, a number of periods, a time step
+POSITIVE = FiniteFloat()
+#: a finite number >= 0: a start-up ramp, a time discarded
+NON_NEGATIVE = FiniteFloat(inclusive=True)
 
 #: ``--velocity-convection``: a set-up's convection scheme of U swapped
 velocity_convection_option = click.option(

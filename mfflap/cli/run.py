@@ -6,6 +6,8 @@ from pathlib import Path
 
 import click
 
+from mfflap.cli.json_output import echo_json
+
 
 @click.command("run")
 @click.argument("case_file", type=click.Path(dir_okay=False, exists=True, path_type=Path))
@@ -22,7 +24,8 @@ import click
 @click.option("--coefficients", default="case", show_default=True,
               help="Model coefficients for the optimisation: 'case' or "
                    "'identified:<uniform|low|high>'.")
-@click.option("--starts", default=3, show_default=True, help="Multi-start points per beta.")
+@click.option("--starts", default=3, show_default=True, type=click.IntRange(min=1),
+              help="Multi-start points per beta.")
 @click.option("--gain-table/--no-gain-table", default=True, show_default=True,
               help="Tabulate the beta = 0 gain against N and the smoothing weights.")
 @click.option("--no-ipopt", is_flag=True, help="Skip the hard-constrained IPOPT comparison.")
@@ -61,9 +64,8 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
                       "written times" if live else ""), err=True)
         raise click.Abort()
     if as_json:
-        import json
 
-        click.echo(json.dumps(run_summary(outcome), indent=2, default=float))
+        echo_json(run_summary(outcome))
         return
     click.echo(f"wrote {out_dir / 'report.html'} and {out_dir / 'results.h5'}")
     if outcome.problems:

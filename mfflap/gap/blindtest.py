@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from mfflap.campaign.cases import CfdCase
+from mfflap.errors import ConfigError
 from mfflap.gap.diagnose import default_candidates, diagnose
 from mfflap.gap.system import COMPONENTS
 from mfflap.hydro.loads import Loads
@@ -174,7 +175,19 @@ class BlindTestResult:
 def blind_test(n_trials: int = 70, snr: float = 3.0, seed: int = 0,
                null_share: float = 0.3, effects: Sequence[str] | None = None,
                progress: Callable[[int, int], None] | None = None) -> BlindTestResult:
-    """Run the blind benchmark; the diagnosis never sees which effect was hidden."""
+    """Run the blind benchmark; the diagnosis never sees which effect was hidden.
+
+    Raises
+    ------
+    ConfigError
+        If ``n_trials`` is below 1 or ``snr`` is not a finite number > 0.
+    """
+    if n_trials < 1:
+        raise ConfigError(f"the blind test needs at least one trial, got {n_trials!r}",
+                          key="n_trials")
+    if not (np.isfinite(snr) and snr > 0):
+        raise ConfigError(f"the signal-to-noise ratio must be a finite number > 0, got "
+                          f"{snr!r}", key="snr")
     rng = np.random.default_rng(seed)
     names = list(effects or default_candidates())
     result = BlindTestResult([*names, NULL], snr=snr)

@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.stats import wilcoxon
 
+from mfflap.errors import ConfigError
 from mfflap.gap.candidates import CandidateEffect, FlowContext, load_all
 from mfflap.gap.system import COMPONENTS, GapSystem, group_folds
 from mfflap.hydro.base import ForceModel
@@ -181,7 +182,18 @@ def diagnose(cases: Sequence[CaseData], base_model: ForceModel,
     validate_by
         Case parameters for leave-one-group-out validation of the chosen effect (e.g.
         leave-one-frequency-out).
+
+    Raises
+    ------
+    ConfigError
+        If ``alpha`` is not in (0, 1) or ``min_gain`` is negative.
     """
+    if not 0 < alpha < 1:
+        raise ConfigError(f"the significance level must be in (0, 1), got {alpha!r}",
+                          key="alpha")
+    if not (np.isfinite(min_gain) and min_gain >= 0):
+        raise ConfigError(f"the smallest error reduction worth claiming must be a finite "
+                          f"share >= 0, got {min_gain!r}", key="min_gain")
     candidates = candidates or default_candidates(context)
     system = system or GapSystem.build(cases, base_model.terms, list(candidates.values()))
     folds = group_folds(range(len(system.cases)), n_folds, seed)

@@ -172,12 +172,16 @@ def identify(cases: Sequence[CaseData], model: ForceModel,
     fixed
         Coefficients held at the given values.
     n_bootstrap
-        Stratified case-bootstrap replicates (0 for none).
+        Stratified case-bootstrap replicates (0 for none). Below 2 the fitted coefficients'
+        standard errors and intervals are NaN: not estimated (a fixed coefficient's are 0).
     excluded
         Cases already left out (e.g. failed CFD), carried into the result and the report.
     """
     if not cases:
         raise MfflapError("no usable CFD cases to identify from")
+    if n_bootstrap < 0:
+        raise ConfigError(f"n_bootstrap must be >= 0 (0: none), got {n_bootstrap!r}",
+                          key="n_bootstrap")
     bad = [k for k in components if k not in COMPONENTS]
     if bad or not components:
         raise ConfigError(f"cannot fit components {bad or '(none)'}; choose from "
@@ -210,8 +214,9 @@ def identify(cases: Sequence[CaseData], model: ForceModel,
             boot[b] = np.nan
     coeffs = {**dict(zip(fitted, x.tolist(), strict=True)), **fixed}
     coeffs = {n: coeffs[n] for n in names}
-    se = {n: 0.0 for n in names}
-    interval = {n: (coeffs[n], coeffs[n]) for n in names}
+    se = {n: 0.0 if n in fixed else float("nan") for n in names}
+    interval = {n: (coeffs[n], coeffs[n]) if n in fixed else (float("nan"), float("nan"))
+                for n in names}
     if n_bootstrap > 1:
         for j, n in enumerate(fitted):
             col = boot[:, j][np.isfinite(boot[:, j])]

@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from mfflap.config import CaseConfig, OptimisationSettings
+from mfflap.errors import ConfigError
 from mfflap.kinematics.convert import harmonic_to_discrete, resample
 from mfflap.kinematics.discrete import DiscreteMotion
 from mfflap.optimisation.optimise import (
@@ -111,9 +112,20 @@ class BetaStudy:
 def beta_study(config: CaseConfig, betas: Sequence[float] | None = None, n_starts: int = 3,
                with_ipopt: bool = True, model=None, sweep: SweepResult | None = None,
                progress: Progress | None = None) -> BetaStudy:
-    """Best feasible sinusoid, then multi-start SQP (and IPOPT) for each beta."""
+    """Best feasible sinusoid, then multi-start SQP (and IPOPT) for each beta.
+
+    Raises
+    ------
+    ConfigError
+        Before any work, if a beta is outside [0, 1] or ``n_starts`` is below 1.
+    """
     o = config.optimisation
     model = model or config.morison_model()
+    if n_starts < 1:
+        raise ConfigError(f"n_starts must be >= 1 (the best sinusoid is the first start), got "
+                          f"{n_starts!r}", key="n_starts")
+    problems = {beta: problem_for(config, beta, model)
+                for beta in (betas if betas is not None else o.betas)}
     sweep = sweep if sweep is not None else default_sweep(config, model, progress)
     best = sweep.best_feasible()
     starts = starting_points(sweep, o.n_steps, n_starts)
@@ -124,8 +136,7 @@ def beta_study(config: CaseConfig, betas: Sequence[float] | None = None, n_start
                  f"{refined.heave_amplitude:.4g} m, mean thrust {refined.mean_thrust:.4g} N "
                  f"(grid {refined.grid_thrust:.4g} N)")
     sqp, sqp_all, ipopt = {}, {}, {}
-    for beta in betas if betas is not None else o.betas:
-        problem = problem_for(config, beta, model)
+    for beta, problem in problems.items():
         sqp[beta], sqp_all[beta] = multistart(problem, starts, min_period=o.min_period,
                                               max_period=o.max_period, progress=progress)
         if with_ipopt:

@@ -172,11 +172,15 @@ def strategy_error_figure(results: Mapping[str, IdentificationResult],
 
 
 def _coefficient_rows(results: Mapping[str, IdentificationResult]) -> list[list[object]]:
+    """A row per strategy and term; a spread not estimated (no bootstrap) is a dash."""
+    def shown(value: float) -> float | None:
+        return float(value) if np.isfinite(value) else None
+
     rows = []
     for label, res in results.items():
         for n, v in res.coefficients.items():
             lo, hi = res.interval[n]
-            rows.append([label, n, float(v), float(res.standard_error[n]), float(lo), float(hi)])
+            rows.append([label, n, float(v), shown(res.standard_error[n]), shown(lo), shown(hi)])
     return rows
 
 
@@ -203,6 +207,11 @@ def add_identification_sections(rep: Report, results: Mapping[str, Identificatio
                                 "97.5 %"], _coefficient_rows(results)))
     s.blocks.append(figure_html(coefficient_figure(results),
                                 "Coefficients and bootstrap 95 % intervals per strategy"))
+    if any(not np.isfinite(r.standard_error[n]) for r in results.values()
+           for n in r.fitted_terms):
+        s.blocks.append(text_html("The identification ran without bootstrap replicates (fewer "
+                                  "than 2): the coefficients' uncertainty is not estimated.",
+                                  warn=True))
     n_per_f = {}
     for p in first.case_parameters:
         n_per_f[p.get("frequency")] = n_per_f.get(p.get("frequency"), 0) + 1

@@ -12,7 +12,7 @@ import numpy as np
 from mfflap.cfd import templates
 from mfflap.cfd.case_inputs import recorded_inputs
 from mfflap.cfd.frames import case_displacement, case_rotation_deg
-from mfflap.cfd.openfoam.loads import check_ramp_time, imposed_state
+from mfflap.cfd.openfoam.loads import check_end_time, check_ramp_time, imposed_state
 from mfflap.errors import ConfigError, MotionError
 from mfflap.kinematics.continuous import HarmonicMotion, Motion, RampHarmonicMotion
 from mfflap.parameters import Fluid, FreeStream, Plate
@@ -81,8 +81,7 @@ def analytic_udf(motion: HarmonicMotion | RampHarmonicMotion, ramp_time: float =
 def velocity_table(motion: Motion, end_time: float, rows_per_second: float = 2000.0,
                    ramp_time: float = 0.0) -> np.ndarray:
     """Rows (t, heave velocity, pitch rate) of the imposed motion from 0 to 1.1 end_time."""
-    if not end_time > 0:
-        raise MotionError(f"end_time must be > 0 s, got {end_time!r}")
+    end_time = check_end_time(end_time)
     t = np.linspace(0.0, 1.1 * end_time, max(int(1.1 * end_time * rows_per_second), 8) + 1)
     s = imposed_state(motion, t, ramp_time).check_finite("UDF table")
     return np.column_stack([t, s.heave_velocity, s.pitch_rate])
@@ -165,6 +164,10 @@ def write_fluent_case(folder: str | Path, motion: Motion, end_time: float, *,
         If ``folder`` holds the report file of an earlier run and ``overwrite`` is not set.
     """
     plate, fluid = plate or Plate(), fluid or Fluid()
+    end_time = check_end_time(end_time)
+    if not (math.isfinite(time_step) and time_step > 0):
+        raise ConfigError(f"time_step must be a finite time > 0 s, got {time_step!r}",
+                          key="time_step")
     folder = Path(folder)
     report = folder / REPORT_FILE
     if report.exists() and not overwrite:

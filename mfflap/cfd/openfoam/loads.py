@@ -11,7 +11,7 @@ from mfflap.cfd.frames import (
     plate_frame_force_to_model,
 )
 from mfflap.cfd.openfoam.forces import ForceHistory
-from mfflap.errors import ConfigError, ParseError
+from mfflap.errors import ConfigError, MotionError, ParseError
 from mfflap.hydro.loads import Loads
 from mfflap.kinematics.continuous import Motion
 from mfflap.kinematics.state import KinematicState
@@ -29,6 +29,20 @@ def check_ramp_time(ramp_time: float) -> float:
     if not (np.isfinite(value) and value >= 0):
         raise ConfigError(f"the start-up ramp must be a finite time >= 0 s (0: none), got "
                           f"{ramp_time!r}", key="ramp_time")
+    return value
+
+
+def check_end_time(end_time: float) -> float:
+    """``end_time``, the simulated time of a CFD run, as a float, s.
+
+    Raises
+    ------
+    MotionError
+        If it is not a finite time > 0 s (a run of zero, negative or endless length).
+    """
+    value = float(end_time)
+    if not (np.isfinite(value) and value > 0):
+        raise MotionError(f"end_time must be a finite time > 0 s, got {end_time!r}")
     return value
 
 

@@ -20,7 +20,7 @@ from pathlib import Path
 from mfflap.cfd.openfoam.case_lock import case_lock, held_descriptor
 from mfflap.cfd.openfoam.case_path import check_case_path
 from mfflap.cfd.openfoam.release import require_supported_release
-from mfflap.errors import CfdRunError
+from mfflap.errors import CfdRunError, ConfigError
 
 # Crash and divergence signatures (not the banner's "Floating point exception trapping
 # enabled"): NaN residuals, the sigFpe handler's stack trace, fatal errors.
@@ -251,7 +251,8 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
     ------
     ConfigError
         Before it starts, if the case's path holds characters OpenFOAM strips
-        (:func:`~mfflap.cfd.openfoam.case_path.check_case_path`).
+        (:func:`~mfflap.cfd.openfoam.case_path.check_case_path`), or ``timeout_s`` is not a
+        finite time > 0 s.
     CfdRunError
         Before it starts, if the OpenFOAM on PATH is of the openfoam.org line, whose cases
         differ from the ones mfflap writes (:mod:`mfflap.cfd.openfoam.release`). On a
@@ -260,6 +261,9 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
         log's tail.
     """
     case_dir = check_case_path(case_dir)
+    if not (math.isfinite(timeout_s) and timeout_s > 0):
+        raise ConfigError(f"the time limit of {application} must be a finite time > 0 s, "
+                          f"got {timeout_s!r}", key="timeout_s")
     _raise_if_stopped(case_dir, application)
     require_supported_release(str(case_dir))  # openfoam.com's line, not openfoam.org's
     if not openfoam_available():

@@ -29,13 +29,13 @@ from mfflap.cfd.frames import FRAMES, case_displacement, case_rotation_deg
 from mfflap.cfd.openfoam.case_path import prepare_case_folder
 from mfflap.cfd.openfoam.cell_counts import check_cell_counts
 from mfflap.cfd.openfoam.h_grid import HGridSpec
-from mfflap.cfd.openfoam.loads import imposed_state
+from mfflap.cfd.openfoam.loads import check_end_time, imposed_state
 from mfflap.cfd.openfoam.plate_frame import (
     format_acceleration_table,
     format_function1_table,
     plate_frame_tables,
 )
-from mfflap.errors import ConfigError, MotionError
+from mfflap.errors import ConfigError
 from mfflap.kinematics.continuous import Motion
 from mfflap.parameters import Fluid, FreeStream, Plate
 from mfflap.toml_io import read_toml
@@ -210,9 +210,7 @@ class SolverSettings:
 
 def table_times(end_time: float, rows_per_second: float = 400.0) -> np.ndarray:
     """Times of the motion tables, s: from 0 to 10 % (+ 0.05 s) past ``end_time``."""
-    if not end_time > 0:
-        raise MotionError(f"end_time must be > 0 s, got {end_time!r}")
-    t_end = 1.1 * end_time + 0.05
+    t_end = 1.1 * check_end_time(end_time) + 0.05
     n = max(math.ceil(t_end * rows_per_second), 8)
     return np.linspace(0.0, t_end, n + 1)
 

@@ -1,0 +1,213 @@
+"""Impossible numbers on the command line and in the library are refused before any work,
+by the option's or key's name; ``--json`` output is strict JSON."""
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from mfflap.campaign.cases import grid_cases
+from mfflap.campaign.execute import CampaignSetup, run_campaign
+from mfflap.campaign.records import CfdRecord
+from mfflap.cfd.fluent.udf import write_fluent_case
+from mfflap.cfd.openfoam.loads import check_end_time
+from mfflap.cfd.openfoam.runner import run_application
+from mfflap.cfd.openfoam.writer import table_times
+from mfflap.cli.json_output import strict_json_value
+from mfflap.cli.main import cli
+from mfflap.config import IdentificationGrid, load_case
+from mfflap.errors import ConfigError, MotionError
+from mfflap.gap.blindtest import NULL, blind_test, synthesize
+from mfflap.gap.diagnose import diagnose
+from mfflap.hydro import MorisonModel
+from mfflap.hydro.loads import Loads
+from mfflap.identification import identify, prepare_cases
+from mfflap.kinematics.continuous import HarmonicMotion
+from mfflap.optimisation.study import beta_study
+
+CASE = Path(__file__).parents[1] / "cases" / "paper2026.toml"
+
+
+def _strict_loads(text: str):
+    """json.loads that refuses NaN and Infinity, as jq and JavaScript do."""
+    def refuse(word):
+        raise ValueError(f"not JSON: {word}")
+    return json.loads(text, parse_constant=refuse)
+
+
+# (command after `mfflap`, with OUT as the folder it would write, the option refused, and
+# the words of click's message)
+REFUSED = [
+    (["cfd", "write", str(CASE), "OUT", "--cycles", "0"], "--cycles", "finite number > 0"),
+    (["cfd", "write", str(CASE), "OUT", "--cycles", "inf"], "--cycles", "finite number > 0"),
+    (["cfd", "write", str(CASE), "OUT", "--cycles", "nan"], "--cycles", "finite number > 0"),
+    (["cfd", "write", str(CASE), "OUT", "--cycles", "three"], "--cycles", "is not a number"),
+    (["cfd", "write", str(CASE), "OUT", "--ramp-time", "-1"], "--ramp-time",
+     "finite number >= 0"),
+    (["cfd", "write", str(CASE), "OUT", "--max-courant", "nan"], "--max-courant",
+     "finite number > 0"),
+    (["cfd", "fluent", str(CASE), "OUT", "--time-step", "0"], "--time-step",
+     "finite number > 0"),
+    (["cfd", "fluent", str(CASE), "OUT", "--cycles", "0"], "--cycles", "finite number > 0"),
+    (["cfd", "convergence", str(CASE), "OUT", "--procs", "0"], "--procs", "x>=1"),
+    (["cfd", "convergence", str(CASE), "OUT", "--cycles", "inf"], "--cycles",
+     "finite number > 0"),
+    (["campaign", "run", str(CASE), "--out", "OUT", "--workers", "0"], "--workers", "x>=1"),
+    (["campaign", "run", str(CASE), "--out", "OUT", "--timeout", "-5"], "--timeout",
+     "finite number > 0"),
+    (["optimise", str(CASE), "--starts", "0", "--output", "OUT/o.h5"], "--starts", "x>=1"),
+    (["run", str(CASE), "--out", "OUT", "--starts", "0"], "--starts", "x>=1"),
+    (["identify", str(CASE), "--bootstrap", "-1", "--output", "OUT/i.h5"], "--bootstrap",
+     "x>=0"),
+    (["gap", "blindtest", "--trials", "0"], "--trials", "x>=1"),
+    (["gap", "blindtest", "--snr", "nan"], "--snr", "finite number > 0"),
+]
+
+
+@pytest.mark.parametrize(("args", "option", "words"), REFUSED,
+                         ids=[" ".join(a[:2] + a[-2:]) for a, _, _ in REFUSED])
+def test_an_impossible_option_is_refused_by_name_before_anything_is_written(
+        tmp_path, args, option, words):
+    out = tmp_path / "out"
+    args = [str(a).replace("OUT", str(out)) for a in args]
+    res = CliRunner().invoke(cli, args)
+    assert res.exit_code == 2, res.output
+    assert f"Invalid value for '{option}'" in res.output and words in res.output
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("end_time", [0.0, -1.0, math.inf, math.nan])
+def test_a_run_of_no_or_endless_length_is_refused(tmp_path, end_time):
+    with pytest.raises(MotionError, match="end_time must be a finite time > 0 s"):
+        check_end_time(end_time)
+    with pytest.raises(MotionError, match="end_time must be a finite time > 0 s"):
+        table_times(end_time)
+    # the analytic UDF of a sinusoid does not tabulate the motion: it used to write a
+    # journal of one time step for end_time 0, and divide by a time step of 0
+    motion = HarmonicMotion(1.0, 0.3, 0.3, np.pi / 2)
+    with pytest.raises(MotionError, match="end_time"):
+        write_fluent_case(tmp_path / "udf", motion, end_time)
+    assert not (tmp_path / "udf").exists()
+    assert check_end_time(2) == 2.0
+
+
+@pytest.mark.parametrize("time_step", [0.0, -1e-3, math.nan, math.inf])
+def test_a_fluent_time_step_that_is_not_a_finite_positive_time_is_refused(tmp_path,
+                                                                        time_step):
+    motion = HarmonicMotion(1.0, 0.3, 0.3, np.pi / 2)
+    with pytest.raises(ConfigError, match="time_step must be a finite time > 0 s") as err:
+        write_fluent_case(tmp_path / "udf", motion, 1.0, time_step=time_step)
+    assert err.value.key == "time_step"
+    assert not (tmp_path / "udf").exists()
+
+
+def test_an_impossible_beta_or_no_start_is_refused_before_the_sweep():
+    case = load_case(CASE)
+    said = []
+    with pytest.raises(ConfigError, match=r"value 2.0 is not allowed; allowed: \[0, 1\]"):
+        beta_study(case, [0.0, 2.0], n_starts=1, with_ipopt=False, progress=said.append)
+    with pytest.raises(ConfigError, match="n_starts must be >= 1") as err:
+        beta_study(case, [0.0], n_starts=0, with_ipopt=False, progress=said.append)
+    assert err.value.key == "n_starts"
+    assert said == []  # neither the sweep nor the refined sinusoid ran
+
+
+def _model_records(rng: np.random.Generator) -> list[CfdRecord]:
+    """Forces of the Morison model itself, with 5 % noise, on nine cases of the grid."""
+    model = MorisonModel()
+    records = []
+    for c in grid_cases(IdentificationGrid(), frequencies=[0.5, 1.0, 2.0],
+                        heave_amplitudes=[0.1, 0.3, 0.5], phases_deg=[90]):
+        t = np.linspace(0.0, c.duration, 400)
+        state = c.motion().sample(t)
+        clean = model.loads(state)
+        loads = Loads(*(t, *(a + 0.05 * np.std(a) * rng.standard_normal(a.shape) for a in
+                             (clean.normal_force, clean.tangential_force, clean.moment))))
+        records.append(CfdRecord(c.case_id, state, loads, c.as_dict()))
+    return records
+
+
+def test_without_bootstrap_the_spread_is_not_estimated_rather_than_zero():
+    cases, _ = prepare_cases(_model_records(np.random.default_rng(3)))
+    res = identify(cases, MorisonModel(), fixed={"tangential_drag": 4.0}, n_bootstrap=0)
+    for name in res.fitted_terms:
+        assert math.isnan(res.standard_error[name])
+        assert all(math.isnan(v) for v in res.interval[name])
+    assert res.standard_error["tangential_drag"] == 0.0  # fixed: known exactly
+    assert res.interval["tangential_drag"] == (4.0, 4.0)
+    with pytest.raises(ConfigError, match="n_bootstrap must be >= 0") as err:
+        identify(cases, MorisonModel(), n_bootstrap=-1)
+    assert err.value.key == "n_bootstrap"
+
+
+def test_identify_without_bootstrap_prints_strict_json_and_no_false_zero(tmp_path):
+    out = tmp_path / "i.h5"
+    runner = CliRunner()
+    res = runner.invoke(cli, ["identify", str(CASE), "--bootstrap", "0", "--strategy",
+                              "uniform", "--output", str(out), "--json"])
+    assert res.exit_code == 0, res.output
+    summary = _strict_loads(res.output)["uniform"]
+    assert set(summary["standard_error"]) == set(summary["coefficients"])
+    assert all(v is None for v in summary["standard_error"].values())
+    text = runner.invoke(cli, ["identify", str(CASE), "--bootstrap", "0", "--strategy",
+                               "uniform", "--output", str(out)])
+    assert text.exit_code == 0, text.output
+    assert "normal_drag = " in text.output and "±" not in text.output
+    html = tmp_path / "i.html"
+    rep = runner.invoke(cli, ["report", "identification", str(out), "--out", str(html)])
+    assert rep.exit_code == 0, rep.output
+    page = html.read_text()
+    assert "uncertainty is not estimated" in page and ">nan<" not in page
+
+
+def test_strict_json_value_makes_every_non_finite_number_null():
+    value = {"a": math.nan, "b": [1.0, math.inf, np.float64(-np.inf)], "c": np.array(
+        [[0.5, np.nan]]), "d": (np.int64(3), "x", None, True), "e": {"f": np.float32(2.5)}}
+    plain = strict_json_value(value)
+    assert plain == {"a": None, "b": [1.0, None, None], "c": [[0.5, None]],
+                     "d": [3, "x", None, True], "e": {"f": 2.5}}
+    json.dumps(plain, allow_nan=False)  # raises on any NaN left
+
+
+def test_blind_test_and_diagnosis_refuse_impossible_settings():
+    with pytest.raises(ConfigError, match="at least one trial") as err:
+        blind_test(0)
+    assert err.value.key == "n_trials"
+    for snr in (0.0, -3.0, math.nan, math.inf):
+        with pytest.raises(ConfigError, match="signal-to-noise ratio") as err:
+            blind_test(2, snr)
+        assert err.value.key == "snr"
+    data = synthesize(np.random.default_rng(5), NULL, 0.0)
+    for alpha in (0.0, 1.0, 2.0, math.nan):
+        with pytest.raises(ConfigError, match="significance level must be in") as err:
+            diagnose(data, MorisonModel(), alpha=alpha)
+        assert err.value.key == "alpha"
+    for gain in (-0.1, math.nan):
+        with pytest.raises(ConfigError, match="error reduction worth claiming") as err:
+            diagnose(data, MorisonModel(), min_gain=gain)
+        assert err.value.key == "min_gain"
+
+
+def test_a_campaign_without_workers_or_time_is_refused_before_its_folder_is_made(tmp_path):
+    cases = grid_cases(IdentificationGrid(), frequencies=[1.0], heave_amplitudes=[0.3],
+                       phases_deg=[90])
+    with pytest.raises(ConfigError, match="at least one worker") as err:
+        run_campaign(cases, tmp_path / "c", n_workers=0, progress=False)
+    assert err.value.key == "n_workers"
+    for timeout in (0.0, -5.0, math.nan, math.inf):
+        with pytest.raises(ConfigError, match="time limit per case") as err:
+            run_campaign(cases, tmp_path / "c", CampaignSetup(timeout_s=timeout),
+                         progress=False)
+        assert err.value.key == "timeout_s"
+    assert not (tmp_path / "c").exists()
+
+
+@pytest.mark.parametrize("timeout", [0.0, -1.0, math.nan])
+def test_an_application_without_time_to_run_is_refused_before_it_starts(tmp_path, timeout):
+    with pytest.raises(ConfigError, match="time limit of blockMesh") as err:
+        run_application(tmp_path, "blockMesh", timeout_s=timeout)
+    assert err.value.key == "timeout_s"
+    assert not (tmp_path / "log.blockMesh").exists()
