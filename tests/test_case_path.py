@@ -57,9 +57,15 @@ def test_write_run_and_campaign_refuse_such_a_folder_before_touching_it(tmp_path
     case = write_case(tmp_path / "good" / "case", MOTION, end_time=0.01)
     spaced.mkdir()
     moved = shutil.move(case, spaced / "case")
-    for run in (lambda: run_case(moved), lambda: run_application(moved, "blockMesh")):
+    said = []
+    for run in (lambda: run_case(moved, progress=said.append),
+                lambda: run_application(moved, "blockMesh")):
         with pytest.raises(ConfigError, match="strips whitespace and quotes"):
             run()
+    assert said == []  # refused before "meshing" was said
+    res = CliRunner().invoke(cli, ["cfd", "run", str(moved)])
+    assert res.exit_code == 2 and "strips whitespace" in res.output
+    assert "meshing" not in res.output
     assert not (spaced / "case" / "constant" / "polyMesh").exists()
     assert not list((spaced / "case").glob("log.*"))
     quoted = tmp_path / "it's"
@@ -67,6 +73,13 @@ def test_write_run_and_campaign_refuse_such_a_folder_before_touching_it(tmp_path
         run_campaign([CfdCase(1.0, 0.3, 90.0, 10.0, duration=0.02, ramp_time=0.01)], quoted,
                      progress=False)
     assert not quoted.exists()
+    # a time limit the solver cannot have is refused before the case is meshed
+    ok = write_case(tmp_path / "ok", MOTION, end_time=0.01)
+    for timeout in (0.0, float("nan")):
+        with pytest.raises(ConfigError, match="time limit of pimpleFoam") as err:
+            run_case(ok, timeout_s=timeout, progress=said.append)
+        assert err.value.key == "timeout_s" and said == []
+    assert not (ok / "constant" / "polyMesh").exists()
     res = CliRunner().invoke(cli, ["cfd", "write", CASE_FILE, str(tmp_path / "a b"),
                                    "--cycles", "0.01"])
     assert res.exit_code == 2 and "OpenFOAM cannot run a case in" in res.output

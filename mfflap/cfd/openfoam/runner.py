@@ -214,6 +214,13 @@ def solver_progress(case_dir: str | Path, log_name: str = "log.pimpleFoam"
     return float(times[-1]), float(steps[-1]) if steps else float("nan")
 
 
+def _check_time_limit(timeout_s: float, application: str) -> None:
+    """Refuse a time limit that is not a finite time > 0 s (ConfigError, key timeout_s)."""
+    if not (math.isfinite(timeout_s) and timeout_s > 0):
+        raise ConfigError(f"the time limit of {application} must be a finite time > 0 s, "
+                          f"got {timeout_s!r}", key="timeout_s")
+
+
 def run_application(case_dir: str | Path, application: str, timeout_s: float = 3600.0,
                     max_courant_abort: float = 100.0, n_procs: int = 1,
                     extra_args: tuple[str, ...] = (), min_time_step: float = 1e-7,
@@ -261,9 +268,7 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
         log's tail.
     """
     case_dir = check_case_path(case_dir)
-    if not (math.isfinite(timeout_s) and timeout_s > 0):
-        raise ConfigError(f"the time limit of {application} must be a finite time > 0 s, "
-                          f"got {timeout_s!r}", key="timeout_s")
+    _check_time_limit(timeout_s, application)
     _raise_if_stopped(case_dir, application)
     require_supported_release(str(case_dir))  # openfoam.com's line, not openfoam.org's
     if not openfoam_available():
@@ -521,6 +526,10 @@ def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
 
     Raises
     ------
+    ConfigError
+        Before anything runs, if the case's path holds characters OpenFOAM strips
+        (:func:`~mfflap.cfd.openfoam.case_path.check_case_path`) or ``timeout_s`` is not a
+        finite time > 0 s.
     CfdRunError
         If the folder is not a case, if another process is running it
         (:func:`mfflap.cfd.openfoam.case_lock.case_lock`), if pimpleFoam ended without an
@@ -529,7 +538,8 @@ def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
     """
     from mfflap.cfd.openfoam.run_progress import RunProgress
 
-    case_dir = Path(case_dir)
+    case_dir = check_case_path(case_dir)  # before "meshing" is said
+    _check_time_limit(timeout_s, "pimpleFoam")
     meshed = (case_dir / "constant" / "polyMesh" / "points").exists()
     needed = ("system/controlDict",) if meshed else ("system/controlDict", "system/blockMeshDict")
     missing = [name for name in needed if not (case_dir / name).is_file()]
