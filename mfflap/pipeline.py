@@ -15,9 +15,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from mfflap.config import CaseConfig
-from mfflap.errors import MfflapError
+from mfflap.errors import ConfigError, MfflapError
 
 Progress = Callable[[str], None]
+
+#: the frequency weightings the main job identifies, one coefficient set each
+RUN_STRATEGIES = ("uniform", "low", "high")
 
 
 @dataclass
@@ -35,6 +38,14 @@ class RunOptions:
     sensitivity: bool = True
     vtk_dir: Path | None = None
     mesh: str = "coarse"
+
+    def __post_init__(self) -> None:
+        allowed = ["case", *(f"identified:{s}" for s in RUN_STRATEGIES)]
+        if self.coefficients not in allowed:
+            raise ConfigError(f"{self.coefficients!r} is not a coefficient set of the run; "
+                              f"use one of {', '.join(allowed)}", key="coefficients")
+        if self.n_starts < 1:
+            raise ConfigError(f"n_starts must be >= 1, got {self.n_starts!r}", key="n_starts")
 
 
 @dataclass
@@ -142,7 +153,7 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
         for name, why in excluded.items():
             outcome.problems.append(f"identification: case {name} left out: {why}")
         outcome.cases = cases
-        return identify_strategies(config, cases, excluded, ["uniform", "low", "high"])
+        return identify_strategies(config, cases, excluded, list(RUN_STRATEGIES))
 
     outcome.identification = _stage(outcome, "identification", progress, identification) or {}
     model = config.morison_model()

@@ -211,3 +211,34 @@ def test_an_application_without_time_to_run_is_refused_before_it_starts(tmp_path
         run_application(tmp_path, "blockMesh", timeout_s=timeout)
     assert err.value.key == "timeout_s"
     assert not (tmp_path / "log.blockMesh").exists()
+
+
+def test_run_refuses_a_coefficient_set_it_does_not_identify_before_its_folder_is_made(
+        tmp_path):
+    out = tmp_path / "run"
+    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--coefficients",
+                                   "identified:medium"])
+    assert res.exit_code == 2, res.output
+    assert "coefficients: 'identified:medium' is not a coefficient set of the run" in res.output
+    assert "identified:uniform, identified:low, identified:high" in res.output
+    assert not out.exists()
+
+
+def test_evaluate_and_gradcheck_put_their_figures_in_the_working_folder(tmp_path,
+                                                                       monkeypatch):
+    """Not beside the case file, whose folder may be the package's or read-only."""
+    cases = tmp_path / "cases"
+    cases.mkdir()
+    case = cases / "study.toml"
+    case.write_text(CASE.read_text())
+    work = tmp_path / "work"
+    work.mkdir()
+    monkeypatch.chdir(work)
+    runner = CliRunner()
+    for args, name in ((["evaluate", str(case)], "study.cycle.png"),
+                       (["gradcheck", str(case), "--n-steps", "12"], "study.gradcheck.png")):
+        res = runner.invoke(cli, args)
+        assert res.exit_code == 0, res.output
+        assert f"figure: {name}" in res.output
+        assert (work / name).stat().st_size > 0
+    assert sorted(p.name for p in cases.iterdir()) == ["study.toml"]

@@ -58,7 +58,8 @@ def _register_subgroups() -> None:
 @click.argument("case_file", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("--json", "as_json", is_flag=True, help="Print the cycle means as JSON.")
 @click.option("--figure", type=click.Path(dir_okay=False, path_type=Path), default=None,
-              help="Where to save the one-cycle figure (PNG). Default: <case>.cycle.png")
+              help="Where to save the one-cycle figure (PNG). Default: <case name>.cycle.png "
+                   "in the working folder (the case file's own folder may be read-only).")
 @click.option("--output", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Also write the results (HDF5, with the case stored beside them).")
 @click.option("--scheme", type=click.Choice(["paper", "midpoint"]), default=None,
@@ -74,7 +75,7 @@ def evaluate(case_file: Path, as_json: bool, figure: Path | None, output: Path |
     from mfflap.evaluation import evaluate_case
 
     result = evaluate_case(case_file, scheme=scheme)
-    figure = figure or case_file.with_suffix(".cycle.png")
+    figure = figure or Path(f"{case_file.stem}.cycle.png")
     result.figure.savefig(figure, dpi=120)
     if output is not None:
         result.save(output)
@@ -93,7 +94,8 @@ def evaluate(case_file: Path, as_json: bool, figure: Path | None, output: Path |
 @click.option("--n-steps", default=40, show_default=True, help="N of the checked motion.")
 @click.option("--json", "as_json", is_flag=True, help="Print the agreement as JSON.")
 @click.option("--figure", type=click.Path(dir_okay=False, path_type=Path), default=None,
-              help="Scatter figure of adjoint vs FD (default: <case>.gradcheck.png).")
+              help="Scatter figure of adjoint vs FD (default: <case name>.gradcheck.png in the "
+                   "working folder).")
 def gradcheck(case_file: Path, n_steps: int, as_json: bool, figure: Path | None) -> None:
     """Adjoint gradient vs complex step and finite differences at beta = 0, 0.5, 1.
 
@@ -118,7 +120,7 @@ def gradcheck(case_file: Path, n_steps: int, as_json: bool, figure: Path | None)
                                   o.penalty_power, o.penalty_heave, o.smoothing_pitch,
                                   o.smoothing_heave, o.scheme)
         checks[beta] = check_gradient(problem, motion)
-    figure = figure or case_file.with_suffix(".gradcheck.png")
+    figure = figure or Path(f"{case_file.stem}.gradcheck.png")
     scatter_figure(checks).savefig(figure, dpi=120)
     if as_json:
         echo_json({str(b): c.as_dict() for b, c in checks.items()} | {"figure": str(figure)})

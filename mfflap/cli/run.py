@@ -45,14 +45,12 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
     from mfflap.pipeline import RunOptions, run_study, write_outputs
 
     case = load_case(case_file)
-    if not (coefficients == "case" or coefficients.startswith("identified:")):
-        raise click.BadParameter(f"{coefficients!r}: use 'case' or 'identified:<strategy>'")
     out_dir = out_dir or Path(f"{case.study.name}_run")
-    out_dir.mkdir(parents=True, exist_ok=True)
     options = RunOptions(fixtures=fixtures, backtest_fixtures=backtest_fixtures, live=live,
                          work_dir=out_dir / "cfd_cases", coefficients=coefficients,
                          n_starts=starts, with_ipopt=not no_ipopt, gain_table=gain_table,
-                         vtk_dir=out_dir / "vtk")
+                         vtk_dir=out_dir / "vtk")  # checked before the folder is made
+    out_dir.mkdir(parents=True, exist_ok=True)
     outcome = run_study(case, options, progress=lambda m: click.echo(m, err=True))
     write_outputs(case, outcome, out_dir / "results.h5", out_dir / "report.html",
                   sources_shown(fixtures))
