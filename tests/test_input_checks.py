@@ -62,6 +62,8 @@ REFUSED = [
     (["run", str(CASE), "--out", "OUT", "--starts", "0"], "--starts", "x>=1"),
     (["identify", str(CASE), "--bootstrap", "-1", "--output", "OUT/i.h5"], "--bootstrap",
      "x>=0"),
+    (["campaign", "compare", "OUT", "OUT", "--start", "nan"], "--start", "finite number >= 0"),
+    (["campaign", "compare", "OUT", "OUT", "--end", "-1"], "--end", "finite number > 0"),
     (["gap", "blindtest", "--trials", "0"], "--trials", "x>=1"),
     (["gap", "blindtest", "--snr", "nan"], "--snr", "finite number > 0"),
 ]

@@ -9,7 +9,7 @@ from pathlib import Path
 import click
 
 from mfflap.cli.json_output import echo_json
-from mfflap.cli.options import POSITIVE, mesh_and_setup_options
+from mfflap.cli.options import NON_NEGATIVE, POSITIVE, mesh_and_setup_options
 
 
 def _floats(text: str | None) -> list[float] | None:
@@ -128,9 +128,9 @@ def status_cmd(out_dir: Path, as_json: bool) -> None:
 @campaign.command("compare")
 @click.argument("folder_a", type=click.Path(file_okay=False, exists=True, path_type=Path))
 @click.argument("folder_b", type=click.Path(file_okay=False, exists=True, path_type=Path))
-@click.option("--start", "start_s", type=float, default=None,
+@click.option("--start", "start_s", type=NON_NEGATIVE, default=None,
               help="Compare after this time, s (default: each case's start-up ramp).")
-@click.option("--end", "end_s", type=float, default=None,
+@click.option("--end", "end_s", type=POSITIVE, default=None,
               help="Compare up to this time, s (default: the shorter record's end).")
 @click.option("--output", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="HDF5 file of the comparison, both manifests beside it.")
