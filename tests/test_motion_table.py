@@ -199,6 +199,26 @@ def test_degrees_in_the_radian_column_are_flagged_with_the_file_and_the_time(tmp
     assert "the pitch reaches -90 deg at t = 0.5 s" in res.stderr
 
 
+def test_a_spline_that_turns_past_upright_between_rows_is_flagged(tmp_path):
+    """Rows at most 89.5 deg, but the spline through them peaks at 93.2 deg between the two
+    rows at 89.5 deg: the solver follows the spline, so that is the pitch warned of."""
+    table = tmp_path / "peak.csv"
+    table.write_text("time,heave_position,pitch_angle_deg\n" + "".join(
+        f"{t},0.0,{p}\n" for t, p in zip([0, 0.1, 0.2, 0.3, 0.4, 0.5],
+                                         [0, 60, 89.5, 89.5, 60, 0], strict=True)))
+    motion = read_motion_table(table)
+    assert np.degrees(np.abs(motion.sample(motion.table_time).pitch_angle).max()) == 89.5
+    pitch, time = largest_pitch(motion, 0.5)
+    fine = np.linspace(0.0, 0.5, 20001)
+    assert np.degrees(pitch) == pytest.approx(
+        np.degrees(np.abs(motion.sample(fine).pitch_angle).max()), abs=0.01)
+    assert np.degrees(pitch) > 93.0 and time == pytest.approx(0.25, abs=0.01)
+    res = CliRunner().invoke(cli, ["cfd", "write", str(CASE), str(tmp_path / "w"),
+                                   "--motion-table", str(table)])
+    assert res.exit_code == 0, res.output
+    assert f"warning: {table}: the pitch reaches 93.16 deg at t = 0.25 s" in res.stderr
+
+
 @pytest.mark.openfoam
 def test_a_table_motion_runs_in_openfoam_and_parses_from_its_own_case(tmp_path):
     """Write from a table, run pimpleFoam on the coarse mesh, parse the case with nothing

@@ -80,15 +80,26 @@ def table_end_time(motion: TabulatedMotion, end_time: float | None = None) -> fl
     return float(end_time)
 
 
+#: times at which :func:`largest_pitch` samples the spline between two rows of a table
+SAMPLES_BETWEEN_ROWS = 15
+
+
 def largest_pitch(motion: TabulatedMotion, end_time: float) -> tuple[float, float]:
-    """The largest pitch in magnitude among a table's rows up to ``end_time``, and its time.
+    """The largest pitch in magnitude of a table's motion up to ``end_time``, and its time.
+
+    The motion is the spline through the rows, which can overshoot them: rows at 89.5 deg
+    either side of a peak give a spline that turns past 90 deg between them. It is sampled
+    at the rows and at :data:`SAMPLES_BETWEEN_ROWS` times between each two.
 
     Returns
     -------
     tuple
-        The pitch (rad, with its sign) and the time of its row (s).
+        The pitch (rad, with its sign) and its time (s).
     """
-    times = motion.table_time[motion.table_time <= end_time]
+    rows = motion.table_time[motion.table_time <= end_time]
+    share = np.arange(SAMPLES_BETWEEN_ROWS + 1) / (SAMPLES_BETWEEN_ROWS + 1)
+    between = (rows[:-1, None] + np.diff(rows)[:, None] * share[None, :]).ravel()
+    times = np.append(between, rows[-1:])
     pitch = motion.sample(times).pitch_angle
     worst = int(np.argmax(np.abs(pitch)))
     return float(pitch[worst]), float(times[worst])
