@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -50,8 +51,13 @@ def _unpack(x: np.ndarray, n: int) -> DiscreteMotion:
 
 
 def check_gradient(problem: FlappingProblem, motion: DiscreteMotion,
-                   fd_relative_step: float = 1e-6) -> GradCheck:
-    """Adjoint vs complex step (h = 1e-30) vs central differences, all 2N + 1 components."""
+                   fd_relative_step: float = 1e-6,
+                   progress: Callable[[int, int], None] | None = None) -> GradCheck:
+    """Adjoint vs complex step (h = 1e-30) vs central differences, all 2N + 1 components.
+
+    Each component costs three evaluations of the objective, so the check's work grows as
+    N^2; ``progress``, if given, is called with (components done, 2N + 1) after each.
+    """
     n = motion.n_steps
     x = _pack(motion)
     adj = problem.gradient(motion).flat()
@@ -67,6 +73,8 @@ def check_gradient(problem: FlappingProblem, motion: DiscreteMotion,
         xm[i] -= step
         fd[i] = (problem.objective(_unpack(xp, n)) - problem.objective(_unpack(xm, n))) / (
             2 * step)
+        if progress is not None:
+            progress(i + 1, x.size)
     scale = np.max(np.abs(cs))
     from mfflap.optimisation.casadi_objective import casadi_gradient
 

@@ -89,3 +89,22 @@ def test_gradcheck_cli(tmp_path):
         assert out[beta]["max_rel_error_casadi"] <= 1e-10
         assert out[beta]["cosine_similarity_controls_fd"] > 0.999
     assert fig.stat().st_size > 10_000
+
+
+def test_gradcheck_reports_each_component_as_it_goes():
+    """The check's work grows as N^2: it says how far it is, once per component."""
+    from mfflap.config import load_case
+    from mfflap.gradcheck import check_gradient
+    from mfflap.kinematics import to_discrete
+    from mfflap.optimisation import FlappingProblem
+
+    case = load_case(CASE)
+    motion = to_discrete(case.motion.build(), 1 / case.motion.frequency, 10)
+    seen = []
+    check = check_gradient(FlappingProblem(case.morison_model(), 0.5), motion,
+                           progress=lambda done, total: seen.append((done, total)))
+    assert seen == [(i, 21) for i in range(1, 22)]
+    assert check.max_rel_error_complex_step <= 1e-10
+    res = CliRunner().invoke(cli, ["gradcheck", str(CASE), "--n-steps", "10"])
+    assert res.exit_code == 0, res.output
+    assert "gradient components" in res.stderr and "/63 " in res.stderr  # 3 betas x 21

@@ -102,6 +102,8 @@ def gradcheck(case_file: Path, n_steps: int, as_json: bool, figure: Path | None)
     The point is the case's [motion] sinusoid, perturbed so that no symmetry hides an
     error, with the case's [optimisation] penalties (P_max, h_max) as they are.
     """
+    from tqdm import tqdm
+
     from mfflap.config import load_case
     from mfflap.gradcheck import FD_NOTE, check_gradient, scatter_figure
     from mfflap.kinematics import DiscreteMotion, to_discrete
@@ -115,11 +117,16 @@ def gradcheck(case_file: Path, n_steps: int, as_json: bool, figure: Path | None)
                             base.heave_acceleration * (1 + 0.1 * rng.normal(size=n_steps)),
                             base.time_step)
     checks = {}
-    for beta in (0.0, 0.5, 1.0):
-        problem = FlappingProblem(case.morison_model(), beta, o.max_power, o.max_heave,
-                                  o.penalty_power, o.penalty_heave, o.smoothing_pitch,
-                                  o.smoothing_heave, o.scheme)
-        checks[beta] = check_gradient(problem, motion)
+    betas = (0.0, 0.5, 1.0)
+    # three evaluations of the objective per component: N^2 work, shown as it goes
+    with tqdm(total=len(betas) * (2 * n_steps + 1), desc="gradient components",
+              disable=as_json, leave=False) as bar:
+        for beta in betas:
+            problem = FlappingProblem(case.morison_model(), beta, o.max_power, o.max_heave,
+                                      o.penalty_power, o.penalty_heave, o.smoothing_pitch,
+                                      o.smoothing_heave, o.scheme)
+            checks[beta] = check_gradient(problem, motion,
+                                          progress=lambda done, total: bar.update())
     figure = figure or Path(f"{case_file.stem}.gradcheck.png")
     scatter_figure(checks).savefig(figure, dpi=120)
     if as_json:
