@@ -41,10 +41,13 @@ class ResultsFile:
         What the file holds (e.g. ``"evaluation"``, ``"optimisation"``), written at creation.
     config_toml
         Full input configuration as TOML text, stored at creation in ``/inputs``.
+    kinds
+        Reading: the kinds of file the reader understands (e.g. ``("optimisation",
+        "run")``); another kind is refused by name, not read as if it were one of them.
     """
 
     def __init__(self, path: str | Path, mode: str = "r", *, kind: str = "results",
-                 config_toml: str | None = None):
+                 config_toml: str | None = None, kinds: tuple[str, ...] | None = None):
         from mfflap import __version__
 
         self.path = Path(path)
@@ -63,6 +66,11 @@ class ResultsFile:
                     f"{self.path}: schema version {int(version)} is newer than this mfflap "
                     f"reads ({SCHEMA_VERSION}); upgrade mfflap"
                 )
+            held = self._h5.attrs.get("kind")
+            if kinds is not None and held not in kinds:
+                self._h5.close()
+                raise MfflapError(f"{self.path}: holds {held!r} results, not "
+                                  f"{' or '.join(repr(k) for k in kinds)}")
         elif "mfflap_schema_version" not in self._h5.attrs:
             self._h5.attrs["mfflap_schema_version"] = SCHEMA_VERSION
             self._h5.attrs["mfflap_version"] = __version__

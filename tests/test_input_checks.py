@@ -5,6 +5,7 @@ import json
 import math
 from pathlib import Path
 
+import h5py
 import numpy as np
 import pytest
 from click.testing import CliRunner
@@ -19,7 +20,7 @@ from mfflap.cfd.openfoam.writer import table_times
 from mfflap.cli.json_output import strict_json_value
 from mfflap.cli.main import cli
 from mfflap.config import IdentificationGrid, load_case
-from mfflap.errors import ConfigError, MotionError
+from mfflap.errors import ConfigError, MfflapError, MotionError
 from mfflap.gap.blindtest import NULL, blind_test, synthesize
 from mfflap.gap.diagnose import diagnose
 from mfflap.hydro import MorisonModel
@@ -244,3 +245,35 @@ def test_evaluate_and_gradcheck_put_their_figures_in_the_working_folder(tmp_path
         assert f"figure: {name}" in res.output
         assert (work / name).stat().st_size > 0
     assert sorted(p.name for p in cases.iterdir()) == ["study.toml"]
+
+
+def test_a_results_file_of_another_kind_is_refused_by_its_kind(tmp_path):
+    """Each reader says which kind of file it was given; before, `report identification` of
+    an optimisation file ended in h5py's KeyError and a CFD record's inputs were read as a
+    study's ('unknown table [parameters]')."""
+    from mfflap.campaign.records import fixture_dir, read_record
+    from mfflap.cfd.model_comparison import read_model_comparison
+    from mfflap.results import ResultsFile
+
+    optimisation = tmp_path / "o.h5"
+    with ResultsFile(optimisation, "w", kind="optimisation", config_toml=CASE.read_text()):
+        pass
+    record = sorted(fixture_dir().glob("*.h5"))[0]
+    runner = CliRunner()
+    for args, held, wanted in (
+            (["report", "identification", str(optimisation)], "optimisation",
+             "'identification' or 'run'"),
+            (["report", "identification", str(record)], "cfd_record", "'identification' or 'run'"),
+            (["backtest", str(record)], "cfd_record", "'optimisation' or 'run'"),
+            (["cfd", "motion-table", str(record), str(tmp_path / "m.csv"), "--beta", "0"],
+             "cfd_record", "'optimisation' or 'run'")):
+        res = runner.invoke(cli, args)
+        assert res.exit_code == 2, res.output
+        assert f"holds '{held}' results, not {wanted}" in res.output
+        assert "Traceback" not in res.output
+    assert not (tmp_path / "m.csv").exists()
+    for read in (read_record, read_model_comparison):
+        with pytest.raises(MfflapError, match=f"{optimisation}: holds 'optimisation' results"):
+            read(optimisation)
+    with h5py.File(optimisation, "r+") as f:  # the reader closed the file it refused
+        assert f.attrs["kind"] == "optimisation"

@@ -164,10 +164,7 @@ def read_record(path: str | Path) -> CfdRecord:
         kinematics' time base (the message names the file).
     """
     path = Path(path)
-    with ResultsFile(path, "r") as rf:
-        kind = rf.h5.attrs.get("kind")
-        if kind != "cfd_record":
-            raise MfflapError(f"{path}: not a CFD record (kind {kind!r})")
+    with ResultsFile(path, "r", kinds=("cfd_record",)) as rf:
         try:
             return _read_record(rf, path)
         except (KeyError, TypeError) as err:  # a group, dataset or field missing

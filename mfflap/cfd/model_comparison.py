@@ -250,7 +250,7 @@ def read_model_comparison(path: str | Path) -> ModelComparison:
     """A comparison stored by :func:`write_model_comparison`."""
     from mfflap.results import ResultsFile
 
-    with ResultsFile(path) as stored:
+    with ResultsFile(path, kinds=("cfd_model_comparison",)) as stored:
         series, _ = stored.read_group("performance")
         _, attrs = stored.read_group("summary")
         return ModelComparison(json.loads(attrs["summary_json"]), stored.read_loads("cfd_loads"),

@@ -39,7 +39,7 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
     from mfflap.results import ResultsFile
 
     spec, solver = mesh_and_solver(mesh, setup_name)
-    with ResultsFile(optimisation_file) as rf:
+    with ResultsFile(optimisation_file, kinds=("optimisation", "run")) as rf:
         case = loads_case(rf.config_toml, source=f"{optimisation_file}:/inputs")
         sweep, best = read_sweep(rf, "optimisation/sweep")
         motions = {}

@@ -626,7 +626,7 @@ def motion_table_cmd(results_file: Path, table_file: Path, beta: float | None,
 
     if (beta is None) == (not best_sinusoid):
         raise click.UsageError("give --beta B or --best-sinusoid")
-    with ResultsFile(results_file) as rf:
+    with ResultsFile(results_file, kinds=("optimisation", "run")) as rf:
         if "optimisation/sqp" not in rf.h5:
             raise click.UsageError(f"{results_file} holds no optimised motions "
                                    "(optimisation/sqp)")

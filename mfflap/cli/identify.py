@@ -100,17 +100,20 @@ def report_identification(results_file: Path, folders: tuple[Path, ...],
                           out_path: Path | None) -> None:
     """Maps of Pearson and NRMSE, overlays, applicability region, weighting sensitivity."""
     from mfflap.config import loads_case
+    from mfflap.errors import MfflapError
     from mfflap.identification.store import read_identification, strategies_in
     from mfflap.identification.workflow import load_cases, sources_shown
     from mfflap.reports.identification import identification_report
     from mfflap.results import ResultsFile
 
-    with ResultsFile(results_file, "r") as rf:
+    with ResultsFile(results_file, "r", kinds=("identification", "run")) as rf:
         case = loads_case(rf.config_toml, source=f"{results_file}:/inputs")
         results = {s: read_identification(rf, f"identification/{s}") for s in strategies_in(rf)}
+        if not results:
+            raise MfflapError(f"{results_file}: no identification results (its groups: "
+                              f"{', '.join(sorted(rf.h5)) or 'none'}); write them with "
+                              "`mfflap identify` or `mfflap run`")
         source = str(rf.h5["identification"].attrs.get("source", ""))
-    if not results:
-        raise click.ClickException(f"{results_file}: no identification results")
     cases, _ = load_cases(case, folders or source)
     out_path = out_path or results_file.with_suffix(".html")
     identification_report(out_path, results, cases, case.morison_model(), case.flow.velocity,
