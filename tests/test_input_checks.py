@@ -277,3 +277,27 @@ def test_a_results_file_of_another_kind_is_refused_by_its_kind(tmp_path):
             read(optimisation)
     with h5py.File(optimisation, "r+") as f:  # the reader closed the file it refused
         assert f.attrs["kind"] == "optimisation"
+
+
+def test_a_scheduler_that_cannot_be_parsed_or_reached_is_a_clear_error(tmp_path):
+    """Before: dask's ValueError or OSError as a traceback."""
+    import socket
+
+    import dask
+
+    cases = grid_cases(IdentificationGrid(), frequencies=[1.0], heave_amplitudes=[0.3],
+                       phases_deg=[90])
+    for address in ("notanaddress", "tcp://host-without-port", "xyz://h:1"):
+        with pytest.raises(ConfigError, match="is not a dask scheduler address") as err:
+            run_campaign(cases, tmp_path / "c", scheduler_address=address, progress=False)
+        assert err.value.key == "scheduler_address"
+    assert not (tmp_path / "c").exists()
+    with socket.socket() as free:  # a port nothing listens on
+        free.bind(("127.0.0.1", 0))
+        port = free.getsockname()[1]
+    with dask.config.set({"distributed.comm.timeouts.connect": "2s"}):
+        with pytest.raises(MfflapError, match=f"cannot reach the dask scheduler at "
+                                              f"tcp://127.0.0.1:{port}"):
+            run_campaign(cases, tmp_path / "c", scheduler_address=f"tcp://127.0.0.1:{port}",
+                         progress=False)
+    assert not list((tmp_path / "c").glob("*.h5"))

@@ -349,6 +349,17 @@ class IgnoreInterrupt(WorkerPlugin):
             signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
+def _check_scheduler_address(address: str) -> None:
+    """Refuse a scheduler address dask cannot parse (ConfigError, key scheduler_address)."""
+    from distributed.comm.addressing import get_address_host_port
+
+    try:
+        get_address_host_port(address)
+    except ValueError as err:
+        raise ConfigError(f"{address!r} is not a dask scheduler address ({err}); e.g. "
+                          "tcp://10.0.0.5:8786", key="scheduler_address") from err
+
+
 def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
                  setup: CampaignSetup | None = None, *, n_workers: int = 1,
                  scheduler_address: str | None = None, retry_failed: bool = False,
@@ -380,7 +391,10 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
     ------
     ConfigError
         Before any case runs: no worker, a time limit that is not a finite time > 0 s, a
-        folder path OpenFOAM cannot read, or a case listed twice.
+        scheduler address dask cannot parse, a folder path OpenFOAM cannot read, or a case
+        listed twice.
+    MfflapError
+        If the scheduler at ``scheduler_address`` cannot be reached.
     """
     from dask.distributed import Client, LocalCluster, as_completed
 
@@ -393,6 +407,8 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
     if not (math.isfinite(setup.timeout_s) and setup.timeout_s > 0):
         raise ConfigError(f"the time limit per case must be a finite time > 0 s, got "
                           f"{setup.timeout_s!r}", key="timeout_s")
+    if scheduler_address is not None:
+        _check_scheduler_address(scheduler_address)
     out = check_case_path(out_dir)  # every case runs below it
     out.mkdir(parents=True, exist_ok=True)
     ids = [c.case_id for c in cases]
@@ -425,7 +441,13 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
             # second campaign on the same machine warns that the port is taken
             cluster = LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
                                    dashboard_address="127.0.0.1:0")
-        client = Client(scheduler_address or cluster)
+        try:
+            client = Client(scheduler_address or cluster)
+        except (OSError, TimeoutError) as err:  # the scheduler is not there (30 s timeout)
+            raise MfflapError(f"cannot reach the dask scheduler at {scheduler_address}: {err}; "
+                              f"start it (e.g. `dask scheduler`) or check the address; the "
+                              f"campaign in {out} ran nothing and resumes when given one"
+                              ) from err
         futures: list[Any] = []
         try:
             if cluster is not None:  # its workers share this terminal's Ctrl-C
