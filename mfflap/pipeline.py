@@ -46,6 +46,10 @@ class RunOptions:
                               f"use one of {', '.join(allowed)}", key="coefficients")
         if self.n_starts < 1:
             raise ConfigError(f"n_starts must be >= 1, got {self.n_starts!r}", key="n_starts")
+        if self.live:  # the live back-test's cases go there: refused before the first stage
+            from mfflap.cfd.openfoam.case_path import check_case_path
+
+            check_case_path(self.work_dir)
 
 
 @dataclass

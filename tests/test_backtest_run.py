@@ -205,6 +205,45 @@ def test_a_failed_cfd_run_is_reported_with_its_reason(tmp_path):
     assert "failed" in out.source and "time step collapsed" in out.source
 
 
+def test_a_live_run_asked_for_and_not_had_is_said_beside_the_fixture_used(tmp_path):
+    """A live run that failed used to be replaced by the fixture's name without a word: the
+    report read as if the fixture were what was asked for."""
+    from mfflap.backtest.workflow import backtest_all
+    from mfflap.config import load_case
+    from mfflap.errors import ConfigError
+    from mfflap.pipeline import RunOptions
+
+    folder = tmp_path / "bt"
+    write_record(folder / f"backtest_{motion_key(MOTION)}.h5", model_record(MOTION))
+    spaced = tmp_path / "live runs"
+    out = backtest_motion(MOTION, "β = 0", MorisonModel(), 50.0, fixture_folders=[folder],
+                          live=True, work_dir=spaced)
+    assert out.status == "back-tested"
+    assert out.source.startswith(f"fixture backtest_{motion_key(MOTION)}.h5 instead of a live "
+                                 "run: ")
+    assert ("OpenFOAM cannot run a case in" in out.source if openfoam_available() else
+            "OpenFOAM is not installed" in out.source)
+    none = backtest_motion(MOTION, "β = 0", MorisonModel(), 50.0, fixture_folders=[folder],
+                           live=True)
+    assert none.source.endswith("instead of a live run: " + (
+        "no work folder for the live run" if openfoam_available() else
+        "OpenFOAM is not installed"))
+    # without live nothing is said beyond the fixture
+    assert backtest_motion(MOTION, "β = 0", MorisonModel(), 50.0,
+                           fixture_folders=[folder]).source == (
+        f"fixture backtest_{motion_key(MOTION)}.h5")
+    # the workflow and the main job refuse such a folder before the first run
+    said = []
+    with pytest.raises(ConfigError, match="OpenFOAM cannot run a case in"):
+        backtest_all(load_case(CASE), {"β = 0": MOTION}, MorisonModel(),
+                     fixture_folders=[folder], live=True, work_dir=spaced / "w",
+                     progress=said.append)
+    assert said == [] and not spaced.exists()
+    with pytest.raises(ConfigError, match="OpenFOAM cannot run a case in"):
+        RunOptions(live=True, work_dir=spaced / "cfd_cases")
+    RunOptions(live=False, work_dir=spaced / "cfd_cases")  # not run: not checked
+
+
 def test_backtest_command_refuses_an_unknown_mesh_for_a_set_up():
     from click.testing import CliRunner
 

@@ -149,7 +149,9 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
                   if (f / f"backtest_{key}.failed.toml").exists()]
         if path is not None:
             record = read_record(path)
-            source = f"fixture {path.name}"
+            # a live run asked for and not had is said, not replaced by the fixture's name
+            source = f"fixture {path.name}" + (f" instead of a live run: {source}" if source
+                                               else "")
         elif failed and not source:
             error = str(read_toml(failed[0]).get("error", "")).splitlines()[0]
             source = f"the CFD run of this motion failed ({failed[0].name}): {error}"

@@ -6,6 +6,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from mfflap.backtest.run import BacktestOutcome, backtest_motion
+from mfflap.cfd.openfoam.case_path import check_case_path
 from mfflap.cfd.openfoam.writer import SolverSettings
 from mfflap.config import CaseConfig
 from mfflap.kinematics.discrete import DiscreteMotion
@@ -23,8 +24,16 @@ def backtest_all(config: CaseConfig, motions: dict[str, DiscreteMotion], model, 
     ``into``, if given, receives each outcome as soon as it is known and is returned, so
     that a caller stopped part-way (Ctrl-C during a live run) keeps the back-tests done
     before.
+
+    Raises
+    ------
+    ConfigError
+        Live, before any run, if ``work_dir``'s path holds characters OpenFOAM strips
+        (:func:`~mfflap.cfd.openfoam.case_path.check_case_path`).
     """
     out = {} if into is None else into
+    if live and work_dir is not None:
+        check_case_path(work_dir)  # before any run, not once per motion
     for label, motion in motions.items():
         if progress is not None:
             progress(f"back-test {label}: {'running OpenFOAM' if live else 'looking up CFD'}")

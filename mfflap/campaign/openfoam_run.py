@@ -13,7 +13,7 @@ from mfflap.campaign.records import CfdRecord
 from mfflap.cfd.bursts import bridge_load_bursts
 from mfflap.cfd.force_envelope import BREACH_FACTOR, EnvelopeBreach, find_envelope_breaches
 from mfflap.cfd.openfoam.case_lock import case_lock
-from mfflap.cfd.openfoam.case_path import empty_case_folder
+from mfflap.cfd.openfoam.case_path import check_case_path, empty_case_folder
 from mfflap.cfd.openfoam.forces import read_forces
 from mfflap.cfd.openfoam.loads import imposed_state, to_loads
 from mfflap.cfd.openfoam.runner import (
@@ -382,12 +382,15 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
 
     Raises
     ------
+    ConfigError
+        Before anything is made, if ``case_dir``'s path holds characters OpenFOAM strips
+        (:func:`~mfflap.cfd.openfoam.case_path.check_case_path`).
     CfdRunError
         For a run that fails or diverges otherwise, or still does after ``max_retries``
         retries, or whose forces still leave the bound then, or leave it again at the same
         flow time with a lower Courant limit (the message says where, and the retries).
     """
-    case_dir = Path(case_dir)
+    case_dir = check_case_path(case_dir)  # before the lock file makes the folder
     solver = solver or SolverSettings(write_interval=end_time / 4)
     with case_lock(case_dir):  # no other run in this case while this one writes or retries
         if not (case_dir / "mfflap_case.toml").exists():
