@@ -53,9 +53,12 @@ def global_to_body(force_x: np.ndarray, force_y: np.ndarray,
 
 
 def strouhal_number(frequency, trailing_edge_half_excursion, free_stream_velocity: float):
-    """St = 2 f A / U with A the trailing-edge half excursion (m)."""
-    return 2 * np.asarray(frequency) * np.asarray(trailing_edge_half_excursion) / (
-        free_stream_velocity)
+    """St = 2 f A / U with A the trailing-edge half excursion (m); infinite in still water
+    (U = 0, a plate flapping on the spot) and NaN if it does not move either, without a
+    warning."""
+    with np.errstate(divide="ignore", invalid="ignore"):  # 0 / 0: NaN, undefined
+        return 2 * np.asarray(frequency) * np.asarray(trailing_edge_half_excursion) / (
+            free_stream_velocity)
 
 
 @dataclass(frozen=True)

@@ -301,3 +301,27 @@ def test_a_scheduler_that_cannot_be_parsed_or_reached_is_a_clear_error(tmp_path)
             run_campaign(cases, tmp_path / "c", scheduler_address=f"tcp://127.0.0.1:{port}",
                          progress=False)
     assert not list((tmp_path / "c").glob("*.h5"))
+
+
+def test_still_water_gives_an_infinite_strouhal_number_printed_as_null(tmp_path):
+    """U = 0 is allowed (a plate flapping on the spot): St = 2 f A / U is infinite there,
+    without a RuntimeWarning, and --json prints it as null."""
+    import re
+    import warnings
+
+    from mfflap.performance import strouhal_number
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert strouhal_number(1.0, 0.3, 0.0) == math.inf
+        assert math.isnan(strouhal_number(1.0, 0.0, 0.0))
+        assert strouhal_number(1.0, 0.3, 0.3) == pytest.approx(2.0)
+    case = tmp_path / "still.toml"
+    case.write_text(re.sub(r"^velocity = .*$", "velocity = 0.0", CASE.read_text(),
+                           flags=re.M))
+    res = CliRunner().invoke(cli, ["evaluate", str(case), "--json", "--figure",
+                                   str(tmp_path / "f.png")])
+    assert res.exit_code == 0, res.output
+    out = _strict_loads(res.stdout)
+    assert out["strouhal_number"] is None and out["mean_thrust"] > 0
+    assert "RuntimeWarning" not in res.stderr
