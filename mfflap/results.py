@@ -53,6 +53,8 @@ class ResultsFile:
         self.path = Path(path)
         if mode == "r" and not self.path.exists():
             raise MfflapError(f"{self.path}: no such results file")
+        if mode != "r":  # a file asked for in a new folder: made, not failed after the work
+            self.path.parent.mkdir(parents=True, exist_ok=True)
         try:
             self._h5 = h5py.File(self.path, mode)
         except OSError as err:  # not HDF5, cut short, or locked by another writer

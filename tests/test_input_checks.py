@@ -325,3 +325,35 @@ def test_still_water_gives_an_infinite_strouhal_number_printed_as_null(tmp_path)
     out = _strict_loads(res.stdout)
     assert out["strouhal_number"] is None and out["mean_thrust"] > 0
     assert "RuntimeWarning" not in res.stderr
+
+
+def test_outputs_asked_for_in_new_folders_are_written_there(tmp_path):
+    """Before: optimise did its minutes of work and then failed to create its file, and
+    evaluate / gradcheck / motion-table failed with a traceback, when the folder named in
+    --output / --figure / the table's path did not exist yet."""
+    from mfflap.results import ResultsFile
+
+    runner = CliRunner()
+    new = tmp_path / "new"
+    commands = [
+        (["identify", str(CASE), "--bootstrap", "0", "--strategy", "uniform", "--output",
+          str(new / "a" / "i.h5")], new / "a" / "i.h5"),
+        (["evaluate", str(CASE), "--output", str(new / "b" / "e.h5"), "--figure",
+          str(new / "c" / "f.png")], new / "c" / "f.png"),
+        (["gradcheck", str(CASE), "--n-steps", "8", "--figure", str(new / "d" / "g.png")],
+         new / "d" / "g.png"),
+    ]
+    for args, made in commands:
+        res = runner.invoke(cli, args)
+        assert res.exit_code == 0, res.output
+        assert made.stat().st_size > 0
+    assert (new / "b" / "e.h5").is_file()
+    with ResultsFile(new / "e" / "f" / "r.h5", "w", kind="evaluation", config_toml="") as rf:
+        rf.write_group("g", {"x": np.arange(3.0)}, {"x": "m"})
+    with ResultsFile(new / "e" / "f" / "r.h5", kinds=("evaluation",)) as rf:
+        assert rf.read_group("g")[0]["x"].tolist() == [0.0, 1.0, 2.0]
+    from mfflap.kinematics.table_file import read_motion_table, write_motion_table
+
+    table = write_motion_table(new / "g" / "m.csv", HarmonicMotion(1.0, 0.3, 0.3, 1.0), 1.0,
+                               40)
+    assert read_motion_table(table).table_time[-1] == pytest.approx(1.0)

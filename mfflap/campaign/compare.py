@@ -244,6 +244,7 @@ def plot_comparison(path: str | Path, comparison: CampaignComparison,
     import matplotlib.pyplot as plt
 
     from mfflap.campaign.records import read_record
+    from mfflap.plots import save_figure
 
     folder_b = Path(comparison.folder_b)
     params = {c.case_id: read_record(folder_b / f"{c.case_id}.h5").parameters
@@ -274,6 +275,6 @@ def plot_comparison(path: str | Path, comparison: CampaignComparison,
     axes[0].legend(fontsize=7)
     fig.suptitle(f"{labels[0]} against {labels[1]}", fontsize=9)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, dpi=110)
     plt.close(fig)
     return Path(path)

@@ -20,6 +20,7 @@ from mfflap.campaign.compare import CampaignComparison, CaseComparison
 from mfflap.campaign.records import CfdRecord, read_record
 from mfflap.errors import MfflapError
 from mfflap.performance import thrust_and_power
+from mfflap.plots import save_figure
 
 #: (record attribute or "thrust", axis label) per panel, top to bottom
 PANELS = (("normal_force", "F_n [N]"), ("tangential_force", "F_t [N]"),
@@ -101,7 +102,7 @@ def plot_histories(folder: str | Path, comparison: CampaignComparison,
         b = read_record(Path(comparison.folder_b) / f"{case_id}.h5")
         fig = history_figure(a, b, case, labels)
         path = folder / f"{case_id}.png"
-        fig.savefig(path, dpi=100)
+        save_figure(fig, path, dpi=100)
         plt.close(fig)
         written.append(path)
     return written

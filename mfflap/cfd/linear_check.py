@@ -193,6 +193,8 @@ def plot_checks(path: str | Path, records: Sequence[CfdRecord], model: ForceMode
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from mfflap.plots import save_figure
+
     n = len(records)
     cols = min(3, max(n, 1))
     rows = -(-n // cols)
@@ -214,6 +216,6 @@ def plot_checks(path: str | Path, records: Sequence[CfdRecord], model: ForceMode
         ax.set_visible(False)
     axes.flat[0].legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, dpi=110)
     plt.close(fig)
     return Path(path)

@@ -294,10 +294,9 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
                                   fluent_depth_m=depth, thin_aerofoil=thin_aerofoil)
     out = comparison.summary
     if plot_path is not None:
-        from mfflap.plots import model_comparison_figure
+        from mfflap.plots import model_comparison_figure, save_figure
 
-        plot_path.parent.mkdir(parents=True, exist_ok=True)
-        model_comparison_figure(comparison).savefig(plot_path, dpi=120)
+        save_figure(model_comparison_figure(comparison), plot_path)
         click.echo(f"wrote {plot_path}", err=True)
     if save_path is not None:
         save_path.parent.mkdir(parents=True, exist_ok=True)

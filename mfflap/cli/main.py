@@ -73,10 +73,11 @@ def evaluate(case_file: Path, as_json: bool, figure: Path | None, output: Path |
     Prints the cycle means and saves a figure of thrust, power, F_n, F_t and M.
     """
     from mfflap.evaluation import evaluate_case
+    from mfflap.plots import save_figure
 
     result = evaluate_case(case_file, scheme=scheme)
     figure = figure or Path(f"{case_file.stem}.cycle.png")
-    result.figure.savefig(figure, dpi=120)
+    save_figure(result.figure, figure)
     if output is not None:
         result.save(output)
     if as_json:
@@ -108,6 +109,7 @@ def gradcheck(case_file: Path, n_steps: int, as_json: bool, figure: Path | None)
     from mfflap.gradcheck import FD_NOTE, check_gradient, scatter_figure
     from mfflap.kinematics import DiscreteMotion, to_discrete
     from mfflap.optimisation import FlappingProblem
+    from mfflap.plots import save_figure
 
     case = load_case(case_file)
     o = case.optimisation
@@ -128,7 +130,7 @@ def gradcheck(case_file: Path, n_steps: int, as_json: bool, figure: Path | None)
             checks[beta] = check_gradient(problem, motion,
                                           progress=lambda done, total: bar.update())
     figure = figure or Path(f"{case_file.stem}.gradcheck.png")
-    scatter_figure(checks).savefig(figure, dpi=120)
+    save_figure(scatter_figure(checks), figure)
     if as_json:
         echo_json({str(b): c.as_dict() for b, c in checks.items()} | {"figure": str(figure)})
         return

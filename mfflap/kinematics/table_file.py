@@ -124,5 +124,6 @@ def write_motion_table(path: str | Path, motion: Motion, end_time: float, n_rows
     lines += [f"{a!r},{b!r},{c!r}" for a, b, c in zip(t.tolist(), s.heave_position.tolist(),
                                                      s.pitch_angle.tolist(), strict=True)]
     path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text("\n".join(lines) + "\n")
     return path
