@@ -125,6 +125,24 @@ def test_cfd_parse_writes_the_figure_and_the_hdf5_file(tmp_path):
     assert read_model_comparison(h5).summary == json.loads(res.stdout)
 
 
+def test_the_fluent_report_options_are_refused_for_an_openfoam_case(tmp_path):
+    """--fx / --fy / --mz / --depth read a Fluent report; given with an OpenFOAM case they
+    used to be ignored without a word."""
+    from click.testing import CliRunner
+
+    from mfflap.cli.main import cli
+
+    case = tmp_path / "case"
+    assert CliRunner().invoke(cli, ["cfd", "write", str(CASE), str(case)]).exit_code == 0
+    for extra, said in ((["--depth", "2"], "--depth applies"),
+                        (["--fx", "a", "--mz", "b"], "--fx, --mz apply")):
+        res = CliRunner().invoke(cli, ["cfd", "parse", str(case), "--case-file", str(CASE),
+                                       *extra])
+        assert res.exit_code == 2
+        assert f"{said} only to a Fluent report; {case} is an OpenFOAM case folder" in (
+            res.output)
+
+
 @pytest.mark.parametrize(("times", "end", "reached"), [
     (np.linspace(0.0, 1.0, 101), 1.0, True),  # lands on it
     (np.linspace(0.0, 0.996, 84), 1.0, True),  # stopped within half a step of it

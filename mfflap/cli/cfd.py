@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING
 
 import click
 import numpy as np
+from click.core import ParameterSource
 
 from mfflap.cli.json_output import echo_json
 from mfflap.cli.options import (
@@ -289,6 +290,14 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
     if plot_path is not None and plot_path.suffix.lower() not in (".png", ".pdf", ".svg"):
         raise click.BadParameter(f"{plot_path}: a figure is written as .png, .pdf or .svg",
                                  param_hint="--plot")
+    if source.is_dir():  # an OpenFOAM case: the Fluent report's options would be ignored
+        context = click.get_current_context()
+        given = [f"--{name}" for name in ("fx", "fy", "mz", "depth")
+                 if context.get_parameter_source(name) is ParameterSource.COMMANDLINE]
+        if given:
+            raise click.UsageError(f"{', '.join(given)} appl{'ies' if len(given) == 1 else 'y'}"
+                                   f" only to a Fluent report; {source} is an OpenFOAM case "
+                                   "folder (its forces and depth are read from the case)")
     comparison = model_comparison(source, case_file, discard_s=discard, ramp_time_s=ramp_time,
                                   motion_table=motion_table, fluent_columns=(fx, fy, mz),
                                   fluent_depth_m=depth, thin_aerofoil=thin_aerofoil)
