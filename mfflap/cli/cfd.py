@@ -307,8 +307,7 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
 
         save_figure(model_comparison_figure(comparison), plot_path)
         click.echo(f"wrote {plot_path}", err=True)
-    if save_path is not None:
-        save_path.parent.mkdir(parents=True, exist_ok=True)
+    if save_path is not None:  # its folder made by ResultsFile
         write_model_comparison(save_path, comparison, case_file)
         click.echo(f"wrote {save_path}", err=True)
     if out["forces_reach_end_time"] is False:

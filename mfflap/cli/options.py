@@ -13,7 +13,6 @@ MESH_NAMES = ("coarse | lean | medium | medium_r20 | fine | graded | medium_edge
 VELOCITY_CONVECTION_NAMES = ("linearUpwind", "LUST")
 
 
-
 class FiniteFloat(click.ParamType):
     """A finite number above a bound (a time, a number of periods), refused with the option's
     name otherwise: ``inf`` and ``nan`` pass click's own FloatRange.
