@@ -193,6 +193,35 @@ def test_a_finished_run_that_lost_its_numerics_is_lost_and_rerun_on_request(tmp_
     assert [r.name for r in read_records(out)] == [SHORT.case_id]  # not the one kept aside
 
 
+@pytest.mark.openfoam
+def test_a_record_cut_short_is_unreadable_then_kept_aside_and_its_case_rerun(tmp_path):
+    """A record cut short (a copy interrupted, a full disk) used to stop `campaign status`
+    with the h5py error of that one file, and a resumed campaign counted it as done for
+    ever; now status calls it "unreadable" and the next run keeps it aside and reruns it."""
+    from mfflap.campaign.records import UNREADABLE_SUFFIX
+
+    out = tmp_path / "camp"
+    setup = CampaignSetup(timeout_s=900.0)
+    run_campaign([SHORT, OTHER], out, setup, progress=False)
+    path = out / f"{SHORT.case_id}.h5"
+    whole = path.read_bytes()
+    path.write_bytes(whole[:5000])
+    states = {s.case_id: s for s in campaign_status(out)}
+    assert states[OTHER.case_id].state == "done"
+    assert states[SHORT.case_id].state == "unreadable"
+    assert f"{path}: cannot be opened as an HDF5 file" in states[SHORT.case_id].message
+    assert f"keeps it as {SHORT.case_id}{UNREADABLE_SUFFIX}" in states[SHORT.case_id].message
+    again = {s.case_id: s for s in run_campaign([SHORT, OTHER], out, setup, progress=False)}
+    assert again[OTHER.case_id].message == "already finished"
+    assert again[SHORT.case_id].state == "done" and again[SHORT.case_id].message.endswith(
+        "s CPU")
+    assert (out / f"{SHORT.case_id}{UNREADABLE_SUFFIX}").read_bytes() == whole[:5000]
+    assert read_record(path).name == SHORT.case_id
+    assert sorted(r.name for r in read_records(out)) == sorted([SHORT.case_id,
+                                                               OTHER.case_id])
+    assert [s.state for s in campaign_status(out)] == ["done", "done"]
+
+
 def test_status_tells_how_far_a_started_run_got(tmp_path):
     """A case folder with a solver log and no record is "started"; the message reads the
     real pimpleFoam log's last time step, the folder a rerun resumes from, the retries."""

@@ -31,7 +31,13 @@ from typing import Any
 from distributed import WorkerPlugin
 
 from mfflap.campaign.cases import CampaignCase
-from mfflap.campaign.records import LOST_SUFFIX, RECORD_SUFFIX, read_record, write_record
+from mfflap.campaign.records import (
+    LOST_SUFFIX,
+    RECORD_SUFFIX,
+    UNREADABLE_SUFFIX,
+    read_record,
+    write_record,
+)
 from mfflap.cfd.bursts import find_load_bursts
 from mfflap.cfd.openfoam.case_lock import CaseBusyError, lock_holder
 from mfflap.cfd.openfoam.case_path import check_case_path
@@ -72,7 +78,8 @@ class CaseStatus:
     case_id: str
     #: "done" | "lost" | "failed" | "running" (by a process holding its run lock: another
     #: campaign given the same folder, a ``cfd run`` of its case) | "busy" (this campaign
-    #: left it to that process) | "started" (stopped part-way) | "pending"
+    #: left it to that process) | "started" (stopped part-way) | "pending" | "unreadable"
+    #: (a record that cannot be read)
     state: str
     message: str = ""
     #: a started case: the share of its end time its solver has simulated (0-1)
@@ -190,12 +197,24 @@ def read_toml_text(text: str) -> dict[str, Any]:
     return tomllib.loads(text)
 
 
+def unreadable_record(path: Path) -> str | None:
+    """Why the record at ``path`` cannot be read (the error's first line), or None."""
+    try:
+        read_record(path)
+    except MfflapError as err:
+        return str(err).splitlines()[0]
+    return None
+
+
 def campaign_status(out_dir: str | Path) -> list[CaseStatus]:
     """Status of every case listed in ``out_dir/campaign.toml``.
 
     A finished case's message names its numerical bursts (:mod:`mfflap.cfd.bursts`), if any;
     a finished case whose forces leave what the motion can drive is "lost"
     (:func:`lost_numerics`).
+    A record that cannot be read (cut short by a copy or a full disk) is "unreadable": its
+    message says why, and the next :func:`run_campaign` keeps it aside and runs the case
+    again.
     A case without a record whose run lock a process holds (:mod:`mfflap.cfd.openfoam.case_lock`)
     is "running": its message names the process and, once its solver has begun, how far it
     got. A case whose OpenFOAM run has begun but has no record yet and that nobody runs is
@@ -212,6 +231,12 @@ def campaign_status(out_dir: str | Path) -> list[CaseStatus]:
     bound = _bound_setup(manifest_data)
     for case_id in manifest_data.get("cases", {}):
         if (out / f"{case_id}{RECORD_SUFFIX}").exists():
+            why = unreadable_record(out / f"{case_id}{RECORD_SUFFIX}")
+            if why is not None:
+                statuses.append(CaseStatus(
+                    case_id, "unreadable", f"{why}; `mfflap campaign run` keeps it as "
+                    f"{case_id}{UNREADABLE_SUFFIX} and runs the case again"))
+                continue
             lost = lost_numerics(out / f"{case_id}{RECORD_SUFFIX}", *bound)
             if lost is not None:
                 statuses.append(CaseStatus(case_id, "lost", lost))
@@ -422,6 +447,8 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
     bound = (setup.plate, setup.fluid, setup.stream)
     for c in cases:
         record = out / f"{c.case_id}{RECORD_SUFFIX}"
+        if record.exists() and unreadable_record(record) is not None:
+            record.replace(out / f"{c.case_id}{UNREADABLE_SUFFIX}")  # kept; the case reruns
         if record.exists() and retry_failed and lost_numerics(record, *bound) is not None:
             record.replace(out / f"{c.case_id}{LOST_SUFFIX}")
         if record.exists():

@@ -36,6 +36,9 @@ RECORD_SUFFIX = ".h5"
 #: a record whose run lost its numerics, kept aside when its case is rerun
 #: (:func:`mfflap.campaign.execute.run_campaign`); not a record of the folder
 LOST_SUFFIX = ".lost.h5"
+#: a record that cannot be read (cut short by a copy, a full disk), kept aside when its case
+#: is run again (:func:`mfflap.campaign.execute.run_campaign`); not a record of the folder
+UNREADABLE_SUFFIX = ".unreadable.h5"
 _STATE_KEYS = tuple(KINEMATIC_UNITS)
 
 
@@ -203,7 +206,7 @@ def _read_record(rf: ResultsFile, path: Path) -> CfdRecord:
 
 def read_records(folder: str | Path) -> list[CfdRecord]:
     """Every record in ``folder`` (sorted by name; hidden files and records kept aside as
-    lost left out); an unreadable one raises naming its file."""
+    lost or unreadable left out); an unreadable one raises naming its file."""
     folder = Path(folder)
     if not folder.is_dir():
         raise MfflapError(f"{folder}: no such fixture folder")
@@ -213,7 +216,8 @@ def read_records(folder: str | Path) -> list[CfdRecord]:
 def record_paths(folder: str | Path) -> list[Path]:
     """The record files of ``folder``, sorted by name (see :func:`read_records`)."""
     return [p for p in sorted(Path(folder).glob(f"*{RECORD_SUFFIX}"))
-            if not p.name.startswith(".") and not p.name.endswith(LOST_SUFFIX)]
+            if not p.name.startswith(".")
+            and not p.name.endswith((LOST_SUFFIX, UNREADABLE_SUFFIX))]
 
 
 def fixture_dir(name: str = "table1_coarse") -> Path:

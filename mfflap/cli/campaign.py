@@ -111,7 +111,8 @@ def run_cmd(case_file: Path, out_dir: Path, frequencies: str | None,
 def status_cmd(out_dir: Path, as_json: bool) -> None:
     """Per-case status of the campaign in OUT_DIR (done, lost: finished with forces beyond
     what the motion can drive, failed with why, running: by the process named, started:
-    stopped with how far its solver got, pending)."""
+    stopped with how far its solver got, pending, unreadable: a record cut short, which the
+    next `campaign run` keeps aside and reruns)."""
     from mfflap.campaign.execute import campaign_status
 
     statuses = campaign_status(out_dir)
@@ -121,7 +122,8 @@ def status_cmd(out_dir: Path, as_json: bool) -> None:
     for s in statuses:
         click.echo(f"{s.state:8s} {s.case_id}  {s.message}")
     counts = {k: sum(s.state == k for s in statuses)
-              for k in ("done", "lost", "failed", "running", "started", "pending")}
+              for k in ("done", "lost", "failed", "running", "started", "pending",
+                        "unreadable")}
     click.echo(", ".join(f"{v} {k}" for k, v in counts.items()))
 
 
