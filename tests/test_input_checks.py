@@ -357,3 +357,32 @@ def test_outputs_asked_for_in_new_folders_are_written_there(tmp_path):
     table = write_motion_table(new / "g" / "m.csv", HarmonicMotion(1.0, 0.3, 0.3, 1.0), 1.0,
                                40)
     assert read_motion_table(table).table_time[-1] == pytest.approx(1.0)
+
+
+def test_a_term_that_acts_on_no_fitted_component_is_refused_by_name():
+    """The tangential force has no arm about the leading edge: fitted to the moment alone,
+    the tangential terms used to come out as 0.000, a number the data never gave."""
+    cases, _ = prepare_cases(_model_records(np.random.default_rng(4)))
+    with pytest.raises(MfflapError, match=r"do not determine the coefficients "
+                                          r"\['tangential_added_mass', 'tangential_drag'\]"):
+        identify(cases, MorisonModel(), components=("moment",), n_bootstrap=0)
+    held = identify(cases, MorisonModel(), components=("moment",), n_bootstrap=0,
+                    fixed={"tangential_added_mass": 0.87, "tangential_drag": 3.12})
+    assert held.fitted_terms == ("normal_added_mass", "normal_drag")
+    assert all(v > 0 for v in held.coefficients.values())
+
+
+def test_one_case_per_frequency_gives_no_spread_rather_than_zero():
+    """Each replicate of a stratified case bootstrap with one case per frequency is the data
+    itself: a standard error of 0 would claim certainty."""
+    records = _model_records(np.random.default_rng(5))
+    single = {}
+    for record in records:  # the first case of each frequency
+        single.setdefault(record.parameters["frequency"], record)
+    cases, _ = prepare_cases(list(single.values()))
+    assert len(cases) == 3
+    res = identify(cases, MorisonModel(), n_bootstrap=20)
+    assert all(math.isnan(res.standard_error[n]) for n in res.fitted_terms)
+    both, _ = prepare_cases(records)
+    spread = identify(both, MorisonModel(), n_bootstrap=20)
+    assert all(spread.standard_error[n] > 0 for n in spread.fitted_terms)

@@ -120,7 +120,19 @@ def _system(cases: Sequence[CaseData], model: ForceModel, fitted: Sequence[str],
 
 
 def _solve(gram: np.ndarray, rhs: np.ndarray, names: Sequence[str]) -> np.ndarray:
-    """min x'Gx - 2 g'x subject to x >= 0 (NNLS on the Cholesky factor)."""
+    """min x'Gx - 2 g'x subject to x >= 0 (NNLS on the Cholesky factor).
+
+    A term whose regressor is zero on every sample fitted (a tangential term fitted to the
+    moment about the leading edge alone, which the tangential force has no arm for) is not
+    determined by the data: refused by name, where the ridge below would set it to 0.
+    """
+    diagonal = np.diag(gram)
+    idle = [n for n, d in zip(names, diagonal, strict=True)
+            if not d > 1e-12 * max(float(diagonal.max()), 0.0)]
+    if idle and len(idle) < len(names):
+        raise MfflapError(f"the data do not determine the coefficients {idle}: their terms are "
+                          "zero on every sample of the fitted components; fit the components "
+                          "they act on, or fix them")
     ridge = 1e-12 * np.trace(gram) / len(gram)
     g = gram + ridge * np.eye(len(gram))
     try:
@@ -172,8 +184,9 @@ def identify(cases: Sequence[CaseData], model: ForceModel,
     fixed
         Coefficients held at the given values.
     n_bootstrap
-        Stratified case-bootstrap replicates (0 for none). Below 2 the fitted coefficients'
-        standard errors and intervals are NaN: not estimated (a fixed coefficient's are 0).
+        Stratified case-bootstrap replicates (0 for none). Below 2, or when no frequency
+        has two cases or more to resample, the fitted coefficients' standard errors and
+        intervals are NaN: not estimated (a fixed coefficient's are 0).
     excluded
         Cases already left out (e.g. failed CFD), carried into the result and the report.
     """
@@ -217,7 +230,9 @@ def identify(cases: Sequence[CaseData], model: ForceModel,
     se = {n: 0.0 if n in fixed else float("nan") for n in names}
     interval = {n: (coeffs[n], coeffs[n]) if n in fixed else (float("nan"), float("nan"))
                 for n in names}
-    if n_bootstrap > 1:
+    # with one case per frequency every replicate is the data themselves: a spread of 0
+    # would claim certainty, so none is estimated
+    if n_bootstrap > 1 and any(len(g) > 1 for g in groups):
         for j, n in enumerate(fitted):
             col = boot[:, j][np.isfinite(boot[:, j])]
             se[n] = float(np.std(col, ddof=1))

@@ -51,7 +51,7 @@ def frequency_weights(frequencies: Sequence[float],
     else:
         w = np.asarray(list(strategy), dtype=float)
         if w.shape != (n,) or np.any(w < 0) or not np.all(np.isfinite(w)) or w.sum() <= 0:
-            raise ConfigError(f"weights {list(w)!r}: need one finite weight >= 0 per distinct "
+            raise ConfigError(f"weights {w.tolist()}: need one finite weight >= 0 per distinct "
                               f"frequency {distinct} and a positive sum",
                               key="identification.frequency_weights")
     w = w / w.sum()

@@ -209,8 +209,9 @@ def add_identification_sections(rep: Report, results: Mapping[str, Identificatio
                                 "Coefficients and bootstrap 95 % intervals per strategy"))
     if any(not np.isfinite(r.standard_error[n]) for r in results.values()
            for n in r.fitted_terms):
-        s.blocks.append(text_html("The identification ran without bootstrap replicates (fewer "
-                                  "than 2): the coefficients' uncertainty is not estimated.",
+        s.blocks.append(text_html("The coefficients' uncertainty is not estimated: the "
+                                  "identification ran with fewer than 2 bootstrap replicates, "
+                                  "or with no frequency that has two cases to resample.",
                                   warn=True))
     n_per_f = {}
     for p in first.case_parameters:
