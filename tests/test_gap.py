@@ -290,3 +290,12 @@ def test_vorticity_at_the_largest_residual_from_real_openfoam_fields(tmp_path):
                                    "--output", str(tmp_path / "g.h5")])
     assert res.exit_code == 0, res.output
     assert "live: vorticity at t =" in (tmp_path / "g.html").read_text()
+    # the flow of another run is refused: its vorticity would be of a motion the record
+    # never had
+    other = next(p.stem for p in sorted(records.glob("*.h5")) if p.stem != "live")
+    res = CliRunner().invoke(cli, ["gap", "diagnose", str(CASE), "--fixtures", str(records),
+                                   "--flow", f"{other}={tmp_path / 'of'}", "--discard", "0",
+                                   "--output", str(tmp_path / "g2.h5")])
+    assert res.exit_code == 2
+    assert f"{tmp_path / 'of'} is not the run of record {other}: it was written" in res.output
+    assert not (tmp_path / "g2.h5").exists()

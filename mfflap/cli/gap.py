@@ -71,7 +71,7 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
     diag, where, pred = diagnose_cases(case, cases, alpha=alpha, min_gain=min_gain)
     snapshots = []
     for item in flow_dirs:
-        from mfflap.gap.flowfield import vorticity_figure
+        from mfflap.gap.flowfield import motion_mismatch, vorticity_figure
 
         name, _, folder = item.partition("=")
         index = next((i for i, c in enumerate(cases) if c.name == name), None)
@@ -79,6 +79,10 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
             raise click.BadParameter(f"{item!r}: expected CASE=DIR with CASE one of the records",
                                      param_hint="--flow")
         c = cases[index]
+        mismatch = motion_mismatch(folder, c.state)
+        if mismatch is not None:
+            raise click.BadParameter(f"{item!r}: {folder} is not the run of record {name}: "
+                                     f"{mismatch}", param_hint="--flow")
         residual = c.cfd_signal("normal_force") - pred[index]["normal_force"]
         t_peak = float(c.state.time[int(np.argmax(np.abs(residual)))])
         fig, shown = vorticity_figure(folder, t_peak, case.plate.chord)
