@@ -2,7 +2,9 @@
 (motion tables, external force histories).
 
 Lines that are empty or start with ``#`` are skipped; the first other line is the header.
-Every error names the file and the line.
+Values are separated by commas, or by semicolons or tabs when the header is (as spreadsheets
+in many locales save CSV); the decimal mark is ``.``. A UTF-8 byte-order mark (Excel's "CSV
+UTF-8") is skipped. Every error names the file and the line.
 """
 
 from __future__ import annotations
@@ -58,7 +60,7 @@ def read_csv_columns(path: str | Path, required: Sequence[str],
     """
     path = Path(path)
     try:
-        text = path.read_text()
+        text = path.read_text(encoding="utf-8-sig")  # a byte-order mark is not a column name
     except UnicodeDecodeError as exc:
         raise ParseError(f"not a text file ({exc.reason})", path=str(path)) from exc
     lines = [(i, line) for i, line in enumerate(text.splitlines(), start=1)
@@ -66,7 +68,8 @@ def read_csv_columns(path: str | Path, required: Sequence[str],
     if not lines:
         raise ParseError("no header line (an empty file)", path=str(path))
     header_line, header_text = lines[0]
-    header = [h.strip() for h in header_text.split(",")]
+    separator = next((s for s in (",", ";", "\t") if s in header_text), ",")
+    header = [h.strip() for h in header_text.split(separator)]
     if len(set(header)) != len(header):
         raise ParseError(f"a column is named twice in the header {header}", path=str(path),
                          line=header_line)
@@ -81,14 +84,18 @@ def read_csv_columns(path: str | Path, required: Sequence[str],
                              f"has {present or 'none'}", path=str(path), line=header_line)
     rows, numbers = [], []
     for i, line in lines[1:]:
-        parts = line.split(",")
+        parts = line.split(separator)
         if len(parts) != len(header):
-            raise ParseError(f"{len(parts)} values for {len(header)} columns",
+            raise ParseError(f"{len(parts)} values for {len(header)} columns "
+                             f"(separated by {separator!r}, as the header is)",
                              path=str(path), line=i)
         try:
             values = [float(p) for p in parts]
         except ValueError as exc:
-            raise ParseError(f"unreadable number: {exc}", path=str(path), line=i) from exc
+            comma = " (the decimal mark is '.', not ',')" if any(
+                "," in p for p in parts) else ""
+            raise ParseError(f"unreadable number: {exc}{comma}", path=str(path),
+                             line=i) from exc
         bad = [h for h, v in zip(header, values, strict=True) if not np.isfinite(v)]
         if bad:
             raise ParseError(f"column {bad[0]} is not finite", path=str(path), line=i)

@@ -85,6 +85,36 @@ def test_bad_tables_are_refused_naming_file_and_line(tmp_path, edit, message, li
         assert info.value.line == line, str(info.value)
 
 
+@pytest.mark.parametrize(("name", "encode"), [
+    ("excel_utf8", lambda text: b"\xef\xbb\xbf" + text.encode()),  # Excel's "CSV UTF-8"
+    ("semicolons", lambda text: text.replace(",", ";").encode()),  # spreadsheets in many
+    ("tabs", lambda text: text.replace(",", "\t").encode()),       # locales
+    ("windows", lambda text: text.replace("\n", "\r\n").encode()),
+    ("spaced", lambda text: text.replace(",", ", ").encode())])
+def test_a_table_saved_by_a_spreadsheet_reads_as_the_same_motion(tmp_path, name, encode):
+    """Before: the byte-order mark became part of the first column's name, and semicolons
+    or tabs made the header one column, each refused as 'missing column'."""
+    plain = read_motion_table(write_table(tmp_path / "plain.csv"))
+    saved = tmp_path / f"{name}.csv"
+    saved.write_bytes(encode(write_table(tmp_path / "src.csv").read_text()))
+    motion = read_motion_table(saved)
+    np.testing.assert_array_equal(motion.table_time, plain.table_time)
+    kept, exact = motion.sample(T), plain.sample(T)
+    np.testing.assert_array_equal(kept.heave_position, exact.heave_position)
+    np.testing.assert_array_equal(kept.pitch_angle, exact.pitch_angle)
+
+
+def test_a_decimal_comma_is_refused_with_the_reason(tmp_path):
+    text = write_table(tmp_path / "src.csv").read_text().replace(",", ";")
+    lines = text.splitlines()
+    lines[3] = lines[3].replace(".", ",")  # the second data row, in a comma-decimal locale
+    path = tmp_path / "comma.csv"
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(ParseError, match=r"the decimal mark is '\.', not ','") as info:
+        read_motion_table(path)
+    assert info.value.line == 4 and "comma.csv" in str(info.value)
+
+
 def test_a_binary_file_is_refused(tmp_path):
     path = tmp_path / "motion.csv"
     path.write_bytes(b"\x89HDF\r\n\x1a\n\xff\xfe")
