@@ -65,6 +65,16 @@ REFUSED = [
      "x>=0"),
     (["campaign", "compare", "OUT", "OUT", "--start", "nan"], "--start", "finite number >= 0"),
     (["campaign", "compare", "OUT", "OUT", "--end", "-1"], "--end", "finite number > 0"),
+    (["campaign", "run", str(CASE), "--out", "OUT", "--frequencies", "1,1"], "--frequencies",
+     "1 given twice"),
+    (["campaign", "run", str(CASE), "--out", "OUT", "--frequencies", ","], "--frequencies",
+     "no numbers"),
+    (["campaign", "run", str(CASE), "--out", "OUT", "--phases", "90,nan"], "--phases",
+     "every number must be finite"),
+    (["optimise", str(CASE), "--betas", "0,0.5,0", "--output", "OUT/o.h5"], "--betas",
+     "0 given twice"),
+    (["identify", str(CASE), "--weights", "1,x", "--output", "OUT/i.h5"], "--weights",
+     "expected comma-separated numbers"),
     (["gap", "blindtest", "--trials", "0"], "--trials", "x>=1"),
     (["gap", "blindtest", "--snr", "nan"], "--snr", "finite number > 0"),
 ]
@@ -197,6 +207,11 @@ def test_blind_test_and_diagnosis_refuse_impossible_settings():
 def test_a_campaign_without_workers_or_time_is_refused_before_its_folder_is_made(tmp_path):
     cases = grid_cases(IdentificationGrid(), frequencies=[1.0], heave_amplitudes=[0.3],
                        phases_deg=[90])
+    with pytest.raises(ConfigError, match="the campaign has no cases") as err:
+        run_campaign([], tmp_path / "c", progress=False)
+    with pytest.raises(ConfigError, match="lists a case twice: ") as err:
+        run_campaign([*cases, *cases], tmp_path / "c", progress=False)
+    assert err.value.key == "cases"
     with pytest.raises(ConfigError, match="at least one worker") as err:
         run_campaign(cases, tmp_path / "c", n_workers=0, progress=False)
     assert err.value.key == "n_workers"

@@ -415,9 +415,9 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
     Raises
     ------
     ConfigError
-        Before any case runs: no worker, a time limit that is not a finite time > 0 s, a
-        scheduler address dask cannot parse, a folder path OpenFOAM cannot read, or a case
-        listed twice.
+        Before the folder is made: no case, a case listed twice, no worker, a time limit
+        that is not a finite time > 0 s, a scheduler address dask cannot parse, or a folder
+        path OpenFOAM cannot read.
     MfflapError
         If the scheduler at ``scheduler_address`` cannot be reached.
     """
@@ -434,11 +434,14 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
                           f"{setup.timeout_s!r}", key="timeout_s")
     if scheduler_address is not None:
         _check_scheduler_address(scheduler_address)
+    ids = [c.case_id for c in cases]
+    if not ids:
+        raise ConfigError("the campaign has no cases", key="cases")
+    if len(set(ids)) != len(ids):
+        raise ConfigError(f"the campaign lists a case twice: "
+                          f"{sorted({i for i in ids if ids.count(i) > 1})}", key="cases")
     out = check_case_path(out_dir)  # every case runs below it
     out.mkdir(parents=True, exist_ok=True)
-    ids = [c.case_id for c in cases]
-    if len(set(ids)) != len(ids):
-        raise ConfigError("the campaign lists a case twice", key="cases")
     _write_manifest(out, cases, setup)
     for stale in out.glob(f".*{RECORD_SUFFIX}.*.tmp"):  # a record half-written when killed
         stale.unlink(missing_ok=True)

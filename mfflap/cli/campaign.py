@@ -9,16 +9,7 @@ from pathlib import Path
 import click
 
 from mfflap.cli.json_output import echo_json
-from mfflap.cli.options import NON_NEGATIVE, POSITIVE, mesh_and_setup_options
-
-
-def _floats(text: str | None) -> list[float] | None:
-    if text is None:
-        return None
-    try:
-        return [float(v) for v in text.split(",") if v.strip()]
-    except ValueError as exc:
-        raise click.BadParameter(f"{text!r}: expected comma-separated numbers") from exc
+from mfflap.cli.options import NON_NEGATIVE, POSITIVE, FloatList, mesh_and_setup_options
 
 
 @contextmanager
@@ -47,9 +38,10 @@ def campaign() -> None:
 @click.argument("case_file", type=click.Path(dir_okay=False, exists=True, path_type=Path))
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
               required=True, help="Campaign folder: one HDF5 record per finished case.")
-@click.option("--frequencies", help="Subset of the grid's frequencies, Hz (e.g. 0.1,1,2).")
-@click.option("--heave-amplitudes", help="Subset of the heave amplitudes, m.")
-@click.option("--phases", help="Subset of the phases, deg.")
+@click.option("--frequencies", type=FloatList(),
+              help="Subset of the grid's frequencies, Hz (e.g. 0.1,1,2).")
+@click.option("--heave-amplitudes", type=FloatList(), help="Subset of the heave amplitudes, m.")
+@click.option("--phases", type=FloatList(), help="Subset of the phases, deg.")
 @mesh_and_setup_options()
 @click.option("--workers", default=1, show_default=True, type=click.IntRange(min=1),
               help="LocalCluster worker processes.")
@@ -65,8 +57,8 @@ def campaign() -> None:
 @click.option("--timeout", default=6 * 3600.0, show_default=True, type=POSITIVE,
               help="Seconds per case.")
 @click.option("--dry-run", is_flag=True, help="List the cases and exit.")
-def run_cmd(case_file: Path, out_dir: Path, frequencies: str | None,
-            heave_amplitudes: str | None, phases: str | None, mesh: str | None,
+def run_cmd(case_file: Path, out_dir: Path, frequencies: list[float] | None,
+            heave_amplitudes: list[float] | None, phases: list[float] | None, mesh: str | None,
             setup_name: str | None, workers: int,
             scheduler: str | None, retry_failed: bool, keep_cases: bool,
             single_precision: bool, timeout: float, dry_run: bool) -> None:
@@ -82,8 +74,7 @@ def run_cmd(case_file: Path, out_dir: Path, frequencies: str | None,
 
     spec, solver = mesh_and_solver(mesh, setup_name)
     case = load_case(case_file)
-    cases = grid_cases(case.identification, _floats(frequencies), _floats(heave_amplitudes),
-                       _floats(phases))
+    cases = grid_cases(case.identification, frequencies, heave_amplitudes, phases)
     if dry_run:
         for c in cases:
             click.echo(f"{c.case_id}  duration {c.duration:g} s  ramp {c.ramp_time:g} s")

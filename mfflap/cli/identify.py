@@ -8,15 +8,13 @@ import click
 import numpy as np
 
 from mfflap.cli.json_output import echo_json
+from mfflap.cli.options import FloatList
 
 
-def _strategies(names: tuple[str, ...], weights: str | None, case) -> list:
+def _strategies(names: tuple[str, ...], weights: list[float] | None, case) -> list:
     chosen: list = list(names) or ["uniform", "low", "high"]
     if weights:
-        try:
-            chosen.append([float(v) for v in weights.split(",")])
-        except ValueError as exc:
-            raise click.BadParameter(f"{weights!r}: expected comma-separated numbers") from exc
+        chosen.append(list(weights))
     elif case.identification.frequency_weights is not None and not names:
         chosen.append(list(case.identification.frequency_weights))
     return chosen
@@ -32,7 +30,7 @@ def _strategies(names: tuple[str, ...], weights: str | None, case) -> list:
 @click.option("--strategy", "strategies", multiple=True,
               type=click.Choice(["uniform", "low", "high"]),
               help="Weighting strategy; repeat for several (default: all three).")
-@click.option("--weights", default=None,
+@click.option("--weights", type=FloatList(unique=False), default=None,
               help="User weights per frequency, ascending frequency, comma-separated.")
 @click.option("--components", default=None,
               help="Fitted components, comma-separated (default normal_force,"
@@ -44,7 +42,7 @@ def _strategies(names: tuple[str, ...], weights: str | None, case) -> list:
               default=Path("identification.h5"), show_default=True, help="HDF5 results.")
 @click.option("--json", "as_json", is_flag=True, help="Print coefficients as JSON.")
 def identify(case_file: Path, folders: tuple[Path, ...], strategies: tuple[str, ...],
-             weights: str | None, components: str | None, n_bootstrap: int, output: Path,
+             weights: list[float] | None, components: str | None, n_bootstrap: int, output: Path,
              as_json: bool) -> None:
     """Fit the Morison coefficients of CASE_FILE's model to CFD records."""
     from mfflap.campaign.records import fixture_dir

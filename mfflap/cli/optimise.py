@@ -7,11 +7,13 @@ from pathlib import Path
 import click
 
 from mfflap.cli.json_output import echo_json
+from mfflap.cli.options import FloatList
 
 
 @click.command()
 @click.argument("case_file", type=click.Path(dir_okay=False, exists=True, path_type=Path))
-@click.option("--betas", default=None, help="Comma-separated betas (default: the case's).")
+@click.option("--betas", type=FloatList(), default=None,
+              help="Comma-separated betas (default: the case's).")
 @click.option("--starts", default=3, show_default=True, type=click.IntRange(min=1),
               help="Multi-start: best sinusoid plus points along the Pareto front.")
 @click.option("--ipopt/--no-ipopt", default=True, show_default=True,
@@ -23,7 +25,7 @@ from mfflap.cli.json_output import echo_json
 @click.option("--report", "report_path", type=click.Path(dir_okay=False, path_type=Path),
               default=None, help="HTML report (default: <output>.html).")
 @click.option("--json", "as_json", is_flag=True, help="Print the optimised means as JSON.")
-def optimise(case_file: Path, betas: str | None, starts: int, ipopt: bool, gain_table: bool,
+def optimise(case_file: Path, betas: list[float] | None, starts: int, ipopt: bool, gain_table: bool,
              output: Path, report_path: Path | None, as_json: bool) -> None:
     """Optimise the motion of CASE_FILE for each beta with the discrete adjoint."""
     from mfflap.config import load_case
@@ -35,19 +37,12 @@ def optimise(case_file: Path, betas: str | None, starts: int, ipopt: bool, gain_
     from mfflap.results import ResultsFile
 
     case = load_case(case_file)
-    beta_list = None
-    if betas:
-        try:
-            beta_list = [float(b) for b in betas.split(",")]
-        except ValueError as exc:
-            raise click.BadParameter(f"{betas!r}: expected comma-separated numbers") from exc
-
     def progress(msg: str) -> None:
         if not as_json:
             click.echo(msg, err=True)
 
     model = case.morison_model()
-    study = beta_study(case, beta_list, n_starts=starts, with_ipopt=ipopt, model=model,
+    study = beta_study(case, betas, n_starts=starts, with_ipopt=ipopt, model=model,
                        progress=progress)
     gain = make_gain_table(case, model=model, sweep=study.sweep, progress=progress) \
         if gain_table else None

@@ -43,6 +43,40 @@ class FiniteFloat(click.ParamType):
         return number
 
 
+class FloatList(click.ParamType):
+    """Comma-separated finite numbers (``1,2,0.5``), at least one; with ``unique`` a number
+    given twice is refused, by the option's name.
+
+    Parameters
+    ----------
+    unique
+        Whether each number may appear only once (a grid's values, a list of betas).
+    """
+
+    name = "list"
+
+    def __init__(self, unique: bool = True) -> None:
+        self.unique = unique
+
+    def convert(self, value, param, ctx) -> list[float]:
+        if isinstance(value, list):
+            return value
+        parts = [v.strip() for v in str(value).split(",")]
+        try:
+            numbers = [float(v) for v in parts if v]
+        except ValueError:
+            self.fail(f"{value!r}: expected comma-separated numbers", param, ctx)
+        if not numbers:
+            self.fail(f"{value!r}: no numbers", param, ctx)
+        if not all(math.isfinite(n) for n in numbers):
+            self.fail(f"{value!r}: every number must be finite", param, ctx)
+        if self.unique and len(set(numbers)) != len(numbers):
+            twice = sorted({n for n in numbers if numbers.count(n) > 1})
+            self.fail(f"{value!r}: {', '.join(f'{n:g}' for n in twice)} given twice",
+                      param, ctx)
+        return numbers
+
+
 #: a finite number > 0: a time span, a number of periods, a time step
 POSITIVE = FiniteFloat()
 #: a finite number >= 0: a start-up ramp, a time discarded
