@@ -75,6 +75,8 @@ REFUSED = [
      "0 given twice"),
     (["identify", str(CASE), "--weights", "1,x", "--output", "OUT/i.h5"], "--weights",
      "expected comma-separated numbers"),
+    (["cfd", "convergence", str(CASE), "OUT", "--courant", "4,x"], "--courant",
+     "expected comma-separated numbers"),
     (["gap", "blindtest", "--trials", "0"], "--trials", "x>=1"),
     (["gap", "blindtest", "--snr", "nan"], "--snr", "finite number > 0"),
 ]

@@ -13,6 +13,7 @@ from mfflap.cli.json_output import echo_json
 from mfflap.cli.options import (
     NON_NEGATIVE,
     POSITIVE,
+    FloatList,
     mesh_and_setup_options,
     velocity_convection_option,
 )
@@ -372,7 +373,7 @@ def fluent(case_file: Path, out_dir: Path, cycles: float, ramp_time: float, time
 @click.argument("out_dir", type=click.Path(file_okay=False, path_type=Path))
 @click.option("--meshes", default="coarse,medium,fine", show_default=True,
               help="Mesh resolutions, coarsest first; the last is the reference.")
-@click.option("--courant", "courants", default="4,2", show_default=True,
+@click.option("--courant", "courants", default="4,2", show_default=True, type=FloatList(),
               help="Courant limits; one mesh (--time-step-mesh) is repeated at each further "
                    "one.")
 @click.option("--time-step-mesh", default=None,
@@ -407,9 +408,9 @@ def fluent(case_file: Path, out_dir: Path, cycles: float, ramp_time: float, time
                    "after it, e.g. --cycles 3).")
 @_motion_table_options("")
 @click.option("--json", "as_json", is_flag=True, help="Print the NRMSE table as JSON.")
-def convergence(case_file: Path, out_dir: Path, meshes: str, courants: str, cycles: float,
-                ramp_time: float | None, procs: int, pressure_solver: str, n_correctors: int,
-                far_field: str, turbulence_convection: str, floor: bool, setup_names: str,
+def convergence(case_file: Path, out_dir: Path, meshes: str, courants: list[float],
+                cycles: float, ramp_time: float | None, procs: int, pressure_solver: str,
+                n_correctors: int, far_field: str, turbulence_convection: str, floor: bool, setup_names: str,
                 time_step_mesh: str | None, phase_from: float | None,
                 motion_table: Path | None, end_time: float | None, as_json: bool) -> None:
     """Mesh and time-step convergence of the [motion] of CASE_FILE: NRMSE between runs, the
@@ -442,7 +443,7 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: str, cycl
     try:
         study = run_convergence(out_dir, motion, end,
                                 meshes=[m.strip() for m in meshes.split(",")],
-                                courants=[float(c) for c in courants.split(",")], ramp_time=ramp,
+                                courants=courants, ramp_time=ramp,
                                 plate=case.plate, fluid=case.fluid, stream=case.flow,
                                 n_procs=procs, floor=floor, time_step_mesh=time_step_mesh,
                                 setups=[setup(n.strip()) for n in setup_names.split(",")
