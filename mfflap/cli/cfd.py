@@ -410,8 +410,8 @@ def fluent(case_file: Path, out_dir: Path, cycles: float, ramp_time: float, time
 @click.option("--json", "as_json", is_flag=True, help="Print the NRMSE table as JSON.")
 def convergence(case_file: Path, out_dir: Path, meshes: str, courants: list[float],
                 cycles: float, ramp_time: float | None, procs: int, pressure_solver: str,
-                n_correctors: int, far_field: str, turbulence_convection: str, floor: bool, setup_names: str,
-                time_step_mesh: str | None, phase_from: float | None,
+                n_correctors: int, far_field: str, turbulence_convection: str, floor: bool,
+                setup_names: str, time_step_mesh: str | None, phase_from: float | None,
                 motion_table: Path | None, end_time: float | None, as_json: bool) -> None:
     """Mesh and time-step convergence of the [motion] of CASE_FILE: NRMSE between runs, the
     grid convergence index of mean thrust, power, peak F_n and RMS moment over the three
