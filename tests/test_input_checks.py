@@ -176,6 +176,16 @@ def test_identify_without_bootstrap_prints_strict_json_and_no_false_zero(tmp_pat
     assert rep.exit_code == 0, rep.output
     page = html.read_text()
     assert "uncertainty is not estimated" in page and ">nan<" not in page
+    # with records other than the ones it was fitted to, the report would draw their maps
+    # beside these coefficients' metrics
+    from mfflap.campaign.records import fixture_dir
+
+    other = runner.invoke(cli, ["report", "identification", str(out), "--fixtures",
+                                str(fixture_dir("small_motion_coarse")), "--out",
+                                str(tmp_path / "other.html")])
+    assert other.exit_code == 2
+    assert "small_motion_coarse lacks 43 of the 43 records" in other.output
+    assert not (tmp_path / "other.html").exists()
 
 
 def test_strict_json_value_makes_every_non_finite_number_null():

@@ -113,6 +113,13 @@ def report_identification(results_file: Path, folders: tuple[Path, ...],
                               "`mfflap identify` or `mfflap run`")
         source = str(rf.h5["identification"].attrs.get("source", ""))
     cases, _ = load_cases(case, folders or source)
+    fitted = set(next(iter(results.values())).case_names)
+    missing = sorted(fitted - {c.name for c in cases})
+    if missing:  # maps and overlays of other records beside these coefficients' metrics
+        raise MfflapError(f"{sources_shown(folders or source)} lacks {len(missing)} of the "
+                          f"{len(fitted)} records {results_file} was fitted to (e.g. "
+                          f"{', '.join(missing[:3])}); give the folders it was fitted from "
+                          "with --fixtures")
     out_path = out_path or results_file.with_suffix(".html")
     identification_report(out_path, results, cases, case.morison_model(), case.flow.velocity,
                           sources_shown(folders or source))
