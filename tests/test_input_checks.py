@@ -77,6 +77,9 @@ REFUSED = [
      "expected comma-separated numbers"),
     (["cfd", "convergence", str(CASE), "OUT", "--courant", "4,x"], "--courant",
      "expected comma-separated numbers"),
+    (["backtest", str(CASE), "--fixtures", "OUT/typo"], "--fixtures", "does not exist"),
+    (["run", str(CASE), "--out", "OUT", "--backtest-fixtures", "OUT/typo"],
+     "--backtest-fixtures", "does not exist"),
     (["gap", "blindtest", "--trials", "0"], "--trials", "x>=1"),
     (["gap", "blindtest", "--snr", "nan"], "--snr", "finite number > 0"),
 ]

@@ -17,7 +17,7 @@ from mfflap.cli.options import mesh_and_setup_options
 @click.option("--work", "work_dir", type=click.Path(file_okay=False, path_type=Path),
               default=Path("backtest_cases"), show_default=True, help="OpenFOAM case folder.")
 @click.option("--fixtures", "fixture_folders", multiple=True,
-              type=click.Path(file_okay=False, path_type=Path),
+              type=click.Path(file_okay=False, exists=True, path_type=Path),
               help="Folders of back-test records (default: the shipped ones).")
 @click.option("--save-to", type=click.Path(file_okay=False, path_type=Path), default=None,
               help="Write live runs as back-test records (fixtures) here.")

@@ -18,7 +18,7 @@ from mfflap.cli.json_output import echo_json
               help="Identification CFD records, a folder or one record file (default: "
                    "shipped fixtures); repeat to pool several.")
 @click.option("--backtest-fixtures", multiple=True,
-              type=click.Path(file_okay=False, path_type=Path),
+              type=click.Path(file_okay=False, exists=True, path_type=Path),
               help="Back-test CFD records (default: shipped fixtures).")
 @click.option("--live", is_flag=True, help="Run the back-test CFD live with OpenFOAM.")
 @click.option("--coefficients", default="case", show_default=True,
