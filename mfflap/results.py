@@ -13,6 +13,7 @@ store the package's objects and read them back into the same objects.
 from __future__ import annotations
 
 import datetime as _dt
+import os
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -36,7 +37,9 @@ class ResultsFile:
     path
         File path.
     mode
-        ``"w"`` (create/overwrite), ``"a"`` (append) or ``"r"``.
+        ``"w"`` (create/overwrite: written beside ``path`` and put in its place when the
+        file is closed cleanly, so that an error or Ctrl-C while writing keeps what ``path``
+        held), ``"a"`` (append) or ``"r"``.
     kind
         What the file holds (e.g. ``"evaluation"``, ``"optimisation"``), written at creation.
     config_toml
@@ -55,15 +58,21 @@ class ResultsFile:
             raise MfflapError(f"{self.path}: no such results file")
         if mode != "r":  # a file asked for in a new folder: made, not failed after the work
             self.path.parent.mkdir(parents=True, exist_ok=True)
+        # "w" writes beside the file and takes its place on a clean close: a run stopped or
+        # failed while writing leaves the results written before whole
+        self._writing = (self.path.with_name(f".{self.path.name}.{os.getpid()}.tmp")
+                         if mode == "w" else None)
         try:
-            self._h5 = h5py.File(self.path, mode)
+            self._h5 = h5py.File(self._writing or self.path, mode)
         except OSError as err:  # not HDF5, cut short, or locked by another writer
             raise MfflapError(f"{self.path}: cannot be opened as an HDF5 file ({err})") from err
         if mode == "r":
             version = self._h5.attrs.get("mfflap_schema_version")
             if version is None:
+                self._h5.close()
                 raise MfflapError(f"{self.path}: not an mfflap results file (no schema version)")
             if int(version) > SCHEMA_VERSION:
+                self._h5.close()
                 raise MfflapError(
                     f"{self.path}: schema version {int(version)} is newer than this mfflap "
                     f"reads ({SCHEMA_VERSION}); upgrade mfflap"
@@ -92,14 +101,25 @@ class ResultsFile:
         return str(self._h5["inputs"].attrs.get("config_toml", ""))
 
     def close(self) -> None:
-        """Close the file."""
+        """Close the file; one opened with ``"w"`` then takes the place of ``path``."""
         self._h5.close()
+        if self._writing is not None and self._writing.exists():
+            os.replace(self._writing, self.path)
+
+    def discard(self) -> None:
+        """Close a file opened with ``"w"`` without writing it: ``path`` keeps what it held."""
+        self._h5.close()
+        if self._writing is not None:
+            self._writing.unlink(missing_ok=True)
 
     def __enter__(self) -> ResultsFile:
         return self
 
-    def __exit__(self, *exc) -> None:
-        self.close()
+    def __exit__(self, exc_type, *exc) -> None:
+        if exc_type is not None and self._writing is not None:
+            self.discard()  # an error or Ctrl-C while writing: the file before is kept
+        else:
+            self.close()
 
     # -- generic -----------------------------------------------------------------------------
     def write_group(self, name: str, arrays: Mapping[str, Any], units: Mapping[str, str],

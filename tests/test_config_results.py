@@ -128,6 +128,29 @@ def test_results_refuse_unitless_data_and_foreign_files(tmp_path):
         ResultsFile(tmp_path / "text.h5")
 
 
+def test_a_results_file_stopped_while_written_keeps_the_file_before(tmp_path):
+    """Written over, a results file used to be emptied at once: an error or Ctrl-C before
+    the new one was complete lost both. Now the new file takes the old one's place only
+    when it is closed cleanly."""
+    path = tmp_path / "r.h5"
+    with ResultsFile(path, "w", kind="evaluation", config_toml="old") as rf:
+        rf.write_group("g", {"x": np.arange(3.0)}, {"x": "m"})
+    for stop in (KeyboardInterrupt, MfflapError):
+        with pytest.raises(stop):
+            with ResultsFile(path, "w", kind="evaluation", config_toml="new") as rf:
+                rf.write_group("g", {"x": np.arange(5.0)}, {"x": "m"})
+                assert path.exists() and len(list(tmp_path.iterdir())) == 2  # beside it
+                raise stop("stopped while writing")
+        with ResultsFile(path, kinds=("evaluation",)) as rf:
+            assert rf.config_toml == "old" and len(rf.read_group("g")[0]["x"]) == 3
+        assert [p.name for p in tmp_path.iterdir()] == ["r.h5"]  # nothing left beside it
+    with ResultsFile(path, "w", kind="evaluation", config_toml="new") as rf:
+        rf.write_group("g", {"x": np.arange(5.0)}, {"x": "m"})
+    with ResultsFile(path) as rf:
+        assert rf.config_toml == "new" and len(rf.read_group("g")[0]["x"]) == 5
+    assert [p.name for p in tmp_path.iterdir()] == ["r.h5"]
+
+
 def test_a_cut_or_incomplete_cfd_record_is_refused_naming_its_file(tmp_path):
     """A record cut short (a copy killed midway) or missing a group says which file it is."""
     import shutil
