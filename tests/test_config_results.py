@@ -151,6 +151,23 @@ def test_a_results_file_stopped_while_written_keeps_the_file_before(tmp_path):
     assert [p.name for p in tmp_path.iterdir()] == ["r.h5"]
 
 
+def test_a_report_stopped_while_written_keeps_the_report_before(tmp_path, monkeypatch):
+    from mfflap.reports import html
+
+    path = html.Report("old report").write(tmp_path / "r.html")
+    assert "old report" in path.read_text()
+
+    class Stopped:
+        def render(self, **_):
+            raise KeyboardInterrupt
+
+    monkeypatch.setattr(html, "_TEMPLATE", Stopped())
+    with pytest.raises(KeyboardInterrupt):
+        html.Report("new report").write(path)
+    assert "old report" in path.read_text()
+    assert [p.name for p in tmp_path.iterdir()] == ["r.html"]
+
+
 def test_a_cut_or_incomplete_cfd_record_is_refused_naming_its_file(tmp_path):
     """A record cut short (a copy killed midway) or missing a group says which file it is."""
     import shutil

@@ -6,6 +6,7 @@ import base64
 import datetime as _dt
 import html
 import io
+import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -89,8 +90,14 @@ class Report:
 
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(_TEMPLATE.render(
-            title=html.escape(self.title), subtitle=html.escape(self.subtitle),
-            sections=self.sections, version=__version__,
-            created=_dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M UTC")))
+        # beside it first, then in its place: a stop while writing keeps the report before
+        beside = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+        try:
+            beside.write_text(_TEMPLATE.render(
+                title=html.escape(self.title), subtitle=html.escape(self.subtitle),
+                sections=self.sections, version=__version__,
+                created=_dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M UTC")))
+            os.replace(beside, path)
+        finally:
+            beside.unlink(missing_ok=True)
         return path
