@@ -416,3 +416,18 @@ def test_one_case_per_frequency_gives_no_spread_rather_than_zero():
     both, _ = prepare_cases(records)
     spread = identify(both, MorisonModel(), n_bootstrap=20)
     assert all(spread.standard_error[n] > 0 for n in spread.fitted_terms)
+
+
+def test_linear_check_refuses_an_empty_case_list_and_runs_a_repeated_case_once(tmp_path):
+    """`--cases ''` used to run all eleven motions, and a case id given twice was refused
+    only as a campaign listing a case twice."""
+    runner = CliRunner()
+    for empty in ("", ","):
+        res = runner.invoke(cli, ["cfd", "linear-check", str(tmp_path / "lc"), "--cases",
+                                  empty, "--list"])
+        assert res.exit_code == 2 and "--cases: no case ids" in res.output
+    case = "harmonic_f1p000_h0p0050_th0p00_phi000p0"
+    res = runner.invoke(cli, ["cfd", "linear-check", str(tmp_path / "lc"), "--cases",
+                              f"{case},{case}", "--list"])
+    assert res.exit_code == 0 and res.output.count(case) == 1
+    assert not (tmp_path / "lc").exists()

@@ -559,9 +559,12 @@ def linear_check(out_dir: Path, case_file: Path | None, mesh: str | None,
     from mfflap.toml_io import dumps
 
     motions = list(SMALL_MOTIONS)
-    if case_ids:
+    if case_ids is not None:
         known = {c.case_id: c for c in motions}
-        wanted = [s.strip() for s in case_ids.split(",") if s.strip()]
+        wanted = list(dict.fromkeys(s.strip() for s in case_ids.split(",") if s.strip()))
+        if not wanted:
+            raise click.UsageError("--cases: no case ids (leave it out for every motion; "
+                                   "--list shows them)")
         unknown = [s for s in wanted if s not in known]
         if unknown:
             raise click.UsageError(f"--cases: unknown {', '.join(unknown)}; known: "
