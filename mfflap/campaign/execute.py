@@ -474,6 +474,8 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
         try:
             client = Client(scheduler_address or cluster)
         except (OSError, TimeoutError) as err:  # the scheduler is not there (30 s timeout)
+            if scheduler_address is None:
+                raise
             raise MfflapError(f"cannot reach the dask scheduler at {scheduler_address}: {err}; "
                               f"start it (e.g. `dask scheduler`) or check the address; the "
                               f"campaign in {out} ran nothing and resumes when given one"
