@@ -1,5 +1,8 @@
-"""Impossible numbers on the command line and in the library are refused before any work,
-by the option's or key's name; ``--json`` output is strict JSON."""
+"""Realistic misuse, found by running every command with wrong, odd and borderline input:
+impossible numbers and lists are refused before any work by the option's or key's name,
+files of the wrong kind or from other runs are refused by name, outputs go to folders that
+do not exist yet, numbers that were not computed are NaN (and ``null`` in strict ``--json``
+output), never a false 0."""
 
 import json
 import math
