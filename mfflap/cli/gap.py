@@ -71,7 +71,8 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
     diag, where, pred = diagnose_cases(case, cases, alpha=alpha, min_gain=min_gain)
     snapshots = []
     for item in flow_dirs:
-        from mfflap.gap.flowfield import motion_mismatch, vorticity_figure
+        from mfflap.cfd.case_inputs import motion_mismatch
+        from mfflap.gap.flowfield import vorticity_figure
 
         name, _, folder = item.partition("=")
         index = next((i for i, c in enumerate(cases) if c.name == name), None)

@@ -18,47 +18,6 @@ def _reader(case_dir: Path) -> pv.POpenFOAMReader:
     return pv.POpenFOAMReader(str(foam))
 
 
-def motion_mismatch(case_dir: str | Path, state) -> str | None:
-    """How the motion an mfflap OpenFOAM case was written for differs from a record's, or
-    None if they agree (or the case keeps no motion samples: not written by mfflap).
-
-    The case keeps samples of its imposed heave and pitch (mfflap_case.toml,
-    :mod:`mfflap.cfd.case_inputs`); those within the record's time span are compared with
-    the record's kinematics, to 1 % of their amplitude. A flow field of another run would
-    show the vorticity of a motion the record never had.
-
-    Parameters
-    ----------
-    case_dir
-        The OpenFOAM case folder.
-    state
-        The record's :class:`~mfflap.kinematics.state.KinematicState`.
-    """
-    from mfflap.toml_io import read_toml
-
-    kept_path = Path(case_dir) / "mfflap_case.toml"
-    kept = read_toml(kept_path) if kept_path.is_file() else {}
-    if "motion_sample_time_s" not in kept:
-        return None
-    times = np.asarray(kept["motion_sample_time_s"], dtype=float)
-    inside = (times >= state.time[0]) & (times <= state.time[-1])
-    if not inside.any():
-        return (f"it was written for t = {times[0]:g}-{times[-1]:g} s, outside the record's "
-                f"{state.time[0]:g}-{state.time[-1]:g} s")
-    for key, name, unit, recorded in (
-            ("motion_sample_heave_m", "heave", "m", state.heave_position),
-            ("motion_sample_pitch_rad", "pitch", "rad", state.pitch_angle)):
-        case_values = np.asarray(kept[key], dtype=float)[inside]
-        record_values = np.interp(times[inside], state.time, recorded)
-        scale = max(float(np.max(np.abs(record_values))), float(np.max(np.abs(case_values))))
-        worst = int(np.argmax(np.abs(case_values - record_values)))
-        if abs(case_values[worst] - record_values[worst]) > 0.01 * scale + 1e-9:
-            return (f"it was written for another motion: its {name} at t = "
-                    f"{times[inside][worst]:.4g} s is {case_values[worst]:.4g} {unit}, the "
-                    f"record's {record_values[worst]:.4g} {unit}")
-    return None
-
-
 def written_times(case_dir: str | Path) -> list[float]:
     """Times at which fields were written (excluding 0)."""
     reader = _reader(Path(case_dir))
