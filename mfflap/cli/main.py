@@ -53,7 +53,6 @@ def _register_subgroups() -> None:
     cli.add_command(gap)
 
 
-
 @cli.command()
 @click.argument("case_file", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("--json", "as_json", is_flag=True, help="Print the cycle means as JSON.")
@@ -82,7 +81,7 @@ def evaluate(case_file: Path, as_json: bool, figure: Path | None, output: Path |
         result.save(output)
     if as_json:
         echo_json({"case": str(case_file), "scheme": result.scheme, **result.summary_dict(),
-                    "figure": str(figure)})
+                   "figure": str(figure)})
         return
     click.echo(f"case {case_file} ({result.description}, scheme {result.scheme})")
     for key, (value, unit) in result.summary_with_units().items():

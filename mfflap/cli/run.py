@@ -62,7 +62,6 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
                       "written times" if live else ""), err=True)
         raise click.Abort()
     if as_json:
-
         echo_json(run_summary(outcome))
         return
     click.echo(f"wrote {out_dir / 'report.html'} and {out_dir / 'results.h5'}")
