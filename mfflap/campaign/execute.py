@@ -35,6 +35,7 @@ from mfflap.campaign.records import (
     LOST_SUFFIX,
     RECORD_SUFFIX,
     UNREADABLE_SUFFIX,
+    CfdRecord,
     read_record,
     write_record,
 )
@@ -97,7 +98,7 @@ def _bound_setup(manifest: dict[str, Any]) -> tuple[Plate, Fluid, FreeStream]:
             FreeStream(**setup.get("stream", {})))
 
 
-def lost_numerics(record_path: Path, plate: Plate, fluid: Fluid, stream: FreeStream,
+def lost_numerics(rec: CfdRecord, plate: Plate, fluid: Fluid, stream: FreeStream,
                   max_lost_share: float = 0.05) -> str | None:
     """Why a finished record's run counts as lost, or None.
 
@@ -109,7 +110,6 @@ def lost_numerics(record_path: Path, plate: Plate, fluid: Fluid, stream: FreeStr
     from mfflap.cfd.bursts import bridge_load_bursts
     from mfflap.cfd.force_envelope import find_envelope_breaches
 
-    rec = read_record(record_path)
     after_ramp = rec.time >= float(rec.parameters.get("ramp_time", 0.0))
     loads, bursts = bridge_load_bursts(rec.loads, after_ramp)
     breaches = find_envelope_breaches(rec.state, loads, plate, fluid, stream,
@@ -197,13 +197,12 @@ def read_toml_text(text: str) -> dict[str, Any]:
     return tomllib.loads(text)
 
 
-def unreadable_record(path: Path) -> str | None:
-    """Why the record at ``path`` cannot be read (the error's first line), or None."""
+def read_finished_record(path: Path) -> tuple[CfdRecord | None, str | None]:
+    """The record at ``path``, or None and why it cannot be read (the error's first line)."""
     try:
-        read_record(path)
+        return read_record(path), None
     except MfflapError as err:
-        return str(err).splitlines()[0]
-    return None
+        return None, str(err).splitlines()[0]
 
 
 def campaign_status(out_dir: str | Path) -> list[CaseStatus]:
@@ -231,17 +230,17 @@ def campaign_status(out_dir: str | Path) -> list[CaseStatus]:
     bound = _bound_setup(manifest_data)
     for case_id in manifest_data.get("cases", {}):
         if (out / f"{case_id}{RECORD_SUFFIX}").exists():
-            why = unreadable_record(out / f"{case_id}{RECORD_SUFFIX}")
-            if why is not None:
+            rec, why = read_finished_record(out / f"{case_id}{RECORD_SUFFIX}")
+            if rec is None:
                 statuses.append(CaseStatus(
                     case_id, "unreadable", f"{why}; `mfflap campaign run` keeps it as "
                     f"{case_id}{UNREADABLE_SUFFIX} and runs the case again"))
                 continue
-            lost = lost_numerics(out / f"{case_id}{RECORD_SUFFIX}", *bound)
+            lost = lost_numerics(rec, *bound)
             if lost is not None:
                 statuses.append(CaseStatus(case_id, "lost", lost))
                 continue
-            bursts = find_load_bursts(read_record(out / f"{case_id}{RECORD_SUFFIX}").loads)
+            bursts = find_load_bursts(rec.loads)
             statuses.append(CaseStatus(case_id, "done", "" if not bursts else
                                        f"{len(bursts)} numerical burst(s), bridged when "
                                        f"identified; first {bursts[0].describe()}"))
@@ -450,10 +449,12 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
     bound = (setup.plate, setup.fluid, setup.stream)
     for c in cases:
         record = out / f"{c.case_id}{RECORD_SUFFIX}"
-        if record.exists() and unreadable_record(record) is not None:
-            record.replace(out / f"{c.case_id}{UNREADABLE_SUFFIX}")  # kept; the case reruns
-        if record.exists() and retry_failed and lost_numerics(record, *bound) is not None:
-            record.replace(out / f"{c.case_id}{LOST_SUFFIX}")
+        if record.exists():  # read once: unreadable, or lost and asked to rerun, is kept aside
+            rec, _ = read_finished_record(record)
+            if rec is None:
+                record.replace(out / f"{c.case_id}{UNREADABLE_SUFFIX}")  # the case reruns
+            elif retry_failed and lost_numerics(rec, *bound) is not None:
+                record.replace(out / f"{c.case_id}{LOST_SUFFIX}")
         if record.exists():
             results[c.case_id] = CaseStatus(c.case_id, "done", "already finished")
         elif _failed_path(out, c.case_id).exists() and not retry_failed:
