@@ -18,7 +18,6 @@ Layout::
 
 from __future__ import annotations
 
-import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -115,7 +114,8 @@ def _single(record: CfdRecord) -> CfdRecord:
 
 
 def write_record(path: str | Path, record: CfdRecord, single_precision: bool = False) -> Path:
-    """Write ``record`` atomically (temporary file, then rename); return the path.
+    """Write ``record`` whole or not at all (:class:`~mfflap.results.ResultsFile` writes
+    beside ``path`` and puts the file in its place when complete); return the path.
 
     ``single_precision`` stores everything but time as float32 (about half the size; the
     forces' own noise is far above float32 resolution), for the fixtures that ship.
@@ -124,28 +124,21 @@ def write_record(path: str | Path, record: CfdRecord, single_precision: bool = F
     if single_precision:
         record = _single(record)
         record.provenance = {**record.provenance, "storage": "float32"}
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     toml = dumps({"parameters": _clean_attrs(record.parameters)})
-    try:
-        with ResultsFile(tmp, "w", kind="cfd_record", config_toml=toml) as rf:
-            rf.write_state("kinematics", record.state)
-            rf.write_loads("loads", record.loads)
-            if record.raw_force is not None:
-                raw = {"force": record.raw_force}
-                units = {"force": "N"}
-                if record.raw_moment is not None:
-                    raw["moment"] = record.raw_moment
-                    units["moment"] = "N*m"
-                rf.write_group("raw", raw, units,
-                               {"frame": "case (x stream, y heave)", "per": "mesh depth"})
-            rf.h5.create_group("parameters").attrs.update(_clean_attrs(record.parameters))
-            rf.h5.create_group("provenance").attrs.update(_clean_attrs(record.provenance))
-            rf.h5.attrs["name"] = record.name
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
+    with ResultsFile(path, "w", kind="cfd_record", config_toml=toml) as rf:
+        rf.write_state("kinematics", record.state)
+        rf.write_loads("loads", record.loads)
+        if record.raw_force is not None:
+            raw = {"force": record.raw_force}
+            units = {"force": "N"}
+            if record.raw_moment is not None:
+                raw["moment"] = record.raw_moment
+                units["moment"] = "N*m"
+            rf.write_group("raw", raw, units,
+                           {"frame": "case (x stream, y heave)", "per": "mesh depth"})
+        rf.h5.create_group("parameters").attrs.update(_clean_attrs(record.parameters))
+        rf.h5.create_group("provenance").attrs.update(_clean_attrs(record.provenance))
+        rf.h5.attrs["name"] = record.name
     return path
 
 
