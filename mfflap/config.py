@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 
 from mfflap.errors import ConfigError
-from mfflap.kinematics.continuous import HarmonicMotion, RampHarmonicMotion
+from mfflap.kinematics.continuous import UPRIGHT_PITCH, HarmonicMotion, RampHarmonicMotion
 from mfflap.parameters import Fluid, FreeStream, MorisonCoefficients, Plate, StripSettings
 from mfflap.toml_io import dumps, read_toml
 from mfflap.validation import bounded, check_fields, from_mapping
@@ -48,10 +48,10 @@ class ModelSettings:
     n_strips: int = bounded(20, low=1, high=100000, unit="1", doc="chordwise strips")
     scheme: str = bounded("paper", choices=("paper", "midpoint"), unit="",
                           doc="discrete evaluation scheme")
-    added_mass_volume_normal: float | None = None
-    added_mass_volume_tangential: float | None = None
-    drag_area_normal: float | None = None
-    drag_area_tangential: float | None = None
+    added_mass_volume_normal: float | None = bounded(None, low=0.0, unit="m^3")
+    added_mass_volume_tangential: float | None = bounded(None, low=0.0, unit="m^3")
+    drag_area_normal: float | None = bounded(None, low=0.0, unit="m^2")
+    drag_area_tangential: float | None = bounded(None, low=0.0, unit="m^2")
 
     def __post_init__(self) -> None:
         check_fields(self, prefix="model.")
@@ -92,6 +92,39 @@ class MotionSpec:
         return RampHarmonicMotion(self.frequency, self.heave_amplitude,
                                   math.radians(self.pitch_ramp_rate_deg), phase)
 
+    def check_upright(self, end_time: float, over: str, source: str | None = None) -> None:
+        """Refuse a ramp motion whose pitch reaches 90 deg (across the stream) by
+        ``end_time``; a harmonic motion's amplitude is already bounded below it.
+
+        Parameters
+        ----------
+        end_time : float, s
+        over : str
+            What sets ``end_time``, for the message (e.g. ``"--cycles 3"``).
+        source : str, optional
+            The case file, for the message.
+
+        Raises
+        ------
+        ConfigError
+            Naming ``motion.pitch_ramp_rate_deg``, the pitch reached, and the rate that
+            keeps the run under 90 deg.
+        """
+        motion = self.build()
+        if not isinstance(motion, RampHarmonicMotion) or self.pitch_ramp_rate_deg == 0.0:
+            return
+        pitch, time = motion.largest_pitch(end_time)
+        if abs(pitch) >= UPRIGHT_PITCH:
+            allowed = math.floor(self.pitch_ramp_rate_deg * UPRIGHT_PITCH / abs(pitch)
+                                 * 1e3) / 1e3
+            raise ConfigError(
+                f"value {self.pitch_ramp_rate_deg} deg/s turns the plate past "
+                f"{math.degrees(UPRIGHT_PITCH):g} deg: the pitch reaches "
+                f"{math.degrees(pitch):.4g} deg at t = {time:.4g} s of the {end_time:g} s "
+                f"run ({over}); below {allowed:g} deg/s, or a shorter run, keeps it under it",
+                source=source, key="motion.pitch_ramp_rate_deg",
+            )
+
 
 @dataclass(frozen=True)
 class Discretisation:
@@ -107,7 +140,7 @@ class Discretisation:
 class OptimisationSettings:
     """The penalised optimisation problem of the paper (shared/design/equations.md)."""
 
-    betas: tuple[float, ...] = bounded((0.0, 0.5, 1.0), low=0.0, high=1.0, unit="1",
+    betas: tuple[float, ...] = bounded((0.0, 0.5, 1.0), low=0.0, high=1.0, unit="1", unique=True,
                                        doc="thrust/power weights beta")
     max_power: float = bounded(50.0, low=0.0, low_open=True, unit="W", doc="P_max")
     max_heave: float = bounded(0.5, low=0.0, low_open=True, unit="m", doc="h_max")
@@ -135,11 +168,11 @@ class IdentificationGrid:
     """The motion grid of the identification campaign (the paper's Table 1 by default)."""
 
     frequencies: tuple[float, ...] = bounded((0.1, 0.2, 0.5, 1.0, 2.0), low=0.0, low_open=True,
-                                             high=100.0, unit="Hz")
+                                             high=100.0, unit="Hz", unique=True)
     heave_amplitudes: tuple[float, ...] = bounded((0.1, 0.2, 0.3, 0.4, 0.5), low=0.0,
-                                                  high=10.0, unit="m")
+                                                  high=10.0, unit="m", unique=True)
     phases_deg: tuple[float, ...] = bounded((45.0, 67.5, 90.0, 112.5, 135.0), low=-360.0,
-                                            high=360.0, unit="deg")
+                                            high=360.0, unit="deg", unique=True)
     pitch_ramp_rate_deg: float = bounded(10.0, low=0.0, high=1000.0, unit="deg/s",
                                          doc="theta_kamp")
     n_cycles: float = bounded(3.0, low=0.5, high=1000.0, unit="1", doc="cycles simulated")
@@ -147,18 +180,46 @@ class IdentificationGrid:
                                   doc="cap on simulated time per case (keeps theta_kamp t bounded)")
     discard_time: float = bounded(0.75, low=0.0, high=1.0e5, unit="s",
                                   doc="start-up transient left out of the fit")
-    frequency_weights: tuple[float, ...] | None = None
+    frequency_weights: tuple[float, ...] | None = bounded(None, low=0.0, unit="1",
+                                                          doc="one weight per frequency")
 
     def __post_init__(self) -> None:
         check_fields(self, prefix="identification.")
+        self._check_ramp_upright()
         w = self.frequency_weights
         if w is not None:
-            if len(w) != len(self.frequencies) or any(x < 0 for x in w) or sum(w) <= 0:
+            if len(w) != len(self.frequencies) or sum(w) <= 0:
                 raise ConfigError(
                     f"value {list(w)!r}: needs one weight >= 0 per frequency "
                     f"({len(self.frequencies)}) and a positive sum",
                     key="identification.frequency_weights",
                 )
+
+    def case_duration(self, frequency: float) -> float:
+        """Simulated time of the grid's case at ``frequency``, s: n_cycles periods capped
+        at max_duration."""
+        return min(self.n_cycles / frequency, self.max_duration)
+
+    def _check_ramp_upright(self) -> None:
+        """Refuse a ramp that pitches some case's plate to 90 deg or past it (across the
+        stream and beyond), naming the cases and the rate that keeps them under it."""
+        rate = math.radians(self.pitch_ramp_rate_deg)
+        if rate == 0.0:
+            return
+        peaks = [(abs(RampHarmonicMotion(f, 0.0, rate).largest_pitch(self.case_duration(f))[0]),
+                  f) for f in self.frequencies]
+        peak, frequency = max(peaks)
+        if peak >= UPRIGHT_PITCH:
+            duration = self.case_duration(frequency)
+            allowed = math.floor(self.pitch_ramp_rate_deg * UPRIGHT_PITCH / peak * 1e3) / 1e3
+            raise ConfigError(
+                f"value {self.pitch_ramp_rate_deg} deg/s turns the plate past "
+                f"{math.degrees(UPRIGHT_PITCH):g} deg: theta_kamp t sin(2 pi f t) reaches "
+                f"{math.degrees(peak):.4g} deg in the f = {frequency:g} Hz cases, which run "
+                f"{duration:g} s (n_cycles / f capped at max_duration); below {allowed:g} "
+                "deg/s, or a shorter n_cycles or max_duration, keeps every case under it",
+                key="identification.pitch_ramp_rate_deg",
+            )
 
 
 @dataclass(frozen=True)

@@ -51,7 +51,13 @@ def evaluate_case(path: str | Path, scheme: str | None = None) -> CaseEvaluation
     """Evaluate the [motion] of a case file.
 
     Harmonic motions use the discrete scheme with the case's N (the paper's model); ramp
-    motions are sampled continuously over ``identification.n_cycles`` carrier periods.
+    motions are sampled continuously over the time a campaign case at this frequency runs
+    (``identification.n_cycles`` carrier periods capped at ``max_duration``).
+
+    Raises
+    ------
+    ConfigError
+        If a ramp motion pitches the plate to 90 deg or past it in that time.
     """
     case = load_case(path)
     model = case.morison_model()
@@ -68,15 +74,18 @@ def evaluate_case(path: str | Path, scheme: str | None = None) -> CaseEvaluation
                 f"N={case.discretisation.n_steps}")
         plot_period = period
     else:
-        n_cycles = case.identification.n_cycles
-        n = int(200 * n_cycles)
-        t = np.arange(n) * (n_cycles * period / n)
+        duration = case.identification.case_duration(spec.frequency)
+        n_cycles = duration / period
+        spec.check_upright(duration, "identification.n_cycles periods capped at max_duration",
+                           source=case.source)
+        n = int(np.ceil(200 * n_cycles))
+        t = np.arange(n) * (duration / n)
         ev = evaluate_states(model, motion.sample(t), spec.frequency)
         half = False
         scheme = "continuous"
         desc = (f"ramp harmonic f={spec.frequency} Hz, h={spec.heave_amplitude} m, "
                 f"theta_kamp={spec.pitch_ramp_rate_deg} deg/s, phi={spec.phase_deg} deg, "
-                f"{n_cycles} cycles")
+                f"{n_cycles:g} cycles")
         plot_period = n_cycles * period
     fig = cycle_figure(ev, plot_period, half_cycle=half, title=f"{case.study.name}: {desc}")
     return CaseEvaluation(case, ev, scheme, desc, fig)

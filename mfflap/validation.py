@@ -28,6 +28,7 @@ def bounded(
     unit: str = "",
     doc: str = "",
     choices: tuple[Any, ...] | None = None,
+    unique: bool = False,
 ) -> Any:
     """Declare a dataclass field with a unit and an allowed range.
 
@@ -45,6 +46,8 @@ def bounded(
         One-line description.
     choices
         For string settings: the allowed values.
+    unique
+        For lists: each value at most once (a grid axis, a list of cases to run).
     """
     meta = {
         "low": low,
@@ -54,6 +57,7 @@ def bounded(
         "unit": unit,
         "doc": doc,
         "choices": choices,
+        "unique": unique,
     }
     return dataclasses.field(default=default, metadata=meta)
 
@@ -72,6 +76,8 @@ def describe_range(meta: Mapping[str, Any]) -> str:
 
 
 def _check_value(name: str, value: Any, meta: Mapping[str, Any], where: str | None) -> None:
+    if value is None:  # an optional setting left out (TOML has no null to give it)
+        return
     if meta.get("choices") is not None:
         if value not in meta["choices"]:
             raise ConfigError(
@@ -87,6 +93,13 @@ def _check_value(name: str, value: Any, meta: Mapping[str, Any], where: str | No
             raise ConfigError("empty list; give at least one value", source=where, key=name)
         for i, item in enumerate(value):
             _check_value(f"{name}[{i}]", item, meta, where)
+            if meta.get("unique") and item in value[:i]:
+                raise ConfigError(
+                    f"value {item!r} is given twice ({name}[{list(value).index(item)}] and "
+                    f"[{i}]); give each value once",
+                    source=where,
+                    key=f"{name}[{i}]",
+                )
         return
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise ConfigError(
@@ -122,6 +135,17 @@ def check_fields(instance: Any, where: str | None = None, prefix: str = "") -> N
             _check_value(prefix + f.name, getattr(instance, f.name), f.metadata, where)
 
 
+def _check_shape(name: str, value: Any, f: dataclasses.Field, where: str | None) -> None:
+    """Refuse one value for a list setting, and a list for a one-value setting."""
+    wants_list = str(f.type).startswith("tuple")
+    if wants_list and not isinstance(value, list | tuple):
+        raise ConfigError(f"value {value!r} must be a list, e.g. [{value!r}]", source=where,
+                          key=name)
+    if not wants_list and isinstance(value, list | tuple):
+        raise ConfigError(f"value {value!r} is a list; give one value", source=where,
+                          key=name)
+
+
 def from_mapping(cls: type[T], mapping: Mapping[str, Any], *, source: str | None = None,
                  prefix: str = "") -> T:
     """Build a dataclass from a mapping, refusing unknown keys and out-of-range values.
@@ -151,6 +175,8 @@ def from_mapping(cls: type[T], mapping: Mapping[str, Any], *, source: str | None
             source=source,
             key=prefix + unknown[0],
         )
+    for name, value in mapping.items():
+        _check_shape(prefix + name, value, fields[name], source)
     for name, f in fields.items():
         if name in mapping and "unit" in f.metadata:
             _check_value(prefix + name, mapping[name], f.metadata, source)
@@ -169,8 +195,10 @@ def from_mapping(cls: type[T], mapping: Mapping[str, Any], *, source: str | None
             raise ConfigError(f"value {v!r} must be a whole number; allowed: "
                               f"{describe_range(f.metadata)}", source=source, key=prefix + k)
         if f.type in ("str", str) and not isinstance(v, str):
-            raise ConfigError(f"value {v!r} must be a string; allowed: "
-                              f"{describe_range(f.metadata)}", source=source, key=prefix + k)
+            allowed = (describe_range(f.metadata) if f.metadata.get("choices")
+                       else "any text in quotes")
+            raise ConfigError(f"value {v!r} must be a string; allowed: {allowed}",
+                              source=source, key=prefix + k)
         if isinstance(v, list):
             v = tuple(v)
         elif f.type in ("float", float) and isinstance(v, int):

@@ -1,14 +1,16 @@
+import re
 from pathlib import Path
 
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from scipy.optimize import brentq
 
 from mfflap.cli.main import cli
 from mfflap.config import CaseConfig, load_case, loads_case
 from mfflap.errors import ConfigError, MfflapError
 from mfflap.hydro import MorisonModel
-from mfflap.kinematics import harmonic_to_discrete
+from mfflap.kinematics import RampHarmonicMotion, harmonic_to_discrete
 from mfflap.performance import evaluate_discrete
 from mfflap.results import SCHEMA_VERSION, ResultsFile
 
@@ -58,6 +60,33 @@ def test_case_toml_round_trip():
          "one weight"),
         ("[nonsense]\na = 1\n", "nonsense", "unknown table"),
         ("[plate]\nchord = 'big'\n", "plate.chord", "not a number"),
+        # a value given twice in a grid axis or a list of betas
+        ("[identification]\nfrequencies = [0.5, 1.0, 1]\n", "identification.frequencies[2]",
+         "given twice (identification.frequencies[1] and [2])"),
+        ("[identification]\nheave_amplitudes = [0.1, 0.1]\n",
+         "identification.heave_amplitudes[1]", "given twice"),
+        ("[identification]\nphases_deg = [90, 45, 90]\n", "identification.phases_deg[2]",
+         "given twice"),
+        ("[optimisation]\nbetas = [0.5, 0.5]\n", "optimisation.betas[1]", "given twice"),
+        # one value where a list goes, a list where one value goes
+        ("[identification]\nfrequencies = 1.0\n", "identification.frequencies",
+         "must be a list, e.g. [1.0]"),
+        ("[identification]\nfrequency_weights = 1.0\n", "identification.frequency_weights",
+         "must be a list"),
+        ("[motion]\nfrequency = [1.0]\n", "motion.frequency", "is a list; give one value"),
+        ("[study]\nname = ['a']\n", "study.name", "is a list"),
+        ("[study]\ndescription = 3\n", "study.description", "any text in quotes"),
+        # the optional settings are checked with the others, naming the file
+        ("[identification]\nfrequency_weights = ['a', 1, 1, 1, 1]\n",
+         "identification.frequency_weights[0]", "not a number"),
+        ("[identification]\nfrequency_weights = [nan, 1, 1, 1, 1]\n",
+         "identification.frequency_weights[0]", "[0, inf)"),
+        ("[model]\ndrag_area_normal = 'x'\n", "model.drag_area_normal", "not a number"),
+        ("[model]\nadded_mass_volume_tangential = -1.0\n",
+         "model.added_mass_volume_tangential", "[0, inf) m^3"),
+        # a pitch ramp that turns some case's plate across the stream
+        ("[identification]\npitch_ramp_rate_deg = 16\n", "identification.pitch_ramp_rate_deg",
+         "f = 0.2 Hz cases, which run 6 s"),
     ],
 )
 def test_every_validation_error_names_file_key_value_range(tmp_path, text, key, fragment):
@@ -219,6 +248,62 @@ def test_cli_ramp_motion(tmp_path):
                     "heave_amplitude=0.2\npitch_ramp_rate_deg=10\n")
     res = CliRunner().invoke(cli, ["evaluate", str(path), "--figure", str(tmp_path / "r.png")])
     assert res.exit_code == 0, res.output
+
+
+def test_largest_pitch_of_a_ramp_is_its_last_peak():
+    # |k t sin(2 pi f t)| peaks where tan x = -x (x = 2 pi f t); up to t = 1.5 s at f = 1 Hz
+    # the last such peak is the root just past x = 5 pi / 2
+    x = brentq(lambda x: np.tan(x) + x, 2.5 * np.pi + 1e-9, 3.0 * np.pi)
+    k = np.radians(10.0)
+    pitch, time = RampHarmonicMotion(1.0, 0.2, k).largest_pitch(1.5)
+    assert time == pytest.approx(x / (2 * np.pi), abs=2e-3)
+    assert abs(pitch) == pytest.approx(k * x / (2 * np.pi) * abs(np.sin(x)), rel=1e-5)
+    # ending on a rising flank, the end is the largest pitch
+    pitch, time = RampHarmonicMotion(1.0, 0.2, k).largest_pitch(1.2)
+    assert time == pytest.approx(1.2) and pitch == pytest.approx(k * 1.2 * np.sin(2.4 * np.pi))
+
+
+def test_the_grid_ramp_limit_is_where_the_plate_stands_across_the_stream(tmp_path):
+    """The rate the error names is the largest that keeps every case under 90 deg: just
+    below it loads, at the named rate's next step up it is refused."""
+    path = tmp_path / "ramp.toml"
+    path.write_text("[identification]\npitch_ramp_rate_deg = 100\n")
+    with pytest.raises(ConfigError, match=r"below ([0-9.]+) deg/s") as info:
+        load_case(path)
+    allowed = float(re.search(r"below ([0-9.]+) deg/s", str(info.value)).group(1))
+    path.write_text(f"[identification]\npitch_ramp_rate_deg = {allowed}\n")
+    grid = load_case(path).identification
+    peak = max(abs(RampHarmonicMotion(f, 0.0, np.radians(allowed))
+                   .largest_pitch(grid.case_duration(f))[0]) for f in grid.frequencies)
+    assert np.radians(89.99) < peak < np.pi / 2
+    path.write_text(f"[identification]\npitch_ramp_rate_deg = {allowed + 0.002}\n")
+    with pytest.raises(ConfigError, match="pitch_ramp_rate_deg"):
+        load_case(path)
+    # a shorter cap on the cases' time lets the same rate through
+    path.write_text("[identification]\npitch_ramp_rate_deg = 100\nmax_duration = 0.5\n"
+                    "frequencies = [1.0, 2.0]\n")
+    assert load_case(path).identification.pitch_ramp_rate_deg == 100
+
+
+def test_a_ramp_motion_past_90_deg_is_refused_for_its_run(tmp_path):
+    """evaluate runs the ramp as long as its campaign case; cfd write and fluent for
+    --cycles periods; each refuses a ramp that turns the plate across the stream."""
+    path = tmp_path / "ramp.toml"
+    path.write_text("[motion]\nkind='ramp_harmonic'\nfrequency=1.0\nheave_amplitude=0.2\n"
+                    "pitch_ramp_rate_deg=35\n")
+    runner = CliRunner()
+    res = runner.invoke(cli, ["evaluate", str(path), "--figure", str(tmp_path / "r.png")])
+    assert res.exit_code == 2 and "Traceback" not in res.output
+    assert str(path) in res.output and "motion.pitch_ramp_rate_deg" in res.output
+    assert "of the 3 s run (identification.n_cycles" in res.output
+    for command in ("write", "fluent"):
+        res = runner.invoke(cli, ["cfd", command, str(path), str(tmp_path / command),
+                                  "--cycles", "4"])
+        assert res.exit_code == 2 and "(--cycles 4)" in res.output, res.output
+        assert not (tmp_path / command).exists()
+        res = runner.invoke(cli, ["cfd", command, str(path), str(tmp_path / command),
+                                  "--cycles", "2"])
+        assert res.exit_code == 0, res.output
 
 
 def test_cli_bad_case_gives_clear_error(tmp_path):

@@ -111,7 +111,7 @@ class HarmonicCase:
 def case_for(grid: IdentificationGrid, frequency: float, heave_amplitude: float,
              phase_deg: float) -> CfdCase:
     """The case of ``grid`` at one (f, h_amp, phi): n_cycles periods capped at max_duration."""
-    duration = min(grid.n_cycles / frequency, grid.max_duration)
+    duration = grid.case_duration(frequency)
     ramp_time = min(0.25 / frequency, 0.5)
     return CfdCase(float(frequency), float(heave_amplitude), float(phase_deg),
                    float(grid.pitch_ramp_rate_deg), float(duration), float(ramp_time))

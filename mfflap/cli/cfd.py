@@ -138,7 +138,9 @@ def _motion_and_end_time(case, motion_table: Path | None, end_time: float | None
         if end_time is not None:
             raise click.UsageError("--end-time goes with --motion-table; the case file's "
                                    "motion runs for --cycles periods")
-        return case.motion.build(), cycles / case.motion.frequency
+        end_time = cycles / case.motion.frequency
+        case.motion.check_upright(end_time, f"--cycles {cycles:g}", source=case.source)
+        return case.motion.build(), end_time
     from mfflap.errors import MotionError
     from mfflap.kinematics.table_file import read_motion_table, table_end_time
 
@@ -155,7 +157,8 @@ def _warn_pitch_past_upright(motion: TabulatedMotion, motion_table: Path,
                              end_time: float) -> None:
     """Warn on stderr when a table's pitch reaches 90 deg or more up to ``end_time``: most
     likely degrees in the ``pitch_angle`` column, which is in rad."""
-    from mfflap.kinematics.table_file import UPRIGHT_PITCH, largest_pitch
+    from mfflap.kinematics.continuous import UPRIGHT_PITCH
+    from mfflap.kinematics.table_file import largest_pitch
 
     pitch, time = largest_pitch(motion, end_time)
     if abs(pitch) >= UPRIGHT_PITCH:

@@ -16,6 +16,10 @@ from scipy.interpolate import CubicSpline
 from mfflap.errors import MotionError
 from mfflap.kinematics.state import KinematicState
 
+#: the pitch at which the plate stands across the stream, rad; a flapping plate stays within
+#: it (the case file's pitch amplitude, and the pitch its ramp reaches, are bounded by it)
+UPRIGHT_PITCH = np.pi / 2
+
 
 def check_times(times: np.ndarray | float, what: str = "time array") -> np.ndarray:
     """Return ``times`` as a 1-D float array, refusing NaN and non-increasing values.
@@ -174,6 +178,26 @@ class RampHarmonicMotion:
             pitch_acceleration=2 * k * w * c - k * t * w**2 * s,
             **heave,
         )
+
+    def largest_pitch(self, end_time: float,
+                      samples_per_period: int = 720) -> tuple[float, float]:
+        """The largest pitch in magnitude from 0 to ``end_time``, and its time.
+
+        The envelope k t grows, so this is the last peak of the carrier before
+        ``end_time`` or ``end_time`` itself. Sampled at ``samples_per_period`` times per
+        carrier period and at ``end_time``: at 720 a peak is missed by less than 1e-5 of
+        its value. Scalar parameters only.
+
+        Returns
+        -------
+        tuple
+            The pitch (rad, with its sign) and its time (s).
+        """
+        n = max(2, int(np.ceil(float(end_time) * float(self.frequency) * samples_per_period)))
+        times = np.linspace(0.0, float(end_time), n + 1)
+        pitch = self.sample(times).pitch_angle
+        worst = int(np.argmax(np.abs(pitch)))
+        return float(pitch[worst]), float(times[worst])
 
 
 class PeriodicSplineMotion:

@@ -6,8 +6,9 @@ The file has a header line naming its columns, in any order:
 - ``time`` in s, starting at 0 and strictly increasing;
 - ``heave_position`` in m;
 - ``pitch_angle`` in rad, or ``pitch_angle_deg`` in degrees (one of the two). A flapping
-  plate pitches less than 90 deg (:data:`UPRIGHT_PITCH`); the commands that write a case
-  from a table warn when it does not (:func:`largest_pitch`).
+  plate pitches less than 90 deg (:data:`~mfflap.kinematics.continuous.UPRIGHT_PITCH`);
+  the commands that write a case from a table warn when it does not
+  (:func:`largest_pitch`).
 
 Other columns are ignored; lines starting with ``#`` are comments. Between rows the motion
 is a cubic spline (continuous rates and accelerations); past the last row it is held at
@@ -26,9 +27,6 @@ from mfflap.kinematics.continuous import Motion, TabulatedMotion
 
 #: the fewest rows a cubic spline through the table needs
 MIN_ROWS = 4
-#: the pitch at which the plate stands across the stream, rad; a flapping plate stays within
-#: it (the case file's pitch amplitude is bounded by it)
-UPRIGHT_PITCH = np.pi / 2
 
 
 def read_motion_table(path: str | Path) -> TabulatedMotion:
