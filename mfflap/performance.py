@@ -61,6 +61,23 @@ def strouhal_number(frequency, trailing_edge_half_excursion, free_stream_velocit
             free_stream_velocity)
 
 
+def thrust_gain(mean_thrust: float, baseline_thrust: float) -> float | None:
+    """Mean-thrust gain over a baseline, T / T_baseline - 1 (fraction).
+
+    None when the baseline makes no thrust (T_baseline <= 0, or not finite): a ratio to a
+    drag is no gain (a drag of 0.07 N cut to 0.01 N would read -85 %).
+    """
+    if not (np.isfinite(baseline_thrust) and baseline_thrust > 0.0):
+        return None
+    return float(mean_thrust) / float(baseline_thrust) - 1.0
+
+
+def no_thrust_gain_reason(baseline_thrust: float, baseline: str) -> str:
+    """Why :func:`thrust_gain` gave None, for a report line."""
+    return (f"{baseline} makes no thrust ({float(baseline_thrust):.4g} N), so there is no "
+            "gain over it to give")
+
+
 @dataclass(frozen=True)
 class CycleSummary:
     """Cycle-mean performance of one or many motions (arrays over leading motion axes).

@@ -353,3 +353,29 @@ def test_ctrl_c_during_a_live_backtest_command_shows_what_was_done_and_how_to_re
     time.sleep(2)
     running = subprocess.run(["pgrep", "-f", f"pimpleFoam -case {work}"], capture_output=True)
     assert running.returncode == 1, running.stdout
+
+
+def test_the_gain_in_cfd_is_not_a_ratio_to_a_drag():
+    """A CFD gain needs both motions back-tested and a best sinusoid that makes thrust."""
+    from types import SimpleNamespace
+
+    from mfflap.backtest.run import BacktestOutcome
+    from mfflap.backtest.workflow import gain_in_cfd, no_gain_in_cfd_reason
+
+    def outcome(label, thrust):
+        comparison = None if thrust is None else SimpleNamespace(cfd_mean_thrust=thrust)
+        return BacktestOutcome(label, "k", "back-tested" if comparison else "not back-tested",
+                               "fixture", comparison=comparison)
+
+    def outcomes(optimised, sinusoid):
+        return {"β = 0": outcome("β = 0", optimised),
+                "best sinusoid": outcome("best sinusoid", sinusoid)}
+
+    assert gain_in_cfd(outcomes(0.3, 0.2)) == pytest.approx(0.5)
+    assert no_gain_in_cfd_reason(outcomes(0.3, 0.2)) is None
+    assert gain_in_cfd(outcomes(-0.01, -0.07)) is None
+    assert "best sinusoid in CFD makes no thrust (-0.07 N)" in \
+        no_gain_in_cfd_reason(outcomes(-0.01, -0.07))
+    assert gain_in_cfd(outcomes(None, 0.2)) is None
+    assert no_gain_in_cfd_reason(outcomes(None, 0.2)) == "β = 0 was not back-tested"
+    assert no_gain_in_cfd_reason({}) == "β = 0 was not back-tested"

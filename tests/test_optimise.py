@@ -12,7 +12,7 @@ from mfflap.errors import ConfigError
 from mfflap.kinematics.convert import harmonic_to_discrete
 from mfflap.optimisation.optimise import assess, optimise_ipopt, optimise_sqp
 from mfflap.optimisation.problem import FlappingProblem
-from mfflap.optimisation.store import read_result, write_result
+from mfflap.optimisation.store import read_result, read_sweep, write_result
 from mfflap.results import ResultsFile
 
 CASE = Path(__file__).parents[1] / "cases" / "paper2026.toml"
@@ -111,11 +111,48 @@ def test_optimise_cli_writes_results_and_report(tmp_path):
     assert res.exit_code == 0, res.output
     data = json.loads(res.output[res.output.index("{"):])
     assert data["optimised"]["0.5"]["converged"] is True
+    # beta = 0 was not optimised: no "beta = 0 gain" from the beta = 0.5 motion
+    assert data["thrust_gain_beta0"] is None and data["thrust_gain_beta0_refined"] is None
     html = out.with_suffix(".html").read_text()
     assert html.count("<img") >= 3 and "Pareto" in html
+    assert "not given: beta = 0 was not optimised" in html
     with ResultsFile(out) as rf:
         assert "optimisation/sqp/beta_0.50/motion" in rf.h5
         assert rf.h5["optimisation/sweep/mean_thrust"].attrs["units"] == "N"
+        assert np.isnan(rf.h5["optimisation"].attrs["thrust_gain_beta0"])
+        assert rf.h5["optimisation"].attrs["thrust_gain_beta0_missing"] == \
+            "beta = 0 was not optimised"
+
+
+def test_thrust_gain_is_not_a_ratio_to_a_drag():
+    from mfflap.performance import thrust_gain
+
+    assert thrust_gain(1.5, 1.0) == pytest.approx(0.5)
+    assert thrust_gain(-0.01, 1.0) == pytest.approx(-1.01)
+    for baseline in (0.0, -0.07, np.nan, np.inf):
+        assert thrust_gain(-0.01, baseline) is None
+
+
+def test_no_gain_is_given_when_the_best_sinusoid_makes_drag(tmp_path):
+    """With P_max = 1 mW every feasible sinusoid makes drag: the ratio of beta = 0's thrust
+    to it (-85 % for a drag cut from 0.075 N to 0.011 N) is no gain and is not given."""
+    case = tmp_path / "tiny_power.toml"
+    case.write_text(CASE.read_text().replace("max_power = 50.0", "max_power = 0.001"))
+    out = tmp_path / "opt.h5"
+    runner = CliRunner()
+    cli = __import__("mfflap.cli.main", fromlist=["cli"]).cli
+    res = runner.invoke(cli, ["optimise", str(case), "--betas", "0", "--starts", "1",
+                              "--no-ipopt", "--output", str(out)])
+    assert res.exit_code == 0, res.output
+    assert "beta = 0 thrust gain: not given: the best feasible sinusoid makes no thrust" \
+        in res.output
+    with ResultsFile(out) as rf:
+        sweep, best = read_sweep(rf, "optimisation/sweep")
+        assert sweep.mean_thrust[best] < 0
+        assert np.isnan(rf.h5["optimisation"].attrs["thrust_gain_beta0"])
+    html = out.with_suffix(".html").read_text()
+    assert ("thrust gain over the best feasible sinusoid: not given: the best feasible "
+            "sinusoid makes no thrust") in html
 
 
 def test_refined_sinusoid_is_feasible_and_no_worse_than_the_grid():

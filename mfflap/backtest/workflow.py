@@ -10,6 +10,7 @@ from mfflap.cfd.openfoam.case_path import check_case_path
 from mfflap.cfd.openfoam.writer import SolverSettings
 from mfflap.config import CaseConfig
 from mfflap.kinematics.discrete import DiscreteMotion
+from mfflap.performance import no_thrust_gain_reason, thrust_gain
 
 
 def backtest_all(config: CaseConfig, motions: dict[str, DiscreteMotion], model, *,
@@ -51,8 +52,24 @@ def backtest_all(config: CaseConfig, motions: dict[str, DiscreteMotion], model, 
 
 def gain_in_cfd(outcomes: dict[str, BacktestOutcome], optimised: str = "β = 0",
                 baseline: str = "best sinusoid") -> float | None:
-    """CFD mean thrust of the optimised motion over the best sinusoid's, minus one."""
+    """CFD mean thrust of the optimised motion over the best sinusoid's, minus one.
+
+    None when either was not back-tested, or the best sinusoid makes no thrust in CFD
+    (:func:`no_gain_in_cfd_reason` says which).
+    """
     a, b = outcomes.get(optimised), outcomes.get(baseline)
     if a is None or b is None or a.comparison is None or b.comparison is None:
         return None
-    return a.comparison.cfd_mean_thrust / b.comparison.cfd_mean_thrust - 1.0
+    return thrust_gain(a.comparison.cfd_mean_thrust, b.comparison.cfd_mean_thrust)
+
+
+def no_gain_in_cfd_reason(outcomes: dict[str, BacktestOutcome], optimised: str = "β = 0",
+                          baseline: str = "best sinusoid") -> str | None:
+    """Why :func:`gain_in_cfd` is None; None when it is a number."""
+    for label in (optimised, baseline):
+        if outcomes.get(label) is None or outcomes[label].comparison is None:
+            return f"{label} was not back-tested"
+    if gain_in_cfd(outcomes, optimised, baseline) is None:
+        return no_thrust_gain_reason(outcomes[baseline].comparison.cfd_mean_thrust,
+                                     f"the {baseline} in CFD")
+    return None

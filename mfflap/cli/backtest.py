@@ -69,7 +69,7 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
 
 def _show(outcomes: dict, as_json: bool) -> None:
     """Print the back-tests: a line per motion, or JSON."""
-    from mfflap.backtest.workflow import gain_in_cfd
+    from mfflap.backtest.workflow import gain_in_cfd, no_gain_in_cfd_reason
 
     data = {label: {"status": o.status, "source": o.source, "motion_key": o.key,
                     **(o.comparison.as_dict() if o.comparison else {})}
@@ -88,3 +88,5 @@ def _show(outcomes: dict, as_json: bool) -> None:
                    f"{d['nrmse']['thrust']:.3f}; CFD max power {d['cfd_max_power']:.1f} W")
     if gain is not None:
         click.echo(f"beta = 0 thrust gain over the best sinusoid in CFD: {gain:+.1%}")
+    else:
+        click.echo(f"beta = 0 thrust gain in CFD: not given: {no_gain_in_cfd_reason(outcomes)}")

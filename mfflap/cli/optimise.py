@@ -65,6 +65,11 @@ def optimise(case_file: Path, betas: list[float] | None, starts: int, ipopt: boo
                    f"{float(s.mean_power):8.3f} W  St {float(s.strouhal_number):5.2f}  "
                    f"{'converged' if r.converged else 'NOT CONVERGED'}"
                    f"{'  FLAGGED' if r.flags else ''}")
-    click.echo(f"beta = 0 thrust gain over the best feasible sinusoid: {study.thrust_gain:+.1%}"
-               f" (over the refined one: {study.thrust_gain_refined:+.1%})")
+    if study.thrust_gain is None:
+        click.echo(f"beta = 0 thrust gain: not given: {study.no_thrust_gain_reason}")
+    else:
+        refined = study.thrust_gain_refined
+        click.echo(f"beta = 0 thrust gain over the best feasible sinusoid: "
+                   f"{study.thrust_gain:+.1%}"
+                   + ("" if refined is None else f" (over the refined one: {refined:+.1%})"))
     click.echo(f"wrote {output} and {html}")

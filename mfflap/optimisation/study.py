@@ -19,6 +19,7 @@ from mfflap.optimisation.optimise import (
 )
 from mfflap.optimisation.problem import FlappingProblem
 from mfflap.optimisation.refine import RefinedSinusoid, refine_best_sinusoid
+from mfflap.performance import no_thrust_gain_reason, thrust_gain
 from mfflap.sweep import SweepResult, pareto_front, sinusoid_sweep
 
 Progress = Callable[[str], None]
@@ -95,18 +96,32 @@ class BetaStudy:
     refined: RefinedSinusoid | None = None
 
     @property
-    def thrust_gain(self) -> float:
-        """beta = 0 mean-thrust gain over the best feasible sinusoid of the grid (fraction)."""
-        base = float(self.sweep.mean_thrust[self.best_sinusoid])
-        return float(self.sqp[min(self.sqp)].summary.mean_thrust) / base - 1.0
+    def thrust_gain(self) -> float | None:
+        """beta = 0 mean-thrust gain over the best feasible sinusoid of the grid (fraction);
+        None when beta = 0 was not optimised or that sinusoid makes no thrust
+        (:attr:`no_thrust_gain_reason` says which)."""
+        if 0.0 not in self.sqp:
+            return None
+        return thrust_gain(float(self.sqp[0.0].summary.mean_thrust),
+                           float(self.sweep.mean_thrust[self.best_sinusoid]))
 
     @property
     def thrust_gain_refined(self) -> float | None:
-        """beta = 0 gain over the refined best feasible sinusoid (fraction)."""
-        if self.refined is None:
+        """beta = 0 gain over the refined best feasible sinusoid (fraction); None as
+        :attr:`thrust_gain`, or without a refined sinusoid."""
+        if 0.0 not in self.sqp or self.refined is None:
             return None
-        return float(self.sqp[min(self.sqp)].summary.mean_thrust) / \
-            self.refined.mean_thrust - 1.0
+        return thrust_gain(float(self.sqp[0.0].summary.mean_thrust), self.refined.mean_thrust)
+
+    @property
+    def no_thrust_gain_reason(self) -> str | None:
+        """Why :attr:`thrust_gain` is None (None when it is a number)."""
+        if 0.0 not in self.sqp:
+            return "beta = 0 was not optimised"
+        base = float(self.sweep.mean_thrust[self.best_sinusoid])
+        if self.thrust_gain is None:
+            return no_thrust_gain_reason(base, "the best feasible sinusoid")
+        return None
 
 
 def beta_study(config: CaseConfig, betas: Sequence[float] | None = None, n_starts: int = 3,
@@ -156,7 +171,8 @@ def gain_table(config: CaseConfig, n_steps: Sequence[int] = (25, 50, 100),
     """beta = 0 thrust gain over the best feasible sinusoid for several N and smoothing
     weights (both epsilons scaled by the factor), each from the best sinusoid.
 
-    Returns arrays ``gain`` (n_N, n_factors), ``thrust`` N, ``strouhal_number``, ``flagged``.
+    Returns arrays ``gain`` (n_N, n_factors; NaN where the best sinusoid makes no thrust),
+    ``thrust`` N, ``strouhal_number``, ``flagged``.
     """
     from dataclasses import replace
 
@@ -178,11 +194,15 @@ def gain_table(config: CaseConfig, n_steps: Sequence[int] = (25, 50, 100),
             problem = problem_for(config, 0.0, model, settings)
             r = optimise_sqp(problem, start, min_period=o.min_period, max_period=o.max_period)
             out["thrust"][i, j] = float(r.summary.mean_thrust)
-            out["gain"][i, j] = out["thrust"][i, j] / base - 1.0
+            gain = thrust_gain(out["thrust"][i, j], base)
+            out["gain"][i, j] = np.nan if gain is None else gain
             out["strouhal_number"][i, j] = float(r.summary.strouhal_number)
             out["flagged"][i, j] = bool(r.flags)
             if progress is not None:
-                progress(f"gain table N={n} smoothing x{fac:g}: {out['gain'][i, j]:+.1%}")
+                shown = (f"{gain:+.1%}" if gain is not None
+                         else f"thrust {out['thrust'][i, j]:.4g} N (no gain: "
+                         f"{no_thrust_gain_reason(base, 'the best feasible sinusoid')})")
+                progress(f"gain table N={n} smoothing x{fac:g}: {shown}")
     out["n_steps"] = np.asarray(n_steps)
     out["smoothing_factors"] = np.asarray(smoothing_factors)
     out["baseline_thrust"] = np.asarray(base)

@@ -15,6 +15,11 @@ GAIN_UNITS = {"gain": "1", "thrust": "N", "strouhal_number": "1", "flagged": "1"
               "n_steps": "1", "smoothing_factors": "1", "baseline_thrust": "N"}
 
 
+def _or_nan(value: float | None) -> float:
+    """An HDF5 attribute for a number that may not have been computed."""
+    return np.nan if value is None else value
+
+
 def write_study(rf: ResultsFile, config: CaseConfig, study: BetaStudy,
                 gain: Mapping[str, np.ndarray] | None = None, model=None,
                 prefix: str = "optimisation") -> None:
@@ -29,7 +34,9 @@ def write_study(rf: ResultsFile, config: CaseConfig, study: BetaStudy,
             write_result(rf, f"{prefix}/sqp_starts/{beta_key(beta)}/start_{k}", other, settings)
         if beta in study.ipopt:
             write_result(rf, f"{prefix}/ipopt/{beta_key(beta)}", study.ipopt[beta], settings)
-    rf.h5[prefix].attrs["thrust_gain_beta0"] = study.thrust_gain
+    rf.h5[prefix].attrs["thrust_gain_beta0"] = _or_nan(study.thrust_gain)
+    if study.no_thrust_gain_reason is not None:
+        rf.h5[prefix].attrs["thrust_gain_beta0_missing"] = study.no_thrust_gain_reason
     if study.refined is not None:
         from dataclasses import asdict
 
@@ -39,6 +46,6 @@ def write_study(rf: ResultsFile, config: CaseConfig, study: BetaStudy,
                        {"frequency": "Hz", "heave_amplitude": "m", "pitch_amplitude": "rad",
                         "phase": "rad", "mean_thrust": "N", "max_power": "W",
                         "grid_thrust": "N"}, {"success": r.success, "message": r.message})
-        rf.h5[prefix].attrs["thrust_gain_beta0_refined"] = study.thrust_gain_refined
+        rf.h5[prefix].attrs["thrust_gain_beta0_refined"] = _or_nan(study.thrust_gain_refined)
     if gain is not None:
         rf.write_group(f"{prefix}/gain_table", gain, GAIN_UNITS)

@@ -41,7 +41,7 @@ def backtest_figure(outcomes: Mapping[str, BacktestOutcome], max_power: float) -
 def add_backtest_sections(rep: Report, outcomes: Mapping[str, BacktestOutcome],
                           max_power: float) -> None:
     """Back-test table, figure and the CFD thrust gain."""
-    from mfflap.backtest.workflow import gain_in_cfd
+    from mfflap.backtest.workflow import gain_in_cfd, no_gain_in_cfd_reason
 
     s = rep.section("Back-test against CFD")
     if not outcomes:
@@ -68,6 +68,9 @@ def add_backtest_sections(rep: Report, outcomes: Mapping[str, BacktestOutcome],
     if gain is not None:
         s.blocks.append(text_html(f"β = 0 thrust gain over the best feasible sinusoid in CFD: "
                                   f"{gain:+.1%}."))
+    elif outcomes:
+        s.blocks.append(text_html(f"β = 0 thrust gain in CFD: not given: "
+                                  f"{no_gain_in_cfd_reason(outcomes)}.", warn=True))
     for label, o in outcomes.items():
         if o.comparison is None:
             s.blocks.append(text_html(f"{label}: not back-tested ({o.source}).", warn=True))
