@@ -91,6 +91,68 @@ def test_unidentifiable_term_is_refused():
                  fixed={"normal_drag": 2.0, "normal_added_mass": 1.2})
 
 
+def test_a_coefficient_the_data_make_negative_is_held_at_zero_and_said_so(tmp_path):
+    """Forces made with C_Dt = -1: the bounded fit holds C_Dt at 0 (the unconstrained fit
+    is negative), the others stay near their values, and the CLI and report say it."""
+    from click.testing import CliRunner
+
+    from mfflap.campaign.records import write_record
+    from mfflap.cli.main import cli
+
+    rng = np.random.default_rng(5)
+    negative = {**TRUE, "tangential_drag": -1.0}
+    records = synthetic_records(rng, noise=0.0, coefficients=negative,
+                                subset=grid_cases(IdentificationGrid(),
+                                                  heave_amplitudes=[0.2, 0.4],
+                                                  phases_deg=[90, 135]))
+    cases, _ = prepare_cases(records)
+    res = identify(cases, MorisonModel(), n_bootstrap=0)
+    assert res.at_lower_bound == ("tangential_drag",)
+    assert res.coefficients["tangential_drag"] == 0.0
+    assert res.coefficients["normal_drag"] == pytest.approx(2.0, rel=0.05)
+    # the same data with the true value: nothing held
+    records_ok = synthetic_records(rng, noise=0.0, subset=grid_cases(
+        IdentificationGrid(), heave_amplitudes=[0.2, 0.4], phases_deg=[90, 135]))
+    assert identify(prepare_cases(records_ok)[0], MorisonModel(),
+                    n_bootstrap=0).at_lower_bound == ()
+
+    folder = tmp_path / "fixtures"
+    for rec in records:
+        write_record(folder / f"{rec.name}.h5", rec, single_precision=True)
+    case_file = Path(__file__).parents[1] / "cases" / "paper2026.toml"
+    out = tmp_path / "id.h5"
+    runner = CliRunner()
+    res = runner.invoke(cli, ["identify", str(case_file), "--fixtures", str(folder),
+                              "--strategy", "uniform", "--bootstrap", "0", "--output",
+                              str(out)])
+    assert res.exit_code == 0, res.output
+    assert "tangential_drag = 0.000 (held at 0)" in res.output
+    assert "held at 0: the fit without the bound makes the coefficient negative" in res.output
+    res = runner.invoke(cli, ["identify", str(case_file), "--fixtures", str(folder),
+                              "--strategy", "uniform", "--bootstrap", "0", "--output",
+                              str(out), "--json"])
+    assert json.loads(res.stdout)["uniform"]["at_lower_bound"] == ["tangential_drag"]
+    res = runner.invoke(cli, ["report", "identification", str(out), "--out",
+                              str(tmp_path / "id.html")])
+    assert res.exit_code == 0, res.output
+    assert "Held at 0: tangential_drag (uniform)" in (tmp_path / "id.html").read_text()
+
+
+@pytest.mark.parametrize(("components", "message"), [
+    ("", "no names"), ("normal_force,normal_force", "normal_force given twice"),
+    ("thrust", "thrust: not one of normal_force, tangential_force, moment")])
+def test_identify_components_are_checked_by_name(tmp_path, components, message):
+    from click.testing import CliRunner
+
+    from mfflap.cli.main import cli
+
+    case_file = Path(__file__).parents[1] / "cases" / "paper2026.toml"
+    res = CliRunner().invoke(cli, ["identify", str(case_file), "--components", components,
+                                   "--output", str(tmp_path / "id.h5")])
+    assert res.exit_code == 2 and "--components" in res.output and message in res.output
+    assert not (tmp_path / "id.h5").exists()
+
+
 def test_gap_and_short_records_are_refused_by_name():
     rng = np.random.default_rng(0)
     rec = synthetic_records(rng, subset=grid_cases(IdentificationGrid(), [1.0], [0.3], [90]))[0]

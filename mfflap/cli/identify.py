@@ -8,7 +8,7 @@ import click
 import numpy as np
 
 from mfflap.cli.json_output import echo_json
-from mfflap.cli.options import FloatList
+from mfflap.cli.options import FloatList, NameList
 
 
 def _strategies(names: tuple[str, ...], weights: list[float] | None, case) -> list:
@@ -18,6 +18,13 @@ def _strategies(names: tuple[str, ...], weights: list[float] | None, case) -> li
     elif case.identification.frequency_weights is not None and not names:
         chosen.append(list(case.identification.frequency_weights))
     return chosen
+
+
+def _fitted_components() -> tuple[str, ...]:
+    """The load components an identification can fit."""
+    from mfflap.identification.data import COMPONENTS
+
+    return tuple(COMPONENTS)
 
 
 @click.command()
@@ -32,8 +39,8 @@ def _strategies(names: tuple[str, ...], weights: list[float] | None, case) -> li
               help="Weighting strategy; repeat for several (default: all three).")
 @click.option("--weights", type=FloatList(unique=False), default=None,
               help="User weights per frequency, ascending frequency, comma-separated.")
-@click.option("--components", default=None,
-              help="Fitted components, comma-separated (default normal_force,"
+@click.option("--components", type=NameList(_fitted_components), default=None,
+              help="Fitted components, comma-separated, each once (default normal_force,"
                    "tangential_force,moment).")
 @click.option("--bootstrap", "n_bootstrap", default=200, show_default=True,
               type=click.IntRange(min=0),
@@ -42,11 +49,12 @@ def _strategies(names: tuple[str, ...], weights: list[float] | None, case) -> li
               default=Path("identification.h5"), show_default=True, help="HDF5 results.")
 @click.option("--json", "as_json", is_flag=True, help="Print coefficients as JSON.")
 def identify(case_file: Path, folders: tuple[Path, ...], strategies: tuple[str, ...],
-             weights: list[float] | None, components: str | None, n_bootstrap: int, output: Path,
-             as_json: bool) -> None:
+             weights: list[float] | None, components: list[str] | None, n_bootstrap: int,
+             output: Path, as_json: bool) -> None:
     """Fit the Morison coefficients of CASE_FILE's model to CFD records."""
     from mfflap.campaign.records import fixture_dir
     from mfflap.config import load_case
+    from mfflap.identification.fit import HELD_AT_ZERO
     from mfflap.identification.workflow import (
         identify_strategies,
         load_cases,
@@ -58,14 +66,14 @@ def identify(case_file: Path, folders: tuple[Path, ...], strategies: tuple[str, 
     case = load_case(case_file)
     folders = folders or (fixture_dir(),)
     cases, excluded = load_cases(case, folders)
-    comps = components.split(",") if components else None
     results = identify_strategies(case, cases, excluded, _strategies(strategies, weights, case),
-                                  comps, n_bootstrap)
+                                  components, n_bootstrap)
     save_identification(output, case, results, source_text(folders))
     summary = {
         label: {"coefficients": r.coefficients, "standard_error": r.standard_error,
                 "median_nrmse_normal_force": float(
                     sorted(r.metrics["normal_force"]["nrmse"])[len(r.case_names) // 2]),
+                "at_lower_bound": list(r.at_lower_bound),
                 "n_cases": len(r.case_names), "excluded": r.excluded}
         for label, r in results.items()
     }
@@ -76,8 +84,11 @@ def identify(case_file: Path, folders: tuple[Path, ...], strategies: tuple[str, 
     for label, r in results.items():
         coeffs = "  ".join(f"{n} = {v:.3f}" + (f" ± {r.standard_error[n]:.3f}"
                                                  if np.isfinite(r.standard_error[n]) else "")
+                           + (" (held at 0)" if n in r.at_lower_bound else "")
                            for n, v in r.coefficients.items())
         click.echo(f"{label:8s} {coeffs}")
+    if any(r.at_lower_bound for r in results.values()):
+        click.echo(f"held at 0: {HELD_AT_ZERO}")
     click.echo(f"wrote {output}")
 
 

@@ -1,7 +1,7 @@
 """Command-line options that several commands share."""
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 import click
 
@@ -75,6 +75,38 @@ class FloatList(click.ParamType):
             self.fail(f"{value!r}: {', '.join(f'{n:g}' for n in twice)} given twice",
                       param, ctx)
         return numbers
+
+
+class NameList(click.ParamType):
+    """Comma-separated names from a fixed set (``normal_force,moment``), at least one, each
+    once; refused by the option's name, with the names allowed.
+
+    Parameters
+    ----------
+    choices
+        The allowed names, or a function that gives them (so that building the command
+        line's help does not import the module that defines them).
+    """
+
+    name = "names"
+
+    def __init__(self, choices: Sequence[str] | Callable[[], Sequence[str]]) -> None:
+        self._choices = choices
+
+    def convert(self, value, param, ctx) -> list[str]:
+        if isinstance(value, list):
+            return value
+        choices = tuple(self._choices() if callable(self._choices) else self._choices)
+        names = [v.strip() for v in str(value).split(",") if v.strip()]
+        if not names:
+            self.fail(f"{value!r}: no names; choose from {', '.join(choices)}", param, ctx)
+        unknown = [n for n in names if n not in choices]
+        if unknown:
+            self.fail(f"{', '.join(unknown)}: not one of {', '.join(choices)}", param, ctx)
+        twice = sorted({n for n in names if names.count(n) > 1})
+        if twice:
+            self.fail(f"{value!r}: {', '.join(twice)} given twice", param, ctx)
+        return names
 
 
 #: a finite number > 0: a time span, a number of periods, a time step

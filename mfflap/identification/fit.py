@@ -34,6 +34,11 @@ from mfflap.identification.data import COMPONENTS, DERIVED, CaseData
 from mfflap.identification.weights import frequency_weights
 from mfflap.metrics import nrmse, pearson
 
+#: What a coefficient held at its lower bound 0 means, for the CLI and the report.
+HELD_AT_ZERO = ("the fit without the bound makes the coefficient negative, which no drag or "
+                "added-mass coefficient is; the identified model has no such term (the data "
+                "do not support it, or another term takes its part)")
+
 
 @dataclass
 class IdentificationResult:
@@ -75,6 +80,13 @@ class IdentificationResult:
     metrics: dict[str, dict[str, np.ndarray]]
     excluded: dict[str, str] = field(default_factory=dict)
     notes: dict[str, list[str]] = field(default_factory=dict)
+
+    @property
+    def at_lower_bound(self) -> tuple[str, ...]:
+        """Fitted terms held at the lower bound 0: the least-squares fit without the bound
+        makes them negative, which no drag or added-mass coefficient is, so the model has
+        no such term (the data do not support it, or another term takes its part)."""
+        return tuple(n for n in self.fitted_terms if self.coefficients[n] == 0.0)
 
     def model(self, base: ForceModel) -> ForceModel:
         """``base`` with the fitted coefficients."""
@@ -249,4 +261,4 @@ def identify(cases: Sequence[CaseData], model: ForceModel,
     )
 
 
-__all__ = ["IdentificationResult", "identify", "score"]
+__all__ = ["HELD_AT_ZERO", "IdentificationResult", "identify", "score"]

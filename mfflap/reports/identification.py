@@ -14,7 +14,7 @@ from matplotlib.figure import Figure
 
 from mfflap.hydro.base import ForceModel
 from mfflap.identification.data import BURST_NOTE, CaseData
-from mfflap.identification.fit import IdentificationResult
+from mfflap.identification.fit import HELD_AT_ZERO, IdentificationResult
 from mfflap.reports.html import Report, figure_html, table_html, text_html
 
 SIGNAL_LABELS = {"normal_force": "F_n", "tangential_force": "F_t", "moment": "M",
@@ -207,6 +207,13 @@ def add_identification_sections(rep: Report, results: Mapping[str, Identificatio
                                 "97.5 %"], _coefficient_rows(results)))
     s.blocks.append(figure_html(coefficient_figure(results),
                                 "Coefficients and bootstrap 95 % intervals per strategy"))
+    held: dict[str, list[str]] = {}
+    for label, r in results.items():
+        for n in r.at_lower_bound:
+            held.setdefault(n, []).append(label)
+    if held:
+        which = "; ".join(f"{n} ({', '.join(labels)})" for n, labels in held.items())
+        s.blocks.append(text_html(f"Held at 0: {which}: {HELD_AT_ZERO}.", warn=True))
     if any(not np.isfinite(r.standard_error[n]) for r in results.values()
            for n in r.fitted_terms):
         s.blocks.append(text_html("The coefficients' uncertainty is not estimated: the "
