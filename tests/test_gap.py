@@ -247,6 +247,16 @@ def test_gap_cli_on_a_record_folder(tmp_path):
     assert chosen["significant"] is True and chosen["variance_inflation"]["circulatory_lift"] >= 1
     html = out.with_suffix(".html").read_text()
     assert "Which unmodelled effect" in html and "coefficients, base terms held" in html
+    # as text: the verdict, then the five largest shares under a heading that says what
+    # the numbers are
+    res = CliRunner().invoke(cli, ["gap", "diagnose", str(CASE), "--fixtures", str(folder),
+                                   "--output", str(out)])
+    assert res.exit_code == 0, res.output
+    lines = res.output.splitlines()
+    heading = next(i for i, line in enumerate(lines) if line.startswith("where the model"))
+    assert "share of the squared residual" in lines[heading] and "eta^2" in lines[heading]
+    shares = [float(line.rsplit(":", 1)[1]) for line in lines[heading + 1:heading + 6]]
+    assert shares == sorted(shares, reverse=True) and all(0 <= v <= 1 for v in shares)
     with h5py.File(out) as h5:
         scores = h5["gap/scores"].attrs
         labels = json.loads(scores["labels"])

@@ -109,6 +109,9 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
                    "validation": diag.validation})
         return
     click.echo(diag.verdict)
+    click.echo("where the model departs most (a component's or harmonic's share of the "
+               "squared residual; for a state or regime, the share of the residual's variance "
+               "it explains, eta^2):")
     for name, share in where["ranking"][:5]:
         click.echo(f"  {name}: {share:.2f}")
     click.echo(f"wrote {output} and {html}")
