@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from mfflap.campaign.compare import compare_campaigns, compare_records
+from mfflap.campaign.compare import OutsideWindow, compare_campaigns, compare_records
 from mfflap.campaign.records import fixture_dir, read_record, read_records, write_record
 from mfflap.cfd.bursts import bridge_load_bursts
 from mfflap.cli.main import cli
@@ -161,8 +161,10 @@ def test_refusals_name_the_case_and_key(record, tmp_path):
     other.parameters = {**record.parameters, "frequency": 2.0}
     with pytest.raises(ConfigError, match=rf"frequency: {record.name}: .*different motions"):
         compare_records(other, record)
-    with pytest.raises(ConfigError, match="start_s"):
+    with pytest.raises(OutsideWindow, match=rf"{record.name}: fewer than two common"):
         compare_records(record, record, start_s=record.time[-1] + 1.0)
+    with pytest.raises(ConfigError, match="end_s: the comparison ends"):
+        compare_campaigns(COARSE, COARSE, start_s=2.0, end_s=1.0)
     single = copy.deepcopy(record)
     single.parameters = {**record.parameters, "storage": "float32"}
     assert compare_records(single, record).nrmse_normal_force == 0  # storage is not motion
@@ -195,6 +197,34 @@ def test_command_writes_hdf5_with_both_manifests_and_a_figure(tmp_path):
     assert fig.stat().st_size > 10_000
     res = CliRunner().invoke(cli, ["campaign", "compare", str(a), str(COARSE)])
     assert res.exit_code == 0 and "only in B: 1 case(s)" in res.output
+
+
+def test_cases_that_end_before_the_window_are_listed_not_fatal(tmp_path):
+    """The small motions run 1.5 to 8 s: from t = 3 s only the f <= 0.5 Hz cases (4 and
+    8 s) have forces to compare; the six others are listed as outside the window."""
+    result = compare_campaigns(AFFORDABLE, COARSE, start_s=3.0)
+    assert sorted(c.case_id for c in result.cases) == sorted(
+        r.name for r in read_records(COARSE) if r.time[-1] >= 4.0)
+    assert len(result.outside_window) == 6
+    assert all("fewer than two common samples from t = 3 s" in why
+               for why in result.outside_window.values())
+    out = tmp_path / "cmp.h5"
+    res = CliRunner().invoke(cli, ["campaign", "compare", str(AFFORDABLE), str(COARSE),
+                                   "--start", "3", "--output", str(out)])
+    assert res.exit_code == 0, res.output
+    assert "outside the window: 6 case(s)" in res.output
+    with h5py.File(out) as h5:
+        assert json.loads(h5["cases"].attrs["outside_window"]) == result.outside_window
+    res = CliRunner().invoke(cli, ["campaign", "compare", str(AFFORDABLE), str(COARSE),
+                                   "--start", "3", "--json"])
+    assert json.loads(res.stdout)["outside_window"] == result.outside_window
+    # no case in the window at all, and a window that ends before it starts
+    res = CliRunner().invoke(cli, ["campaign", "compare", str(AFFORDABLE), str(COARSE),
+                                   "--start", "100"])
+    assert res.exit_code != 0 and "no case of the 11 in common" in res.output
+    res = CliRunner().invoke(cli, ["campaign", "compare", str(AFFORDABLE), str(COARSE),
+                                   "--start", "3", "--end", "2"])
+    assert res.exit_code == 2 and "--end 2 is not after --start 3" in res.output
 
 
 def test_a_run_that_lost_its_numerics_is_timed_and_left_out_of_the_medians():

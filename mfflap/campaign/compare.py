@@ -13,8 +13,9 @@ The CPU time of each run is kept beside.
 
 from __future__ import annotations
 
+import json
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -94,6 +95,8 @@ class CampaignComparison:
     cases: list[CaseComparison]
     only_a: list[str]
     only_b: list[str]
+    #: common cases with no stretch in the window asked for (--start / --end), with why
+    outside_window: dict[str, str] = field(default_factory=dict)
 
     def summary(self) -> dict[str, float]:
         """Median and largest NRMSE per component and the median thrust difference over the
@@ -113,6 +116,10 @@ class CampaignComparison:
         return out
 
 
+class OutsideWindow(ConfigError):
+    """Two records that share fewer than two samples in the window compared."""
+
+
 def _motion_parameters(record: CfdRecord) -> dict:
     return {k: v for k, v in record.parameters.items() if k not in _NOT_MOTION}
 
@@ -129,8 +136,9 @@ def compare_records(a: CfdRecord, b: CfdRecord, start_s: float | None = None,
     Raises
     ------
     ConfigError
-        If the two records are of different motions, naming the parameter, or if they share
-        fewer than two samples after the start.
+        If the two records are of different motions, naming the parameter, or if the
+        window ends before it starts; :class:`OutsideWindow` if they share fewer than two
+        samples in it.
     """
     pa, pb = _motion_parameters(a), _motion_parameters(b)
     for key in sorted(set(pa) | set(pb)):
@@ -146,8 +154,9 @@ def compare_records(a: CfdRecord, b: CfdRecord, start_s: float | None = None,
         end = min(end, float(end_s))
     keep = (b.time >= start) & (b.time <= end)
     if np.count_nonzero(keep) < 2:
-        raise ConfigError(f"{a.name}: fewer than two common samples after t = {start:g} s",
-                          key="start_s")
+        raise OutsideWindow(f"{a.name}: fewer than two common samples from t = {start:g} s "
+                            f"to {end:g} s (the records end at {a.time[-1]:g} and "
+                            f"{b.time[-1]:g} s)")
     t = b.time[keep]
     loads_a, bursts_a = bridge_load_bursts(a.loads, (a.time >= start) & (a.time <= end))
     loads_b, bursts_b = bridge_load_bursts(b.loads, (b.time >= start) & (b.time <= end))
@@ -189,11 +198,21 @@ def compare_campaigns(folder_a: str | Path, folder_b: str | Path,
                       end_s: float | None = None) -> CampaignComparison:
     """Every case both campaign folders finished, A against B.
 
+    A case whose records share no stretch of two samples or more in the window asked for
+    (a short case of a grid that runs each frequency for its own time, with a ``start_s``
+    past its end) is left out and listed in ``outside_window``, with why.
+
     Raises
     ------
     MfflapError
-        If the folders have no finished case in common.
+        If the folders have no finished case in common, or none in the window.
+    ConfigError
+        If ``end_s`` is not after ``start_s``, or two records of a case are of different
+        motions.
     """
+    if start_s is not None and end_s is not None and float(end_s) <= float(start_s):
+        raise ConfigError(f"the comparison ends (t = {end_s:g} s) before it starts "
+                          f"(t = {start_s:g} s)", key="end_s")
     records_a = {r.name: r for r in read_records(folder_a)}
     records_b = {r.name: r for r in read_records(folder_b)}
     common = sorted(set(records_a) & set(records_b))
@@ -202,11 +221,19 @@ def compare_campaigns(folder_a: str | Path, folder_b: str | Path,
                           f"({len(records_a)} and {len(records_b)} records)")
     manifest = Path(folder_b) / "campaign.toml"
     bound = _bound_setup(read_toml(manifest)) if manifest.is_file() else None
-    cases = [compare_records(records_a[n], records_b[n], start_s, bound, end_s)
-             for n in common]
+    cases, outside = [], {}
+    for name in common:
+        try:
+            cases.append(compare_records(records_a[name], records_b[name], start_s, bound,
+                                         end_s))
+        except OutsideWindow as exc:
+            outside[name] = str(exc)
+    if not cases:
+        raise MfflapError(f"no case of the {len(common)} in common has two samples or more "
+                          f"in the window asked for: {next(iter(outside.values()))}")
     return CampaignComparison(str(folder_a), str(folder_b), cases,
                               sorted(set(records_a) - set(records_b)),
-                              sorted(set(records_b) - set(records_a)))
+                              sorted(set(records_b) - set(records_a)), outside)
 
 
 def write_comparison(path: str | Path, comparison: CampaignComparison) -> Path:
@@ -230,7 +257,8 @@ def write_comparison(path: str | Path, comparison: CampaignComparison) -> Path:
                        attrs={"case_ids": [c.case_id for c in comparison.cases],
                               "folder_a": comparison.folder_a,
                               "folder_b": comparison.folder_b,
-                              "only_a": comparison.only_a, "only_b": comparison.only_b})
+                              "only_a": comparison.only_a, "only_b": comparison.only_b,
+                              "outside_window": json.dumps(comparison.outside_window)})
     return Path(path)
 
 

@@ -147,6 +147,8 @@ def compare_cmd(folder_a: Path, folder_b: Path, start_s: float | None, end_s: fl
 
     if case_ids and histories_dir is None:
         raise click.UsageError("--case chooses the cases of --histories; give --histories DIR")
+    if start_s is not None and end_s is not None and end_s <= start_s:
+        raise click.UsageError(f"--end {end_s:g} is not after --start {start_s:g}")
     result = compare_campaigns(folder_a, folder_b, start_s, end_s)
     if output is not None:
         write_comparison(output, result)
@@ -163,7 +165,7 @@ def compare_cmd(folder_a: Path, folder_b: Path, start_s: float | None, end_s: fl
                               "power_difference": c.power_difference,
                               "cpu_ratio": c.cpu_ratio} for c in result.cases],
                    "summary": result.summary(), "only_a": result.only_a,
-                   "only_b": result.only_b})
+                   "only_b": result.only_b, "outside_window": result.outside_window})
         return
     width = max(len(c.case_id) for c in result.cases)
     click.echo(f"{'case':{width}s} {'F_n':>7s} {'F_t':>7s} {'M':>7s} {'thrust':>8s} "
@@ -182,6 +184,10 @@ def compare_cmd(folder_a: Path, folder_b: Path, start_s: float | None, end_s: fl
                f"{s['median_nrmse_normal_force']:.2%} / {s['max_nrmse_normal_force']:.2%}, M "
                f"{s['median_nrmse_moment']:.2%} / {s['max_nrmse_moment']:.2%}; CPU A / B "
                f"{s['cpu_ratio']:.2f}")
+    if result.outside_window:
+        names = list(result.outside_window)
+        click.echo(f"outside the window: {len(names)} case(s) with fewer than two common "
+                   f"samples in it: {', '.join(names[:5])}" + (", ..." if len(names) > 5 else ""))
     for label, only in (("A", result.only_a), ("B", result.only_b)):
         if only:
             click.echo(f"only in {label}: {len(only)} case(s): {', '.join(only[:5])}"
