@@ -315,6 +315,9 @@ def test_an_optimised_motion_becomes_a_table_and_the_same_case_as_the_back_test(
     res = CliRunner().invoke(cli, ["cfd", "motion-table", str(optimisation_file), str(table)])
     assert res.exit_code == 2 and "--beta B or --best-sinusoid" in res.output
     res = CliRunner().invoke(cli, ["cfd", "motion-table", str(optimisation_file), str(table),
+                                   "--beta", "0.5", "--best-sinusoid"])
+    assert res.exit_code == 2 and "not both" in res.output
+    res = CliRunner().invoke(cli, ["cfd", "motion-table", str(optimisation_file), str(table),
                                    "--best-sinusoid"])
     assert res.exit_code == 0 and read_motion_table(table).table_time[-1] > 0
 

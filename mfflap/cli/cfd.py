@@ -638,8 +638,11 @@ def motion_table_cmd(results_file: Path, table_file: Path, beta: float | None,
     from mfflap.optimisation.study import sinusoid_motion
     from mfflap.results import ResultsFile
 
-    if (beta is None) == (not best_sinusoid):
+    if beta is None and not best_sinusoid:
         raise click.UsageError("give --beta B or --best-sinusoid")
+    if beta is not None and best_sinusoid:
+        raise click.UsageError("give --beta B or --best-sinusoid, not both: a table holds "
+                               "one motion")
     with ResultsFile(results_file, kinds=("optimisation", "run")) as rf:
         if "optimisation/sqp" not in rf.h5:
             raise click.UsageError(f"{results_file} holds no optimised motions "
