@@ -125,6 +125,12 @@ def test_udf_settings_are_checked():
         table_udf(SINE, 1.0, ramp_time=0.2, periodic_period=1.0)
 
 
+def test_a_start_up_ramp_as_long_as_the_run_writes_no_udf(tmp_path):
+    with pytest.raises(ConfigError, match=r"ramp \(6 s\) lasts the whole run \(6 s\)"):
+        write_fluent_case(tmp_path / "fl", RAMP, 6.0, ramp_time=6.0, time_step=2e-3)
+    assert not (tmp_path / "fl").exists()
+
+
 def test_journal_references_the_udf_and_the_report_file(tmp_path):
     folder = write_fluent_case(tmp_path / "fl", RAMP, 6.0, ramp_time=0.5, time_step=2e-3)
     text = (folder / "mfflap_run.jou").read_text()

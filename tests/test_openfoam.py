@@ -310,6 +310,18 @@ def test_an_impossible_start_up_ramp_is_refused_not_read_as_none(tmp_path, ramp_
         assert not (tmp_path / "c").exists()  # refused before anything was written
 
 
+def test_a_start_up_ramp_as_long_as_the_run_is_refused(tmp_path):
+    """The motion would never reach its amplitude; a ramp just shorter is written."""
+    from mfflap.errors import ConfigError
+
+    for ramp_time in (1.0, 10.0):
+        with pytest.raises(ConfigError, match=rf"ramp \({ramp_time:g} s\) lasts the whole "
+                                              r"run \(1 s\)") as err:
+            write_case(tmp_path / "c", MOTION, end_time=1.0, ramp_time=ramp_time)
+        assert err.value.key == "ramp_time" and not (tmp_path / "c").exists()
+    assert write_case(tmp_path / "c", MOTION, end_time=1.0, ramp_time=0.99).is_dir()
+
+
 def test_an_impossible_end_time_or_depth_writes_nothing(tmp_path):
     from mfflap.errors import ConfigError, MotionError
 

@@ -165,6 +165,7 @@ def write_fluent_case(folder: str | Path, motion: Motion, end_time: float, *,
     """
     plate, fluid = plate or Plate(), fluid or Fluid()
     end_time = check_end_time(end_time)
+    check_ramp_time(ramp_time, end_time)
     if not (math.isfinite(time_step) and time_step > 0):
         raise ConfigError(f"time_step must be a finite time > 0 s, got {time_step!r}",
                           key="time_step")

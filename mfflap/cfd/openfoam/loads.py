@@ -17,18 +17,30 @@ from mfflap.kinematics.continuous import Motion
 from mfflap.kinematics.state import KinematicState
 
 
-def check_ramp_time(ramp_time: float) -> float:
+def check_ramp_time(ramp_time: float, end_time: float | None = None) -> float:
     """``ramp_time`` as a float, s.
+
+    Parameters
+    ----------
+    ramp_time : s
+    end_time : s, optional
+        The run's simulated time: the ramp must end before it.
 
     Raises
     ------
     ConfigError
-        If it is negative or not a finite number (0 is no ramp).
+        If it is negative or not a finite number (0 is no ramp), or lasts the whole run
+        (the motion would never reach its amplitude).
     """
     value = float(ramp_time)
     if not (np.isfinite(value) and value >= 0):
         raise ConfigError(f"the start-up ramp must be a finite time >= 0 s (0: none), got "
                           f"{ramp_time!r}", key="ramp_time")
+    if end_time is not None and value > 0 and value >= float(end_time):
+        raise ConfigError(f"the start-up ramp ({value:g} s) lasts the whole run "
+                          f"({float(end_time):g} s): the motion would never reach its "
+                          "amplitude; end it well before the run does (a quarter to half a "
+                          "period is usual)", key="ramp_time")
     return value
 
 

@@ -29,7 +29,7 @@ from mfflap.cfd.frames import FRAMES, case_displacement, case_rotation_deg
 from mfflap.cfd.openfoam.case_path import prepare_case_folder
 from mfflap.cfd.openfoam.cell_counts import check_cell_counts
 from mfflap.cfd.openfoam.h_grid import HGridSpec
-from mfflap.cfd.openfoam.loads import check_end_time, imposed_state
+from mfflap.cfd.openfoam.loads import check_end_time, check_ramp_time, imposed_state
 from mfflap.cfd.openfoam.plate_frame import (
     format_acceleration_table,
     format_function1_table,
@@ -271,6 +271,7 @@ def write_case(case_dir: str | Path, motion: Motion, end_time: float,
     if not (math.isfinite(depth) and depth > 0):
         raise ConfigError(f"the mesh depth must be > 0 m, got {depth!r}", key="depth")
     u = stream.velocity
+    check_ramp_time(ramp_time, check_end_time(end_time))
     # the motion's tables first: they check the end time, the ramp and the motion
     if solver.frame == "plate":
         tables = plate_frame_tables(motion, table_times(end_time), u, ramp_time=ramp_time)
