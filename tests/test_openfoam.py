@@ -310,6 +310,19 @@ def test_an_impossible_start_up_ramp_is_refused_not_read_as_none(tmp_path, ramp_
         assert not (tmp_path / "c").exists()  # refused before anything was written
 
 
+def test_parsing_a_case_that_has_not_run_says_so(tmp_path):
+    from mfflap.cfd.openfoam.forces import read_forces
+    from mfflap.errors import ParseError
+
+    case = write_case(tmp_path / "c", MOTION, end_time=1.0)
+    with pytest.raises(ParseError, match=r"no forces output folder: the case has not run "
+                                         r"yet \(mfflap cfd run .*c\)"):
+        read_forces(case)
+    (case / "log.pimpleFoam").write_text("crashed before the first time step\n")
+    with pytest.raises(ParseError, match=r"no forces output folder$"):
+        read_forces(case)
+
+
 def test_a_start_up_ramp_as_long_as_the_run_is_refused(tmp_path):
     """The motion would never reach its amplitude; a ramp just shorter is written."""
     from mfflap.errors import ConfigError

@@ -163,7 +163,11 @@ def read_forces(case_dir: str | Path, function_name: str = "forces") -> ForceHis
     """Read every time folder of ``postProcessing/<function_name>`` of a case."""
     base = Path(case_dir) / "postProcessing" / function_name
     if not base.is_dir():
-        raise ParseError("no forces output folder", path=str(base))
+        ran = (Path(case_dir) / "postProcessing").is_dir() or any(
+            Path(case_dir).glob("log.*"))
+        raise ParseError("no forces output folder" + (
+            "" if ran else f": the case has not run yet (mfflap cfd run {case_dir})"),
+            path=str(base))
     folders = time_folders(base)
     if not folders:
         raise ParseError("no time folders", path=str(base))
