@@ -63,6 +63,7 @@ REFUSED = [
     (["campaign", "run", str(CASE), "--out", "OUT", "--timeout", "-5"], "--timeout",
      "finite number > 0"),
     (["optimise", str(CASE), "--starts", "0", "--output", "OUT/o.h5"], "--starts", "x>=1"),
+    (["gradcheck", str(CASE), "--n-steps", "1", "--figure", "OUT/g.png"], "--n-steps", "x>=2"),
     (["run", str(CASE), "--out", "OUT", "--starts", "0"], "--starts", "x>=1"),
     (["identify", str(CASE), "--bootstrap", "-1", "--output", "OUT/i.h5"], "--bootstrap",
      "x>=0"),

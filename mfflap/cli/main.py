@@ -91,7 +91,8 @@ def evaluate(case_file: Path, as_json: bool, figure: Path | None, output: Path |
 
 @cli.command()
 @click.argument("case_file", type=click.Path(dir_okay=False, path_type=Path))
-@click.option("--n-steps", default=40, show_default=True, help="N of the checked motion.")
+@click.option("--n-steps", default=40, show_default=True, type=click.IntRange(min=2),
+              help="N of the checked motion (steps per half cycle; the work grows as N^2).")
 @click.option("--json", "as_json", is_flag=True, help="Print the agreement as JSON.")
 @click.option("--figure", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Scatter figure of adjoint vs FD (default: <case name>.gradcheck.png in the "
