@@ -9,6 +9,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from mfflap.config import CaseConfig, load_case
+from mfflap.errors import ConfigError
 from mfflap.kinematics.convert import to_discrete
 from mfflap.performance import CycleSummary, Evaluation, evaluate_discrete, evaluate_states
 from mfflap.plots import cycle_figure
@@ -57,12 +58,17 @@ def evaluate_case(path: str | Path, scheme: str | None = None) -> CaseEvaluation
     Raises
     ------
     ConfigError
-        If a ramp motion pitches the plate to 90 deg or past it in that time.
+        If a ramp motion pitches the plate to 90 deg or past it in that time, or ``scheme``
+        is given for it (a discrete scheme is for a harmonic motion).
     """
     case = load_case(path)
     model = case.morison_model()
-    scheme = scheme or case.model.scheme
     spec = case.motion
+    if scheme is not None and spec.kind != "harmonic":
+        raise ConfigError(f"scheme {scheme!r} is a discrete scheme of the harmonic motion; "
+                          f"the {spec.kind} motion of [motion] is evaluated continuously",
+                          source=case.source, key="scheme")
+    scheme = scheme or case.model.scheme
     motion = spec.build()
     period = 1.0 / spec.frequency
     if spec.kind == "harmonic":

@@ -248,6 +248,11 @@ def test_cli_ramp_motion(tmp_path):
                     "heave_amplitude=0.2\npitch_ramp_rate_deg=10\n")
     res = CliRunner().invoke(cli, ["evaluate", str(path), "--figure", str(tmp_path / "r.png")])
     assert res.exit_code == 0, res.output
+    assert "scheme continuous" in res.output
+    # a discrete scheme is for the harmonic motion: asked for a ramp, it is refused
+    res = CliRunner().invoke(cli, ["evaluate", str(path), "--scheme", "midpoint",
+                                   "--figure", str(tmp_path / "r.png")])
+    assert res.exit_code == 2 and "scheme: scheme 'midpoint' is a discrete scheme" in res.output
 
 
 def test_largest_pitch_of_a_ramp_is_its_last_peak():
