@@ -126,6 +126,23 @@ def test_a_fluent_time_step_that_is_not_a_finite_positive_time_is_refused(tmp_pa
     assert not (tmp_path / "udf").exists()
 
 
+def test_a_fluent_time_step_too_long_for_the_run_is_refused_and_a_coarse_one_warned(
+        tmp_path):
+    motion = HarmonicMotion(1.0, 0.3, 0.3, np.pi / 2)
+    with pytest.raises(ConfigError, match=r"time_step 0.2 s leaves fewer than 10 steps in the "
+                                          r"1 s run") as err:
+        write_fluent_case(tmp_path / "udf", motion, 1.0, time_step=0.2)
+    assert err.value.key == "time_step" and not (tmp_path / "udf").exists()
+    assert write_fluent_case(tmp_path / "udf", motion, 1.0, time_step=0.1).is_dir()
+    runner = CliRunner()
+    res = runner.invoke(cli, ["cfd", "fluent", str(CASE), str(tmp_path / "coarse"),
+                              "--time-step", "0.05"])
+    assert res.exit_code == 0 and "gives 20 steps per period of the 1 Hz motion" in res.output
+    res = runner.invoke(cli, ["cfd", "fluent", str(CASE), str(tmp_path / "fine"),
+                              "--time-step", "0.005"])
+    assert res.exit_code == 0 and "warning" not in res.output
+
+
 def test_an_impossible_beta_or_no_start_is_refused_before_the_sweep():
     case = load_case(CASE)
     said = []

@@ -355,7 +355,7 @@ def fluent(case_file: Path, out_dir: Path, cycles: float, ramp_time: float, time
            overwrite: bool) -> None:
     """Write a DEFINE_CG_MOTION UDF and a batch journal for the [motion] of CASE_FILE (or a
     --motion-table)."""
-    from mfflap.cfd.fluent.udf import FLUENT_KEPT_FILE, write_fluent_case
+    from mfflap.cfd.fluent.udf import FEW_STEPS_PER_PERIOD, FLUENT_KEPT_FILE, write_fluent_case
     from mfflap.cfd.openfoam.writer import attach_motion_table
     from mfflap.config import load_case
 
@@ -364,6 +364,12 @@ def fluent(case_file: Path, out_dir: Path, cycles: float, ramp_time: float, time
     write_fluent_case(out_dir, motion, end_time, ramp_time=ramp_time,
                       time_step=time_step, velocity=case.flow.velocity, table=table,
                       plate=case.plate, fluid=case.fluid, overwrite=overwrite)
+    per_period = 1.0 / (case.motion.frequency * time_step)
+    if motion_table is None and per_period < FEW_STEPS_PER_PERIOD:
+        click.echo(f"warning: --time-step {time_step:g} s gives {per_period:.3g} steps per "
+                   f"period of the {case.motion.frequency:g} Hz motion; flapping-foil runs "
+                   f"use a few hundred (fewer than {FEW_STEPS_PER_PERIOD} smear the forces)",
+                   err=True)
     if motion_table is not None:
         attach_motion_table(out_dir, motion_table, kept_file=FLUENT_KEPT_FILE)
     click.echo(f"wrote {out_dir / 'mfflap_motion.c'}, {out_dir / 'mfflap_run.jou'} and "

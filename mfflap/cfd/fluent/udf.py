@@ -120,6 +120,11 @@ def table_udf(motion: Motion, end_time: float, ramp_time: float = 0.0,
 REPORT_FILE = "plate-forces.out"
 #: what a UDF was written for, beside it (:mod:`mfflap.cfd.case_inputs`)
 FLUENT_KEPT_FILE = "mfflap_fluent.toml"
+#: the fewest time steps a journal may run: fewer jump over the motion
+MIN_STEPS_PER_RUN = 10
+#: time steps per carrier period below which `cfd fluent` warns (Fluent's flapping-foil
+#: studies use a few hundred)
+FEW_STEPS_PER_PERIOD = 50
 
 
 def journal(udf_file: str, report_file: str = REPORT_FILE, case_file: str = "plate.cas.h5",
@@ -161,7 +166,9 @@ def write_fluent_case(folder: str | Path, motion: Motion, end_time: float, *,
     Raises
     ------
     ConfigError
-        If ``folder`` holds the report file of an earlier run and ``overwrite`` is not set.
+        If ``folder`` holds the report file of an earlier run and ``overwrite`` is not set,
+        the ramp does not end before the run, or ``time_step`` leaves fewer than
+        :data:`MIN_STEPS_PER_RUN` steps in it.
     """
     plate, fluid = plate or Plate(), fluid or Fluid()
     end_time = check_end_time(end_time)
@@ -169,6 +176,10 @@ def write_fluent_case(folder: str | Path, motion: Motion, end_time: float, *,
     if not (math.isfinite(time_step) and time_step > 0):
         raise ConfigError(f"time_step must be a finite time > 0 s, got {time_step!r}",
                           key="time_step")
+    if time_step * MIN_STEPS_PER_RUN > end_time:
+        raise ConfigError(f"time_step {time_step:g} s leaves fewer than {MIN_STEPS_PER_RUN} "
+                          f"steps in the {end_time:g} s run: Fluent would jump over the "
+                          "motion", key="time_step")
     folder = Path(folder)
     report = folder / REPORT_FILE
     if report.exists() and not overwrite:
