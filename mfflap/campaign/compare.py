@@ -25,13 +25,13 @@ from mfflap.campaign.records import CfdRecord, read_records
 from mfflap.cfd.bursts import bridge_bursts, bridge_load_bursts
 from mfflap.cfd.force_envelope import find_envelope_breaches
 from mfflap.errors import ConfigError, MfflapError
-from mfflap.hydro.loads import Loads
+from mfflap.hydro.loads import LOAD_COMPONENTS, Loads
 from mfflap.metrics import nrmse, pearson, time_mean
 from mfflap.parameters import Fluid, FreeStream, Plate
 from mfflap.performance import thrust_and_power
 from mfflap.toml_io import read_toml
 
-COMPONENTS = ("normal_force", "tangential_force", "moment")
+COMPONENTS = LOAD_COMPONENTS
 #: parameters that describe how a record is kept, not the motion
 _NOT_MOTION = frozenset({"storage"})
 

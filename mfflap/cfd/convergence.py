@@ -29,11 +29,12 @@ from mfflap.cfd.openfoam.writer import SolverSettings, resolve_mesh
 from mfflap.cfd.openfoam.yplus import YPlusHistory, read_y_plus
 from mfflap.cfd.phase_average import phase_average, whole_periods
 from mfflap.errors import ConfigError
+from mfflap.hydro.loads import LOAD_COMPONENTS
 from mfflap.kinematics.continuous import Motion
 from mfflap.metrics import nrmse, time_mean
 from mfflap.performance import thrust_and_power
 
-COMPONENTS = ("normal_force", "tangential_force", "moment")
+COMPONENTS = LOAD_COMPONENTS
 
 
 @dataclass

@@ -16,9 +16,10 @@ import numpy as np
 
 from mfflap.errors import MfflapError
 from mfflap.hydro.base import ForceTerm
+from mfflap.hydro.loads import LOAD_COMPONENTS
 from mfflap.identification.data import CaseData
 
-COMPONENTS = ("normal_force", "tangential_force", "moment")
+COMPONENTS = LOAD_COMPONENTS
 
 
 @dataclass

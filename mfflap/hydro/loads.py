@@ -12,6 +12,8 @@ LOAD_UNITS: dict[str, str] = {
     "tangential_force": "N",
     "moment": "N*m",
 }
+#: the load components, in the order of :meth:`Loads.stacked`
+LOAD_COMPONENTS: tuple[str, ...] = tuple(LOAD_UNITS)
 
 
 @dataclass(frozen=True)

@@ -14,13 +14,13 @@ from mfflap.cfd.bursts import bridge_bursts, bridge_load_bursts
 from mfflap.cfd.force_envelope import find_envelope_breaches
 from mfflap.errors import MfflapError
 from mfflap.hydro.base import ForceModel
-from mfflap.hydro.loads import Loads
+from mfflap.hydro.loads import LOAD_UNITS, Loads
 from mfflap.kinematics.state import KINEMATIC_UNITS, KinematicState
 from mfflap.parameters import Fluid, FreeStream, Plate
 from mfflap.performance import thrust_and_power
 
 #: Load components a fit can use, with their units.
-COMPONENTS = {"normal_force": "N", "tangential_force": "N", "moment": "N*m"}
+COMPONENTS = LOAD_UNITS
 #: How a case's notes say that numerical bursts of its CFD were bridged.
 BURST_NOTE = "numerical burst(s) bridged by linear interpolation"
 #: How a case's notes say that stretches beyond the physical force bound were bridged.
