@@ -378,4 +378,4 @@ def test_the_gain_in_cfd_is_not_a_ratio_to_a_drag():
         no_gain_in_cfd_reason(outcomes(-0.01, -0.07))
     assert gain_in_cfd(outcomes(None, 0.2)) is None
     assert no_gain_in_cfd_reason(outcomes(None, 0.2)) == "β = 0 was not back-tested"
-    assert no_gain_in_cfd_reason({}) == "β = 0 was not back-tested"
+    assert no_gain_in_cfd_reason({}) == "there is no β = 0 motion (not optimised)"

@@ -67,7 +67,9 @@ def no_gain_in_cfd_reason(outcomes: dict[str, BacktestOutcome], optimised: str =
                           baseline: str = "best sinusoid") -> str | None:
     """Why :func:`gain_in_cfd` is None; None when it is a number."""
     for label in (optimised, baseline):
-        if outcomes.get(label) is None or outcomes[label].comparison is None:
+        if label not in outcomes:
+            return f"there is no {label} motion (not optimised)"
+        if outcomes[label].comparison is None:
             return f"{label} was not back-tested"
     if gain_in_cfd(outcomes, optimised, baseline) is None:
         return no_thrust_gain_reason(outcomes[baseline].comparison.cfd_mean_thrust,
