@@ -211,3 +211,43 @@ def test_a_case_still_running_is_named_with_the_process_that_runs_it(tmp_path):
     assert json.loads(res.stdout)["forces_reach_end_time"] is False
     assert "before the 0.004 s the run was written for (a run is still going: pid " \
            f"{os.getpid()} since" in res.stderr
+
+
+def test_cfd_parse_prints_numbers_with_units_and_warns_past_the_linear_theory(tmp_path):
+    """The paper's motion reaches ~80 deg of effective incidence, far past where
+    thin-aerofoil theory is a yardstick: `cfd parse --thin-aerofoil` says so. A motion of a
+    few millimetres stays under the limit and gets no warning."""
+    import re
+
+    from click.testing import CliRunner
+    from test_fluent import write_plate_report
+
+    from mfflap.cli.main import cli
+    from mfflap.hydro.thin_aerofoil import LINEAR_INCIDENCE_LIMIT_DEG
+
+    runner = CliRunner()
+    report = _beside_its_udf(tmp_path)
+    res = runner.invoke(cli, ["cfd", "parse", str(report), "--case-file", str(CASE),
+                              "--thin-aerofoil"])
+    assert res.exit_code == 0, res.output
+    incidence = float(re.search(r"max_effective_incidence_deg +([0-9.]+) deg",
+                                res.stdout).group(1))
+    assert incidence > LINEAR_INCIDENCE_LIMIT_DEG
+    assert f"effective incidence reaches {incidence:.3g} deg" in res.stderr
+    assert re.search(r"cfd_mean_thrust +-?[0-9.e+-]+ N\n", res.stdout)
+    assert re.search(r"cfd_mean_power +-?[0-9.e+-]+ W\n", res.stdout)
+    assert re.search(r"numerical_bursts +none\n", res.stdout)
+
+    small = tmp_path / "small.toml"
+    small.write_text(CASE.read_text().replace("heave_amplitude = 0.3", "heave_amplitude = 0.002")
+                     .replace("pitch_amplitude_deg = 20.0", "pitch_amplitude_deg = 0.5"))
+    res = runner.invoke(cli, ["cfd", "fluent", str(small), str(tmp_path / "small"),
+                              "--cycles", "1", "--ramp-time", "0.25"])
+    assert res.exit_code == 0, res.output
+    t = np.linspace(0.01, 1.0, 300)
+    report = write_plate_report(tmp_path / "small" / "plate-forces.out", t,
+                                0.1 * np.sin(6 * t), 0.1 * np.cos(6 * t), 0.01 * np.sin(6 * t))
+    res = runner.invoke(cli, ["cfd", "parse", str(report), "--case-file", str(small),
+                              "--thin-aerofoil"])
+    assert res.exit_code == 0, res.output
+    assert "effective incidence reaches" not in res.stderr

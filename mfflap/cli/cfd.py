@@ -324,6 +324,15 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
                    f"{case_file} and the ramp and motion table given were not checked against "
                    f"it (`mfflap cfd fluent` writes {FLUENT_KEPT_FILE} where the journal "
                    "makes Fluent write its report)", err=True)
+    if thin_aerofoil:
+        from mfflap.hydro.thin_aerofoil import LINEAR_INCIDENCE_LIMIT_DEG
+
+        incidence = out["thin_aerofoil"]["max_effective_incidence_deg"]
+        if incidence > LINEAR_INCIDENCE_LIMIT_DEG:
+            click.echo(f"warning: the motion's effective incidence reaches {incidence:.3g} deg; "
+                       "thin-aerofoil theory (linear, attached flow) is a yardstick up to "
+                       f"about {LINEAR_INCIDENCE_LIMIT_DEG:g} deg, so its numbers here say "
+                       "little about the CFD", err=True)
     if as_json:
         echo_json(out)
     else:
@@ -331,9 +340,24 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
             if isinstance(v, dict):
                 click.echo(f"  {k}:")
                 for kk, vv in v.items():
-                    click.echo(f"    {kk:28s} {vv}")
+                    click.echo(f"    {kk:28s} {_shown(kk, vv)}")
             else:
-                click.echo(f"  {k:24s} {v}")
+                click.echo(f"  {k:24s} {_shown(k, v)}")
+
+
+#: units of the numbers `cfd parse` prints, by a word of their name
+_UNIT_BY_WORD = (("_deg", "deg"), ("thrust", "N"), ("power", "W"), ("time", "s"))
+
+
+def _shown(key: str, value) -> str:
+    """A value of the parse summary as text: numbers to 6 digits with their unit, empty
+    lists as 'none'."""
+    if isinstance(value, float):
+        unit = next((u for word, u in _UNIT_BY_WORD if word in key), "")
+        return f"{value:.6g}{' ' + unit if unit else ''}"
+    if isinstance(value, list):
+        return "none" if not value else "; ".join(str(item) for item in value)
+    return str(value)
 
 
 @cfd.command()

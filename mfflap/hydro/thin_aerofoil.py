@@ -44,6 +44,11 @@ from mfflap.hydro.loads import Loads
 from mfflap.kinematics.state import KinematicState
 from mfflap.parameters import Fluid, FreeStream, Plate
 
+#: the effective incidence, deg, beyond which the theory is no yardstick: the flow separates
+#: from a plate at roughly this incidence, and the theory's linear, attached-flow, flat-wake
+#: assumptions fail (the linear check's motions stay at 4-10 deg)
+LINEAR_INCIDENCE_LIMIT_DEG = 10.0
+
 #: R. T. Jones' approximation of Wagner's function, Phi(s) = 1 - sum A_i exp(-b_i s), with the
 #: reduced time s = 2 U t / c (semichords travelled): pairs (A_i, b_i).
 JONES_WAGNER = ((0.165, 0.0455), (0.335, 0.3))
