@@ -1,6 +1,7 @@
 """Gap diagnosis: candidate library, Wagner lag, decomposition, selection, blind benchmark."""
 
 import json
+import re
 from pathlib import Path
 
 import h5py
@@ -226,6 +227,24 @@ def test_external_csv_case_and_its_errors(tmp_path):
     missing.write_text("time,pitch_angle\n0,0\n")
     with pytest.raises(ParseError, match="missing column"):
         read_csv_case(missing)
+    # the motion's checks name the file too (they said "<text>")
+    short = tmp_path / "short.csv"
+    short.write_text("\n".join(rows[:3]) + "\n")
+    with pytest.raises(ParseError, match=rf"^{re.escape(str(short))}: short: 2 samples; .* at "
+                                         "least 8"):
+        read_csv_case(short)
+    back = tmp_path / "back.csv"
+    back.write_text("\n".join([*rows[:6], rows[4], *rows[7:]]) + "\n")
+    with pytest.raises(ParseError, match=rf"^{re.escape(str(back))}: back: time must increase: "
+                                         r"sample 5 \(t = 0\.0301508 s\) is not after sample 4"):
+        read_csv_case(back)
+    # one CSV alone is too few cases; the message says why the fixtures were not pooled
+    from mfflap.cli.main import cli
+
+    res = CliRunner().invoke(cli, ["gap", "diagnose", str(CASE), "--csv", str(good),
+                                   "--output", str(tmp_path / "g.h5")])
+    assert res.exit_code == 2 and "1 case(s) from --csv; a diagnosis needs at least 3" \
+        in res.output and "--fixtures DIR" in res.output
 
 
 def test_gap_cli_on_a_record_folder(tmp_path):

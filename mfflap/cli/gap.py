@@ -21,11 +21,12 @@ def gap() -> None:
 @click.option("--fixtures", "folders", multiple=True,
               type=click.Path(exists=True, path_type=Path),
               help="Folders of CFD records (campaign, back-test) or record files; default: "
-                   "shipped fixtures.")
+                   "shipped fixtures, unless --csv is given.")
 @click.option("--csv", "csv_files", multiple=True,
               type=click.Path(dir_okay=False, exists=True, path_type=Path),
               help="External (motion, force) CSV files: time, pitch_angle, heave_position, "
-                   "normal_force, tangential_force, moment.")
+                   "normal_force, tangential_force, moment (rad, m, N, N*m about the leading "
+                   "edge); repeat for several. With --fixtures, pooled with the records.")
 @click.option("--flow", "flow_dirs", multiple=True,
               help="CASE=DIR: an OpenFOAM case folder with written fields for record CASE; the "
                    "report shows its vorticity where the model misses most.")
@@ -48,6 +49,7 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
     from mfflap.config import load_case
     from mfflap.gap.external import read_csv_case
     from mfflap.gap.report import gap_report, write_diagnosis
+    from mfflap.gap.system import MIN_CASES
     from mfflap.gap.workflow import diagnose_cases
     from mfflap.identification.data import prepare_cases
     from mfflap.identification.workflow import pooled_records
@@ -56,6 +58,7 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
     case = load_case(case_file)
     cases = []
     sources = []
+    given_folders = bool(folders)
     folders = folders or ((fixture_dir(),) if not csv_files else ())
     if folders:
         records, _ = pooled_records(folders)
@@ -68,6 +71,10 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
             click.echo(f"left out {name}: {why}", err=True)
     cases += [read_csv_case(p) for p in csv_files]
     sources += [str(p) for p in csv_files]
+    if len(cases) < MIN_CASES and csv_files and not given_folders:
+        raise click.UsageError(f"{len(cases)} case(s) from --csv; a diagnosis needs at least "
+                               f"{MIN_CASES}, and the shipped fixtures are read only without "
+                               "--csv: add CSV files, or --fixtures DIR to pool records")
     diag, where, pred = diagnose_cases(case, cases, alpha=alpha, min_gain=min_gain)
     snapshots = []
     for item in flow_dirs:

@@ -15,23 +15,40 @@ from mfflap.kinematics.state import KinematicState
 
 CSV_COLUMNS = ("time", "pitch_angle", "heave_position", "normal_force", "tangential_force",
                "moment")
+#: the fewest samples a case may have (the smoothing splines of its motion need them)
+MIN_SAMPLES = 8
 
 
 def case_from_arrays(name: str, time, pitch_angle, heave_position, normal_force,
-                     tangential_force, moment, parameters: dict | None = None) -> CaseData:
+                     tangential_force, moment, parameters: dict | None = None,
+                     source: str | None = None) -> CaseData:
     """A case from sampled positions (rad, m) and loads (N, N*m, body frame, about the LE).
 
     Rates and accelerations come from smoothing splines of the positions (the generalised
     cross-validation choice of smoothing), so noisy measured motions can be used.
+
+    Raises
+    ------
+    ParseError
+        Naming ``source`` (the file the arrays came from), for fewer than
+        :data:`MIN_SAMPLES` samples, a time that does not increase (which sample), or
+        positions that are not finite.
     """
     t = np.asarray(time, dtype=float)
-    if t.ndim != 1 or len(t) < 8 or np.any(np.diff(t) <= 0):
-        raise ParseError(f"{name}: time must be increasing with at least 8 samples")
+    if t.ndim != 1 or len(t) < MIN_SAMPLES:
+        raise ParseError(f"{name}: {t.size} samples; the smoothing splines of the motion need "
+                         f"at least {MIN_SAMPLES}", path=source)
+    back = np.flatnonzero(~(np.diff(t) > 0))
+    if back.size:
+        i = int(back[0]) + 1
+        raise ParseError(f"{name}: time must increase: sample {i} (t = {t[i]:g} s) is not "
+                         f"after sample {i - 1} (t = {t[i - 1]:g} s)", path=source)
     arrays = {}
     for key, values in (("pitch", pitch_angle), ("heave", heave_position)):
         y = np.asarray(values, dtype=float)
         if y.shape != t.shape or not np.all(np.isfinite(y)):
-            raise ParseError(f"{name}: {key} must be finite with one value per time")
+            raise ParseError(f"{name}: {key} must be finite with one value per time",
+                             path=source)
         spline = make_smoothing_spline(t, y)
         arrays[key] = (spline(t), spline.derivative(1)(t), spline.derivative(2)(t))
     state = KinematicState(time=t, pitch_angle=arrays["pitch"][0],
@@ -56,4 +73,5 @@ def read_csv_case(path: str | Path, parameters: dict | None = None) -> CaseData:
     """
     path = Path(path)
     col = read_csv_columns(path, CSV_COLUMNS)
-    return case_from_arrays(path.stem, *(col[c] for c in CSV_COLUMNS), parameters=parameters)
+    return case_from_arrays(path.stem, *(col[c] for c in CSV_COLUMNS), parameters=parameters,
+                            source=str(path))

@@ -20,6 +20,8 @@ from mfflap.hydro.loads import LOAD_COMPONENTS
 from mfflap.identification.data import CaseData
 
 COMPONENTS = LOAD_COMPONENTS
+#: the fewest cases a diagnosis can hold cases out of
+MIN_CASES = 3
 
 
 @dataclass
@@ -50,8 +52,9 @@ class GapSystem:
               candidates: Sequence[ForceTerm],
               components: Sequence[str] = COMPONENTS) -> GapSystem:
         """Evaluate every regressor of every case once."""
-        if len(cases) < 3:
-            raise MfflapError(f"gap diagnosis needs at least 3 cases, got {len(cases)}")
+        if len(cases) < MIN_CASES:
+            raise MfflapError(f"gap diagnosis needs at least {MIN_CASES} cases (it holds cases "
+                              f"out to test each effect), got {len(cases)}")
         terms = list(base) + list(candidates)
         names = [t.name for t in terms]
         scales = {}
