@@ -113,6 +113,15 @@ def test_blind_benchmark_meets_its_targets_at_snr_3():
                                                          strict=True))
     assert np.isfinite(res.fitted_coefficient).sum() == sum(
         t == c != NULL for t, c in zip(res.truth, res.claimed, strict=True))
+    assert "no claim on null datasets : " in res.summary() and "nan" not in res.summary()
+
+
+def test_a_blind_benchmark_without_null_trials_says_so_instead_of_nan():
+    res = blind_test(n_trials=3, snr=3.0, seed=0)
+    assert NULL not in res.truth and np.isnan(res.null_correct)
+    text = res.summary()
+    assert "no claim on null datasets : – (no null trial among these)" in text
+    assert "nan" not in text
     weak = blind_test(n_trials=20, snr=0.2, seed=7)  # the test can fail: at SNR 0.2 it does
     assert weak.attribution_accuracy < 0.7
 

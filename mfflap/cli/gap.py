@@ -125,10 +125,13 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
 
 
 @gap.command("blindtest")
-@click.option("--trials", default=70, show_default=True, type=click.IntRange(min=1))
+@click.option("--trials", default=70, show_default=True, type=click.IntRange(min=1),
+              help="Synthetic datasets diagnosed; about 30 % hide no effect (null trials).")
 @click.option("--snr", default=3.0, show_default=True, type=POSITIVE,
               help="Signal-to-noise ratio.")
-@click.option("--seed", default=0, show_default=True)
+@click.option("--seed", default=0, show_default=True,
+              help="Seed of the datasets and the hidden effects (the same seed, the same "
+                   "benchmark).")
 @click.option("--json", "as_json", is_flag=True)
 def blindtest_cmd(trials: int, snr: float, seed: int, as_json: bool) -> None:
     """Diagnose datasets with a hidden effect (or none) and score the attributions."""

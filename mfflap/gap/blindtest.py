@@ -159,12 +159,20 @@ class BlindTestResult:
         """Printable scores and the confusion matrix."""
         m = self.confusion()
         width = max(len(x) for x in self.labels) + 2
+        def percent(value: float, what: str, trials: str) -> str:
+            return (f"{value:.1%} {what}" if np.isfinite(value)
+                    else f"– (no {trials} trial among these)")
+
         lines = [f"blind benchmark at SNR {self.snr:g}: {len(self.truth)} trials",
-                 f"  right effect ranked first : {self.attribution_accuracy:.1%} of effect trials",
-                 f"  no claim on null datasets : {self.null_correct:.1%} of null trials",
-                 f"  held-out gap shrinkage    : {self.mean_gain:.1%} mean error reduction",
-                 f"  right effect's coefficient: {self.coefficient_error:.1%} median error "
-                 f"of the refitted value",
+                 "  right effect ranked first : "
+                 + percent(self.attribution_accuracy, "of effect trials", "effect"),
+                 "  no claim on null datasets : "
+                 + percent(self.null_correct, "of null trials", "null"),
+                 "  held-out gap shrinkage    : "
+                 + percent(self.mean_gain, "mean error reduction", "effect"),
+                 "  right effect's coefficient: "
+                 + percent(self.coefficient_error, "median error of the refitted value",
+                           "effect"),
                  "  confusion (rows: hidden, columns: claimed):",
                  " " * (width + 2) + " ".join(f"{lab[:8]:>8s}" for lab in self.labels)]
         for lab, row in zip(self.labels, m, strict=True):
