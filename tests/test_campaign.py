@@ -2,6 +2,7 @@
 
 import os
 import re
+import shutil
 import signal
 import socket
 import subprocess
@@ -160,7 +161,9 @@ def test_campaign_on_local_cluster_resumes_and_reports_failures(tmp_path, capfd)
     assert all(s.message == "already finished" for s in again[:2])
     assert (out / f"{SHORT.case_id}.h5").stat().st_mtime_ns == mtime  # never rerun
     assert [s.state for s in campaign_status(out)] == ["done", "done", "failed"]
-    with pytest.raises(ConfigError, match="another setup"):
+    with pytest.raises(ConfigError, match=r"another setup \(mesh: 'coarse' in the folder, "
+                                          r"'medium' asked; .*timeout_s: 900\.0 in the folder, "
+                                          r"21600\.0 asked"):
         run_campaign([SHORT], out, CampaignSetup(mesh="medium"), progress=False)
 
 
@@ -1183,3 +1186,23 @@ def test_a_stopped_campaign_waits_for_its_workers_to_let_go_of_their_cases(tmp_p
     finally:
         keeping.kill()
         keeping.wait()
+
+
+def test_a_folder_of_another_setup_names_what_differs(tmp_path):
+    """The shipped Co 2 campaign's manifest against the affordable set-up: refused before any
+    case runs, naming each setting that differs with both values."""
+    from mfflap.cfd.openfoam.setups import setup
+
+    out = tmp_path / "campaign"
+    out.mkdir()
+    shutil.copy(Path(__file__).parents[1] / "campaigns" / "table1_coarse_co2" / "campaign.toml",
+                out / "campaign.toml")
+    affordable = setup("affordable")
+    with pytest.raises(ConfigError) as err:
+        run_campaign([SHORT], out, CampaignSetup(mesh=affordable.mesh.name,
+                                                 solver=affordable.solver), progress=False)
+    message = str(err.value)
+    assert "mesh: 'coarse' in the folder, 'graded' asked" in message
+    assert "solver.max_courant: 2.0 in the folder, 4.0 asked" in message
+    assert "; ...)" in message  # more than four differences: the first four shown
+    assert not (out / "cases").exists() and not list(out.glob("*.h5"))

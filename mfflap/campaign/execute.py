@@ -179,15 +179,32 @@ def _write_manifest(out: Path, cases: Sequence[CampaignCase], setup: CampaignSet
     wanted = {"setup": setup.as_dict(), "cases": {c.case_id: c.as_dict() for c in cases}}
     if manifest.exists():
         old = read_toml(manifest)
-        if (_with_added_settings(old.get("setup", {}))
-                != read_toml_text(dumps({"setup": wanted["setup"]}))["setup"]):
-            raise ConfigError(f"{manifest}: this folder holds a campaign with another setup; "
-                              "use a new output folder", key="setup")
+        had = _with_added_settings(old.get("setup", {}))
+        asked = read_toml_text(dumps({"setup": wanted["setup"]}))["setup"]
+        if had != asked:
+            differences = _differences(had, asked)
+            raise ConfigError(f"{manifest}: this folder holds a campaign with another setup "
+                              f"({'; '.join(differences[:4])}"
+                              f"{'; ...' if len(differences) > 4 else ''}); its cases would mix "
+                              "with this one's: use a new output folder, or the folder's own "
+                              "settings", key="setup")
         merged = {**old.get("cases", {}), **wanted["cases"]}
         wanted["cases"] = merged
     tmp = manifest.with_suffix(".toml.tmp")
     tmp.write_text(dumps(wanted))
     tmp.replace(manifest)
+
+
+def _differences(had: dict[str, Any], asked: dict[str, Any], prefix: str = "") -> list[str]:
+    """``key: folder's value -> asked value`` for every setting that differs (nested)."""
+    out = []
+    for key in sorted(set(had) | set(asked)):
+        a, b = had.get(key), asked.get(key)
+        if isinstance(a, dict) and isinstance(b, dict):
+            out += _differences(a, b, f"{prefix}{key}.")
+        elif a != b:
+            out.append(f"{prefix}{key}: {a!r} in the folder, {b!r} asked")
+    return out
 
 
 def read_toml_text(text: str) -> dict[str, Any]:
