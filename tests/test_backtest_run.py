@@ -120,10 +120,11 @@ def test_fixture_lookup_by_key_then_by_tolerance_and_missing_is_reported(tmp_pat
 @pytest.mark.openfoam
 def test_live_backtest_runs_openfoam_and_saves_a_fixture(tmp_path):
     assert openfoam_available()
-    fast = harmonic_to_discrete(2.0, 0.1, np.deg2rad(10), np.deg2rad(90), 20)
+    # 0.6 periods of 4 Hz: the run (0.15 s) outlasts the back-test's half-period ramp
+    fast = harmonic_to_discrete(4.0, 0.05, np.deg2rad(10), np.deg2rad(90), 20)
     told: list[str] = []
     out = backtest_motion(fast, "fast", MorisonModel(), 50.0, live=True, work_dir=tmp_path,
-                          n_cycles=0.2, save_to=tmp_path / "fx", progress=told.append)
+                          n_cycles=0.6, save_to=tmp_path / "fx", progress=told.append)
     assert out.status == "back-tested" and out.source == "live OpenFOAM"
     assert told[0].startswith("meshing ") and told[1].startswith("pimpleFoam started")
     saved = tmp_path / "fx" / f"backtest_{out.key}.h5"
@@ -136,9 +137,9 @@ def test_live_backtest_runs_openfoam_and_saves_a_fixture(tmp_path):
     from mfflap.cfd.openfoam.setups import setup
 
     affordable = setup("affordable")
-    other = harmonic_to_discrete(2.0, 0.1, np.deg2rad(12), np.deg2rad(90), 20)
+    other = harmonic_to_discrete(4.0, 0.05, np.deg2rad(12), np.deg2rad(90), 20)
     out = backtest_motion(other, "affordable", MorisonModel(), 50.0, live=True,
-                          work_dir=tmp_path, n_cycles=0.2, save_to=tmp_path / "fx",
+                          work_dir=tmp_path, n_cycles=0.6, save_to=tmp_path / "fx",
                           mesh=affordable.mesh.name, solver=affordable.solver)
     assert out.status == "back-tested"
     record = read_record(tmp_path / "fx" / f"backtest_{out.key}.h5")
