@@ -333,6 +333,12 @@ def test_a_start_up_ramp_as_long_as_the_run_is_refused(tmp_path):
             write_case(tmp_path / "c", MOTION, end_time=1.0, ramp_time=ramp_time)
         assert err.value.key == "ramp_time" and not (tmp_path / "c").exists()
     assert write_case(tmp_path / "c", MOTION, end_time=1.0, ramp_time=0.99).is_dir()
+    # a mesh study refuses it before its first run, not after it started
+    from mfflap.cfd.convergence import run_convergence
+
+    with pytest.raises(ConfigError, match="lasts the whole run"):
+        run_convergence(tmp_path / "study", MOTION, 0.2, meshes=["coarse"], ramp_time=0.25)
+    assert not (tmp_path / "study").exists()
 
 
 def test_an_impossible_end_time_or_depth_writes_nothing(tmp_path):

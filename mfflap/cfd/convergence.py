@@ -24,6 +24,7 @@ import numpy as np
 from mfflap.campaign.records import CfdRecord, read_record, write_record
 from mfflap.cfd.bursts import find_load_bursts
 from mfflap.cfd.gci import GridConvergence, grid_convergence
+from mfflap.cfd.openfoam.loads import check_end_time, check_ramp_time
 from mfflap.cfd.openfoam.setups import CfdSetup
 from mfflap.cfd.openfoam.writer import SolverSettings, resolve_mesh
 from mfflap.cfd.openfoam.yplus import YPlusHistory, read_y_plus
@@ -219,6 +220,7 @@ def run_convergence(out_dir: str | Path, motion: Motion, end_time: float, *,
                           f"({', '.join(meshes)})", key="time_step_mesh")
     if period is not None and not period > 0:
         raise ConfigError(f"the period must be > 0 s, got {period!r}", key="period")
+    check_ramp_time(ramp_time, check_end_time(end_time))  # before any run starts
     if phase_from is not None and not 0 <= phase_from < end_time:
         raise ConfigError(f"the mean cycles would start at {phase_from!r} s, outside the run "
                           f"(0-{end_time:.6g} s)", key="phase_from")
