@@ -186,6 +186,14 @@ class IdentificationGrid:
     def __post_init__(self) -> None:
         check_fields(self, prefix="identification.")
         self._check_ramp_upright()
+        short = [f for f in self.frequencies if self.case_duration(f) <= self.case_ramp_time(f)]
+        if short:
+            f = short[0]
+            raise ConfigError(
+                f"value {self.max_duration} s leaves the f = {f:g} Hz cases no time after "
+                f"their {self.case_ramp_time(f):g} s start-up ramp (a quarter period, at most "
+                "0.5 s): the motion would never reach its amplitude", key="identification."
+                "max_duration")
         w = self.frequency_weights
         if w is not None:
             if len(w) != len(self.frequencies) or sum(w) <= 0:
@@ -199,6 +207,12 @@ class IdentificationGrid:
         """Simulated time of the grid's case at ``frequency``, s: n_cycles periods capped
         at max_duration."""
         return min(self.n_cycles / frequency, self.max_duration)
+
+    @staticmethod
+    def case_ramp_time(frequency: float) -> float:
+        """C^2 start-up ramp of the grid's case at ``frequency``, s: a quarter period, at
+        most 0.5 s."""
+        return min(0.25 / frequency, 0.5)
 
     def _check_ramp_upright(self) -> None:
         """Refuse a ramp that pitches some case's plate to 90 deg or past it (across the

@@ -87,6 +87,9 @@ def test_case_toml_round_trip():
         # a pitch ramp that turns some case's plate across the stream
         ("[identification]\npitch_ramp_rate_deg = 16\n", "identification.pitch_ramp_rate_deg",
          "f = 0.2 Hz cases, which run 6 s"),
+        # cases that would end inside their start-up ramp
+        ("[identification]\nmax_duration = 0.4\n", "identification.max_duration",
+         "leaves the f = 0.1 Hz cases no time after their 0.5 s start-up ramp"),
     ],
 )
 def test_every_validation_error_names_file_key_value_range(tmp_path, text, key, fragment):

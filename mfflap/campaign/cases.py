@@ -112,7 +112,7 @@ def case_for(grid: IdentificationGrid, frequency: float, heave_amplitude: float,
              phase_deg: float) -> CfdCase:
     """The case of ``grid`` at one (f, h_amp, phi): n_cycles periods capped at max_duration."""
     duration = grid.case_duration(frequency)
-    ramp_time = min(0.25 / frequency, 0.5)
+    ramp_time = grid.case_ramp_time(frequency)
     return CfdCase(float(frequency), float(heave_amplitude), float(phase_deg),
                    float(grid.pitch_ramp_rate_deg), float(duration), float(ramp_time))
 
