@@ -287,6 +287,12 @@ def test_real_openfoam_run_end_to_end(tmp_path):
     assert pearson(cfd.normal_force[after], model.normal_force[after]) > 0.9
     ratio = cfd.normal_force[after].mean() / model.normal_force[after].mean()
     assert 0.7 < ratio < 1.5
+    # run again: it has run to its end time, so no solver starts and nothing is appended
+    log = (case / "log.pimpleFoam").read_text()
+    told: list[str] = []
+    run_case(case, timeout_s=300, progress=told.append)
+    assert told == [f"{case} has run to its end time (0.06 s) already: nothing to run"]
+    assert (case / "log.pimpleFoam").read_text() == log
 
 
 def test_running_a_folder_that_is_not_a_case_says_so_and_writes_nothing(tmp_path):

@@ -513,7 +513,8 @@ def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
              min_time_step: float = 1e-7, watch: Callable[[], str | None] | None = None,
              watch_every_s: float = 60.0, progress: Callable[[str], None] | None = None,
              progress_every_s: float = 10.0) -> None:
-    """blockMesh (once), checkMesh (once), then pimpleFoam from the latest written time.
+    """blockMesh (once), checkMesh (once), then pimpleFoam from the latest written time
+    (none if the case has run to its end time).
 
     The latest written time is the latest folder holding every field
     (:func:`latest_solution_time`), not merely the latest folder: controlDict is set to start
@@ -565,6 +566,13 @@ def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
             if not (case_dir / "processor0").exists():
                 run_application(case_dir, "decomposePar", timeout_s=300)
         start = latest_solution_time(case_dir) or "0"
+        final = end_time(case_dir)
+        if (final is not None and float(start) >= final - 1e-9 * abs(final)
+                and ran_to_end(case_dir)):
+            if progress is not None:
+                progress(f"{case_dir} has run to its end time ({final:g} s) already: nothing to "
+                         "run")
+            return
         set_start_time(case_dir, start)
         aligned = align_writes_to_end(case_dir, float(start))
         if aligned is not None and progress is not None:
