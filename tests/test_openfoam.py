@@ -295,6 +295,45 @@ def test_real_openfoam_run_end_to_end(tmp_path):
     assert (case / "log.pimpleFoam").read_text() == log
 
 
+def _written_time(root: Path, initial: Path, name: str) -> None:
+    """A time folder as a run writes it: every field of 0/, each ending with the divider."""
+    (root / name).mkdir(parents=True)
+    for field_file in initial.iterdir():
+        (root / name / field_file.name).write_text(
+            field_file.read_text() + "\n// " + "*" * 73 + " //\n")
+
+
+@pytest.mark.openfoam
+def test_a_run_does_not_switch_layout_part_way(tmp_path):
+    """decomposePar and reconstructPar (1912) do not carry the moving mesh's points: a case
+    run serial to t > 0 is not decomposed (the parallel run began again at t = 0), and one
+    run on 2 processes is not continued serial (the solver stopped on a missing field) or
+    on 3; each is refused naming how to continue, before anything runs."""
+    from mfflap.cfd.openfoam.runner import latest_solution_time
+
+    serial = write_case(tmp_path / "serial", MOTION, end_time=1.0)
+    _written_time(serial, serial / "0", "0.25")
+    with pytest.raises(CfdRunError, match=r"run serial to t = 0\.25 s; decomposed on 2 "
+                                          r"processes it would start again from t = 0 s.*"
+                                          r"continue it serial \(without --procs\)"):
+        run_case(serial, n_procs=2)
+    assert not (serial / "processor0").exists() and not (serial / "log.blockMesh").exists()
+
+    decomposed = write_case(tmp_path / "decomposed", MOTION, end_time=1.0)
+    for rank in (0, 1):
+        for name in ("0", "0.3"):
+            _written_time(decomposed / f"processor{rank}", decomposed / "0", name)
+    assert latest_solution_time(decomposed, "serial") == "0"
+    assert latest_solution_time(decomposed, "decomposed") == "0.3"
+    assert latest_solution_time(decomposed) == "0.3"  # where the next run resumes
+    for n_procs, layout in ((1, "serial"), (3, "on 3 processes")):
+        with pytest.raises(CfdRunError, match=rf"run decomposed on 2 processes to t = 0\.3 s; "
+                                              rf"{layout} it cannot resume there .* continue "
+                                              r"it with --procs 2"):
+            run_case(decomposed, n_procs=n_procs)
+    assert not (decomposed / "log.blockMesh").exists()
+
+
 def test_running_a_folder_that_is_not_a_case_says_so_and_writes_nothing(tmp_path):
     (tmp_path / "empty").mkdir()
     with pytest.raises(CfdRunError, match=r"empty: not an OpenFOAM case: no "

@@ -379,7 +379,14 @@ def written_whole(path: Path) -> bool:
     return _END_DIVIDER.search(tail) is not None
 
 
-def latest_solution_time(case_dir: str | Path) -> str | None:
+def processor_folders(case_dir: str | Path) -> list[Path]:
+    """The ``processor<N>`` folders of a decomposed case, in rank order (none if serial)."""
+    folders = [p for p in Path(case_dir).glob("processor*") if p.is_dir()
+               and p.name.removeprefix("processor").isdigit()]
+    return sorted(folders, key=lambda p: int(p.name.removeprefix("processor")))
+
+
+def latest_solution_time(case_dir: str | Path, layout: str = "latest") -> str | None:
     """Name of the latest time folder written whole that holds every field of ``0/``.
 
     A time folder can hold less: the yPlus function object writes its field into a folder of
@@ -388,9 +395,24 @@ def latest_solution_time(case_dir: str | Path) -> str | None:
     OpenFOAM's ``startFrom latestTime`` would restart from such a folder and stop at once
     for want of p, or on a field it cannot read. A decomposed case needs the folder whole
     in every ``processor*`` folder. None if no folder qualifies (``0/`` missing or empty).
+
+    Parameters
+    ----------
+    layout
+        ``"serial"``: the case folder's own times; ``"decomposed"``: the times every
+        ``processor*`` folder holds; ``"latest"``: the later of the two, where
+        :func:`run_case` resumes (in the layout that holds it: :func:`_check_layout`).
     """
     case = Path(case_dir)
-    roots = sorted(case.glob("processor[0-9]*")) or [case]
+    if layout == "latest":
+        times = [t for t in (latest_solution_time(case, "serial"),
+                             latest_solution_time(case, "decomposed")) if t is not None]
+        return max(times, key=float) if times else None
+    if layout not in ("serial", "decomposed"):
+        raise ValueError(f"layout must be 'serial', 'decomposed' or 'latest', got {layout!r}")
+    roots = processor_folders(case) if layout == "decomposed" else [case]
+    if not roots:
+        return None
 
     def fields(folder: Path) -> set[str]:
         return {p.name.removesuffix(".gz") for p in folder.iterdir() if p.is_file()}
@@ -509,6 +531,46 @@ def written_where_stopped(case_dir: str | Path) -> str | None:
     return written if abs(float(written) - reached[0]) <= 0.5 * reached[1] else None
 
 
+def _later(a: str | None, b: str | None) -> bool:
+    """Whether time name ``a`` is later than ``b`` (None: no time)."""
+    return a is not None and (b is None or float(a) > float(b))
+
+
+def _check_layout(case_dir: Path, n_procs: int) -> None:
+    """Refuse a run whose layout (serial, or decomposed on ``n_procs`` ranks) would not
+    resume where the case's last run stopped.
+
+    OpenFOAM 1912's decomposePar and reconstructPar carry a time's fields but not the
+    moving mesh's points (written under ``<time>/polyMesh``), so a run cannot switch
+    between serial and decomposed, or between rank counts, part-way: decomposed, a serial
+    run's progress was ignored and the run began again at t = 0; reconstructed, the serial
+    solver stopped on a missing field, or restarted its mesh from rest and its time step
+    collapsed.
+
+    Raises
+    ------
+    CfdRunError
+        Naming the layout that holds the latest time and how to continue.
+    """
+    processors = processor_folders(case_dir)
+    serial = latest_solution_time(case_dir, "serial")
+    decomposed = latest_solution_time(case_dir, "decomposed") if processors else None
+    how = ("OpenFOAM 1912's decomposePar and reconstructPar do not carry the moving mesh's "
+           "points between the two, so a run continues in the layout it stopped in")
+    if n_procs > 1 and _later(serial, decomposed) and float(serial) > 0:
+        raise CfdRunError(f"the case was run serial to t = {serial} s; decomposed on {n_procs} "
+                          f"processes it would start again from t = {decomposed or 0} s "
+                          f"({how}): continue it serial (without --procs), or write it "
+                          "again (--overwrite) to run it decomposed from the start",
+                          case=str(case_dir))
+    if processors and _later(decomposed, serial) and float(decomposed) > 0 \
+            and len(processors) != n_procs:
+        layout = "serial" if n_procs == 1 else f"on {n_procs} processes"
+        raise CfdRunError(f"the case was run decomposed on {len(processors)} processes to "
+                          f"t = {decomposed} s; {layout} it cannot resume there ({how}): "
+                          f"continue it with --procs {len(processors)}", case=str(case_dir))
+
+
 def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
              min_time_step: float = 1e-7, watch: Callable[[], str | None] | None = None,
              watch_every_s: float = 60.0, progress: Callable[[str], None] | None = None,
@@ -549,6 +611,7 @@ def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
                           "`mfflap cfd write`)", case=str(case_dir))
     require_supported_release(str(case_dir))  # before the lock file is written
     with case_lock(case_dir):  # one run at a time in a case
+        _check_layout(case_dir, n_procs)
         if not meshed:
             if progress is not None:
                 progress(f"meshing {case_dir} (blockMesh, checkMesh)")
@@ -563,9 +626,9 @@ def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
             text = re.sub(r"numberOfSubdomains\s+\d+;", f"numberOfSubdomains {n_procs};", text)
             text = re.sub(r"n\s+\(\d+ 1 1\);", f"n           ({n_procs} 1 1);", text)
             dict_path.write_text(text)
-            if not (case_dir / "processor0").exists():
-                run_application(case_dir, "decomposePar", timeout_s=300)
-        start = latest_solution_time(case_dir) or "0"
+            if len(processor_folders(case_dir)) != n_procs:  # none, or only t = 0 of another
+                run_application(case_dir, "decomposePar", timeout_s=300, extra_args=("-force",))
+        start = latest_solution_time(case_dir, "decomposed" if n_procs > 1 else "serial") or "0"
         final = end_time(case_dir)
         if (final is not None and float(start) >= final - 1e-9 * abs(final)
                 and ran_to_end(case_dir)):
