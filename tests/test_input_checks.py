@@ -64,6 +64,11 @@ REFUSED = [
      "finite number > 0"),
     (["optimise", str(CASE), "--starts", "0", "--output", "OUT/o.h5"], "--starts", "x>=1"),
     (["gradcheck", str(CASE), "--n-steps", "1", "--figure", "OUT/g.png"], "--n-steps", "x>=2"),
+    # a figure format matplotlib cannot write: refused before the work, not after it
+    (["evaluate", str(CASE), "--figure", "OUT/f.txt"], "--figure", "written as .png, .pdf"),
+    (["gradcheck", str(CASE), "--figure", "OUT/g.jpg"], "--figure", "written as .png, .pdf"),
+    (["campaign", "compare", "OUT", "OUT", "--figure", "OUT/c.gif"], "--figure",
+     "written as .png, .pdf"),
     (["run", str(CASE), "--out", "OUT", "--starts", "0"], "--starts", "x>=1"),
     (["identify", str(CASE), "--bootstrap", "-1", "--output", "OUT/i.h5"], "--bootstrap",
      "x>=0"),

@@ -9,7 +9,13 @@ from pathlib import Path
 import click
 
 from mfflap.cli.json_output import echo_json
-from mfflap.cli.options import NON_NEGATIVE, POSITIVE, FloatList, mesh_and_setup_options
+from mfflap.cli.options import (
+    NON_NEGATIVE,
+    POSITIVE,
+    FigureFile,
+    FloatList,
+    mesh_and_setup_options,
+)
 
 
 @contextmanager
@@ -127,7 +133,7 @@ def status_cmd(out_dir: Path, as_json: bool) -> None:
               help="Compare up to this time, s (default: the shorter record's end).")
 @click.option("--output", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="HDF5 file of the comparison, both manifests beside it.")
-@click.option("--figure", type=click.Path(dir_okay=False, path_type=Path), default=None,
+@click.option("--figure", type=FigureFile(), default=None,
               help="PNG: NRMSE of F_n and M and the thrust difference per case.")
 @click.option("--histories", "histories_dir", default=None,
               type=click.Path(file_okay=False, path_type=Path),

@@ -13,6 +13,7 @@ from mfflap.cli.json_output import echo_json
 from mfflap.cli.options import (
     NON_NEGATIVE,
     POSITIVE,
+    FigureFile,
     FloatList,
     mesh_and_setup_options,
     velocity_convection_option,
@@ -266,9 +267,9 @@ def run(case_dir: Path, timeout: float, procs: int, progress_every: float,
                                  "for a report file without the mfflap_fluent.toml of "
                                  "`cfd fluent` beside it (that and an OpenFOAM case written "
                                  "from a table keep it).")
-@click.option("--plot", "plot_path", type=click.Path(dir_okay=False, path_type=Path),
-              default=None, help="Write a figure of F_n, F_t, M, thrust and power, CFD beside "
-              "the model, over time (.png, .pdf or .svg).")
+@click.option("--plot", "plot_path", type=FigureFile(), default=None,
+              help="Write a figure of F_n, F_t, M, thrust and power, CFD beside the model, "
+                   "over time (.png, .pdf or .svg).")
 @click.option("--save", "save_path", type=click.Path(dir_okay=False, path_type=Path),
               default=None, help="Write the comparison to HDF5: both time series, the summary, "
               "the case file and what the run was written for.")
@@ -291,9 +292,6 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
     from mfflap.cfd.fluent.udf import FLUENT_KEPT_FILE
     from mfflap.cfd.model_comparison import model_comparison, write_model_comparison
 
-    if plot_path is not None and plot_path.suffix.lower() not in (".png", ".pdf", ".svg"):
-        raise click.BadParameter(f"{plot_path}: a figure is written as .png, .pdf or .svg",
-                                 param_hint="--plot")
     if source.is_dir():  # an OpenFOAM case: the Fluent report's options would be ignored
         context = click.get_current_context()
         given = [f"--{name}" for name in ("fx", "fy", "mz", "depth")

@@ -9,6 +9,7 @@ import click
 import numpy as np
 
 from mfflap.cli.json_output import echo_json
+from mfflap.cli.options import FigureFile
 from mfflap.errors import MfflapError
 
 
@@ -56,7 +57,7 @@ def _register_subgroups() -> None:
 @cli.command()
 @click.argument("case_file", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("--json", "as_json", is_flag=True, help="Print the cycle means as JSON.")
-@click.option("--figure", type=click.Path(dir_okay=False, path_type=Path), default=None,
+@click.option("--figure", type=FigureFile(), default=None,
               help="Where to save the one-cycle figure (PNG). Default: <case name>.cycle.png "
                    "in the working folder (the case file's own folder may be read-only).")
 @click.option("--output", type=click.Path(dir_okay=False, path_type=Path), default=None,
@@ -94,7 +95,7 @@ def evaluate(case_file: Path, as_json: bool, figure: Path | None, output: Path |
 @click.option("--n-steps", default=40, show_default=True, type=click.IntRange(min=2),
               help="N of the checked motion (steps per half cycle; the work grows as N^2).")
 @click.option("--json", "as_json", is_flag=True, help="Print the agreement as JSON.")
-@click.option("--figure", type=click.Path(dir_okay=False, path_type=Path), default=None,
+@click.option("--figure", type=FigureFile(), default=None,
               help="Scatter figure of adjoint vs FD (default: <case name>.gradcheck.png in the "
                    "working folder).")
 def gradcheck(case_file: Path, n_steps: int, as_json: bool, figure: Path | None) -> None:

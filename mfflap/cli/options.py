@@ -2,6 +2,7 @@
 
 import math
 from collections.abc import Callable, Sequence
+from pathlib import Path
 
 import click
 
@@ -108,6 +109,24 @@ class NameList(click.ParamType):
             self.fail(f"{value!r}: {', '.join(twice)} given twice", param, ctx)
         return names
 
+
+class FigureFile(click.Path):
+    """A figure file to write: its suffix says the format, one of :data:`FIGURE_SUFFIXES`,
+    refused by the option's name before any work (matplotlib would refuse it after)."""
+
+    def __init__(self) -> None:
+        super().__init__(dir_okay=False, path_type=Path)
+
+    def convert(self, value, param, ctx):
+        path = super().convert(value, param, ctx)
+        if Path(path).suffix.lower() not in FIGURE_SUFFIXES:
+            self.fail(f"{path}: a figure is written as {', '.join(FIGURE_SUFFIXES[:-1])} or "
+                      f"{FIGURE_SUFFIXES[-1]}", param, ctx)
+        return path
+
+
+#: the figure formats the commands write, by suffix
+FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
 
 #: a finite number > 0: a time span, a number of periods, a time step
 POSITIVE = FiniteFloat()
