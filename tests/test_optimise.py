@@ -146,6 +146,13 @@ def test_no_gain_is_given_when_the_best_sinusoid_makes_drag(tmp_path):
     assert res.exit_code == 0, res.output
     assert "beta = 0 thrust gain: not given: the best feasible sinusoid makes no thrust" \
         in res.output
+    # why the optimum is flagged (and, if so, not converged) is said under its line
+    with ResultsFile(out) as rf:
+        result = read_result(rf, "optimisation/sqp/beta_0.00")
+    assert result.flags and all(f"    flagged: {flag}" in res.output for flag in result.flags)
+    if not result.converged:
+        assert f"    not converged after {result.n_iterations} iterations: " \
+               f"{result.message}" in res.output
     with ResultsFile(out) as rf:
         sweep, best = read_sweep(rf, "optimisation/sweep")
         assert sweep.mean_thrust[best] < 0

@@ -65,6 +65,10 @@ def optimise(case_file: Path, betas: list[float] | None, starts: int, ipopt: boo
                    f"{float(s.mean_power):8.3f} W  St {float(s.strouhal_number):5.2f}  "
                    f"{'converged' if r.converged else 'NOT CONVERGED'}"
                    f"{'  FLAGGED' if r.flags else ''}")
+        if not r.converged:
+            click.echo(f"    not converged after {r.n_iterations} iterations: {r.message}")
+        for flag in r.flags:
+            click.echo(f"    flagged: {flag}")
     if study.thrust_gain is None:
         click.echo(f"beta = 0 thrust gain: not given: {study.no_thrust_gain_reason}")
     else:
