@@ -67,6 +67,13 @@ class ModelSettings:
         )
 
 
+def _rate_under_upright(rate_deg: float, peak: float) -> float:
+    """The pitch ramp rate, deg/s, at which a ramp that reaches ``peak`` rad at ``rate_deg``
+    reaches :data:`UPRIGHT_PITCH` instead (the pitch is linear in the rate), rounded down to
+    1e-3 deg/s: any rate below it stays under."""
+    return math.floor(rate_deg * UPRIGHT_PITCH / peak * 1e3) / 1e3
+
+
 @dataclass(frozen=True)
 class MotionSpec:
     """A continuous motion given in engineering units (degrees)."""
@@ -115,8 +122,7 @@ class MotionSpec:
             return
         pitch, time = motion.largest_pitch(end_time)
         if abs(pitch) >= UPRIGHT_PITCH:
-            allowed = math.floor(self.pitch_ramp_rate_deg * UPRIGHT_PITCH / abs(pitch)
-                                 * 1e3) / 1e3
+            allowed = _rate_under_upright(self.pitch_ramp_rate_deg, abs(pitch))
             raise ConfigError(
                 f"value {self.pitch_ramp_rate_deg} deg/s turns the plate past "
                 f"{math.degrees(UPRIGHT_PITCH):g} deg: the pitch reaches "
@@ -225,7 +231,7 @@ class IdentificationGrid:
         peak, frequency = max(peaks)
         if peak >= UPRIGHT_PITCH:
             duration = self.case_duration(frequency)
-            allowed = math.floor(self.pitch_ramp_rate_deg * UPRIGHT_PITCH / peak * 1e3) / 1e3
+            allowed = _rate_under_upright(self.pitch_ramp_rate_deg, peak)
             raise ConfigError(
                 f"value {self.pitch_ramp_rate_deg} deg/s turns the plate past "
                 f"{math.degrees(UPRIGHT_PITCH):g} deg: theta_kamp t sin(2 pi f t) reaches "
