@@ -316,6 +316,7 @@ def test_backtest_command_lists_each_motion_and_why_it_was_not_back_tested(
     assert list(data["motions"]) == ["best sinusoid", "β = 0.5"]
     assert {d["status"] for d in data["motions"].values()} == {"not back-tested"}
     assert data["cfd_thrust_gain"] is None
+    assert data["cfd_thrust_gain_missing"] == "there is no β = 0 motion (not optimised)"
     text = CliRunner().invoke(cli, ["backtest", str(optimisation_file), "--fixtures",
                                     str(empty)])
     assert text.exit_code == 0 and text.output.count("NOT BACK-TESTED") == 2

@@ -113,6 +113,7 @@ def test_optimise_cli_writes_results_and_report(tmp_path):
     assert data["optimised"]["0.5"]["converged"] is True
     # beta = 0 was not optimised: no "beta = 0 gain" from the beta = 0.5 motion
     assert data["thrust_gain_beta0"] is None and data["thrust_gain_beta0_refined"] is None
+    assert data["thrust_gain_beta0_missing"] == "beta = 0 was not optimised"
     html = out.with_suffix(".html").read_text()
     assert html.count("<img") >= 3 and "Pareto" in html
     assert "not given: beta = 0 was not optimised" in html

@@ -76,7 +76,8 @@ def _show(outcomes: dict, as_json: bool) -> None:
             for label, o in outcomes.items()}
     gain = gain_in_cfd(outcomes)
     if as_json:
-        echo_json({"motions": data, "cfd_thrust_gain": gain})
+        echo_json({"motions": data, "cfd_thrust_gain": gain,
+                   "cfd_thrust_gain_missing": no_gain_in_cfd_reason(outcomes)})
         return
     for label, d in data.items():
         if d["status"] != "back-tested":

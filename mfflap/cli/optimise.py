@@ -57,7 +57,8 @@ def optimise(case_file: Path, betas: list[float] | None, starts: int, ipopt: boo
            for b, r in study.sqp.items()}
     if as_json:
         echo_json({"optimised": out, "thrust_gain_beta0": study.thrust_gain,
-                   "thrust_gain_beta0_refined": study.thrust_gain_refined})
+                   "thrust_gain_beta0_refined": study.thrust_gain_refined,
+                   "thrust_gain_beta0_missing": study.no_thrust_gain_reason})
         return
     for b, r in study.sqp.items():
         s = r.summary
