@@ -1206,3 +1206,34 @@ def test_a_folder_of_another_setup_names_what_differs(tmp_path):
     assert "solver.max_courant: 2.0 in the folder, 4.0 asked" in message
     assert "; ...)" in message  # more than four differences: the first four shown
     assert not (out / "cases").exists() and not list(out.glob("*.h5"))
+
+
+def test_a_dry_run_lists_each_case_with_its_state_or_refuses_as_the_run_would(tmp_path):
+    """Part of the shipped Co 2 campaign: one case done, one failed, the rest pending; with
+    another set-up the dry run is refused as the run would be, and nothing is written."""
+    from click.testing import CliRunner
+
+    from mfflap.cli.main import cli
+
+    source = Path(__file__).parents[1] / "campaigns" / "table1_coarse_co2"
+    out = tmp_path / "campaign"
+    out.mkdir()
+    for name in ("campaign.toml", "f1p000_h0p300_phi090p0.h5",
+                 "f0p500_h0p500_phi135p0.failed.toml"):
+        shutil.copy(source / name, out / name)
+    case = Path(__file__).parents[1] / "cases" / "paper2026.toml"
+    before = sorted(p.name for p in out.iterdir())
+    args = ["campaign", "run", str(case), "--out", str(out), "--dry-run",
+            "--frequencies", "0.5,1", "--heave-amplitudes", "0.3,0.5", "--phases", "90,135"]
+    res = CliRunner().invoke(cli, [*args, "--setup", "coarse_co2"])
+    assert res.exit_code == 0, res.output
+    states = {line.split()[0]: line.split()[-1] for line in res.output.splitlines()}
+    assert states["f1p000_h0p300_phi090p0"] == "done"
+    assert states["f0p500_h0p500_phi135p0"] == "failed"
+    assert set(states.values()) == {"done", "failed", "pending"} and len(states) == 8
+    res = CliRunner().invoke(cli, [*args, "--setup", "affordable"])
+    assert res.exit_code != 0 and "another setup (mesh: 'coarse' in the folder" in res.output
+    res = CliRunner().invoke(cli, [*args[:3], "--out", str(tmp_path / "new"), "--dry-run",
+                                   "--frequencies", "1", "--phases", "90"])
+    assert res.exit_code == 0 and res.output.split()[-1] == "pending"
+    assert sorted(p.name for p in out.iterdir()) == before and not (tmp_path / "new").exists()

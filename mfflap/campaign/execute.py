@@ -174,21 +174,36 @@ def _with_added_settings(setup: dict[str, Any]) -> dict[str, Any]:
     return setup
 
 
+def check_same_setup(out_dir: str | Path, setup: CampaignSetup) -> None:
+    """Refuse a campaign folder that holds a campaign with another setup (nothing to check
+    in a new folder).
+
+    Raises
+    ------
+    ConfigError
+        Naming the manifest and every setting that differs, with both values (the first
+        four).
+    """
+    manifest = Path(out_dir) / "campaign.toml"
+    if not manifest.exists():
+        return
+    had = _with_added_settings(read_toml(manifest).get("setup", {}))
+    asked = read_toml_text(dumps({"setup": setup.as_dict()}))["setup"]
+    if had != asked:
+        differences = _differences(had, asked)
+        raise ConfigError(f"{manifest}: this folder holds a campaign with another setup "
+                          f"({'; '.join(differences[:4])}"
+                          f"{'; ...' if len(differences) > 4 else ''}); its cases would mix "
+                          "with this one's: use a new output folder, or the folder's own "
+                          "settings", key="setup")
+
+
 def _write_manifest(out: Path, cases: Sequence[CampaignCase], setup: CampaignSetup) -> None:
     manifest = out / "campaign.toml"
     wanted = {"setup": setup.as_dict(), "cases": {c.case_id: c.as_dict() for c in cases}}
     if manifest.exists():
-        old = read_toml(manifest)
-        had = _with_added_settings(old.get("setup", {}))
-        asked = read_toml_text(dumps({"setup": wanted["setup"]}))["setup"]
-        if had != asked:
-            differences = _differences(had, asked)
-            raise ConfigError(f"{manifest}: this folder holds a campaign with another setup "
-                              f"({'; '.join(differences[:4])}"
-                              f"{'; ...' if len(differences) > 4 else ''}); its cases would mix "
-                              "with this one's: use a new output folder, or the folder's own "
-                              "settings", key="setup")
-        merged = {**old.get("cases", {}), **wanted["cases"]}
+        check_same_setup(out, setup)
+        merged = {**read_toml(manifest).get("cases", {}), **wanted["cases"]}
         wanted["cases"] = merged
     tmp = manifest.with_suffix(".toml.tmp")
     tmp.write_text(dumps(wanted))

@@ -62,7 +62,9 @@ def campaign() -> None:
               help="Store the records in float32, like the shipped fixtures (half the size).")
 @click.option("--timeout", default=6 * 3600.0, show_default=True, type=POSITIVE,
               help="Seconds per case.")
-@click.option("--dry-run", is_flag=True, help="List the cases and exit.")
+@click.option("--dry-run", is_flag=True,
+              help="List the cases with their state in --out (done, failed, pending, ...) "
+                   "and exit; a folder of another setup is refused as the run would be.")
 def run_cmd(case_file: Path, out_dir: Path, frequencies: list[float] | None,
             heave_amplitudes: list[float] | None, phases: list[float] | None, mesh: str | None,
             setup_name: str | None, workers: int,
@@ -74,21 +76,30 @@ def run_cmd(case_file: Path, out_dir: Path, frequencies: list[float] | None,
     stopped. Failed cases are reported and do not stop the others.
     """
     from mfflap.campaign.cases import grid_cases
-    from mfflap.campaign.execute import CampaignSetup, run_campaign
+    from mfflap.campaign.execute import (
+        CampaignSetup,
+        campaign_status,
+        check_same_setup,
+        run_campaign,
+    )
     from mfflap.cfd.openfoam.setups import mesh_and_solver
     from mfflap.config import load_case
 
     spec, solver = mesh_and_solver(mesh, setup_name)
     case = load_case(case_file)
     cases = grid_cases(case.identification, frequencies, heave_amplitudes, phases)
-    if dry_run:
-        for c in cases:
-            click.echo(f"{c.case_id}  duration {c.duration:g} s  ramp {c.ramp_time:g} s")
-        return
     campaign_setup = CampaignSetup(mesh=spec.name, solver=solver, plate=case.plate,
                                    fluid=case.fluid, stream=case.flow, timeout_s=timeout,
                                    keep_case_dirs=keep_cases,
                                    single_precision=single_precision)
+    if dry_run:  # what the run would do: refused as it would be, or each case's state
+        check_same_setup(out_dir, campaign_setup)
+        states = ({s.case_id: s.state for s in campaign_status(out_dir)}
+                  if (out_dir / "campaign.toml").is_file() else {})
+        for c in cases:
+            click.echo(f"{c.case_id}  duration {c.duration:g} s  ramp {c.ramp_time:g} s"
+                       f"  {states.get(c.case_id, 'pending')}")
+        return
     with aborted_with_resume_message(out_dir):
         statuses = run_campaign(cases, out_dir, campaign_setup, n_workers=workers,
                                 scheduler_address=scheduler, retry_failed=retry_failed)
