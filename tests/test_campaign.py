@@ -514,7 +514,9 @@ def test_an_earlier_calls_breach_counts_for_the_same_flow_time_rule(tmp_path, mo
     assert later[2].startswith("rerun from t = 0 s with max Co 2: ")
     assert "as at max Co 4" in later[2]
     assert "maxCo           2;" in (case_dir / "system" / "controlDict").read_text()
-    assert (case_dir / "log.pimpleFoam").read_text().count("Starting time loop") == 5
+    # three runs in the first call; in the second, none for the run that had reached its
+    # end time (its forces are judged as they are), then the rerun from t = 0
+    assert (case_dir / "log.pimpleFoam").read_text().count("Starting time loop") == 4
 
 
 def test_retry_failed_gives_a_failed_case_a_new_budget_of_retries(tmp_path):
