@@ -29,6 +29,37 @@ from mfflap.kinematics.state import KINEMATIC_UNITS, KinematicState
 SCHEMA_VERSION = 1
 
 
+def check_overwrite(path: str | Path, kind: str) -> None:
+    """Refuse to write ``kind`` results over a file that holds something else.
+
+    Writing over results of the same kind is a rerun and is allowed; writing over another
+    kind of results (an ``--output`` that names the optimisation file), over an HDF5 file
+    mfflap did not write, or over a file that is not HDF5 at all would lose it.
+
+    Raises
+    ------
+    MfflapError
+        Naming the file and what it holds.
+    """
+    path = Path(path)
+    if not path.exists():
+        return
+    if path.is_dir():
+        raise MfflapError(f"{path}: is a folder; name a results file (.h5)")
+    lose = "writing results over it would lose it: choose another file, or delete it first"
+    try:
+        with h5py.File(path, "r") as h5:
+            attrs = dict(h5.attrs)
+    except OSError:
+        raise MfflapError(f"{path}: exists and is not an HDF5 file; {lose}") from None
+    if "mfflap_schema_version" not in attrs:
+        raise MfflapError(f"{path}: is an HDF5 file mfflap did not write; {lose}")
+    held = attrs.get("kind")
+    if held != kind:
+        raise MfflapError(f"{path}: holds {held!r} results; writing {kind!r} results over them "
+                          "would lose them: choose another file, or delete it first")
+
+
 class ResultsFile:
     """An HDF5 results file opened for writing or reading.
 
@@ -56,6 +87,8 @@ class ResultsFile:
         self.path = Path(path)
         if mode == "r" and not self.path.exists():
             raise MfflapError(f"{self.path}: no such results file")
+        if mode == "w":
+            check_overwrite(self.path, kind)
         if mode != "r":  # a file asked for in a new folder: made, not failed after the work
             self.path.parent.mkdir(parents=True, exist_ok=True)
         # "w" writes beside the file and takes its place on a clean close: a run stopped or

@@ -115,6 +115,43 @@ def test_missing_case_file(tmp_path):
         load_case(tmp_path / "nope.toml")
 
 
+def test_results_are_not_written_over_a_file_that_holds_something_else(tmp_path):
+    """The same kind is a rerun and is written over; another kind of results, an HDF5 file
+    mfflap did not write, or a file that is not HDF5 is kept, refused by name (by the
+    library after the work, by the command line's --output before it)."""
+    import h5py
+
+    results = tmp_path / "opt.h5"
+    with ResultsFile(results, "w", kind="optimisation") as rf:
+        rf.h5.attrs["marker"] = 1
+    with ResultsFile(results, "w", kind="optimisation") as rf:  # a rerun
+        rf.h5.attrs["marker"] = 2
+    with ResultsFile(results) as rf:
+        assert rf.h5.attrs["marker"] == 2
+    foreign = tmp_path / "theirs.h5"
+    with h5py.File(foreign, "w") as h5:
+        h5["x"] = np.arange(3)
+    page = tmp_path / "report.html"
+    page.write_text("<html></html>")
+    refused = {results: "holds 'optimisation' results; writing 'identification' results over "
+                        "them would lose them",
+               foreign: "is an HDF5 file mfflap did not write",
+               page: "exists and is not an HDF5 file",
+               tmp_path: "is a folder"}
+    for path, why in refused.items():
+        with pytest.raises(MfflapError, match=why):
+            ResultsFile(path, "w", kind="identification")
+    with ResultsFile(results) as rf:
+        assert rf.h5.attrs["kind"] == "optimisation" and rf.h5.attrs["marker"] == 2
+    assert page.read_text() == "<html></html>"
+    # the commands refuse it by the option's name before the work
+    res = CliRunner().invoke(cli, ["evaluate", str(ROOT / "cases" / "paper2026.toml"),
+                                   "--output", str(results), "--figure",
+                                   str(tmp_path / "f.png")])
+    assert res.exit_code == 2 and "Invalid value for '--output'" in res.output
+    assert "holds 'optimisation' results" in res.output and not (tmp_path / "f.png").exists()
+
+
 def test_hdf5_round_trip(tmp_path):
     model = MorisonModel()
     d = harmonic_to_discrete(np.array([0.5, 1.0]), 0.3, 0.3, np.pi / 2, 30)

@@ -14,6 +14,7 @@ from mfflap.cli.options import (
     POSITIVE,
     FigureFile,
     FloatList,
+    ResultsOutput,
     mesh_and_setup_options,
 )
 
@@ -142,7 +143,7 @@ def status_cmd(out_dir: Path, as_json: bool) -> None:
               help="Compare after this time, s (default: each case's start-up ramp).")
 @click.option("--end", "end_s", type=POSITIVE, default=None,
               help="Compare up to this time, s (default: the shorter record's end).")
-@click.option("--output", type=click.Path(dir_okay=False, path_type=Path), default=None,
+@click.option("--output", type=ResultsOutput("campaign_comparison"), default=None,
               help="HDF5 file of the comparison, both manifests beside it.")
 @click.option("--figure", type=FigureFile(), default=None,
               help="PNG: NRMSE of F_n and M and the thrust difference per case.")

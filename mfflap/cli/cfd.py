@@ -15,6 +15,7 @@ from mfflap.cli.options import (
     POSITIVE,
     FigureFile,
     FloatList,
+    ResultsOutput,
     mesh_and_setup_options,
     velocity_convection_option,
 )
@@ -270,7 +271,7 @@ def run(case_dir: Path, timeout: float, procs: int, progress_every: float,
 @click.option("--plot", "plot_path", type=FigureFile(), default=None,
               help="Write a figure of F_n, F_t, M, thrust and power, CFD beside the model, "
                    "over time (.png, .pdf or .svg).")
-@click.option("--save", "save_path", type=click.Path(dir_okay=False, path_type=Path),
+@click.option("--save", "save_path", type=ResultsOutput("cfd_model_comparison"),
               default=None, help="Write the comparison to HDF5: both time series, the summary, "
               "the case file and what the run was written for.")
 @click.option("--json", "as_json", is_flag=True, help="Print results as JSON.")

@@ -8,7 +8,7 @@ import click
 import numpy as np
 
 from mfflap.cli.json_output import echo_json
-from mfflap.cli.options import NON_NEGATIVE, POSITIVE
+from mfflap.cli.options import NON_NEGATIVE, POSITIVE, ResultsOutput
 
 
 @click.group()
@@ -35,7 +35,7 @@ def gap() -> None:
 @click.option("--alpha", default=0.01, show_default=True, help="Significance level.")
 @click.option("--min-gain", default=0.02, show_default=True,
               help="Smallest held-out error reduction worth claiming.")
-@click.option("--output", type=click.Path(dir_okay=False, path_type=Path),
+@click.option("--output", type=ResultsOutput("gap_diagnosis"),
               default=Path("gap.h5"), show_default=True)
 @click.option("--report", "report_path", type=click.Path(dir_okay=False, path_type=Path),
               default=None, help="HTML report (default: <output>.html).")

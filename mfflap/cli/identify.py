@@ -8,7 +8,7 @@ import click
 import numpy as np
 
 from mfflap.cli.json_output import echo_json
-from mfflap.cli.options import FloatList, NameList
+from mfflap.cli.options import FloatList, NameList, ResultsOutput
 
 
 def _strategies(names: tuple[str, ...], weights: list[float] | None, case) -> list:
@@ -45,7 +45,7 @@ def _fitted_components() -> tuple[str, ...]:
 @click.option("--bootstrap", "n_bootstrap", default=200, show_default=True,
               type=click.IntRange(min=0),
               help="Case-bootstrap replicates.")
-@click.option("--output", type=click.Path(dir_okay=False, path_type=Path),
+@click.option("--output", type=ResultsOutput("identification"),
               default=Path("identification.h5"), show_default=True, help="HDF5 results.")
 @click.option("--json", "as_json", is_flag=True, help="Print coefficients as JSON.")
 def identify(case_file: Path, folders: tuple[Path, ...], strategies: tuple[str, ...],

@@ -9,7 +9,7 @@ import click
 import numpy as np
 
 from mfflap.cli.json_output import echo_json
-from mfflap.cli.options import FigureFile
+from mfflap.cli.options import FigureFile, ResultsOutput
 from mfflap.errors import MfflapError
 
 
@@ -60,7 +60,7 @@ def _register_subgroups() -> None:
 @click.option("--figure", type=FigureFile(), default=None,
               help="Where to save the one-cycle figure (PNG). Default: <case name>.cycle.png "
                    "in the working folder (the case file's own folder may be read-only).")
-@click.option("--output", type=click.Path(dir_okay=False, path_type=Path), default=None,
+@click.option("--output", type=ResultsOutput("evaluation"), default=None,
               help="Also write the results (HDF5, with the case stored beside them).")
 @click.option("--scheme", type=click.Choice(["paper", "midpoint"]), default=None,
               help="Discrete scheme (default: the case's [model] scheme).")

@@ -7,7 +7,7 @@ from pathlib import Path
 import click
 
 from mfflap.cli.json_output import echo_json
-from mfflap.cli.options import FloatList
+from mfflap.cli.options import FloatList, ResultsOutput
 
 
 @click.command()
@@ -20,7 +20,7 @@ from mfflap.cli.options import FloatList
               help="Also solve the hard-constrained problem with IPOPT.")
 @click.option("--gain-table", is_flag=True,
               help="Also tabulate the beta = 0 gain against N and the smoothing weights.")
-@click.option("--output", type=click.Path(dir_okay=False, path_type=Path),
+@click.option("--output", type=ResultsOutput("optimisation"),
               default=Path("optimisation.h5"), show_default=True)
 @click.option("--report", "report_path", type=click.Path(dir_okay=False, path_type=Path),
               default=None, help="HTML report (default: <output>.html).")

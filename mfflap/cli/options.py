@@ -125,6 +125,28 @@ class FigureFile(click.Path):
         return path
 
 
+class ResultsOutput(click.Path):
+    """An HDF5 results file to write ``kind`` results into: a file that holds another kind
+    of results, or is not mfflap's, is refused by the option's name before any work
+    (:func:`mfflap.results.check_overwrite`); the same kind is a rerun and is written over.
+    """
+
+    def __init__(self, kind: str) -> None:
+        super().__init__(dir_okay=False, path_type=Path)
+        self.kind = kind
+
+    def convert(self, value, param, ctx):
+        from mfflap.errors import MfflapError
+        from mfflap.results import check_overwrite
+
+        path = super().convert(value, param, ctx)
+        try:
+            check_overwrite(path, self.kind)
+        except MfflapError as exc:
+            self.fail(str(exc), param, ctx)
+        return path
+
+
 #: the figure formats the commands write, by suffix
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
 
