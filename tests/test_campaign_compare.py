@@ -218,6 +218,14 @@ def test_cases_that_end_before_the_window_are_listed_not_fatal(tmp_path):
     res = CliRunner().invoke(cli, ["campaign", "compare", str(AFFORDABLE), str(COARSE),
                                    "--start", "3", "--json"])
     assert json.loads(res.stdout)["outside_window"] == result.outside_window
+    # a history asked for of a case outside the window says so
+    res = CliRunner().invoke(cli, ["campaign", "compare", str(AFFORDABLE), str(COARSE),
+                                   "--start", "3", "--histories", str(tmp_path / "h"),
+                                   "--case", "harmonic_f2p000_h0p0000_th1p00_phi090p0"])
+    assert res.exit_code != 0
+    assert ("harmonic_f2p000_h0p0000_th1p00_phi090p0: fewer than two common samples from "
+            "t = 3 s to 1.5 s (the records end at 1.5 and 1.5 s): outside the window "
+            "compared") in res.output
     # no case in the window at all, and a window that ends before it starts
     res = CliRunner().invoke(cli, ["campaign", "compare", str(AFFORDABLE), str(COARSE),
                                    "--start", "100"])
@@ -308,7 +316,7 @@ def test_history_figures_refuse_a_case_not_run_by_both(tmp_path):
                                    "--histories", str(tmp_path / "h"),
                                    "--case", "f2p000_h0p500_phi135p0"])
     assert res.exit_code != 0
-    assert "f2p000_h0p500_phi135p0 not run by both" in res.output
+    assert "f2p000_h0p500_phi135p0: not run by both" in res.output
     assert "compared: f1p000_h0p500_phi135p0" in res.output
     assert not (tmp_path / "h").exists() or not any((tmp_path / "h").iterdir())
     res = CliRunner().invoke(cli, ["campaign", "compare", str(a_dir), str(b_dir),

@@ -83,16 +83,18 @@ def plot_histories(folder: str | Path, comparison: CampaignComparison,
     Raises
     ------
     MfflapError
-        If a case asked for in ``case_ids`` is not among the compared ones, naming it and
-        the compared cases.
+        If a case asked for in ``case_ids`` is not among the compared ones, naming it, why
+        (not run by both, or outside the window compared) and the compared cases.
     """
     chosen = {c.case_id: c for c in comparison.cases}
     if case_ids:
         missing = [c for c in case_ids if c not in chosen]
         if missing:
-            raise MfflapError(f"case(s) {', '.join(missing)} not run by both "
-                              f"{comparison.folder_a} and {comparison.folder_b}; compared: "
-                              f"{', '.join(chosen) or 'none'}")
+            why = [f"{comparison.outside_window[c]}: outside the window compared"
+                   if c in comparison.outside_window
+                   else f"{c}: not run by both {comparison.folder_a} and {comparison.folder_b}"
+                   for c in missing]
+            raise MfflapError(f"{'; '.join(why)}; compared: {', '.join(chosen) or 'none'}")
         chosen = {c: chosen[c] for c in case_ids}
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
