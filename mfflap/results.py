@@ -51,7 +51,8 @@ def check_overwrite(path: str | Path, kind: str) -> None:
         with h5py.File(path, "r") as h5:
             attrs = dict(h5.attrs)
     except OSError:
-        raise MfflapError(f"{path}: exists and is not an HDF5 file; {lose}") from None
+        raise MfflapError(f"{path}: exists and is not an HDF5 file (or one cut short); "
+                          f"{lose}") from None
     if "mfflap_schema_version" not in attrs:
         raise MfflapError(f"{path}: is an HDF5 file mfflap did not write; {lose}")
     held = attrs.get("kind")
