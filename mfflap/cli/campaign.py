@@ -146,7 +146,8 @@ def status_cmd(out_dir: Path, as_json: bool) -> None:
 @click.option("--output", type=ResultsOutput("campaign_comparison"), default=None,
               help="HDF5 file of the comparison, both manifests beside it.")
 @click.option("--figure", type=FigureFile(), default=None,
-              help="PNG: NRMSE of F_n and M and the thrust difference per case.")
+              help="Figure (.png, .pdf or .svg): NRMSE of F_n and M and the thrust "
+                   "difference per case.")
 @click.option("--histories", "histories_dir", default=None,
               type=click.Path(file_okay=False, path_type=Path),
               help="Folder for one PNG per case: F_n, F_t, M and thrust of both runs over "

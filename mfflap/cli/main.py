@@ -58,8 +58,9 @@ def _register_subgroups() -> None:
 @click.argument("case_file", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("--json", "as_json", is_flag=True, help="Print the cycle means as JSON.")
 @click.option("--figure", type=FigureFile(), default=None,
-              help="Where to save the one-cycle figure (PNG). Default: <case name>.cycle.png "
-                   "in the working folder (the case file's own folder may be read-only).")
+              help="Where to save the one-cycle figure (.png, .pdf or .svg). Default: "
+                   "<case name>.cycle.png in the working folder (the case file's own folder "
+                   "may be read-only).")
 @click.option("--output", type=ResultsOutput("evaluation"), default=None,
               help="Also write the results (HDF5, with the case stored beside them).")
 @click.option("--scheme", type=click.Choice(["paper", "midpoint"]), default=None,
