@@ -129,6 +129,38 @@ def test_lock_holder_names_the_holder_without_taking_or_creating_the_lock(tmp_pa
         prober.join()
 
 
+def test_a_busy_prober_does_not_make_a_run_fail_however_short_the_wait(tmp_path, monkeypatch):
+    """On a loaded machine one pause can outlast the whole quick wait; the run still tries
+    enough times to pass a prober holding the lock for microseconds at a time. With a single
+    try, about a quarter of these runs were refused."""
+    import mfflap.cfd.openfoam.case_lock as case_lock_module
+
+    monkeypatch.setattr(case_lock_module, "_QUICK_WAIT_S", 0.0)
+    case = tmp_path / "case"
+    with case_lock(case):
+        pass
+    stop = threading.Event()
+
+    def probe() -> None:
+        while not stop.is_set():
+            lock_holder(case)
+
+    prober = threading.Thread(target=probe)
+    prober.start()
+    refused = 0
+    try:
+        for _ in range(300):
+            try:
+                with case_lock(case):
+                    pass
+            except CaseBusyError:
+                refused += 1
+    finally:
+        stop.set()
+        prober.join()
+    assert refused == 0
+
+
 #: a process that holds a case's lock and shares it with a child that lives ``argv[2]`` s
 SHARING_HOLDER = (
     "import subprocess, sys, time\n"

@@ -26,6 +26,7 @@ from __future__ import annotations
 import datetime as _dt
 import fcntl
 import os
+import random
 import re
 import socket
 import threading
@@ -145,21 +146,29 @@ def _acquire(case: Path, shown: str | Path) -> int:
 
 #: how long a run tries again to take a lock found held, and the pause between tries, s: a
 #: :func:`lock_holder` probe holds it for microseconds, a run for minutes
-_QUICK_WAIT_S, _PAUSE_S = 0.2, 0.05
+_QUICK_WAIT_S, _PAUSE_S = 0.2, 0.01
+
+#: the fewest tries before a held lock is given up, however long they took: on a loaded
+#: machine one pause can outlast the whole wait, and a probe running in a tight loop holds the
+#: lock at about a third of the moments a try is made
+_MIN_TRIES = 20
 
 
 def _flock_within(fd: int, wait_s: float) -> bool:
-    """Take the exclusive lock, trying again every :data:`_PAUSE_S` while it is held, for up
-    to ``wait_s`` seconds; True if it was taken (OSError where flock(2) is missing)."""
+    """Take the exclusive lock, trying again every :data:`_PAUSE_S` (jittered) while it is
+    held, for up to ``wait_s`` seconds and at least :data:`_MIN_TRIES` times; True if it was
+    taken (OSError where flock(2) is missing)."""
     deadline = time.monotonic() + wait_s
+    tries = 0
     while True:
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
             return True
         except BlockingIOError:
-            if time.monotonic() >= deadline:
+            tries += 1
+            if tries >= _MIN_TRIES and time.monotonic() >= deadline:
                 return False
-            time.sleep(_PAUSE_S)
+            time.sleep(_PAUSE_S * random.uniform(0.5, 1.5))  # no lockstep with a poller
 
 
 def lock_holder(case_dir: str | Path) -> str | None:
