@@ -1,5 +1,8 @@
 import importlib.util
+import subprocess
 import sys
+import time
+from collections.abc import Callable
 from pathlib import Path
 from types import ModuleType
 
@@ -55,3 +58,22 @@ def load_benchmark():
     yield load
     for module in loaded.values():
         sys.modules.pop(module.__name__, None)
+
+
+@pytest.fixture()
+def solvers_left() -> Callable[..., str]:
+    """A function of a ``pgrep -f`` pattern: the command lines of the processes matching it
+    that still run after waiting up to ``wait_s`` for them to end ("" if none). A signalled
+    solver takes a moment to write its fields and stop, longer on a loaded machine, so a
+    test that a stop left no solver behind polls instead of sleeping a fixed time."""
+
+    def left(pattern: str, wait_s: float = 60.0) -> str:
+        deadline = time.monotonic() + wait_s
+        while True:
+            found = subprocess.run(["pgrep", "-a", "-f", pattern], capture_output=True,
+                                   text=True).stdout
+            if not found or time.monotonic() >= deadline:
+                return found
+            time.sleep(0.2)
+
+    return left

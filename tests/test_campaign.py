@@ -938,7 +938,8 @@ def test_a_lost_scheduler_stops_the_campaign_with_nothing_marked_failed(tmp_path
 @pytest.mark.openfoam
 @pytest.mark.parametrize("command_name", ["campaign run", "cfd linear-check"])
 def test_an_interrupted_campaign_stops_its_solvers_and_says_how_to_resume(tmp_path,
-                                                                          command_name):
+                                                                          command_name,
+                                                                          solvers_left):
     """Ctrl-C (SIGINT to the job's process group) on `mfflap campaign run` or `mfflap cfd
     linear-check` (a campaign of small motions): the dask workers ignore it, the solver of
     the case in flight writes the step it reached and stops, the LocalCluster is stopped,
@@ -970,10 +971,8 @@ def test_an_interrupted_campaign_stops_its_solvers_and_says_how_to_resume(tmp_pa
     assert proc.returncode == 1, err
     assert re.search(rf"interrupted: 0 of 1 cases done in {re.escape(str(out))}, 1 stopped "
                      "part-way; the same command resumes them", err), err
-    time.sleep(2)  # pdeathsig's SIGTERM reaches the solver as its worker dies
-    running = subprocess.run(["pgrep", "-f", f"pimpleFoam -case {case_dirs}"],
-                             capture_output=True)
-    assert running.returncode == 1, running.stdout  # no solver left writing into the case
+    # no solver left writing into the case (pdeathsig's SIGTERM reaches it as its worker dies)
+    assert solvers_left(f"pimpleFoam -case {case_dirs}") == ""
     assert [s.state for s in campaign_status(out)] == ["started"]
     # the solver in flight wrote the step it had reached: the rerun loses nothing
     from mfflap.cfd.openfoam.runner import latest_solution_time
@@ -1126,10 +1125,11 @@ def test_a_stopped_campaign_case_starts_no_application_afterwards(tmp_path):
 
     case_dir = tmp_path / "c"
     write_case(case_dir, SHORT.motion(), SHORT.duration, ramp_time=SHORT.ramp_time)
-    asked, outcome = threading.Event(), []
+    inside, asked, outcome = threading.Event(), threading.Event(), []
 
     def run_in_a_campaign_block() -> None:
         with stoppable():
+            inside.set()
             asked.wait(30)
             try:
                 run_case(case_dir)
@@ -1138,7 +1138,7 @@ def test_a_stopped_campaign_case_starts_no_application_afterwards(tmp_path):
 
     worker = threading.Thread(target=run_in_a_campaign_block)
     worker.start()
-    time.sleep(0.2)  # inside its block
+    assert inside.wait(30)
     assert stop_running_solvers(0.0) == 0  # no solver running yet
     asked.set()
     worker.join(60)
@@ -1174,10 +1174,10 @@ def test_a_stopped_campaign_waits_for_its_workers_to_let_go_of_their_cases(tmp_p
         assert proc.stdout.readline().strip() == "held"
         return proc
 
-    letting_go = hold("a", 1.0)
-    started = time.monotonic()
+    letting_go = hold("a", 3.0)
+    assert lock_holder(out / "cases" / "a") is not None  # held when the wait begins
     execute._wait_for_release(out, ["a", "never-run"])
-    assert time.monotonic() - started > 0.5 and lock_holder(out / "cases" / "a") is None
+    assert lock_holder(out / "cases" / "a") is None and letting_go.wait(5) == 0
     letting_go.wait()
     monkeypatch.setattr(execute, "RELEASE_WAIT_S", 0.5)
     keeping = hold("b", 600.0)
