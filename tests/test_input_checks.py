@@ -457,3 +457,42 @@ def test_linear_check_refuses_an_empty_case_list_and_runs_a_repeated_case_once(t
                               f"{case},{case}", "--list"])
     assert res.exit_code == 0 and res.output.count(case) == 1
     assert not (tmp_path / "lc").exists()
+
+
+IGNORED = [  # an option the rest of the command line would make it ignore
+    (["cfd", "write", str(CASE), "OUT", "--motion-table", "TABLE", "--cycles", "5"],
+     "--cycles applies only to the case file's [motion]; a --motion-table runs to --end-time"),
+    (["cfd", "fluent", str(CASE), "OUT", "--motion-table", "TABLE", "--cycles", "5"],
+     "--cycles applies only to the case file's [motion]"),
+    (["cfd", "convergence", str(CASE), "OUT", "--motion-table", "TABLE", "--cycles", "2"],
+     "--cycles applies only to the case file's [motion]"),
+    (["backtest", "OPT", "--setup", "affordable", "--save-to", "OUT"],
+     "--save-to, --setup apply only to live runs (--live); without it the back-test reads "
+     "CFD records (--fixtures), run on the mesh and set-up they were made with"),
+    (["backtest", "OPT", "--work", "OUT"], "--work applies only to live runs (--live)"),
+    (["backtest", "OPT", "--mesh", "medium", "--json"], "--mesh applies only to live runs"),
+    (["campaign", "run", str(CASE), "--out", "OUT", "--workers", "2", "--scheduler",
+      "tcp://127.0.0.1:1"], "--workers applies only to the LocalCluster mfflap starts; with "
+                            "--scheduler the cluster's own workers run the cases"),
+]
+
+
+@pytest.mark.parametrize(("args", "words"), IGNORED,
+                         ids=[" ".join(a[:2] + a[-2:]) for a, _ in IGNORED])
+def test_an_option_the_command_would_ignore_is_refused_by_name_before_anything_is_written(
+        tmp_path, optimisation_file, args, words):
+    """Before, each of these ran without the option: `backtest --setup affordable` read the
+    coarse mesh's fixtures, and `cfd write --motion-table --cycles 5` ran the table's
+    length."""
+    table = tmp_path / "motion.csv"
+    time_s = np.linspace(0.0, 2.0, 201)
+    np.savetxt(table, np.column_stack([time_s, 0.1 * np.sin(2 * np.pi * time_s),
+                                       0.1 * np.sin(2 * np.pi * time_s + 1.0)]),
+               delimiter=",", header="time,heave_position,pitch_angle", comments="")
+    out = tmp_path / "out"
+    args = [str(a).replace("OUT", str(out)).replace("TABLE", str(table))
+            .replace("OPT", str(optimisation_file)) for a in args]
+    res = CliRunner().invoke(cli, args)
+    assert res.exit_code == 2, res.output
+    assert words in " ".join(res.output.split())
+    assert not out.exists()

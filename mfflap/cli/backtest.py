@@ -7,7 +7,7 @@ from pathlib import Path
 import click
 
 from mfflap.cli.json_output import echo_json
-from mfflap.cli.options import mesh_and_setup_options
+from mfflap.cli.options import mesh_and_setup_options, refuse_given
 
 
 @click.command()
@@ -38,6 +38,10 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
     from mfflap.optimisation.study import sinusoid_motion
     from mfflap.results import ResultsFile
 
+    if not live:  # the fixtures' runs are read as they were made
+        refuse_given(("work_dir", "save_to", "mesh", "setup_name"),
+                     "live runs (--live); without it the back-test reads CFD records "
+                     "(--fixtures), run on the mesh and set-up they were made with")
     spec, solver = mesh_and_solver(mesh, setup_name)
     with ResultsFile(optimisation_file, kinds=("optimisation", "run")) as rf:
         case = loads_case(rf.config_toml, source=f"{optimisation_file}:/inputs")

@@ -16,6 +16,7 @@ from mfflap.cli.options import (
     FloatList,
     ResultsOutput,
     mesh_and_setup_options,
+    refuse_given,
 )
 
 
@@ -76,6 +77,9 @@ def run_cmd(case_file: Path, out_dir: Path, frequencies: list[float] | None,
     Finished cases are never rerun: rerun the same command to continue a campaign that was
     stopped. Failed cases are reported and do not stop the others.
     """
+    if scheduler is not None:
+        refuse_given(("workers",), "the LocalCluster mfflap starts; with --scheduler the "
+                                   "cluster's own workers run the cases")
     from mfflap.campaign.cases import grid_cases
     from mfflap.campaign.execute import (
         CampaignSetup,

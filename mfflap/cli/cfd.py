@@ -7,7 +7,6 @@ from typing import TYPE_CHECKING
 
 import click
 import numpy as np
-from click.core import ParameterSource
 
 from mfflap.cli.json_output import echo_json
 from mfflap.cli.options import (
@@ -17,6 +16,7 @@ from mfflap.cli.options import (
     FloatList,
     ResultsOutput,
     mesh_and_setup_options,
+    refuse_given,
     velocity_convection_option,
 )
 
@@ -146,6 +146,8 @@ def _motion_and_end_time(case, motion_table: Path | None, end_time: float | None
     from mfflap.errors import MotionError
     from mfflap.kinematics.table_file import read_motion_table, table_end_time
 
+    refuse_given(("cycles",), "the case file's [motion]; a --motion-table runs to --end-time "
+                              "(default: the table's last row)")
     motion = read_motion_table(motion_table)
     try:
         end_time = table_end_time(motion, end_time)
@@ -294,13 +296,9 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
     from mfflap.cfd.model_comparison import model_comparison, write_model_comparison
 
     if source.is_dir():  # an OpenFOAM case: the Fluent report's options would be ignored
-        context = click.get_current_context()
-        given = [f"--{name}" for name in ("fx", "fy", "mz", "depth")
-                 if context.get_parameter_source(name) is ParameterSource.COMMANDLINE]
-        if given:
-            raise click.UsageError(f"{', '.join(given)} appl{'ies' if len(given) == 1 else 'y'}"
-                                   f" only to a Fluent report; {source} is an OpenFOAM case "
-                                   "folder (its forces and depth are read from the case)")
+        refuse_given(("fx", "fy", "mz", "depth"),
+                     f"a Fluent report; {source} is an OpenFOAM case folder (its forces and "
+                     "depth are read from the case)")
     comparison = model_comparison(source, case_file, discard_s=discard, ramp_time_s=ramp_time,
                                   motion_table=motion_table, fluent_columns=(fx, fy, mz),
                                   fluent_depth_m=depth, thin_aerofoil=thin_aerofoil)

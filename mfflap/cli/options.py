@@ -5,6 +5,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import click
+from click.core import ParameterSource
 
 MESH_NAMES = ("coarse | lean | medium | medium_r20 | fine | graded | medium_edge10 | "
               "medium_edge9 | medium_edge6 | medium_edge4 | openfoam_md | "
@@ -188,3 +189,34 @@ def mesh_and_setup_options(runs: str = "") -> Callable:
                  "coarse, or the --setup's.",
         )(command)
     return decorate
+
+
+def given_options(*names: str) -> list[str]:
+    """The options of the running command among the parameters ``names`` that its command
+    line gives, as their flags (``work_dir`` given as ``--work`` is ``"--work"``)."""
+    context = click.get_current_context()
+    flags = {param.name: param.opts[0] for param in context.command.params}
+    return [flags[name] for name in names
+            if context.get_parameter_source(name) is ParameterSource.COMMANDLINE]
+
+
+def refuse_given(names: Sequence[str], apply_only: str) -> None:
+    """Refuse the options among ``names`` that the command line gives where they would be
+    ignored, instead of running without them.
+
+    Parameters
+    ----------
+    names
+        Parameter names of the running command.
+    apply_only
+        What they apply to and why not here, completing "--x applies only to ...".
+
+    Raises
+    ------
+    click.UsageError
+        Naming each option given.
+    """
+    given = given_options(*names)
+    if given:
+        verb = "applies" if len(given) == 1 else "apply"
+        raise click.UsageError(f"{', '.join(given)} {verb} only to {apply_only}")
