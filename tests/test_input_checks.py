@@ -496,3 +496,18 @@ def test_an_option_the_command_would_ignore_is_refused_by_name_before_anything_i
     assert res.exit_code == 2, res.output
     assert words in " ".join(res.output.split())
     assert not out.exists()
+
+
+def test_identify_weights_not_one_per_frequency_of_the_records_name_the_option(tmp_path):
+    """The count is known once the records are read: the refusal names --weights and the
+    records' frequencies (it used to name only the case file's identification key)."""
+    out = tmp_path / "out"
+    for weights, said in (("1,2,3", "3 weights [1.0, 2.0, 3.0]"),
+                          ("0,0,0,0,0", "5 weights [0.0, 0.0, 0.0, 0.0, 0.0]")):
+        res = CliRunner().invoke(cli, ["identify", str(CASE), "--weights", weights,
+                                       "--bootstrap", "0", "--output", str(out / "i.h5")])
+        assert res.exit_code == 2, res.output
+        assert "Invalid value for --weights" in res.output
+        assert (f"{said} for the 5 frequencies of the records, 0.1, 0.2, 0.5, 1, 2 Hz"
+                in " ".join(res.output.split()))
+    assert not out.exists()

@@ -20,6 +20,23 @@ def _strategies(names: tuple[str, ...], weights: list[float] | None, case) -> li
     return chosen
 
 
+def _check_weights(weights: list[float], cases: list) -> None:
+    """Refuse ``--weights`` that are not one weight per distinct frequency of the records,
+    naming the option (the fit would name only the case file's key)."""
+    from mfflap.errors import ConfigError
+    from mfflap.identification.weights import frequency_weights
+
+    try:
+        frequency_weights([c.frequency for c in cases], weights)
+    except ConfigError as exc:
+        distinct = sorted({float(c.frequency) for c in cases})
+        raise click.BadParameter(
+            f"{len(weights)} weights {weights} for the {len(distinct)} frequencies of the "
+            f"records, {', '.join(f'{f:g}' for f in distinct)} Hz: give one finite weight >= "
+            "0 per frequency, in ascending frequency, with a positive sum",
+            param_hint="--weights") from exc
+
+
 def _fitted_components() -> tuple[str, ...]:
     """The load components an identification can fit."""
     from mfflap.identification.data import COMPONENTS
@@ -66,6 +83,8 @@ def identify(case_file: Path, folders: tuple[Path, ...], strategies: tuple[str, 
     case = load_case(case_file)
     folders = folders or (fixture_dir(),)
     cases, excluded = load_cases(case, folders)
+    if weights:
+        _check_weights(weights, cases)
     results = identify_strategies(case, cases, excluded, _strategies(strategies, weights, case),
                                   components, n_bootstrap)
     save_identification(output, case, results, source_text(folders))
