@@ -471,6 +471,8 @@ IGNORED = [  # an option the rest of the command line would make it ignore
      "CFD records (--fixtures), run on the mesh and set-up they were made with"),
     (["backtest", "OPT", "--work", "OUT"], "--work applies only to live runs (--live)"),
     (["backtest", "OPT", "--mesh", "medium", "--json"], "--mesh applies only to live runs"),
+    (["cfd", "convergence", str(CASE), "OUT", "--courant", "4", "--time-step-mesh", "coarse"],
+     "--time-step-mesh applies only to a study of two or more --courant limits"),
     (["campaign", "run", str(CASE), "--out", "OUT", "--workers", "2", "--scheduler",
       "tcp://127.0.0.1:1"], "--workers applies only to the LocalCluster mfflap starts; with "
                             "--scheduler the cluster's own workers run the cases"),

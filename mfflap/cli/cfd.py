@@ -454,6 +454,9 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: list[floa
     from mfflap.config import load_case
     from mfflap.reports.html import Report, figure_html, table_html
 
+    if len(courants) < 2:
+        refuse_given(("time_step_mesh",), "a study of two or more --courant limits (the mesh "
+                                          "repeated at each limit after the first)")
     case = load_case(case_file)
     motion, end = _motion_and_end_time(case, motion_table, end_time, cycles)
     period = 1.0 / case.motion.frequency
