@@ -337,3 +337,25 @@ def test_vorticity_at_the_largest_residual_from_real_openfoam_fields(tmp_path):
     assert res.exit_code == 2
     assert f"{tmp_path / 'of'} is not the run of record {other}: it was written" in res.output
     assert not (tmp_path / "g2.h5").exists()
+
+
+@pytest.mark.parametrize(("flow", "said"), [
+    ("nocase", "'nocase': expected CASE=DIR, a record's case id and the OpenFOAM case folder"),
+    ("=TMP", "'=TMP': expected CASE=DIR"),
+    ("f1p000_h0p300_phi90p0=TMP", "no record 'f1p000_h0p300_phi90p0' among the 43 records; "
+                                  "nearest: f1p000_h0p300_phi090p0,"),
+    ("f1p000_h0p300_phi090p0=TMP/missing", "TMP/missing is not a folder"),
+])
+def test_a_flow_folder_that_cannot_be_shown_is_refused_before_the_diagnosis(tmp_path, flow,
+                                                                           said):
+    """--flow is checked before the diagnosis runs (it was checked after it, and a case id
+    mistyped got no hint), naming what is wrong."""
+    from mfflap.cli.main import cli
+
+    flow = flow.replace("TMP", str(tmp_path))
+    res = CliRunner().invoke(cli, ["gap", "diagnose", str(CASE), "--flow", flow, "--output",
+                                   str(tmp_path / "g.h5")])
+    assert res.exit_code == 2, res.output
+    assert "Invalid value for --flow" in res.output
+    assert said.replace("TMP", str(tmp_path)) in " ".join(res.output.split())
+    assert not (tmp_path / "g.h5").exists()

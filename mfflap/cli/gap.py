@@ -75,26 +75,17 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
         raise click.UsageError(f"{len(cases)} case(s) from --csv; a diagnosis needs at least "
                                f"{MIN_CASES}, and the shipped fixtures are read only without "
                                "--csv: add CSV files, or --fixtures DIR to pool records")
+    flows = [_flow_record(item, cases) for item in flow_dirs]  # checked before the work
     diag, where, pred = diagnose_cases(case, cases, alpha=alpha, min_gain=min_gain)
     snapshots = []
-    for item in flow_dirs:
-        from mfflap.cfd.case_inputs import motion_mismatch
+    for index, folder in flows:
         from mfflap.gap.flowfield import vorticity_figure
 
-        name, _, folder = item.partition("=")
-        index = next((i for i, c in enumerate(cases) if c.name == name), None)
-        if index is None or not folder:
-            raise click.BadParameter(f"{item!r}: expected CASE=DIR with CASE one of the records",
-                                     param_hint="--flow")
         c = cases[index]
-        mismatch = motion_mismatch(folder, c.state)
-        if mismatch is not None:
-            raise click.BadParameter(f"{item!r}: {folder} is not the run of record {name}: "
-                                     f"{mismatch}", param_hint="--flow")
         residual = c.cfd_signal("normal_force") - pred[index]["normal_force"]
         t_peak = float(c.state.time[int(np.argmax(np.abs(residual)))])
         fig, shown = vorticity_figure(folder, t_peak, case.plate.chord)
-        snapshots.append((fig, f"{name}: vorticity at t = {shown:.4g} s, the written time "
+        snapshots.append((fig, f"{c.name}: vorticity at t = {shown:.4g} s, the written time "
                                f"nearest the largest F_n residual (t = {t_peak:.4g} s)"))
     with ResultsFile(output, "w", kind="gap_diagnosis", config_toml=case.to_toml()) as rf:
         write_diagnosis(rf, diag, where)
@@ -122,6 +113,34 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
     for name, share in where["ranking"][:5]:
         click.echo(f"  {name}: {share:.2f}")
     click.echo(f"wrote {output} and {html}")
+
+
+def _flow_record(item: str, cases: list) -> tuple[int, str]:
+    """The record index and case folder of a ``--flow CASE=DIR``, refused naming what is
+    wrong: the form, a case id that is no record's (with the nearest ones), a folder that is
+    not there, or the run of another motion."""
+    import difflib
+
+    from mfflap.cfd.case_inputs import motion_mismatch
+
+    name, _, folder = item.partition("=")
+    if not name or not folder:
+        raise click.BadParameter(f"{item!r}: expected CASE=DIR, a record's case id and the "
+                                 "OpenFOAM case folder of its run", param_hint="--flow")
+    names = [c.name for c in cases]
+    if name not in names:
+        near = difflib.get_close_matches(name, names, n=3, cutoff=0.6)
+        raise click.BadParameter(f"{item!r}: no record {name!r} among the {len(names)} records"
+                                 + (f"; nearest: {', '.join(near)}" if near else ""),
+                                 param_hint="--flow")
+    if not Path(folder).is_dir():
+        raise click.BadParameter(f"{item!r}: {folder} is not a folder", param_hint="--flow")
+    index = names.index(name)
+    mismatch = motion_mismatch(folder, cases[index].state)
+    if mismatch is not None:
+        raise click.BadParameter(f"{item!r}: {folder} is not the run of record {name}: "
+                                 f"{mismatch}", param_hint="--flow")
+    return index, folder
 
 
 @gap.command("blindtest")
