@@ -273,6 +273,12 @@ def test_a_comparison_can_end_before_the_records_do(record):
                                    str(start + period_s), "--json"])
     assert res.exit_code == 0, res.output
     assert {c["end_s"] for c in json.loads(res.stdout)["cases"]} == {start + period_s}
+    # a folder compared with itself: said, since every number is then 0
+    assert (f"warning: {COARSE} and {COARSE} are the same folder: each case is compared "
+            "with itself, so every difference below is 0") in " ".join(res.stderr.split())
+    res = CliRunner().invoke(cli, ["campaign", "compare", str(AFFORDABLE), str(COARSE),
+                                   "--json"])
+    assert res.exit_code == 0 and "same folder" not in res.stderr
 
 
 CAMPAIGNS = Path(__file__).parents[1] / "campaigns"

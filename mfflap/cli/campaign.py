@@ -172,6 +172,9 @@ def compare_cmd(folder_a: Path, folder_b: Path, start_s: float | None, end_s: fl
         raise click.UsageError("--case chooses the cases of --histories; give --histories DIR")
     if start_s is not None and end_s is not None and end_s <= start_s:
         raise click.UsageError(f"--end {end_s:g} is not after --start {start_s:g}")
+    if folder_a.resolve() == folder_b.resolve():
+        click.echo(f"warning: {folder_a} and {folder_b} are the same folder: each case is "
+                   "compared with itself, so every difference below is 0", err=True)
     result = compare_campaigns(folder_a, folder_b, start_s, end_s)
     if output is not None:
         write_comparison(output, result)
