@@ -6,6 +6,7 @@ output), never a false 0."""
 
 import json
 import math
+import re
 from pathlib import Path
 
 import h5py
@@ -513,3 +514,24 @@ def test_identify_weights_not_one_per_frequency_of_the_records_name_the_option(t
         assert (f"{said} for the 5 frequencies of the records, 0.1, 0.2, 0.5, 1, 2 Hz"
                 in " ".join(res.output.split()))
     assert not out.exists()
+
+
+@pytest.mark.parametrize(("duration", "ramp", "said"), [
+    (1.0, 1.0, "ramp_time: the start-up ramp (1 s) lasts the whole run (1 s)"),
+    (0.5, 2.0, "ramp_time: the start-up ramp (2 s) lasts the whole run (0.5 s)"),
+    (0.0, 0.0, "duration: the duration must be a finite time > 0 s, got 0"),
+    (math.inf, 0.25, "duration: the duration must be a finite time > 0 s, got inf"),
+    (2.0, -0.1, "ramp_time: the start-up ramp must be a finite time >= 0 s"),
+])
+def test_a_campaign_case_that_could_not_run_is_refused_when_it_is_made(duration, ramp, said):
+    """Built in code, such a case used to be refused only when its run was written, after
+    its campaign had started the cases before it."""
+    from mfflap.campaign.cases import CfdCase, HarmonicCase
+
+    with pytest.raises(ConfigError) as err:
+        CfdCase(1.0, 0.3, 90.0, 10.0, duration, ramp)
+    assert str(err.value).startswith(f"case f1p000_h0p300_phi090p0: {said}")
+    with pytest.raises(ConfigError, match=f"case harmonic_f1p000_h0p0100_th2p00_phi090p0: "
+                                          f"{re.escape(said)}"):
+        HarmonicCase(1.0, 0.01, 2.0, 90.0, duration, ramp)
+    assert CfdCase(1.0, 0.3, 90.0, 10.0, 3.0, 0.25).duration == 3.0

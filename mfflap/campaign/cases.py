@@ -29,6 +29,22 @@ class CampaignCase(Protocol):
     def as_dict(self) -> dict[str, float]: ...
 
 
+def _check_run_times(case_id: str, duration: float, ramp_time: float) -> None:
+    """Refuse, when a case is made, a run of no or endless length or a start-up ramp that
+    lasts it all (the case would be refused only when it came to run, after its campaign
+    had started), naming the case."""
+    from mfflap.cfd.openfoam.loads import check_end_time, check_ramp_time
+    from mfflap.errors import MotionError
+
+    try:
+        check_ramp_time(ramp_time, check_end_time(duration))
+    except ConfigError as exc:
+        raise ConfigError(exc._message, source=f"case {case_id}", key=exc.key) from exc
+    except MotionError as exc:
+        raise ConfigError(str(exc).replace("end_time", "the duration"),
+                          source=f"case {case_id}", key="duration") from exc
+
+
 @dataclass(frozen=True)
 class CfdCase:
     """An identification motion, theta = k t sin(2 pi f t), h = h_a sin(2 pi f t + phi).
@@ -50,6 +66,9 @@ class CfdCase:
     duration: float
     ramp_time: float
     kind = "ramp_harmonic"
+
+    def __post_init__(self) -> None:
+        _check_run_times(self.case_id, self.duration, self.ramp_time)
 
     @property
     def case_id(self) -> str:
@@ -89,6 +108,9 @@ class HarmonicCase:
     duration: float
     ramp_time: float
     kind = "harmonic"
+
+    def __post_init__(self) -> None:
+        _check_run_times(self.case_id, self.duration, self.ramp_time)
 
     @property
     def case_id(self) -> str:
