@@ -178,7 +178,8 @@ class IdentificationGrid:
     heave_amplitudes: tuple[float, ...] = bounded((0.1, 0.2, 0.3, 0.4, 0.5), low=0.0,
                                                   high=10.0, unit="m", unique=True)
     phases_deg: tuple[float, ...] = bounded((45.0, 67.5, 90.0, 112.5, 135.0), low=-360.0,
-                                            high=360.0, unit="deg", unique=True)
+                                            high=360.0, unit="deg", unique=True,
+                                            period=360.0)
     pitch_ramp_rate_deg: float = bounded(10.0, low=0.0, high=1000.0, unit="deg/s",
                                          doc="theta_kamp")
     n_cycles: float = bounded(3.0, low=0.5, high=1000.0, unit="1", doc="cycles simulated")

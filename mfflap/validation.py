@@ -29,6 +29,7 @@ def bounded(
     doc: str = "",
     choices: tuple[Any, ...] | None = None,
     unique: bool = False,
+    period: float | None = None,
 ) -> Any:
     """Declare a dataclass field with a unit and an allowed range.
 
@@ -48,6 +49,9 @@ def bounded(
         For string settings: the allowed values.
     unique
         For lists: each value at most once (a grid axis, a list of cases to run).
+    period
+        For unique lists of angles: values a whole number of ``period`` apart are the same
+        value (phases 90 and -270 deg are one motion).
     """
     meta = {
         "low": low,
@@ -58,6 +62,7 @@ def bounded(
         "doc": doc,
         "choices": choices,
         "unique": unique,
+        "period": period,
     }
     return dataclasses.field(default=default, metadata=meta)
 
@@ -97,6 +102,17 @@ def _check_value(name: str, value: Any, meta: Mapping[str, Any], where: str | No
                 raise ConfigError(
                     f"value {item!r} is given twice ({name}[{list(value).index(item)}] and "
                     f"[{i}]); give each value once",
+                    source=where,
+                    key=f"{name}[{i}]",
+                )
+            period = meta.get("period") if meta.get("unique") else None
+            same = next((j for j, earlier in enumerate(value[:i]) if period and math.isclose(
+                math.remainder(float(item) - float(earlier), period), 0.0, abs_tol=1e-9)), None)
+            if same is not None:
+                raise ConfigError(
+                    f"value {item!r} is the same as {value[same]!r} ({name}[{same}]): they lie "
+                    f"{abs(float(item) - float(value[same])):g} {meta.get('unit', '')} apart, a "
+                    f"whole number of periods ({period:g}); give each value once",
                     source=where,
                     key=f"{name}[{i}]",
                 )

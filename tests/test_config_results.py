@@ -68,6 +68,11 @@ def test_case_toml_round_trip():
         ("[identification]\nphases_deg = [90, 45, 90]\n", "identification.phases_deg[2]",
          "given twice"),
         ("[optimisation]\nbetas = [0.5, 0.5]\n", "optimisation.betas[1]", "given twice"),
+        # a phase a whole turn from another is the same motion
+        ("[identification]\nphases_deg = [45, 90, -270]\n", "identification.phases_deg[2]",
+         "value -270 is the same as 90 (identification.phases_deg[1]): they lie 360 deg apart"),
+        ("[identification]\nphases_deg = [-45, 315.0]\n", "identification.phases_deg[1]",
+         "the same as -45"),
         # one value where a list goes, a list where one value goes
         ("[identification]\nfrequencies = 1.0\n", "identification.frequencies",
          "must be a list, e.g. [1.0]"),
