@@ -75,7 +75,9 @@ def _inject_burst(case_dir, at_s):
 def test_cfd_run_on_missing_folder_is_a_clear_error(tmp_path):
     res = CliRunner().invoke(cli, ["cfd", "parse", str(tmp_path), "--case-file", str(CASE)])
     assert res.exit_code == 2
-    assert "mfflap_case.toml" in res.output and "no such file" in res.output
+    assert (f"{tmp_path}: no mfflap_case.toml: not a case written by `mfflap cfd write`, so "
+            "nothing says in which frame, at which depth and for which motion its forces were "
+            "computed") in " ".join(res.output.split())
 
 
 def test_gradcheck_cli(tmp_path):

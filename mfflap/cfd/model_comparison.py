@@ -128,6 +128,12 @@ def model_comparison(source: str | Path, case_file: str | Path, *, discard_s: fl
     case = load_case(case_file)
     if source.is_dir():
         kept = source / "mfflap_case.toml"
+        if not kept.is_file():
+            raise ConfigError("no mfflap_case.toml: not a case written by `mfflap cfd write`, "
+                              "so nothing says in which frame, at which depth and for which "
+                              "motion its forces were computed; write the case with `mfflap "
+                              "cfd write` (with --motion-table for any motion) and run it",
+                              source=str(source))
         meta: dict[str, Any] | None = read_toml(kept)
         history = read_forces(source)
         depth_m = float(meta["depth"])
