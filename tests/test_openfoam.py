@@ -406,6 +406,52 @@ def test_divergence_signatures():
     assert _DIVERGED.search("--> FOAM FATAL ERROR:")
 
 
+def test_a_failure_is_told_by_its_cause_not_by_its_exit_code_alone():
+    from mfflap.cfd.openfoam.solver_log import FATAL_TEXT_CHARS, failure_reason
+
+    fatal = ("--> FOAM FATAL ERROR: (openfoam-1912)\nCannot find file \"points\" in "
+             "directory \"polyMesh\"\n\n    From function Foam::polyMesh::polyMesh\n    in "
+             "file meshes/polyMesh/polyMesh.C at line 326.\n\nFOAM exiting\n")
+    assert failure_reason(fatal, 1) == ('FOAM FATAL ERROR: Cannot find file "points" in '
+                                        'directory "polyMesh"')
+    long = "--> FOAM FATAL IO ERROR: \n" + "word " * 200 + "\n\nFOAM exiting\n"
+    reason = failure_reason(long, 1)
+    assert reason.startswith("FOAM FATAL IO ERROR: word word")
+    assert len(reason) == len("FOAM FATAL IO ERROR: ") + FATAL_TEXT_CHARS
+    assert reason.endswith("...")
+    assert failure_reason("#1  Foam::sigFpe::sigHandler(int) at ??", -8) == (
+        "a floating point exception: the solution diverged")
+    assert failure_reason("Solving for p, Initial residual = nan", 0) == (
+        "NaN in the solution: it diverged")
+    assert failure_reason("Time = 0.1\n", -9) == "killed by SIGKILL (the out-of-memory killer?)"
+    assert failure_reason("Time = 0.1\n", -15) == "killed by SIGTERM"
+    assert failure_reason("Time = 0.1\n", 3) == "exit code 3"
+
+
+@pytest.mark.openfoam
+@pytest.mark.parametrize(("broken", "old", "new", "said"), [
+    ("system/blockMeshDict", "vertices", "vertixes",
+     "blockMesh failed (exit code 1): FOAM FATAL IO ERROR: Entry 'vertices' not found in "
+     "dictionary"),
+    ("system/fvSchemes", "linearUpwind", "linearUpwindd",
+     "pimpleFoam failed (exit code 1): FOAM FATAL IO ERROR: Unknown discretisation type "
+     "linearUpwindd"),
+])
+def test_a_case_openfoam_refuses_is_reported_with_openfoam_s_own_words(tmp_path, broken, old,
+                                                                        new, said):
+    """Real blockMesh and pimpleFoam on a case with a typo: the error says what OpenFOAM
+    said, not only its exit code (it used to read "failed (exit code 1, diverged or
+    crashed)")."""
+    case = tmp_path / "case"
+    write_case(case, MOTION, end_time=0.01)
+    path = case / broken
+    path.write_text(path.read_text().replace(old, new, 1))
+    with pytest.raises(CfdRunError) as err:
+        run_case(case)
+    assert said in str(err.value).splitlines()[0]
+    assert "diverged" not in str(err.value).splitlines()[0]
+
+
 def test_courant_numbers_with_exponents_are_read():
     """Regression: values like 1.2e+02 (an exploding run) were dropped by the old filter."""
     from mfflap.cfd.openfoam.runner import max_courant

@@ -345,8 +345,11 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
     own_tail = read_tail(log, 200_000, start=own_start)
     courants = max_courant(own_tail)
     if proc.returncode != 0 or _DIVERGED.search(own_tail[-50_000:]):
-        raise CfdRunError(f"{application} failed (exit code {proc.returncode}, diverged or "
-                          "crashed)", case=str(case_dir), log_tail=_tail(log))
+        from mfflap.cfd.openfoam.solver_log import failure_reason
+
+        raise CfdRunError(f"{application} failed (exit code {proc.returncode}): "
+                          f"{failure_reason(own_tail[-50_000:], proc.returncode)}",
+                          case=str(case_dir), log_tail=_tail(log))
     if courants > max_courant_abort:
         raise CfdRunError(f"Courant number exploded to {courants:g}", case=str(case_dir),
                           log_tail=_tail(log))

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import re
+import signal
 from pathlib import Path
 from typing import Any
 
@@ -146,3 +147,45 @@ def bounding_summary(log_text: str) -> dict[str, int | float]:
             worst[field] = min(worst[field], ratio)
     return {**{f"n_steps_bounding_{f}": n for f, n in counts.items()},
             **{f"worst_bounding_{f}": w for f, w in worst.items()}}
+
+
+# an OpenFOAM fatal error: its heading, then what went wrong up to where it was raised
+_FATAL = re.compile(r"FOAM FATAL (IO )?ERROR:?[^\n]*\n(.*?)(?=\n\s*From function|\nFOAM "
+                    r"exiting|\nFOAM aborting|\Z)", re.S)
+_FLOATING_POINT = re.compile(r"sigFpe::sigHandler|Floating point exception \(core")
+_NAN = re.compile(r"(?<![A-Za-z])-?nan(?![A-Za-z])", re.I)
+#: the longest fatal-error text a failure's one-line reason quotes, characters
+FATAL_TEXT_CHARS = 400
+
+
+def failure_reason(log_text: str, returncode: int | None) -> str:
+    """Why an OpenFOAM application failed, in a line: the text of its last fatal error
+    (what was wrong and in which file and line), a floating point exception or NaN (the
+    solution diverged), the signal that killed it, or else its exit code.
+
+    Parameters
+    ----------
+    log_text
+        The application's own log (its last part will do).
+    returncode
+        Its exit status (negative: killed by that signal), or None if unknown.
+    """
+    fatal = list(_FATAL.finditer(log_text))
+    if fatal:
+        kind = "FOAM FATAL IO ERROR" if fatal[-1].group(1) else "FOAM FATAL ERROR"
+        text = " ".join(fatal[-1].group(2).split())
+        if len(text) > FATAL_TEXT_CHARS:
+            text = text[:FATAL_TEXT_CHARS - 3] + "..."
+        return f"{kind}: {text}" if text else kind
+    if _FLOATING_POINT.search(log_text):
+        return "a floating point exception: the solution diverged"
+    if _NAN.search(log_text):
+        return "NaN in the solution: it diverged"
+    if returncode is not None and returncode < 0:
+        try:
+            name = signal.Signals(-returncode).name
+        except ValueError:
+            name = f"signal {-returncode}"
+        return f"killed by {name}" + (" (the out-of-memory killer?)" if name == "SIGKILL"
+                                      else "")
+    return f"exit code {returncode}"
