@@ -452,6 +452,31 @@ def test_a_case_openfoam_refuses_is_reported_with_openfoam_s_own_words(tmp_path,
     assert "diverged" not in str(err.value).splitlines()[0]
 
 
+@pytest.mark.openfoam
+def test_a_mesh_checkmesh_fails_starts_no_solver_however_it_was_made(tmp_path):
+    """A mesh made without mfflap (here blockMesh's, mirrored by transformPoints so that
+    every cell is inside out) used to go to pimpleFoam unchecked, as did a mesh whose
+    check had failed once: the rerun saw its points and skipped checkMesh."""
+    from mfflap.cfd.openfoam.runner import mesh_checked, run_application
+
+    case = tmp_path / "case"
+    write_case(case, MOTION, end_time=0.01)
+    run_application(case, "blockMesh", timeout_s=120)
+    run_application(case, "transformPoints", timeout_s=120, extra_args=("-scale", "(1 -1 1)"))
+    assert not mesh_checked(case)
+    for _ in range(2):  # the rerun checks it again
+        with pytest.raises(CfdRunError) as err:
+            run_case(case)
+        first = str(err.value).splitlines()[0]
+        assert "checkMesh did not report 'Mesh OK': Zero or negative cell volume detected" in first
+        assert first.endswith("pimpleFoam is not started on this mesh (a rerun checks it again)")
+        assert first.count("negative cell volume") == 1  # the last check's words only
+        assert not (case / "log.pimpleFoam").exists()
+    shutil.rmtree(case / "constant" / "polyMesh")  # meshed again by blockMesh: it passes
+    run_case(case)
+    assert mesh_checked(case) and (case / "log.pimpleFoam").is_file()
+
+
 def test_courant_numbers_with_exponents_are_read():
     """Regression: values like 1.2e+02 (an exploding run) were dropped by the old filter."""
     from mfflap.cfd.openfoam.runner import max_courant

@@ -356,6 +356,24 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
     return log
 
 
+def _last_check(case_dir: str | Path) -> str | None:
+    """The output of the last checkMesh run in the case (``log.checkMesh`` holds every run,
+    each from its ``Exec`` line), or None if it has not run."""
+    log = Path(case_dir) / "log.checkMesh"
+    if not log.is_file():
+        return None
+    text = log.read_text(errors="replace")
+    return text[max(text.rfind("\nExec "), 0):]
+
+
+def mesh_checked(case_dir: str | Path) -> bool:
+    """True if the last checkMesh of the case (its ``log.checkMesh``, written by
+    :func:`run_application`) passed its mesh ("Mesh OK"). A mesh made without mfflap, or
+    one whose check failed, is not."""
+    last = _last_check(case_dir)
+    return last is not None and "Mesh OK" in last
+
+
 def is_time_folder(name: str) -> bool:
     """True if ``name`` is a number, as OpenFOAM names its time folders."""
     try:
@@ -607,6 +625,7 @@ def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
     case_dir = check_case_path(case_dir)  # before "meshing" is said
     _check_time_limit(timeout_s, "pimpleFoam")
     meshed = (case_dir / "constant" / "polyMesh" / "points").exists()
+    checked = meshed and mesh_checked(case_dir)  # a mesh made by hand, or failed, is checked
     needed = ("system/controlDict",) if meshed else ("system/controlDict", "system/blockMeshDict")
     missing = [name for name in needed if not (case_dir / name).is_file()]
     if missing:
@@ -615,14 +634,22 @@ def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
     require_supported_release(str(case_dir))  # before the lock file is written
     with case_lock(case_dir):  # one run at a time in a case
         _check_layout(case_dir, n_procs)
-        if not meshed:
+        if not checked:
             if progress is not None:
-                progress(f"meshing {case_dir} (blockMesh, checkMesh)")
-            run_application(case_dir, "blockMesh", timeout_s=300)
+                progress(f"meshing {case_dir} (blockMesh, checkMesh)" if not meshed else
+                         f"checking the mesh of {case_dir} (checkMesh)")
+            if not meshed:
+                run_application(case_dir, "blockMesh", timeout_s=300)
             log = run_application(case_dir, "checkMesh", timeout_s=300)
-            if "Mesh OK" not in log.read_text():
-                raise CfdRunError("checkMesh did not report 'Mesh OK'", case=str(case_dir),
-                                  log_tail=_tail(log))
+            if not mesh_checked(case_dir):
+                failed = [" ".join(line.strip().lstrip("*").rstrip(".").split())
+                          for line in (_last_check(case_dir) or "").splitlines()
+                          if line.lstrip().startswith("***")]
+                raise CfdRunError(
+                    "checkMesh did not report 'Mesh OK'"
+                    + (f": {'; '.join(failed)}" if failed else "")
+                    + "; pimpleFoam is not started on this mesh (a rerun checks it again)",
+                    case=str(case_dir), log_tail=_tail(log))
         if n_procs > 1:
             dict_path = case_dir / "system" / "decomposeParDict"
             text = dict_path.read_text()
