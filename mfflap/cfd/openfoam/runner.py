@@ -20,15 +20,10 @@ from pathlib import Path
 from mfflap.cfd.openfoam.case_lock import case_lock, held_descriptor
 from mfflap.cfd.openfoam.case_path import check_case_path
 from mfflap.cfd.openfoam.release import require_supported_release
+from mfflap.cfd.openfoam.solver_log import DIVERGED, failure_reason
 from mfflap.errors import CfdRunError, ConfigError
 
-# Crash and divergence signatures (not the banner's "Floating point exception trapping
-# enabled"): NaN residuals, the sigFpe handler's stack trace, fatal errors.
-_DIVERGED = re.compile(
-    r"((?<![A-Za-z])-?nan(?![A-Za-z])|sigFpe::sigHandler|Floating point exception \(core|"
-    r"FOAM FATAL)",
-    re.I,
-)
+_DIVERGED = DIVERGED  # crash and divergence signatures
 _COURANT = re.compile(r"Courant Number mean: \S+ max: ([-+0-9.eE]+)\s")
 
 
@@ -345,8 +340,6 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
     own_tail = read_tail(log, 200_000, start=own_start)
     courants = max_courant(own_tail)
     if proc.returncode != 0 or _DIVERGED.search(own_tail[-50_000:]):
-        from mfflap.cfd.openfoam.solver_log import failure_reason
-
         raise CfdRunError(f"{application} failed (exit code {proc.returncode}): "
                           f"{failure_reason(own_tail[-50_000:], proc.returncode)}",
                           case=str(case_dir), log_tail=_tail(log))

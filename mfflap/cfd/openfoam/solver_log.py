@@ -152,8 +152,12 @@ def bounding_summary(log_text: str) -> dict[str, int | float]:
 # an OpenFOAM fatal error: its heading, then what went wrong up to where it was raised
 _FATAL = re.compile(r"FOAM FATAL (IO )?ERROR:?[^\n]*\n(.*?)(?=\n\s*From function|\nFOAM "
                     r"exiting|\nFOAM aborting|\Z)", re.S)
-_FLOATING_POINT = re.compile(r"sigFpe::sigHandler|Floating point exception \(core")
+# the sigFpe handler's stack trace (not the banner's "Floating point exception trapping
+# enabled"), and NaN residuals
+_FLOATING_POINT = re.compile(r"sigFpe::sigHandler|Floating point exception \(core", re.I)
 _NAN = re.compile(r"(?<![A-Za-z])-?nan(?![A-Za-z])", re.I)
+#: crash and divergence signatures in a log: NaN, a floating point exception, a fatal error
+DIVERGED = re.compile(rf"({_NAN.pattern}|{_FLOATING_POINT.pattern}|FOAM FATAL)", re.I)
 #: the longest fatal-error text a failure's one-line reason quotes, characters
 FATAL_TEXT_CHARS = 400
 
