@@ -121,8 +121,30 @@ def test_udf_settings_are_checked():
             analytic_udf(SINE, ramp_time=ramp_time)
         with pytest.raises(ConfigError, match="start-up ramp must be a finite time"):
             table_udf(SINE, 1.0, ramp_time=ramp_time)
-    with pytest.raises(ConfigError, match="periodic table cannot carry a start-up ramp"):
-        table_udf(SINE, 1.0, ramp_time=0.2, periodic_period=1.0)
+    for period in (0.0, -1.0, float("inf")):
+        with pytest.raises(ConfigError, match="periodic_period must be a finite time > 0 s"):
+            table_udf(SINE, 1.0, periodic_period=period)
+
+
+def test_a_sinusoid_s_table_holds_its_ramp_and_one_period_and_wraps_after_it(tmp_path):
+    """`cfd fluent --table` of a sinusoid: the table's size no longer grows with the run (200
+    periods made a 30 MB C file); compiled and run, the UDF follows the motion, ramp
+    included, to the run's end."""
+    times = np.concatenate([np.linspace(0.0, 3.0, 121), np.linspace(196.0, 200.0, 41)])
+    out = run_udf(table_udf(SINE, 200.0, ramp_time=0.4, periodic_period=1.0), tmp_path, times)
+    exact = imposed_state(SINE, times, 0.4)
+    for column, name in ((1, "heave_velocity"), (2, "pitch_rate")):
+        expected = getattr(exact, name)
+        np.testing.assert_allclose(out[:, column], expected,
+                                   atol=1e-4 * np.abs(expected).max())  # linear interpolation
+    folder = write_fluent_case(tmp_path / "fl", SINE, 200.0, ramp_time=0.5, time_step=2e-3,
+                               table=True)
+    source = (folder / "mfflap_motion.c").read_text()
+    assert "#define MFFLAP_PERIODIC 1" in source and "#define MFFLAP_WRAP_FROM 0.5" in source
+    assert len(source) < 500_000  # 1.5 s of rows; the whole run: about 30 MB
+    short = write_fluent_case(tmp_path / "short", SINE, 1.2, ramp_time=0.5, time_step=2e-3,
+                              table=True)  # less than the ramp and a period: the whole run
+    assert "#define MFFLAP_PERIODIC 0" in (short / "mfflap_motion.c").read_text()
 
 
 def test_a_start_up_ramp_as_long_as_the_run_writes_no_udf(tmp_path):

@@ -93,27 +93,34 @@ def table_udf(motion: Motion, end_time: float, ramp_time: float = 0.0,
               ) -> str:
     """C source of a table-driven DEFINE_CG_MOTION (linear interpolation).
 
-    ``periodic_period`` wraps times beyond the table (for a periodic motion without start-up
-    ramp); otherwise the end values are held.
+    With ``periodic_period`` (a motion periodic once its start-up ramp is over) the table
+    holds the ramp and one period after it, ``[0, ramp_time + periodic_period]``, and later
+    times wrap into that period, so the table's size does not grow with the run;
+    ``end_time`` is then not used. Otherwise the table covers the run and its end values
+    are held past it.
     """
     from mfflap import __version__
 
     _check_name(udf_name)
+    ramp_time = check_ramp_time(ramp_time)
     if periodic_period is not None:
-        if ramp_time > 0:
-            raise ConfigError("a periodic table cannot carry a start-up ramp; use ramp_time 0 "
-                              "or a clamped table", key="ramp_time")
-        end_time = periodic_period / 1.1
-    rows = velocity_table(motion, end_time, rows_per_second, ramp_time)
-    if periodic_period is not None:
-        rows = rows[rows[:, 0] <= periodic_period + 1e-12]
-        rows[-1, 1:] = rows[0, 1:]
+        if not (math.isfinite(periodic_period) and periodic_period > 0):
+            raise ConfigError(f"periodic_period must be a finite time > 0 s, got "
+                              f"{periodic_period!r}", key="periodic_period")
+        table_end = ramp_time + periodic_period
+        rows = velocity_table(motion, table_end / 1.1, rows_per_second, ramp_time)
+        rows = rows[rows[:, 0] <= table_end * (1 + 1e-12)]
+        at_wrap = imposed_state(motion, np.array([ramp_time]), ramp_time)
+        rows[-1, 1:] = at_wrap.heave_velocity[0], at_wrap.pitch_rate[0]  # one period on
+    else:
+        rows = velocity_table(motion, end_time, rows_per_second, ramp_time)
     heave_sign, pitch_sign = _signs()
     return _env().get_template("cg_motion_table.c.j2").render(
         version=__version__, rows=rows.tolist(), n_rows=len(rows), t_first=rows[0, 0],
         t_last=rows[-1, 0], periodic=periodic_period is not None,
-        period=float(periodic_period or 0.0), interpolation="linear", udf_name=udf_name,
-        heave_sign=heave_sign, pitch_sign=pitch_sign, description=description)
+        period=float(periodic_period or 0.0), wrap_from=ramp_time, interpolation="linear",
+        udf_name=udf_name, heave_sign=heave_sign, pitch_sign=pitch_sign,
+        description=description)
 
 
 #: the report file the journal makes Fluent write, beside the UDF
@@ -188,8 +195,12 @@ def write_fluent_case(folder: str | Path, motion: Motion, end_time: float, *,
                           "forces as the new motion's: move it away, write into another "
                           "folder, or overwrite (--overwrite deletes the report)")
     analytic = isinstance(motion, HarmonicMotion | RampHarmonicMotion) and not table
+    # a sinusoid's table: its ramp and one period, wrapped (not the whole run, which at 200
+    # periods made a 30 MB C file)
+    period = (1.0 / float(motion.frequency) if isinstance(motion, HarmonicMotion)
+              and end_time > ramp_time + 1.0 / float(motion.frequency) else None)
     source = (analytic_udf(motion, ramp_time, udf_name) if analytic  # type: ignore[arg-type]
-              else table_udf(motion, end_time, ramp_time, udf_name))
+              else table_udf(motion, end_time, ramp_time, udf_name, periodic_period=period))
     n_steps = max(math.ceil(end_time / time_step), 1)
     run_journal = journal("mfflap_motion.c", time_step=time_step, n_steps=n_steps,
                           velocity=velocity, udf_name=udf_name)
