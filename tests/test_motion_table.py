@@ -288,6 +288,11 @@ def test_an_optimised_motion_becomes_a_table_and_the_same_case_as_the_back_test(
                                    "--beta", "0.5", "--cycles", "2"])
     assert res.exit_code == 0, res.output
     assert "does not start at rest" in res.output and "--ramp-time" in res.output
+    sine = CliRunner().invoke(cli, ["cfd", "motion-table", str(optimisation_file),
+                                    str(tmp_path / "sine.csv"), "--best-sinusoid"])
+    assert sine.exit_code == 0, sine.output
+    # a sinusoid starts at pitch 0: its round-off (1e-15 deg) is not shown as a pitch
+    assert "it does not start at rest (pitch rate " in sine.output, sine.output
     with ResultsFile(optimisation_file) as rf:
         spline = cfd_motion(read_result(rf, "optimisation/sqp/beta_0.50").motion)
     motion = read_motion_table(table)

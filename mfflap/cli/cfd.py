@@ -696,9 +696,13 @@ def motion_table_cmd(results_file: Path, table_file: Path, beta: float | None,
                        comment=f"{label} of {results_file}, period {spline.period:.9g} s")
     start = spline.sample(np.array([0.0]))
     click.echo(f"wrote {table_file}: {label}, period {spline.period:.4g} s, {cycles:g} periods")
-    if max(abs(start.pitch_angle[0]), abs(start.pitch_rate[0]),
-           abs(start.heave_velocity[0])) > 1e-6:
-        click.echo(f"it does not start at rest (pitch {np.degrees(start.pitch_angle[0]):.3g} "
-                   f"deg, pitch rate {np.degrees(start.pitch_rate[0]):.3g} deg/s, heave "
-                   f"velocity {start.heave_velocity[0]:.3g} m/s): write the case with "
+    at_start = {"pitch": (np.degrees(start.pitch_angle[0]), "deg"),
+                "pitch rate": (np.degrees(start.pitch_rate[0]), "deg/s"),
+                "heave velocity": (start.heave_velocity[0], "m/s")}
+    moving = {name: value for name, value in at_start.items() if abs(value[0]) > 1e-6}
+    if moving:  # round-off (1e-15 deg) is no motion, and is not shown
+        click.echo("it does not start at rest ("
+                   + ", ".join(f"{name} {value:.3g} {unit}"
+                               for name, (value, unit) in moving.items())
+                   + "): write the case with "
                    f"--ramp-time (the back-test uses half a period, {0.5 * spline.period:.4g} s)")
