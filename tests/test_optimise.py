@@ -2,6 +2,7 @@
 
 import json
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -161,6 +162,48 @@ def test_no_gain_is_given_when_the_best_sinusoid_makes_drag(tmp_path):
     html = out.with_suffix(".html").read_text()
     assert ("thrust gain over the best feasible sinusoid: not given: the best feasible "
             "sinusoid makes no thrust") in html
+
+
+def test_a_gain_from_a_flagged_beta_0_optimum_says_so(tmp_path):
+    """N = 2 steps per half cycle: the beta = 0 optimum is flagged (the scheme's energy
+    error, peaks between the steps); its gain is still given, with the doubt beside it in
+    the text, the JSON, the HDF5 file and the report (it was given as if sound)."""
+    case = tmp_path / "n2.toml"
+    case.write_text(CASE.read_text().replace("n_steps = 50", "n_steps = 2"))
+    out = tmp_path / "opt.h5"
+    cli = __import__("mfflap.cli.main", fromlist=["cli"]).cli
+    args = ["optimise", str(case), "--betas", "0", "--starts", "1", "--no-ipopt", "--output",
+            str(out)]
+    res = CliRunner().invoke(cli, args)
+    assert res.exit_code == 0, res.output
+    with ResultsFile(out) as rf:
+        result = read_result(rf, "optimisation/sqp/beta_0.00")
+        caveat = rf.h5["optimisation"].attrs["thrust_gain_beta0_caveat"]
+        assert np.isfinite(rf.h5["optimisation"].attrs["thrust_gain_beta0"])
+    n = len(result.flags)
+    assert n >= 1 and caveat == (f"the beta = 0 optimum it is computed from is flagged ({n} "
+                                 f"flag{'s' if n > 1 else ''}): the gain inherits that doubt")
+    assert f"; caution: {caveat}" in res.output
+    assert f"Caution: {caveat}." in out.with_suffix(".html").read_text()
+    data = json.loads(CliRunner().invoke(cli, [*args, "--json"]).stdout)
+    assert data["thrust_gain_beta0"] is not None and data["thrust_gain_beta0_caveat"] == caveat
+
+
+def test_a_sound_beta_0_optimum_gives_its_gain_without_a_caveat():
+    from mfflap.optimisation.study import BetaStudy
+
+    sound = SimpleNamespace(converged=True, flags=[],
+                            summary=SimpleNamespace(mean_thrust=3.0))
+    study = BetaStudy(sweep=SimpleNamespace(mean_thrust=np.array([2.0])), best_sinusoid=0,
+                      sqp={0.0: sound}, sqp_all={})
+    assert study.thrust_gain == pytest.approx(0.5) and study.thrust_gain_caveat is None
+    study.sqp[0.0] = SimpleNamespace(converged=False, flags=["a", "b"],
+                                     summary=SimpleNamespace(mean_thrust=3.0))
+    assert study.thrust_gain_caveat == ("the beta = 0 optimum it is computed from did not "
+                                        "converge and is flagged (2 flags): the gain inherits "
+                                        "that doubt")
+    study.sweep = SimpleNamespace(mean_thrust=np.array([-1.0]))  # no gain: nothing to doubt
+    assert study.thrust_gain is None and study.thrust_gain_caveat is None
 
 
 def test_refined_sinusoid_is_feasible_and_no_worse_than_the_grid():

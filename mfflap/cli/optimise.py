@@ -58,7 +58,8 @@ def optimise(case_file: Path, betas: list[float] | None, starts: int, ipopt: boo
     if as_json:
         echo_json({"optimised": out, "thrust_gain_beta0": study.thrust_gain,
                    "thrust_gain_beta0_refined": study.thrust_gain_refined,
-                   "thrust_gain_beta0_missing": study.no_thrust_gain_reason})
+                   "thrust_gain_beta0_missing": study.no_thrust_gain_reason,
+                   "thrust_gain_beta0_caveat": study.thrust_gain_caveat})
         return
     for b, r in study.sqp.items():
         s = r.summary
@@ -76,5 +77,7 @@ def optimise(case_file: Path, betas: list[float] | None, starts: int, ipopt: boo
         refined = study.thrust_gain_refined
         click.echo(f"beta = 0 thrust gain over the best feasible sinusoid: "
                    f"{study.thrust_gain:+.1%}"
-                   + ("" if refined is None else f" (over the refined one: {refined:+.1%})"))
+                   + ("" if refined is None else f" (over the refined one: {refined:+.1%})")
+                   + (f"; caution: {study.thrust_gain_caveat}" if study.thrust_gain_caveat
+                      else ""))
     click.echo(f"wrote {output} and {html}")

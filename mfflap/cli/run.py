@@ -81,6 +81,7 @@ def run_summary(outcome) -> dict:
                             for b, r in outcome.study.sqp.items()}
         out["thrust_gain_beta0"] = outcome.study.thrust_gain
         out["thrust_gain_beta0_refined"] = outcome.study.thrust_gain_refined
+        out["thrust_gain_beta0_caveat"] = outcome.study.thrust_gain_caveat
     out["backtest"] = {k: {"status": o.status, "source": o.source,
                            **(o.comparison.as_dict() if o.comparison else {})}
                        for k, o in outcome.backtests.items()}

@@ -124,6 +124,23 @@ class BetaStudy:
         return None
 
 
+    @property
+    def thrust_gain_caveat(self) -> str | None:
+        """Why :attr:`thrust_gain`, a number, is in doubt: the beta = 0 optimum it is
+        computed from did not converge or was flagged (None when neither, or when there is
+        no gain)."""
+        if self.thrust_gain is None:
+            return None
+        result = self.sqp[0.0]
+        doubts = ([] if result.converged else ["did not converge"]) + \
+            ([f"is flagged ({len(result.flags)} flag{'s' if len(result.flags) > 1 else ''})"]
+             if result.flags else [])
+        if not doubts:
+            return None
+        return (f"the beta = 0 optimum it is computed from {' and '.join(doubts)}: the gain "
+                "inherits that doubt")
+
+
 def beta_study(config: CaseConfig, betas: Sequence[float] | None = None, n_starts: int = 3,
                with_ipopt: bool = True, model=None, sweep: SweepResult | None = None,
                progress: Progress | None = None) -> BetaStudy:

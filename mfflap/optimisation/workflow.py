@@ -37,6 +37,8 @@ def write_study(rf: ResultsFile, config: CaseConfig, study: BetaStudy,
     rf.h5[prefix].attrs["thrust_gain_beta0"] = _or_nan(study.thrust_gain)
     if study.no_thrust_gain_reason is not None:
         rf.h5[prefix].attrs["thrust_gain_beta0_missing"] = study.no_thrust_gain_reason
+    if study.thrust_gain_caveat is not None:
+        rf.h5[prefix].attrs["thrust_gain_beta0_caveat"] = study.thrust_gain_caveat
     if study.refined is not None:
         from dataclasses import asdict
 

@@ -132,6 +132,8 @@ def add_optimisation_sections(rep: Report, study, model, scheme: str, max_power:
     if study.thrust_gain is not None:
         s.blocks.append(text_html(f"β = 0 thrust gain over the best feasible sinusoid: "
                                   f"{study.thrust_gain:+.1%} (the paper: +50.29 %)."))
+        if study.thrust_gain_caveat is not None:
+            s.blocks.append(text_html(f"Caution: {study.thrust_gain_caveat}.", warn=True))
     else:
         s.blocks.append(text_html(f"β = 0 thrust gain over the best feasible sinusoid: not "
                                   f"given: {study.no_thrust_gain_reason}.", warn=True))
