@@ -219,3 +219,22 @@ def test_refined_sinusoid_is_feasible_and_no_worse_than_the_grid():
     assert r.max_power <= 50.0 * (1 + 1e-6)
     assert r.mean_thrust >= r.grid_thrust
     assert r.mean_thrust > 1.01 * r.grid_thrust  # a coarse grid leaves room to improve
+
+
+def test_gain_table_entries_say_which_optimum_is_in_doubt():
+    """Each (N, smoothing) entry: the gain over the best feasible sinusoid, and its progress
+    line says when its beta = 0 optimum is flagged or did not converge (every entry of the
+    paper's case is flagged, and the lines read as sound)."""
+    from mfflap.optimisation.study import gain_table
+
+    config = load_case(CASE)
+    lines: list[str] = []
+    table = gain_table(config, n_steps=(2, 25), smoothing_factors=(1.0,),
+                       progress=lines.append)
+    lines = [line for line in lines if line.startswith("gain table")]  # not the sweep's
+    assert table["gain"].shape == (2, 1) and len(lines) == 2
+    np.testing.assert_allclose(table["gain"][:, 0],
+                               table["thrust"][:, 0] / float(table["baseline_thrust"]) - 1.0)
+    assert table["flagged"][0, 0]  # N = 2: the scheme's energy error carries it
+    for line, flagged in zip(lines, table["flagged"][:, 0], strict=True):
+        assert ("flagged" in line) == bool(flagged), line

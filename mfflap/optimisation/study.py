@@ -219,7 +219,10 @@ def gain_table(config: CaseConfig, n_steps: Sequence[int] = (25, 50, 100),
                 shown = (f"{gain:+.1%}" if gain is not None
                          else f"thrust {out['thrust'][i, j]:.4g} N (no gain: "
                          f"{no_thrust_gain_reason(base, 'the best feasible sinusoid')})")
-                progress(f"gain table N={n} smoothing x{fac:g}: {shown}")
+                doubt = ([] if r.converged else ["not converged"]) + (["flagged"] if r.flags
+                                                                     else [])
+                progress(f"gain table N={n} smoothing x{fac:g}: {shown}"
+                         + (f" ({', '.join(doubt)})" if doubt else ""))
     out["n_steps"] = np.asarray(n_steps)
     out["smoothing_factors"] = np.asarray(smoothing_factors)
     out["baseline_thrust"] = np.asarray(base)
