@@ -169,6 +169,12 @@ class OptimisationSettings:
             )
 
 
+#: the decimals of each grid axis that a campaign case's id keeps
+#: (:attr:`mfflap.campaign.cases.CfdCase.case_id`, e.g. ``f1p000_h0p300_phi090p0``): two
+#: values of an axis equal to these decimals would name one case
+CASE_ID_DECIMALS = {"frequencies": 3, "heave_amplitudes": 3, "phases_deg": 1}
+
+
 @dataclass(frozen=True)
 class IdentificationGrid:
     """The motion grid of the identification campaign (the paper's Table 1 by default)."""
@@ -192,6 +198,7 @@ class IdentificationGrid:
 
     def __post_init__(self) -> None:
         check_fields(self, prefix="identification.")
+        self._check_case_ids()
         self._check_ramp_upright()
         short = [f for f in self.frequencies if self.case_duration(f) <= self.case_ramp_time(f)]
         if short:
@@ -220,6 +227,22 @@ class IdentificationGrid:
         """C^2 start-up ramp of the grid's case at ``frequency``, s: a quarter period, at
         most 0.5 s."""
         return min(0.25 / frequency, 0.5)
+
+    def _check_case_ids(self) -> None:
+        """Refuse two values of an axis that agree to the decimals the case ids keep: their
+        cases would share an id, and so a record and a case folder."""
+        for key, decimals in CASE_ID_DECIMALS.items():
+            values = getattr(self, key)
+            shown = [f"{v:.{decimals}f}" for v in values]
+            for j, text in enumerate(shown):
+                if text in shown[:j]:
+                    i = shown.index(text)
+                    raise ConfigError(
+                        f"values {values[i]!r} and {values[j]!r} ({key}[{i}] and [{j}]) are "
+                        f"one value to {decimals} decimal{'s' if decimals > 1 else ''}, as a "
+                        "campaign case's id keeps "
+                        f"them ({text}): their cases would share an id and a record; give "
+                        "values that differ there", key=f"identification.{key}[{j}]")
 
     def _check_ramp_upright(self) -> None:
         """Refuse a ramp that pitches some case's plate to 90 deg or past it (across the

@@ -68,6 +68,12 @@ def test_case_toml_round_trip():
         ("[identification]\nphases_deg = [90, 45, 90]\n", "identification.phases_deg[2]",
          "given twice"),
         ("[optimisation]\nbetas = [0.5, 0.5]\n", "optimisation.betas[1]", "given twice"),
+        # two values one case id apart: their cases would share a record
+        ("[identification]\nfrequencies = [0.5, 1.0, 1.0004]\n",
+         "identification.frequencies[2]", "values 1.0 and 1.0004 (frequencies[1] and [2]) are "
+         "one value to 3 decimals, as a campaign case's id keeps them (1.000)"),
+        ("[identification]\nphases_deg = [90.0, 90.04]\n", "identification.phases_deg[1]",
+         "one value to 1 decimal, as"),
         # a phase a whole turn from another is the same motion
         ("[identification]\nphases_deg = [45, 90, -270]\n", "identification.phases_deg[2]",
          "value -270 is the same as 90 (identification.phases_deg[1]): they lie 360 deg apart"),

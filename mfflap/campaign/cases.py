@@ -8,7 +8,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import asdict, dataclass
 from typing import Protocol
 
-from mfflap.config import IdentificationGrid
+from mfflap.config import CASE_ID_DECIMALS, IdentificationGrid
 from mfflap.errors import ConfigError
 from mfflap.kinematics.continuous import HarmonicMotion, Motion, RampHarmonicMotion
 
@@ -73,7 +73,10 @@ class CfdCase:
     @property
     def case_id(self) -> str:
         """Stable, file-name and TOML-key safe identifier, e.g. ``f1p000_h0p300_phi090p0``."""
-        text = f"f{self.frequency:.3f}_h{self.heave_amplitude:.3f}_phi{self.phase_deg:05.1f}"
+        f, h, phi = (CASE_ID_DECIMALS[k] for k in ("frequencies", "heave_amplitudes",
+                                                    "phases_deg"))
+        text = (f"f{self.frequency:.{f}f}_h{self.heave_amplitude:.{h}f}"
+                f"_phi{self.phase_deg:0{4 + phi}.{phi}f}")
         return text.replace(".", "p").replace("-", "m")
 
     def motion(self) -> RampHarmonicMotion:
