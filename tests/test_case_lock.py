@@ -10,6 +10,8 @@ import subprocess
 import sys
 import threading
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
@@ -112,6 +114,15 @@ def test_lock_holder_names_the_holder_without_taking_or_creating_the_lock(tmp_pa
     with case_lock(case):
         assert lock_holder(case) == (case / LOCK_FILE).read_text()  # this process counts
         assert issubclass(CaseBusyError, CfdRunError)
+    with _probed_in_a_loop(case):
+        for _ in range(200):  # each would be refused if a probe's lock counted as a run's
+            with case_lock(case):
+                pass
+
+
+@contextmanager
+def _probed_in_a_loop(case: Path) -> Iterator[None]:
+    """A thread calling lock_holder(case) as fast as it can while the block runs."""
     stop = threading.Event()
 
     def probe() -> None:
@@ -121,9 +132,7 @@ def test_lock_holder_names_the_holder_without_taking_or_creating_the_lock(tmp_pa
     prober = threading.Thread(target=probe)
     prober.start()
     try:
-        for _ in range(200):  # each would be refused if a probe's lock counted as a run's
-            with case_lock(case):
-                pass
+        yield
     finally:
         stop.set()
         prober.join()
@@ -139,25 +148,14 @@ def test_a_busy_prober_does_not_make_a_run_fail_however_short_the_wait(tmp_path,
     case = tmp_path / "case"
     with case_lock(case):
         pass
-    stop = threading.Event()
-
-    def probe() -> None:
-        while not stop.is_set():
-            lock_holder(case)
-
-    prober = threading.Thread(target=probe)
-    prober.start()
     refused = 0
-    try:
+    with _probed_in_a_loop(case):
         for _ in range(300):
             try:
                 with case_lock(case):
                     pass
             except CaseBusyError:
                 refused += 1
-    finally:
-        stop.set()
-        prober.join()
     assert refused == 0
 
 
