@@ -240,9 +240,9 @@ class IdentificationGrid:
                     raise ConfigError(
                         f"values {values[i]!r} and {values[j]!r} ({key}[{i}] and [{j}]) are "
                         f"one value to {decimals} decimal{'s' if decimals > 1 else ''}, as a "
-                        "campaign case's id keeps "
-                        f"them ({text}): their cases would share an id and a record; give "
-                        "values that differ there", key=f"identification.{key}[{j}]")
+                        f"campaign case's id keeps them ({text}): their cases would share an "
+                        "id and a record; give values that differ there",
+                        key=f"identification.{key}[{j}]")
 
     def _check_ramp_upright(self) -> None:
         """Refuse a ramp that pitches some case's plate to 90 deg or past it (across the

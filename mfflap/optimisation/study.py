@@ -123,7 +123,6 @@ class BetaStudy:
             return no_thrust_gain_reason(base, "the best feasible sinusoid")
         return None
 
-
     @property
     def thrust_gain_caveat(self) -> str | None:
         """Why :attr:`thrust_gain`, a number, is in doubt: the beta = 0 optimum it is
