@@ -474,6 +474,10 @@ IGNORED = [  # an option the rest of the command line would make it ignore
     (["backtest", "OPT", "--mesh", "medium", "--json"], "--mesh applies only to live runs"),
     (["cfd", "convergence", str(CASE), "OUT", "--courant", "4", "--time-step-mesh", "coarse"],
      "--time-step-mesh applies only to a study of two or more --courant limits"),
+    (["cfd", "convergence", str(CASE), "OUT", "--meshes", "coarse,medium",
+      "--time-step-mesh", "fine"],
+     "Invalid value for --time-step-mesh: 'fine' is not one of the study's --meshes (coarse, "
+     "medium)"),
     (["campaign", "run", str(CASE), "--out", "OUT", "--workers", "2", "--scheduler",
       "tcp://127.0.0.1:1"], "--workers applies only to the LocalCluster mfflap starts; with "
                             "--scheduler the cluster's own workers run the cases"),

@@ -457,6 +457,10 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: list[floa
     if len(courants) < 2:
         refuse_given(("time_step_mesh",), "a study of two or more --courant limits (the mesh "
                                           "repeated at each limit after the first)")
+    mesh_names = [m.strip() for m in meshes.split(",")]
+    if time_step_mesh is not None and time_step_mesh not in mesh_names:
+        raise click.BadParameter(f"{time_step_mesh!r} is not one of the study's --meshes "
+                                 f"({', '.join(mesh_names)})", param_hint="--time-step-mesh")
     case = load_case(case_file)
     motion, end = _motion_and_end_time(case, motion_table, end_time, cycles)
     period = 1.0 / case.motion.frequency
@@ -475,7 +479,7 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: list[floa
         described = f"motion table {motion_table.name}, {end:g} s"
     try:
         study = run_convergence(out_dir, motion, end,
-                                meshes=[m.strip() for m in meshes.split(",")],
+                                meshes=mesh_names,
                                 courants=courants, ramp_time=ramp,
                                 plate=case.plate, fluid=case.fluid, stream=case.flow,
                                 n_procs=procs, floor=floor, time_step_mesh=time_step_mesh,
