@@ -397,7 +397,7 @@ def test_an_impossible_end_time_or_depth_writes_nothing(tmp_path):
 
 
 def test_divergence_signatures():
-    from mfflap.cfd.openfoam.runner import _DIVERGED
+    from mfflap.cfd.openfoam.solver_log import DIVERGED as _DIVERGED
 
     assert not _DIVERGED.search("trapFpe: Floating point exception trapping enabled (FOAM_SIGFPE).")
     assert not _DIVERGED.search("Solving for Ux, Initial residual = 0.004, No Iterations 1")

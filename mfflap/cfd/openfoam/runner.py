@@ -23,7 +23,6 @@ from mfflap.cfd.openfoam.release import require_supported_release
 from mfflap.cfd.openfoam.solver_log import DIVERGED, failure_reason
 from mfflap.errors import CfdRunError, ConfigError
 
-_DIVERGED = DIVERGED  # crash and divergence signatures
 _COURANT = re.compile(r"Courant Number mean: \S+ max: ([-+0-9.eE]+)\s")
 
 
@@ -339,7 +338,7 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
                          "resumes", case=str(case_dir), log_tail=_tail(log))
     own_tail = read_tail(log, 200_000, start=own_start)
     courants = max_courant(own_tail)
-    if proc.returncode != 0 or _DIVERGED.search(own_tail[-50_000:]):
+    if proc.returncode != 0 or DIVERGED.search(own_tail[-50_000:]):
         raise CfdRunError(f"{application} failed (exit code {proc.returncode}): "
                           f"{failure_reason(own_tail[-50_000:], proc.returncode)}",
                           case=str(case_dir), log_tail=_tail(log))
@@ -634,10 +633,10 @@ def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
             if not meshed:
                 run_application(case_dir, "blockMesh", timeout_s=300)
             log = run_application(case_dir, "checkMesh", timeout_s=300)
-            if not mesh_checked(case_dir):
+            last = _last_check(case_dir) or ""
+            if "Mesh OK" not in last:  # as mesh_checked, from the log read once
                 failed = [" ".join(line.strip().lstrip("*").rstrip(".").split())
-                          for line in (_last_check(case_dir) or "").splitlines()
-                          if line.lstrip().startswith("***")]
+                          for line in last.splitlines() if line.lstrip().startswith("***")]
                 raise CfdRunError(
                     "checkMesh did not report 'Mesh OK'"
                     + (f": {'; '.join(failed)}" if failed else "")
