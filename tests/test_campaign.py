@@ -162,9 +162,10 @@ def test_campaign_on_local_cluster_resumes_and_reports_failures(tmp_path, capfd)
     assert (out / f"{SHORT.case_id}.h5").stat().st_mtime_ns == mtime  # never rerun
     assert [s.state for s in campaign_status(out)] == ["done", "done", "failed"]
     with pytest.raises(ConfigError, match=r"another setup \(mesh: 'coarse' in the folder, "
-                                          r"'medium' asked; .*timeout_s: 900\.0 in the folder, "
-                                          r"21600\.0 asked"):
+                                          r"'medium' asked\); ") as refused:
         run_campaign([SHORT], out, CampaignSetup(mesh="medium"), progress=False)
+    assert "timeout_s" not in str(refused.value)  # a time limit is not a setup (no result
+    # depends on it): a case that timed out is rerun with a longer one
 
 
 @pytest.mark.openfoam
@@ -692,7 +693,9 @@ def test_campaign_command_runs_a_named_set_up(tmp_path):
     assert "cheapest" in unknown.output
     res = CliRunner().invoke(cli, ["campaign", "run", str(case), "--out", str(out), *grid,
                                    "--setup", "affordable", "--timeout", "3", "--keep-cases"])
-    assert res.exit_code == 0, res.output
+    assert res.exit_code == 1, res.output  # the case failed (timed out): not a whole campaign
+    assert ("exit status 1: 1 of 1 cases not done (1 failed: `--retry-failed` reruns them)"
+            in res.stderr)
     manifest = read_toml(out / "campaign.toml")["setup"]
     assert manifest["mesh"] == "graded"
     assert manifest["solver"]["velocity_convection"] == "LUST"
@@ -701,6 +704,33 @@ def test_campaign_command_runs_a_named_set_up(tmp_path):
     (case_dir,) = (out / "cases").iterdir()
     assert "Gauss LUST grad(U)" in (case_dir / "system" / "fvSchemes").read_text()
     assert "FAILED f2p000_h0p100_phi090p0" in res.output
+
+
+@pytest.mark.openfoam
+def test_campaign_command_exit_status_says_whether_every_case_is_done(tmp_path):
+    """A case that fails (timed out) gives exit status 1 after the summary, so that a
+    script's next step does not take the campaign as complete; `--retry-failed` with a longer
+    time limit (not a setup of its own) then runs it (half a cycle at 2 Hz on the coarse
+    mesh, about 20 s) and the status is 0."""
+    from click.testing import CliRunner
+
+    from mfflap.cli.main import cli
+    from mfflap.toml_io import read_toml
+
+    case = tmp_path / "short.toml"
+    text = (Path(__file__).parents[1] / "cases" / "paper2026.toml").read_text()
+    case.write_text(text.replace("n_cycles = 3.0", "n_cycles = 0.5"))
+    out = tmp_path / "camp"
+    args = ["campaign", "run", str(case), "--out", str(out), "--frequencies", "2",
+            "--heave-amplitudes", "0.1", "--phases", "90"]
+    failed = CliRunner().invoke(cli, [*args, "--timeout", "1"])
+    assert failed.exit_code == 1, failed.output
+    assert "0/1 cases done" in failed.stdout and "FAILED f2p000_h0p100_phi090p0" in failed.stdout
+    assert "exit status 1: 1 of 1 cases not done (1 failed" in failed.stderr
+    done = CliRunner().invoke(cli, [*args, "--retry-failed"])  # the default time limit
+    assert done.exit_code == 0, done.output
+    assert "1/1 cases done" in done.stdout and "exit status" not in done.stderr
+    assert read_toml(out / "campaign.toml")["setup"]["timeout_s"] == 6 * 3600.0  # the last
 
 
 def _solvers_in(case_dir: Path) -> list[str]:
@@ -1015,6 +1045,14 @@ def test_a_case_another_process_runs_is_left_to_it_not_failed(tmp_path):
             f"by pid {holder.pid} since ")
         listed = CliRunner().invoke(cli, ["campaign", "status", str(out)])
         assert listed.exit_code == 0 and "0 failed, 1 running, 0 started" in listed.output
+        case_file = Path(__file__).parents[1] / "cases" / "paper2026.toml"
+        left = CliRunner().invoke(cli, ["campaign", "run", str(case_file), "--out", str(out),
+                                        "--frequencies", "1", "--heave-amplitudes", "0.3",
+                                        "--phases", "90"])  # the same case id as SHORT
+        assert left.exit_code == 1, left.output  # not done by this command
+        assert f"BUSY {SHORT.case_id}: " in left.stdout
+        assert f"being run by another process (pid {holder.pid}" in left.stdout
+        assert left.stderr.endswith("exit status 1: 1 of 1 cases not done\n"), left.stderr
     finally:
         holder.kill()
         holder.wait()

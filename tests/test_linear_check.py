@@ -148,10 +148,18 @@ def test_command_reads_a_finished_campaign(tmp_path, records):
 @pytest.mark.openfoam
 def test_command_runs_a_small_motion_in_openfoam(tmp_path):
     """One case from scratch: the campaign writes, runs and records it, the check follows;
-    --velocity-convection reaches the solver (the coarse mesh with LUST)."""
+    --velocity-convection reaches the solver (the coarse mesh with LUST). Timed out first,
+    the motion is failed (exit status 1) until `--retry-failed` runs it again with a longer
+    time limit."""
     case = SMALL_MOTIONS[8]  # f = 2 Hz, heave 2 mm leading pitch 0.75 deg: about 15 s CPU
-    res = CliRunner().invoke(cli, ["cfd", "linear-check", str(tmp_path), "--cases",
-                                   case.case_id, "--velocity-convection", "LUST", "--json"])
+    args = ["cfd", "linear-check", str(tmp_path), "--cases", case.case_id,
+            "--velocity-convection", "LUST"]
+    timed_out = CliRunner().invoke(cli, [*args, "--timeout", "1"])
+    assert timed_out.exit_code == 1 and f"FAILED {case.case_id}: " in timed_out.stdout
+    again = CliRunner().invoke(cli, [*args, "--json"])  # a failed motion is not rerun
+    assert again.exit_code == 1 and "timed out" in json.loads(again.stdout)["failed"][
+        case.case_id]
+    res = CliRunner().invoke(cli, [*args, "--retry-failed", "--json"])
     assert res.exit_code == 0, res.output
     (check,) = json.loads(res.stdout)["checks"]
     assert check["nrmse_normal_force"] < 0.05 and check["pearson_moment"] > 0.99

@@ -65,8 +65,8 @@ class CampaignSetup:
     single_precision: bool = False
 
     def as_dict(self) -> dict[str, Any]:
-        """Plain nested values for campaign.toml (what the runs depend on; not how the case
-        folders and records are kept)."""
+        """Plain nested values for campaign.toml (what the runs depend on, and the time
+        limit of the last run; not how the case folders and records are kept)."""
         return {"mesh": self.mesh, "timeout_s": self.timeout_s,
                 "solver": asdict(self.solver), "plate": asdict(self.plate),
                 "fluid": asdict(self.fluid), "stream": asdict(self.stream)}
@@ -176,7 +176,8 @@ def _with_added_settings(setup: dict[str, Any]) -> dict[str, Any]:
 
 def check_same_setup(out_dir: str | Path, setup: CampaignSetup) -> None:
     """Refuse a campaign folder that holds a campaign with another setup (nothing to check
-    in a new folder).
+    in a new folder). The time limit per case is not part of it: no result depends on it,
+    and a case that timed out is rerun with a longer one.
 
     Raises
     ------
@@ -189,6 +190,8 @@ def check_same_setup(out_dir: str | Path, setup: CampaignSetup) -> None:
         return
     had = _with_added_settings(read_toml(manifest).get("setup", {}))
     asked = read_toml_text(dumps({"setup": setup.as_dict()}))["setup"]
+    had.pop("timeout_s", None)
+    asked.pop("timeout_s")
     if had != asked:
         differences = _differences(had, asked)
         raise ConfigError(f"{manifest}: this folder holds a campaign with another setup "

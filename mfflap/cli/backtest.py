@@ -28,7 +28,8 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
              setup_name: str | None, as_json: bool) -> None:
     """Back-test the optimised motions (and the best sinusoid) of OPTIMISATION_FILE.
 
-    Ctrl-C stops the run in flight and shows the motions back-tested before it.
+    Ctrl-C stops the run in flight and shows the motions back-tested before it. The exit
+    status is 1 when a motion could not be back-tested (each is listed with why).
     """
     from mfflap.backtest.workflow import backtest_all
     from mfflap.campaign.records import fixture_dir
@@ -69,6 +70,11 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
                    + (f"resumes the live runs in {work_dir} from their last written times"
                       if live else "back-tests them all again"), err=True)
         raise click.Abort()
+    missing = [label for label, o in outcomes.items() if o.status != "back-tested"]
+    if missing:  # listed above with why; a script must not take the back-test as complete
+        click.echo(f"exit status 1: {len(missing)} of {len(outcomes)} motions not "
+                   f"back-tested ({', '.join(missing)})", err=True)
+        raise SystemExit(1)
 
 
 def _show(outcomes: dict, as_json: bool) -> None:

@@ -75,7 +75,8 @@ def run_cmd(case_file: Path, out_dir: Path, frequencies: list[float] | None,
     """Run the identification grid of CASE_FILE in OpenFOAM.
 
     Finished cases are never rerun: rerun the same command to continue a campaign that was
-    stopped. Failed cases are reported and do not stop the others.
+    stopped. Failed cases are reported and do not stop the others. The exit status is 1
+    unless every case is done (failed, or left busy to another process running it).
     """
     if scheduler is not None:
         refuse_given(("workers",), "the LocalCluster mfflap starts; with --scheduler the "
@@ -116,6 +117,12 @@ def run_cmd(case_file: Path, out_dir: Path, frequencies: list[float] | None,
     if any(s.state == "busy" for s in statuses):
         click.echo("busy cases are left to the process running them; `mfflap campaign status "
                    f"{out_dir}` follows them")
+    if done < len(statuses):  # a script's next step (identify) must not take it as complete
+        failed = sum(s.state == "failed" for s in statuses)
+        click.echo(f"exit status 1: {len(statuses) - done} of {len(statuses)} cases not done"
+                   + (f" ({failed} failed: `--retry-failed` reruns them)" if failed else ""),
+                   err=True)
+        raise SystemExit(1)
 
 
 @campaign.command("status")

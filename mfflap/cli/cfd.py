@@ -565,11 +565,13 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: list[floa
 @click.option("--timeout", default=3600.0, show_default=True, type=POSITIVE,
               help="Seconds per case.")
 @click.option("--single-precision", is_flag=True, help="Store the records in float32.")
+@click.option("--retry-failed", is_flag=True,
+              help="Rerun the motions that failed before (e.g. with a longer --timeout).")
 @click.option("--json", "as_json", is_flag=True, help="Print the checks as JSON.")
 def linear_check(out_dir: Path, case_file: Path | None, mesh: str | None,
                  setup_name: str | None, velocity_convection: str | None,
                  case_ids: str | None, list_only: bool, workers: int, timeout: float,
-                 single_precision: bool, as_json: bool) -> None:
+                 single_precision: bool, retry_failed: bool, as_json: bool) -> None:
     """Verify a CFD set-up against linear unsteady thin-aerofoil theory.
 
     Runs small harmonic heaves and pitches (effective incidence of a few degrees, reduced
@@ -577,7 +579,7 @@ def linear_check(out_dir: Path, case_file: Path | None, mesh: str | None,
     run's F_n and M with Theodorsen's theory and with the strip model: a table,
     OUT_DIR/linear_check/checks.h5 and OUT_DIR/linear_check/normal_force.png. A sound set-up
     lies a few percent from the theory; wrong frames, scaling or moment reference show as
-    tens of percent.
+    tens of percent. The exit status is 1 when a motion failed (each is listed with why).
     """
     from dataclasses import asdict, replace
 
@@ -620,7 +622,7 @@ def linear_check(out_dir: Path, case_file: Path | None, mesh: str | None,
                           single_precision=single_precision)
     with aborted_with_resume_message(out_dir):
         statuses = run_campaign(motions, out_dir, setup, n_workers=workers,
-                                progress=not as_json)
+                                retry_failed=retry_failed, progress=not as_json)
     failed = [s for s in statuses if s.state != "done"]
     records = [read_record(out_dir / f"{s.case_id}.h5") for s in statuses if s.state == "done"]
     model = config.morison_model()
