@@ -16,6 +16,12 @@ class MfflapError(Exception):
         self._message = message
         self._kwargs = kwargs
 
+    @property
+    def detail(self) -> str:
+        """The message without the file, key or line it names (for a caller that names the
+        place its own way, such as a command-line option)."""
+        return getattr(self, "_message", self.args[0] if self.args else "")
+
     def __reduce__(self) -> tuple[Any, ...]:
         message = getattr(self, "_message", self.args[0] if self.args else "")
         return (_rebuild, (type(self), message, getattr(self, "_kwargs", {})))

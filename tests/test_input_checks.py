@@ -505,6 +505,19 @@ def test_an_option_the_command_would_ignore_is_refused_by_name_before_anything_i
     assert not out.exists()
 
 
+@pytest.mark.parametrize("args", [["--frame", "plate", "--far-field", "freestream"],
+                                  ["--setup", "affordable_plate", "--far-field", "freestream"]])
+def test_a_far_field_the_plate_frame_cannot_take_is_refused_by_the_option(tmp_path, args):
+    """The plate's frame with the freestream far field, from --frame or a set-up's frame:
+    the refusal names --far-field (it named the library's key, far_field)."""
+    out = tmp_path / "out"
+    res = CliRunner().invoke(cli, ["cfd", "write", str(CASE), str(out), *args])
+    assert res.exit_code == 2, res.output
+    assert ("Invalid value for --far-field: the plate frame needs the inletOutlet far field, "
+            "not freestream" in " ".join(res.output.split()))
+    assert "far_field" not in res.output and not out.exists()
+
+
 def test_identify_weights_not_one_per_frequency_of_the_records_name_the_option(tmp_path):
     """The count is known once the records are read: the refusal names --weights and the
     records' frequencies (it used to name only the case file's identification key)."""

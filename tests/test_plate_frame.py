@@ -177,7 +177,7 @@ def test_cfd_write_frame_plate_takes_the_inlet_outlet_far_field(tmp_path):
     res = CliRunner().invoke(cli, ["cfd", "write", str(case_file), str(tmp_path / "d"),
                                    "--frame", "plate", "--far-field", "freestream"])
     assert res.exit_code != 0
-    assert "far_field" in res.output and "inletOutlet" in res.output
+    assert res.exit_code == 2 and "--far-field" in res.output and "inletOutlet" in res.output
     assert not (tmp_path / "d" / "constant").exists()
 
 

@@ -95,6 +95,7 @@ def write(case_file: Path, case_dir: Path, mesh: str | None, setup_name: str | N
     from mfflap.cfd.openfoam.setups import mesh_and_solver
     from mfflap.cfd.openfoam.writer import attach_motion_table, write_case
     from mfflap.config import load_case
+    from mfflap.errors import ConfigError
 
     spec, solver = mesh_and_solver(mesh, setup_name)
     case = load_case(case_file)
@@ -109,7 +110,13 @@ def write(case_file: Path, case_dir: Path, mesh: str | None, setup_name: str | N
                                    ("n_outer_correctors", outer_correctors),
                                    ("n_correctors", correctors))
                  if v is not None}
-    solver = replace(solver, write_interval=end_time / writes, **overrides)
+    try:
+        solver = replace(solver, write_interval=end_time / writes, **overrides)
+    except ConfigError as exc:  # named by the option that set it, not the library's key
+        option = _SOLVER_OPTIONS.get(exc.key or "")
+        if option is None:
+            raise
+        raise click.BadParameter(exc.detail, param_hint=option) from exc
     write_case(case_dir, motion, end_time, mesh=spec, plate=case.plate,
                fluid=case.fluid, stream=case.flow, ramp_time=ramp_time, y_plus=y_plus,
                solver=solver, overwrite=overwrite)
@@ -119,6 +126,14 @@ def write(case_file: Path, case_dir: Path, mesh: str | None, setup_name: str | N
             f"{solver.n_outer_correctors}x{solver.n_correctors}")  # outer x pressure correctors
     click.echo(f"wrote {case_dir} (mesh {spec.name}, {solver.frame} frame, {loop}, max Co "
                f"{solver.max_courant:g}, {solver.pressure_solver}, end time {end_time:g} s)")
+
+
+#: the `cfd write` option that sets each solver setting
+_SOLVER_OPTIONS = {"far_field": "--far-field", "pressure_solver": "--pressure-solver",
+                   "velocity_convection": "--velocity-convection",
+                   "turbulence_convection": "--turbulence-convection", "frame": "--frame",
+                   "max_courant": "--max-courant", "n_outer_correctors": "--outer-correctors",
+                   "n_correctors": "--correctors"}
 
 
 def _run_state(source: Path) -> str:

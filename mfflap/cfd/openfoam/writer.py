@@ -183,9 +183,10 @@ class SolverSettings:
             raise ConfigError(f"frame must be one of {', '.join(FRAMES)}, got {self.frame!r}",
                               key="frame")
         if self.frame == "plate" and self.far_field != "inletOutlet":
-            raise ConfigError("frame 'plate' needs far_field 'inletOutlet': the stream enters "
-                              "the plate's frame with the heave and pitch, which the "
-                              f"{self.far_field} far field cannot follow", key="far_field")
+            raise ConfigError(f"the plate frame needs the inletOutlet far field, not "
+                              f"{self.far_field}: the stream enters the plate's frame with "
+                              f"the heave and pitch, which the {self.far_field} far field "
+                              "cannot follow", key="far_field")
         if self.velocity_convection not in VELOCITY_CONVECTION_SCHEMES:
             raise ConfigError(f"velocity_convection must be one of "
                               f"{', '.join(VELOCITY_CONVECTION_SCHEMES)}, got "
