@@ -148,6 +148,9 @@ def test_campaign_on_local_cluster_resumes_and_reports_failures(tmp_path, capfd)
     rec = records[SHORT.case_id]
     assert rec.provenance["openfoam_build"].startswith("OPENFOAM=1912")
     assert rec.provenance["mesh"] == "coarse" and rec.provenance["cpu_time_s"] > 0
+    assert rec.provenance["flow_velocity_m_per_s"] == 0.3  # what it was run for, read back
+    assert rec.provenance["fluid_kinematic_viscosity_m2_per_s"] == 1e-6  # by identification
+    assert rec.provenance["plate_thickness_m"] == 0.003
     assert 0 <= rec.provenance["n_steps_bounding_epsilon"] <= rec.provenance["n_time_steps"]
     assert rec.parameters["frequency"] == 1.0
     assert rec.provenance["storage"] == "float32"  # written compact, like the fixtures

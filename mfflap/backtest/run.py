@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from mfflap.backtest.compare import BacktestComparison, compare_last_cycle
+from mfflap.campaign.record_inputs import folder_setup, input_mismatches
 from mfflap.campaign.records import CfdRecord, read_record, write_record
 from mfflap.cfd.openfoam.writer import SolverSettings
 from mfflap.errors import MfflapError
@@ -147,8 +148,16 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
         path = _matching_fixture(key, motion, folders)
         failed = [f / f"backtest_{key}.failed.toml" for f in folders
                   if (f / f"backtest_{key}.failed.toml").exists()]
-        if path is not None:
-            record = read_record(path)
+        found = None if path is None else read_record(path)
+        mismatches = [] if found is None else input_mismatches(
+            found, model.plate, model.fluid, model.stream, folder_setup(path))
+        if mismatches:  # the same motion, but not this case's CFD: its plate, fluid, stream
+            m = mismatches[0]
+            source = ((f"{source}; " if source else "")
+                      + f"fixture {path.name} matches the motion but ran for {m.key} = "
+                      f"{m.record_value:g} ({m.where}), the case has {m.case_value:g}")
+        elif found is not None:
+            record = found
             # a live run asked for and not had is said, not replaced by the fixture's name
             source = f"fixture {path.name}" + (f" instead of a live run: {source}" if source
                                                else "")

@@ -11,6 +11,7 @@ from typing import Any
 
 from mfflap.campaign.records import CfdRecord
 from mfflap.cfd.bursts import bridge_load_bursts
+from mfflap.cfd.case_inputs import PHYSICAL_KEYS
 from mfflap.cfd.force_envelope import BREACH_FACTOR, EnvelopeBreach, find_envelope_breaches
 from mfflap.cfd.openfoam.case_lock import case_lock
 from mfflap.cfd.openfoam.case_path import check_case_path, empty_case_folder
@@ -143,8 +144,8 @@ def record_from_case(case_dir: str | Path, motion: Motion, name: str,
                      source=f"openfoam:{name}", frame=str(meta.get("frame", "inertial")))
     prov = {**solver_provenance(case_dir), "mesh": meta["mesh"], "n_cells": meta["n_cells"],
             "force_dialect": history.dialect, "depth_m": meta["depth"], "span_m": meta["span"]}
-    for key, value in meta.items():
-        if key.startswith("solver_"):
+    for key, value in meta.items():  # how it was run, and what for (plate, fluid, stream)
+        if key.startswith("solver_") or (key in PHYSICAL_KEYS and key != "span"):
             prov[key] = value
     prov.update(as_run_settings(case_dir))
     if plate is not None:

@@ -61,7 +61,7 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
     given_folders = bool(folders)
     folders = folders or ((fixture_dir(),) if not csv_files else ())
     if folders:
-        records, _ = pooled_records(folders)
+        records, _ = pooled_records(folders, case, use="gap diagnosis")
         prepared, excluded = prepare_cases(
             records, case.identification.discard_time if discard is None else discard,
             plate=case.plate, fluid=case.fluid, stream=case.flow)

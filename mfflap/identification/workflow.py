@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
+from mfflap.campaign.record_inputs import check_records_inputs
 from mfflap.campaign.records import CfdRecord, fixture_dir, read_record, read_records
 from mfflap.config import CaseConfig
 from mfflap.identification.data import CaseData, prepare_cases
@@ -45,7 +46,8 @@ def sources_shown(folders: str | Path | Sequence[str | Path] | None) -> str:
     return ", ".join(str(f) for f in _folder_list(folders))
 
 
-def pooled_records(folders: str | Path | Sequence[str | Path] | None = None
+def pooled_records(folders: str | Path | Sequence[str | Path] | None = None,
+                   config: CaseConfig | None = None, use: str = "identification"
                    ) -> tuple[list[CfdRecord], dict[str, str]]:
     """The records of one or more folders or record files (the shipped fixtures by default),
     and the cases that failed in a folder without a record anywhere else, with the reason.
@@ -54,13 +56,17 @@ def pooled_records(folders: str | Path | Sequence[str | Path] | None = None
     another (a case its set-up lost, rerun with another); a record file (``DIR/CASE.h5``)
     adds that record alone, so that a few cases can be taken from a folder that also holds
     others. A string holding several paths one per line (a result's ``source``,
-    :func:`source_text`) is read as those paths.
+    :func:`source_text`) is read as those paths. Given ``config``, the records must have
+    been run for its plate, fluid and stream (:mod:`mfflap.campaign.record_inputs`); ``use``
+    says what for, in the refusal.
 
     Raises
     ------
     MfflapError
         If a case has a record in two of the paths (which CFD to use is ambiguous), naming
         both, or if the paths hold no record.
+    ConfigError
+        If a record was run for another plate, fluid or stream than ``config``'s.
     """
     from mfflap.errors import MfflapError
 
@@ -85,6 +91,9 @@ def pooled_records(folders: str | Path | Sequence[str | Path] | None = None
         where = ", ".join(str(f) for f in paths)
         raise MfflapError(f"{where}: no CFD records (*.h5); run "
                           "`mfflap campaign run` into it or point --fixtures elsewhere")
+    if config is not None:
+        check_records_inputs([(r, origin[r.name]) for r in records], config.plate,
+                             config.fluid, config.flow, case_source=config.source, use=use)
     return records, {k: v for k, v in failed.items() if k not in origin}
 
 
@@ -93,7 +102,7 @@ def load_cases(config: CaseConfig,
                n_samples: int = 400) -> tuple[list[CaseData], dict[str, str]]:
     """Prepared cases of one or more record folders (:func:`pooled_records`) and the cases
     left out, with the reason (a failed run, a record identification cannot use)."""
-    records, failed = pooled_records(folders)
+    records, failed = pooled_records(folders, config)
     cases, excluded = prepare_cases(records, config.identification.discard_time, n_samples,
                                     plate=config.plate, fluid=config.fluid,
                                     stream=config.flow)
