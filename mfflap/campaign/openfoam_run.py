@@ -2,16 +2,18 @@
 
 from __future__ import annotations
 
+import math
 import re
 import shutil
 import time
 from collections.abc import Callable
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
 from mfflap.campaign.records import CfdRecord
 from mfflap.cfd.bursts import bridge_load_bursts
-from mfflap.cfd.case_inputs import PHYSICAL_KEYS
+from mfflap.cfd.case_inputs import PHYSICAL_KEYS, check_case_inputs
 from mfflap.cfd.force_envelope import BREACH_FACTOR, EnvelopeBreach, find_envelope_breaches
 from mfflap.cfd.openfoam.case_lock import case_lock
 from mfflap.cfd.openfoam.case_path import check_case_path, empty_case_folder
@@ -30,7 +32,7 @@ from mfflap.cfd.openfoam.writer import (
     SolverSettings,
     write_case,
 )
-from mfflap.errors import CfdRunError, MfflapError
+from mfflap.errors import CfdRunError, ConfigError, MfflapError
 from mfflap.kinematics.continuous import Motion
 from mfflap.parameters import Fluid, FreeStream, Plate
 from mfflap.toml_io import read_toml
@@ -342,6 +344,40 @@ def _write_case_whole(case_dir: Path, write: Callable[[Path], object]) -> None:
     tmp.rmdir()
 
 
+def check_written_for(case_dir: Path, motion: Motion, end_time: float, ramp_time: float,
+                      mesh: str | AnyMeshSpec, solver: SolverSettings, plate: Plate | None,
+                      fluid: Fluid | None, stream: FreeStream | None) -> None:
+    """Refuse to resume a case written before for another run.
+
+    A work folder is used again by a later back-test or study: a case of the same name
+    written for another plate, fluid, stream, motion, duration, mesh or solver setting
+    would be resumed (or, finished, read) as this run's. What its mfflap_case.toml does
+    not keep (a case of an earlier mfflap) is not compared.
+
+    Raises
+    ------
+    ConfigError
+        Naming the first key that differs, both values and the folder.
+    """
+    kept = case_dir / "mfflap_case.toml"
+    meta = read_toml(kept)
+    advice = ("its results are not this run's: delete that folder, or give another work "
+              "folder, to run this one")
+    check_case_inputs(kept, meta, None, motion, plate or Plate(), fluid or Fluid(),
+                      stream or FreeStream(), advice=advice, given_as="asked")
+    asked = {"mesh": mesh if isinstance(mesh, str) else mesh.name, "end_time": end_time,
+             "ramp_time": ramp_time,
+             **{f"solver_{key}": value for key, value in asdict(solver).items()}}
+    for key, value in asked.items():
+        written = meta.get(key)
+        if key not in meta or written == value or (
+                isinstance(value, float) and isinstance(written, (int, float))
+                and math.isclose(written, value, rel_tol=1e-9)):
+            continue
+        raise ConfigError(f"{case_dir} was written for {key} = {written!r}, this run asks "
+                          f"{value!r} ({kept}); {advice}", key=key)
+
+
 def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict[str, Any],
                end_time: float, *, mesh: str | AnyMeshSpec = "coarse", ramp_time: float = 0.0,
                solver: SolverSettings | None = None, plate: Plate | None = None,
@@ -394,7 +430,10 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
     case_dir = check_case_path(case_dir)  # before the lock file makes the folder
     solver = solver or SolverSettings(write_interval=end_time / 4)
     with case_lock(case_dir):  # no other run in this case while this one writes or retries
-        if not (case_dir / "mfflap_case.toml").exists():
+        if (case_dir / "mfflap_case.toml").exists():  # resumed: only if it is this run
+            check_written_for(case_dir, motion, end_time, ramp_time, mesh, solver, plate,
+                              fluid, stream)
+        else:
             _write_case_whole(case_dir, lambda tmp: write_case(
                 tmp, motion, end_time, mesh=mesh, plate=plate, fluid=fluid, stream=stream,
                 solver=solver, ramp_time=ramp_time, y_plus=y_plus))

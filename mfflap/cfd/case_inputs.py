@@ -68,8 +68,10 @@ def _close(a: np.ndarray | float, b: np.ndarray | float) -> np.ndarray:
     return np.abs(a - b) <= RELATIVE_TOLERANCE * scale
 
 
-def check_case_inputs(kept: str | Path, meta: dict[str, Any], case_file: str | Path,
-                      motion: Motion, plate: Plate, fluid: Fluid, stream: FreeStream) -> None:
+def check_case_inputs(kept: str | Path, meta: dict[str, Any], case_file: str | Path | None,
+                      motion: Motion, plate: Plate, fluid: Fluid, stream: FreeStream, *,
+                      advice: str = "parse the case with the case file it was written from",
+                      given_as: str = "in the case file") -> None:
     """Raise unless ``case_file``'s plate, fluid, stream and motion are those the case was
     written for.
 
@@ -82,6 +84,8 @@ def check_case_inputs(kept: str | Path, meta: dict[str, Any], case_file: str | P
         Its contents. Keys it lacks (a case written by an earlier mfflap) are not checked.
     case_file
         Where ``motion``, ``plate``, ``fluid`` and ``stream`` came from, for the message.
+    advice, given_as
+        What to do, and where the values given come from, for the message.
 
     Raises
     ------
@@ -90,14 +94,14 @@ def check_case_inputs(kept: str | Path, meta: dict[str, Any], case_file: str | P
     """
     kept = Path(kept)
     case_dir = kept.parent
-    advice = "parse the case with the case file it was written from"
+    source = None if case_file is None else str(case_file)
     for key, (case_key, getter) in PHYSICAL_KEYS.items():
         if key not in meta:
             continue
         given, written = float(getter(plate, fluid, stream)), float(meta[key])
         if not _close(given, written):
-            raise ConfigError(f"{given!r} in the case file, but {case_dir} was written for "
-                              f"{written!r} ({kept}); {advice}", source=str(case_file),
+            raise ConfigError(f"{given!r} {given_as}, but {case_dir} was written for "
+                              f"{written!r} ({kept}); {advice}", source=source,
                               key=case_key)
     if "motion_sample_time_s" not in meta:
         return
@@ -113,7 +117,7 @@ def check_case_inputs(kept: str | Path, meta: dict[str, Any], case_file: str | P
             raise ConfigError(f"not the motion {case_dir} imposes: at t = {t[i]:.6g} s its "
                               f"{name} is {given[i]:.6g} {unit}, the case's "
                               f"{written[i]:.6g} {unit} ({kept}, {key}); {advice}",
-                              source=str(case_file), key="motion")
+                              source=source, key="motion")
 
 
 def motion_mismatch(case_dir: str | Path, state) -> str | None:
