@@ -709,6 +709,39 @@ def test_campaign_command_runs_a_named_set_up(tmp_path):
     assert "FAILED f2p000_h0p100_phi090p0" in res.output
 
 
+def test_a_case_the_folder_lists_with_other_values_is_refused_before_anything_runs(tmp_path):
+    """A case id keeps f, h and phi: the same id with another duration, ramp or pitch ramp
+    rate (n_cycles or pitch_ramp_rate_deg changed in the case file) would take the folder's
+    record or run of the listed case for the one asked. Refused, by `campaign run` and its
+    --dry-run, naming the values both ways; other and new cases pass."""
+    from click.testing import CliRunner
+
+    from mfflap.campaign.execute import _write_manifest, check_same_cases
+    from mfflap.cli.main import cli
+
+    out = tmp_path / "camp"
+    out.mkdir()
+    listed = CfdCase(2.0, 0.1, 90.0, 10.0, duration=1.5, ramp_time=0.125)  # paper2026's
+    _write_manifest(out, [listed], CampaignSetup())
+    check_same_cases(out, [listed, OTHER])  # the same values, and a case not listed
+    longer = CfdCase(2.0, 0.1, 90.0, 10.0, duration=2.5, ramp_time=0.125)
+    with pytest.raises(ConfigError, match=r"duration: 1\.5 in the folder, 2\.5 asked") as err:
+        check_same_cases(out, [OTHER, longer])
+    assert err.value.key == f"cases.{listed.case_id}"
+    case = tmp_path / "case.toml"
+    text = (Path(__file__).parents[1] / "cases" / "paper2026.toml").read_text()
+    case.write_text(text.replace("pitch_ramp_rate_deg = 10.0", "pitch_ramp_rate_deg = 5.0"))
+    for dry_run in (["--dry-run"], []):
+        res = CliRunner().invoke(cli, ["campaign", "run", str(case), "--out", str(out),
+                                       "--frequencies", "2", "--heave-amplitudes", "0.1",
+                                       "--phases", "90", *dry_run])
+        assert res.exit_code == 2, res.output
+        assert (f"{out / 'campaign.toml'}: cases.{listed.case_id}: this folder holds case "
+                f"{listed.case_id} with other values (pitch_ramp_rate_deg: 10.0 in the "
+                "folder, 5.0 asked)") in " ".join(res.output.split())
+    assert sorted(p.name for p in out.iterdir()) == ["campaign.toml"]
+
+
 @pytest.mark.openfoam
 def test_campaign_command_exit_status_says_whether_every_case_is_done(tmp_path):
     """A case that fails (timed out) gives exit status 1 after the summary, so that a
@@ -1049,6 +1082,7 @@ def test_a_case_another_process_runs_is_left_to_it_not_failed(tmp_path):
         listed = CliRunner().invoke(cli, ["campaign", "status", str(out)])
         assert listed.exit_code == 0 and "0 failed, 1 running, 0 started" in listed.output
         case_file = Path(__file__).parents[1] / "cases" / "paper2026.toml"
+        (out / "campaign.toml").unlink()  # it lists SHORT's 0.04 s, not the grid's 3 s
         left = CliRunner().invoke(cli, ["campaign", "run", str(case_file), "--out", str(out),
                                         "--frequencies", "1", "--heave-amplitudes", "0.3",
                                         "--phases", "90"])  # the same case id as SHORT

@@ -201,11 +201,40 @@ def check_same_setup(out_dir: str | Path, setup: CampaignSetup) -> None:
                           "settings", key="setup")
 
 
+def check_same_cases(out_dir: str | Path, cases: Sequence[CampaignCase]) -> None:
+    """Refuse cases that a campaign folder lists under the same id with other values (a
+    case id keeps the frequency, heave and phase; the duration, start-up ramp and pitch ramp
+    rate come from the case file's [identification] too): the folder's record or run of
+    that id is of the case it lists, and would be taken for the one asked.
+
+    Raises
+    ------
+    ConfigError
+        Naming the manifest, the first case that differs and each value, both ways.
+    """
+    manifest = Path(out_dir) / "campaign.toml"
+    if not manifest.exists():
+        return
+    listed = read_toml(manifest).get("cases", {})
+    for c in cases:
+        had = listed.get(c.case_id)
+        asked = read_toml_text(dumps({"case": c.as_dict()}))["case"]
+        if isinstance(had, dict) and had != asked:
+            differences = _differences(had, asked)
+            raise ConfigError(f"this folder holds case {c.case_id} with other "
+                              f"values ({'; '.join(differences[:4])}); its record or run is "
+                              "of that case and would be taken for this one: use a new output "
+                              "folder, or the folder's own values (the case file's "
+                              "[identification])", source=str(manifest),
+                              key=f"cases.{c.case_id}")
+
+
 def _write_manifest(out: Path, cases: Sequence[CampaignCase], setup: CampaignSetup) -> None:
     manifest = out / "campaign.toml"
     wanted = {"setup": setup.as_dict(), "cases": {c.case_id: c.as_dict() for c in cases}}
     if manifest.exists():
         check_same_setup(out, setup)
+        check_same_cases(out, cases)
         merged = {**read_toml(manifest).get("cases", {}), **wanted["cases"]}
         wanted["cases"] = merged
     tmp = manifest.with_suffix(".toml.tmp")

@@ -85,6 +85,7 @@ def run_cmd(case_file: Path, out_dir: Path, frequencies: list[float] | None,
     from mfflap.campaign.execute import (
         CampaignSetup,
         campaign_status,
+        check_same_cases,
         check_same_setup,
         run_campaign,
     )
@@ -100,6 +101,7 @@ def run_cmd(case_file: Path, out_dir: Path, frequencies: list[float] | None,
                                    single_precision=single_precision)
     if dry_run:  # what the run would do: refused as it would be, or each case's state
         check_same_setup(out_dir, campaign_setup)
+        check_same_cases(out_dir, cases)
         states = ({s.case_id: s.state for s in campaign_status(out_dir)}
                   if (out_dir / "campaign.toml").is_file() else {})
         for c in cases:
