@@ -551,6 +551,19 @@ def test_convergence_command_on_three_meshes_and_two_courant_limits(tmp_path):
     res = CliRunner().invoke(cli, args)
     assert res.exit_code == 0 and "already finished" in res.output
     assert (out / "fine_co4.h5").stat().st_mtime_ns == mtime
+    # nor does it take them for the runs of another motion or plate (it did before)
+    text = case.read_text()
+    for old, new, said in (
+            ("pitch_amplitude_deg = 20.0", "pitch_amplitude_deg = 10.0",
+             "coarse_co4.h5: motion: this run imposed another motion"),
+            ("chord = 0.16 ", "chord = 0.12 ",
+             "coarse_co4.h5: plate.chord: this run was made for plate.chord = 0.16, the "
+             "study asks for 0.12")):
+        other = tmp_path / "other.toml"
+        other.write_text(text.replace(old, new))
+        res = CliRunner().invoke(cli, ["cfd", "convergence", str(other), *args[3:]])
+        assert res.exit_code == 2 and said in " ".join(res.output.split()), res.output
+    assert (out / "fine_co4.h5").stat().st_mtime_ns == mtime
 
 
 def test_collapsed_time_step_is_recognised_from_a_real_log_excerpt():

@@ -21,10 +21,11 @@ from pathlib import Path
 
 import numpy as np
 
+from mfflap.campaign.record_inputs import input_mismatches
 from mfflap.campaign.records import CfdRecord, read_record, write_record
 from mfflap.cfd.bursts import find_load_bursts
 from mfflap.cfd.gci import GridConvergence, grid_convergence
-from mfflap.cfd.openfoam.loads import check_end_time, check_ramp_time
+from mfflap.cfd.openfoam.loads import check_end_time, check_ramp_time, imposed_state
 from mfflap.cfd.openfoam.setups import CfdSetup
 from mfflap.cfd.openfoam.writer import SolverSettings, resolve_mesh
 from mfflap.cfd.openfoam.yplus import YPlusHistory, read_y_plus
@@ -33,6 +34,7 @@ from mfflap.errors import ConfigError
 from mfflap.hydro.loads import LOAD_COMPONENTS
 from mfflap.kinematics.continuous import Motion
 from mfflap.metrics import nrmse, time_mean
+from mfflap.parameters import Fluid, FreeStream, Plate
 from mfflap.performance import thrust_and_power
 
 COMPONENTS = LOAD_COMPONENTS
@@ -155,8 +157,10 @@ def mesh_gci(records: Sequence[CfdRecord], start: float,
 
 
 def _check_resumed(path: Path, record: CfdRecord, settings: SolverSettings,
-                   end_time: float) -> None:
-    """Refuse a finished run of an earlier study that this one would compare as its own."""
+                   end_time: float, motion: Motion, ramp_time: float, plate: Plate | None,
+                   fluid: Fluid | None, stream: FreeStream | None) -> None:
+    """Refuse a finished run of an earlier study that this one would compare as its own:
+    another duration, solver setting, plate, fluid, stream or motion."""
     if abs(record.time[-1] - end_time) > 0.02 * end_time:
         raise ConfigError(f"this run ends at {record.time[-1]:.4g} s, the study at "
                           f"{end_time:.4g} s (another --cycles?); use another output folder, "
@@ -167,6 +171,26 @@ def _check_resumed(path: Path, record: CfdRecord, settings: SolverSettings,
             raise ConfigError(f"this run was made with {key} = {stored!r}, the study asks for "
                               f"{value!r}; use another output folder, or delete the record "
                               f"to rerun it", source=str(path), key=key)
+    mismatches = input_mismatches(record, plate or Plate(), fluid or Fluid(),
+                                  stream or FreeStream())
+    if mismatches:
+        m = mismatches[0]
+        raise ConfigError(f"this run was made for {m.key} = {m.record_value:g}, the study asks "
+                          f"for {m.case_value:g}; use another output folder, or delete the "
+                          "record to rerun it", source=str(path), key=m.key)
+    asked = imposed_state(motion, record.time, ramp_time)
+    for name, unit, made, wanted in (
+            ("heave", "m", record.state.heave_position, asked.heave_position),
+            ("pitch", "rad", record.state.pitch_angle, asked.pitch_angle)):
+        scale = max(float(np.max(np.abs(wanted))), float(np.max(np.abs(made))), 1e-12)
+        bad = np.flatnonzero(np.abs(made - wanted) > 1e-6 * scale)
+        if bad.size:
+            i = int(bad[0])
+            raise ConfigError(f"this run imposed another motion (another --motion-table, "
+                              f"pitch, heave, frequency or --ramp-time?): at t = "
+                              f"{record.time[i]:.6g} s its {name} is {made[i]:.6g} {unit}, the "
+                              f"study's {wanted[i]:.6g} {unit}; use another output folder, or "
+                              "delete the record to rerun it", source=str(path), key="motion")
 
 
 def run_convergence(out_dir: str | Path, motion: Motion, end_time: float, *,
@@ -264,7 +288,8 @@ def run_convergence(out_dir: str | Path, motion: Motion, end_time: float, *,
         mesh_name = mesh_names[label]
         if path.exists():
             record = read_record(path)
-            _check_resumed(path, record, settings, end_time)
+            _check_resumed(path, record, settings, end_time, motion, ramp_time, plate, fluid,
+                           stream)
             if progress:
                 progress(f"{label}: already finished")
         else:
