@@ -31,7 +31,7 @@ from mfflap.campaign.execute import (
 from mfflap.campaign.openfoam_run import run_motion
 from mfflap.campaign.records import CfdRecord, read_record, read_records, write_record
 from mfflap.cfd.openfoam.runner import dies_with_caller, openfoam_available, run_case
-from mfflap.cfd.openfoam.writer import write_case
+from mfflap.cfd.openfoam.writer import SolverSettings, write_case
 from mfflap.config import IdentificationGrid
 from mfflap.errors import CfdRunError, ConfigError, MfflapError
 from mfflap.hydro import MorisonModel
@@ -102,10 +102,15 @@ def test_restart_continues_from_last_written_time(tmp_path):
     assert openfoam_available()
     motion = SHORT.motion()
     case_dir = tmp_path / "c"
-    run_motion(case_dir, motion, "c", {}, end_time=0.03, ramp_time=0.02)
+    # the case run_motion writes for 0.06 s, run to 0.03 s and stopped there (a run whose
+    # end time was changed is another run: run_motion refuses to resume it)
+    write_case(case_dir, motion, 0.06, ramp_time=0.02,
+               solver=SolverSettings(write_interval=0.06 / 4))
     control = case_dir / "system" / "controlDict"
-    control.write_text(control.read_text().replace("endTime         0.03;",
-                                                   "endTime         0.06;"))
+    text = control.read_text()
+    control.write_text(text.replace("endTime         0.06;", "endTime         0.03;"))
+    run_case(case_dir, timeout_s=300)
+    control.write_text(text)
     told: list[str] = []
     rec = run_motion(case_dir, motion, "c", {}, end_time=0.06, ramp_time=0.02,
                      progress=told.append)
@@ -443,15 +448,20 @@ def test_retries_of_an_earlier_call_reach_the_record_of_the_call_that_finishes(t
     from mfflap.errors import CfdRunError
 
     case_dir = tmp_path / "c"
+    solver = SolverSettings(write_interval=0.25)  # nothing written before the 'collapse'
     with pytest.raises(CfdRunError, match=r"time step collapsed.*; after 1 retry: time step "
                        r"collapsed at t = [0-9.e-]+ s; resumed from t = 0 s with the "
                        r"inletOutlet"):
         run_motion(case_dir, SHORT.motion(), "c", {}, 1.0, ramp_time=0.02, min_time_step=1.0,
-                   max_retries=1)
-    control = case_dir / "system" / "controlDict"
-    control.write_text(control.read_text().replace("endTime         1.0;", "endTime 0.02;"))
-    assert "endTime 0.02;" in control.read_text()
-    rec = run_motion(case_dir, SHORT.motion(), "c", {}, 0.02, ramp_time=0.02)
+                   max_retries=1, solver=solver)
+    # the run cut to 0.02 s by hand, in both files (a case of another end time is another
+    # run, which run_motion refuses to resume)
+    for name, old, new in (("system/controlDict", "endTime         1.0;", "endTime 0.02;"),
+                           ("mfflap_case.toml", "end_time = 1.0\n", "end_time = 0.02\n")):
+        path = case_dir / name
+        assert old in path.read_text()
+        path.write_text(path.read_text().replace(old, new))
+    rec = run_motion(case_dir, SHORT.motion(), "c", {}, 0.02, ramp_time=0.02, solver=solver)
     assert rec.time[-1] == pytest.approx(0.02, abs=1e-3)
     assert re.fullmatch(r"time step collapsed at t = [0-9.e-]+ s; resumed from t = 0 s with "
                         r"the inletOutlet far field", rec.provenance["retries"])
