@@ -238,3 +238,129 @@ def test_gain_table_entries_say_which_optimum_is_in_doubt():
     assert table["flagged"][0, 0]  # N = 2: the scheme's energy error carries it
     for line, flagged in zip(lines, table["flagged"][:, 0], strict=True):
         assert ("flagged" in line) == bool(flagged), line
+
+
+def _sigint_at_iteration(k: int):
+    """A CasADi iteration callback that sends this process SIGINT (a Ctrl-C) at IPOPT's
+    iteration ``k``: deterministically inside the solve."""
+    import os
+    import signal
+
+    import casadi as ca
+
+    class SendSigint(ca.Callback):
+        def __init__(self, nx: int, ng: int):
+            ca.Callback.__init__(self)
+            self.nx, self.ng, self.calls = nx, ng, 0
+            self.construct("send_sigint", {})
+
+        def get_n_in(self):
+            return ca.nlpsol_n_out()
+
+        def get_n_out(self):
+            return 1
+
+        def get_name_in(self, i):
+            return ca.nlpsol_out(i)
+
+        def get_name_out(self, i):
+            return "ret"
+
+        def get_sparsity_in(self, i):
+            name = ca.nlpsol_out(i)
+            if name in ("f",):
+                return ca.Sparsity.scalar()
+            if name in ("x", "lam_x"):
+                return ca.Sparsity.dense(self.nx)
+            if name in ("g", "lam_g"):
+                return ca.Sparsity.dense(self.ng)
+            return ca.Sparsity(0, 0)
+
+        def eval(self, arg):
+            self.calls += 1
+            if self.calls == k:
+                os.kill(os.getpid(), signal.SIGINT)
+            return [0]
+
+    return SendSigint
+
+
+def _rosenbrock_solver(iteration_callback):
+    import casadi as ca
+
+    n = 40
+    x = ca.SX.sym("x", n)
+    f = ca.sum1(100 * (x[1:] - x[:-1] ** 2) ** 2 + (1 - x[:-1]) ** 2)
+    callback = iteration_callback(n, 0)
+    solver = ca.nlpsol("r", "ipopt", {"x": x, "f": f},
+                       {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
+                        "iteration_callback": callback})
+    solver.callback = callback  # CasADi keeps no reference of its own
+    return solver, np.full(n, -1.2)
+
+
+def test_casadi_swallows_a_ctrl_c_in_ipopt_and_interrupts_kept_raises_it_again():
+    """The premise, on real IPOPT: a SIGINT at iteration 3 makes CasADi return a stopped
+    solve (User_Requested_Stop from a callback, NonIpopt_Exception_Thrown from IPOPT's own
+    iterations, as in optimise_ipopt) instead of raising; within interrupts_kept the
+    KeyboardInterrupt reaches the caller. A SIGTERM handled by mfflap's commands
+    (StopRequested) likewise."""
+    import signal
+
+    from mfflap.cli.stop_signals import StopRequested, stop_signals_as_interrupt
+    from mfflap.optimisation.interrupts import interrupts_kept
+
+    solver, x0 = _rosenbrock_solver(_sigint_at_iteration(3))
+    solver(x0=x0)  # returns: the interrupt is swallowed, the solve said stopped
+    assert solver.stats()["return_status"] in ("User_Requested_Stop",
+                                               "NonIpopt_Exception_Thrown")
+    solver, x0 = _rosenbrock_solver(_sigint_at_iteration(3))
+    with pytest.raises(KeyboardInterrupt), interrupts_kept():
+        solver(x0=x0)
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # restored
+    with interrupts_kept():  # nothing raised, nothing kept: the solve's result stands
+        solved, x0 = _rosenbrock_solver(_sigint_at_iteration(10**9))
+        solved(x0=x0)
+    assert solved.stats()["success"]
+
+    def sigterm_at_iteration(nx, ng):
+        import os
+
+        class SendSigterm(_sigint_at_iteration(3)):
+            def eval(self, arg):
+                self.calls += 1
+                if self.calls == 3:
+                    os.kill(os.getpid(), signal.SIGTERM)
+                return [0]
+
+        return SendSigterm(nx, ng)
+
+    solver, x0 = _rosenbrock_solver(sigterm_at_iteration)
+    with pytest.raises(StopRequested, match="SIGTERM"), stop_signals_as_interrupt(), \
+            interrupts_kept():
+        solver(x0=x0)
+
+
+def test_ctrl_c_during_optimise_ipopt_stops_it(capfd):
+    """A SIGINT while IPOPT iterates in optimise_ipopt (its NLP built beforehand, so the
+    signal lands in the solve: CasADi's warning says so) raises KeyboardInterrupt instead of
+    returning a half-solved motion."""
+    import os
+    import signal
+    import threading
+
+    from mfflap.optimisation.optimise import _ipopt_solver
+
+    p = problem(0.5)
+    n = 120  # about 1.5 s of IPOPT here
+    _ipopt_solver(p, n, 100000, 1e-14)
+    start = harmonic_to_discrete(2.1, 0.05, np.deg2rad(50), np.deg2rad(112.5), n)
+    timer = threading.Timer(0.3, lambda: os.kill(os.getpid(), signal.SIGINT))
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            optimise_ipopt(p, start, min_period=0.2, max_period=20.0, max_iterations=100000,
+                           tolerance=1e-14)
+    finally:
+        timer.cancel()
+    assert "KeyboardInterruptException" in capfd.readouterr().err

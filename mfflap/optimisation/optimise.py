@@ -19,6 +19,7 @@ from scipy.optimize import minimize
 from mfflap.errors import ConfigError
 from mfflap.kinematics.convert import resample
 from mfflap.kinematics.discrete import DiscreteMotion
+from mfflap.optimisation.interrupts import interrupts_kept
 from mfflap.optimisation.problem import FlappingProblem
 from mfflap.performance import CycleSummary, evaluate_discrete
 
@@ -232,7 +233,8 @@ def optimise_ipopt(problem: FlappingProblem, start: DiscreteMotion, *, min_perio
     lbx = np.full(2 * n + 1, -np.inf)
     ubx = np.full(2 * n + 1, np.inf)
     lbx[-1], ubx[-1] = lo / scale[-1], hi / scale[-1]
-    sol = solver(x0=_pack(start) / scale, p=par, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
+    with interrupts_kept():  # a Ctrl-C stops the solve and the caller, not only IPOPT
+        sol = solver(x0=_pack(start) / scale, p=par, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
     stats = solver.stats()
     motion = _unpack(np.asarray(sol["x"]).ravel() * scale, n)
     summary, peak, flags = assess(problem, motion)
