@@ -172,6 +172,32 @@ def test_refusals_name_the_case_and_key(record, tmp_path):
         compare_campaigns(COARSE, fixture_dir("backtest"))
 
 
+def test_campaigns_of_another_plate_or_stream_are_not_compared(tmp_path):
+    """Set-ups are compared on one flow: a folder whose campaign.toml (or a record's
+    provenance) says another stream or chord is refused, naming the case and both values."""
+    faster = tmp_path / "faster"
+    shutil.copytree(COARSE, faster)
+    manifest = faster / "campaign.toml"
+    text = manifest.read_text()
+    assert "[setup.stream]\nvelocity = 0.3\n" in text
+    manifest.write_text(text.replace("[setup.stream]\nvelocity = 0.3\n",
+                                     "[setup.stream]\nvelocity = 0.5\n"))
+    first = sorted(p.stem for p in COARSE.glob("*.h5"))[0]
+    with pytest.raises(ConfigError, match=rf"flow\.velocity: case {first} ran for flow\."
+                                          rf"velocity = 0\.3 in {AFFORDABLE} and 0\.5 in "
+                                          rf"{faster}: a comparison of two set-ups needs"):
+        compare_campaigns(AFFORDABLE, faster)
+    record = read_record(COARSE / f"{first}.h5")
+    record.provenance["chord_m"] = 0.2  # a record that says its own plate
+    shorter = tmp_path / "shorter"
+    shorter.mkdir()
+    write_record(shorter / f"{first}.h5", record)
+    res = CliRunner().invoke(cli, ["campaign", "compare", str(COARSE), str(shorter)])
+    assert res.exit_code == 2, res.output
+    assert f"ran for plate.chord = 0.16 in {COARSE} and 0.2 in {shorter}" in " ".join(
+        res.output.split())
+
+
 def test_command_writes_hdf5_with_both_manifests_and_a_figure(tmp_path):
     a = tmp_path / "a"
     shutil.copytree(AFFORDABLE, a)

@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from mfflap.campaign.execute import _bound_setup
+from mfflap.campaign.record_inputs import folder_setup, run_for, run_for_differences
 from mfflap.campaign.records import CfdRecord, read_records
 from mfflap.cfd.bursts import bridge_bursts, bridge_load_bursts
 from mfflap.cfd.force_envelope import find_envelope_breaches
@@ -208,7 +209,8 @@ def compare_campaigns(folder_a: str | Path, folder_b: str | Path,
         If the folders have no finished case in common, or none in the window.
     ConfigError
         If ``end_s`` is not after ``start_s``, or two records of a case are of different
-        motions.
+        motions, or were run for another plate, fluid or stream
+        (:mod:`mfflap.campaign.record_inputs`).
     """
     if start_s is not None and end_s is not None and float(end_s) <= float(start_s):
         raise ConfigError(f"the comparison ends (t = {end_s:g} s) before it starts "
@@ -219,6 +221,15 @@ def compare_campaigns(folder_a: str | Path, folder_b: str | Path,
     if not common:
         raise MfflapError(f"{folder_a} and {folder_b} have no finished case in common "
                           f"({len(records_a)} and {len(records_b)} records)")
+    setups = folder_setup(Path(folder_a)), folder_setup(Path(folder_b))
+    for name in common:  # set-ups compared on one flow, not two flows
+        differ = run_for_differences(run_for(records_a[name], setups[0]),
+                                     run_for(records_b[name], setups[1]))
+        if differ:
+            key, in_a, in_b = differ[0]
+            raise ConfigError(f"case {name} ran for {key} = {in_a:g} in {folder_a} and "
+                              f"{in_b:g} in {folder_b}: a comparison of two set-ups needs the "
+                              "same plate, fluid and stream", key=key)
     manifest = Path(folder_b) / "campaign.toml"
     bound = _bound_setup(read_toml(manifest)) if manifest.is_file() else None
     cases, outside = [], {}

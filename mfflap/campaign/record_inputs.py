@@ -89,6 +89,15 @@ def input_mismatches(record: CfdRecord, plate: Plate, fluid: Fluid, stream: Free
     return out
 
 
+def run_for_differences(a: dict[str, tuple[float, str]], b: dict[str, tuple[float, str]]
+                        ) -> list[tuple[str, float, float]]:
+    """(case-file key, value in ``a``, value in ``b``) for each key both :func:`run_for`
+    results give that differs."""
+    return [(key, a[key][0], b[key][0]) for key in CHECKED_KEYS if key in a and key in b
+            and abs(a[key][0] - b[key][0]) > RELATIVE_TOLERANCE * max(abs(a[key][0]),
+                                                                      abs(b[key][0]))]
+
+
 def check_records_inputs(records: Sequence[tuple[CfdRecord, Path]], plate: Plate,
                          fluid: Fluid, stream: FreeStream, *, case_source: str | None,
                          use: str) -> None:
