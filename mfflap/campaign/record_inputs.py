@@ -19,21 +19,18 @@ from pathlib import Path
 from typing import Any
 
 from mfflap.campaign.records import CfdRecord
+from mfflap.cfd.case_inputs import PHYSICAL_KEYS
 from mfflap.errors import ConfigError
 from mfflap.parameters import Fluid, FreeStream, Plate
 from mfflap.toml_io import read_toml
 
+#: provenance keys a record had before it kept mfflap_case.toml's (the case-file key's)
+_EARLIER_KEYS = {"plate.chord": ("chord_m",), "plate.span": ("span_m",)}
 #: case-file key -> (provenance keys of a record, in order of preference; the value in a
 #: case's plate, fluid and stream)
 CHECKED_KEYS: dict[str, tuple[tuple[str, ...], Callable[[Plate, Fluid, FreeStream], float]]] = {
-    "plate.chord": (("plate_chord_m", "chord_m"), lambda p, f, s: p.chord),
-    "plate.span": (("span_m",), lambda p, f, s: p.span),
-    "plate.thickness": (("plate_thickness_m",), lambda p, f, s: p.thickness),
-    "fluid.density": (("fluid_density_kg_per_m3",), lambda p, f, s: f.density),
-    "fluid.kinematic_viscosity": (("fluid_kinematic_viscosity_m2_per_s",),
-                                  lambda p, f, s: f.kinematic_viscosity),
-    "flow.velocity": (("flow_velocity_m_per_s",), lambda p, f, s: s.velocity),
-}
+    case_key: (((kept,) if kept != "span" else ()) + _EARLIER_KEYS.get(case_key, ()), getter)
+    for kept, (case_key, getter) in PHYSICAL_KEYS.items()}
 #: relative tolerance (the values are kept as exact float reprs, or float64 attributes)
 RELATIVE_TOLERANCE = 1e-6
 
