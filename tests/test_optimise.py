@@ -240,6 +240,18 @@ def test_gain_table_entries_say_which_optimum_is_in_doubt():
         assert ("flagged" in line) == bool(flagged), line
 
 
+@pytest.fixture
+def ctrl_c_raises():
+    """SIGINT raises KeyboardInterrupt, as in an interactive Python: a process started in
+    the background (CI's, with nohup) inherits SIGINT ignored, and Python then leaves it
+    so."""
+    import signal
+
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, before)
+
+
 def _sigint_at_iteration(k: int):
     """A CasADi iteration callback that sends this process SIGINT (a Ctrl-C) at IPOPT's
     iteration ``k``: deterministically inside the solve."""
@@ -299,7 +311,7 @@ def _rosenbrock_solver(iteration_callback):
     return solver, np.full(n, -1.2)
 
 
-def test_casadi_swallows_a_ctrl_c_in_ipopt_and_interrupts_kept_raises_it_again():
+def test_casadi_swallows_a_ctrl_c_in_ipopt_and_interrupts_kept_raises_it_again(ctrl_c_raises):
     """The premise, on real IPOPT: a SIGINT at iteration 3 makes CasADi return a stopped
     solve (User_Requested_Stop from a callback, NonIpopt_Exception_Thrown from IPOPT's own
     iterations, as in optimise_ipopt) instead of raising; within interrupts_kept the
@@ -341,7 +353,7 @@ def test_casadi_swallows_a_ctrl_c_in_ipopt_and_interrupts_kept_raises_it_again()
         solver(x0=x0)
 
 
-def test_ctrl_c_during_optimise_ipopt_stops_it(capfd):
+def test_ctrl_c_during_optimise_ipopt_stops_it(capfd, ctrl_c_raises):
     """A SIGINT while IPOPT iterates in optimise_ipopt (its NLP built beforehand, so the
     signal lands in the solve: CasADi's warning says so) raises KeyboardInterrupt instead of
     returning a half-solved motion."""
