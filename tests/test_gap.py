@@ -359,3 +359,27 @@ def test_a_flow_folder_that_cannot_be_shown_is_refused_before_the_diagnosis(tmp_
     assert "Invalid value for --flow" in res.output
     assert said.replace("TMP", str(tmp_path)) in " ".join(res.output.split())
     assert not (tmp_path / "g.h5").exists()
+
+
+def test_a_flow_folder_of_another_plate_is_refused(tmp_path):
+    """The run of the record's motion, but written for another chord: its vorticity is not
+    this case's flow. Refused by --flow before the diagnosis (only the motion was checked)."""
+    from mfflap.campaign.cases import CfdCase
+    from mfflap.campaign.records import fixture_dir, read_record
+    from mfflap.cfd.openfoam.writer import write_case
+    from mfflap.cli.main import cli
+    from mfflap.parameters import Plate
+
+    name = "f1p000_h0p300_phi090p0"
+    p = read_record(fixture_dir() / f"{name}.h5").parameters
+    case = CfdCase(p["frequency"], p["heave_amplitude"], p["phase_deg"],
+                   p["pitch_ramp_rate_deg"], duration=p["duration"], ramp_time=p["ramp_time"])
+    folder = write_case(tmp_path / "of", case.motion(), case.duration,
+                        ramp_time=case.ramp_time, plate=Plate(chord=0.2))
+    res = CliRunner().invoke(cli, ["gap", "diagnose", str(CASE), "--flow", f"{name}={folder}",
+                                   "--output", str(tmp_path / "g.h5")])
+    assert res.exit_code == 2, res.output
+    assert (f"Invalid value for --flow: '{name}={folder}': plate.chord: 0.16 in the case "
+            f"file, but {folder} was written for 0.2") in " ".join(res.output.split())
+    assert "its flow field is not this case's" in " ".join(res.output.split())
+    assert not (tmp_path / "g.h5").exists()

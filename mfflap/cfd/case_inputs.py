@@ -69,11 +69,11 @@ def _close(a: np.ndarray | float, b: np.ndarray | float) -> np.ndarray:
 
 
 def check_case_inputs(kept: str | Path, meta: dict[str, Any], case_file: str | Path | None,
-                      motion: Motion, plate: Plate, fluid: Fluid, stream: FreeStream, *,
+                      motion: Motion | None, plate: Plate, fluid: Fluid, stream: FreeStream, *,
                       advice: str = "parse the case with the case file it was written from",
                       given_as: str = "in the case file") -> None:
     """Raise unless ``case_file``'s plate, fluid, stream and motion are those the case was
-    written for.
+    written for (its plate, fluid and stream alone, given no ``motion``).
 
     Parameters
     ----------
@@ -103,7 +103,7 @@ def check_case_inputs(kept: str | Path, meta: dict[str, Any], case_file: str | P
             raise ConfigError(f"{given!r} {given_as}, but {case_dir} was written for "
                               f"{written!r} ({kept}); {advice}", source=source,
                               key=case_key)
-    if "motion_sample_time_s" not in meta:
+    if motion is None or "motion_sample_time_s" not in meta:
         return
     t = np.asarray(meta["motion_sample_time_s"], dtype=float)
     state = imposed_state(motion, t, float(meta.get("ramp_time", 0.0)))

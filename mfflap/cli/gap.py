@@ -75,7 +75,7 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
         raise click.UsageError(f"{len(cases)} case(s) from --csv; a diagnosis needs at least "
                                f"{MIN_CASES}, and the shipped fixtures are read only without "
                                "--csv: add CSV files, or --fixtures DIR to pool records")
-    flows = [_flow_record(item, cases) for item in flow_dirs]  # checked before the work
+    flows = [_flow_record(item, cases, case) for item in flow_dirs]  # before the work
     diag, where, pred = diagnose_cases(case, cases, alpha=alpha, min_gain=min_gain)
     snapshots = []
     for index, folder in flows:
@@ -115,13 +115,15 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
     click.echo(f"wrote {output} and {html}")
 
 
-def _flow_record(item: str, cases: list) -> tuple[int, str]:
+def _flow_record(item: str, cases: list, config) -> tuple[int, str]:
     """The record index and case folder of a ``--flow CASE=DIR``, refused naming what is
     wrong: the form, a case id that is no record's (with the nearest ones), a folder that is
-    not there, or the run of another motion."""
+    not there, or the run of another motion, plate, fluid or stream than the case file's."""
     import difflib
 
-    from mfflap.cfd.case_inputs import motion_mismatch
+    from mfflap.cfd.case_inputs import check_case_inputs, motion_mismatch
+    from mfflap.errors import ConfigError
+    from mfflap.toml_io import read_toml
 
     name, _, folder = item.partition("=")
     if not name or not folder:
@@ -140,6 +142,14 @@ def _flow_record(item: str, cases: list) -> tuple[int, str]:
     if mismatch is not None:
         raise click.BadParameter(f"{item!r}: {folder} is not the run of record {name}: "
                                  f"{mismatch}", param_hint="--flow")
+    kept = Path(folder) / "mfflap_case.toml"
+    if kept.is_file():
+        try:
+            check_case_inputs(kept, read_toml(kept), None, None, config.plate, config.fluid,
+                              config.flow, advice="its flow field is not this case's")
+        except ConfigError as exc:
+            raise click.BadParameter(f"{item!r}: {exc.key}: {exc.detail}",
+                                     param_hint="--flow") from exc
     return index, folder
 
 
