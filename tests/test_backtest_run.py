@@ -322,6 +322,41 @@ def test_backtest_command_lists_each_motion_and_why_it_was_not_back_tested(
     assert text.exit_code == 1 and text.stdout.count("NOT BACK-TESTED") == 2
 
 
+def test_a_fixture_stands_in_for_a_failed_live_run_only_if_it_is_that_runs_cfd(tmp_path,
+                                                                              capsys):
+    """A live run asked for on another mesh or set-up and not had (here: no work folder)
+    used to fall back to the fixture of the default set-up, shown as back-tested: the
+    fixture now stands in only when its mesh and solver settings are those asked."""
+    from dataclasses import replace
+
+    from mfflap.cfd.openfoam.writer import SolverSettings
+
+    folder = tmp_path / "bt"
+    record = model_record(MOTION)
+    record.provenance.update({"mesh": "coarse", "solver_max_courant": 4.0,
+                              "solver_write_interval": 0.3})  # as the shipped ones say
+    write_record(folder / f"backtest_{motion_key(MOTION)}.h5", record)
+    args = (MOTION, "β = 0", MorisonModel(), 50.0)
+    same = backtest_motion(*args, fixture_folders=[folder], live=True)
+    assert same.status == "back-tested" and "instead of a live run" in same.source
+    from mfflap.cli.backtest import _show
+
+    _show({"β = 0": same}, as_json=False)  # the text says it beside the numbers too
+    assert (f"CFD: fixture backtest_{motion_key(MOTION)}.h5 instead of a live run: "
+            in capsys.readouterr().out)
+    for mesh, solver, said in (
+            ("graded", None, "was run on mesh 'coarse', not 'graded' as asked"),
+            ("coarse", replace(SolverSettings(), max_courant=2.0),
+             "was run with max_courant = 4.0, not 2.0 as asked")):
+        other = backtest_motion(*args, fixture_folders=[folder], live=True, mesh=mesh,
+                                solver=solver)
+        assert other.status == "not back-tested", other.source
+        assert other.source.endswith(f"; fixture backtest_{motion_key(MOTION)}.h5 {said}")
+    # without --live the fixtures are read as they were made, whatever their set-up
+    assert backtest_motion(*args, fixture_folders=[folder], mesh="graded").status == (
+        "back-tested")
+
+
 def test_backtest_command_exits_0_when_every_motion_is_back_tested(optimisation_file):
     """The shipped fixtures hold both motions: both are compared, and the exit status is 0
     (1 is kept for motions left out, above)."""

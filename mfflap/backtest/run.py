@@ -9,8 +9,9 @@ silently.
 from __future__ import annotations
 
 import hashlib
+import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -18,7 +19,7 @@ import numpy as np
 from mfflap.backtest.compare import BacktestComparison, compare_last_cycle
 from mfflap.campaign.record_inputs import folder_setup, input_mismatches
 from mfflap.campaign.records import CfdRecord, read_record, write_record
-from mfflap.cfd.openfoam.writer import SolverSettings
+from mfflap.cfd.openfoam.writer import AnyMeshSpec, SolverSettings
 from mfflap.errors import MfflapError
 from mfflap.kinematics.continuous import PeriodicSplineMotion
 from mfflap.kinematics.convert import to_spline
@@ -87,6 +88,24 @@ def _matching_fixture(key: str, motion: DiscreteMotion, folders: Sequence[Path],
     return None
 
 
+def _other_set_up(record: CfdRecord, mesh: str | AnyMeshSpec,
+                  solver: SolverSettings | None) -> str | None:
+    """How a fixture's run differs from the live run asked for (its mesh, a solver setting
+    its provenance gives), or None: then it is the CFD that run would have been."""
+    asked_mesh = mesh if isinstance(mesh, str) else mesh.name
+    had_mesh = record.provenance.get("mesh")
+    if had_mesh is not None and had_mesh != asked_mesh:
+        return f"on mesh {had_mesh!r}, not {asked_mesh!r} as asked"
+    for key, value in asdict(solver or SolverSettings()).items():
+        had = record.provenance.get(f"solver_{key}")
+        if key == "write_interval" or had is None or had == value or (
+                isinstance(value, float) and isinstance(had, (int, float))
+                and math.isclose(had, value, rel_tol=1e-9)):
+            continue
+        return f"with {key} = {had!r}, not {value!r} as asked"
+    return None
+
+
 def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float, *,
                     fixture_folders: Sequence[str | Path] = (), live: bool = False,
                     work_dir: str | Path | None = None, n_cycles: float = 3.0,
@@ -151,11 +170,15 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
         found = None if path is None else read_record(path)
         mismatches = [] if found is None else input_mismatches(
             found, model.plate, model.fluid, model.stream, folder_setup(path))
+        other_setup = (None if found is None or not live
+                       else _other_set_up(found, mesh, solver))
         if mismatches:  # the same motion, but not this case's CFD: its plate, fluid, stream
             m = mismatches[0]
             source = ((f"{source}; " if source else "")
                       + f"fixture {path.name} matches the motion but ran for {m.key} = "
                       f"{m.record_value:g} ({m.where}), the case has {m.case_value:g}")
+        elif other_setup is not None:  # not the CFD the live run asked for would have been
+            source += f"; fixture {path.name} was run {other_setup}"
         elif found is not None:
             record = found
             # a live run asked for and not had is said, not replaced by the fixture's name

@@ -97,6 +97,8 @@ def _show(outcomes: dict, as_json: bool) -> None:
                    f"{d['model_mean_thrust']:.3f} N; power CFD {d['cfd_mean_power']:.3f} W "
                    f"model {d['model_mean_power']:.3f} W; NRMSE thrust "
                    f"{d['nrmse']['thrust']:.3f}; CFD max power {d['cfd_max_power']:.1f} W")
+        if "instead of a live run" in d["source"]:  # said here, not only in the progress
+            click.echo(f"{'':14s} CFD: {d['source']}")
     if gain is not None:
         click.echo(f"beta = 0 thrust gain over the best sinusoid in CFD: {gain:+.1%}")
     else:
