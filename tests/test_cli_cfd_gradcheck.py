@@ -30,6 +30,7 @@ def test_cfd_write_run_parse_with_real_openfoam(tmp_path, options):
     assert health["n_time_steps"] > 10 and health["cpu_time_s"] > 0
     assert health["n_steps_bounding_epsilon"] <= health["n_time_steps"]
     assert health["numerical_bursts"] == []  # the impulsive start's force impulse is real
+    assert "y_plus_mean" not in health  # written without --y-plus: nothing to say
     schemes = (case_dir / "system" / "fvSchemes").read_text()
     if options:  # bounded upwind k and epsilon: nothing to clip
         assert "div(phi,k)      Gauss upwind;" in schemes

@@ -176,6 +176,36 @@ def test_y_plus_rows_of_real_output_and_of_a_run_killed_mid_row(tmp_path):
         read_y_plus(case)
 
 
+def test_y_plus_summary_and_what_it_means_for_the_wall_functions(tmp_path):
+    """Of v1912's real output (coarse mesh, average y+ about 5-6: below the log law) and of
+    the same rows scaled into and past the 30-300 range."""
+    from mfflap.cfd.openfoam.yplus import (
+        YPlusHistory,
+        read_y_plus,
+        wall_function_note,
+        y_plus_summary,
+    )
+
+    real = read_y_plus(_y_plus_case(tmp_path, (DATA / "yPlus.dat").read_text()))
+    summary = y_plus_summary(real)
+    assert summary["y_plus_mean"] == pytest.approx(np.mean(real.average))
+    assert summary["y_plus_min"] == real.minimum.min()
+    assert summary["y_plus_max"] == real.maximum.max()
+    assert summary["y_plus_share_below_log_law"] == 1.0
+    assert "below 30 for 100% of the output times" in wall_function_note(summary)
+
+    def scaled(factor):
+        return y_plus_summary(YPlusHistory(real.time, factor * real.minimum,
+                                           factor * real.maximum, factor * real.average))
+
+    inside = scaled(100.0 / real.average.min())  # the smallest average at y+ = 100
+    assert inside["y_plus_share_below_log_law"] == 0 and wall_function_note(inside) is None
+    half = np.sort(real.average)[3]  # four of the seven averages reach 300, three do not
+    past = scaled(300.0001 / half)
+    assert past["y_plus_share_above_log_law"] == pytest.approx(4 / 7)
+    assert "above 300 for 57% of them" in wall_function_note(past)
+
+
 @settings(max_examples=150, deadline=None)
 @given(cut=st.integers(0, 600), junk=st.text(max_size=20), pos=st.integers(0, 600))
 def test_y_plus_parser_fuzz_never_hangs_or_lies(tmp_path_factory, cut, junk, pos):

@@ -217,3 +217,30 @@ def test_a_solver_stopped_by_a_signal_of_its_own_is_not_a_finished_run(tmp_path)
         case / "system" / "controlDict").read_text(), re.M).group(1))
     n_writes = (0.1 - float(resumed)) / interval
     assert interval <= 0.025 and n_writes == pytest.approx(round(n_writes), abs=1e-6)
+
+
+@pytest.mark.openfoam
+def test_cfd_run_reports_the_plates_y_plus_against_the_wall_functions(tmp_path):
+    """A real run written with --y-plus (coarse mesh, 0.1 s): `cfd run` gives the plate's
+    y+ from the yPlus function object, in text and JSON, and says that it lies below the
+    wall functions' log-law range (the coarse mesh's first cells sit at y+ of a few)."""
+    import json
+
+    from mfflap.cfd.openfoam.yplus import read_y_plus
+    from mfflap.cli.main import cli
+
+    case = tmp_path / "yp"
+    res = CliRunner().invoke(cli, ["cfd", "write", str(CASE), str(case), "--y-plus",
+                                   "--cycles", "0.1", "--ramp-time", "0.04"])
+    assert res.exit_code == 0, res.output
+    text = CliRunner().invoke(cli, ["cfd", "run", str(case)])
+    assert text.exit_code == 0, text.output
+    history = read_y_plus(case)
+    data = json.loads(CliRunner().invoke(cli, ["cfd", "run", str(case), "--json"]).stdout)
+    assert data["y_plus_mean"] == pytest.approx(history.average.mean())
+    assert 0 < data["y_plus_min"] < data["y_plus_mean"] < data["y_plus_max"] < 30
+    assert data["y_plus_share_below_log_law"] == 1.0
+    assert data["wall_function_note"].startswith(
+        "the plate's average y+ lies outside the wall functions' log-law range (30-300)")
+    assert f"y+ on the plate: mean {data['y_plus_mean']:.3g} (from" in text.stdout
+    assert "below 30 for 100% of the output times" in " ".join(text.stdout.split())

@@ -204,8 +204,10 @@ def run(case_dir: Path, timeout: float, procs: int, progress_every: float,
     """Mesh (once), check and run CASE_DIR with pimpleFoam; restarts from the latest time.
 
     Prints the CPU time, the number of time steps, how many k and epsilon solves OpenFOAM
-    had to clip ("bounding epsilon") from the log, and the numerical bursts of the force
-    history (a few time steps where the run lost its pressure coupling, mfflap.cfd.bursts).
+    had to clip ("bounding epsilon") from the log, the numerical bursts of the force
+    history (a few time steps where the run lost its pressure coupling, mfflap.cfd.bursts)
+    and, for a case written with --y-plus, the plate's y+ against the wall functions'
+    log-law range.
     """
     from mfflap.cfd.bursts import find_numerical_bursts
     from mfflap.cfd.openfoam.forces import read_forces
@@ -216,6 +218,7 @@ def run(case_dir: Path, timeout: float, procs: int, progress_every: float,
         written_where_stopped,
     )
     from mfflap.cfd.openfoam.solver_log import solver_provenance
+    from mfflap.cfd.openfoam.yplus import read_y_plus, wall_function_note, y_plus_summary
 
     progress = (None if progress_every <= 0 else
                 lambda message: click.echo(f"[cfd run] {message}", err=True))
@@ -242,11 +245,19 @@ def run(case_dir: Path, timeout: float, procs: int, progress_every: float,
         signals.append(history.moment[:, 2])
     summary["numerical_bursts"] = [b.describe()
                                    for b in find_numerical_bursts(history.time, signals)]
+    if (case_dir / "postProcessing" / "yPlus").is_dir():  # written with --y-plus
+        summary.update(y_plus_summary(read_y_plus(case_dir)))
+        summary["wall_function_note"] = wall_function_note(summary)
     if as_json:
         echo_json(summary)
         return
     click.echo(f"finished {case_dir}: {summary['cpu_time_s']:.1f} s CPU, "
                f"{summary['n_time_steps']} time steps")
+    if "y_plus_mean" in summary:
+        click.echo(f"  y+ on the plate: mean {summary['y_plus_mean']:.3g} (from "
+                   f"{summary['y_plus_min']:.3g} to {summary['y_plus_max']:.3g} over the run)")
+        if summary["wall_function_note"]:
+            click.echo(f"  {summary['wall_function_note']}")
     for burst in summary["numerical_bursts"]:
         click.echo(f"  numerical burst {burst}")
     for field in ("k", "epsilon"):

@@ -80,3 +80,41 @@ def _patch_rows(path: Path, patch: str) -> list[tuple[float, float, float, float
                              path=str(path), line=i)
         rows.append(row)
     return rows
+
+
+#: the log-law range of y+ that wall functions are made for (the first cell's centre in the
+#: log layer); OpenFOAM's nutkWallFunction treats a cell below y+ of about 11 as laminar
+WALL_FUNCTION_RANGE = (30.0, 300.0)
+
+
+def y_plus_summary(history: YPlusHistory) -> dict[str, float]:
+    """The plate's y+ over a run: the time mean of its area average, the smallest and the
+    largest value anywhere on it, and the share of the run's output times whose area average
+    lies below and above :data:`WALL_FUNCTION_RANGE`."""
+    low, high = WALL_FUNCTION_RANGE
+    return {"y_plus_mean": float(np.mean(history.average)),
+            "y_plus_min": float(np.min(history.minimum)),
+            "y_plus_max": float(np.max(history.maximum)),
+            "y_plus_share_below_log_law": float(np.mean(history.average < low)),
+            "y_plus_share_above_log_law": float(np.mean(history.average > high))}
+
+
+def wall_function_note(summary: dict[str, float]) -> str | None:
+    """What the y+ of a run means for its wall functions, or None if its area average stays
+    within :data:`WALL_FUNCTION_RANGE` throughout."""
+    low, high = WALL_FUNCTION_RANGE
+    below, above = summary["y_plus_share_below_log_law"], summary["y_plus_share_above_log_law"]
+    if not below and not above:
+        return None
+    parts = []
+    if below:
+        parts.append(f"below {low:g} for {below:.0%} of the output times (the first cells in "
+                     "the buffer layer or viscous sublayer, where the wall functions' log law "
+                     "does not hold; nutkWallFunction takes a cell below y+ of about 11 as "
+                     "laminar)")
+    if above:
+        parts.append(f"above {high:g} for {above:.0%} of them (the first cells past the log "
+                     "layer)")
+    return ("the plate's average y+ lies outside the wall functions' log-law range "
+            f"({low:g}-{high:g}): {'; '.join(parts)}; its wall shear, and so F_t, is the "
+            "least certain of the forces")
