@@ -593,6 +593,10 @@ def test_convergence_command_on_three_meshes_and_two_courant_limits(tmp_path):
         other.write_text(text.replace(old, new))
         res = CliRunner().invoke(cli, ["cfd", "convergence", str(other), *args[3:]])
         assert res.exit_code == 2 and said in " ".join(res.output.split()), res.output
+    res = CliRunner().invoke(cli, [*args, "--far-field", "inletOutlet"])  # another solver
+    assert res.exit_code == 2 and ("coarse_co4.h5: far_field: this run was made with "
+                                   "far_field = 'freestream', the study asks for "
+                                   "'inletOutlet'") in " ".join(res.output.split()), res.output
     assert (out / "fine_co4.h5").stat().st_mtime_ns == mtime
 
 

@@ -9,9 +9,8 @@ silently.
 from __future__ import annotations
 
 import hashlib
-import math
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass, replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -19,6 +18,7 @@ import numpy as np
 from mfflap.backtest.compare import BacktestComparison, compare_last_cycle
 from mfflap.campaign.record_inputs import folder_setup, input_mismatches
 from mfflap.campaign.records import CfdRecord, read_record, write_record
+from mfflap.cfd.case_inputs import kept_differences, solver_keys
 from mfflap.cfd.openfoam.writer import AnyMeshSpec, SolverSettings
 from mfflap.errors import MfflapError
 from mfflap.kinematics.continuous import PeriodicSplineMotion
@@ -96,13 +96,9 @@ def _other_set_up(record: CfdRecord, mesh: str | AnyMeshSpec,
     had_mesh = record.provenance.get("mesh")
     if had_mesh is not None and had_mesh != asked_mesh:
         return f"on mesh {had_mesh!r}, not {asked_mesh!r} as asked"
-    for key, value in asdict(solver or SolverSettings()).items():
-        had = record.provenance.get(f"solver_{key}")
-        if key == "write_interval" or had is None or had == value or (
-                isinstance(value, float) and isinstance(had, (int, float))
-                and math.isclose(had, value, rel_tol=1e-9)):
-            continue
-        return f"with {key} = {had!r}, not {value!r} as asked"
+    asked = solver_keys(solver or SolverSettings(), leave_out=("write_interval",))
+    for key, had, value in kept_differences(record.provenance, asked)[:1]:
+        return f"with {key.removeprefix('solver_')} = {had!r}, not {value!r} as asked"
     return None
 
 

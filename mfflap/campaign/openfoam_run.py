@@ -2,18 +2,21 @@
 
 from __future__ import annotations
 
-import math
 import re
 import shutil
 import time
 from collections.abc import Callable
-from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
 from mfflap.campaign.records import CfdRecord
 from mfflap.cfd.bursts import bridge_load_bursts
-from mfflap.cfd.case_inputs import PHYSICAL_KEYS, check_case_inputs
+from mfflap.cfd.case_inputs import (
+    PHYSICAL_KEYS,
+    check_case_inputs,
+    kept_differences,
+    solver_keys,
+)
 from mfflap.cfd.force_envelope import BREACH_FACTOR, EnvelopeBreach, find_envelope_breaches
 from mfflap.cfd.openfoam.case_lock import case_lock
 from mfflap.cfd.openfoam.case_path import check_case_path, empty_case_folder
@@ -366,14 +369,8 @@ def check_written_for(case_dir: Path, motion: Motion, end_time: float, ramp_time
     check_case_inputs(kept, meta, None, motion, plate or Plate(), fluid or Fluid(),
                       stream or FreeStream(), advice=advice, given_as="asked")
     asked = {"mesh": mesh if isinstance(mesh, str) else mesh.name, "end_time": end_time,
-             "ramp_time": ramp_time,
-             **{f"solver_{key}": value for key, value in asdict(solver).items()}}
-    for key, value in asked.items():
-        written = meta.get(key)
-        if key not in meta or written == value or (
-                isinstance(value, float) and isinstance(written, (int, float))
-                and math.isclose(written, value, rel_tol=1e-9)):
-            continue
+             "ramp_time": ramp_time, **solver_keys(solver)}
+    for key, written, value in kept_differences(meta, asked)[:1]:
         raise ConfigError(f"{case_dir} was written for {key} = {written!r}, this run asks "
                           f"{value!r} ({kept}); {advice}", key=key)
 

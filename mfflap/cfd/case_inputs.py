@@ -157,3 +157,30 @@ def motion_mismatch(case_dir: str | Path, state) -> str | None:
                     f"{times[inside][worst]:.4g} s is {case_values[worst]:.4g} {unit}, the "
                     f"record's {record_values[worst]:.4g} {unit}")
     return None
+
+
+def kept_differences(kept: dict[str, Any], asked: dict[str, Any]) -> list[tuple[str, Any, Any]]:
+    """(key, kept value, asked value) for each key of ``asked`` that ``kept`` (a case's
+    mfflap_case.toml, a record's provenance) has with another value: floats to
+    :data:`RELATIVE_TOLERANCE`, others exactly. Keys ``kept`` lacks (written by an earlier
+    mfflap) are not compared."""
+    out = []
+    for key, value in asked.items():
+        if key not in kept:
+            continue
+        had = kept[key]
+        if had == value or (isinstance(value, float) and isinstance(had, (int, float))
+                            and bool(_close(float(had), value))):
+            continue
+        out.append((key, had, value))
+    return out
+
+
+def solver_keys(solver: Any, leave_out: tuple[str, ...] = ()) -> dict[str, Any]:
+    """A solver's settings under the keys a case and a record keep them (``solver_<name>``),
+    without those named in ``leave_out``."""
+    from dataclasses import asdict
+
+    return {f"solver_{key}": value for key, value in asdict(solver).items()
+            if key not in leave_out}
+

@@ -16,7 +16,7 @@ their mean cycles (:mod:`mfflap.cfd.phase_average`), beside each run's cycle-to-
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -24,6 +24,7 @@ import numpy as np
 from mfflap.campaign.record_inputs import input_mismatches
 from mfflap.campaign.records import CfdRecord, read_record, write_record
 from mfflap.cfd.bursts import find_load_bursts
+from mfflap.cfd.case_inputs import kept_differences, solver_keys
 from mfflap.cfd.gci import GridConvergence, grid_convergence
 from mfflap.cfd.openfoam.loads import check_end_time, check_ramp_time, imposed_state
 from mfflap.cfd.openfoam.setups import CfdSetup
@@ -165,12 +166,12 @@ def _check_resumed(path: Path, record: CfdRecord, settings: SolverSettings,
         raise ConfigError(f"this run ends at {record.time[-1]:.4g} s, the study at "
                           f"{end_time:.4g} s (another --cycles?); use another output folder, "
                           f"or delete the record to rerun it", source=str(path), key="cycles")
-    for key, value in asdict(settings).items():
-        stored = record.provenance.get(f"solver_{key}")
-        if key != "write_interval" and stored is not None and stored != value:
-            raise ConfigError(f"this run was made with {key} = {stored!r}, the study asks for "
-                              f"{value!r}; use another output folder, or delete the record "
-                              f"to rerun it", source=str(path), key=key)
+    asked = solver_keys(settings, leave_out=("write_interval",))
+    for key, stored, value in kept_differences(record.provenance, asked)[:1]:
+        key = key.removeprefix("solver_")
+        raise ConfigError(f"this run was made with {key} = {stored!r}, the study asks for "
+                          f"{value!r}; use another output folder, or delete the record to "
+                          "rerun it", source=str(path), key=key)
     mismatches = input_mismatches(record, plate or Plate(), fluid or Fluid(),
                                   stream or FreeStream())
     if mismatches:
