@@ -3,12 +3,16 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 import numpy as np
 
 from mfflap.cli.json_output import echo_json
 from mfflap.cli.options import NON_NEGATIVE, POSITIVE, ResultsOutput
+
+if TYPE_CHECKING:
+    from mfflap.config import CaseConfig
 
 
 @click.group()
@@ -115,7 +119,7 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
     click.echo(f"wrote {output} and {html}")
 
 
-def _flow_record(item: str, cases: list, config) -> tuple[int, str]:
+def _flow_record(item: str, cases: list, config: CaseConfig) -> tuple[int, str]:
     """The record index and case folder of a ``--flow CASE=DIR``, refused naming what is
     wrong: the form, a case id that is no record's (with the nearest ones), a folder that is
     not there, or the run of another motion, plate, fluid or stream than the case file's."""
