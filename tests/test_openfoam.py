@@ -559,9 +559,13 @@ def test_convergence_command_on_three_meshes_and_two_courant_limits(tmp_path):
     for key in ("coarse_co4 vs fine_co4", "medium_co4 vs fine_co4", "coarse_co4 vs coarse_co2"):
         assert 0 <= data["nrmse"][key]["normal_force"] < 1.0
     assert data["runs"]["coarse_co4"]["y_plus_mean"] > 0
+    for run in data["runs"].values():  # the first 0.02 s of a ramped motion: y+ of a few
+        assert run["y_plus_mean"] < 30 and run["wall_function_note"].startswith(
+            "the plate's average y+ lies outside the wall functions' log-law range")
     for run in data["runs"].values():  # the records' own clipping counts, as a fraction
         assert 0 <= run["epsilon_clipped_step_fraction"] <= 1
     assert (out / "convergence.html").read_text().count("<img") == 1
+    assert (out / "convergence.html").read_text().count("log-law range (30-300)") == 4
     assert "steps with epsilon clipped" in (out / "convergence.html").read_text()
     # the grid convergence index is computed from the three meshes' own records
     from mfflap.campaign.records import read_record

@@ -29,7 +29,12 @@ from mfflap.cfd.gci import GridConvergence, grid_convergence
 from mfflap.cfd.openfoam.loads import check_end_time, check_ramp_time, imposed_state
 from mfflap.cfd.openfoam.setups import CfdSetup
 from mfflap.cfd.openfoam.writer import SolverSettings, resolve_mesh
-from mfflap.cfd.openfoam.yplus import YPlusHistory, read_y_plus
+from mfflap.cfd.openfoam.yplus import (
+    YPlusHistory,
+    read_y_plus,
+    wall_function_note,
+    y_plus_summary,
+)
 from mfflap.cfd.phase_average import phase_average, whole_periods
 from mfflap.errors import ConfigError
 from mfflap.hydro.loads import LOAD_COMPONENTS
@@ -94,7 +99,9 @@ class ConvergenceStudy:
                                    "y_plus_mean": None if r.y_plus is None else
                                    float(np.mean(r.y_plus.average)),
                                    "y_plus_max": None if r.y_plus is None else
-                                   float(np.max(r.y_plus.maximum))}
+                                   float(np.max(r.y_plus.maximum)),
+                                   "wall_function_note": None if r.y_plus is None else
+                                   wall_function_note(y_plus_summary(r.y_plus))}
                          for r in self.runs}}
 
 

@@ -478,7 +478,7 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: list[floa
     from mfflap.cfd.openfoam.setups import setup
     from mfflap.cfd.openfoam.writer import SolverSettings
     from mfflap.config import load_case
-    from mfflap.reports.html import Report, figure_html, table_html
+    from mfflap.reports.html import Report, figure_html, table_html, text_html
 
     if len(courants) < 2:
         refuse_given(("time_step_mesh",), "a study of two or more --courant limits (the mesh "
@@ -538,6 +538,9 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: list[floa
                                    v["y_plus_max"], v["epsilon_clipped_step_fraction"],
                                    "; ".join(v["numerical_bursts"]) or "-"]
                                   for k, v in runs.items()]))
+    notes = {k: v["wall_function_note"] for k, v in runs.items() if v["wall_function_note"]}
+    for k, note in notes.items():  # the plate's y+ against the wall functions' range
+        sec.blocks.append(text_html(f"{k}: {note}", warn=True))
     sec.blocks.append(figure_html(convergence_figure(study), "F_n and y+ over the run"))
     if study.phase_nrmse:
         psec = rep.section(f"Mean cycles ({study.phase_cycles} periods per run)")
@@ -558,6 +561,8 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: list[floa
     if as_json:
         echo_json(study.as_dict())
         return
+    for k, note in notes.items():
+        click.echo(f"{k}: {note}")
     for k, v in runs.items():
         if v["numerical_bursts"]:
             click.echo(f"{k}: {len(v['numerical_bursts'])} numerical burst(s), counted in "
