@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from mfflap.campaign.records import CfdRecord
-from mfflap.cfd.case_inputs import PHYSICAL_KEYS
+from mfflap.cfd.case_inputs import PHYSICAL_KEYS, RELATIVE_TOLERANCE
 from mfflap.errors import ConfigError
 from mfflap.parameters import Fluid, FreeStream, Plate
 from mfflap.toml_io import read_toml
@@ -31,8 +31,10 @@ _EARLIER_KEYS = {"plate.chord": ("chord_m",), "plate.span": ("span_m",)}
 CHECKED_KEYS: dict[str, tuple[tuple[str, ...], Callable[[Plate, Fluid, FreeStream], float]]] = {
     case_key: (((kept,) if kept != "span" else ()) + _EARLIER_KEYS.get(case_key, ()), getter)
     for kept, (case_key, getter) in PHYSICAL_KEYS.items()}
-#: relative tolerance (the values are kept as exact float reprs, or float64 attributes)
-RELATIVE_TOLERANCE = 1e-6
+def _differ(a: float, b: float) -> bool:
+    """Whether two kept values differ by more than the tolerance of kept inputs
+    (:data:`mfflap.cfd.case_inputs.RELATIVE_TOLERANCE` of the larger)."""
+    return abs(a - b) > RELATIVE_TOLERANCE * max(abs(a), abs(b))
 
 
 @dataclass(frozen=True)
@@ -81,7 +83,7 @@ def input_mismatches(record: CfdRecord, plate: Plate, fluid: Fluid, stream: Free
     out = []
     for key, (value, where) in run_for(record, folder_setup).items():
         wanted = float(CHECKED_KEYS[key][1](plate, fluid, stream))
-        if abs(value - wanted) > RELATIVE_TOLERANCE * max(abs(value), abs(wanted)):
+        if _differ(value, wanted):
             out.append(InputMismatch(record.name, key, value, wanted, where))
     return out
 
@@ -90,9 +92,8 @@ def run_for_differences(a: dict[str, tuple[float, str]], b: dict[str, tuple[floa
                         ) -> list[tuple[str, float, float]]:
     """(case-file key, value in ``a``, value in ``b``) for each key both :func:`run_for`
     results give that differs."""
-    return [(key, a[key][0], b[key][0]) for key in CHECKED_KEYS if key in a and key in b
-            and abs(a[key][0] - b[key][0]) > RELATIVE_TOLERANCE * max(abs(a[key][0]),
-                                                                      abs(b[key][0]))]
+    return [(key, a[key][0], b[key][0]) for key in CHECKED_KEYS
+            if key in a and key in b and _differ(a[key][0], b[key][0])]
 
 
 def check_records_inputs(records: Sequence[tuple[CfdRecord, Path]], plate: Plate,
