@@ -589,12 +589,14 @@ def test_status_counts_retries_not_rerun_requests(tmp_path):
 
 def test_manifest_written_before_the_pressure_solver_setting_still_resumes(tmp_path):
     """campaign.toml files written before pressure_solver/pressure_tolerance, far_field,
-    velocity_convection and frame existed describe PCG runs at 1e-7 with the freestream far
-    field, linearUpwind U and the moving mesh: they resume with those settings and refuse
-    GAMG, LUST or the plate's frame."""
+    velocity_convection, frame and wall_treatment existed describe PCG runs at 1e-7 with the
+    freestream far field, linearUpwind U, the moving mesh and the log-law wall functions:
+    they resume with those settings and refuse GAMG, LUST, the plate's frame or another wall
+    treatment."""
     from dataclasses import asdict, replace
 
     from mfflap.campaign.execute import CampaignSetup, _write_manifest
+    from mfflap.cfd.case_inputs import ADDED_SOLVER_SETTINGS
     from mfflap.toml_io import dumps, read_toml
 
     cases = grid_cases(IdentificationGrid(frequencies=(1.0,), heave_amplitudes=(0.1,),
@@ -602,9 +604,8 @@ def test_manifest_written_before_the_pressure_solver_setting_still_resumes(tmp_p
     setup = CampaignSetup()
     old = setup.as_dict()
     old["solver"] = {k: v for k, v in asdict(setup.solver).items()
-                     if k not in ("pressure_solver", "pressure_tolerance", "far_field",
-                                  "velocity_convection", "pressure_final_rel_tol",
-                                  "turbulence_convection", "frame")}
+                     if k not in ADDED_SOLVER_SETTINGS}
+    assert len(old["solver"]) == len(asdict(setup.solver)) - 8
     (tmp_path / "campaign.toml").write_text(dumps({"setup": old, "cases": {}}))
     _write_manifest(tmp_path, cases, setup)  # same runs: accepted
     assert read_toml(tmp_path / "campaign.toml")["setup"]["solver"]["pressure_solver"] == "PCG"
@@ -613,7 +614,9 @@ def test_manifest_written_before_the_pressure_solver_setting_still_resumes(tmp_p
     assert solver["pressure_final_rel_tol"] == 0.0
     assert solver["turbulence_convection"] == "limitedLinear"
     assert solver["frame"] == "inertial"
+    assert solver["wall_treatment"] == "log_law"
     for change in ({"pressure_solver": "GAMG"}, {"velocity_convection": "LUST"},
+                   {"wall_treatment": "all_y_plus"},
                    {"pressure_final_rel_tol": 0.01}, {"turbulence_convection": "upwind"},
                    {"frame": "plate", "far_field": "inletOutlet"}):
         other = replace(setup, solver=replace(setup.solver, **change))
@@ -677,12 +680,13 @@ def test_the_settings_as_run_follow_every_remedy_a_retry_applies(tmp_path):
     case = write_case(tmp_path / "c", SHORT.motion(), end_time=0.02, solver=solver)
     assert as_run_settings(case) == {
         "as_run_max_courant": solver.max_courant, "as_run_far_field": solver.far_field,
-        "as_run_turbulence_convection": solver.turbulence_convection}
+        "as_run_turbulence_convection": solver.turbulence_convection,
+        "as_run_wall_treatment": solver.wall_treatment}
     assert use_inlet_outlet_far_field(case) and use_upwind_turbulence(case)
     lower_courant_limit(case)
     assert as_run_settings(case) == {
         "as_run_max_courant": solver.max_courant / 2, "as_run_far_field": "inletOutlet",
-        "as_run_turbulence_convection": "upwind"}
+        "as_run_turbulence_convection": "upwind", "as_run_wall_treatment": "log_law"}
 
 
 @pytest.mark.openfoam

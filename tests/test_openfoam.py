@@ -203,7 +203,7 @@ def test_y_plus_summary_and_what_it_means_for_the_wall_functions(tmp_path):
     half = np.sort(real.average)[3]  # four of the seven averages reach 300, three do not
     past = scaled(300.0001 / half)
     assert past["y_plus_share_above_log_law"] == pytest.approx(4 / 7)
-    assert "above 300 for 57% of them" in wall_function_note(past)
+    assert "above 300 for 57% of the output times" in wall_function_note(past)
 
 
 @settings(max_examples=150, deadline=None)

@@ -48,6 +48,16 @@ def test_medium_piso_is_the_reference_with_affordables_pressure_velocity_couplin
     assert co5.solver.max_courant == 5.0
 
 
+def test_reference_all_y_plus_is_the_reference_but_for_its_wall_treatment():
+    """Its measured distance from the reference is the wall treatment's and nothing else's."""
+    setups = named_setups()
+    reference, other = setups["reference"], setups["reference_all_y_plus"]
+    assert other.mesh == reference.mesh
+    assert reference.solver.wall_treatment == "log_law"
+    assert dataclasses.replace(other.solver, wall_treatment="log_law") == reference.solver
+    assert other.solver.wall_treatment == "all_y_plus"
+
+
 def test_the_coarse_courant_set_ups_change_the_fixtures_set_up_in_what_they_say_alone():
     """coarse_co2, coarse_co1 and coarse_co05 are the shipped fixtures' set-up (the defaults
     on the coarse mesh) but for the Courant limit and, for the last two, the far field."""
@@ -162,7 +172,7 @@ def test_cfd_write_sets_the_courant_limit_and_the_correctors(tmp_path):
     assert res.exit_code == 0, res.output
     case = tmp_path / "c"
     assert res.output.strip() == (f"wrote {case} (mesh graded, inertial frame, PIMPLE 3x2, "
-                                  "max Co 2.5, GAMG, end time 0.1 s)")
+                                  "max Co 2.5, GAMG, log_law wall treatment, end time 0.1 s)")
     assert re.search(r"^maxCo\s+2.5;", (case / "system" / "controlDict").read_text(), re.M)
     solution = (case / "system" / "fvSolution").read_text()
     assert "nOuterCorrectors 3;" in solution and "nCorrectors     2;" in solution

@@ -40,6 +40,7 @@ from mfflap.campaign.records import (
     write_record,
 )
 from mfflap.cfd.bursts import find_load_bursts
+from mfflap.cfd.case_inputs import ADDED_SOLVER_SETTINGS
 from mfflap.cfd.openfoam.case_lock import CaseBusyError, lock_holder
 from mfflap.cfd.openfoam.case_path import check_case_path
 from mfflap.cfd.openfoam.runner import RunStopped, stop_running_solvers, stoppable
@@ -159,18 +160,10 @@ def run_one(case: CampaignCase, out_dir: str, setup: CampaignSetup) -> CaseStatu
     return CaseStatus(case.case_id, "done", f"{cpu:.0f} s CPU")
 
 
-#: Solver settings added after campaigns were first written, at the values those runs used:
-#: a manifest without them describes runs made with these values.
-_ADDED_SOLVER_SETTINGS = {"pressure_solver": "PCG", "pressure_tolerance": 1e-7,
-                          "far_field": "freestream", "velocity_convection": "linearUpwind",
-                          "pressure_final_rel_tol": 0.0,
-                          "turbulence_convection": "limitedLinear", "frame": "inertial"}
-
-
 def _with_added_settings(setup: dict[str, Any]) -> dict[str, Any]:
     setup = dict(setup)
     if isinstance(setup.get("solver"), dict):
-        setup["solver"] = {**_ADDED_SOLVER_SETTINGS, **setup["solver"]}
+        setup["solver"] = {**ADDED_SOLVER_SETTINGS, **setup["solver"]}
     return setup
 
 

@@ -34,6 +34,7 @@ from mfflap.cfd.openfoam.writer import (
     AnyMeshSpec,
     SolverSettings,
     write_case,
+    written_wall_treatment,
 )
 from mfflap.errors import CfdRunError, ConfigError, MfflapError
 from mfflap.kinematics.continuous import Motion
@@ -76,7 +77,9 @@ def as_run_settings(case_dir: str | Path) -> dict[str, Any]:
         ``as_run_max_courant`` (system/controlDict), ``as_run_far_field`` ("freestream",
         "inletOutlet" or "other", from 0/U) and ``as_run_turbulence_convection`` (the first
         k or epsilon convection scheme of system/fvSchemes, both written and changed
-        together, as a ``SolverSettings.turbulence_convection`` name, or "other").
+        together, as a ``SolverSettings.turbulence_convection`` name, or "other") and
+        ``as_run_wall_treatment`` (the plate's nut condition in 0/nut, as a
+        ``SolverSettings.wall_treatment`` name, or "other").
     """
     case = Path(case_dir)
     velocity = (case / "0" / "U").read_bytes() if (case / "0" / "U").is_file() else b""
@@ -86,7 +89,8 @@ def as_run_settings(case_dir: str | Path) -> dict[str, Any]:
     match = _TURBULENCE_DIV.search(schemes.read_text()) if schemes.is_file() else None
     return {"as_run_max_courant": courant_limit(case), "as_run_far_field": far_field,
             "as_run_turbulence_convection": _SCHEME_NAMES.get(
-                match.group(2).strip() if match else "", "other")}
+                match.group(2).strip() if match else "", "other"),
+            "as_run_wall_treatment": written_wall_treatment(case)}
 
 
 #: SolverSettings.turbulence_convection by the fvSchemes text it writes

@@ -36,6 +36,13 @@ PHYSICAL_KEYS = {
                                            lambda p, f, s: f.kinematic_viscosity),
     "flow_velocity_m_per_s": ("flow.velocity", lambda p, f, s: s.velocity),
 }
+#: Solver settings added after cases, records and campaigns first kept theirs, at the values
+#: those runs used: what keeps solver settings without one of these ran with this value
+ADDED_SOLVER_SETTINGS = {"pressure_solver": "PCG", "pressure_tolerance": 1e-7,
+                         "far_field": "freestream", "velocity_convection": "linearUpwind",
+                         "pressure_final_rel_tol": 0.0,
+                         "turbulence_convection": "limitedLinear", "frame": "inertial",
+                         "wall_treatment": "log_law"}
 #: samples of the imposed motion kept with a case
 N_MOTION_SAMPLES = 64
 #: relative tolerance of the comparisons (the kept values are exact float reprs)
@@ -163,7 +170,11 @@ def kept_differences(kept: dict[str, Any], asked: dict[str, Any]) -> list[tuple[
     """(key, kept value, asked value) for each key of ``asked`` that ``kept`` (a case's
     mfflap_case.toml, a record's provenance) has with another value: floats to
     :data:`RELATIVE_TOLERANCE`, others exactly. Keys ``kept`` lacks (written by an earlier
-    mfflap) are not compared."""
+    mfflap) are not compared, except the :data:`ADDED_SOLVER_SETTINGS` where ``kept`` has
+    solver settings: those it lacks are at the values its run used."""
+    if any(key.startswith("solver_") for key in kept):
+        kept = {**{f"solver_{key}": value for key, value in ADDED_SOLVER_SETTINGS.items()},
+                **kept}
     out = []
     for key, value in asked.items():
         if key not in kept:

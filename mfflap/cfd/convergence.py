@@ -101,8 +101,15 @@ class ConvergenceStudy:
                                    "y_plus_max": None if r.y_plus is None else
                                    float(np.max(r.y_plus.maximum)),
                                    "wall_function_note": None if r.y_plus is None else
-                                   wall_function_note(y_plus_summary(r.y_plus))}
+                                   wall_function_note(y_plus_summary(r.y_plus),
+                                                      _wall_treatment(r.record))}
                          for r in self.runs}}
+
+
+def _wall_treatment(record: CfdRecord) -> str:
+    """The plate's wall treatment a run's case held (log_law for records that do not say)."""
+    prov = record.provenance
+    return str(prov.get("as_run_wall_treatment", prov.get("solver_wall_treatment", "log_law")))
 
 
 def _clipped_fraction(record: CfdRecord) -> float | None:
@@ -216,7 +223,7 @@ def run_convergence(out_dir: str | Path, motion: Motion, end_time: float, *,
     ----------
     solver
         Base solver settings (pressure solver, correctors, far field, k and epsilon
-        convection); the Courant limit is the study's.
+        convection, wall treatment); the Courant limit is the study's.
     floor
         Also rerun the reference with the other pressure solver (PCG <-> GAMG, both converged
         to the same tolerance): the NRMSE between the two is the floor under every mesh
@@ -231,7 +238,8 @@ def run_convergence(out_dir: str | Path, motion: Motion, end_time: float, *,
         the cheapest; the finest tells whether the reference itself is time-step converged).
     setups
         Named set-ups (setups.toml) run as well, each with its own mesh and solver settings
-        but the study's far field and k and epsilon convection (``setup_<name>``), and
+        but the study's far field, k and epsilon convection and wall treatment
+        (``setup_<name>``), and
         compared with the reference.
     period
         The motion's period, s, if it is periodic (not for a pitch ramp): with two or more
@@ -269,14 +277,15 @@ def run_convergence(out_dir: str | Path, motion: Motion, end_time: float, *,
 
     if floor:
         add_floor(reference, meshes[-1], base, courants[0])
-    for s in setups:  # each with its own mesh and solver, in the study's far field and
-        # turbulence convection
+    for s in setups:  # each with its own mesh and solver, in the study's far field,
+        # turbulence convection and wall treatment
         if s.solver.frame == "plate" and base.far_field != "inletOutlet":
             raise ConfigError(f"set-up {s.name!r} runs in the plate's frame, which needs the "
                               f"inletOutlet far field; the study's is {base.far_field} "
                               "(--far-field inletOutlet)", key="far_field")
         settings = replace(s.solver, far_field=base.far_field,
-                           turbulence_convection=base.turbulence_convection)
+                           turbulence_convection=base.turbulence_convection,
+                           wall_treatment=base.wall_treatment)
         plan.append((f"setup_{s.name}", s.mesh, settings, s.solver.max_courant))
         if floor:
             add_floor(f"setup_{s.name}", s.mesh, settings, s.solver.max_courant)

@@ -25,7 +25,7 @@ from mfflap.cli.options import mesh_and_setup_options, refuse_given
 @click.option("--json", "as_json", is_flag=True)
 def backtest(optimisation_file: Path, live: bool, work_dir: Path,
              fixture_folders: tuple[Path, ...], save_to: Path | None, mesh: str | None,
-             setup_name: str | None, as_json: bool) -> None:
+             setup_name: str | None, wall_treatment: str | None, as_json: bool) -> None:
     """Back-test the optimised motions (and the best sinusoid) of OPTIMISATION_FILE.
 
     Ctrl-C stops the run in flight and shows the motions back-tested before it. The exit
@@ -40,10 +40,10 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
     from mfflap.results import ResultsFile
 
     if not live:  # the fixtures' runs are read as they were made
-        refuse_given(("work_dir", "save_to", "mesh", "setup_name"),
+        refuse_given(("work_dir", "save_to", "mesh", "setup_name", "wall_treatment"),
                      "live runs (--live); without it the back-test reads CFD records "
                      "(--fixtures), run on the mesh and set-up they were made with")
-    spec, solver = mesh_and_solver(mesh, setup_name)
+    spec, solver = mesh_and_solver(mesh, setup_name, wall_treatment)
     with ResultsFile(optimisation_file, kinds=("optimisation", "run")) as rf:
         case = loads_case(rf.config_toml, source=f"{optimisation_file}:/inputs")
         sweep, best = read_sweep(rf, "optimisation/sweep")

@@ -69,7 +69,7 @@ def campaign() -> None:
                    "and exit; a folder of another setup is refused as the run would be.")
 def run_cmd(case_file: Path, out_dir: Path, frequencies: list[float] | None,
             heave_amplitudes: list[float] | None, phases: list[float] | None, mesh: str | None,
-            setup_name: str | None, workers: int,
+            setup_name: str | None, wall_treatment: str | None, workers: int,
             scheduler: str | None, retry_failed: bool, keep_cases: bool,
             single_precision: bool, timeout: float, dry_run: bool) -> None:
     """Run the identification grid of CASE_FILE in OpenFOAM.
@@ -92,7 +92,7 @@ def run_cmd(case_file: Path, out_dir: Path, frequencies: list[float] | None,
     from mfflap.cfd.openfoam.setups import mesh_and_solver
     from mfflap.config import load_case
 
-    spec, solver = mesh_and_solver(mesh, setup_name)
+    spec, solver = mesh_and_solver(mesh, setup_name, wall_treatment)
     case = load_case(case_file)
     cases = grid_cases(case.identification, frequencies, heave_amplitudes, phases)
     campaign_setup = CampaignSetup(mesh=spec.name, solver=solver, plate=case.plate,

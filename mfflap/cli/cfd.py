@@ -12,6 +12,7 @@ from mfflap.cli.json_output import echo_json
 from mfflap.cli.options import (
     NON_NEGATIVE,
     POSITIVE,
+    WALL_TREATMENT_NAMES,
     FigureFile,
     FloatList,
     ResultsOutput,
@@ -87,7 +88,7 @@ def write(case_file: Path, case_dir: Path, mesh: str | None, setup_name: str | N
           pressure_solver: str | None, velocity_convection: str | None, writes: int,
           turbulence_convection: str | None, frame: str | None, motion_table: Path | None,
           end_time: float | None, max_courant: float | None, outer_correctors: int | None,
-          correctors: int | None, overwrite: bool) -> None:
+          correctors: int | None, wall_treatment: str | None, overwrite: bool) -> None:
     """Write an OpenFOAM case for the [motion] of CASE_FILE (or a --motion-table) into
     CASE_DIR, a new or empty folder (or a case written before, with --overwrite)."""
     from dataclasses import replace
@@ -97,7 +98,7 @@ def write(case_file: Path, case_dir: Path, mesh: str | None, setup_name: str | N
     from mfflap.config import load_case
     from mfflap.errors import ConfigError
 
-    spec, solver = mesh_and_solver(mesh, setup_name)
+    spec, solver = mesh_and_solver(mesh, setup_name, wall_treatment)
     case = load_case(case_file)
     motion, end_time = _motion_and_end_time(case, motion_table, end_time, cycles)
     if frame == "plate" and far_field is None:
@@ -125,7 +126,8 @@ def write(case_file: Path, case_dir: Path, mesh: str | None, setup_name: str | N
     loop = (f"{'PISO' if solver.n_outer_correctors == 1 else 'PIMPLE'} "
             f"{solver.n_outer_correctors}x{solver.n_correctors}")  # outer x pressure correctors
     click.echo(f"wrote {case_dir} (mesh {spec.name}, {solver.frame} frame, {loop}, max Co "
-               f"{solver.max_courant:g}, {solver.pressure_solver}, end time {end_time:g} s)")
+               f"{solver.max_courant:g}, {solver.pressure_solver}, {solver.wall_treatment} "
+               f"wall treatment, end time {end_time:g} s)")
 
 
 #: the `cfd write` option that sets each solver setting
@@ -133,7 +135,7 @@ _SOLVER_OPTIONS = {"far_field": "--far-field", "pressure_solver": "--pressure-so
                    "velocity_convection": "--velocity-convection",
                    "turbulence_convection": "--turbulence-convection", "frame": "--frame",
                    "max_courant": "--max-courant", "n_outer_correctors": "--outer-correctors",
-                   "n_correctors": "--correctors"}
+                   "n_correctors": "--correctors", "wall_treatment": "--wall-treatment"}
 
 
 def _run_state(source: Path) -> str:
@@ -218,6 +220,7 @@ def run(case_dir: Path, timeout: float, procs: int, progress_every: float,
         written_where_stopped,
     )
     from mfflap.cfd.openfoam.solver_log import solver_provenance
+    from mfflap.cfd.openfoam.writer import written_wall_treatment
     from mfflap.cfd.openfoam.yplus import read_y_plus, wall_function_note, y_plus_summary
 
     progress = (None if progress_every <= 0 else
@@ -247,7 +250,8 @@ def run(case_dir: Path, timeout: float, procs: int, progress_every: float,
                                    for b in find_numerical_bursts(history.time, signals)]
     if (case_dir / "postProcessing" / "yPlus").is_dir():  # written with --y-plus
         summary.update(y_plus_summary(read_y_plus(case_dir)))
-        summary["wall_function_note"] = wall_function_note(summary)
+        summary["wall_treatment"] = written_wall_treatment(case_dir)
+        summary["wall_function_note"] = wall_function_note(summary, summary["wall_treatment"])
     if as_json:
         echo_json(summary)
         return
@@ -255,7 +259,8 @@ def run(case_dir: Path, timeout: float, procs: int, progress_every: float,
                f"{summary['n_time_steps']} time steps")
     if "y_plus_mean" in summary:
         click.echo(f"  y+ on the plate: mean {summary['y_plus_mean']:.3g} (from "
-                   f"{summary['y_plus_min']:.3g} to {summary['y_plus_max']:.3g} over the run)")
+                   f"{summary['y_plus_min']:.3g} to {summary['y_plus_max']:.3g} over the run; "
+                   f"{summary['wall_treatment']} wall treatment)")
         if summary["wall_function_note"]:
             click.echo(f"  {summary['wall_function_note']}")
     for burst in summary["numerical_bursts"]:
@@ -452,6 +457,11 @@ def fluent(case_file: Path, out_dir: Path, cycles: float, ramp_time: float, time
               default="limitedLinear", show_default=True,
               help="Convection of k and epsilon in every run, set-ups included (upwind: no "
                    "clipping of negative epsilon).")
+@click.option("--wall-treatment", type=click.Choice(WALL_TREATMENT_NAMES), default="log_law",
+              show_default=True,
+              help="The plate's wall conditions in every run, set-ups included: log_law "
+                   "(k-epsilon wall functions, for a first cell at y+ 30-300) or all_y_plus "
+                   "(Spalding's law for nut and epsilon's low-Re correction: any y+).")
 @click.option("--floor", is_flag=True,
               help="Rerun the reference, and each set-up, with the other pressure solver: "
                    "the round-off floor under every NRMSE of the study.")
@@ -466,7 +476,8 @@ def fluent(case_file: Path, out_dir: Path, cycles: float, ramp_time: float, time
 @click.option("--json", "as_json", is_flag=True, help="Print the NRMSE table as JSON.")
 def convergence(case_file: Path, out_dir: Path, meshes: str, courants: list[float],
                 cycles: float, ramp_time: float | None, procs: int, pressure_solver: str,
-                n_correctors: int, far_field: str, turbulence_convection: str, floor: bool,
+                n_correctors: int, far_field: str, turbulence_convection: str,
+                wall_treatment: str, floor: bool,
                 setup_names: str, time_step_mesh: str | None, phase_from: float | None,
                 motion_table: Path | None, end_time: float | None, as_json: bool) -> None:
     """Mesh and time-step convergence of the [motion] of CASE_FILE: NRMSE between runs, the
@@ -514,7 +525,8 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: list[floa
                                 solver=SolverSettings(pressure_solver=pressure_solver,
                                                       n_correctors=n_correctors,
                                                       far_field=far_field,
-                                                      turbulence_convection=turbulence_convection),
+                                                      turbulence_convection=turbulence_convection,
+                                                      wall_treatment=wall_treatment),
                                 period=period if periodic else None,
                                 phase_from=phase_from,
                                 progress=lambda m: click.echo(m, err=True))
@@ -600,8 +612,9 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: list[floa
               help="Rerun the motions that failed before (e.g. with a longer --timeout).")
 @click.option("--json", "as_json", is_flag=True, help="Print the checks as JSON.")
 def linear_check(out_dir: Path, case_file: Path | None, mesh: str | None,
-                 setup_name: str | None, velocity_convection: str | None,
-                 case_ids: str | None, list_only: bool, workers: int, timeout: float,
+                 setup_name: str | None, wall_treatment: str | None,
+                 velocity_convection: str | None, case_ids: str | None, list_only: bool,
+                 workers: int, timeout: float,
                  single_precision: bool, retry_failed: bool, as_json: bool) -> None:
     """Verify a CFD set-up against linear unsteady thin-aerofoil theory.
 
@@ -645,7 +658,7 @@ def linear_check(out_dir: Path, case_file: Path | None, mesh: str | None,
             click.echo(f"{c.case_id}  duration {c.duration:g} s  ramp {c.ramp_time:g} s")
         return
     config = load_case(case_file) if case_file else CaseConfig()
-    spec, solver = mesh_and_solver(mesh, setup_name)
+    spec, solver = mesh_and_solver(mesh, setup_name, wall_treatment)
     if velocity_convection is not None:
         solver = replace(solver, velocity_convection=velocity_convection)
     setup = CampaignSetup(mesh=spec.name, solver=solver, plate=config.plate,

@@ -13,6 +13,8 @@ MESH_NAMES = ("coarse | lean | medium | medium_r20 | fine | graded | medium_edge
 #: The U convection schemes of the case template (writer.VELOCITY_CONVECTION_SCHEMES), named
 #: here so that the command line does not import the writer to build its help
 VELOCITY_CONVECTION_NAMES = ("linearUpwind", "LUST")
+#: The plate's wall treatments of the case template (writer.WALL_TREATMENTS), likewise
+WALL_TREATMENT_NAMES = ("log_law", "all_y_plus")
 
 
 class FiniteFloat(click.ParamType):
@@ -163,7 +165,8 @@ velocity_convection_option = click.option(
 
 
 def mesh_and_setup_options(runs: str = "") -> Callable:
-    """``--mesh`` and ``--setup``: which mesh and solver settings the OpenFOAM runs use.
+    """``--mesh``, ``--setup`` and ``--wall-treatment``: which mesh and solver settings the
+    OpenFOAM runs use.
 
     Parameters
     ----------
@@ -173,10 +176,17 @@ def mesh_and_setup_options(runs: str = "") -> Callable:
     Returns
     -------
     Callable
-        A decorator adding both options (read with
+        A decorator adding the three options (read with
         :func:`mfflap.cfd.openfoam.setups.mesh_and_solver`).
     """
     def decorate(command):
+        command = click.option(
+            "--wall-treatment", type=click.Choice(WALL_TREATMENT_NAMES), default=None,
+            help=f"The plate's wall conditions{runs}: log_law (k-epsilon wall functions, for "
+                 "a first cell at y+ 30-300) or all_y_plus (Spalding's law for nut and "
+                 "epsilon's low-Re correction: any y+, like Fluent's enhanced wall "
+                 "treatment); default log_law, or the --setup's.",
+        )(command)
         command = click.option(
             "--setup", "setup_name", default=None,
             help=f"A named set-up{runs} of cfd_templates/openfoam/setups.toml (mesh and "

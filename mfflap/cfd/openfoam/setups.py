@@ -95,20 +95,26 @@ def setup(name: str) -> CfdSetup:
     return setups[name]
 
 
-def mesh_and_solver(mesh: str | None = None,
-                    setup_name: str | None = None) -> tuple[AnyMeshSpec, SolverSettings]:
-    """The mesh and solver settings a command asks for with ``--mesh`` and ``--setup``.
+def mesh_and_solver(mesh: str | None = None, setup_name: str | None = None,
+                    wall_treatment: str | None = None) -> tuple[AnyMeshSpec, SolverSettings]:
+    """The mesh and solver settings a command asks for with ``--mesh``, ``--setup`` and
+    ``--wall-treatment``.
 
     A named set-up gives both; with a mesh as well, its solver settings run on that mesh
     instead of its own (to tell a set-up's mesh from its solver settings); a mesh alone comes
-    with the default solver settings; neither means the coarse mesh.
+    with the default solver settings; neither means the coarse mesh. A wall treatment
+    replaces the set-up's (or the default) ``SolverSettings.wall_treatment``.
 
     Raises
     ------
     ConfigError
-        If either is unknown.
+        If any is unknown.
     """
     if setup_name is not None:
         chosen = setup(setup_name)
-        return (chosen.mesh if mesh is None else resolve_mesh(mesh)), chosen.solver
-    return resolve_mesh(mesh or "coarse"), SolverSettings()
+        spec, solver = (chosen.mesh if mesh is None else resolve_mesh(mesh)), chosen.solver
+    else:
+        spec, solver = resolve_mesh(mesh or "coarse"), SolverSettings()
+    if wall_treatment is not None:
+        solver = replace(solver, wall_treatment=wall_treatment)
+    return spec, solver

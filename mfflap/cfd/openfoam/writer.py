@@ -16,6 +16,7 @@ resolutions in ``cfd_templates/openfoam/meshes.toml``. Two formulations
 from __future__ import annotations
 
 import math
+import re
 import shutil
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -131,10 +132,30 @@ def resolve_mesh(mesh: str | AnyMeshSpec) -> AnyMeshSpec:
 VELOCITY_CONVECTION_SCHEMES = ("linearUpwind", "LUST")
 #: fvSchemes entry of each turbulence_convection choice
 TURBULENCE_CONVECTION_SCHEMES = {"limitedLinear": "limitedLinear 1", "upwind": "upwind"}
+#: The plate's wall conditions of each wall_treatment choice: the type of nut's and the
+#: options of epsilon's epsilonWallFunction (k keeps kqRWallFunction, a zero gradient)
+WALL_TREATMENTS = {
+    "log_law": {"nut": "nutkWallFunction", "epsilon_options": ""},
+    "all_y_plus": {"nut": "nutUSpaldingWallFunction",
+                   "epsilon_options": " lowReCorrection true;"},
+}
 #: The template folder of the files only the plate's frame needs
 PLATE_FRAME_TEMPLATES = "plate_frame"
 #: The template folder of the H-type mesh's blockMeshDict (:mod:`~.h_grid`)
 H_GRID_TEMPLATES = "h_grid"
+
+
+#: the plate's entry of 0/nut (group 1: its type)
+_PLATE_NUT = re.compile(r"\bplate\s*\{\s*type\s+(\w+)\s*;")
+
+
+def written_wall_treatment(case_dir: str | Path) -> str:
+    """The :data:`WALL_TREATMENTS` name of the plate's wall condition of nut in a case's
+    0/nut (as written, or as changed by hand since), or "other"."""
+    path = Path(case_dir) / "0" / "nut"
+    match = _PLATE_NUT.search(path.read_text(errors="replace")) if path.is_file() else None
+    return next((name for name, wall in WALL_TREATMENTS.items()
+                 if match and match.group(1) == wall["nut"]), "other")
 
 
 @dataclass(frozen=True)
@@ -171,6 +192,13 @@ class SolverSettings:
     #: frame (no mesh motion, about a third less CPU per time step; needs the inletOutlet
     #: far field, whose inflow follows the heave and pitch)
     frame: str = "inertial"
+    #: the plate's wall conditions: "log_law": nutkWallFunction and epsilonWallFunction,
+    #: made for a first cell in the log layer (y+ 30-300), which take a cell below y+ of
+    #: about 11 as laminar; "all_y_plus": Spalding's law of the wall for nut (viscous
+    #: sublayer, buffer and log layer in one formula) and epsilon's low-Re correction
+    #: (2 k nu / y^2 in the sublayer), valid at any y+ of the first cell, as Fluent's
+    #: enhanced wall treatment, which the paper used, is
+    wall_treatment: str = "log_law"
 
     def __post_init__(self) -> None:
         if self.pressure_solver not in ("PCG", "GAMG"):
@@ -187,6 +215,9 @@ class SolverSettings:
                               f"{self.far_field}: the stream enters the plate's frame with "
                               f"the heave and pitch, which the {self.far_field} far field "
                               "cannot follow", key="far_field")
+        if self.wall_treatment not in WALL_TREATMENTS:
+            raise ConfigError(f"wall_treatment must be one of {', '.join(WALL_TREATMENTS)}, "
+                              f"got {self.wall_treatment!r}", key="wall_treatment")
         if self.velocity_convection not in VELOCITY_CONVECTION_SCHEMES:
             raise ConfigError(f"velocity_convection must be one of "
                               f"{', '.join(VELOCITY_CONVECTION_SCHEMES)}, got "
@@ -296,7 +327,7 @@ def write_case(case_dir: str | Path, motion: Motion, end_time: float,
         "velocity_convection": solver.velocity_convection,
         "pressure_final_rel_tol": solver.pressure_final_rel_tol,
         "turbulence_convection": TURBULENCE_CONVECTION_SCHEMES[solver.turbulence_convection],
-        "frame": solver.frame,
+        "frame": solver.frame, "wall": WALL_TREATMENTS[solver.wall_treatment],
     }
     env = jinja2.Environment(undefined=jinja2.StrictUndefined, keep_trailing_newline=True)
     src = template_dir()

@@ -99,11 +99,24 @@ def y_plus_summary(history: YPlusHistory) -> dict[str, float]:
             "y_plus_share_above_log_law": float(np.mean(history.average > high))}
 
 
-def wall_function_note(summary: dict[str, float]) -> str | None:
-    """What the y+ of a run means for its wall functions, or None if its area average stays
-    within :data:`WALL_FUNCTION_RANGE` throughout."""
+def wall_function_note(summary: dict[str, float],
+                       wall_treatment: str = "log_law") -> str | None:
+    """What the y+ of a run means for its wall conditions, or None if they hold throughout.
+
+    Parameters
+    ----------
+    summary
+        :func:`y_plus_summary` of the run.
+    wall_treatment
+        The case's wall treatment (:func:`~mfflap.cfd.openfoam.writer.written_wall_treatment`):
+        "all_y_plus" holds at any y+ below the top of :data:`WALL_FUNCTION_RANGE` (the log
+        layer's end), the sublayer and buffer layer too; "log_law" (or another) wall
+        functions only while the area average stays within that range.
+    """
     low, high = WALL_FUNCTION_RANGE
-    below, above = summary["y_plus_share_below_log_law"], summary["y_plus_share_above_log_law"]
+    all_y_plus = wall_treatment == "all_y_plus"
+    below = 0.0 if all_y_plus else summary["y_plus_share_below_log_law"]
+    above = summary["y_plus_share_above_log_law"]
     if not below and not above:
         return None
     parts = []
@@ -111,10 +124,12 @@ def wall_function_note(summary: dict[str, float]) -> str | None:
         parts.append(f"below {low:g} for {below:.0%} of the output times (the first cells in "
                      "the buffer layer or viscous sublayer, where the wall functions' log law "
                      "does not hold; nutkWallFunction takes a cell below y+ of about 11 as "
-                     "laminar)")
+                     "laminar, --wall-treatment all_y_plus holds there)")
     if above:
-        parts.append(f"above {high:g} for {above:.0%} of them (the first cells past the log "
-                     "layer)")
-    return ("the plate's average y+ lies outside the wall functions' log-law range "
-            f"({low:g}-{high:g}): {'; '.join(parts)}; its wall shear, and so F_t, is the "
-            "least certain of the forces")
+        parts.append(f"above {high:g} for {above:.0%} of {'them' if below else 'the output times'}"
+                     " (the first cells past the log layer)")
+    where = (f"above the log layer's end ({high:g}), where its all_y_plus wall treatment "
+             "does not hold" if all_y_plus else
+             f"outside the wall functions' log-law range ({low:g}-{high:g})")
+    return (f"the plate's average y+ lies {where}: {'; '.join(parts)}; its wall shear, and "
+            "so F_t, is the least certain of the forces")
