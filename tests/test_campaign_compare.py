@@ -89,14 +89,14 @@ def test_what_moves_affordables_small_motion_drag(variant, setup_name, mesh, con
     """affordable's three changes from the reference taken apart on the small motions
     (README, Validation against linear theory): each run set is what its cfd linear-check
     options make, and the 10-16 % lower drag comes with LUST on the graded mesh only."""
+    from mfflap.campaign.execute import manifest_setup
     from mfflap.cfd.openfoam.setups import mesh_and_solver
-    from mfflap.toml_io import read_toml
 
     folder = VARIANTS / variant
     spec, solver = mesh_and_solver(mesh, setup_name)
     if convection is not None:
         solver = dataclasses.replace(solver, velocity_convection=convection)
-    made = read_toml(folder / "campaign.toml")["setup"]
+    made = manifest_setup(folder)  # with the settings added since, at their runs' values
     assert made["mesh"] == spec.name
     assert made["solver"] == dataclasses.asdict(solver)
     result = compare_campaigns(folder, MEDIUM, start_s=0.5)
@@ -354,3 +354,41 @@ def test_history_figures_refuse_a_case_not_run_by_both(tmp_path):
     res = CliRunner().invoke(cli, ["campaign", "compare", str(a_dir), str(b_dir),
                                    "--case", "f1p000_h0p500_phi135p0"])
     assert res.exit_code == 2 and "give --histories DIR" in res.output
+
+
+def test_the_comparison_says_what_separates_the_two_set_ups(tmp_path):
+    """From the two campaign.toml: the settings that differ, both values, in text and JSON;
+    a setting neither manifest names (both written before the wall treatment was kept) is
+    at the value their runs used, and so no difference; the time limit is none either."""
+    lust = VARIANTS / "graded_pimple_lust"
+    result = compare_campaigns(lust, COARSE, start_s=0.5)
+    assert result.setup_differences == [("mesh", "graded", "coarse"),
+                                        ("solver.pressure_solver", "GAMG", "PCG"),
+                                        ("solver.velocity_convection", "LUST", "linearUpwind")]
+    text = CliRunner().invoke(cli, ["campaign", "compare", str(lust), str(COARSE)])
+    assert text.exit_code == 0, text.output
+    assert text.output.splitlines()[0] == (
+        "set-ups differ in: mesh ('graded' in A, 'coarse' in B); solver.pressure_solver "
+        "('GAMG' in A, 'PCG' in B); solver.velocity_convection ('LUST' in A, "
+        "'linearUpwind' in B)")
+    data = json.loads(CliRunner().invoke(cli, ["campaign", "compare", str(lust), str(COARSE),
+                                               "--json"]).stdout)
+    assert data["setup_differences"][0] == {"setting": "mesh", "a": "graded", "b": "coarse"}
+    # a rerun of the same set-up with the wall treatment written out and another time limit
+    same = tmp_path / "same"
+    shutil.copytree(COARSE, same)
+    manifest = same / "campaign.toml"
+    manifest.write_text(manifest.read_text().replace(
+        'frame = "inertial"\n', 'frame = "inertial"\nwall_treatment = "log_law"\n').replace(
+        "timeout_s = 3600.0", "timeout_s = 60.0"))
+    assert compare_campaigns(COARSE, same).setup_differences == []
+    assert CliRunner().invoke(cli, ["campaign", "compare", str(COARSE), str(same)]
+                              ).output.splitlines()[0] == (
+        "set-ups: the same mesh and solver settings")
+    manifest.write_text(manifest.read_text().replace('"log_law"', '"all_y_plus"'))
+    assert compare_campaigns(COARSE, same).setup_differences == [
+        ("solver.wall_treatment", "log_law", "all_y_plus")]
+    manifest.unlink()
+    assert compare_campaigns(COARSE, same).setup_differences is None
+    assert "set-ups: not both known" in CliRunner().invoke(
+        cli, ["campaign", "compare", str(COARSE), str(same)]).output

@@ -17,10 +17,11 @@ import json
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from mfflap.campaign.execute import _bound_setup
+from mfflap.campaign.execute import _bound_setup, manifest_setup, setting_differences
 from mfflap.campaign.record_inputs import folder_setup, run_for, run_for_differences
 from mfflap.campaign.records import CfdRecord, read_records
 from mfflap.cfd.bursts import bridge_bursts, bridge_load_bursts
@@ -98,6 +99,9 @@ class CampaignComparison:
     only_b: list[str]
     #: common cases with no stretch in the window asked for (--start / --end), with why
     outside_window: dict[str, str] = field(default_factory=dict)
+    #: (setting, A's value, B's value) for each setting of the two folders' campaign.toml
+    #: that differs (mesh, solver), what the comparison measures; None if either has none
+    setup_differences: list[tuple[str, Any, Any]] | None = None
 
     def summary(self) -> dict[str, float]:
         """Median and largest NRMSE per component and the median thrust difference over the
@@ -242,9 +246,11 @@ def compare_campaigns(folder_a: str | Path, folder_b: str | Path,
     if not cases:
         raise MfflapError(f"no case of the {len(common)} in common has two samples or more "
                           f"in the window asked for: {next(iter(outside.values()))}")
+    manifests = manifest_setup(folder_a), manifest_setup(folder_b)
     return CampaignComparison(str(folder_a), str(folder_b), cases,
                               sorted(set(records_a) - set(records_b)),
-                              sorted(set(records_b) - set(records_a)), outside)
+                              sorted(set(records_b) - set(records_a)), outside,
+                              None if None in manifests else setting_differences(*manifests))
 
 
 def write_comparison(path: str | Path, comparison: CampaignComparison) -> Path:
@@ -269,7 +275,8 @@ def write_comparison(path: str | Path, comparison: CampaignComparison) -> Path:
                               "folder_a": comparison.folder_a,
                               "folder_b": comparison.folder_b,
                               "only_a": comparison.only_a, "only_b": comparison.only_b,
-                              "outside_window": json.dumps(comparison.outside_window)})
+                              "outside_window": json.dumps(comparison.outside_window),
+                              "setup_differences": json.dumps(comparison.setup_differences)})
     return Path(path)
 
 

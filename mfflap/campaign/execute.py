@@ -179,11 +179,10 @@ def check_same_setup(out_dir: str | Path, setup: CampaignSetup) -> None:
         four).
     """
     manifest = Path(out_dir) / "campaign.toml"
-    if not manifest.exists():
+    had = manifest_setup(out_dir)
+    if had is None:
         return
-    had = _with_added_settings(read_toml(manifest).get("setup", {}))
     asked = read_toml_text(dumps({"setup": setup.as_dict()}))["setup"]
-    had.pop("timeout_s", None)
     asked.pop("timeout_s")
     if had != asked:
         differences = _differences(had, asked)
@@ -235,16 +234,36 @@ def _write_manifest(out: Path, cases: Sequence[CampaignCase], setup: CampaignSet
     tmp.replace(manifest)
 
 
-def _differences(had: dict[str, Any], asked: dict[str, Any], prefix: str = "") -> list[str]:
-    """``key: folder's value -> asked value`` for every setting that differs (nested)."""
+def setting_differences(a: dict[str, Any], b: dict[str, Any],
+                        prefix: str = "") -> list[tuple[str, Any, Any]]:
+    """``(dotted key, value in a, value in b)`` for every setting of two nested set-up
+    tables that differs (None where one lacks it), in key order."""
     out = []
-    for key in sorted(set(had) | set(asked)):
-        a, b = had.get(key), asked.get(key)
-        if isinstance(a, dict) and isinstance(b, dict):
-            out += _differences(a, b, f"{prefix}{key}.")
-        elif a != b:
-            out.append(f"{prefix}{key}: {a!r} in the folder, {b!r} asked")
+    for key in sorted(set(a) | set(b)):
+        in_a, in_b = a.get(key), b.get(key)
+        if isinstance(in_a, dict) and isinstance(in_b, dict):
+            out += setting_differences(in_a, in_b, f"{prefix}{key}.")
+        elif in_a != in_b:
+            out.append((f"{prefix}{key}", in_a, in_b))
     return out
+
+
+def _differences(had: dict[str, Any], asked: dict[str, Any]) -> list[str]:
+    """``key: folder's value, asked value`` for every setting that differs (nested)."""
+    return [f"{key}: {a!r} in the folder, {b!r} asked"
+            for key, a, b in setting_differences(had, asked)]
+
+
+def manifest_setup(out_dir: str | Path) -> dict[str, Any] | None:
+    """The ``[setup]`` of a campaign folder's campaign.toml with the solver settings added
+    since it was written at the values its runs used, without the time limit per case (no
+    result depends on it); None if the folder has no campaign.toml."""
+    manifest = Path(out_dir) / "campaign.toml"
+    if not manifest.is_file():
+        return None
+    setup = _with_added_settings(read_toml(manifest).get("setup", {}))
+    setup.pop("timeout_s", None)
+    return setup
 
 
 def read_toml_text(text: str) -> dict[str, Any]:

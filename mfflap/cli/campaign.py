@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from typing import Any
 
 import click
 
@@ -149,6 +150,16 @@ def status_cmd(out_dir: Path, as_json: bool) -> None:
     click.echo(", ".join(f"{v} {k}" for k, v in counts.items()))
 
 
+def _setups_line(differences: list[tuple[str, Any, Any]] | None) -> str:
+    """What separates the two campaigns' set-ups, for the head of the comparison."""
+    if differences is None:
+        return "set-ups: not both known (a folder without campaign.toml)"
+    if not differences:
+        return "set-ups: the same mesh and solver settings"
+    return "set-ups differ in: " + "; ".join(f"{key} ({a!r} in A, {b!r} in B)"
+                                             for key, a, b in differences)
+
+
 @campaign.command("compare")
 @click.argument("folder_a", type=click.Path(file_okay=False, exists=True, path_type=Path))
 @click.argument("folder_b", type=click.Path(file_okay=False, exists=True, path_type=Path))
@@ -200,8 +211,11 @@ def compare_cmd(folder_a: Path, folder_b: Path, start_s: float | None, end_s: fl
                               "power_difference": c.power_difference,
                               "cpu_ratio": c.cpu_ratio} for c in result.cases],
                    "summary": result.summary(), "only_a": result.only_a,
-                   "only_b": result.only_b, "outside_window": result.outside_window})
+                   "only_b": result.only_b, "outside_window": result.outside_window,
+                   "setup_differences": None if result.setup_differences is None else
+                   [{"setting": k, "a": a, "b": b} for k, a, b in result.setup_differences]})
         return
+    click.echo(_setups_line(result.setup_differences))
     width = max(len(c.case_id) for c in result.cases)
     click.echo(f"{'case':{width}s} {'F_n':>7s} {'F_t':>7s} {'M':>7s} {'thrust':>8s} "
                f"{'bursts A/B':>10s} {'lost s A/B':>11s} {'CPU A/B':>8s}    "
