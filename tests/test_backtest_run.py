@@ -347,7 +347,10 @@ def test_a_fixture_stands_in_for_a_failed_live_run_only_if_it_is_that_runs_cfd(t
     for mesh, solver, said in (
             ("graded", None, "was run on mesh 'coarse', not 'graded' as asked"),
             ("coarse", replace(SolverSettings(), max_courant=2.0),
-             "was run with max_courant = 4.0, not 2.0 as asked")):
+             "was run with max_courant = 4.0, not 2.0 as asked"),
+            # kept before the wall treatment was: run with the log-law wall functions
+            ("coarse", replace(SolverSettings(), wall_treatment="all_y_plus"),
+             "was run with wall_treatment = 'log_law', not 'all_y_plus' as asked")):
         other = backtest_motion(*args, fixture_folders=[folder], live=True, mesh=mesh,
                                 solver=solver)
         assert other.status == "not back-tested", other.source
