@@ -601,7 +601,20 @@ def test_convergence_command_on_three_meshes_and_two_courant_limits(tmp_path):
     assert res.exit_code == 2 and ("coarse_co4.h5: far_field: this run was made with "
                                    "far_field = 'freestream', the study asks for "
                                    "'inletOutlet'") in " ".join(res.output.split()), res.output
+    res = CliRunner().invoke(cli, [*args, "--wall-treatment", "all_y_plus"])
+    assert res.exit_code == 2 and ("coarse_co4.h5: wall_treatment: this run was made with "
+                                   "wall_treatment = 'log_law', the study asks for "
+                                   "'all_y_plus'") in " ".join(res.output.split()), res.output
     assert (out / "fine_co4.h5").stat().st_mtime_ns == mtime
+    # the text output and the report say what every run was made with
+    import html
+
+    settings = ("the meshes' runs: PIMPLE 2x1, PCG; every run, named set-ups included: "
+                "freestream far field, limitedLinear k and epsilon convection, log_law wall "
+                "treatment")
+    res = CliRunner().invoke(cli, args[:-1])
+    assert res.exit_code == 0 and settings in res.output, res.output
+    assert settings in html.unescape((out / "convergence.html").read_text())
 
 
 def test_collapsed_time_step_is_recognised_from_a_real_log_excerpt():

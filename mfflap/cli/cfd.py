@@ -539,7 +539,11 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: list[floa
     if phase_from is not None and not study.phase_cycles:
         click.echo(f"no mean cycles compared: the runs hold fewer than two whole periods "
                    f"({period:.6g} s) after --phase-from {phase_from:g} s", err=True)
-    rep = Report("Mesh and time-step convergence", f"{case.study.name}: {described}")
+    settings = (f"the meshes' runs: PIMPLE 2x{n_correctors}, {pressure_solver}; every run, "
+                f"named set-ups included: {far_field} far field, {turbulence_convection} k "
+                f"and epsilon convection, {wall_treatment} wall treatment")
+    rep = Report("Mesh and time-step convergence", f"{case.study.name}: {described}; "
+                                                   f"{settings}")
     sec = rep.section("NRMSE between runs")
     sec.blocks.append(table_html(["comparison", "F_n", "F_t", "M"],
                                  [[k, *v.values()] for k, v in study.nrmse.items()]))
@@ -573,6 +577,7 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: list[floa
     if as_json:
         echo_json(study.as_dict())
         return
+    click.echo(settings)
     for k, note in notes.items():
         click.echo(f"{k}: {note}")
     for k, v in runs.items():
