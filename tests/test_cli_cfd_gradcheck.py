@@ -27,6 +27,7 @@ def test_cfd_write_run_parse_with_real_openfoam(tmp_path, options):
     assert res.exit_code == 0, res.output
     health = json.loads(res.stdout)
     assert health["openfoam_build"].startswith("OPENFOAM=")
+    assert health["wall_treatment"] == "log_law"  # said with or without --y-plus
     assert health["n_time_steps"] > 10 and health["cpu_time_s"] > 0
     assert health["n_steps_bounding_epsilon"] <= health["n_time_steps"]
     assert health["numerical_bursts"] == []  # the impulsive start's force impulse is real

@@ -248,9 +248,9 @@ def run(case_dir: Path, timeout: float, procs: int, progress_every: float,
         signals.append(history.moment[:, 2])
     summary["numerical_bursts"] = [b.describe()
                                    for b in find_numerical_bursts(history.time, signals)]
+    summary["wall_treatment"] = written_wall_treatment(case_dir)
     if (case_dir / "postProcessing" / "yPlus").is_dir():  # written with --y-plus
         summary.update(y_plus_summary(read_y_plus(case_dir)))
-        summary["wall_treatment"] = written_wall_treatment(case_dir)
         summary["wall_function_note"] = wall_function_note(summary, summary["wall_treatment"])
     if as_json:
         echo_json(summary)
