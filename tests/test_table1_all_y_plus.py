@@ -78,3 +78,34 @@ def test_the_identified_coefficients_move_within_their_spread_but_normal_drag():
     assert log_law["tangential_added_mass"] == spalding["tangential_added_mass"] == 0.0
     assert log_law["tangential_drag"] == 0.0
     assert 0 < spalding["tangential_drag"] < spread["tangential_drag"]
+
+
+def test_the_identification_report_says_the_wall_treatment_each_case_ran_with(tmp_path):
+    """The report's table of CFD cases has the column; for a shipped record, which keeps
+    solver settings but not this one, it reads log_law."""
+    import re
+
+    from click.testing import CliRunner
+
+    from mfflap.cli.main import cli
+
+    case_file = Path(__file__).parents[1] / "cases" / "paper2026.toml"
+    shipped_one = SHIPPED / "f1p000_h0p100_phi090p0.h5"
+    for label, fixtures in (("all_y_plus", [ALL_Y_PLUS]), ("log_law", [shipped_one])):
+        out = tmp_path / f"{label}.h5"
+        args = [a for f in fixtures for a in ("--fixtures", str(f))]
+        res = CliRunner().invoke(cli, ["identify", str(case_file), *args, "--strategy",
+                                       "uniform", "--bootstrap", "5", "--output", str(out)])
+        assert res.exit_code == 0, res.output
+        html = tmp_path / f"{label}.html"
+        res = CliRunner().invoke(cli, ["report", "identification", str(out), "--out",
+                                       str(html)])
+        assert res.exit_code == 0, res.output
+        used = html.read_text()[html.read_text().index("CFD cases used"):]
+        used = used[:used.index("</table>")]
+        header = re.findall(r"<th>([^<]*)</th>", used)
+        column = header.index("wall treatment")
+        rows = re.findall(r"<tr><td>(f[0-9p]+_h[0-9p]+_phi[0-9p]+)</td>(.*?)</tr>", used)
+        assert len(rows) == (15 if label == "all_y_plus" else 1)
+        for _, row in rows:
+            assert re.findall(r"<td>([^<]*)</td>", row)[column - 1] == label

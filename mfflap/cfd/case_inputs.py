@@ -187,6 +187,19 @@ def kept_differences(kept: dict[str, Any], asked: dict[str, Any]) -> list[tuple[
     return out
 
 
+def kept_wall_treatment(kept: dict[str, Any]) -> str | None:
+    """The plate's wall treatment a case or record (its mfflap_case.toml, its provenance)
+    says it ran with: as run (read from its 0/nut), as written, or, for one that keeps
+    solver settings but not this one, the value :data:`ADDED_SOLVER_SETTINGS` gives; None
+    if it keeps no solver setting at all."""
+    for key in ("as_run_wall_treatment", "solver_wall_treatment"):
+        if key in kept:
+            return str(kept[key])
+    if any(key.startswith("solver_") for key in kept):
+        return ADDED_SOLVER_SETTINGS["wall_treatment"]
+    return None
+
+
 def solver_keys(solver: Any, leave_out: tuple[str, ...] = ()) -> dict[str, Any]:
     """A solver's settings under the keys a case and a record keep them (``solver_<name>``),
     without those named in ``leave_out``."""

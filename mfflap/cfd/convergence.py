@@ -24,7 +24,7 @@ import numpy as np
 from mfflap.campaign.record_inputs import input_mismatches
 from mfflap.campaign.records import CfdRecord, read_record, write_record
 from mfflap.cfd.bursts import find_load_bursts
-from mfflap.cfd.case_inputs import kept_differences, solver_keys
+from mfflap.cfd.case_inputs import kept_differences, kept_wall_treatment, solver_keys
 from mfflap.cfd.gci import GridConvergence, grid_convergence
 from mfflap.cfd.openfoam.loads import check_end_time, check_ramp_time, imposed_state
 from mfflap.cfd.openfoam.setups import CfdSetup
@@ -101,15 +101,10 @@ class ConvergenceStudy:
                                    "y_plus_max": None if r.y_plus is None else
                                    float(np.max(r.y_plus.maximum)),
                                    "wall_function_note": None if r.y_plus is None else
-                                   wall_function_note(y_plus_summary(r.y_plus),
-                                                      _wall_treatment(r.record))}
+                                   wall_function_note(
+                                       y_plus_summary(r.y_plus),
+                                       kept_wall_treatment(r.record.provenance) or "log_law")}
                          for r in self.runs}}
-
-
-def _wall_treatment(record: CfdRecord) -> str:
-    """The plate's wall treatment a run's case held (log_law for records that do not say)."""
-    prov = record.provenance
-    return str(prov.get("as_run_wall_treatment", prov.get("solver_wall_treatment", "log_law")))
 
 
 def _clipped_fraction(record: CfdRecord) -> float | None:

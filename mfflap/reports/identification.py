@@ -12,6 +12,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
 
+from mfflap.cfd.case_inputs import kept_wall_treatment
 from mfflap.hydro.base import ForceModel
 from mfflap.identification.data import BURST_NOTE, CaseData
 from mfflap.identification.fit import HELD_AT_ZERO, IdentificationResult
@@ -239,6 +240,7 @@ def add_identification_sections(rep: Report, results: Mapping[str, Identificatio
                      prov.get("n_cells", "-"), prov.get("solver_max_courant", "-"),
                      str(prov.get("solver_far_field", "-")),
                      prov.get("as_run_max_courant", "-"), str(prov.get("as_run_far_field", "-")),
+                     kept_wall_treatment(prov) or "-",
                      float(prov.get("cpu_time_s", np.nan)),
                      str(prov.get("retries", "")) or "-",
                      float(first.metrics["normal_force"]["nrmse"][i]),
@@ -247,7 +249,8 @@ def add_identification_sections(rep: Report, results: Mapping[str, Identificatio
                               f"the {first.strategy}-weighted fit):"))
     s.blocks.append(table_html(["case", "f [Hz]", "h_amp [m]", "φ [deg]", "mesh", "cells",
                                 "set-up max Co", "set-up far field", "max Co at end",
-                                "far field at end", "CPU [s]", "solver retries",
+                                "far field at end", "wall treatment", "CPU [s]",
+                                "solver retries",
                                 "NRMSE F_n", "Pearson F_n"], rows))
     if first.notes:
         s.blocks.append(text_html("Data cleaning (numerical bursts of the CFD bridged, "
