@@ -172,9 +172,7 @@ def kept_differences(kept: dict[str, Any], asked: dict[str, Any]) -> list[tuple[
     :data:`RELATIVE_TOLERANCE`, others exactly. Keys ``kept`` lacks (written by an earlier
     mfflap) are not compared, except the :data:`ADDED_SOLVER_SETTINGS` where ``kept`` has
     solver settings: those it lacks are at the values its run used."""
-    if any(key.startswith("solver_") for key in kept):
-        kept = {**{f"solver_{key}": value for key, value in ADDED_SOLVER_SETTINGS.items()},
-                **kept}
+    kept = with_added_solver_settings(kept)
     out = []
     for key, value in asked.items():
         if key not in kept:
@@ -192,12 +190,18 @@ def kept_wall_treatment(kept: dict[str, Any]) -> str | None:
     says it ran with: as run (read from its 0/nut), as written, or, for one that keeps
     solver settings but not this one, the value :data:`ADDED_SOLVER_SETTINGS` gives; None
     if it keeps no solver setting at all."""
-    for key in ("as_run_wall_treatment", "solver_wall_treatment"):
-        if key in kept:
-            return str(kept[key])
-    if any(key.startswith("solver_") for key in kept):
-        return ADDED_SOLVER_SETTINGS["wall_treatment"]
-    return None
+    treatment = kept.get("as_run_wall_treatment",
+                         with_added_solver_settings(kept).get("solver_wall_treatment"))
+    return None if treatment is None else str(treatment)
+
+
+def with_added_solver_settings(kept: dict[str, Any]) -> dict[str, Any]:
+    """``kept`` (a case's mfflap_case.toml, a record's provenance) with the
+    :data:`ADDED_SOLVER_SETTINGS` it lacks, at the values its run used, if it keeps solver
+    settings at all; as it is otherwise."""
+    if not any(key.startswith("solver_") for key in kept):
+        return kept
+    return {**{f"solver_{key}": value for key, value in ADDED_SOLVER_SETTINGS.items()}, **kept}
 
 
 def solver_keys(solver: Any, leave_out: tuple[str, ...] = ()) -> dict[str, Any]:
