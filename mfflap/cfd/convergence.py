@@ -96,15 +96,19 @@ class ConvergenceStudy:
                                    "epsilon_clipped_step_fraction": _clipped_fraction(r.record),
                                    "numerical_bursts": [b.describe() for b in
                                                         find_load_bursts(r.record.loads)],
-                                   "y_plus_mean": None if r.y_plus is None else
-                                   float(np.mean(r.y_plus.average)),
-                                   "y_plus_max": None if r.y_plus is None else
-                                   float(np.max(r.y_plus.maximum)),
-                                   "wall_function_note": None if r.y_plus is None else
-                                   wall_function_note(
-                                       y_plus_summary(r.y_plus),
-                                       kept_wall_treatment(r.record.provenance) or "log_law")}
+                                   **_y_plus_keys(r)}
                          for r in self.runs}}
+
+
+def _y_plus_keys(run: ConvergenceRun) -> dict[str, float | str | None]:
+    """A run's mean and largest y+ on the plate and what they mean for its wall treatment
+    (all None for a run without y+ output)."""
+    if run.y_plus is None:
+        return {"y_plus_mean": None, "y_plus_max": None, "wall_function_note": None}
+    summary = y_plus_summary(run.y_plus)
+    return {"y_plus_mean": summary["y_plus_mean"], "y_plus_max": summary["y_plus_max"],
+            "wall_function_note": wall_function_note(
+                summary, kept_wall_treatment(run.record.provenance) or "log_law")}
 
 
 def _clipped_fraction(record: CfdRecord) -> float | None:
