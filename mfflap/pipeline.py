@@ -148,7 +148,12 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
     from mfflap.backtest.workflow import backtest_all
     from mfflap.campaign.records import fixture_dir
     from mfflap.identification.workflow import identify_strategies, load_cases
-    from mfflap.optimisation.study import beta_study, gain_table, sinusoid_motion
+    from mfflap.optimisation.study import (
+        StudyInterrupted,
+        beta_study,
+        gain_table,
+        sinusoid_motion,
+    )
 
     folders = options.fixtures or (fixture_dir(),)
 
@@ -172,9 +177,17 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
     if outcome.cases:
         outcome.gap = _stage(outcome, "gap diagnosis", progress,
                              lambda: gap_diagnosis(config, outcome.cases))
-    outcome.study = _stage(outcome, "optimisation", progress, lambda: beta_study(
-        config, n_starts=options.n_starts, with_ipopt=options.with_ipopt, model=model,
-        progress=progress))
+
+    def optimisation():
+        try:
+            return beta_study(config, n_starts=options.n_starts,
+                              with_ipopt=options.with_ipopt, model=model, progress=progress)
+        except StudyInterrupted as exc:  # the betas finished before it are written
+            outcome.study = exc.study
+            outcome.problems.append(f"optimisation: {exc.study.interruption}")
+            raise
+
+    outcome.study = _stage(outcome, "optimisation", progress, optimisation)
     study = outcome.study
     if study is not None and options.gain_table:
         outcome.gain = _stage(outcome, "gain table", progress, lambda: gain_table(

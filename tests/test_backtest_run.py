@@ -195,6 +195,43 @@ def test_main_job_runs_end_to_end_on_the_shipped_fixtures(tmp_path):
     assert list((out / "vtk").glob("*.pvd"))
 
 
+@pytest.mark.slow
+def test_a_stop_during_the_main_jobs_optimisation_writes_the_betas_optimised_before(
+        tmp_path, monkeypatch):
+    """`mfflap run` stopped by SIGTERM as beta = 0.5 starts: results.h5 and report.html
+    hold identification, the sweep and beta = 0, name the stage and the betas left out
+    (before, the finished betas were lost with the stage)."""
+    import os
+    import signal
+
+    import mfflap.optimisation.study as study_module
+    from mfflap.cli.main import cli
+    from mfflap.results import ResultsFile
+
+    real_multistart = study_module.multistart
+
+    def multistart(problem, *args, **kwargs):
+        if problem.beta == 0.5:
+            os.kill(os.getpid(), signal.SIGTERM)
+        return real_multistart(problem, *args, **kwargs)
+
+    monkeypatch.setattr(study_module, "multistart", multistart)
+    out = tmp_path / "run"
+    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--starts", "1",
+                                   "--no-ipopt", "--no-gain-table"])
+    assert res.exit_code == 1, res.output
+    assert "interrupted (optimisation): " in res.output
+    left = "interrupted during beta = 0.5: beta 0.5, 1 not optimised (optimised: 0)"
+    with ResultsFile(out / "results.h5") as rf:
+        assert rf.h5.attrs["interrupted_stage"] == "optimisation"
+        assert f"optimisation: {left}" in rf.h5.attrs["problems"]
+        assert list(rf.h5["optimisation/sqp"]) == ["beta_0.00"]
+        assert rf.h5["optimisation"].attrs["interrupted_beta"] == 0.5
+        assert "identification" in rf.h5 and "backtest" not in rf.h5
+    html = (out / "report.html").read_text()
+    assert f"Incomplete: {left}." in html and "Optimised motions" in html
+
+
 def test_a_failed_cfd_run_is_reported_with_its_reason(tmp_path):
     folder = tmp_path / "bt"
     folder.mkdir()

@@ -124,6 +124,9 @@ def test_optimise_cli_writes_results_and_report(tmp_path):
         assert np.isnan(rf.h5["optimisation"].attrs["thrust_gain_beta0"])
         assert rf.h5["optimisation"].attrs["thrust_gain_beta0_missing"] == \
             "beta = 0 was not optimised"
+        assert np.isnan(rf.h5["optimisation"].attrs["interrupted_beta"])  # ran to the end
+        assert rf.h5["optimisation"].attrs["betas_not_optimised"].size == 0
+    assert "Incomplete" not in html
 
 
 def test_thrust_gain_is_not_a_ratio_to_a_drag():
@@ -376,3 +379,74 @@ def test_ctrl_c_during_optimise_ipopt_stops_it(capfd, ctrl_c_raises):
     finally:
         timer.cancel()
     assert "KeyboardInterruptException" in capfd.readouterr().err
+
+
+def test_a_stop_signal_between_betas_keeps_the_betas_optimised_before_it():
+    """A SIGTERM (SLURM's stop; a Ctrl-C alike) while beta = 0.75 is optimised: the study
+    raises StudyInterrupted, a KeyboardInterrupt, holding beta = 0.5 and the sweep; the
+    stopped beta is dropped, though one of its starts had finished."""
+    import os
+    import signal
+
+    from mfflap.cli.stop_signals import stop_signals_as_interrupt
+    from mfflap.optimisation.study import StudyInterrupted, beta_study
+    from mfflap.sweep import sinusoid_sweep
+
+    config = load_case(CASE)
+    model = config.morison_model()
+    o = config.optimisation
+    sweep = sinusoid_sweep(model, np.linspace(0.5, 2.5, 5), np.linspace(0.05, 0.3, 3),
+                           np.deg2rad([20, 40]), np.deg2rad([90]), n_steps=o.n_steps,
+                           max_power=o.max_power)
+
+    def progress(message: str) -> None:
+        if message.startswith("beta 0.75 from"):  # inside the beta's multistart
+            os.kill(os.getpid(), signal.SIGTERM)
+
+    with pytest.raises(StudyInterrupted) as caught, stop_signals_as_interrupt():
+        beta_study(config, [0.5, 0.75, 1.0], n_starts=1, with_ipopt=False, model=model,
+                   sweep=sweep, progress=progress)
+    assert isinstance(caught.value, KeyboardInterrupt)
+    study = caught.value.study
+    assert list(study.sqp) == [0.5] and list(study.sqp_all) == [0.5] and study.ipopt == {}
+    assert study.sqp[0.5].converged and study.sweep is sweep
+    assert study.interrupted_beta == 0.75 and study.betas_not_optimised == (0.75, 1.0)
+    assert study.interruption == ("interrupted during beta = 0.75: beta 0.75, 1 not "
+                                  "optimised (optimised: 0.5)")
+    assert str(caught.value) == study.interruption
+
+
+@pytest.mark.slow
+def test_an_interrupted_optimise_writes_the_betas_optimised_before_it(tmp_path, monkeypatch):
+    """`mfflap optimise` stopped by SIGTERM during beta = 0.75 (sent as its optimisation
+    starts): exit 1, the message says what was left out, and the results file and the
+    report hold beta = 0.5 and say the study is incomplete (before, nothing was written)."""
+    import os
+    import signal
+
+    import mfflap.optimisation.study as study_module
+
+    real_multistart = study_module.multistart
+
+    def multistart(problem, *args, **kwargs):
+        if problem.beta == 0.75:
+            os.kill(os.getpid(), signal.SIGTERM)
+        return real_multistart(problem, *args, **kwargs)
+
+    monkeypatch.setattr(study_module, "multistart", multistart)
+    out = tmp_path / "opt.h5"
+    res = CliRunner().invoke(__import__("mfflap.cli.main", fromlist=["cli"]).cli,
+                             ["optimise", str(CASE), "--betas", "0.5,0.75,1", "--starts", "1",
+                              "--no-ipopt", "--output", str(out)])
+    assert res.exit_code == 1, res.output
+    html = out.with_suffix(".html")
+    assert (f"interrupted during beta = 0.75: beta 0.75, 1 not optimised (optimised: 0.5); "
+            f"wrote those optimised to {out} and {html}") in res.output
+    with ResultsFile(out) as rf:
+        assert list(rf.h5["optimisation/sqp"]) == ["beta_0.50"]
+        assert rf.h5["optimisation"].attrs["interrupted_beta"] == 0.75
+        np.testing.assert_array_equal(rf.h5["optimisation"].attrs["betas_not_optimised"],
+                                      [0.75, 1.0])
+        assert "optimisation/sweep/mean_thrust" in rf.h5
+    assert ("Incomplete: interrupted during beta = 0.75: beta 0.75, 1 not optimised "
+            "(optimised: 0.5).") in html.read_text()

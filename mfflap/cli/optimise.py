@@ -27,14 +27,13 @@ from mfflap.cli.options import FloatList, ResultsOutput
 @click.option("--json", "as_json", is_flag=True, help="Print the optimised means as JSON.")
 def optimise(case_file: Path, betas: list[float] | None, starts: int, ipopt: bool, gain_table: bool,
              output: Path, report_path: Path | None, as_json: bool) -> None:
-    """Optimise the motion of CASE_FILE for each beta with the discrete adjoint."""
+    """Optimise the motion of CASE_FILE for each beta with the discrete adjoint.
+
+    Ctrl-C (or SIGTERM, SIGUSR1) stops it and writes the betas optimised before it.
+    """
     from mfflap.config import load_case
-    from mfflap.optimisation.study import beta_study
+    from mfflap.optimisation.study import StudyInterrupted, beta_study
     from mfflap.optimisation.study import gain_table as make_gain_table
-    from mfflap.optimisation.workflow import write_study
-    from mfflap.reports.html import Report
-    from mfflap.reports.optimisation import add_optimisation_sections
-    from mfflap.results import ResultsFile
 
     case = load_case(case_file)
     def progress(msg: str) -> None:
@@ -42,16 +41,23 @@ def optimise(case_file: Path, betas: list[float] | None, starts: int, ipopt: boo
             click.echo(msg, err=True)
 
     model = case.morison_model()
-    study = beta_study(case, betas, n_starts=starts, with_ipopt=ipopt, model=model,
-                       progress=progress)
-    gain = make_gain_table(case, model=model, sweep=study.sweep, progress=progress) \
-        if gain_table else None
-    with ResultsFile(output, "w", kind="optimisation", config_toml=case.to_toml()) as rf:
-        write_study(rf, case, study, gain, model)
-    rep = Report(f"Optimisation study: {case.study.name}", case.study.description)
-    add_optimisation_sections(rep, study, model, case.optimisation.scheme,
-                              case.optimisation.max_power, gain)
-    html = rep.write(report_path or output.with_suffix(".html"))
+    try:
+        study = beta_study(case, betas, n_starts=starts, with_ipopt=ipopt, model=model,
+                           progress=progress)
+    except StudyInterrupted as exc:  # write the betas finished before it, then stop
+        html = _write(case, exc.study, None, model, output, report_path)
+        click.echo(f"{exc.study.interruption}; wrote those optimised to {output} and {html}",
+                   err=True)
+        raise click.Abort() from None
+    try:
+        gain = make_gain_table(case, model=model, sweep=study.sweep, progress=progress) \
+            if gain_table else None
+    except KeyboardInterrupt:  # the beta study is finished: write it without the table
+        html = _write(case, study, None, model, output, report_path)
+        click.echo(f"interrupted during the gain table; wrote the beta study without it to "
+                   f"{output} and {html}", err=True)
+        raise click.Abort() from None
+    html = _write(case, study, gain, model, output, report_path)
     out = {f"{b:g}": {**r.summary.as_dict(), "period": float(r.motion.period),
                       "converged": r.converged, "flags": r.flags}
            for b, r in study.sqp.items()}
@@ -81,3 +87,18 @@ def optimise(case_file: Path, betas: list[float] | None, starts: int, ipopt: boo
                    + (f"; caution: {study.thrust_gain_caveat}" if study.thrust_gain_caveat
                       else ""))
     click.echo(f"wrote {output} and {html}")
+
+
+def _write(case, study, gain, model, output: Path, report_path: Path | None) -> Path:
+    """Write the study's results file and HTML report; return the report's path."""
+    from mfflap.optimisation.workflow import write_study
+    from mfflap.reports.html import Report
+    from mfflap.reports.optimisation import add_optimisation_sections
+    from mfflap.results import ResultsFile
+
+    with ResultsFile(output, "w", kind="optimisation", config_toml=case.to_toml()) as rf:
+        write_study(rf, case, study, gain, model)
+    rep = Report(f"Optimisation study: {case.study.name}", case.study.description)
+    add_optimisation_sections(rep, study, model, case.optimisation.scheme,
+                              case.optimisation.max_power, gain)
+    return rep.write(report_path or output.with_suffix(".html"))

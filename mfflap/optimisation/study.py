@@ -94,6 +94,21 @@ class BetaStudy:
     sqp_all: dict[float, list[OptimisationResult]]
     ipopt: dict[float, OptimisationResult] = field(default_factory=dict)
     refined: RefinedSinusoid | None = None
+    #: the beta whose optimisation a Ctrl-C (or SIGTERM) stopped, or None
+    interrupted_beta: float | None = None
+    #: the betas asked for but not optimised because of that interrupt (the stopped one
+    #: first); their partial results are not kept
+    betas_not_optimised: tuple[float, ...] = ()
+
+    @property
+    def interruption(self) -> str | None:
+        """What an interrupt left out, in words (None when the study ran to its end)."""
+        if self.interrupted_beta is None:
+            return None
+        done = ", ".join(f"{b:g}" for b in self.sqp) or "none"
+        return (f"interrupted during beta = {self.interrupted_beta:g}: beta "
+                f"{', '.join(f'{b:g}' for b in self.betas_not_optimised)} not optimised "
+                f"(optimised: {done})")
 
     @property
     def thrust_gain(self) -> float | None:
@@ -140,6 +155,26 @@ class BetaStudy:
                 "inherits that doubt")
 
 
+class StudyInterrupted(KeyboardInterrupt):
+    """A Ctrl-C (or a stop signal) during a beta study's optimisations.
+
+    It is a KeyboardInterrupt, so whatever does not know it stops as on Ctrl-C; a caller
+    that does finds the betas finished before it in :attr:`study` (with the sweep and the
+    refined sinusoid), to write them before it stops.
+
+    Attributes
+    ----------
+    study : BetaStudy
+        The betas whose SQP (and IPOPT, when asked) finished;
+        :attr:`BetaStudy.interrupted_beta` and :attr:`BetaStudy.betas_not_optimised` say
+        what was left out.
+    """
+
+    def __init__(self, study: BetaStudy) -> None:
+        super().__init__(study.interruption)
+        self.study = study
+
+
 def beta_study(config: CaseConfig, betas: Sequence[float] | None = None, n_starts: int = 3,
                with_ipopt: bool = True, model=None, sweep: SweepResult | None = None,
                progress: Progress | None = None) -> BetaStudy:
@@ -149,6 +184,9 @@ def beta_study(config: CaseConfig, betas: Sequence[float] | None = None, n_start
     ------
     ConfigError
         Before any work, if a beta is outside [0, 1] or ``n_starts`` is below 1.
+    StudyInterrupted
+        On a Ctrl-C (or a stop signal) during the optimisations, holding the betas
+        finished before it; during the sweep, a plain KeyboardInterrupt.
     """
     o = config.optimisation
     model = model or config.morison_model()
@@ -168,15 +206,23 @@ def beta_study(config: CaseConfig, betas: Sequence[float] | None = None, n_start
                  f"(grid {refined.grid_thrust:.4g} N)")
     sqp, sqp_all, ipopt = {}, {}, {}
     for beta, problem in problems.items():
-        sqp[beta], sqp_all[beta] = multistart(problem, starts, min_period=o.min_period,
-                                              max_period=o.max_period, progress=progress)
-        if with_ipopt:
-            ipopt[beta] = optimise_ipopt(problem, starts[0][1], min_period=o.min_period,
-                                         max_period=o.max_period, start_label=starts[0][0])
+        try:
+            found, found_all = multistart(problem, starts, min_period=o.min_period,
+                                          max_period=o.max_period, progress=progress)
+            found_ipopt = optimise_ipopt(problem, starts[0][1], min_period=o.min_period,
+                                         max_period=o.max_period, start_label=starts[0][0]
+                                         ) if with_ipopt else None
+        except KeyboardInterrupt as exc:  # keep the betas finished; this one is dropped
+            left = tuple(list(problems)[list(problems).index(beta):])
+            raise StudyInterrupted(BetaStudy(sweep, best, sqp, sqp_all, ipopt, refined,
+                                             interrupted_beta=beta,
+                                             betas_not_optimised=left)) from exc
+        sqp[beta], sqp_all[beta] = found, found_all
+        if found_ipopt is not None:
+            ipopt[beta] = found_ipopt
             if progress is not None:
-                r = ipopt[beta]
                 progress(f"beta {beta:g} IPOPT (hard constraints): thrust "
-                         f"{float(r.summary.mean_thrust):.3g} N, {r.message}")
+                         f"{float(found_ipopt.summary.mean_thrust):.3g} N, {found_ipopt.message}")
     return BetaStudy(sweep, best, sqp, sqp_all, ipopt, refined)
 
 

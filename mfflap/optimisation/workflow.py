@@ -35,6 +35,8 @@ def write_study(rf: ResultsFile, config: CaseConfig, study: BetaStudy,
         if beta in study.ipopt:
             write_result(rf, f"{prefix}/ipopt/{beta_key(beta)}", study.ipopt[beta], settings)
     rf.h5[prefix].attrs["thrust_gain_beta0"] = _or_nan(study.thrust_gain)
+    rf.h5[prefix].attrs["interrupted_beta"] = _or_nan(study.interrupted_beta)  # NaN: ran to the end
+    rf.h5[prefix].attrs["betas_not_optimised"] = np.asarray(study.betas_not_optimised, float)
     if study.no_thrust_gain_reason is not None:
         rf.h5[prefix].attrs["thrust_gain_beta0_missing"] = study.no_thrust_gain_reason
     if study.thrust_gain_caveat is not None:

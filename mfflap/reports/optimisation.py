@@ -126,6 +126,8 @@ def add_optimisation_sections(rep: Report, study, model, scheme: str, max_power:
     s.blocks.append(figure_html(pareto_figure(sw, best, study.sqp),
                                 "Mean thrust against mean power and efficiency (Fig. 4a,b)"))
     s = rep.section("Optimised motions (β sweep)")
+    if study.interruption is not None:
+        s.blocks.append(text_html(f"Incomplete: {study.interruption}.", warn=True))
     rows = [result_rows(f"β = {b:g}", r) for b, r in study.sqp.items()]
     rows += [result_rows(f"β = {b:g}", r) for b, r in study.ipopt.items()]
     s.blocks.append(table_html(RESULT_HEADER, rows))
