@@ -450,3 +450,33 @@ def test_an_interrupted_optimise_writes_the_betas_optimised_before_it(tmp_path, 
         assert "optimisation/sweep/mean_thrust" in rf.h5
     assert ("Incomplete: interrupted during beta = 0.75: beta 0.75, 1 not optimised "
             "(optimised: 0.5).") in html.read_text()
+
+
+@pytest.mark.slow
+def test_a_stop_during_the_gain_table_writes_the_beta_study_without_it(tmp_path, monkeypatch):
+    """SIGTERM as the gain table's first beta = 0 optimisation starts: the beta study
+    (beta = 0.5, finished) is written whole, without a gain table, and the message says so."""
+    import os
+    import signal
+
+    import mfflap.optimisation.optimise as optimise_module
+
+    real_sqp = optimise_module.optimise_sqp
+
+    def optimise_sqp(problem, *args, **kwargs):
+        if problem.beta == 0.0:  # only the gain table's problems: the study's beta is 0.5
+            os.kill(os.getpid(), signal.SIGTERM)
+        return real_sqp(problem, *args, **kwargs)
+
+    monkeypatch.setattr(optimise_module, "optimise_sqp", optimise_sqp)
+    out = tmp_path / "opt.h5"
+    res = CliRunner().invoke(__import__("mfflap.cli.main", fromlist=["cli"]).cli,
+                             ["optimise", str(CASE), "--betas", "0.5", "--starts", "1",
+                              "--no-ipopt", "--gain-table", "--output", str(out)])
+    assert res.exit_code == 1, res.output
+    assert (f"interrupted during the gain table; wrote the beta study without it to {out}"
+            in res.output)
+    with ResultsFile(out) as rf:
+        assert list(rf.h5["optimisation/sqp"]) == ["beta_0.50"]
+        assert "optimisation/gain_table" not in rf.h5
+        assert np.isnan(rf.h5["optimisation"].attrs["interrupted_beta"])
