@@ -69,8 +69,8 @@ Run: python benchmarks/cfd_cost.py [setup ...] [--meshes coarse,lean] [--cycles 
      numbers in HDF5 with the command line;
      with --work-dir, runs that finished there before are read, not rerun, runs stopped
      part-way are resumed, and a folder
-     whose runs had another motion, cycle count, far field or k-epsilon convection
-     (--turbulence-convection) is refused; the mesh study
+     whose runs had another motion, cycle count, far field, k-epsilon convection
+     (--turbulence-convection) or wall treatment (--wall-treatment) is refused; the mesh study
      of the README: affordable --meshes fine --far-field inletOutlet --cycles 1; the
      plate's frame: affordable --plate-frame --far-field inletOutlet --cycles 1)
 """
@@ -94,7 +94,13 @@ from mfflap.cfd.openfoam.loads import imposed_state, to_loads
 from mfflap.cfd.openfoam.runner import ran_to_end, run_case, solver_progress
 from mfflap.cfd.openfoam.setups import mesh_and_solver, setup
 from mfflap.cfd.openfoam.solver_log import solver_provenance
-from mfflap.cfd.openfoam.writer import AnyMeshSpec, SolverSettings, mesh_specs, write_case
+from mfflap.cfd.openfoam.writer import (
+    WALL_TREATMENTS,
+    AnyMeshSpec,
+    SolverSettings,
+    mesh_specs,
+    write_case,
+)
 from mfflap.errors import MfflapError
 from mfflap.identification.data import despike
 from mfflap.kinematics import HarmonicMotion
@@ -668,6 +674,10 @@ def argument_parser() -> argparse.ArgumentParser:
     parser.add_argument("--turbulence-convection", choices=("limitedLinear", "upwind"),
                         default=None, help="convection of k and epsilon in every run "
                         "(default: each set-up's own; upwind needs no clipping of epsilon)")
+    parser.add_argument("--wall-treatment", choices=tuple(WALL_TREATMENTS), default=None,
+                        help="the plate's wall conditions in every run, the reference and "
+                        "the baseline included (default: each set-up's own): log_law (k-"
+                        "epsilon wall functions) or all_y_plus (Spalding's law, any y+)")
     parser.add_argument("--plate-frame", action="store_true",
                         help="also run the reference and every set-up in the plate's frame "
                         "(static mesh, inletOutlet far field)")
@@ -730,11 +740,13 @@ def parsed_arguments(argv: list[str] | None = None) -> argparse.Namespace:
 
 def settings_stamp(args: argparse.Namespace) -> str:
     """What every run of a work folder shares: the motion, the cycles simulated, the far
-    field and the k-epsilon convection."""
+    field, the k-epsilon convection and, when asked, the wall treatment."""
     own = "each set-up's own"
+    # said only when asked, so that the folders of earlier commands keep their stamps
+    wall = "" if args.wall_treatment is None else f"; wall treatment {args.wall_treatment}"
     return (f"motion {benchmark_motion(args.pitch_deg)!r}; cycles {args.cycles!r}; far field "
             f"{args.far_field or own}; k-epsilon convection "
-            f"{args.turbulence_convection or own}\n")
+            f"{args.turbulence_convection or own}{wall}\n")
 
 
 def claim_work_dir(root: str | Path, said: str) -> None:
@@ -817,6 +829,8 @@ def plan_runs(args: argparse.Namespace, root: str | Path | None = None) -> RunPl
         jobs = [j.with_solver(far_field=args.far_field) for j in jobs]
     if args.turbulence_convection:
         jobs = [j.with_solver(turbulence_convection=args.turbulence_convection) for j in jobs]
+    if args.wall_treatment:
+        jobs = [j.with_solver(wall_treatment=args.wall_treatment) for j in jobs]
     moving = {"reference", *named} if args.plate_frame else set()
     jobs += [j.variant("plate", frame="plate", far_field="inletOutlet")
              for j in jobs if j.label in moving]

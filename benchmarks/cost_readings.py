@@ -5,16 +5,17 @@ one yardstick on one motion, and is named ``cost_accuracy_pitch<P>[<suffix>].h5`
 motion's pitch amplitude (deg). The yardstick it names sorts it into one of four kinds:
 mfflap's O-grid medium mesh at one time step (``reference[-coX]``), the mean of that mesh's
 runs at several time steps (``mean of max Co ...``), openfoam.md's H-type medium mesh or its
-fine one (``openfoam_md@openfoam_md_medium[-coX]``, ``..._fine[-coX]``). Where several
-studies of one motion measure against one mesh at different time steps, the smallest max
-Co counts; two studies of one motion against the same yardstick are refused. For each
-study and each time window it holds (cycle 1, and the first stroke where ``--window`` gave
-it), this prints the set-up within the cost that comes nearest the yardstick and whether that
-meets the target: F_n and M within 2 % NRMSE with both pressure solvers where the study
-reran the set-up with the other one (a pass that turns on round-off is not a pass). "Within
-the cost" is the set-up's CPU per cycle as a ratio to openfoam.md's set-up on the same
-motion and machine, at most 90 s / 4.4 min = 0.34. --figure draws the same as a grid,
-yardstick against pitch, one panel per window.
+fine one (``openfoam_md@openfoam_md_medium[-coX]``, ``..._fine[-coX]``). A study whose runs
+all had the all_y_plus wall treatment (``cfd_cost.py --wall-treatment all_y_plus``) goes to
+that kind's all_y_plus twin. Where several studies of one motion measure against one mesh
+at different time steps, the smallest max Co counts; two studies of one motion against the
+same yardstick are refused. For each study and each time window it holds (cycle 1, and the
+first stroke where ``--window`` gave it), this prints the set-up within the cost that
+comes nearest the yardstick and whether that meets the target: F_n and M within 2 % NRMSE
+with both pressure solvers where the study reran the set-up with the other one (a pass
+that turns on round-off is not a pass). "Within the cost" is the set-up's CPU per cycle as
+a ratio to openfoam.md's set-up on the same motion and machine, at most 90 s / 4.4 min =
+0.34. --figure draws the same as a grid, yardstick against pitch, one panel per window.
 
     python benchmarks/cost_readings.py [--studies docs/figures] [--figure F.png]
 """
@@ -34,6 +35,12 @@ YARDSTICKS = {"o_grid_time_step": "mfflap's O-grid medium mesh at its smallest t
               "o_grid_mean": "mfflap's O-grid medium mesh, the mean of its time steps",
               "h_medium": "openfoam.md's H-type medium mesh at its smallest time step run",
               "h_fine": "openfoam.md's H-type fine mesh at its smallest time step run"}
+#: the wall treatments a yardstick may run with: log_law (the shipped set-ups', named in the
+#: kinds above) and all_y_plus (cfd_cost.py --wall-treatment all_y_plus), kinds of their own
+YARDSTICKS.update({f"{kind}_all_y_plus": f"{said}, all_y_plus wall treatment"
+                   for kind, said in list(YARDSTICKS.items())})
+#: how cfd_cost.py's settings stamp names a wall treatment asked for every run
+_WALL_TREATMENT = re.compile(r"; wall treatment (?P<name>\w+)")
 _STUDY_FILE = re.compile(r"^cost_accuracy_pitch(?P<pitch>\d+(?:\.\d+)?)(?:_[\w.]+)?\.h5$")
 #: a run's label: a set-up, maybe on a named mesh, maybe at another max Co
 _RUN_LABEL = re.compile(r"^(?P<run>[^-\s]+?)(?:-co(?P<courant>\d+(?:\.\d+)?))?$")
@@ -60,6 +67,14 @@ def yardstick_kind(label: str) -> str:
         raise ValueError(f"yardstick {label!r} is none of: mean of max Co ..., "
                          f"{', '.join(_SINGLE_RUNS)} (each maybe -coX)")
     return _SINGLE_RUNS[found["run"]][0]
+
+
+def study_wall_treatment(settings: str) -> str:
+    """The wall treatment every run of a study had, from the settings cfd_cost.py stamps it
+    with: the one ``--wall-treatment`` asked for, else the set-ups' own (log_law, the
+    treatment of every set-up a yardstick runs)."""
+    found = _WALL_TREATMENT.search(settings)
+    return "log_law" if found is None else found["name"]
 
 
 def _max_courant(label: str) -> float:
@@ -143,6 +158,12 @@ def study_readings(path: str | Path) -> list[Reading]:
             kind = yardstick_kind(str(attrs["yardstick"]))
         except ValueError as error:
             raise ValueError(f"{path}: {error}") from None
+        wall = study_wall_treatment(str(attrs.get("settings", "")))
+        if wall != "log_law":
+            kind = f"{kind}_{wall}"
+            if kind not in YARDSTICKS:
+                raise ValueError(f"{path}: wall treatment {wall!r} is none of log_law, "
+                                 "all_y_plus")
         named = [label for label in h5 if h5[label].attrs.get("named", False)
                  and "cost_ratio" in h5[label].attrs]
         for index, window in enumerate(str(w) for w in attrs["windows"]):

@@ -388,6 +388,26 @@ def test_the_plan_reruns_a_yardstick_with_the_other_solver_and_moves_set_ups_to_
     assert all(j.solver.far_field == "inletOutlet" for j in plan.jobs)
 
 
+def test_the_wall_treatment_asked_for_is_every_runs_and_stamps_the_work_folder(bench, tmp_path):
+    """--wall-treatment all_y_plus: the reference, its reruns, the baseline, the named
+    set-ups and their twins all run it; the work folder's stamp says so, so a folder of
+    earlier (stamp without it, each set-up's own) runs is refused, and without the option
+    the stamp reads as before."""
+    args = bench.parsed_arguments(["medium_piso", "--wall-treatment", "all_y_plus"])
+    plan = bench.plan_runs(args)
+    assert {"reference", "reference-co3", "openfoam_md", "medium_piso-PCG"} <= set(
+        _labels(plan))
+    assert {j.solver.wall_treatment for j in plan.jobs} == {"all_y_plus"}
+    own = bench.parsed_arguments(["medium_piso"])
+    assert {j.solver.wall_treatment for j in bench.plan_runs(own).jobs} == {"log_law"}
+    assert "wall treatment" not in bench.settings_stamp(own)
+    assert bench.settings_stamp(args) == bench.settings_stamp(own).replace(
+        "\n", "; wall treatment all_y_plus\n")
+    bench.claim_work_dir(tmp_path, bench.settings_stamp(own))
+    with pytest.raises(SystemExit, match="holds runs of other settings"):
+        bench.claim_work_dir(tmp_path, bench.settings_stamp(args))
+
+
 def test_without_the_solver_floor_a_twin_that_finished_before_is_still_read(bench, tmp_path):
     """--no-solver-floor runs no new reruns, but a set-up's rerun with the other pressure
     solver that finished in the work folder costs nothing and is read, so the set-up is

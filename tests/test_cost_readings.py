@@ -36,7 +36,8 @@ def _run(bench, label, offset, cpu):
                           loads={k: wave + offset for k in bench.COMPONENTS})
 
 
-def _write(bench, path, runs, named, floors, window=None, failed=(), yardstick="reference"):
+def _write(bench, path, runs, named, floors, window=None, failed=(), yardstick="reference",
+           settings="motion X"):
     """A one-cycle study against ``yardstick`` (openfoam_md's CPU 200 s: a cost ratio of 0.34
     is 68 s) written by cfd_cost.py's writer; the runs labelled in ``failed`` failed."""
     results = {yardstick: _run(bench, yardstick, 0.0, 300.0),
@@ -44,7 +45,7 @@ def _write(bench, path, runs, named, floors, window=None, failed=(), yardstick="
                **{label: _run(bench, label, offset, cpu) for label, (offset, cpu) in runs.items()},
                **{label: bench.SetupRun(label, None, failure="diverged") for label in failed}}
     study = bench.Study(results, results[yardstick], 1.0, named, floors,
-                        dict.fromkeys(results, 1000), results["openfoam_md"], None, "motion X",
+                        dict.fromkeys(results, 1000), results["openfoam_md"], None, settings,
                         window)
     bench.write_study(study, path, ["cfd_cost.py"])
 
@@ -127,6 +128,31 @@ def test_of_two_studies_at_two_time_steps_the_smaller_counts_and_other_twins_are
                yardstick="openfoam_md@openfoam_md_medium")
     with pytest.raises(ValueError, match=r"a second study of 20 deg against openfoam\.md's "
                        r"H-type medium mesh"):
+        readings.all_readings(tmp_path)
+
+
+def test_a_study_run_with_the_all_y_plus_wall_treatment_is_a_yardstick_of_its_own(
+        bench, readings, tmp_path):
+    """The same motion against the O-grid medium mesh with each wall treatment: two
+    readings, not a second study refused; the stamp cfd_cost.py writes is what is read."""
+    stamp = bench.settings_stamp(bench.parsed_arguments(["--wall-treatment", "all_y_plus"]))
+    assert readings.study_wall_treatment(stamp) == "all_y_plus"
+    assert readings.study_wall_treatment(bench.settings_stamp(
+        bench.parsed_arguments([]))) == "log_law"
+    _write(bench, tmp_path / "cost_accuracy_pitch20.h5", {"cheap": (0.02, 50.0)}, ["cheap"],
+           {})
+    _write(bench, tmp_path / "cost_accuracy_pitch20_all_y_plus.h5", {"cheap": (0.06, 50.0)},
+           ["cheap"], {}, settings=stamp)
+    log_law, all_y_plus = readings.all_readings(tmp_path)
+    assert (log_law.yardstick, log_law.met) == ("o_grid_time_step", True)
+    assert (all_y_plus.yardstick, all_y_plus.met) == ("o_grid_time_step_all_y_plus", False)
+    assert all_y_plus.nrmse_percent == pytest.approx(3.0, rel=1e-3)
+    assert readings.describe(all_y_plus).startswith(
+        "20 deg, mfflap's O-grid medium mesh at its smallest time step run, all_y_plus wall "
+        "treatment (reference), cycle 1: cheap")
+    _write(bench, tmp_path / "cost_accuracy_pitch20_x.h5", {"cheap": (0.06, 50.0)},
+           ["cheap"], {}, settings="motion X; wall treatment lowRe")
+    with pytest.raises(ValueError, match=r"pitch20_x\.h5: wall treatment 'lowRe' is none of"):
         readings.all_readings(tmp_path)
 
 
