@@ -305,8 +305,9 @@ def main() -> None:
         print(describe(reading))
     met = [r for r in readings if r.met]
     print(f"{len(met)} of {len(readings)} readings met"
-          + (": " + "; ".join(f"{r.pitch_deg:g} deg against {r.yardstick_label}, {r.window}"
-                              for r in met) if met else ""))
+          + (": " + "; ".join(f"{r.pitch_deg:g} deg against {r.yardstick_label}"
+                              + (" with all_y_plus" if r.yardstick.endswith("_all_y_plus")
+                                 else "") + f", {r.window}" for r in met) if met else ""))
     if args.figure:
         readings_figure(readings, args.figure)
         print(f"wrote {args.figure}")

@@ -139,17 +139,22 @@ def test_a_study_run_with_the_all_y_plus_wall_treatment_is_a_yardstick_of_its_ow
     assert readings.study_wall_treatment(stamp) == "all_y_plus"
     assert readings.study_wall_treatment(bench.settings_stamp(
         bench.parsed_arguments([]))) == "log_law"
-    _write(bench, tmp_path / "cost_accuracy_pitch20.h5", {"cheap": (0.02, 50.0)}, ["cheap"],
+    _write(bench, tmp_path / "cost_accuracy_pitch20.h5", {"cheap": (0.06, 50.0)}, ["cheap"],
            {})
-    _write(bench, tmp_path / "cost_accuracy_pitch20_all_y_plus.h5", {"cheap": (0.06, 50.0)},
+    _write(bench, tmp_path / "cost_accuracy_pitch20_all_y_plus.h5", {"cheap": (0.02, 50.0)},
            ["cheap"], {}, settings=stamp)
     log_law, all_y_plus = readings.all_readings(tmp_path)
-    assert (log_law.yardstick, log_law.met) == ("o_grid_time_step", True)
-    assert (all_y_plus.yardstick, all_y_plus.met) == ("o_grid_time_step_all_y_plus", False)
-    assert all_y_plus.nrmse_percent == pytest.approx(3.0, rel=1e-3)
+    assert (log_law.yardstick, log_law.met) == ("o_grid_time_step", False)
+    assert (all_y_plus.yardstick, all_y_plus.met) == ("o_grid_time_step_all_y_plus", True)
+    assert log_law.nrmse_percent == pytest.approx(3.0, rel=1e-3)
     assert readings.describe(all_y_plus).startswith(
         "20 deg, mfflap's O-grid medium mesh at its smallest time step run, all_y_plus wall "
         "treatment (reference), cycle 1: cheap")
+    done = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "cost_readings.py"),
+                           "--studies", str(tmp_path)], capture_output=True, text=True,
+                          check=True)
+    assert done.stdout.splitlines()[-1] == ("1 of 2 readings met: 20 deg against reference "
+                                            "with all_y_plus, cycle 1")
     _write(bench, tmp_path / "cost_accuracy_pitch20_x.h5", {"cheap": (0.06, 50.0)},
            ["cheap"], {}, settings="motion X; wall treatment lowRe")
     with pytest.raises(ValueError, match=r"pitch20_x\.h5: wall treatment 'lowRe' is none of"):
@@ -176,17 +181,24 @@ def test_a_file_that_is_not_a_study_is_refused_by_name(bench, readings, tmp_path
         assert done.returncode == 1 and said in done.stderr
 
 
-def test_the_shipped_studies_meet_the_target_only_at_20_deg_against_the_o_grid(readings,
+def test_the_shipped_studies_meet_the_target_only_at_20_deg_against_the_o_grid_mean(readings,
                                                                               tmp_path):
-    """README's verdict, read from the shipped studies: the one reading met is the mean of
-    the O-grid medium mesh's time steps at 20 deg (medium_piso, with both pressure solvers,
-    in cycle 1 and over the first stroke); against that mesh's smallest time step run the
+    """README's verdict, read from the shipped studies: the readings met are against the
+    mean of the O-grid medium mesh's time steps at 20 deg (medium_piso, with both pressure
+    solvers, in cycle 1 and over the first stroke; with the all_y_plus wall treatment in
+    every run, over the first stroke only); against that mesh's smallest time step run the
     nearest set-up within the cost is 2.5 % off at 5 deg (its worse solver) and 2.2 % at
     20 deg; against openfoam.md's H-type meshes nothing within the cost comes within 2 %."""
     every = readings.all_readings(FIGURES)
     met = [(r.yardstick, r.pitch_deg, r.window) for r in every if r.met]
-    assert met == [("o_grid_mean", 20.0, "cycle 1"), ("o_grid_mean", 20.0, "t = 0.25-0.55 s")]
+    assert met == [("o_grid_mean", 20.0, "cycle 1"), ("o_grid_mean", 20.0, "t = 0.25-0.55 s"),
+                   ("o_grid_mean_all_y_plus", 20.0, "t = 0.25-0.55 s")]
     assert {r.setup for r in every if r.met} == {"medium_piso"}
+    # with all_y_plus in every run the cycle-1 reading is missed, by round-off's doing too
+    missed = next(r for r in every if (r.yardstick, r.pitch_deg, r.window)
+                  == ("o_grid_mean_all_y_plus", 20.0, "cycle 1"))
+    assert missed.setup == "medium_piso" and missed.both_solvers
+    assert 4.0 < missed.nrmse_percent < 5.0
     assert all(r.both_solvers for r in every if r.met)
     five = next(r for r in every
                 if (r.yardstick, r.pitch_deg, r.window) == ("o_grid_time_step", 5.0, "cycle 1"))
@@ -201,7 +213,7 @@ def test_the_shipped_studies_meet_the_target_only_at_20_deg_against_the_o_grid(r
         ("o_grid_time_step", 5.0), ("o_grid_time_step", 10.0), ("o_grid_time_step", 20.0),
         ("o_grid_mean", 5.0), ("o_grid_mean", 10.0),
         ("o_grid_mean", 20.0), ("h_medium", 5.0), ("h_medium", 10.0), ("h_medium", 20.0),
-        ("h_fine", 5.0), ("h_fine", 10.0), ("h_fine", 20.0)}
+        ("h_fine", 5.0), ("h_fine", 10.0), ("h_fine", 20.0), ("o_grid_mean_all_y_plus", 20.0)}
     readme = " ".join((ROOT / "README.md").read_text().split())
     assert f"{len(met)} of {len(every)} are met" in readme
     assert readings.readings_figure(every, tmp_path / "r.png") is not None
