@@ -77,3 +77,24 @@ def solvers_left() -> Callable[..., str]:
             time.sleep(0.2)
 
     return left
+
+
+@pytest.fixture()
+def sigterm_before(monkeypatch) -> Callable[..., None]:
+    """``sigterm_before(module, name, beta)``: wrap ``module.name`` (an optimiser taking a
+    problem first) so that this process is sent a real SIGTERM as it starts on the problem
+    of that beta, then runs it; the stop lands at a known place in a study."""
+    import os
+    import signal
+
+    def wrap(module, name: str, beta: float) -> None:
+        real = getattr(module, name)
+
+        def stopped_at_beta(problem, *args, **kwargs):
+            if problem.beta == beta:
+                os.kill(os.getpid(), signal.SIGTERM)
+            return real(problem, *args, **kwargs)
+
+        monkeypatch.setattr(module, name, stopped_at_beta)
+
+    return wrap

@@ -197,25 +197,15 @@ def test_main_job_runs_end_to_end_on_the_shipped_fixtures(tmp_path):
 
 @pytest.mark.slow
 def test_a_stop_during_the_main_jobs_optimisation_writes_the_betas_optimised_before(
-        tmp_path, monkeypatch):
+        tmp_path, sigterm_before):
     """`mfflap run` stopped by SIGTERM as beta = 0.5 starts: results.h5 and report.html
     hold identification, the sweep and beta = 0, name the stage and the betas left out
     (before, the finished betas were lost with the stage)."""
-    import os
-    import signal
-
     import mfflap.optimisation.study as study_module
     from mfflap.cli.main import cli
     from mfflap.results import ResultsFile
 
-    real_multistart = study_module.multistart
-
-    def multistart(problem, *args, **kwargs):
-        if problem.beta == 0.5:
-            os.kill(os.getpid(), signal.SIGTERM)
-        return real_multistart(problem, *args, **kwargs)
-
-    monkeypatch.setattr(study_module, "multistart", multistart)
+    sigterm_before(study_module, "multistart", 0.5)
     out = tmp_path / "run"
     res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--starts", "1",
                                    "--no-ipopt", "--no-gain-table"])

@@ -417,23 +417,14 @@ def test_a_stop_signal_between_betas_keeps_the_betas_optimised_before_it():
 
 
 @pytest.mark.slow
-def test_an_interrupted_optimise_writes_the_betas_optimised_before_it(tmp_path, monkeypatch):
+def test_an_interrupted_optimise_writes_the_betas_optimised_before_it(tmp_path,
+                                                                     sigterm_before):
     """`mfflap optimise` stopped by SIGTERM during beta = 0.75 (sent as its optimisation
     starts): exit 1, the message says what was left out, and the results file and the
     report hold beta = 0.5 and say the study is incomplete (before, nothing was written)."""
-    import os
-    import signal
-
     import mfflap.optimisation.study as study_module
 
-    real_multistart = study_module.multistart
-
-    def multistart(problem, *args, **kwargs):
-        if problem.beta == 0.75:
-            os.kill(os.getpid(), signal.SIGTERM)
-        return real_multistart(problem, *args, **kwargs)
-
-    monkeypatch.setattr(study_module, "multistart", multistart)
+    sigterm_before(study_module, "multistart", 0.75)
     out = tmp_path / "opt.h5"
     res = CliRunner().invoke(__import__("mfflap.cli.main", fromlist=["cli"]).cli,
                              ["optimise", str(CASE), "--betas", "0.5,0.75,1", "--starts", "1",
@@ -453,22 +444,14 @@ def test_an_interrupted_optimise_writes_the_betas_optimised_before_it(tmp_path, 
 
 
 @pytest.mark.slow
-def test_a_stop_during_the_gain_table_writes_the_beta_study_without_it(tmp_path, monkeypatch):
+def test_a_stop_during_the_gain_table_writes_the_beta_study_without_it(tmp_path,
+                                                                       sigterm_before):
     """SIGTERM as the gain table's first beta = 0 optimisation starts: the beta study
     (beta = 0.5, finished) is written whole, without a gain table, and the message says so."""
-    import os
-    import signal
-
     import mfflap.optimisation.optimise as optimise_module
 
-    real_sqp = optimise_module.optimise_sqp
-
-    def optimise_sqp(problem, *args, **kwargs):
-        if problem.beta == 0.0:  # only the gain table's problems: the study's beta is 0.5
-            os.kill(os.getpid(), signal.SIGTERM)
-        return real_sqp(problem, *args, **kwargs)
-
-    monkeypatch.setattr(optimise_module, "optimise_sqp", optimise_sqp)
+    # only the gain table's problems have beta = 0: the study's beta is 0.5
+    sigterm_before(optimise_module, "optimise_sqp", 0.0)
     out = tmp_path / "opt.h5"
     res = CliRunner().invoke(__import__("mfflap.cli.main", fromlist=["cli"]).cli,
                              ["optimise", str(CASE), "--betas", "0.5", "--starts", "1",
