@@ -15,6 +15,14 @@ ALL_Y_PLUS = Path(__file__).parents[1] / "campaigns" / "table1_coarse_all_y_plus
 SHIPPED = fixture_dir("table1_coarse")
 
 
+@pytest.fixture(scope="module")
+def comparison():
+    """`campaign compare` of the shipped runs (A) against these (B), made once."""
+    from mfflap.campaign.compare import compare_campaigns
+
+    return compare_campaigns(SHIPPED, ALL_Y_PLUS)
+
+
 def phi90() -> list[Path]:
     """The records of the phi = 90 deg slice (15 cases)."""
     return [p for p in record_paths(ALL_Y_PLUS) if p.stem.endswith("_phi090p0")]
@@ -41,13 +49,11 @@ def test_each_run_held_the_all_y_plus_wall_conditions(path):
     assert shipped.parameters == record.parameters
 
 
-def test_the_wall_treatment_moves_the_separated_runs_not_the_attached_ones():
+def test_the_wall_treatment_moves_the_separated_runs_not_the_attached_ones(comparison):
     """At h = 0.1 m (attached flow, small effective incidence) the two treatments agree
     within 4 % NRMSE in F_n; the large heaves, whose separation the wall treatment shapes,
     differ by up to about 20 % (campaigns/README.md)."""
-    from mfflap.campaign.compare import compare_campaigns
-
-    result = compare_campaigns(SHIPPED, ALL_Y_PLUS)
+    result = comparison
     assert result.setup_differences == [("solver.wall_treatment", "log_law", "all_y_plus")]
     slice_ = [c for c in result.cases if c.case_id.endswith("_phi090p0")]
     assert len(slice_) == 15
@@ -116,14 +122,13 @@ def test_the_identification_report_says_the_wall_treatment_each_case_ran_with(tm
             assert re.findall(r"<td>([^<]*)</td>", row)[column - 1] == label
 
 
-def test_over_the_whole_grid_the_wall_treatment_moves_large_heaves_not_small_ones():
+def test_over_the_whole_grid_the_wall_treatment_moves_large_heaves_not_small_ones(
+        comparison):
     """The 42 cases both campaigns finished: at h = 0.1 m every F_n is within 5 % NRMSE; at
     h = 0.3 and 0.5 m the median is 5-8 % and the worst about 20 % (campaigns/README.md)."""
     import numpy as np
 
-    from mfflap.campaign.compare import compare_campaigns
-
-    result = compare_campaigns(SHIPPED, ALL_Y_PLUS)
+    result = comparison
     assert len(result.cases) >= 42
     by_heave = {h: [c.nrmse_normal_force for c in result.cases if f"_h{h}_" in c.case_id]
                 for h in ("0p100", "0p300", "0p500")}
@@ -135,21 +140,21 @@ def test_over_the_whole_grid_the_wall_treatment_moves_large_heaves_not_small_one
 
 
 @pytest.mark.slow
-def test_over_the_whole_grid_the_identification_and_the_beta_0_optimum_barely_move():
+def test_over_the_whole_grid_the_identification_and_the_beta_0_optimum_barely_move(
+        comparison):
     """Uniform weighting on the 42 cases of each treatment: the normal drag moves by about
     7 % (5.53 to 5.16), the fit to the CFD is as good (median F_n NRMSE within a
     percentage point), and the beta = 0 optimum made with either set of coefficients has
     the same mean thrust within 1 % (campaigns/README.md)."""
     import numpy as np
 
-    from mfflap.campaign.compare import compare_campaigns
     from mfflap.config import load_case
     from mfflap.identification.workflow import identify_strategies, load_cases
     from mfflap.optimisation.study import default_sweep
     from mfflap.pipeline import coefficient_sensitivity
 
     case = load_case(Path(__file__).parents[1] / "cases" / "paper2026.toml")
-    names = [f"{c.case_id}.h5" for c in compare_campaigns(SHIPPED, ALL_Y_PLUS).cases]
+    names = [f"{c.case_id}.h5" for c in comparison.cases]
     fits = {}
     for label, folder in (("log_law", SHIPPED), ("all_y_plus", ALL_Y_PLUS)):
         cases, excluded = load_cases(case, [folder / n for n in names])
