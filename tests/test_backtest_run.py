@@ -187,6 +187,9 @@ def test_main_job_runs_end_to_end_on_the_shipped_fixtures(tmp_path):
                   "Coefficient sensitivity", "Sinusoidal sweep", "Sim-to-real gap"):
         assert title in html
     assert html.count("<img") >= 15
+    # the two failed fixtures' log lines stay lines, folded under their reasons: in the
+    # summary's problems and in the table of cases left out of the fit
+    assert html.count("<summary>last log lines</summary><pre>PIMPLE: iteration 1\n") == 4
     with ResultsFile(out / "results.h5") as rf:
         assert "paper2026" in rf.config_toml
         assert {"identification", "optimisation", "backtest", "sensitivity", "gap"} <= set(rf.h5)

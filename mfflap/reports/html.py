@@ -7,6 +7,7 @@ import datetime as _dt
 import html
 import io
 import os
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -22,6 +23,7 @@ table { border-collapse: collapse; margin: 1em 0; }
 td, th { border: 1px solid #bbb; padding: 3px 8px; text-align: right; }
 th { background: #eee; } td:first-child, th:first-child { text-align: left; }
 .warn { background: #fff3cd; border-left: 4px solid #e0a800; padding: 0.5em 1em; }
+pre { font-size: 85%; overflow-x: auto; }
 img { max-width: 100%; } figure { margin: 1em 0; } figcaption { color: #555; }
 </style></head><body>
 <h1>{{ title }}</h1><p>{{ subtitle }}</p>
@@ -44,12 +46,30 @@ def figure_html(fig: Figure, caption: str = "", dpi: int = 110) -> str:
             f"<figcaption>{html.escape(caption)}</figcaption></figure>")
 
 
+def _first_line_and_fold(text: str) -> tuple[str, str]:
+    """``text``'s first line (escaped) and the rest folded into a ``<details>`` block.
+
+    The rest keeps its lines in a ``<pre>``, headed by its ``--- label ---`` line when it
+    has one (an error's "last log lines"), else by "more"; "" when there is no rest.
+    """
+    first, _, rest = text.partition("\n")
+    if not rest.strip():
+        return html.escape(text), ""
+    label = "more"
+    header = re.match(r"\s*--- (.+?) ---[ \t]*\n", rest)
+    if header:
+        label, rest = header.group(1), rest[header.end():]
+    return html.escape(first), (f"<details><summary>{html.escape(label)}</summary>"
+                                f"<pre>{html.escape(rest.strip(chr(10)))}</pre></details>")
+
+
 def table_html(header: Sequence[str], rows: Sequence[Sequence[object]]) -> str:
-    """A table; floats are shown with 4 significant digits, None as a dash."""
+    """A table; floats are shown with 4 significant digits, None as a dash, text of several
+    lines as its first line with the rest folded (see `text_html`)."""
     def cell(v):
         if v is None:
             return "-"
-        return f"{v:.4g}" if isinstance(v, float) else html.escape(str(v))
+        return f"{v:.4g}" if isinstance(v, float) else "".join(_first_line_and_fold(str(v)))
 
     head = "".join(f"<th>{html.escape(h)}</th>" for h in header)
     body = "".join("<tr>" + "".join(f"<td>{cell(v)}</td>" for v in r) + "</tr>" for r in rows)
@@ -57,9 +77,17 @@ def table_html(header: Sequence[str], rows: Sequence[Sequence[object]]) -> str:
 
 
 def text_html(text: str, warn: bool = False) -> str:
-    """A paragraph (escaped); ``warn`` highlights it."""
+    """A paragraph (escaped); ``warn`` highlights it.
+
+    Text of several lines (an error with the solver's last log lines) keeps its first line
+    as the paragraph and the rest line by line in a folded ``<pre>`` block, headed by its
+    ``--- label ---`` line when it has one, so the log stays readable and out of the way.
+    """
     cls = ' class="warn"' if warn else ""
-    return f"<p{cls}>{html.escape(text)}</p>"
+    first, fold = _first_line_and_fold(text)
+    if not fold:
+        return f"<p{cls}>{first}</p>"
+    return f"<div{cls}><p>{first}</p>{fold}</div>"
 
 
 @dataclass
