@@ -124,28 +124,44 @@ def test_the_identification_report_says_the_wall_treatment_each_case_ran_with(tm
 
 def test_over_the_whole_grid_the_wall_treatment_moves_large_heaves_not_small_ones(
         comparison):
-    """The 42 cases both campaigns finished: at h = 0.1 m every F_n is within 5 % NRMSE; at
-    h = 0.3 and 0.5 m the median is 5-8 % and the worst about 20 % (campaigns/README.md)."""
+    """The 43 cases both campaigns finished (the same 43: the two that failed here failed
+    in the shipped runs too): at h = 0.1 m every F_n is within 5 % NRMSE; at h = 0.3 and
+    0.5 m the median is 5-8 % and the worst about 17-20 %; over all, the median is about
+    4 % (campaigns/README.md)."""
     import numpy as np
 
     result = comparison
-    assert len(result.cases) >= 42
+    assert len(result.cases) == 43 and not result.only_a and not result.only_b
     by_heave = {h: [c.nrmse_normal_force for c in result.cases if f"_h{h}_" in c.case_id]
                 for h in ("0p100", "0p300", "0p500")}
     assert len(by_heave["0p100"]) == 15 and max(by_heave["0p100"]) < 0.05
     for heave in ("0p300", "0p500"):
         assert 0.04 < np.median(by_heave[heave]) < 0.09
         assert max(by_heave[heave]) > 0.15
-    assert np.median([c.nrmse_normal_force for c in result.cases]) < 0.04
+    assert 0.03 < np.median([c.nrmse_normal_force for c in result.cases]) < 0.05
+
+
+def test_the_two_cases_not_done_failed_as_in_the_shipped_runs():
+    """h = 0.5 m, phi = 135 deg at f = 0.5 and 1 Hz: failed here after three retries each,
+    as in the shipped runs (campaigns/README.md)."""
+    failed = {p.name.removesuffix(".failed.toml") for p in ALL_Y_PLUS.glob("*.failed.toml")}
+    shipped = {p.name.removesuffix(".failed.toml") for p in SHIPPED.glob("*.failed.toml")}
+    assert failed == shipped == {"f0p500_h0p500_phi135p0", "f1p000_h0p500_phi135p0"}
+    for name in failed:
+        error = read_toml(ALL_Y_PLUS / f"{name}.failed.toml")["error"]
+        assert "after 3 retries" in error
 
 
 @pytest.mark.slow
-def test_over_the_whole_grid_the_identification_and_the_beta_0_optimum_barely_move(
+def test_over_the_whole_grid_one_case_decides_which_way_the_identification_moves(
         comparison):
-    """Uniform weighting on the 42 cases of each treatment: the normal drag moves by about
-    7 % (5.53 to 5.16), the fit to the CFD is as good (median F_n NRMSE within a
-    percentage point), and the beta = 0 optimum made with either set of coefficients has
-    the same mean thrust within 1 % (campaigns/README.md)."""
+    """Uniform weighting on the 43 cases of each treatment: the normal drag moves by about
+    +7 % (5.05 to 5.38) and the beta = 0 optimum made with the all_y_plus coefficients has
+    about 7 % less mean thrust (34.4 to 32.1 N) at a slower period (0.99 to 1.29 s).
+    Without f = 2 Hz, h = 0.5 m, phi = 135 deg, the case of the largest forces, the normal
+    drag moves the other way (5.53 to 5.16) and the two optima's thrust agrees within 1 %.
+    The fit to the CFD is as good either way (median F_n NRMSE within a percentage point;
+    campaigns/README.md)."""
     import numpy as np
 
     from mfflap.config import load_case
@@ -155,16 +171,21 @@ def test_over_the_whole_grid_the_identification_and_the_beta_0_optimum_barely_mo
 
     case = load_case(Path(__file__).parents[1] / "cases" / "paper2026.toml")
     names = [f"{c.case_id}.h5" for c in comparison.cases]
-    fits = {}
-    for label, folder in (("log_law", SHIPPED), ("all_y_plus", ALL_Y_PLUS)):
-        cases, excluded = load_cases(case, [folder / n for n in names])
-        assert len(cases) == len(names) >= 42 and not excluded
-        fits[label] = identify_strategies(case, cases, excluded, ["uniform"],
-                                          n_bootstrap=20)["uniform"]
-    drag = {k: f.coefficients["normal_drag"] for k, f in fits.items()}
-    assert drag["all_y_plus"] / drag["log_law"] == pytest.approx(0.93, abs=0.02)
-    fit = {k: np.median(f.metrics["normal_force"]["nrmse"]) for k, f in fits.items()}
-    assert abs(fit["all_y_plus"] - fit["log_law"]) < 0.01
-    optima = coefficient_sensitivity(case, fits, default_sweep(case), lambda _: None)
-    thrust = {k: float(r.summary.mean_thrust) for k, (_, r) in optima.items()}
-    assert thrust["all_y_plus"] == pytest.approx(thrust["log_law"], rel=0.01)
+    largest = "f2p000_h0p500_phi135p0.h5"
+    assert len(names) == 43 and largest in names
+    for subset, drag_ratio, thrust_ratio in ((names, 1.07, 0.93),
+                                             ([n for n in names if n != largest], 0.93, 1.0)):
+        fits = {}
+        for label, folder in (("log_law", SHIPPED), ("all_y_plus", ALL_Y_PLUS)):
+            cases, excluded = load_cases(case, [folder / n for n in subset])
+            assert len(cases) == len(subset) and not excluded
+            fits[label] = identify_strategies(case, cases, excluded, ["uniform"],
+                                              n_bootstrap=20)["uniform"]
+        drag = {k: f.coefficients["normal_drag"] for k, f in fits.items()}
+        assert drag["all_y_plus"] / drag["log_law"] == pytest.approx(drag_ratio, abs=0.02)
+        fit = {k: np.median(f.metrics["normal_force"]["nrmse"]) for k, f in fits.items()}
+        assert abs(fit["all_y_plus"] - fit["log_law"]) < 0.01
+        optima = coefficient_sensitivity(case, fits, default_sweep(case), lambda _: None)
+        thrust = {k: float(r.summary.mean_thrust) for k, (_, r) in optima.items()}
+        assert thrust["all_y_plus"] / thrust["log_law"] == pytest.approx(thrust_ratio,
+                                                                          abs=0.01)
