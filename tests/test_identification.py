@@ -326,3 +326,116 @@ def _paper_case():
     from mfflap.config import load_case
 
     return load_case(_PAPER)
+
+
+def _shipped_cases():
+    from mfflap.config import load_case
+    from mfflap.identification.workflow import load_cases
+
+    case = load_case(Path(__file__).parents[1] / "cases" / "paper2026.toml")
+    return case, *load_cases(case)
+
+
+@pytest.mark.parametrize("strategy", ["uniform", "low", [1.0, 2.0, 3.0, 0.5, 1.0]])
+def test_each_cases_refit_without_it_is_identify_run_without_it(strategy):
+    """The leave-one-out rows are the fits `identify` makes of the other cases (the
+    shipped CFD fixtures; the case of the largest forces, and the first and last)."""
+    case, cases, _ = _shipped_cases()
+    res = identify(cases, case.morison_model(), strategy, n_bootstrap=0)
+    assert res.leave_one_out.shape == (len(cases), len(res.fitted_terms))
+    largest = [c.name for c in cases].index("f2p000_h0p500_phi135p0")
+    for i in (0, largest, len(cases) - 1):
+        rest = cases[:i] + cases[i + 1:]
+        alone = identify(rest, case.morison_model(), strategy, n_bootstrap=0)
+        assert res.leave_one_out[i] == pytest.approx(
+            [alone.coefficients[n] for n in res.fitted_terms], rel=1e-9, abs=1e-12)
+
+
+def test_the_most_influential_case_is_named_with_how_far_it_moves_the_coefficient():
+    """On the shipped fixtures the normal drag rests most on f = 2 Hz, h = 0.5 m,
+    phi = 135 deg (5.05, and 5.53 without it), about one bootstrap standard error; a held term
+    that no case moves is not listed."""
+    from mfflap.identification.fit import most_influential
+
+    case, cases, _ = _shipped_cases()
+    res = identify(cases, case.morison_model(), "uniform", n_bootstrap=200)
+    found = {i.term: i for i in most_influential(res)}
+    drag = found["normal_drag"]
+    assert drag.case == "f2p000_h0p500_phi135p0"
+    assert (drag.value, drag.value_without) == pytest.approx((5.05, 5.53), abs=0.01)
+    assert drag.relative_change == pytest.approx(0.095, abs=0.002)
+    assert drag.in_standard_errors == pytest.approx(
+        (5.53 - 5.05) / res.standard_error["normal_drag"], rel=0.01)
+    assert str(drag).startswith("normal_drag: f2p000_h0p500_phi135p0 (5.05 -> 5.53, +9.5%")
+    # every listed change is the largest over the cases
+    for inf in found.values():
+        j = res.fitted_terms.index(inf.term)
+        assert abs(inf.change) == pytest.approx(
+            np.nanmax(np.abs(res.leave_one_out[:, j] - inf.value)))
+    assert "tangential_drag" in res.at_lower_bound and "tangential_drag" not in found
+
+
+def test_a_frequency_of_one_case_drops_out_of_its_refit_and_one_case_has_none():
+    """Leaving out the only case of a frequency refits the others with their own weights;
+    a single case leaves nothing to refit: NaN, and nothing is named."""
+    from mfflap.identification.fit import most_influential
+
+    rng = np.random.default_rng(3)
+    records = synthetic_records(rng, subset=grid_cases(
+        IdentificationGrid(frequencies=[0.5, 1.0, 2.0]), heave_amplitudes=[0.1, 0.3],
+        phases_deg=[90]))
+    records = [r for r in records if not (r.name.startswith("f2p000") and "h0p300" in r.name)]
+    cases, _ = prepare_cases(records)
+    res = identify(cases, MorisonModel(), "uniform", n_bootstrap=0)
+    lone = [c.name for c in cases].index("f2p000_h0p100_phi090p0")
+    rest = cases[:lone] + cases[lone + 1:]
+    alone = identify(rest, MorisonModel(), "uniform", n_bootstrap=0)
+    assert res.leave_one_out[lone] == pytest.approx(
+        [alone.coefficients[n] for n in res.fitted_terms], rel=1e-9)
+    single = identify(cases[:1], MorisonModel(), "uniform", n_bootstrap=0)
+    assert np.all(np.isnan(single.leave_one_out)) and most_influential(single) == []
+
+
+def test_the_refits_are_stored_reported_and_printed(tmp_path):
+    """`mfflap identify` prints the case that moves each coefficient most and keeps the
+    refits in its HDF5 file; the report tabulates and draws them; a file written before
+    they were kept reads back without them and reports without the table."""
+    from click.testing import CliRunner
+
+    from mfflap.cli.main import cli
+    from mfflap.identification.store import read_identification
+    from mfflap.results import ResultsFile
+
+    case_file = Path(__file__).parents[1] / "cases" / "paper2026.toml"
+    out = tmp_path / "id.h5"
+    runner = CliRunner()
+    res = runner.invoke(cli, ["identify", str(case_file), "--strategy", "uniform",
+                              "--bootstrap", "50", "--output", str(out)])
+    assert res.exit_code == 0, res.output
+    assert ("left out, moves most: normal_added_mass: f2p000_h0p500_phi045p0" in res.output
+            and "normal_drag: f2p000_h0p500_phi135p0 (5.05 -> 5.53, +9.5%" in res.output)
+    res = runner.invoke(cli, ["identify", str(case_file), "--strategy", "uniform",
+                              "--bootstrap", "50", "--output", str(tmp_path / "j.h5"),
+                              "--json"])
+    moved = json.loads(res.stdout)["uniform"]["most_influential"]["normal_drag"]
+    assert moved["case"] == "f2p000_h0p500_phi135p0"
+    assert moved["relative_change"] == pytest.approx(0.095, abs=0.002)
+    with ResultsFile(out) as rf:
+        back = read_identification(rf, "identification/uniform")
+        assert rf.units("identification/uniform")["leave_one_out"] == "1"
+    assert back.leave_one_out.shape == (43, 4)
+    html = tmp_path / "id.html"
+    assert runner.invoke(cli, ["report", "identification", str(out), "--out",
+                               str(html)]).exit_code == 0
+    text = html.read_text()
+    assert "<th>most influential case</th>" in text
+    assert ("<td>normal_drag</td><td>5.05</td><td>f2p000_h0p500_phi135p0</td><td>5.531</td>"
+            "<td>+9.5%</td>") in text
+    assert "Coefficients refitted without each case (uniform weighting)" in text
+    with ResultsFile(out, "a") as rf:  # as a file written before the refits were kept
+        del rf.h5["identification/uniform/leave_one_out"]
+    with ResultsFile(out) as rf:
+        assert read_identification(rf, "identification/uniform").leave_one_out.size == 0
+    assert runner.invoke(cli, ["report", "identification", str(out), "--out",
+                               str(html)]).exit_code == 0
+    assert "most influential case" not in html.read_text()

@@ -71,7 +71,7 @@ def identify(case_file: Path, folders: tuple[Path, ...], strategies: tuple[str, 
     """Fit the Morison coefficients of CASE_FILE's model to CFD records."""
     from mfflap.campaign.records import fixture_dir
     from mfflap.config import load_case
-    from mfflap.identification.fit import HELD_AT_ZERO
+    from mfflap.identification.fit import HELD_AT_ZERO, most_influential
     from mfflap.identification.workflow import (
         identify_strategies,
         load_cases,
@@ -93,7 +93,12 @@ def identify(case_file: Path, folders: tuple[Path, ...], strategies: tuple[str, 
                 "median_nrmse_normal_force": float(
                     sorted(r.metrics["normal_force"]["nrmse"])[len(r.case_names) // 2]),
                 "at_lower_bound": list(r.at_lower_bound),
-                "n_cases": len(r.case_names), "excluded": r.excluded}
+                "n_cases": len(r.case_names), "excluded": r.excluded,
+                "most_influential": {
+                    i.term: {"case": i.case, "value_without": i.value_without,
+                             "relative_change": i.relative_change,
+                             "change_in_standard_errors": i.in_standard_errors}
+                    for i in most_influential(r)}}
         for label, r in results.items()
     }
     if as_json:
@@ -106,6 +111,9 @@ def identify(case_file: Path, folders: tuple[Path, ...], strategies: tuple[str, 
                            + (" (held at 0)" if n in r.at_lower_bound else "")
                            for n, v in r.coefficients.items())
         click.echo(f"{label:8s} {coeffs}")
+        influence = most_influential(r)
+        if influence:
+            click.echo(f"{'':8s} left out, moves most: " + "; ".join(map(str, influence)))
     if any(r.at_lower_bound for r in results.values()):
         click.echo(f"held at 0: {HELD_AT_ZERO}")
     click.echo(f"wrote {output}")

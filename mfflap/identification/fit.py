@@ -17,6 +17,10 @@ are used by default. The moment adds where along the chord the normal load acts.
 Uncertainty: samples within a case are strongly correlated, so a sample-based covariance
 would be far too optimistic. Cases are resampled with replacement within each frequency
 (a stratified case bootstrap); the spread of the refitted coefficients is the uncertainty.
+
+Influence: each case is also left out in turn and the coefficients refitted without it
+(a case jackknife, :func:`most_influential`), which names the CFD runs an identified value
+rests on: the ones to check or refine first.
 """
 
 from __future__ import annotations
@@ -65,6 +69,10 @@ class IdentificationResult:
         thrust and input power.
     excluded : dict
         Cases left out, with the reason.
+    leave_one_out : ndarray (n_cases, n_fitted)
+        The fitted terms refitted without each case in turn (row i: without case i), the
+        other cases weighted as in the fit; NaN where the rest do not determine them. Empty
+        (0 rows) for a result stored before it was computed.
     """
 
     coefficients: dict[str, float]
@@ -80,6 +88,7 @@ class IdentificationResult:
     metrics: dict[str, dict[str, np.ndarray]]
     excluded: dict[str, str] = field(default_factory=dict)
     notes: dict[str, list[str]] = field(default_factory=dict)
+    leave_one_out: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
 
     @property
     def at_lower_bound(self) -> tuple[str, ...]:
@@ -100,34 +109,55 @@ class _System:
     frequencies: np.ndarray
 
 
-def _system(cases: Sequence[CaseData], model: ForceModel, fitted: Sequence[str],
-            fixed: Mapping[str, float], components: Sequence[str],
-            weights: Mapping[float, float]) -> _System:
+@dataclass
+class _Blocks:
+    """Each case's unscaled, unweighted normal-equation blocks, per component: what any
+    subset of the cases is assembled from (:func:`_assemble`)."""
+
+    grams: np.ndarray  # (n_cases, n_components, p, p): A'A
+    rhs: np.ndarray  # (n_cases, n_components, p): A'(y - fixed terms)
+    square_sums: np.ndarray  # (n_cases, n_components): sum of y^2 (the component scales)
+    n_samples: np.ndarray  # (n_cases,)
+    frequencies: np.ndarray  # (n_cases,), Hz
+
+
+def _blocks(cases: Sequence[CaseData], model: ForceModel, fitted: Sequence[str],
+            fixed: Mapping[str, float], components: Sequence[str]) -> _Blocks:
     names = [t.name for t in model.terms]
     idx_fit = [names.index(n) for n in fitted]
     idx_fix = [names.index(n) for n in fixed]
     fix_vals = np.array([fixed[n] for n in fixed])
-    scales = {}
-    for k in components:
-        y = np.concatenate([c.cfd_signal(k) for c in cases])
-        scales[k] = float(np.sqrt(np.mean(y**2))) or 1.0
-    freqs = np.array([c.frequency for c in cases])
-    count = {f: int(np.sum(np.isclose(freqs, f))) for f in weights}
-    p = len(fitted)
-    grams, rhs = np.zeros((len(cases), p, p)), np.zeros((len(cases), p))
+    n, m, p = len(cases), len(components), len(fitted)
+    grams, rhs, squares = np.zeros((n, m, p, p)), np.zeros((n, m, p)), np.zeros((n, m))
     for i, c in enumerate(cases):
-        f = min(weights, key=lambda v, c=c: abs(v - c.frequency))
-        w_case = weights[f] / count[f] / c.n_samples
         regs = model.regressors(c.state)
-        for k in components:
+        for j, k in enumerate(components):
             a_all = np.column_stack([getattr(regs[t.name], k) for t in model.terms])
             y = c.cfd_signal(k)
+            squares[i, j] = float(np.sum(y**2))
             if idx_fix:
                 y = y - a_all[:, idx_fix] @ fix_vals
-            a = a_all[:, idx_fit] / scales[k]
-            yk = y / scales[k]
-            grams[i] += w_case * a.T @ a
-            rhs[i] += w_case * a.T @ yk
+            a = a_all[:, idx_fit]
+            grams[i, j] = a.T @ a
+            rhs[i, j] = a.T @ y
+    return _Blocks(grams, rhs, squares, np.array([c.n_samples for c in cases], dtype=float),
+                   np.array([c.frequency for c in cases]))
+
+
+def _assemble(blocks: _Blocks, weights: Mapping[float, float],
+              kept: np.ndarray | None = None) -> _System:
+    """The weighted, scaled normal equations of the cases ``kept`` (a boolean mask; all by
+    default), each case's own: the component scales are the RMS of the CFD over the cases
+    kept, and each frequency's weight is shared among its cases kept."""
+    kept = np.ones(len(blocks.n_samples), dtype=bool) if kept is None else kept
+    scale2 = blocks.square_sums[kept].sum(axis=0) / blocks.n_samples[kept].sum()
+    scale2 = np.where(scale2 > 0, scale2, 1.0)
+    freqs = blocks.frequencies[kept]
+    count = {f: int(np.sum(np.isclose(freqs, f))) for f in weights}
+    nearest = [min(weights, key=lambda v, f=f: abs(v - f)) for f in freqs]
+    w_case = np.array([weights[f] / count[f] for f in nearest]) / blocks.n_samples[kept]
+    grams = np.einsum("c,cmij,m->cij", w_case, blocks.grams[kept], 1.0 / scale2)
+    rhs = np.einsum("c,cmi,m->ci", w_case, blocks.rhs[kept], 1.0 / scale2)
     return _System(grams, rhs, freqs)
 
 
@@ -155,6 +185,81 @@ def _solve(gram: np.ndarray, rhs: np.ndarray, names: Sequence[str]) -> np.ndarra
     b = np.linalg.solve(r.T, rhs)
     x, _ = nnls(r, b)
     return x
+
+
+def _leave_one_out(blocks: _Blocks, weights: Mapping[float, float],
+                   fitted: Sequence[str]) -> np.ndarray:
+    """The fitted terms refitted without each case in turn (rows), as :func:`identify`
+    fits them: the component scales from the cases kept, each frequency's weight shared
+    among its cases kept. A frequency left without cases drops out with its weight (the
+    others keep theirs). NaN where the cases kept do not determine the terms."""
+    n = len(blocks.n_samples)
+    out = np.full((n, len(fitted)), np.nan)
+    for i in range(n):
+        kept = np.arange(n) != i
+        present = {min(weights, key=lambda v, f=f: abs(v - f))
+                   for f in blocks.frequencies[kept]}
+        kept_weights = {f: w for f, w in weights.items() if f in present}
+        if not kept.any() or sum(kept_weights.values()) <= 0:
+            continue
+        system = _assemble(blocks, kept_weights, kept)
+        try:
+            out[i] = _solve(system.grams.sum(axis=0), system.rhs.sum(axis=0), fitted)
+        except MfflapError:
+            pass
+    return out
+
+
+@dataclass(frozen=True)
+class Influence:
+    """The case whose leaving out moves one identified coefficient the most."""
+
+    term: str
+    case: str
+    value: float  # with every case
+    value_without: float  # refitted without ``case``
+    standard_error: float  # the bootstrap's, NaN when not estimated
+
+    @property
+    def change(self) -> float:
+        """value_without - value."""
+        return self.value_without - self.value
+
+    @property
+    def relative_change(self) -> float:
+        """The change over the value (NaN for a value of 0)."""
+        return self.change / self.value if self.value else float("nan")
+
+    @property
+    def in_standard_errors(self) -> float:
+        """The change in bootstrap standard errors (NaN when not estimated)."""
+        se = self.standard_error
+        return abs(self.change) / se if np.isfinite(se) and se > 0 else float("nan")
+
+    def __str__(self) -> str:
+        relative = (f", {self.relative_change:+.1%}" if np.isfinite(self.relative_change)
+                    else "")
+        spread = (f", {self.in_standard_errors:.1f} s.e."
+                  if np.isfinite(self.in_standard_errors) else "")
+        return (f"{self.term}: {self.case} ({self.value:.3g} -> {self.value_without:.3g}"
+                f"{relative}{spread})")
+
+
+def most_influential(result: IdentificationResult) -> list[Influence]:
+    """For each fitted term that some case moves, the case whose leaving out moves it most
+    (``result.leave_one_out``); empty when that was not computed or no case moves any."""
+    rows = np.asarray(result.leave_one_out, dtype=float)
+    if rows.ndim != 2 or rows.shape != (len(result.case_names), len(result.fitted_terms)):
+        return []
+    found = []
+    for j, term in enumerate(result.fitted_terms):
+        change = np.abs(rows[:, j] - result.coefficients[term])
+        if not np.any(np.isfinite(change)) or np.nanmax(change) == 0:
+            continue
+        i = int(np.nanargmax(change))
+        found.append(Influence(term, result.case_names[i], result.coefficients[term],
+                               float(rows[i, j]), result.standard_error[term]))
+    return found
 
 
 def score(cases: Sequence[CaseData], model: ForceModel,
@@ -222,7 +327,8 @@ def identify(cases: Sequence[CaseData], model: ForceModel,
         raise ConfigError("every coefficient is fixed: nothing to identify",
                           key="identification.fixed")
     weights = frequency_weights([c.frequency for c in cases], strategy)
-    system = _system(cases, model, fitted, fixed, components, weights)
+    blocks = _blocks(cases, model, fitted, fixed, components)
+    system = _assemble(blocks, weights)
     x = _solve(system.grams.sum(axis=0), system.rhs.sum(axis=0), fitted)
     rng = np.random.default_rng(seed)
     boot = np.empty((n_bootstrap, len(fitted)))
@@ -251,14 +357,16 @@ def identify(cases: Sequence[CaseData], model: ForceModel,
             interval[n] = (float(np.percentile(col, 2.5)), float(np.percentile(col, 97.5)))
     fitted_model = model.with_coefficients(coeffs)
     name = strategy if isinstance(strategy, str) else "custom"
+    jackknife = _leave_one_out(blocks, weights, fitted)
     return IdentificationResult(
         coefficients=coeffs, standard_error=se, interval=interval, bootstrap=boot,
         fitted_terms=tuple(fitted), strategy=name, weights=weights,
         components=tuple(components), case_names=[c.name for c in cases],
         case_parameters=[dict(c.parameters) for c in cases],
         metrics=score(cases, fitted_model), excluded=dict(excluded or {}),
-        notes={c.name: list(c.notes) for c in cases if c.notes},
+        notes={c.name: list(c.notes) for c in cases if c.notes}, leave_one_out=jackknife,
     )
 
 
-__all__ = ["HELD_AT_ZERO", "IdentificationResult", "identify", "score"]
+__all__ = ["HELD_AT_ZERO", "IdentificationResult", "Influence", "identify",
+           "most_influential", "score"]

@@ -22,9 +22,11 @@ def write_identification(rf: ResultsFile, result: IdentificationResult,
         "bootstrap": result.bootstrap,
         "weight_frequencies": np.array(list(result.weights)),
         "weights": np.array(list(result.weights.values())),
+        # rows: cases (case_names), columns: fitted_terms
+        "leave_one_out": np.asarray(result.leave_one_out, dtype=float),
     }
     units = {"coefficients": "1", "standard_error": "1", "interval": "1", "bootstrap": "1",
-             "weight_frequencies": "Hz", "weights": "1"}
+             "weight_frequencies": "Hz", "weights": "1", "leave_one_out": "1"}
     for signal, values in result.metrics.items():
         for metric, arr in values.items():
             arrays[f"{metric}_{signal}"] = arr
@@ -58,6 +60,8 @@ def read_identification(rf: ResultsFile, group: str) -> IdentificationResult:
         case_names=json.loads(attrs["case_names"]),
         case_parameters=json.loads(attrs["case_parameters"]), metrics=metrics,
         excluded=json.loads(attrs["excluded"]), notes=json.loads(attrs.get("notes", "{}")),
+        # a file written before the refits without each case were kept has none
+        leave_one_out=a.get("leave_one_out", np.empty((0, 0))),
     )
 
 

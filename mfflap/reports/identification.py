@@ -15,7 +15,7 @@ from matplotlib.figure import Figure
 from mfflap.cfd.case_inputs import kept_wall_treatment
 from mfflap.hydro.base import ForceModel
 from mfflap.identification.data import BURST_NOTE, CaseData
-from mfflap.identification.fit import HELD_AT_ZERO, IdentificationResult
+from mfflap.identification.fit import HELD_AT_ZERO, IdentificationResult, most_influential
 from mfflap.reports.html import Report, figure_html, table_html, text_html
 
 SIGNAL_LABELS = {"normal_force": "F_n", "tangential_force": "F_t", "moment": "M",
@@ -172,6 +172,51 @@ def strategy_error_figure(results: Mapping[str, IdentificationResult],
     return fig
 
 
+def influence_figure(result: IdentificationResult) -> Figure | None:
+    """Each fitted coefficient refitted without each case in turn (dots), against its value
+    with every case (line) and its bootstrap standard error (band); the case that moves it
+    most is named. None when the refits were not stored or no case moves any coefficient."""
+    found = most_influential(result)
+    if not found:
+        return None
+    rows = np.asarray(result.leave_one_out, dtype=float)
+    x = np.arange(len(result.case_names))
+    fig, axes = plt.subplots(len(found), 1, figsize=(max(7.0, 0.17 * len(x) + 2), 2.0 * len(found)
+                                                     + 1.2), sharex=True, squeeze=False)
+    for ax, inf in zip(axes[:, 0], found, strict=True):
+        j = result.fitted_terms.index(inf.term)
+        se = inf.standard_error
+        if np.isfinite(se):
+            ax.axhspan(inf.value - se, inf.value + se, color="0.9", label="± 1 bootstrap s.e.")
+        ax.axhline(inf.value, color="k", lw=1, label="with every case")
+        ax.plot(x, rows[:, j], "o", ms=3, label="without the case")
+        i = result.case_names.index(inf.case)
+        ax.annotate(inf.case, (i, rows[i, j]), fontsize=7, xytext=(4, 4),
+                    textcoords="offset points")
+        ax.set_ylabel(inf.term.replace("_", " "), fontsize=8)
+    axes[0, 0].legend(fontsize=7, loc="best")
+    axes[-1, 0].set_xticks(x, result.case_names, rotation=90, fontsize=6)
+    fig.suptitle(f"Coefficients refitted without each case ({result.strategy} weighting)")
+    fig.tight_layout()
+    return fig
+
+
+def shown_percent(fraction: float) -> str:
+    """A signed percentage with one decimal, or a dash for NaN."""
+    return f"{fraction:+.1%}" if np.isfinite(fraction) else "-"
+
+
+def _influence_rows(results: Mapping[str, IdentificationResult]) -> list[list[object]]:
+    rows = []
+    for label, res in results.items():
+        for inf in most_influential(res):
+            rows.append([label, inf.term, float(inf.value), inf.case, float(inf.value_without),
+                         shown_percent(inf.relative_change),
+                         float(inf.in_standard_errors) if np.isfinite(inf.in_standard_errors)
+                         else None])
+    return rows
+
+
 def _coefficient_rows(results: Mapping[str, IdentificationResult]) -> list[list[object]]:
     """A row per strategy and term; a spread not estimated (no bootstrap) is a dash."""
     def shown(value: float) -> float | None:
@@ -221,6 +266,20 @@ def add_identification_sections(rep: Report, results: Mapping[str, Identificatio
                                   "identification ran with fewer than 2 bootstrap replicates, "
                                   "or with no frequency that has two cases to resample.",
                                   warn=True))
+    influence = _influence_rows(results)
+    if influence:
+        s.blocks.append(text_html(
+            "The case each coefficient rests on most: every case left out in turn and the "
+            "coefficients refitted without it (the others weighted as before). A change of "
+            "one bootstrap standard error or more means one CFD run decides that value: "
+            "check that run (its mesh, time step, numerical bursts) before trusting it."))
+        s.blocks.append(table_html(["weighting", "term", "value", "most influential case",
+                                    "value without it", "relative change",
+                                    "change / bootstrap s.e."], influence))
+        fig = influence_figure(first)
+        if fig is not None:
+            s.blocks.append(figure_html(fig, f"Coefficients refitted without each case "
+                                             f"({first.strategy} weighting)"))
     n_per_f = {}
     for p in first.case_parameters:
         n_per_f[p.get("frequency")] = n_per_f.get(p.get("frequency"), 0) + 1
