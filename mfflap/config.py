@@ -195,6 +195,10 @@ class IdentificationGrid:
                                   doc="start-up transient left out of the fit")
     frequency_weights: tuple[float, ...] | None = bounded(None, low=0.0, unit="1",
                                                           doc="one weight per frequency")
+    residual_scaling: str = bounded(
+        "grid", choices=("grid", "case"), unit="",
+        doc="residuals over each component's RMS across every case (grid) or over its "
+            "range in each case (case: the fit minimises the mean square NRMSE)")
 
     def __post_init__(self) -> None:
         check_fields(self, prefix="identification.")

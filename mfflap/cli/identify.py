@@ -59,6 +59,11 @@ def _fitted_components() -> tuple[str, ...]:
 @click.option("--components", type=NameList(_fitted_components), default=None,
               help="Fitted components, comma-separated, each once (default normal_force,"
                    "tangential_force,moment).")
+@click.option("--residual-scaling", type=click.Choice(["grid", "case"]), default=None,
+              help="Residuals over each component's RMS across every case (grid: the cases "
+                   "of large forces weigh most) or over its range in each case (case: the "
+                   "fit minimises the mean square NRMSE, every case weighs alike); default "
+                   "the case file's [identification] residual_scaling, grid unless set.")
 @click.option("--bootstrap", "n_bootstrap", default=200, show_default=True,
               type=click.IntRange(min=0),
               help="Case-bootstrap replicates.")
@@ -66,12 +71,13 @@ def _fitted_components() -> tuple[str, ...]:
               default=Path("identification.h5"), show_default=True, help="HDF5 results.")
 @click.option("--json", "as_json", is_flag=True, help="Print coefficients as JSON.")
 def identify(case_file: Path, folders: tuple[Path, ...], strategies: tuple[str, ...],
-             weights: list[float] | None, components: list[str] | None, n_bootstrap: int,
-             output: Path, as_json: bool) -> None:
+             weights: list[float] | None, components: list[str] | None,
+             residual_scaling: str | None, n_bootstrap: int, output: Path,
+             as_json: bool) -> None:
     """Fit the Morison coefficients of CASE_FILE's model to CFD records."""
     from mfflap.campaign.records import fixture_dir
     from mfflap.config import load_case
-    from mfflap.identification.fit import HELD_AT_ZERO, most_influential
+    from mfflap.identification.fit import HELD_AT_ZERO, RESIDUAL_SCALINGS, most_influential
     from mfflap.identification.workflow import (
         identify_strategies,
         load_cases,
@@ -86,7 +92,7 @@ def identify(case_file: Path, folders: tuple[Path, ...], strategies: tuple[str, 
     if weights:
         _check_weights(weights, cases)
     results = identify_strategies(case, cases, excluded, _strategies(strategies, weights, case),
-                                  components, n_bootstrap)
+                                  components, n_bootstrap, residual_scaling)
     save_identification(output, case, results, source_text(folders))
     summary = {
         label: {"coefficients": r.coefficients, "standard_error": r.standard_error,
@@ -94,6 +100,7 @@ def identify(case_file: Path, folders: tuple[Path, ...], strategies: tuple[str, 
                     sorted(r.metrics["normal_force"]["nrmse"])[len(r.case_names) // 2]),
                 "at_lower_bound": list(r.at_lower_bound),
                 "n_cases": len(r.case_names), "excluded": r.excluded,
+                "residual_scaling": r.residual_scaling,
                 "most_influential": {
                     i.term: {"case": i.case, "value_without": i.value_without,
                              "relative_change": i.relative_change,
@@ -104,7 +111,9 @@ def identify(case_file: Path, folders: tuple[Path, ...], strategies: tuple[str, 
     if as_json:
         echo_json(summary)
         return
-    click.echo(f"{len(cases)} cases from {sources_shown(folders)}; {len(excluded)} left out")
+    scaling = next(iter(results.values())).residual_scaling
+    click.echo(f"{len(cases)} cases from {sources_shown(folders)}; {len(excluded)} left out; "
+               f"residuals scaled {RESIDUAL_SCALINGS[scaling]}")
     for label, r in results.items():
         coeffs = "  ".join(f"{n} = {v:.3f}" + (f" ± {r.standard_error[n]:.3f}"
                                                  if np.isfinite(r.standard_error[n]) else "")

@@ -6,7 +6,11 @@ fit is linear: for each case c and fitted component k (F_n, F_t, M),
     r_ck = (y_ck - A_ck x) / s_k,
 
 with y the CFD signal, A the term regressors and s_k the RMS of component k over all cases
-(so that newtons and newton-metres are comparable). Case c carries the weight
+(so that newtons and newton-metres are comparable; ``residual_scaling="grid"``, the
+default). With ``residual_scaling="case"``, s_ck is instead the range of component k in
+case c, the paper's NRMSE denominator: the fit then minimises the weighted mean square
+NRMSE over the cases, and a case of large forces counts no more than one of small forces.
+Case c carries the weight
 w_f(c) / (n_cases at f(c) * n_samples(c)): each frequency gets its strategy weight whatever
 its number of cases and samples. Coefficients are bounded below by zero (they are physical
 drag and added-mass coefficients) and solved by NNLS on the normal equations.
@@ -37,6 +41,15 @@ from mfflap.hydro.base import ForceModel
 from mfflap.identification.data import COMPONENTS, DERIVED, CaseData
 from mfflap.identification.weights import frequency_weights
 from mfflap.metrics import nrmse, pearson
+
+#: How residuals are made comparable across components and cases (``identify``'s
+#: ``residual_scaling``), with what each means for the report and the CLI.
+RESIDUAL_SCALINGS = {
+    "grid": "each component by its RMS over every case (forces in newtons: the cases of "
+            "large forces weigh most)",
+    "case": "each component of each case by its range in that case (the fit minimises the "
+            "mean square NRMSE: every case weighs alike)",
+}
 
 #: What a coefficient held at its lower bound 0 means, for the CLI and the report.
 HELD_AT_ZERO = ("the fit without the bound makes the coefficient negative, which no drag or "
@@ -69,6 +82,8 @@ class IdentificationResult:
         thrust and input power.
     excluded : dict
         Cases left out, with the reason.
+    residual_scaling : str
+        A key of :data:`RESIDUAL_SCALINGS`.
     leave_one_out : ndarray (n_cases, n_fitted)
         The fitted terms refitted without each case in turn (row i: without case i), the
         other cases weighted as in the fit; NaN where the rest do not determine them. Empty
@@ -89,6 +104,7 @@ class IdentificationResult:
     excluded: dict[str, str] = field(default_factory=dict)
     notes: dict[str, list[str]] = field(default_factory=dict)
     leave_one_out: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
+    residual_scaling: str = "grid"
 
     @property
     def at_lower_bound(self) -> tuple[str, ...]:
@@ -119,10 +135,12 @@ class _Blocks:
     square_sums: np.ndarray  # (n_cases, n_components): sum of y^2 (the component scales)
     n_samples: np.ndarray  # (n_cases,)
     frequencies: np.ndarray  # (n_cases,), Hz
+    scaled_per_case: bool = False  # each case's blocks already divided by its ranges^2
 
 
 def _blocks(cases: Sequence[CaseData], model: ForceModel, fitted: Sequence[str],
-            fixed: Mapping[str, float], components: Sequence[str]) -> _Blocks:
+            fixed: Mapping[str, float], components: Sequence[str],
+            residual_scaling: str = "grid") -> _Blocks:
     names = [t.name for t in model.terms]
     idx_fit = [names.index(n) for n in fitted]
     idx_fix = [names.index(n) for n in fixed]
@@ -138,10 +156,14 @@ def _blocks(cases: Sequence[CaseData], model: ForceModel, fitted: Sequence[str],
             if idx_fix:
                 y = y - a_all[:, idx_fix] @ fix_vals
             a = a_all[:, idx_fit]
-            grams[i, j] = a.T @ a
-            rhs[i, j] = a.T @ y
+            span = 1.0
+            if residual_scaling == "case":  # the case's range: NRMSE's denominator
+                span = float(np.ptp(c.cfd_signal(k))) or 1.0
+            grams[i, j] = a.T @ a / span**2
+            rhs[i, j] = a.T @ y / span**2
     return _Blocks(grams, rhs, squares, np.array([c.n_samples for c in cases], dtype=float),
-                   np.array([c.frequency for c in cases]))
+                   np.array([c.frequency for c in cases]),
+                   scaled_per_case=residual_scaling == "case")
 
 
 def _assemble(blocks: _Blocks, weights: Mapping[float, float],
@@ -151,7 +173,7 @@ def _assemble(blocks: _Blocks, weights: Mapping[float, float],
     kept, and each frequency's weight is shared among its cases kept."""
     kept = np.ones(len(blocks.n_samples), dtype=bool) if kept is None else kept
     scale2 = blocks.square_sums[kept].sum(axis=0) / blocks.n_samples[kept].sum()
-    scale2 = np.where(scale2 > 0, scale2, 1.0)
+    scale2 = np.where((scale2 > 0) & (not blocks.scaled_per_case), scale2, 1.0)
     freqs = blocks.frequencies[kept]
     count = {f: int(np.sum(np.isclose(freqs, f))) for f in weights}
     nearest = [min(weights, key=lambda v, f=f: abs(v - f)) for f in freqs]
@@ -285,7 +307,8 @@ def identify(cases: Sequence[CaseData], model: ForceModel,
              strategy: str | Sequence[float] = "uniform",
              components: Sequence[str] = tuple(COMPONENTS), fixed: Mapping[str, float] | None
              = None, n_bootstrap: int = 200, seed: int = 0,
-             excluded: Mapping[str, str] | None = None) -> IdentificationResult:
+             excluded: Mapping[str, str] | None = None,
+             residual_scaling: str = "grid") -> IdentificationResult:
     """Fit the coefficients of ``model`` to the CFD of ``cases``.
 
     Parameters
@@ -306,12 +329,20 @@ def identify(cases: Sequence[CaseData], model: ForceModel,
         intervals are NaN: not estimated (a fixed coefficient's are 0).
     excluded
         Cases already left out (e.g. failed CFD), carried into the result and the report.
+    residual_scaling
+        ``"grid"`` (each component's residual over its RMS across all cases) or ``"case"``
+        (over its range in each case: the weighted mean square NRMSE is minimised); see
+        :data:`RESIDUAL_SCALINGS`.
     """
     if not cases:
         raise MfflapError("no usable CFD cases to identify from")
     if n_bootstrap < 0:
         raise ConfigError(f"n_bootstrap must be >= 0 (0: none), got {n_bootstrap!r}",
                           key="n_bootstrap")
+    if residual_scaling not in RESIDUAL_SCALINGS:
+        raise ConfigError(f"residual scaling {residual_scaling!r}: choose one of "
+                          f"{', '.join(RESIDUAL_SCALINGS)}",
+                          key="identification.residual_scaling")
     bad = [k for k in components if k not in COMPONENTS]
     if bad or not components:
         raise ConfigError(f"cannot fit components {bad or '(none)'}; choose from "
@@ -327,7 +358,7 @@ def identify(cases: Sequence[CaseData], model: ForceModel,
         raise ConfigError("every coefficient is fixed: nothing to identify",
                           key="identification.fixed")
     weights = frequency_weights([c.frequency for c in cases], strategy)
-    blocks = _blocks(cases, model, fitted, fixed, components)
+    blocks = _blocks(cases, model, fitted, fixed, components, residual_scaling)
     system = _assemble(blocks, weights)
     x = _solve(system.grams.sum(axis=0), system.rhs.sum(axis=0), fitted)
     rng = np.random.default_rng(seed)
@@ -365,8 +396,9 @@ def identify(cases: Sequence[CaseData], model: ForceModel,
         case_parameters=[dict(c.parameters) for c in cases],
         metrics=score(cases, fitted_model), excluded=dict(excluded or {}),
         notes={c.name: list(c.notes) for c in cases if c.notes}, leave_one_out=jackknife,
+        residual_scaling=residual_scaling,
     )
 
 
-__all__ = ["HELD_AT_ZERO", "IdentificationResult", "Influence", "identify",
-           "most_influential", "score"]
+__all__ = ["HELD_AT_ZERO", "RESIDUAL_SCALINGS", "IdentificationResult", "Influence",
+           "identify", "most_influential", "score"]

@@ -35,7 +35,8 @@ def write_identification(rf: ResultsFile, result: IdentificationResult,
              "strategy": result.strategy, "components": json.dumps(result.components),
              "case_names": json.dumps(result.case_names),
              "case_parameters": json.dumps(result.case_parameters),
-             "excluded": json.dumps(result.excluded), "notes": json.dumps(result.notes)}
+             "excluded": json.dumps(result.excluded), "notes": json.dumps(result.notes),
+             "residual_scaling": result.residual_scaling}
     rf.write_group(group, arrays, units, attrs)
     return group
 
@@ -62,6 +63,8 @@ def read_identification(rf: ResultsFile, group: str) -> IdentificationResult:
         excluded=json.loads(attrs["excluded"]), notes=json.loads(attrs.get("notes", "{}")),
         # a file written before the refits without each case were kept has none
         leave_one_out=a.get("leave_one_out", np.empty((0, 0))),
+        # files written before the choice was offered were fitted on the grid's scales
+        residual_scaling=str(attrs.get("residual_scaling", "grid")),
     )
 
 

@@ -113,14 +113,17 @@ def load_cases(config: CaseConfig,
 def identify_strategies(config: CaseConfig, cases: Sequence[CaseData],
                         excluded: dict[str, str], strategies: Sequence[str | Sequence[float]],
                         components: Sequence[str] | None = None,
-                        n_bootstrap: int = 200) -> dict[str, IdentificationResult]:
-    """One identification per strategy (the case's frequency_weights count as ``custom``)."""
+                        n_bootstrap: int = 200,
+                        residual_scaling: str | None = None) -> dict[str, IdentificationResult]:
+    """One identification per strategy (the case's frequency_weights count as ``custom``),
+    with the case's ``[identification] residual_scaling`` unless another is given."""
     base = config.morison_model()
+    scaling = residual_scaling or config.identification.residual_scaling
     out = {}
     for strategy in strategies:
         kwargs = {} if components is None else {"components": tuple(components)}
         res = identify(cases, base, strategy, n_bootstrap=n_bootstrap, excluded=excluded,
-                       **kwargs)
+                       residual_scaling=scaling, **kwargs)
         out[res.strategy] = res
     return out
 

@@ -15,7 +15,12 @@ from matplotlib.figure import Figure
 from mfflap.cfd.case_inputs import kept_wall_treatment
 from mfflap.hydro.base import ForceModel
 from mfflap.identification.data import BURST_NOTE, CaseData
-from mfflap.identification.fit import HELD_AT_ZERO, IdentificationResult, most_influential
+from mfflap.identification.fit import (
+    HELD_AT_ZERO,
+    RESIDUAL_SCALINGS,
+    IdentificationResult,
+    most_influential,
+)
 from mfflap.reports.html import Report, figure_html, table_html, text_html
 
 SIGNAL_LABELS = {"normal_force": "F_n", "tangential_force": "F_t", "moment": "M",
@@ -249,6 +254,8 @@ def add_identification_sections(rep: Report, results: Mapping[str, Identificatio
     first = next(iter(results.values()))
     s = rep.section(f"Identified coefficients ({len(first.case_names)} CFD cases"
                     f"{f' from {source}' if source else ''})")
+    s.blocks.append(text_html(f"Residuals scaled {RESIDUAL_SCALINGS[first.residual_scaling]} "
+                              f"(residual_scaling = \"{first.residual_scaling}\")."))
     s.blocks.append(table_html(["weighting", "term", "value", "bootstrap s.e.", "2.5 %",
                                 "97.5 %"], _coefficient_rows(results)))
     s.blocks.append(figure_html(coefficient_figure(results),
