@@ -181,6 +181,8 @@ def test_main_job_runs_end_to_end_on_the_shipped_fixtures(tmp_path):
     summary = json.loads(res.output[res.output.index("{\n"):])
     assert set(summary["optimised"]) == {"0", "0.5", "1"}
     assert set(summary["coefficients"]) == {"uniform", "low", "high"}
+    assert summary["most_influential_case"]["uniform"]["normal_drag"] == (
+        "f2p000_h0p500_phi135p0")
     assert "gap_verdict" in summary and len(summary["backtest"]) == 4
     html = (out / "report.html").read_text()
     for title in ("Identified coefficients", "Optimised motions", "Back-test against CFD",

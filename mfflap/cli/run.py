@@ -73,8 +73,13 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
 
 def run_summary(outcome) -> dict:
     """The key numbers of a run (JSON-friendly)."""
+    from mfflap.identification.fit import most_influential
+
     out: dict = {"problems": [p.splitlines()[0] for p in outcome.problems]}
     out["coefficients"] = {k: r.coefficients for k, r in outcome.identification.items()}
+    out["most_influential_case"] = {  # per strategy and coefficient: the case it rests on most
+        k: {i.term: i.case for i in most_influential(r)}
+        for k, r in outcome.identification.items()}
     if outcome.study is not None:
         out["optimised"] = {f"{b:g}": {**r.summary.as_dict(), "period": float(r.motion.period),
                                        "converged": r.converged, "flags": r.flags}
