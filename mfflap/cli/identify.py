@@ -94,6 +94,7 @@ def identify(case_file: Path, folders: tuple[Path, ...], strategies: tuple[str, 
     results = identify_strategies(case, cases, excluded, _strategies(strategies, weights, case),
                                   components, n_bootstrap, residual_scaling)
     save_identification(output, case, results, source_text(folders))
+    influence = {label: most_influential(r) for label, r in results.items()}
     summary = {
         label: {"coefficients": r.coefficients, "standard_error": r.standard_error,
                 "median_nrmse_normal_force": float(
@@ -105,7 +106,7 @@ def identify(case_file: Path, folders: tuple[Path, ...], strategies: tuple[str, 
                     i.term: {"case": i.case, "value_without": i.value_without,
                              "relative_change": i.relative_change,
                              "change_in_standard_errors": i.in_standard_errors}
-                    for i in most_influential(r)}}
+                    for i in influence[label]}}
         for label, r in results.items()
     }
     if as_json:
@@ -120,9 +121,9 @@ def identify(case_file: Path, folders: tuple[Path, ...], strategies: tuple[str, 
                            + (" (held at 0)" if n in r.at_lower_bound else "")
                            for n, v in r.coefficients.items())
         click.echo(f"{label:8s} {coeffs}")
-        influence = most_influential(r)
-        if influence:
-            click.echo(f"{'':8s} left out, moves most: " + "; ".join(map(str, influence)))
+        if influence[label]:
+            click.echo(f"{'':8s} left out, moves most: "
+                       + "; ".join(map(str, influence[label])))
     if any(r.at_lower_bound for r in results.values()):
         click.echo(f"held at 0: {HELD_AT_ZERO}")
     click.echo(f"wrote {output}")

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import jinja2
+import numpy as np
 from matplotlib.figure import Figure
 
 _TEMPLATE = jinja2.Template("""<!DOCTYPE html>
@@ -44,6 +45,12 @@ def figure_html(fig: Figure, caption: str = "", dpi: int = 110) -> str:
     data = base64.b64encode(buf.getvalue()).decode()
     return (f'<figure><img src="data:image/png;base64,{data}" alt="{html.escape(caption)}">'
             f"<figcaption>{html.escape(caption)}</figcaption></figure>")
+
+
+def signed_percent(fraction: float | None) -> str:
+    """A fraction as a signed percentage with one decimal, or a dash where it was not
+    computed (None or NaN)."""
+    return "–" if fraction is None or not np.isfinite(fraction) else f"{fraction:+.1%}"
 
 
 def _first_line_and_fold(text: str) -> tuple[str, str]:

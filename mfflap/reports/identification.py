@@ -21,7 +21,7 @@ from mfflap.identification.fit import (
     IdentificationResult,
     most_influential,
 )
-from mfflap.reports.html import Report, figure_html, table_html, text_html
+from mfflap.reports.html import Report, figure_html, signed_percent, table_html, text_html
 
 SIGNAL_LABELS = {"normal_force": "F_n", "tangential_force": "F_t", "moment": "M",
                  "thrust": "thrust", "input_power": "input power"}
@@ -206,17 +206,12 @@ def influence_figure(result: IdentificationResult) -> Figure | None:
     return fig
 
 
-def shown_percent(fraction: float) -> str:
-    """A signed percentage with one decimal, or a dash for NaN."""
-    return f"{fraction:+.1%}" if np.isfinite(fraction) else "-"
-
-
 def _influence_rows(results: Mapping[str, IdentificationResult]) -> list[list[object]]:
     rows = []
     for label, res in results.items():
         for inf in most_influential(res):
             rows.append([label, inf.term, float(inf.value), inf.case, float(inf.value_without),
-                         shown_percent(inf.relative_change),
+                         signed_percent(inf.relative_change),
                          float(inf.in_standard_errors) if np.isfinite(inf.in_standard_errors)
                          else None])
     return rows

@@ -14,7 +14,7 @@ from matplotlib.figure import Figure
 from mfflap.kinematics.discrete import DiscreteMotion
 from mfflap.optimisation.optimise import OptimisationResult
 from mfflap.performance import evaluate_discrete
-from mfflap.reports.html import Report, figure_html, table_html, text_html
+from mfflap.reports.html import Report, figure_html, signed_percent, table_html, text_html
 from mfflap.sweep import SweepResult, pareto_front
 
 
@@ -108,11 +108,6 @@ RESULT_HEADER = ["motion", "method", "mean thrust [N]", "mean power [W]", "η", 
                  "period [s]", "max power [W]", "max power at 10N [W]", "converged", "flags"]
 
 
-def _percent(gain: float | None) -> str:
-    """A gain as a signed percentage, or a dash where it was not computed."""
-    return "–" if gain is None or not np.isfinite(gain) else f"{gain:+.1%}"
-
-
 def add_optimisation_sections(rep: Report, study, model, scheme: str, max_power: float,
                               gain: Mapping[str, np.ndarray] | None = None) -> None:
     """Sections of the optimisation study (sweep, beta sweep, IPOPT, gain table)."""
@@ -146,7 +141,7 @@ def add_optimisation_sections(rep: Report, study, model, scheme: str, max_power:
             f"{r.frequency:.4g} Hz, h_amp = {r.heave_amplitude:.4g} m, θ_amp = "
             f"{np.rad2deg(r.pitch_amplitude):.1f}°, φ = {np.rad2deg(r.phase):.1f}°, mean "
             f"thrust {r.mean_thrust:.4g} N (grid {r.grid_thrust:.4g} N); β = 0 gain over it: "
-            f"{_percent(study.thrust_gain_refined)}."))
+            f"{signed_percent(study.thrust_gain_refined)}."))
     for b, r in study.sqp.items():
         if float(r.summary.mean_power) < 0:
             s.blocks.append(text_html(
@@ -166,7 +161,7 @@ def add_optimisation_sections(rep: Report, study, model, scheme: str, max_power:
     if gain is not None:
         s = rep.section("β = 0 gain against N and the smoothing weights")
         header = ["N"] + [f"ε × {f:g}" for f in gain["smoothing_factors"]]
-        rows = [[int(n)] + [f"{_percent(g)}{' (flagged)' if fl else ''}" for g, fl in
+        rows = [[int(n)] + [f"{signed_percent(g)}{' (flagged)' if fl else ''}" for g, fl in
                             zip(gain["gain"][i], gain["flagged"][i], strict=True)]
                 for i, n in enumerate(gain["n_steps"])]
         s.blocks.append(table_html(header, rows))
