@@ -186,8 +186,9 @@ def influence_figure(result: IdentificationResult) -> Figure | None:
         return None
     rows = np.asarray(result.leave_one_out, dtype=float)
     x = np.arange(len(result.case_names))
-    fig, axes = plt.subplots(len(found), 1, figsize=(max(7.0, 0.17 * len(x) + 2), 2.0 * len(found)
-                                                     + 1.2), sharex=True, squeeze=False)
+    width_in, height_in = max(7.0, 0.17 * len(x) + 2), 2.0 * len(found) + 1.2
+    fig, axes = plt.subplots(len(found), 1, figsize=(width_in, height_in), sharex=True,
+                             squeeze=False)
     for ax, inf in zip(axes[:, 0], found, strict=True):
         j = result.fitted_terms.index(inf.term)
         se = inf.standard_error
