@@ -531,3 +531,35 @@ def test_the_residual_scaling_comes_from_the_case_file_or_the_command_line(tmp_p
         del rf.h5["identification/uniform"].attrs["residual_scaling"]
     with ResultsFile(tmp_path / "case.h5") as rf:
         assert read_identification(rf, "identification/uniform").residual_scaling == "grid"
+
+
+def test_a_case_can_be_left_out_by_name_and_its_fit_is_the_refit_without_it(tmp_path):
+    """`identify --exclude CASE` fits without that case (the jackknife's row for it), lists
+    it among the cases left out with the reason; a name that is none of the cases is
+    refused by the option's name, listing the cases, before anything is written."""
+    from click.testing import CliRunner
+
+    from mfflap.cli.main import cli
+
+    case_file = Path(__file__).parents[1] / "cases" / "paper2026.toml"
+    runner = CliRunner()
+    full = json.loads(runner.invoke(cli, [
+        "identify", str(case_file), "--strategy", "uniform", "--bootstrap", "0", "--output",
+        str(tmp_path / "all.h5"), "--json"]).stdout)["uniform"]
+    res = runner.invoke(cli, ["identify", str(case_file), "--strategy", "uniform",
+                              "--bootstrap", "0", "--exclude", "f2p000_h0p500_phi135p0",
+                              "--output", str(tmp_path / "without.h5"), "--json"])
+    assert res.exit_code == 0, res.output
+    without = json.loads(res.stdout)["uniform"]
+    assert without["n_cases"] == full["n_cases"] - 1 == 42
+    assert without["excluded"]["f2p000_h0p500_phi135p0"] == "left out on request (--exclude)"
+    moved = full["most_influential"]["normal_drag"]
+    assert moved["case"] == "f2p000_h0p500_phi135p0"
+    assert without["coefficients"]["normal_drag"] == pytest.approx(moved["value_without"],
+                                                                   rel=1e-9)
+    res = runner.invoke(cli, ["identify", str(case_file), "--exclude", "f2p000_h0p500_phi136p0",
+                              "--output", str(tmp_path / "typo.h5")])
+    assert res.exit_code == 2
+    assert "Invalid value for --exclude: no case 'f2p000_h0p500_phi136p0' among the 43" in (
+        res.output)
+    assert "f2p000_h0p500_phi135p0" in res.output and not (tmp_path / "typo.h5").exists()

@@ -51,6 +51,9 @@ def _fitted_components() -> tuple[str, ...]:
               help="Folder of CFD records or one record file, DIR/CASE.h5 (default: the "
                    "shipped fixtures); repeat to pool several (a case may have a record in "
                    "one of them only).")
+@click.option("--exclude", "left_out", multiple=True, metavar="CASE",
+              help="Leave this case out of the fit (e.g. the one a coefficient rests on "
+                   "most); repeat for several.")
 @click.option("--strategy", "strategies", multiple=True,
               type=click.Choice(["uniform", "low", "high"]),
               help="Weighting strategy; repeat for several (default: all three).")
@@ -70,16 +73,19 @@ def _fitted_components() -> tuple[str, ...]:
 @click.option("--output", type=ResultsOutput("identification"),
               default=Path("identification.h5"), show_default=True, help="HDF5 results.")
 @click.option("--json", "as_json", is_flag=True, help="Print coefficients as JSON.")
-def identify(case_file: Path, folders: tuple[Path, ...], strategies: tuple[str, ...],
+def identify(case_file: Path, folders: tuple[Path, ...], left_out: tuple[str, ...],
+             strategies: tuple[str, ...],
              weights: list[float] | None, components: list[str] | None,
              residual_scaling: str | None, n_bootstrap: int, output: Path,
              as_json: bool) -> None:
     """Fit the Morison coefficients of CASE_FILE's model to CFD records."""
     from mfflap.campaign.records import fixture_dir
     from mfflap.config import load_case
+    from mfflap.errors import MfflapError
     from mfflap.identification.fit import HELD_AT_ZERO, RESIDUAL_SCALINGS, most_influential
     from mfflap.identification.workflow import (
         identify_strategies,
+        leave_out,
         load_cases,
         save_identification,
         source_text,
@@ -89,6 +95,11 @@ def identify(case_file: Path, folders: tuple[Path, ...], strategies: tuple[str, 
     case = load_case(case_file)
     folders = folders or (fixture_dir(),)
     cases, excluded = load_cases(case, folders)
+    if left_out:
+        try:
+            cases, excluded = leave_out(cases, excluded, left_out)
+        except MfflapError as exc:
+            raise click.BadParameter(str(exc), param_hint="--exclude") from exc
     if weights:
         _check_weights(weights, cases)
     results = identify_strategies(case, cases, excluded, _strategies(strategies, weights, case),

@@ -8,6 +8,7 @@ from pathlib import Path
 from mfflap.campaign.record_inputs import check_records_inputs
 from mfflap.campaign.records import CfdRecord, fixture_dir, read_record, read_records
 from mfflap.config import CaseConfig
+from mfflap.errors import MfflapError
 from mfflap.identification.data import CaseData, prepare_cases
 from mfflap.identification.fit import IdentificationResult, identify
 from mfflap.identification.store import write_identification
@@ -68,8 +69,6 @@ def pooled_records(folders: str | Path | Sequence[str | Path] | None = None,
     ConfigError
         If a record was run for another plate, fluid or stream than ``config``'s.
     """
-    from mfflap.errors import MfflapError
-
     paths = _folder_list(folders)
     records, origin, failed = [], {}, {}
     for path in paths:
@@ -108,6 +107,26 @@ def load_cases(config: CaseConfig,
                                     stream=config.flow)
     excluded.update(failed)
     return cases, excluded
+
+
+def leave_out(cases: Sequence[CaseData], excluded: dict[str, str],
+              names: Sequence[str]) -> tuple[list[CaseData], dict[str, str]]:
+    """``cases`` without those named (a case to refit without, e.g. the one a coefficient
+    rests on most), each added to ``excluded`` with the reason.
+
+    Raises
+    ------
+    MfflapError
+        For a name that is none of the cases, with the names there are.
+    """
+    have = {c.name for c in cases}
+    unknown = [n for n in names if n not in have]
+    if unknown:
+        raise MfflapError(f"no case {', '.join(map(repr, unknown))} among the "
+                          f"{len(have)} to identify from: {', '.join(sorted(have))}")
+    drop = set(names)
+    kept = [c for c in cases if c.name not in drop]
+    return kept, {**excluded, **{n: "left out on request (--exclude)" for n in names}}
 
 
 def identify_strategies(config: CaseConfig, cases: Sequence[CaseData],
