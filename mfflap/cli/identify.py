@@ -74,10 +74,9 @@ def _fitted_components() -> tuple[str, ...]:
               default=Path("identification.h5"), show_default=True, help="HDF5 results.")
 @click.option("--json", "as_json", is_flag=True, help="Print coefficients as JSON.")
 def identify(case_file: Path, folders: tuple[Path, ...], left_out: tuple[str, ...],
-             strategies: tuple[str, ...],
-             weights: list[float] | None, components: list[str] | None,
-             residual_scaling: str | None, n_bootstrap: int, output: Path,
-             as_json: bool) -> None:
+             strategies: tuple[str, ...], weights: list[float] | None,
+             components: list[str] | None, residual_scaling: str | None, n_bootstrap: int,
+             output: Path, as_json: bool) -> None:
     """Fit the Morison coefficients of CASE_FILE's model to CFD records."""
     from mfflap.campaign.records import fixture_dir
     from mfflap.config import load_case
