@@ -9,7 +9,13 @@ import click
 import numpy as np
 
 from mfflap.cli.json_output import echo_json
-from mfflap.cli.options import NON_NEGATIVE, POSITIVE, ResultsOutput
+from mfflap.cli.options import (
+    NON_NEGATIVE,
+    POSITIVE,
+    RESIDUAL_SCALING_NAMES,
+    ResultsOutput,
+    residual_scaling_option,
+)
 
 if TYPE_CHECKING:
     from mfflap.config import CaseConfig
@@ -39,6 +45,7 @@ def gap() -> None:
 @click.option("--alpha", default=0.01, show_default=True, help="Significance level.")
 @click.option("--min-gain", default=0.02, show_default=True,
               help="Smallest held-out error reduction worth claiming.")
+@residual_scaling_option
 @click.option("--output", type=ResultsOutput("gap_diagnosis"),
               default=Path("gap.h5"), show_default=True)
 @click.option("--report", "report_path", type=click.Path(dir_okay=False, path_type=Path),
@@ -46,8 +53,8 @@ def gap() -> None:
 @click.option("--json", "as_json", is_flag=True)
 def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Path, ...],
                  flow_dirs: tuple[str, ...], discard: float | None, alpha: float,
-                 min_gain: float, output: Path, report_path: Path | None,
-                 as_json: bool) -> None:
+                 min_gain: float, residual_scaling: str | None, output: Path,
+                 report_path: Path | None, as_json: bool) -> None:
     """Where the model of CASE_FILE departs from CFD, and which effect explains it."""
     from mfflap.campaign.records import fixture_dir
     from mfflap.config import load_case
@@ -56,6 +63,8 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
     from mfflap.gap.system import MIN_CASES
     from mfflap.gap.workflow import diagnose_cases
     from mfflap.identification.data import prepare_cases
+    from mfflap.identification.error_growth import scaling_advice
+    from mfflap.identification.fit import RESIDUAL_SCALINGS
     from mfflap.identification.workflow import pooled_records
     from mfflap.results import ResultsFile
 
@@ -80,7 +89,8 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
                                f"{MIN_CASES}, and the shipped fixtures are read only without "
                                "--csv: add CSV files, or --fixtures DIR to pool records")
     flows = [_flow_record(item, cases, case) for item in flow_dirs]  # before the work
-    diag, where, pred = diagnose_cases(case, cases, alpha=alpha, min_gain=min_gain)
+    diag, where, pred = diagnose_cases(case, cases, alpha=alpha, min_gain=min_gain,
+                                       residual_scaling=residual_scaling)
     snapshots = []
     for index, folder in flows:
         from mfflap.gap.flowfield import vorticity_figure
@@ -97,6 +107,10 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
                       ", ".join(sources), snapshots)
     if as_json:
         echo_json({"verdict": diag.verdict,
+                   "residual_scaling": diag.residual_scaling,
+                   "error_growth": {k: {"exponent": g.exponent, "interval": list(g.interval),
+                                        "matching_scaling": g.matching_scaling}
+                                    for k, g in diag.error_growth.items()},
                    "chosen": diag.chosen.label if diag.chosen else None,
                    "ranking": [[s.label, s.gain, s.p_value] for s in diag.scores],
                    "candidates": [
@@ -111,6 +125,8 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
                    "validation": diag.validation})
         return
     click.echo(diag.verdict)
+    click.echo(f"residuals scaled {RESIDUAL_SCALINGS[diag.residual_scaling]}; the base "
+               f"model's {scaling_advice(diag.error_growth, diag.residual_scaling)}")
     click.echo("where the model departs most (a component's or harmonic's share of the "
                "squared residual; for a state or regime, the share of the residual's variance "
                "it explains, eta^2):")
@@ -165,18 +181,30 @@ def _flow_record(item: str, cases: list, config: CaseConfig) -> tuple[int, str]:
 @click.option("--seed", default=0, show_default=True,
               help="Seed of the datasets and the hidden effects (the same seed, the same "
                    "benchmark).")
+@click.option("--noise", type=click.Choice(["absolute", "relative"]), default="absolute",
+              show_default=True,
+              help="The noise's size in each dataset's cases: the same in every case "
+                   "(absolute), or in proportion to the case's own loads (relative, as the "
+                   "reduced model's errors against CFD grow).")
+@click.option("--residual-scaling", type=click.Choice(RESIDUAL_SCALING_NAMES), default="grid",
+              show_default=True,
+              help="How the diagnosis scales each case's residuals: by each component's RMS "
+                   "over every case (grid) or by its range in the case (case).")
 @click.option("--json", "as_json", is_flag=True)
-def blindtest_cmd(trials: int, snr: float, seed: int, as_json: bool) -> None:
+def blindtest_cmd(trials: int, snr: float, seed: int, noise: str, residual_scaling: str,
+                  as_json: bool) -> None:
     """Diagnose datasets with a hidden effect (or none) and score the attributions."""
     from tqdm import tqdm
 
     from mfflap.gap.blindtest import blind_test
 
     bar = tqdm(total=trials, desc="blind trials", disable=as_json)
-    result = blind_test(trials, snr, seed, progress=lambda done, total: bar.update())
+    result = blind_test(trials, snr, seed, progress=lambda done, total: bar.update(),
+                        noise=noise, residual_scaling=residual_scaling)
     bar.close()
     if as_json:
-        echo_json({"attribution_accuracy": result.attribution_accuracy,
+        echo_json({"noise": noise, "residual_scaling": residual_scaling,
+                   "attribution_accuracy": result.attribution_accuracy,
                    "null_correct": result.null_correct,
                    "mean_heldout_gain": result.mean_gain,
                    "coefficient_error": result.coefficient_error,

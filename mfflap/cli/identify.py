@@ -8,7 +8,7 @@ import click
 import numpy as np
 
 from mfflap.cli.json_output import echo_json
-from mfflap.cli.options import FloatList, NameList, ResultsOutput
+from mfflap.cli.options import FloatList, NameList, ResultsOutput, residual_scaling_option
 
 
 def _strategies(names: tuple[str, ...], weights: list[float] | None, case) -> list:
@@ -62,11 +62,7 @@ def _fitted_components() -> tuple[str, ...]:
 @click.option("--components", type=NameList(_fitted_components), default=None,
               help="Fitted components, comma-separated, each once (default normal_force,"
                    "tangential_force,moment).")
-@click.option("--residual-scaling", type=click.Choice(["grid", "case"]), default=None,
-              help="Residuals over each component's RMS across every case (grid: the cases "
-                   "of large forces weigh most) or over its range in each case (case: the "
-                   "fit minimises the mean square NRMSE, every case weighs alike); default "
-                   "the case file's [identification] residual_scaling, grid unless set.")
+@residual_scaling_option
 @click.option("--bootstrap", "n_bootstrap", default=200, show_default=True,
               type=click.IntRange(min=0),
               help="Case-bootstrap replicates.")
@@ -81,6 +77,7 @@ def identify(case_file: Path, folders: tuple[Path, ...], left_out: tuple[str, ..
     from mfflap.campaign.records import fixture_dir
     from mfflap.config import load_case
     from mfflap.errors import MfflapError
+    from mfflap.identification.error_growth import scaling_advice
     from mfflap.identification.fit import HELD_AT_ZERO, RESIDUAL_SCALINGS, most_influential
     from mfflap.identification.workflow import (
         identify_strategies,
@@ -112,6 +109,9 @@ def identify(case_file: Path, folders: tuple[Path, ...], left_out: tuple[str, ..
                 "at_lower_bound": list(r.at_lower_bound),
                 "n_cases": len(r.case_names), "excluded": r.excluded,
                 "residual_scaling": r.residual_scaling,
+                "error_growth": {k: {"exponent": g.exponent, "interval": list(g.interval),
+                                     "matching_scaling": g.matching_scaling}
+                                 for k, g in r.error_growth.items()},
                 "most_influential": {
                     i.term: {"case": i.case, "value_without": i.value_without,
                              "relative_change": i.relative_change,
@@ -136,6 +136,8 @@ def identify(case_file: Path, folders: tuple[Path, ...], left_out: tuple[str, ..
                        + "; ".join(map(str, influence[label])))
     if any(r.at_lower_bound for r in results.values()):
         click.echo(f"held at 0: {HELD_AT_ZERO}")
+    first = next(iter(results.values()))  # the strategies' fits err alike
+    click.echo(f"{scaling_advice(first.error_growth, scaling)} ({first.strategy} weighting)")
     click.echo(f"wrote {output}")
 
 

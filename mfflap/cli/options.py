@@ -163,6 +163,18 @@ velocity_convection_option = click.option(
     "--velocity-convection", type=click.Choice(VELOCITY_CONVECTION_NAMES), default=None,
     help="Convection scheme of U; default linearUpwind (or the set-up's).")
 
+#: The identification's residual scalings (identification.fit.RESIDUAL_SCALINGS), named here
+#: so that the command line does not import the fit to build its help
+RESIDUAL_SCALING_NAMES = ("grid", "case")
+
+#: ``--residual-scaling``: how a fit of the model's coefficients weighs the cases
+residual_scaling_option = click.option(
+    "--residual-scaling", type=click.Choice(RESIDUAL_SCALING_NAMES), default=None,
+    help="Residuals over each component's RMS across every case (grid: the cases of large "
+         "forces weigh most) or over its range in each case (case: the fit minimises the "
+         "mean square NRMSE, every case weighs alike); default the case file's "
+         "[identification] residual_scaling, grid unless set.")
+
 
 def mesh_and_setup_options(runs: str = "") -> Callable:
     """``--mesh``, ``--setup`` and ``--wall-treatment``: which mesh and solver settings the

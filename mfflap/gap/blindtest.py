@@ -27,6 +27,12 @@ from mfflap.hydro.morison import MorisonModel
 from mfflap.identification.data import CaseData
 
 NULL = "none"
+#: How the noise of a synthetic dataset is sized, case by case
+NOISE_MODELS = {
+    "absolute": "the same size in every case: each component's RMS over all cases",
+    "relative": "in proportion to each case's own loads: each component's RMS in the case "
+                "(the model errors of CFD, about the same NRMSE in every run, look so)",
+}
 
 
 def trial_cases(rng: np.random.Generator, n_cases: int = 20, n_samples: int = 240
@@ -56,16 +62,26 @@ def _ar1(rng, n: int, rho: float = 0.9) -> np.ndarray:
 
 
 def synthesize(rng: np.random.Generator, effect: str, snr: float, noise_level: float = 0.05,
-               n_cases: int = 20) -> list[CaseData]:
-    """A dataset with a hidden ``effect`` (or :data:`NULL`) at signal-to-noise ratio ``snr``."""
-    return synthesize_with_strength(rng, effect, snr, noise_level, n_cases)[0]
+               n_cases: int = 20, noise: str = "absolute") -> list[CaseData]:
+    """A dataset with a hidden ``effect`` (or :data:`NULL`) at signal-to-noise ratio ``snr``,
+    its noise sized as ``noise`` (a key of :data:`NOISE_MODELS`) says."""
+    return synthesize_with_strength(rng, effect, snr, noise_level, n_cases, noise)[0]
 
 
 def synthesize_with_strength(rng: np.random.Generator, effect: str, snr: float,
-                             noise_level: float = 0.05, n_cases: int = 20
-                             ) -> tuple[list[CaseData], float]:
+                             noise_level: float = 0.05, n_cases: int = 20,
+                             noise: str = "absolute") -> tuple[list[CaseData], float]:
     """:func:`synthesize`, and the hidden effect's coefficient (0 for :data:`NULL`), which
-    the data given to the diagnosis does not carry."""
+    the data given to the diagnosis does not carry.
+
+    Raises
+    ------
+    ConfigError
+        If ``noise`` is none of :data:`NOISE_MODELS`.
+    """
+    if noise not in NOISE_MODELS:
+        raise ConfigError(f"noise model {noise!r}: choose one of {', '.join(NOISE_MODELS)}",
+                          key="noise")
     cases = trial_cases(rng, n_cases)
     base = MorisonModel().with_coefficients(
         {k: v * rng.uniform(0.8, 1.2) for k, v in MorisonModel().coefficients.items()})
@@ -97,7 +113,10 @@ def synthesize_with_strength(rng: np.random.Generator, effect: str, snr: float,
             y = getattr(ld, k).copy()
             if ex is not None:
                 y = y + ex[0] * getattr(ex[1], k)
-            y = y + noise_level * scale[k] * _ar1(rng, len(y))
+            size = scale[k]
+            if noise == "relative":  # the case's own RMS (their mean square is scale's)
+                size = float(np.sqrt(np.mean(getattr(ld, k)**2)))
+            y = y + noise_level * size * _ar1(rng, len(y))
             comps[k] = y
         out.append(CaseData(c.name, c.parameters, c.state,
                             Loads(c.state.time, comps["normal_force"],
@@ -118,6 +137,9 @@ class BlindTestResult:
     #: the claimed effect's refitted coefficient where the right effect was claimed, else nan
     fitted_coefficient: list[float] = field(default_factory=list)
     snr: float = 3.0
+    #: the datasets' noise model (a key of NOISE_MODELS) and the diagnosis's scaling
+    noise: str = "absolute"
+    residual_scaling: str = "grid"
 
     def confusion(self) -> np.ndarray:
         """Counts [true label, claimed label] in the order of ``labels``."""
@@ -163,7 +185,8 @@ class BlindTestResult:
             return (f"{value:.1%} {what}" if np.isfinite(value)
                     else f"– (no {trials} trial among these)")
 
-        lines = [f"blind benchmark at SNR {self.snr:g}: {len(self.truth)} trials",
+        lines = [f"blind benchmark at SNR {self.snr:g}: {len(self.truth)} trials ({self.noise} "
+                 f"noise, residuals scaled by {self.residual_scaling})",
                  "  right effect ranked first : "
                  + percent(self.attribution_accuracy, "of effect trials", "effect"),
                  "  no claim on null datasets : "
@@ -182,13 +205,15 @@ class BlindTestResult:
 
 def blind_test(n_trials: int = 70, snr: float = 3.0, seed: int = 0,
                null_share: float = 0.3, effects: Sequence[str] | None = None,
-               progress: Callable[[int, int], None] | None = None) -> BlindTestResult:
+               progress: Callable[[int, int], None] | None = None, noise: str = "absolute",
+               residual_scaling: str = "grid") -> BlindTestResult:
     """Run the blind benchmark; the diagnosis never sees which effect was hidden.
 
     Raises
     ------
     ConfigError
-        If ``n_trials`` is below 1 or ``snr`` is not a finite number > 0.
+        If ``n_trials`` is below 1, ``snr`` is not a finite number > 0, or ``noise`` or
+        ``residual_scaling`` is none of its choices.
     """
     if n_trials < 1:
         raise ConfigError(f"the blind test needs at least one trial, got {n_trials!r}",
@@ -198,12 +223,13 @@ def blind_test(n_trials: int = 70, snr: float = 3.0, seed: int = 0,
                           f"{snr!r}", key="snr")
     rng = np.random.default_rng(seed)
     names = list(effects or default_candidates())
-    result = BlindTestResult([*names, NULL], snr=snr)
+    result = BlindTestResult([*names, NULL], snr=snr, noise=noise,
+                             residual_scaling=residual_scaling)
     base = MorisonModel()
     for k in range(n_trials):
         truth = NULL if rng.uniform() < null_share else names[int(rng.integers(len(names)))]
-        data, strength = synthesize_with_strength(rng, truth, snr)
-        diag = diagnose(data, base, validate_by=())
+        data, strength = synthesize_with_strength(rng, truth, snr, noise=noise)
+        diag = diagnose(data, base, validate_by=(), residual_scaling=residual_scaling)
         claimed = NULL if diag.chosen is None else diag.chosen.names[0]
         result.truth.append(truth)
         result.claimed.append(claimed)

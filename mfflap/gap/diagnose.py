@@ -34,6 +34,7 @@ from mfflap.gap.candidates import CandidateEffect, FlowContext, load_all
 from mfflap.gap.system import COMPONENTS, GapSystem, group_folds
 from mfflap.hydro.base import ForceModel
 from mfflap.identification.data import CaseData
+from mfflap.identification.error_growth import ErrorGrowth, measure_error_growth
 from mfflap.metrics import nrmse, pearson
 from mfflap.performance import thrust_and_power
 
@@ -75,6 +76,10 @@ class Diagnosis:
     gap: dict[str, dict] = field(default_factory=dict)
     validation: dict[str, dict] = field(default_factory=dict)
     case_names: list[str] = field(default_factory=list)
+    residual_scaling: str = "grid"
+    #: how the base model's error (its coefficients as configured) grows with each case's
+    #: loads, per component: which residual scaling weighs the cases as their errors say
+    error_growth: dict[str, ErrorGrowth] = field(default_factory=dict)
 
 
 #: variance inflation factor above which a coefficient is called confounded (the usual rule
@@ -170,7 +175,7 @@ def diagnose(cases: Sequence[CaseData], base_model: ForceModel,
              context: FlowContext | None = None, max_combination: int = 2,
              n_folds: int = 5, alpha: float = 0.01, min_gain: float = 0.02, seed: int = 0,
              validate_by: Sequence[str] = ("frequency", "heave_amplitude"),
-             system: GapSystem | None = None) -> Diagnosis:
+             residual_scaling: str = "grid", system: GapSystem | None = None) -> Diagnosis:
     """Rank the candidate effects by held-out improvement and claim one only if significant.
 
     Parameters
@@ -182,11 +187,18 @@ def diagnose(cases: Sequence[CaseData], base_model: ForceModel,
     validate_by
         Case parameters for leave-one-group-out validation of the chosen effect (e.g.
         leave-one-frequency-out).
+    residual_scaling
+        How each case's residuals are scaled (a key of
+        :data:`~mfflap.identification.fit.RESIDUAL_SCALINGS`): by each component's RMS over
+        every case ("grid"), or by its range in the case ("case": every case weighs alike
+        in the fits, the held-out errors and the significance test). Ignored when
+        ``system`` is given (it holds its own).
 
     Raises
     ------
     ConfigError
-        If ``alpha`` is not in (0, 1) or ``min_gain`` is negative.
+        If ``alpha`` is not in (0, 1), ``min_gain`` is negative or ``residual_scaling`` is
+        none of the scalings.
     """
     if not 0 < alpha < 1:
         raise ConfigError(f"the significance level must be in (0, 1), got {alpha!r}",
@@ -195,7 +207,8 @@ def diagnose(cases: Sequence[CaseData], base_model: ForceModel,
         raise ConfigError(f"the smallest error reduction worth claiming must be a finite "
                           f"share >= 0, got {min_gain!r}", key="min_gain")
     candidates = candidates or default_candidates(context)
-    system = system or GapSystem.build(cases, base_model.terms, list(candidates.values()))
+    system = system or GapSystem.build(cases, base_model.terms, list(candidates.values()),
+                                       residual_scaling=residual_scaling)
     folds = group_folds(range(len(system.cases)), n_folds, seed)
     base_cols = list(range(system.n_base))
     base_values = np.array([base_model.coefficients[n] for n in system.names[:system.n_base]])
@@ -237,7 +250,9 @@ def diagnose(cases: Sequence[CaseData], base_model: ForceModel,
                     f"one-sided signed-rank test needs at least "
                     f"{int(np.ceil(np.log2(1 / alpha)))} cases): add cases")
     diag = Diagnosis(list(system.names[: system.n_base]), base_sse, scores, chosen, verdict,
-                     case_names=[c.name for c in system.cases])
+                     case_names=[c.name for c in system.cases],
+                     residual_scaling=system.residual_scaling,
+                     error_growth=measure_error_growth(system.cases, base_model))
     diag.gap["before"] = gap_metrics(system, _predictions(system, base_cols, folds))
     validated = chosen or (singles[0] if singles else None)
     if chosen is not None:

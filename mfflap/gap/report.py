@@ -11,6 +11,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from mfflap.gap.diagnose import CONFOUNDED_VIF, Diagnosis
+from mfflap.identification.error_growth import scaling_advice
+from mfflap.identification.fit import RESIDUAL_SCALINGS
 from mfflap.reports.html import Report, figure_html, table_html, text_html
 from mfflap.results import ResultsFile
 
@@ -83,6 +85,11 @@ def add_gap_sections(rep: Report, diag: Diagnosis, where: dict,
     """Verdict, where the model departs, candidates, gap before/after, validation."""
     s = rep.section("Sim-to-real gap: verdict")
     s.blocks.append(text_html(diag.verdict, warn=diag.chosen is None))
+    s.blocks.append(text_html(f"Residuals scaled {RESIDUAL_SCALINGS[diag.residual_scaling]} "
+                              f"(residual_scaling = \"{diag.residual_scaling}\"), in the "
+                              "fits, the held-out errors and the significance test; the base "
+                              "model's (coefficients as configured) "
+                              f"{scaling_advice(diag.error_growth, diag.residual_scaling)}."))
     s = rep.section("Where the model departs from CFD")
     s.blocks.append(table_html(["factor", "share / η²"], [(k, float(v)) for k, v in
                                                           where["ranking"][:15]]))
@@ -187,3 +194,6 @@ def write_diagnosis(rf: ResultsFile, diag: Diagnosis, where: dict, group: str = 
     g.attrs["chosen"] = diag.chosen.label if diag.chosen else ""
     g.attrs["case_names"] = json.dumps(diag.case_names)
     g.attrs["validation"] = json.dumps(diag.validation)
+    g.attrs["residual_scaling"] = diag.residual_scaling
+    g.attrs["error_growth"] = json.dumps({k: [v.exponent, *v.interval, v.n_cases]
+                                          for k, v in diag.error_growth.items()})

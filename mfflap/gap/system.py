@@ -1,10 +1,14 @@
 """Per-case least-squares blocks over the base terms and every candidate.
 
-For case c and component k the rows are (y - A x) / s_k with s_k the component's RMS over
-all cases, weighted 1 / n_samples(c) so that every case counts equally. Keeping each case's
-Gram matrix G_c = A'A, g_c = A'y and y'y makes any fit on any subset of terms and cases a
-sum of small blocks, and any case's squared error a quadratic form: cross-validation of every
-candidate set costs almost nothing once the regressors are evaluated.
+For case c and component k the rows are (y - A x) / s_ck, weighted 1 / n_samples(c) so that
+every case counts equally. With ``residual_scaling="grid"`` (the default) s_ck is the
+component's RMS over all cases, so the cases of large forces weigh most; with ``"case"`` it
+is the component's range in case c, NRMSE's denominator, so the fits minimise the mean
+square NRMSE and every case weighs alike (as in identification, :data:`RESIDUAL_SCALINGS`).
+Keeping each case's Gram matrix G_c = A'A, g_c = A'y and y'y makes any fit on any subset of
+terms and cases a sum of small blocks, and any case's squared error a quadratic form:
+cross-validation of every candidate set costs almost nothing once the regressors are
+evaluated.
 """
 
 from __future__ import annotations
@@ -14,10 +18,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mfflap.errors import MfflapError
+from mfflap.errors import ConfigError, MfflapError
 from mfflap.hydro.base import ForceTerm
 from mfflap.hydro.loads import LOAD_COMPONENTS
 from mfflap.identification.data import CaseData
+from mfflap.identification.fit import RESIDUAL_SCALINGS
 
 COMPONENTS = LOAD_COMPONENTS
 #: the fewest cases a diagnosis can hold cases out of
@@ -34,8 +39,10 @@ class GapSystem:
         Column names: base terms, then candidates.
     n_base : int
     grams : (n_cases, p, p); rhs : (n_cases, p); yy : (n_cases,)
-    scales : dict component -> RMS
+    scales : per case, dict component -> the divisor of its residuals (N or N*m)
     columns : per case, per component, (n_samples, p) regressor matrices (unscaled)
+    residual_scaling : str
+        A key of :data:`~mfflap.identification.fit.RESIDUAL_SCALINGS`: what ``scales`` are.
     """
 
     names: list[str]
@@ -43,24 +50,35 @@ class GapSystem:
     grams: np.ndarray
     rhs: np.ndarray
     yy: np.ndarray
-    scales: dict[str, float]
+    scales: list[dict[str, float]]
     columns: list[dict[str, np.ndarray]]
     cases: list[CaseData]
+    residual_scaling: str = "grid"
 
     @classmethod
     def build(cls, cases: Sequence[CaseData], base: Sequence[ForceTerm],
               candidates: Sequence[ForceTerm],
-              components: Sequence[str] = COMPONENTS) -> GapSystem:
-        """Evaluate every regressor of every case once."""
+              components: Sequence[str] = COMPONENTS,
+              residual_scaling: str = "grid") -> GapSystem:
+        """Evaluate every regressor of every case once.
+
+        Raises
+        ------
+        MfflapError
+            If there are fewer than :data:`MIN_CASES` cases.
+        ConfigError
+            If ``residual_scaling`` is not a key of ``RESIDUAL_SCALINGS``.
+        """
         if len(cases) < MIN_CASES:
             raise MfflapError(f"gap diagnosis needs at least {MIN_CASES} cases (it holds cases "
                               f"out to test each effect), got {len(cases)}")
+        if residual_scaling not in RESIDUAL_SCALINGS:
+            raise ConfigError(f"residual scaling {residual_scaling!r}: choose one of "
+                              f"{', '.join(RESIDUAL_SCALINGS)}",
+                              key="identification.residual_scaling")
         terms = list(base) + list(candidates)
         names = [t.name for t in terms]
-        scales = {}
-        for k in components:
-            y = np.concatenate([c.cfd_signal(k) for c in cases])
-            scales[k] = float(np.sqrt(np.mean(y**2))) or 1.0
+        scales = _residual_scales(cases, components, residual_scaling)
         p = len(terms)
         grams, rhs, yy = np.zeros((len(cases), p, p)), np.zeros((len(cases), p)), np.zeros(
             len(cases))
@@ -73,12 +91,13 @@ class GapSystem:
                 a = np.column_stack([getattr(r, k) for r in regs])
                 y = c.cfd_signal(k)
                 cols[k] = a
-                a_s, y_s = a / scales[k], y / scales[k]
+                a_s, y_s = a / scales[i][k], y / scales[i][k]
                 grams[i] += w * a_s.T @ a_s
                 rhs[i] += w * a_s.T @ y_s
                 yy[i] += w * y_s @ y_s
             columns.append(cols)
-        return cls(names, len(base), grams, rhs, yy, scales, columns, list(cases))
+        return cls(names, len(base), grams, rhs, yy, scales, columns, list(cases),
+                   residual_scaling)
 
     def fit(self, cols: Sequence[int], train: np.ndarray) -> np.ndarray:
         """Unconstrained least squares on ``cols`` over the ``train`` cases."""
@@ -165,6 +184,17 @@ class GapSystem:
             sse[held] = self.case_sse(cols, x, held)
             coefs.append(x)
         return sse, coefs
+
+
+def _residual_scales(cases: Sequence[CaseData], components: Sequence[str],
+                     residual_scaling: str) -> list[dict[str, float]]:
+    """Each case's divisor of each component's residual: the RMS over every case ("grid")
+    or the range in the case ("case"); 1 where that is 0 (a component that stays 0)."""
+    if residual_scaling == "case":
+        return [{k: float(np.ptp(c.cfd_signal(k))) or 1.0 for k in components} for c in cases]
+    grid = {k: float(np.sqrt(np.mean(np.concatenate([c.cfd_signal(k) for c in cases])**2)))
+            or 1.0 for k in components}
+    return [dict(grid) for _ in cases]
 
 
 def _solve_normal_equations(gram: np.ndarray, rhs: np.ndarray) -> np.ndarray:

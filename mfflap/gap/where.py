@@ -48,9 +48,9 @@ def decompose(system: GapSystem, predictions: list[dict[str, np.ndarray]], veloc
     lags = np.full(len(cases), np.nan)
     for i, c in enumerate(cases):
         for k in COMPONENTS:
-            r = (c.cfd_signal(k) - predictions[i][k]) / system.scales[k]
+            r = (c.cfd_signal(k) - predictions[i][k]) / system.scales[i][k]
             sq[k] += float(np.mean(r**2))
-        r = (c.cfd_signal(component) - predictions[i][component]) / system.scales[component]
+        r = (c.cfd_signal(component) - predictions[i][component]) / system.scales[i][component]
         t = c.state.time
         f = float(c.parameters.get("frequency", np.nan))
         if not np.isfinite(f) and "period" in c.parameters:

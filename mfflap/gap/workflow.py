@@ -13,12 +13,19 @@ from mfflap.identification.data import CaseData
 
 
 def diagnose_cases(config: CaseConfig, cases: Sequence[CaseData], alpha: float = 0.01,
-                   min_gain: float = 0.02) -> tuple[Diagnosis, dict, list[dict]]:
+                   min_gain: float = 0.02, residual_scaling: str | None = None
+                   ) -> tuple[Diagnosis, dict, list[dict]]:
     """The diagnosis, the decomposition of the base model's held-out residual, and the
-    held-out base predictions per case (for flow snapshots at the residual peaks)."""
+    held-out base predictions per case (for flow snapshots at the residual peaks).
+
+    The residuals are scaled as ``residual_scaling`` says, else as the case's
+    ``[identification] residual_scaling`` (the diagnosis refits the base model's
+    coefficients, so it scales them as their identification does)."""
+    scaling = residual_scaling or config.identification.residual_scaling
     base = config.morison_model()
     candidates = default_candidates(FlowContext(config.plate, config.fluid, config.flow))
-    diag = diagnose(cases, base, candidates, alpha=alpha, min_gain=min_gain)
-    system = GapSystem.build(cases, base.terms, [])
+    diag = diagnose(cases, base, candidates, alpha=alpha, min_gain=min_gain,
+                    residual_scaling=scaling)
+    system = GapSystem.build(cases, base.terms, [], residual_scaling=scaling)
     pred = _predictions(system, list(range(len(base.terms))), group_folds(range(len(cases)), 5))
     return diag, decompose(system, pred, config.flow.velocity, config.plate.chord), pred

@@ -39,6 +39,7 @@ from scipy.optimize import nnls
 from mfflap.errors import ConfigError, MfflapError
 from mfflap.hydro.base import ForceModel
 from mfflap.identification.data import COMPONENTS, DERIVED, CaseData
+from mfflap.identification.error_growth import ErrorGrowth, measure_error_growth
 from mfflap.identification.weights import frequency_weights
 from mfflap.metrics import nrmse, pearson
 
@@ -88,6 +89,11 @@ class IdentificationResult:
         The fitted terms refitted without each case in turn (row i: without case i), the
         other cases weighted as in the fit; NaN where the rest do not determine them. Empty
         (0 rows) for a result stored before it was computed.
+    error_growth : dict
+        Per fitted component, how the fitted model's error grows with each case's loads
+        (:class:`~mfflap.identification.error_growth.ErrorGrowth`): which residual scaling
+        weighs the cases as their errors say. Empty for a result stored before it was
+        measured.
     """
 
     coefficients: dict[str, float]
@@ -105,6 +111,7 @@ class IdentificationResult:
     notes: dict[str, list[str]] = field(default_factory=dict)
     leave_one_out: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
     residual_scaling: str = "grid"
+    error_growth: dict[str, ErrorGrowth] = field(default_factory=dict)
 
     @property
     def at_lower_bound(self) -> tuple[str, ...]:
@@ -397,6 +404,7 @@ def identify(cases: Sequence[CaseData], model: ForceModel,
         metrics=score(cases, fitted_model), excluded=dict(excluded or {}),
         notes={c.name: list(c.notes) for c in cases if c.notes}, leave_one_out=jackknife,
         residual_scaling=residual_scaling,
+        error_growth=measure_error_growth(cases, fitted_model, components),
     )
 
 

@@ -6,6 +6,7 @@ import json
 
 import numpy as np
 
+from mfflap.identification.error_growth import ErrorGrowth
 from mfflap.identification.fit import IdentificationResult
 from mfflap.results import ResultsFile
 
@@ -36,7 +37,9 @@ def write_identification(rf: ResultsFile, result: IdentificationResult,
              "case_names": json.dumps(result.case_names),
              "case_parameters": json.dumps(result.case_parameters),
              "excluded": json.dumps(result.excluded), "notes": json.dumps(result.notes),
-             "residual_scaling": result.residual_scaling}
+             "residual_scaling": result.residual_scaling,
+             "error_growth": json.dumps({k: [g.exponent, *g.interval, g.n_cases]
+                                         for k, g in result.error_growth.items()})}
     rf.write_group(group, arrays, units, attrs)
     return group
 
@@ -65,6 +68,9 @@ def read_identification(rf: ResultsFile, group: str) -> IdentificationResult:
         leave_one_out=a.get("leave_one_out", np.empty((0, 0))),
         # files written before the choice was offered were fitted on the grid's scales
         residual_scaling=str(attrs.get("residual_scaling", "grid")),
+        # likewise before the error's growth with the loads was measured
+        error_growth={k: ErrorGrowth(k, b, (low, high), int(n)) for k, (b, low, high, n)
+                      in json.loads(attrs.get("error_growth", "{}")).items()},
     )
 
 

@@ -15,6 +15,7 @@ from matplotlib.figure import Figure
 from mfflap.cfd.case_inputs import kept_wall_treatment
 from mfflap.hydro.base import ForceModel
 from mfflap.identification.data import BURST_NOTE, CaseData
+from mfflap.identification.error_growth import scaling_advice
 from mfflap.identification.fit import (
     HELD_AT_ZERO,
     RESIDUAL_SCALINGS,
@@ -252,6 +253,13 @@ def add_identification_sections(rep: Report, results: Mapping[str, Identificatio
                     f"{f' from {source}' if source else ''})")
     s.blocks.append(text_html(f"Residuals scaled {RESIDUAL_SCALINGS[first.residual_scaling]} "
                               f"(residual_scaling = \"{first.residual_scaling}\")."))
+    if first.error_growth:
+        s.blocks.append(text_html(
+            f"How the fitted model's error grows with each run's loads ({first.strategy} "
+            f"weighting): {scaling_advice(first.error_growth, first.residual_scaling)}. "
+            "Weighted least squares weighs the runs best by their errors' size: near b = 0, "
+            "one scale per component over the grid (\"grid\"); near b = 1, each run's own "
+            "range (\"case\")."))
     s.blocks.append(table_html(["weighting", "term", "value", "bootstrap s.e.", "2.5 %",
                                 "97.5 %"], _coefficient_rows(results)))
     s.blocks.append(figure_html(coefficient_figure(results),

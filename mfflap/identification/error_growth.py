@@ -1,0 +1,106 @@
+"""How the reduced model's error grows with the size of each run's loads.
+
+A least-squares fit over many runs is most accurate when each run's residuals are weighted
+by the inverse of their variance. Which residual scaling (:data:`RESIDUAL_SCALINGS`) does
+that is a question the data answer: fitting
+
+    log(RMS of the residual in case c) = a + b log(RMS of the CFD load in case c)
+
+over the cases, per component, gives the exponent b. Near 0, the model errs by about the
+same amount in every run, and one scale per component over the grid (``"grid"``) weighs the
+runs as their errors say. Near 1, the error is a like share of each run's loads (the same
+NRMSE in every run), and each run's own range (``"case"``) does. ``mfflap gap blindtest
+--noise absolute | relative`` shows what the other choice costs.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import stats
+
+from mfflap.hydro.base import ForceModel
+from mfflap.identification.data import COMPONENTS, CaseData
+
+#: the exponent that divides the two scalings: nearer 0, "grid"; nearer 1, "case"
+MIDPOINT = 0.5
+#: the fewest cases whose slope has a confidence interval (one degree of freedom left)
+MIN_CASES = 3
+
+
+@dataclass(frozen=True)
+class ErrorGrowth:
+    """The exponent b of residual RMS ~ (load RMS)^b over the cases, for one component.
+
+    Attributes
+    ----------
+    component : str
+    exponent : float
+        The least-squares slope in log-log.
+    interval : tuple of float
+        Its 95 % confidence interval (Student's t on n_cases - 2 degrees of freedom).
+    n_cases : int
+        The cases it was fitted on (those with a nonzero load and residual).
+    """
+
+    component: str
+    exponent: float
+    interval: tuple[float, float]
+    n_cases: int
+
+    @property
+    def matching_scaling(self) -> str:
+        """The residual scaling that weighs the cases as this growth says: "case" from an
+        exponent of :data:`MIDPOINT` up, else "grid"."""
+        return "case" if self.exponent >= MIDPOINT else "grid"
+
+    def __str__(self) -> str:
+        low, high = self.interval
+        return f"{self.component} {self.exponent:.2f} [{low:.2f}, {high:.2f}]"
+
+
+def measure_error_growth(cases: Sequence[CaseData], model: ForceModel,
+                 components: Sequence[str] = COMPONENTS) -> dict[str, ErrorGrowth]:
+    """Fit the exponent of each component's error growth over ``cases`` for ``model``.
+
+    A component with fewer than :data:`MIN_CASES` cases of nonzero load and residual, or
+    whose loads are all of one size, is left out (nothing to fit a slope to).
+    """
+    loads = [model.loads(c.state) for c in cases]
+    out = {}
+    for k in components:
+        size = np.array([np.sqrt(np.mean(c.cfd_signal(k)**2)) for c in cases])
+        error = np.array([np.sqrt(np.mean((c.cfd_signal(k) - getattr(ld, k))**2))
+                          for c, ld in zip(cases, loads, strict=True)])
+        usable = (size > 0) & (error > 0) & np.isfinite(size) & np.isfinite(error)
+        x, y = np.log(size[usable]), np.log(error[usable])
+        if len(x) < MIN_CASES or np.ptp(x) == 0:
+            continue
+        fit = stats.linregress(x, y)
+        slope = float(fit.slope)
+        half = float(stats.t.ppf(0.975, len(x) - 2) * fit.stderr)
+        out[k] = ErrorGrowth(k, slope, (slope - half, slope + half), len(x))
+    return out
+
+
+def scaling_advice(growth: Mapping[str, ErrorGrowth], used: str) -> str:
+    """One sentence: how the errors grow, and whether ``used`` weighs the cases so."""
+    if not growth:
+        return "the error's growth with the runs' loads could not be measured"
+    said = "; ".join(map(str, growth.values()))
+    matching = {g.matching_scaling for g in growth.values()}
+    head = f"residual RMS grows with the run's load RMS as load^b: b = {said} (95 %)"
+    if matching != {used} and len(matching) == 1:
+        better = matching.pop()
+        why = ("errors in proportion to each run's loads" if better == "case"
+               else "errors of one size in every run")
+        return (f"{head}: {why}, which residual scaling \"{better}\" weighs the runs by, "
+                f"not \"{used}\"")
+    if matching == {used}:
+        return f"{head}, as residual scaling \"{used}\" weighs the runs"
+    return f"{head}: the components disagree on the scaling"
+
+
+__all__ = ["ErrorGrowth", "measure_error_growth", "scaling_advice"]
