@@ -196,9 +196,10 @@ class IdentificationGrid:
     frequency_weights: tuple[float, ...] | None = bounded(None, low=0.0, unit="1",
                                                           doc="one weight per frequency")
     residual_scaling: str = bounded(
-        "grid", choices=("grid", "case"), unit="",
-        doc="residuals over each component's RMS across every case (grid) or over its "
-            "range in each case (case: the fit minimises the mean square NRMSE)")
+        "grid", choices=("grid", "case", "auto"), unit="",
+        doc="residuals over each component's RMS across every case (grid), over its "
+            "range in each case (case: the fit minimises the mean square NRMSE), or the one "
+            "of the two that the model's errors ask for (auto)")
 
     def __post_init__(self) -> None:
         check_fields(self, prefix="identification.")

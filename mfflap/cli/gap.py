@@ -64,7 +64,7 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
     from mfflap.gap.workflow import diagnose_cases
     from mfflap.identification.data import prepare_cases
     from mfflap.identification.error_growth import scaling_advice
-    from mfflap.identification.fit import RESIDUAL_SCALINGS
+    from mfflap.identification.fit import scaling_said
     from mfflap.identification.workflow import pooled_records
     from mfflap.results import ResultsFile
 
@@ -125,8 +125,8 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
                    "validation": diag.validation})
         return
     click.echo(diag.verdict)
-    click.echo(f"residuals scaled {RESIDUAL_SCALINGS[diag.residual_scaling]}; the base "
-               f"model's {scaling_advice(diag.error_growth, diag.residual_scaling)}")
+    click.echo(f"residuals scaled {scaling_said(diag.residual_scaling, diag.scaling_asked)}; "
+               f"the base model's {scaling_advice(diag.error_growth, diag.residual_scaling)}")
     click.echo("where the model departs most (a component's or harmonic's share of the "
                "squared residual; for a state or regime, the share of the residual's variance "
                "it explains, eta^2):")

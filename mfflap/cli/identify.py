@@ -78,7 +78,7 @@ def identify(case_file: Path, folders: tuple[Path, ...], left_out: tuple[str, ..
     from mfflap.config import load_case
     from mfflap.errors import MfflapError
     from mfflap.identification.error_growth import scaling_advice
-    from mfflap.identification.fit import HELD_AT_ZERO, RESIDUAL_SCALINGS, most_influential
+    from mfflap.identification.fit import HELD_AT_ZERO, most_influential, scalings_said
     from mfflap.identification.workflow import (
         identify_strategies,
         leave_out,
@@ -109,6 +109,7 @@ def identify(case_file: Path, folders: tuple[Path, ...], left_out: tuple[str, ..
                 "at_lower_bound": list(r.at_lower_bound),
                 "n_cases": len(r.case_names), "excluded": r.excluded,
                 "residual_scaling": r.residual_scaling,
+                "residual_scaling_asked": r.scaling_asked,
                 "error_growth": {k: {"exponent": g.exponent, "interval": list(g.interval),
                                      "matching_scaling": g.matching_scaling}
                                  for k, g in r.error_growth.items()},
@@ -122,9 +123,9 @@ def identify(case_file: Path, folders: tuple[Path, ...], left_out: tuple[str, ..
     if as_json:
         echo_json(summary)
         return
-    scaling = next(iter(results.values())).residual_scaling
+    first = next(iter(results.values()))  # the strategies' fits err alike
     click.echo(f"{len(cases)} cases from {sources_shown(folders)}; {len(excluded)} left out; "
-               f"residuals scaled {RESIDUAL_SCALINGS[scaling]}")
+               f"residuals scaled {scalings_said(results)}")
     for label, r in results.items():
         coeffs = "  ".join(f"{n} = {v:.3f}" + (f" ± {r.standard_error[n]:.3f}"
                                                  if np.isfinite(r.standard_error[n]) else "")
@@ -136,8 +137,8 @@ def identify(case_file: Path, folders: tuple[Path, ...], left_out: tuple[str, ..
                        + "; ".join(map(str, influence[label])))
     if any(r.at_lower_bound for r in results.values()):
         click.echo(f"held at 0: {HELD_AT_ZERO}")
-    first = next(iter(results.values()))  # the strategies' fits err alike
-    click.echo(f"{scaling_advice(first.error_growth, scaling)} ({first.strategy} weighting)")
+    click.echo(f"{scaling_advice(first.error_growth, first.residual_scaling)} "
+               f"({first.strategy} weighting)")
     click.echo(f"wrote {output}")
 
 

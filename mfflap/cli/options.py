@@ -169,11 +169,13 @@ RESIDUAL_SCALING_NAMES = ("grid", "case")
 
 #: ``--residual-scaling``: how a fit of the model's coefficients weighs the cases
 residual_scaling_option = click.option(
-    "--residual-scaling", type=click.Choice(RESIDUAL_SCALING_NAMES), default=None,
+    "--residual-scaling", type=click.Choice([*RESIDUAL_SCALING_NAMES, "auto"]), default=None,
     help="Residuals over each component's RMS across every case (grid: the cases of large "
-         "forces weigh most) or over its range in each case (case: the fit minimises the "
-         "mean square NRMSE, every case weighs alike); default the case file's "
-         "[identification] residual_scaling, grid unless set.")
+         "forces weigh most), over its range in each case (case: the fit minimises the "
+         "mean square NRMSE, every case weighs alike), or the one of the two that the "
+         "model's errors ask for (auto: case where they grow in proportion to each run's "
+         "loads); default the case file's [identification] residual_scaling, grid unless "
+         "set.")
 
 
 def mesh_and_setup_options(runs: str = "") -> Callable:

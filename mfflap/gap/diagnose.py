@@ -34,7 +34,12 @@ from mfflap.gap.candidates import CandidateEffect, FlowContext, load_all
 from mfflap.gap.system import COMPONENTS, GapSystem, group_folds
 from mfflap.hydro.base import ForceModel
 from mfflap.identification.data import CaseData
-from mfflap.identification.error_growth import ErrorGrowth, measure_error_growth
+from mfflap.identification.error_growth import (
+    AUTO,
+    ErrorGrowth,
+    choose_scaling,
+    measure_error_growth,
+)
 from mfflap.metrics import nrmse, pearson
 from mfflap.performance import thrust_and_power
 
@@ -77,9 +82,12 @@ class Diagnosis:
     validation: dict[str, dict] = field(default_factory=dict)
     case_names: list[str] = field(default_factory=list)
     residual_scaling: str = "grid"
-    #: how the base model's error (its coefficients as configured) grows with each case's
-    #: loads, per component: which residual scaling weighs the cases as their errors say
+    #: how the base model's error (its terms refitted over every case on the grid's scale)
+    #: grows with each case's loads, per component: which residual scaling weighs the cases
+    #: as their errors say
     error_growth: dict[str, ErrorGrowth] = field(default_factory=dict)
+    #: the scaling asked for: ``residual_scaling``, or "auto" (chosen by ``error_growth``)
+    scaling_asked: str = "grid"
 
 
 #: variance inflation factor above which a coefficient is called confounded (the usual rule
@@ -165,6 +173,18 @@ def gap_metrics(system: GapSystem, predictions: list[dict[str, np.ndarray]]) -> 
     return out
 
 
+def _refitted_error_growth(cases: Sequence[CaseData], base_model: ForceModel
+                           ) -> dict[str, ErrorGrowth]:
+    """How the base model's error grows with each case's loads, its terms refitted over all
+    cases on the grid's scale: the errors its fits face (with the coefficients as
+    configured, their own misfit, in proportion to the loads, would decide)."""
+    on_grid = GapSystem.build(cases, base_model.terms, [])
+    fitted = on_grid.fit(range(on_grid.n_base), np.arange(len(cases)))
+    refitted = base_model.with_coefficients(dict(zip(on_grid.names, fitted.tolist(),
+                                                     strict=True)))
+    return measure_error_growth(cases, refitted)
+
+
 def default_candidates(context: FlowContext | None = None) -> dict[str, CandidateEffect]:
     """One instance of every registered candidate."""
     return {name: cls(context) for name, cls in sorted(load_all().items())}
@@ -191,7 +211,9 @@ def diagnose(cases: Sequence[CaseData], base_model: ForceModel,
         How each case's residuals are scaled (a key of
         :data:`~mfflap.identification.fit.RESIDUAL_SCALINGS`): by each component's RMS over
         every case ("grid"), or by its range in the case ("case": every case weighs alike
-        in the fits, the held-out errors and the significance test). Ignored when
+        in the fits, the held-out errors and the significance test); or "auto", the one
+        the base model's errors ask for
+        (:func:`~mfflap.identification.error_growth.choose_scaling`). Ignored when
         ``system`` is given (it holds its own).
 
     Raises
@@ -207,8 +229,12 @@ def diagnose(cases: Sequence[CaseData], base_model: ForceModel,
         raise ConfigError(f"the smallest error reduction worth claiming must be a finite "
                           f"share >= 0, got {min_gain!r}", key="min_gain")
     candidates = candidates or default_candidates(context)
-    system = system or GapSystem.build(cases, base_model.terms, list(candidates.values()),
-                                       residual_scaling=residual_scaling)
+    growth = _refitted_error_growth(system.cases if system else cases, base_model)
+    if system is None:
+        system = GapSystem.build(cases, base_model.terms, list(candidates.values()),
+                                 residual_scaling=(choose_scaling(growth)
+                                                   if residual_scaling == AUTO
+                                                   else residual_scaling))
     folds = group_folds(range(len(system.cases)), n_folds, seed)
     base_cols = list(range(system.n_base))
     base_values = np.array([base_model.coefficients[n] for n in system.names[:system.n_base]])
@@ -251,8 +277,9 @@ def diagnose(cases: Sequence[CaseData], base_model: ForceModel,
                     f"{int(np.ceil(np.log2(1 / alpha)))} cases): add cases")
     diag = Diagnosis(list(system.names[: system.n_base]), base_sse, scores, chosen, verdict,
                      case_names=[c.name for c in system.cases],
-                     residual_scaling=system.residual_scaling,
-                     error_growth=measure_error_growth(system.cases, base_model))
+                     residual_scaling=system.residual_scaling, error_growth=growth,
+                     scaling_asked=(residual_scaling if residual_scaling == AUTO
+                                    else system.residual_scaling))
     diag.gap["before"] = gap_metrics(system, _predictions(system, base_cols, folds))
     validated = chosen or (singles[0] if singles else None)
     if chosen is not None:

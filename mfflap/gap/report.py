@@ -12,7 +12,7 @@ import numpy as np
 
 from mfflap.gap.diagnose import CONFOUNDED_VIF, Diagnosis
 from mfflap.identification.error_growth import scaling_advice
-from mfflap.identification.fit import RESIDUAL_SCALINGS
+from mfflap.identification.fit import scaling_said
 from mfflap.reports.html import Report, figure_html, table_html, text_html
 from mfflap.results import ResultsFile
 
@@ -85,10 +85,10 @@ def add_gap_sections(rep: Report, diag: Diagnosis, where: dict,
     """Verdict, where the model departs, candidates, gap before/after, validation."""
     s = rep.section("Sim-to-real gap: verdict")
     s.blocks.append(text_html(diag.verdict, warn=diag.chosen is None))
-    s.blocks.append(text_html(f"Residuals scaled {RESIDUAL_SCALINGS[diag.residual_scaling]} "
-                              f"(residual_scaling = \"{diag.residual_scaling}\"), in the "
-                              "fits, the held-out errors and the significance test; the base "
-                              "model's (coefficients as configured) "
+    scaled = scaling_said(diag.residual_scaling, diag.scaling_asked)
+    s.blocks.append(text_html(f"Residuals scaled {scaled}, in the fits, the held-out errors and "
+                              "the significance test; the base model's (refitted over "
+                              "every case) "
                               f"{scaling_advice(diag.error_growth, diag.residual_scaling)}."))
     s = rep.section("Where the model departs from CFD")
     s.blocks.append(table_html(["factor", "share / η²"], [(k, float(v)) for k, v in

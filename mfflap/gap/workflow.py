@@ -20,12 +20,13 @@ def diagnose_cases(config: CaseConfig, cases: Sequence[CaseData], alpha: float =
 
     The residuals are scaled as ``residual_scaling`` says, else as the case's
     ``[identification] residual_scaling`` (the diagnosis refits the base model's
-    coefficients, so it scales them as their identification does)."""
+    coefficients, so it scales them as their identification does); "auto" lets the base
+    model's errors choose."""
     scaling = residual_scaling or config.identification.residual_scaling
     base = config.morison_model()
     candidates = default_candidates(FlowContext(config.plate, config.fluid, config.flow))
     diag = diagnose(cases, base, candidates, alpha=alpha, min_gain=min_gain,
                     residual_scaling=scaling)
-    system = GapSystem.build(cases, base.terms, [], residual_scaling=scaling)
+    system = GapSystem.build(cases, base.terms, [], residual_scaling=diag.residual_scaling)
     pred = _predictions(system, list(range(len(base.terms))), group_folds(range(len(cases)), 5))
     return diag, decompose(system, pred, config.flow.velocity, config.plate.chord), pred

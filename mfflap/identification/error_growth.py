@@ -24,6 +24,8 @@ from scipy import stats
 from mfflap.hydro.base import ForceModel
 from mfflap.identification.data import COMPONENTS, CaseData
 
+#: the residual scaling asked for to have the data choose (:func:`choose_scaling`)
+AUTO = "auto"
 #: the exponent that divides the two scalings: nearer 0, "grid"; nearer 1, "case"
 MIDPOINT = 0.5
 #: the fewest cases whose slope has a confidence interval (one degree of freedom left)
@@ -85,6 +87,13 @@ def measure_error_growth(cases: Sequence[CaseData], model: ForceModel,
     return out
 
 
+def choose_scaling(growth: Mapping[str, ErrorGrowth]) -> str:
+    """The residual scaling ``"auto"`` stands for: "case" where every component measured
+    asks for it, else "grid" (also where none could be measured, or they disagree)."""
+    matching = {g.matching_scaling for g in growth.values()}
+    return "case" if matching == {"case"} else "grid"
+
+
 def scaling_advice(growth: Mapping[str, ErrorGrowth], used: str) -> str:
     """One sentence: how the errors grow, and whether ``used`` weighs the cases so."""
     if not growth:
@@ -100,7 +109,9 @@ def scaling_advice(growth: Mapping[str, ErrorGrowth], used: str) -> str:
                 f"not \"{used}\"")
     if matching == {used}:
         return f"{head}, as residual scaling \"{used}\" weighs the runs"
-    return f"{head}: the components disagree on the scaling"
+    asks = "; ".join(f"{', '.join(k for k, g in growth.items() if g.matching_scaling == m)} "
+                     f"ask for \"{m}\"" for m in ("grid", "case"))
+    return f"{head}: the components disagree ({asks}), and \"auto\" keeps \"grid\""
 
 
-__all__ = ["ErrorGrowth", "measure_error_growth", "scaling_advice"]
+__all__ = ["AUTO", "ErrorGrowth", "choose_scaling", "measure_error_growth", "scaling_advice"]

@@ -10,6 +10,10 @@ with y the CFD signal, A the term regressors and s_k the RMS of component k over
 default). With ``residual_scaling="case"``, s_ck is instead the range of component k in
 case c, the paper's NRMSE denominator: the fit then minimises the weighted mean square
 NRMSE over the cases, and a case of large forces counts no more than one of small forces.
+With ``residual_scaling="auto"`` the data choose: the fit is made on the grid's scales,
+how its error grows with each case's loads is measured
+(:mod:`~mfflap.identification.error_growth`), and where every component's error grows
+about in proportion to the loads the fit is made again with each case's ranges.
 Case c carries the weight
 w_f(c) / (n_cases at f(c) * n_samples(c)): each frequency gets its strategy weight whatever
 its number of cases and samples. Coefficients are bounded below by zero (they are physical
@@ -39,7 +43,12 @@ from scipy.optimize import nnls
 from mfflap.errors import ConfigError, MfflapError
 from mfflap.hydro.base import ForceModel
 from mfflap.identification.data import COMPONENTS, DERIVED, CaseData
-from mfflap.identification.error_growth import ErrorGrowth, measure_error_growth
+from mfflap.identification.error_growth import (
+    AUTO,
+    ErrorGrowth,
+    choose_scaling,
+    measure_error_growth,
+)
 from mfflap.identification.weights import frequency_weights
 from mfflap.metrics import nrmse, pearson
 
@@ -51,6 +60,28 @@ RESIDUAL_SCALINGS = {
     "case": "each component of each case by its range in that case (the fit minimises the "
             "mean square NRMSE: every case weighs alike)",
 }
+
+#: What may be asked for: a scaling, or "auto" (the one the model's errors ask for)
+SCALING_CHOICES = (*RESIDUAL_SCALINGS, AUTO)
+
+
+
+def scaling_said(used: str, asked: str) -> str:
+    """What the residuals were scaled by, for the CLI and the reports (and that the data
+    chose it, where ``asked`` is "auto")."""
+    chosen = ', chosen by "auto" as the errors ask' if asked == AUTO else ""
+    return f'{RESIDUAL_SCALINGS[used]} (residual_scaling = "{used}"{chosen})'
+
+
+def scalings_said(results: Mapping[str, IdentificationResult]) -> str:
+    """:func:`scaling_said` of several strategies' fits: once where they agree, else each
+    (with "auto" each fit's errors choose for it)."""
+    said = {label: scaling_said(r.residual_scaling, r.scaling_asked)
+            for label, r in results.items()}
+    if len(set(said.values())) == 1:
+        return next(iter(said.values()))
+    return "; ".join(f"{label}: {text}" for label, text in said.items())
+
 
 #: What a coefficient held at its lower bound 0 means, for the CLI and the report.
 HELD_AT_ZERO = ("the fit without the bound makes the coefficient negative, which no drag or "
@@ -84,7 +115,9 @@ class IdentificationResult:
     excluded : dict
         Cases left out, with the reason.
     residual_scaling : str
-        A key of :data:`RESIDUAL_SCALINGS`.
+        A key of :data:`RESIDUAL_SCALINGS`: the scaling the fit was made with.
+    scaling_asked : str
+        What was asked for: that scaling, or ``"auto"`` (the data chose it).
     leave_one_out : ndarray (n_cases, n_fitted)
         The fitted terms refitted without each case in turn (row i: without case i), the
         other cases weighted as in the fit; NaN where the rest do not determine them. Empty
@@ -112,6 +145,7 @@ class IdentificationResult:
     leave_one_out: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
     residual_scaling: str = "grid"
     error_growth: dict[str, ErrorGrowth] = field(default_factory=dict)
+    scaling_asked: str = "grid"
 
     @property
     def at_lower_bound(self) -> tuple[str, ...]:
@@ -337,18 +371,19 @@ def identify(cases: Sequence[CaseData], model: ForceModel,
     excluded
         Cases already left out (e.g. failed CFD), carried into the result and the report.
     residual_scaling
-        ``"grid"`` (each component's residual over its RMS across all cases) or ``"case"``
+        ``"grid"`` (each component's residual over its RMS across all cases), ``"case"``
         (over its range in each case: the weighted mean square NRMSE is minimised); see
-        :data:`RESIDUAL_SCALINGS`.
+        :data:`RESIDUAL_SCALINGS`; or ``"auto"``, the one the grid fit's errors ask for
+        (:func:`~mfflap.identification.error_growth.choose_scaling`).
     """
     if not cases:
         raise MfflapError("no usable CFD cases to identify from")
     if n_bootstrap < 0:
         raise ConfigError(f"n_bootstrap must be >= 0 (0: none), got {n_bootstrap!r}",
                           key="n_bootstrap")
-    if residual_scaling not in RESIDUAL_SCALINGS:
+    if residual_scaling not in SCALING_CHOICES:
         raise ConfigError(f"residual scaling {residual_scaling!r}: choose one of "
-                          f"{', '.join(RESIDUAL_SCALINGS)}",
+                          f"{', '.join(SCALING_CHOICES)}",
                           key="identification.residual_scaling")
     bad = [k for k in components if k not in COMPONENTS]
     if bad or not components:
@@ -365,9 +400,19 @@ def identify(cases: Sequence[CaseData], model: ForceModel,
         raise ConfigError("every coefficient is fixed: nothing to identify",
                           key="identification.fixed")
     weights = frequency_weights([c.frequency for c in cases], strategy)
+    asked = residual_scaling
+    residual_scaling = "grid" if asked == AUTO else asked
     blocks = _blocks(cases, model, fitted, fixed, components, residual_scaling)
     system = _assemble(blocks, weights)
     x = _solve(system.grams.sum(axis=0), system.rhs.sum(axis=0), fitted)
+    if asked == AUTO:  # the grid fit's errors say which scaling weighs the cases so
+        on_grid = model.with_coefficients({**dict(zip(fitted, x.tolist(), strict=True)),
+                                           **fixed})
+        residual_scaling = choose_scaling(measure_error_growth(cases, on_grid, components))
+        if residual_scaling != "grid":
+            blocks = _blocks(cases, model, fitted, fixed, components, residual_scaling)
+            system = _assemble(blocks, weights)
+            x = _solve(system.grams.sum(axis=0), system.rhs.sum(axis=0), fitted)
     rng = np.random.default_rng(seed)
     boot = np.empty((n_bootstrap, len(fitted)))
     groups = [np.flatnonzero(np.isclose(system.frequencies, f)) for f in weights]
@@ -405,8 +450,10 @@ def identify(cases: Sequence[CaseData], model: ForceModel,
         notes={c.name: list(c.notes) for c in cases if c.notes}, leave_one_out=jackknife,
         residual_scaling=residual_scaling,
         error_growth=measure_error_growth(cases, fitted_model, components),
+        scaling_asked=asked,
     )
 
 
-__all__ = ["HELD_AT_ZERO", "RESIDUAL_SCALINGS", "IdentificationResult", "Influence",
-           "identify", "most_influential", "score"]
+__all__ = ["HELD_AT_ZERO", "RESIDUAL_SCALINGS", "SCALING_CHOICES", "IdentificationResult",
+           "Influence", "identify", "most_influential", "scaling_said", "scalings_said",
+           "score"]

@@ -38,6 +38,7 @@ def write_identification(rf: ResultsFile, result: IdentificationResult,
              "case_parameters": json.dumps(result.case_parameters),
              "excluded": json.dumps(result.excluded), "notes": json.dumps(result.notes),
              "residual_scaling": result.residual_scaling,
+             "residual_scaling_asked": result.scaling_asked,
              "error_growth": json.dumps({k: [g.exponent, *g.interval, g.n_cases]
                                          for k, g in result.error_growth.items()})}
     rf.write_group(group, arrays, units, attrs)
@@ -71,6 +72,9 @@ def read_identification(rf: ResultsFile, group: str) -> IdentificationResult:
         # likewise before the error's growth with the loads was measured
         error_growth={k: ErrorGrowth(k, b, (low, high), int(n)) for k, (b, low, high, n)
                       in json.loads(attrs.get("error_growth", "{}")).items()},
+        # and before "auto" was offered, the scaling used was the one asked for
+        scaling_asked=str(attrs.get("residual_scaling_asked",
+                                    attrs.get("residual_scaling", "grid"))),
     )
 
 

@@ -18,9 +18,9 @@ from mfflap.identification.data import BURST_NOTE, CaseData
 from mfflap.identification.error_growth import scaling_advice
 from mfflap.identification.fit import (
     HELD_AT_ZERO,
-    RESIDUAL_SCALINGS,
     IdentificationResult,
     most_influential,
+    scalings_said,
 )
 from mfflap.reports.html import Report, figure_html, signed_percent, table_html, text_html
 
@@ -251,8 +251,7 @@ def add_identification_sections(rep: Report, results: Mapping[str, Identificatio
     first = next(iter(results.values()))
     s = rep.section(f"Identified coefficients ({len(first.case_names)} CFD cases"
                     f"{f' from {source}' if source else ''})")
-    s.blocks.append(text_html(f"Residuals scaled {RESIDUAL_SCALINGS[first.residual_scaling]} "
-                              f"(residual_scaling = \"{first.residual_scaling}\")."))
+    s.blocks.append(text_html(f"Residuals scaled {scalings_said(results)}."))
     if first.error_growth:
         s.blocks.append(text_html(
             f"How the fitted model's error grows with each run's loads ({first.strategy} "
