@@ -120,7 +120,8 @@ def test_the_residual_scaling_that_wins_the_blind_benchmark_is_the_noise_model_s
     """Weighted least squares is best with weights matching the noise: at SNR 1, noise of
     one size in every case is attributed far better with grid scaling, noise in proportion
     to each case's loads (as the model's errors against CFD are) with case scaling, whose
-    refitted coefficient is then several times nearer the hidden one."""
+    refitted coefficient is then several times nearer the hidden one. "auto" chooses as
+    well."""
     scores = {(noise, scaling): blind_test(n_trials=30, snr=1.0, seed=0, noise=noise,
                                            residual_scaling=scaling)
               for noise in ("absolute", "relative") for scaling in ("grid", "case")}
@@ -133,6 +134,11 @@ def test_the_residual_scaling_that_wins_the_blind_benchmark_is_the_noise_model_s
     for result in scores.values():
         assert result.null_correct == 1.0
     assert "(relative noise, residuals scaled by case)" in relative_case.summary()
+    # "auto" lets the errors choose, and does as well as the better fixed choice
+    for noise, better in (("absolute", absolute_grid), ("relative", relative_case)):
+        auto = blind_test(n_trials=30, snr=1.0, seed=0, noise=noise, residual_scaling="auto")
+        assert auto.attribution_accuracy >= better.attribution_accuracy - 0.05, noise
+        assert auto.coefficient_error < 2 * better.coefficient_error, noise
     with pytest.raises(ConfigError, match="noise model 'gaussian': choose one of absolute, "
                                           "relative") as err:
         synthesize(np.random.default_rng(0), NULL, 1.0, noise="gaussian")
@@ -367,10 +373,11 @@ def test_gap_cli_on_a_record_folder(tmp_path):
     blind = json.loads(res.stdout)
     assert len(blind["confusion"]) == 7 and "coefficient_error" in blind
     assert (blind["noise"], blind["residual_scaling"]) == ("absolute", "grid")
-    res = CliRunner().invoke(cli, ["gap", "blindtest", "--trials", "2", "--noise", "relative",
-                                   "--residual-scaling", "case"])
-    assert res.exit_code == 0, res.output
-    assert "2 trials (relative noise, residuals scaled by case)" in res.output
+    for scaling in ("case", "auto"):
+        res = CliRunner().invoke(cli, ["gap", "blindtest", "--trials", "2", "--noise",
+                                       "relative", "--residual-scaling", scaling])
+        assert res.exit_code == 0, res.output
+        assert f"2 trials (relative noise, residuals scaled by {scaling})" in res.output
     again = tmp_path / "again"
     write_record(again / f"{data[0].name}.h5",
                  CfdRecord(data[0].name, data[0].state, data[0].cfd, data[0].parameters))

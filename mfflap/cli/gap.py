@@ -186,10 +186,11 @@ def _flow_record(item: str, cases: list, config: CaseConfig) -> tuple[int, str]:
               help="The noise's size in each dataset's cases: the same in every case "
                    "(absolute), or in proportion to the case's own loads (relative, as the "
                    "reduced model's errors against CFD grow).")
-@click.option("--residual-scaling", type=click.Choice(RESIDUAL_SCALING_NAMES), default="grid",
-              show_default=True,
+@click.option("--residual-scaling", type=click.Choice([*RESIDUAL_SCALING_NAMES, "auto"]),
+              default="grid", show_default=True,
               help="How the diagnosis scales each case's residuals: by each component's RMS "
-                   "over every case (grid) or by its range in the case (case).")
+                   "over every case (grid), by its range in the case (case), or as the base "
+                   "model's errors ask (auto).")
 @click.option("--json", "as_json", is_flag=True)
 def blindtest_cmd(trials: int, snr: float, seed: int, noise: str, residual_scaling: str,
                   as_json: bool) -> None:
