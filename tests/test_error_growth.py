@@ -89,6 +89,29 @@ def test_too_few_cases_or_loads_of_one_size_give_no_exponent():
     assert choose_scaling(mixed) == "grid" == choose_scaling({})
 
 
+def test_the_figure_draws_the_points_and_the_fit_or_nothing_without_them():
+    """One panel per component: the runs' points and the fitted power law through them (its
+    line at the smallest and largest load is exp(a) load^b), and the two reference slopes;
+    nothing where no points were kept."""
+    from mfflap.reports.error_growth_plot import error_growth_figure
+
+    data = synthesize(np.random.default_rng(1), NULL, 1.0, noise="relative")
+    growth = identify(data, MorisonModel(), n_bootstrap=0).error_growth
+    fig = error_growth_figure(growth, "title")
+    assert len(fig.axes) == 3
+    for ax, g in zip(fig.axes, growth.values(), strict=True):
+        points, fit = ax.lines[0], ax.lines[1]
+        np.testing.assert_allclose(points.get_xdata(), g.load_rms)
+        np.testing.assert_allclose(points.get_ydata(), g.residual_rms)
+        x, y = fit.get_xdata(), fit.get_ydata()
+        np.testing.assert_allclose(y[[0, -1]], np.exp(g.log_prefactor) * x[[0, -1]]**g.exponent)
+        assert f"b = {g.exponent:.2f}" in ax.get_legend().get_texts()[1].get_text()
+    without_points = {k: ErrorGrowth(k, g.exponent, g.interval, g.n_cases)
+                      for k, g in growth.items()}
+    assert error_growth_figure(without_points, "title") is None
+    assert error_growth_figure({}, "title") is None
+
+
 def test_kept_in_hdf5_and_an_older_file_reads_without_it(tmp_path):
     data = synthesize(np.random.default_rng(1), NULL, 1.0, noise="relative")
     result = identify(data, MorisonModel(), n_bootstrap=0)
@@ -125,6 +148,8 @@ def test_on_the_shipped_fixtures_the_errors_grow_in_proportion_and_the_tools_say
     assert runner.invoke(cli, ["report", "identification", str(tmp_path / "id.h5"), "--out",
                                str(html)]).exit_code == 0
     assert "How the fitted model" in html.read_text()
+    assert "Each run&#x27;s residual against its loads, with the fitted power law" in (
+        html.read_text())
     verdicts = {}
     for scaling in ("grid", "case"):
         out = tmp_path / f"gap_{scaling}.h5"
@@ -134,8 +159,9 @@ def test_on_the_shipped_fixtures_the_errors_grow_in_proportion_and_the_tools_say
         said = json.loads(res.stdout)
         assert {g["matching_scaling"] for g in said["error_growth"].values()} == {"case"}
         verdicts[scaling] = said["chosen"]
-        assert "(refitted over every case) residual RMS grows" in out.with_suffix(
-            ".html").read_text()
+        report = out.with_suffix(".html").read_text()
+        assert "(refitted over every case) residual RMS grows" in report
+        assert "Each run&#x27;s residual against its loads: b near 0" in report
     assert verdicts == {"grid": None, "case": "wake_lag"}
 
 

@@ -11,8 +11,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from mfflap.gap.diagnose import CONFOUNDED_VIF, Diagnosis
-from mfflap.identification.error_growth import scaling_advice
+from mfflap.identification.error_growth import growth_to_json, scaling_advice
 from mfflap.identification.fit import scaling_said
+from mfflap.reports.error_growth_plot import error_growth_figure
 from mfflap.reports.html import Report, figure_html, table_html, text_html
 from mfflap.results import ResultsFile
 
@@ -90,6 +91,11 @@ def add_gap_sections(rep: Report, diag: Diagnosis, where: dict,
                               "the significance test; the base model's (refitted over "
                               "every case) "
                               f"{scaling_advice(diag.error_growth, diag.residual_scaling)}."))
+    fig = error_growth_figure(diag.error_growth, "How the base model's error (refitted over "
+                                                 "every case) grows with each run's loads")
+    if fig is not None:
+        s.blocks.append(figure_html(fig, "Each run's residual against its loads: b near 0 asks "
+                                         "for the grid's scale, near 1 for each case's"))
     s = rep.section("Where the model departs from CFD")
     s.blocks.append(table_html(["factor", "share / η²"], [(k, float(v)) for k, v in
                                                           where["ranking"][:15]]))
@@ -195,5 +201,5 @@ def write_diagnosis(rf: ResultsFile, diag: Diagnosis, where: dict, group: str = 
     g.attrs["case_names"] = json.dumps(diag.case_names)
     g.attrs["validation"] = json.dumps(diag.validation)
     g.attrs["residual_scaling"] = diag.residual_scaling
-    g.attrs["error_growth"] = json.dumps({k: [v.exponent, *v.interval, v.n_cases]
-                                          for k, v in diag.error_growth.items()})
+    g.attrs["error_growth"] = growth_to_json(diag.error_growth)
+    g.attrs["residual_scaling_asked"] = diag.scaling_asked

@@ -15,6 +15,7 @@ NRMSE in every run), and each run's own range (``"case"``) does. ``mfflap gap bl
 
 from __future__ import annotations
 
+import json
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
@@ -45,12 +46,19 @@ class ErrorGrowth:
         Its 95 % confidence interval (Student's t on n_cases - 2 degrees of freedom).
     n_cases : int
         The cases it was fitted on (those with a nonzero load and residual).
+    log_prefactor : float
+        The fit's intercept a: residual RMS = exp(a) (load RMS)^b.
+    load_rms, residual_rms : tuple of float
+        Each of those cases' CFD load RMS and residual RMS (N or N*m): the points fitted.
     """
 
     component: str
     exponent: float
     interval: tuple[float, float]
     n_cases: int
+    log_prefactor: float = float("nan")
+    load_rms: tuple[float, ...] = ()
+    residual_rms: tuple[float, ...] = ()
 
     @property
     def matching_scaling(self) -> str:
@@ -64,7 +72,7 @@ class ErrorGrowth:
 
 
 def measure_error_growth(cases: Sequence[CaseData], model: ForceModel,
-                 components: Sequence[str] = COMPONENTS) -> dict[str, ErrorGrowth]:
+                         components: Sequence[str] = COMPONENTS) -> dict[str, ErrorGrowth]:
     """Fit the exponent of each component's error growth over ``cases`` for ``model``.
 
     A component with fewer than :data:`MIN_CASES` cases of nonzero load and residual, or
@@ -83,8 +91,25 @@ def measure_error_growth(cases: Sequence[CaseData], model: ForceModel,
         fit = stats.linregress(x, y)
         slope = float(fit.slope)
         half = float(stats.t.ppf(0.975, len(x) - 2) * fit.stderr)
-        out[k] = ErrorGrowth(k, slope, (slope - half, slope + half), len(x))
+        out[k] = ErrorGrowth(k, slope, (slope - half, slope + half), len(x),
+                             float(fit.intercept), tuple(size[usable].tolist()),
+                             tuple(error[usable].tolist()))
     return out
+
+
+def growth_to_json(growth: Mapping[str, ErrorGrowth]) -> str:
+    """``growth`` as JSON (an HDF5 attribute), read back by :func:`growth_from_json`."""
+    return json.dumps({k: {"exponent": g.exponent, "interval": list(g.interval),
+                           "n_cases": g.n_cases, "log_prefactor": g.log_prefactor,
+                           "load_rms": list(g.load_rms), "residual_rms": list(g.residual_rms)}
+                       for k, g in growth.items()})
+
+
+def growth_from_json(text: str) -> dict[str, ErrorGrowth]:
+    """What :func:`growth_to_json` wrote ("{}": none measured)."""
+    return {k: ErrorGrowth(k, v["exponent"], tuple(v["interval"]), int(v["n_cases"]),
+                           v["log_prefactor"], tuple(v["load_rms"]), tuple(v["residual_rms"]))
+            for k, v in json.loads(text).items()}
 
 
 def choose_scaling(growth: Mapping[str, ErrorGrowth]) -> str:
@@ -114,4 +139,5 @@ def scaling_advice(growth: Mapping[str, ErrorGrowth], used: str) -> str:
     return f"{head}: the components disagree ({asks}), and \"auto\" keeps \"grid\""
 
 
-__all__ = ["AUTO", "ErrorGrowth", "choose_scaling", "measure_error_growth", "scaling_advice"]
+__all__ = ["AUTO", "ErrorGrowth", "choose_scaling", "growth_from_json", "growth_to_json",
+           "measure_error_growth", "scaling_advice"]

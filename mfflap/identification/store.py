@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 
-from mfflap.identification.error_growth import ErrorGrowth
+from mfflap.identification.error_growth import growth_from_json, growth_to_json
 from mfflap.identification.fit import IdentificationResult
 from mfflap.results import ResultsFile
 
@@ -39,8 +39,7 @@ def write_identification(rf: ResultsFile, result: IdentificationResult,
              "excluded": json.dumps(result.excluded), "notes": json.dumps(result.notes),
              "residual_scaling": result.residual_scaling,
              "residual_scaling_asked": result.scaling_asked,
-             "error_growth": json.dumps({k: [g.exponent, *g.interval, g.n_cases]
-                                         for k, g in result.error_growth.items()})}
+             "error_growth": growth_to_json(result.error_growth)}
     rf.write_group(group, arrays, units, attrs)
     return group
 
@@ -70,8 +69,7 @@ def read_identification(rf: ResultsFile, group: str) -> IdentificationResult:
         # files written before the choice was offered were fitted on the grid's scales
         residual_scaling=str(attrs.get("residual_scaling", "grid")),
         # likewise before the error's growth with the loads was measured
-        error_growth={k: ErrorGrowth(k, b, (low, high), int(n)) for k, (b, low, high, n)
-                      in json.loads(attrs.get("error_growth", "{}")).items()},
+        error_growth=growth_from_json(attrs.get("error_growth", "{}")),
         # and before "auto" was offered, the scaling used was the one asked for
         scaling_asked=str(attrs.get("residual_scaling_asked",
                                     attrs.get("residual_scaling", "grid"))),

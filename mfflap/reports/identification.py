@@ -22,6 +22,7 @@ from mfflap.identification.fit import (
     most_influential,
     scalings_said,
 )
+from mfflap.reports.error_growth_plot import error_growth_figure
 from mfflap.reports.html import Report, figure_html, signed_percent, table_html, text_html
 
 SIGNAL_LABELS = {"normal_force": "F_n", "tangential_force": "F_t", "moment": "M",
@@ -259,6 +260,12 @@ def add_identification_sections(rep: Report, results: Mapping[str, Identificatio
             "Weighted least squares weighs the runs best by their errors' size: near b = 0, "
             "one scale per component over the grid (\"grid\"); near b = 1, each run's own "
             "range (\"case\")."))
+        fig = error_growth_figure(first.error_growth, f"How the fitted model's error grows "
+                                  f"with each run's loads ({first.strategy} weighting)")
+        if fig is not None:
+            s.blocks.append(figure_html(fig, "Each run's residual against its loads, with "
+                                             "the fitted power law and the two the "
+                                             "scalings assume"))
     s.blocks.append(table_html(["weighting", "term", "value", "bootstrap s.e.", "2.5 %",
                                 "97.5 %"], _coefficient_rows(results)))
     s.blocks.append(figure_html(coefficient_figure(results),
