@@ -230,11 +230,11 @@ def diagnose(cases: Sequence[CaseData], base_model: ForceModel,
                           f"share >= 0, got {min_gain!r}", key="min_gain")
     candidates = candidates or default_candidates(context)
     growth = _refitted_error_growth(system.cases if system else cases, base_model)
+    asked = system.residual_scaling if system is not None else residual_scaling
     if system is None:
         system = GapSystem.build(cases, base_model.terms, list(candidates.values()),
-                                 residual_scaling=(choose_scaling(growth)
-                                                   if residual_scaling == AUTO
-                                                   else residual_scaling))
+                                 residual_scaling=(choose_scaling(growth) if asked == AUTO
+                                                   else asked))
     folds = group_folds(range(len(system.cases)), n_folds, seed)
     base_cols = list(range(system.n_base))
     base_values = np.array([base_model.coefficients[n] for n in system.names[:system.n_base]])
@@ -278,8 +278,7 @@ def diagnose(cases: Sequence[CaseData], base_model: ForceModel,
     diag = Diagnosis(list(system.names[: system.n_base]), base_sse, scores, chosen, verdict,
                      case_names=[c.name for c in system.cases],
                      residual_scaling=system.residual_scaling, error_growth=growth,
-                     scaling_asked=(residual_scaling if residual_scaling == AUTO
-                                    else system.residual_scaling))
+                     scaling_asked=asked)
     diag.gap["before"] = gap_metrics(system, _predictions(system, base_cols, folds))
     validated = chosen or (singles[0] if singles else None)
     if chosen is not None:
