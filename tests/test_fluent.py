@@ -163,6 +163,12 @@ def test_journal_references_the_udf_and_the_report_file(tmp_path):
     for line in commands:
         assert line.startswith("/"), line
         assert line.count('"') % 2 == 0 and line.count("(") == line.count(")"), line
+    # the paper's turbulence model is set after the case is read, before the flow starts
+    order = [next(i for i, line in enumerate(commands) if line.startswith(prefix))
+             for prefix in ("/file/read-case", "/define/models/viscous/ke-realizable yes",
+                            "/define/models/viscous/near-wall-treatment/enhanced-wall-"
+                            "treatment yes", "/solve/initialize/initialize-flow")]
+    assert order == sorted(order)
     # the report columns the journal creates are the parser's defaults
     names = re.findall(r"/solve/report-definitions/add (\S+)", text)
     assert names == ["fx-plate", "fy-plate", "mz-plate"]
