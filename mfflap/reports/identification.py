@@ -202,6 +202,7 @@ def influence_figure(result: IdentificationResult) -> Figure | None:
         ax.annotate(inf.case, (i, rows[i, j]), fontsize=7, xytext=(4, 4),
                     textcoords="offset points")
         ax.set_ylabel(inf.term.replace("_", " "), fontsize=8)
+        ax.margins(y=0.2)  # room for the name above the point that moves it most
     axes[0, 0].legend(fontsize=7, loc="best")
     axes[-1, 0].set_xticks(x, result.case_names, rotation=90, fontsize=6)
     fig.suptitle(f"Coefficients refitted without each case ({result.strategy} weighting)")
