@@ -184,6 +184,10 @@ def test_main_job_runs_end_to_end_on_the_shipped_fixtures(tmp_path):
     assert summary["most_influential_case"]["uniform"]["normal_drag"] == (
         "f2p000_h0p500_phi135p0")
     assert "gap_verdict" in summary and len(summary["backtest"]) == 4
+    # the shipped case file fits on the grid's scale; the fixtures' errors ask for "case"
+    assert summary["residual_scaling"]["uniform"] == {"used": "grid", "asked": "grid",
+                                                      "errors_ask_for": ["case"]}
+    assert summary["gap_residual_scaling"] == "grid"
     html = (out / "report.html").read_text()
     for title in ("Identified coefficients", "Optimised motions", "Back-test against CFD",
                   "Coefficient sensitivity", "Sinusoidal sweep", "Sim-to-real gap"):

@@ -90,6 +90,12 @@ def run_summary(outcome) -> dict:
     out["backtest"] = {k: {"status": o.status, "source": o.source,
                            **(o.comparison.as_dict() if o.comparison else {})}
                        for k, o in outcome.backtests.items()}
+    # per strategy: the scaling the fit was made with, and the one its errors ask for
+    out["residual_scaling"] = {
+        k: {"used": r.residual_scaling, "asked": r.scaling_asked,
+            "errors_ask_for": sorted({g.matching_scaling for g in r.error_growth.values()})}
+        for k, r in outcome.identification.items()}
     if outcome.gap is not None:
         out["gap_verdict"] = outcome.gap[0].verdict
+        out["gap_residual_scaling"] = outcome.gap[0].residual_scaling
     return out
