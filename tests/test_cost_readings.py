@@ -186,7 +186,7 @@ def test_the_shipped_studies_meet_the_target_only_at_20_deg_against_the_o_grid_m
     """README's verdict, read from the shipped studies: the readings met are against the
     mean of the O-grid medium mesh's time steps at 20 deg (medium_piso, with both pressure
     solvers, in cycle 1 and over the first stroke; with the all_y_plus wall treatment in
-    every run, over the first stroke only at 20 deg and not at all at 10 deg); against that
+    every run, over the first stroke only at 20 deg and not at all at 5 or 10 deg); against that
     mesh's smallest time step run the nearest set-up within the cost is 2.5 % off at 5 deg
     (its worse solver) and 2.2 % at 20 deg; against openfoam.md's H-type meshes nothing
     within the cost comes within 2 %."""
@@ -214,11 +214,13 @@ def test_the_shipped_studies_meet_the_target_only_at_20_deg_against_the_o_grid_m
         ("o_grid_time_step", 5.0), ("o_grid_time_step", 10.0), ("o_grid_time_step", 20.0),
         ("o_grid_mean", 5.0), ("o_grid_mean", 10.0),
         ("o_grid_mean", 20.0), ("h_medium", 5.0), ("h_medium", 10.0), ("h_medium", 20.0),
-        ("h_fine", 5.0), ("h_fine", 10.0), ("h_fine", 20.0), ("o_grid_mean_all_y_plus", 10.0),
-        ("o_grid_mean_all_y_plus", 20.0)}
-    # at 10 deg with all_y_plus nothing within the cost comes within 2 %, either window
-    ten = [r for r in every if (r.yardstick, r.pitch_deg) == ("o_grid_mean_all_y_plus", 10.0)]
-    assert len(ten) == 2 and all(r.nrmse_percent > 3.0 for r in ten)
+        ("h_fine", 5.0), ("h_fine", 10.0), ("h_fine", 20.0), ("o_grid_mean_all_y_plus", 5.0),
+        ("o_grid_mean_all_y_plus", 10.0), ("o_grid_mean_all_y_plus", 20.0)}
+    # at 5 and 10 deg with all_y_plus nothing within the cost comes within 2 %, either window
+    for pitch in (5.0, 10.0):
+        low = [r for r in every
+               if (r.yardstick, r.pitch_deg) == ("o_grid_mean_all_y_plus", pitch)]
+        assert len(low) == 2 and all(r.nrmse_percent > 3.0 for r in low), pitch
     readme = " ".join((ROOT / "README.md").read_text().split())
     assert f"{len(met)} of {len(every)} are met" in readme
     assert readings.readings_figure(every, tmp_path / "r.png") is not None
