@@ -84,7 +84,7 @@ def test_too_few_cases_or_loads_of_one_size_give_no_exponent():
     mixed = {"normal_force": ErrorGrowth("normal_force", 0.9, (0.8, 1.0), 5),
              "moment": ErrorGrowth("moment", 0.1, (0.0, 0.2), 5)}
     assert scaling_advice(mixed, "grid").endswith(
-        'the components disagree (moment ask for "grid"; normal_force ask for "case"), and '
+        'the components disagree (moment asks for "grid"; normal_force asks for "case"), and '
         '"auto" keeps "grid"')
     assert choose_scaling(mixed) == "grid" == choose_scaling({})
 

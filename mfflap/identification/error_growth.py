@@ -134,8 +134,10 @@ def scaling_advice(growth: Mapping[str, ErrorGrowth], used: str) -> str:
                 f"not \"{used}\"")
     if matching == {used}:
         return f"{head}, as residual scaling \"{used}\" weighs the runs"
-    asks = "; ".join(f"{', '.join(k for k, g in growth.items() if g.matching_scaling == m)} "
-                     f"ask for \"{m}\"" for m in ("grid", "case"))
+    asking = {m: [k for k, g in growth.items() if g.matching_scaling == m]
+              for m in ("grid", "case")}
+    asks = "; ".join(f"{', '.join(names)} ask{'s' if len(names) == 1 else ''} for \"{m}\""
+                     for m, names in asking.items())
     return f"{head}: the components disagree ({asks}), and \"auto\" keeps \"grid\""
 
 

@@ -65,7 +65,6 @@ RESIDUAL_SCALINGS = {
 SCALING_CHOICES = (*RESIDUAL_SCALINGS, AUTO)
 
 
-
 def scaling_said(used: str, asked: str) -> str:
     """What the residuals were scaled by, for the CLI and the reports (and that the data
     chose it, where ``asked`` is "auto")."""
@@ -400,19 +399,21 @@ def identify(cases: Sequence[CaseData], model: ForceModel,
         raise ConfigError("every coefficient is fixed: nothing to identify",
                           key="identification.fixed")
     weights = frequency_weights([c.frequency for c in cases], strategy)
+
+    def fit_scaled(scaling: str) -> tuple[_Blocks, _System, np.ndarray]:
+        blocks = _blocks(cases, model, fitted, fixed, components, scaling)
+        system = _assemble(blocks, weights)
+        return blocks, system, _solve(system.grams.sum(axis=0), system.rhs.sum(axis=0), fitted)
+
     asked = residual_scaling
     residual_scaling = "grid" if asked == AUTO else asked
-    blocks = _blocks(cases, model, fitted, fixed, components, residual_scaling)
-    system = _assemble(blocks, weights)
-    x = _solve(system.grams.sum(axis=0), system.rhs.sum(axis=0), fitted)
+    blocks, system, x = fit_scaled(residual_scaling)
     if asked == AUTO:  # the grid fit's errors say which scaling weighs the cases so
         on_grid = model.with_coefficients({**dict(zip(fitted, x.tolist(), strict=True)),
                                            **fixed})
         residual_scaling = choose_scaling(measure_error_growth(cases, on_grid, components))
         if residual_scaling != "grid":
-            blocks = _blocks(cases, model, fitted, fixed, components, residual_scaling)
-            system = _assemble(blocks, weights)
-            x = _solve(system.grams.sum(axis=0), system.rhs.sum(axis=0), fitted)
+            blocks, system, x = fit_scaled(residual_scaling)
     rng = np.random.default_rng(seed)
     boot = np.empty((n_bootstrap, len(fitted)))
     groups = [np.flatnonzero(np.isclose(system.frequencies, f)) for f in weights]
