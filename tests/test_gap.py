@@ -342,6 +342,7 @@ def test_gap_cli_on_a_record_folder(tmp_path):
     assert chosen["significant"] is True and chosen["variance_inflation"]["circulatory_lift"] >= 1
     html = out.with_suffix(".html").read_text()
     assert "Which unmodelled effect" in html and "coefficients, base terms held" in html
+    assert "what it is" in html and "Claimed circulatory_lift, quasi-steady" in html
     # as text: the verdict, then the five largest shares under a heading that says what
     # the numbers are
     res = CliRunner().invoke(cli, ["gap", "diagnose", str(CASE), "--fixtures", str(folder),
@@ -353,11 +354,20 @@ def test_gap_cli_on_a_record_folder(tmp_path):
     shares = [float(line.rsplit(":", 1)[1]) for line in lines[heading + 1:heading + 6]]
     assert shares == sorted(shares, reverse=True) and all(0 <= v <= 1 for v in shares)
     assert "residuals scaled each component by its RMS over every case" in res.output
+    # the claim in words: what the effect is, what its coefficient means, both values
+    claim = next(line for line in lines if line.startswith("claimed "))
+    assert claim.startswith("claimed circulatory_lift, quasi-steady circulatory lift: lift "
+                            "slope a = dC_L/dalpha (thin-aerofoil theory: 2 pi) = ")
+    assert f"{chosen['held_coefficients']['circulatory_lift']:.3g} fitted to the residual" in (
+        claim)
+    assert chosen["physical_names"] == ["quasi-steady circulatory lift"]
     with h5py.File(out) as h5:
         scores = h5["gap/scores"].attrs
         labels = json.loads(scores["labels"])
         held = json.loads(scores["held_coefficients"])[labels.index("circulatory_lift")]
         assert h5["gap"].attrs["residual_scaling"] == "grid"
+        assert json.loads(h5["gap"].attrs["descriptions"])["wake_lag"]["physical_name"] == (
+            "wake-lagged circulatory lift (Wagner function, Jones approximation)")
     assert held == pytest.approx(chosen["held_coefficients"])
     # the residuals scaled per case: said on screen, in the JSON, the file and the report
     res = CliRunner().invoke(cli, ["gap", "diagnose", str(CASE), "--fixtures", str(folder),

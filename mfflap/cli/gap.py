@@ -115,6 +115,8 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
                    "ranking": [[s.label, s.gain, s.p_value] for s in diag.scores],
                    "candidates": [
                        {"label": s.label, "heldout_gain": s.gain,
+                        "physical_names": [diag.descriptions.get(n, {}).get("physical_name")
+                                           for n in s.names],
                         "p_value": s.p_value, "significant": s.significant,
                         "coefficients": s.coefficients,
                         "held_coefficients": s.held_coefficients,
@@ -125,6 +127,8 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
                    "validation": diag.validation})
         return
     click.echo(diag.verdict)
+    if diag.chosen is not None:
+        click.echo(diag.claim_said())
     click.echo(f"residuals scaled {scaling_said(diag.residual_scaling, diag.scaling_asked)}; "
                f"the base model's {scaling_advice(diag.error_growth, diag.residual_scaling)}")
     click.echo("where the model departs most (a component's or harmonic's share of the "

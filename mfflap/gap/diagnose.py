@@ -88,6 +88,25 @@ class Diagnosis:
     error_growth: dict[str, ErrorGrowth] = field(default_factory=dict)
     #: the scaling asked for: ``residual_scaling``, or "auto" (chosen by ``error_growth``)
     scaling_asked: str = "grid"
+    #: per candidate: what it is and what its coefficient means (physical_name,
+    #: coefficient_name of its class)
+    descriptions: dict[str, dict[str, str]] = field(default_factory=dict)
+
+    def claim_said(self) -> str | None:
+        """The claimed effect in words: what it is, what its coefficient means and its
+        value both ways (refitted with the base terms; fitted to the residual of the model
+        as configured). None when nothing is claimed."""
+        if self.chosen is None:
+            return None
+        parts = []
+        for name in self.chosen.names:
+            said = self.descriptions.get(name, {})
+            parts.append(f"{name}, {said.get('physical_name', 'a candidate effect')}: "
+                         f"{said.get('coefficient_name', 'its coefficient')} = "
+                         f"{self.chosen.coefficients[name]:.3g} refitted with the base terms, "
+                         f"{self.chosen.held_coefficients[name]:.3g} fitted to the residual "
+                         "of the model as configured")
+        return "claimed " + "; ".join(parts)
 
 
 #: variance inflation factor above which a coefficient is called confounded (the usual rule
@@ -278,7 +297,10 @@ def diagnose(cases: Sequence[CaseData], base_model: ForceModel,
     diag = Diagnosis(list(system.names[: system.n_base]), base_sse, scores, chosen, verdict,
                      case_names=[c.name for c in system.cases],
                      residual_scaling=system.residual_scaling, error_growth=growth,
-                     scaling_asked=asked)
+                     scaling_asked=asked,
+                     descriptions={n: {"physical_name": c.physical_name,
+                                       "coefficient_name": c.coefficient_name}
+                                   for n, c in candidates.items()})
     diag.gap["before"] = gap_metrics(system, _predictions(system, base_cols, folds))
     validated = chosen or (singles[0] if singles else None)
     if chosen is not None:

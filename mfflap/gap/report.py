@@ -86,6 +86,9 @@ def add_gap_sections(rep: Report, diag: Diagnosis, where: dict,
     """Verdict, where the model departs, candidates, gap before/after, validation."""
     s = rep.section("Sim-to-real gap: verdict")
     s.blocks.append(text_html(diag.verdict, warn=diag.chosen is None))
+    claim = diag.claim_said()
+    if claim is not None:
+        s.blocks.append(text_html(f"{claim[0].upper()}{claim[1:]}."))
     scaled = scaling_said(diag.residual_scaling, diag.scaling_asked)
     s.blocks.append(text_html(f"Residuals scaled {scaled}, in the fits, the held-out errors and "
                               "the significance test; the base model's (refitted over "
@@ -121,9 +124,11 @@ def add_gap_sections(rep: Report, diag: Diagnosis, where: dict,
             f"{sc.confounded_with[n][1]:+.2f})"
             f"{' confounded' if sc.variance_inflation[n] > CONFOUNDED_VIF else ''}"
             for n in sc.names)
-        rows.append([sc.label, sc.gain, sc.p_value, "yes" if sc.significant else "no", coefs,
-                     held, separable])
-    s.blocks.append(table_html(["candidate(s)", "held-out gain", "p (Wilcoxon)",
+        what = " + ".join(diag.descriptions.get(n, {}).get("physical_name", n)
+                          for n in sc.names)
+        rows.append([sc.label, what, sc.gain, sc.p_value, "yes" if sc.significant else "no",
+                     coefs, held, separable])
+    s.blocks.append(table_html(["candidate(s)", "what it is", "held-out gain", "p (Wilcoxon)",
                                 "significant", "coefficients, base terms refitted (mean ± "
                                 "spread over folds)", "coefficients, base terms held",
                                 "variance inflation (most correlated term)"], rows))
@@ -203,3 +208,4 @@ def write_diagnosis(rf: ResultsFile, diag: Diagnosis, where: dict, group: str = 
     g.attrs["residual_scaling"] = diag.residual_scaling
     g.attrs["error_growth"] = growth_to_json(diag.error_growth)
     g.attrs["residual_scaling_asked"] = diag.scaling_asked
+    g.attrs["descriptions"] = json.dumps(diag.descriptions)
