@@ -108,9 +108,7 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
     if as_json:
         echo_json({"verdict": diag.verdict,
                    "residual_scaling": diag.residual_scaling,
-                   "error_growth": {k: {"exponent": g.exponent, "interval": list(g.interval),
-                                        "matching_scaling": g.matching_scaling}
-                                    for k, g in diag.error_growth.items()},
+                   "error_growth": {k: g.summary() for k, g in diag.error_growth.items()},
                    "chosen": diag.chosen.label if diag.chosen else None,
                    "ranking": [[s.label, s.gain, s.p_value] for s in diag.scores],
                    "candidates": [

@@ -110,9 +110,7 @@ def identify(case_file: Path, folders: tuple[Path, ...], left_out: tuple[str, ..
                 "n_cases": len(r.case_names), "excluded": r.excluded,
                 "residual_scaling": r.residual_scaling,
                 "residual_scaling_asked": r.scaling_asked,
-                "error_growth": {k: {"exponent": g.exponent, "interval": list(g.interval),
-                                     "matching_scaling": g.matching_scaling}
-                                 for k, g in r.error_growth.items()},
+                "error_growth": {k: g.summary() for k, g in r.error_growth.items()},
                 "most_influential": {
                     i.term: {"case": i.case, "value_without": i.value_without,
                              "relative_change": i.relative_change,

@@ -66,6 +66,11 @@ class ErrorGrowth:
         exponent of :data:`MIDPOINT` up, else "grid"."""
         return "case" if self.exponent >= MIDPOINT else "grid"
 
+    def summary(self) -> dict:
+        """The exponent, its interval and the scaling it asks for (for JSON output)."""
+        return {"exponent": self.exponent, "interval": list(self.interval),
+                "matching_scaling": self.matching_scaling}
+
     def __str__(self) -> str:
         low, high = self.interval
         return f"{self.component} {self.exponent:.2f} [{low:.2f}, {high:.2f}]"
