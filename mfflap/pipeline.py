@@ -147,6 +147,7 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
     """The stages of :func:`run_study`, filling ``outcome``."""
     from mfflap.backtest.workflow import backtest_all
     from mfflap.campaign.records import fixture_dir
+    from mfflap.identification.error_growth import scaling_advice
     from mfflap.identification.workflow import identify_strategies, load_cases
     from mfflap.optimisation.study import (
         StudyInterrupted,
@@ -165,6 +166,10 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
         return identify_strategies(config, cases, excluded, list(RUN_STRATEGIES))
 
     outcome.identification = _stage(outcome, "identification", progress, identification) or {}
+    if outcome.identification:  # whether the fit weighs the runs as their errors say
+        first = next(iter(outcome.identification.values()))
+        progress(f"identification ({first.strategy} weighting): "
+                 f"{scaling_advice(first.error_growth, first.residual_scaling)}")
     model = config.morison_model()
     if options.coefficients.startswith("identified:"):
         strategy = options.coefficients.split(":", 1)[1]
@@ -177,6 +182,8 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
     if outcome.cases:
         outcome.gap = _stage(outcome, "gap diagnosis", progress,
                              lambda: gap_diagnosis(config, outcome.cases))
+        if outcome.gap is not None:
+            progress(f"gap diagnosis: {outcome.gap[0].verdict}")
 
     def optimisation():
         try:

@@ -188,6 +188,12 @@ def test_main_job_runs_end_to_end_on_the_shipped_fixtures(tmp_path):
     assert summary["residual_scaling"]["uniform"] == {"used": "grid", "asked": "grid",
                                                       "errors_ask_for": ["case"]}
     assert summary["gap_residual_scaling"] == "grid"
+    # and on the terminal, before the JSON: whether the fit weighs the runs as their errors
+    # say, and the gap verdict
+    assert ('identification (uniform weighting): residual RMS grows with the run\'s load RMS'
+            in res.output and 'which residual scaling "case" weighs the runs by, not "grid"'
+            in res.output)
+    assert f"gap diagnosis: {summary['gap_verdict']}" in res.output
     html = (out / "report.html").read_text()
     for title in ("Identified coefficients", "Optimised motions", "Back-test against CFD",
                   "Coefficient sensitivity", "Sinusoidal sweep", "Sim-to-real gap"):
