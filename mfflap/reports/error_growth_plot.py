@@ -12,11 +12,11 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
 
+from mfflap.hydro.loads import LOAD_UNITS
 from mfflap.identification.error_growth import ErrorGrowth
 
-#: the components' symbols and units, for the axes
-_AXES = {"normal_force": ("F_n", "N"), "tangential_force": ("F_t", "N"),
-         "moment": ("M", "N m")}
+#: the components' symbols, for the axes (their units: LOAD_UNITS)
+_SYMBOLS = {"normal_force": "F_n", "tangential_force": "F_t", "moment": "M"}
 
 
 def error_growth_figure(growth: Mapping[str, ErrorGrowth], title: str) -> Figure | None:
@@ -41,7 +41,7 @@ def error_growth_figure(growth: Mapping[str, ErrorGrowth], title: str) -> Figure
         for b, style, said in ((0.0, ":", 'b = 0 ("grid")'), (1.0, "--", 'b = 1 ("case")')):
             ax.loglog(span, centre_y * (span / centre_x)**b, style, color="0.4", lw=1,
                       label=said)
-        symbol, unit = _AXES.get(k, (k, ""))
+        symbol, unit = _SYMBOLS.get(k, k), LOAD_UNITS.get(k, "")
         ax.set_xlabel(f"{symbol} RMS of the CFD ({unit})")
         ax.set_ylabel(f"{symbol} RMS of the residual ({unit})")
         ax.legend(fontsize=7, loc="upper left")
