@@ -114,11 +114,19 @@ def coefficient_sensitivity(config: CaseConfig, identification: dict, sweep,
     return out
 
 
-def gap_diagnosis(config: CaseConfig, cases: list) -> tuple:
-    """Diagnosis and residual decomposition of the case's model on the identification CFD."""
+def gap_diagnosis(config: CaseConfig, cases: list, backtests: dict | None = None) -> tuple:
+    """Diagnosis and residual decomposition of the case's model on the identification CFD;
+    with back-tests, whether its effect carries over to their CFD runs (the motions the fits
+    never saw)."""
+    from mfflap.gap.transfer import held_out_motions
     from mfflap.gap.workflow import diagnose_cases
 
-    diag, where, _ = diagnose_cases(config, cases)
+    records = [o.record for o in (backtests or {}).values() if o.record is not None]
+    held_out, excluded = (held_out_motions(records, config.identification.discard_time,
+                                           plate=config.plate, fluid=config.fluid,
+                                           stream=config.flow) if records else (None, None))
+    diag, where, _ = diagnose_cases(config, cases, held_out=held_out,
+                                    held_out_excluded=excluded)
     return diag, where
 
 
@@ -179,11 +187,6 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
             outcome.problems.append(f"optimisation: no identified coefficients for strategy "
                                     f"{strategy!r}; used the case's coefficients")
     outcome.model = model
-    if outcome.cases:
-        outcome.gap = _stage(outcome, "gap diagnosis", progress,
-                             lambda: gap_diagnosis(config, outcome.cases))
-        if outcome.gap is not None:
-            progress(f"gap diagnosis: {outcome.gap[0].verdict}")
 
     def optimisation():
         try:
@@ -211,6 +214,15 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
         for label, o in outcome.backtests.items():
             if o.status != "back-tested":
                 outcome.problems.append(f"back-test: {label} not back-tested: {o.source}")
+    if outcome.cases:  # after the back-test: its runs are the ones the fits never saw
+        outcome.gap = _stage(outcome, "gap diagnosis", progress,
+                             lambda: gap_diagnosis(config, outcome.cases, outcome.backtests))
+        if outcome.gap is not None:
+            progress(f"gap diagnosis: {outcome.gap[0].verdict}")
+            if outcome.gap[0].transfer is not None:
+                progress(f"gap diagnosis, on the back-tested motions: "
+                         f"{outcome.gap[0].transfer.verdict}")
+    if study is not None:
         if options.sensitivity and outcome.identification:
             outcome.sensitivity = _stage(outcome, "coefficient sensitivity", progress,
                                          lambda: coefficient_sensitivity(

@@ -194,7 +194,14 @@ def test_main_job_runs_end_to_end_on_the_shipped_fixtures(tmp_path):
             in res.output and 'which residual scaling "case" weighs the runs by, not "grid"'
             in res.output)
     assert f"gap diagnosis: {summary['gap_verdict']}" in res.output
+    # the gap diagnosis runs after the back-test and checks its best candidate (grid
+    # scaling claims none) on the four back-tested runs, which no fit saw
+    transfer = summary["gap_transfer"]
+    assert transfer["claimed"] is False and len(transfer["effect"]) == 1
+    assert "the 4 held-out motion(s)" in transfer["verdict"]
+    assert f"on the back-tested motions: {transfer['verdict']}" in res.output
     html = (out / "report.html").read_text()
+    assert "Does it carry over to runs outside the cases?" in html
     for title in ("Identified coefficients", "Optimised motions", "Back-test against CFD",
                   "Coefficient sensitivity", "Sinusoidal sweep", "Sim-to-real gap"):
         assert title in html
@@ -206,6 +213,7 @@ def test_main_job_runs_end_to_end_on_the_shipped_fixtures(tmp_path):
         assert "paper2026" in rf.config_toml
         assert {"identification", "optimisation", "backtest", "sensitivity", "gap"} <= set(rf.h5)
         statuses = {rf.h5[f"backtest/{k}"].attrs["status"] for k in rf.h5["backtest"]}
+        assert len(json.loads(rf.h5["gap/transfer"].attrs["motion_names"])) == 4
         assert statuses <= {"back-tested", "not back-tested"}
     assert list((out / "vtk").glob("*.pvd"))
 

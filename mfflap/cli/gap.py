@@ -40,6 +40,11 @@ def gap() -> None:
 @click.option("--flow", "flow_dirs", multiple=True,
               help="CASE=DIR: an OpenFOAM case folder with written fields for record CASE; the "
                    "report shows its vorticity where the model misses most.")
+@click.option("--check-on", "check_on", multiple=True,
+              type=click.Path(exists=True, path_type=Path),
+              help="Folders of CFD records or record files the fits must not see (e.g. the "
+                   "back-tested optimised motions): whether the claimed effect (else the best "
+                   "candidate) predicts their last period better. Repeat for several.")
 @click.option("--discard", default=None, type=NON_NEGATIVE,
               help="Start-up time left out, s (default: the case's identification.discard_time).")
 @click.option("--alpha", default=0.01, show_default=True, help="Significance level.")
@@ -52,7 +57,8 @@ def gap() -> None:
               default=None, help="HTML report (default: <output>.html).")
 @click.option("--json", "as_json", is_flag=True)
 def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Path, ...],
-                 flow_dirs: tuple[str, ...], discard: float | None, alpha: float,
+                 flow_dirs: tuple[str, ...], check_on: tuple[Path, ...],
+                 discard: float | None, alpha: float,
                  min_gain: float, residual_scaling: str | None, output: Path,
                  report_path: Path | None, as_json: bool) -> None:
     """Where the model of CASE_FILE departs from CFD, and which effect explains it."""
@@ -89,8 +95,11 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
                                f"{MIN_CASES}, and the shipped fixtures are read only without "
                                "--csv: add CSV files, or --fixtures DIR to pool records")
     flows = [_flow_record(item, cases, case) for item in flow_dirs]  # before the work
+    held_out, held_out_excluded = (_held_out(check_on, case, cases, discard) if check_on
+                                   else (None, None))
     diag, where, pred = diagnose_cases(case, cases, alpha=alpha, min_gain=min_gain,
-                                       residual_scaling=residual_scaling)
+                                       residual_scaling=residual_scaling, held_out=held_out,
+                                       held_out_excluded=held_out_excluded)
     snapshots = []
     for index, folder in flows:
         from mfflap.gap.flowfield import vorticity_figure
@@ -122,7 +131,8 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
                         "variance_inflation": s.variance_inflation,
                         "confounded_with": s.confounded_with}
                        for s in diag.scores],
-                   "validation": diag.validation})
+                   "validation": diag.validation,
+                   "transfer": diag.transfer.as_dict() if diag.transfer else None})
         return
     click.echo(diag.verdict)
     if diag.chosen is not None:
@@ -134,7 +144,29 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
                "it explains, eta^2):")
     for name, share in where["ranking"][:5]:
         click.echo(f"  {name}: {share:.2f}")
+    if diag.transfer is not None:
+        click.echo(f"on runs outside the cases: {diag.transfer.verdict}")
+        for name, why in diag.transfer.excluded.items():
+            click.echo(f"  not checked on {name}: {why}")
     click.echo(f"wrote {output} and {html}")
+
+
+def _held_out(paths: tuple[Path, ...], config: CaseConfig, cases: list,
+              discard: float | None) -> tuple[list, dict[str, str]]:
+    """The ``--check-on`` runs, refused when one of them is also among the diagnosed cases
+    (a run the fits saw says nothing about how the effect carries over)."""
+    from mfflap.gap.transfer import held_out_motions
+    from mfflap.identification.workflow import pooled_records
+
+    records, failed = pooled_records(paths, config, use="the transfer check")
+    seen = sorted({r.name for r in records} & {c.name for c in cases})
+    if seen:
+        raise click.BadParameter(f"{', '.join(seen)} are also among the diagnosed cases; the "
+                                 "check needs runs the fits do not see", param_hint="--check-on")
+    motions, excluded = held_out_motions(
+        records, config.identification.discard_time if discard is None else discard,
+        plate=config.plate, fluid=config.fluid, stream=config.flow)
+    return motions, {**failed, **excluded}
 
 
 def _flow_record(item: str, cases: list, config: CaseConfig) -> tuple[int, str]:

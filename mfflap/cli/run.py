@@ -98,4 +98,9 @@ def run_summary(outcome) -> dict:
     if outcome.gap is not None:
         out["gap_verdict"] = outcome.gap[0].verdict
         out["gap_residual_scaling"] = outcome.gap[0].residual_scaling
+        transfer = outcome.gap[0].transfer
+        out["gap_transfer"] = None if transfer is None else {
+            "effect": list(transfer.effect), "claimed": transfer.claimed,
+            "carries_over": transfer.carries_over, "gain": transfer.gain,
+            "verdict": transfer.verdict}
     return out

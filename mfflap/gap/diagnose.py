@@ -25,6 +25,7 @@ from __future__ import annotations
 import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.stats import wilcoxon
@@ -42,6 +43,9 @@ from mfflap.identification.error_growth import (
 )
 from mfflap.metrics import nrmse, pearson
 from mfflap.performance import thrust_and_power
+
+if TYPE_CHECKING:
+    from mfflap.gap.transfer import TransferCheck
 
 
 @dataclass
@@ -91,6 +95,9 @@ class Diagnosis:
     #: per candidate: what it is and what its coefficient means (physical_name,
     #: coefficient_name of its class)
     descriptions: dict[str, dict[str, str]] = field(default_factory=dict)
+    #: whether the claimed effect (else the best candidate) predicts CFD runs outside the
+    #: cases better (:mod:`mfflap.gap.transfer`); None when none were given
+    transfer: TransferCheck | None = None
 
     def claim_said(self) -> str | None:
         """The claimed effect in words: what it is, what its coefficient means and its

@@ -11,6 +11,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from mfflap.gap.diagnose import CONFOUNDED_VIF, Diagnosis
+from mfflap.gap.transfer import BASE, TransferCheck
 from mfflap.identification.error_growth import growth_to_json, scaling_advice
 from mfflap.identification.fit import scaling_said
 from mfflap.reports.error_growth_plot import error_growth_figure
@@ -69,6 +70,64 @@ def _candidate_figure(diag: Diagnosis):
     ax.set_xlabel("held-out error reduction vs the base model (green: significant)")
     fig.tight_layout()
     return fig
+
+
+def _transfer_figure(check: TransferCheck):
+    """Per held-out motion, each component's NRMSE without and with the checked effect."""
+    motions = check.motions
+    comps = list(motions[0].nrmse[BASE])
+    fig, axes = plt.subplots(1, len(comps), figsize=(3.6 * len(comps), 3.4), squeeze=False)
+    x = np.arange(len(motions))
+    for ax, comp in zip(axes[0], comps, strict=True):
+        ax.bar(x - 0.2, [100 * m.nrmse[BASE][comp] for m in motions], 0.4, label="base model")
+        ax.bar(x + 0.2, [100 * m.nrmse[check.label][comp] for m in motions], 0.4,
+               label=f"+ {check.label}")
+        ax.set_xticks(x, [m.label for m in motions], rotation=20, fontsize=8)
+        ax.set_ylabel(f"NRMSE of {comp} [%]")
+    axes[0][0].legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def add_transfer_section(rep: Report, check: TransferCheck) -> None:
+    """Whether the effect predicts runs outside the diagnosed cases better."""
+    s = rep.section("Does it carry over to runs outside the cases?")
+    s.blocks.append(text_html(check.verdict[0].upper() + check.verdict[1:] + ".",
+                              warn=not check.carries_over))
+    s.blocks.append(text_html(
+        "The base terms alone, with each candidate and with the checked effect, are fitted on "
+        "every diagnosed case and compared with CFD runs none of the fits saw (the back-tested "
+        "motions in a run), each over its last period. A motion's error is the mean over F_n, "
+        "F_t and M of the squared NRMSE; every motion weighs alike. An effect that lowers the "
+        "diagnosed cases' held-out error but not these runs' is confined to the identification "
+        "grid's motions: a model with it is no better for optimising."))
+    for name, why in check.excluded.items():
+        s.blocks.append(text_html(f"Not checked on {name}: {why}", warn=True))
+    if not check.motions:
+        return
+    lab = check.label
+    rows = []
+    for m in check.motions:
+        rows.append([m.label, m.name]
+                    + [f"{100 * m.nrmse[BASE][k]:.1f} → {100 * m.nrmse[lab][k]:.1f}"
+                       for k in m.nrmse[BASE]]
+                    + [f"{m.mean_thrust['cfd']:.3g} / {m.mean_thrust[BASE]:.3g} / "
+                       f"{m.mean_thrust[lab]:.3g}",
+                       f"{m.mean_power['cfd']:.3g} / {m.mean_power[BASE]:.3g} / "
+                       f"{m.mean_power[lab]:.3g}"])
+    comps = list(check.motions[0].nrmse[BASE])
+    s.blocks.append(table_html(
+        ["motion", "record"] + [f"NRMSE {k} [%], base → + {lab}" for k in comps]
+        + ["mean thrust [N]: CFD / base / + effect", "mean input power [W]: CFD / base / "
+           "+ effect"], rows))
+    s.blocks.append(figure_html(_transfer_figure(check), f"NRMSE per held-out motion, base "
+                                                          f"model and + {lab}"))
+    s.blocks.append(table_html(
+        ["terms added", "error on the held-out runs vs the base model's", "runs improved",
+         "coefficients (fitted on every diagnosed case)"],
+        [[label, -gain, f"{check.n_better[label]} of {len(check.motions)}",
+          "; ".join(f"{n} = {v:.3g}" for n, v in check.coefficients[label].items())]
+         for label, gain in sorted(check.gains.items(), key=lambda kv: -kv[1])]))
 
 
 def gap_report(path, diag: Diagnosis, where: dict, source: str = "",
@@ -164,6 +223,8 @@ def add_gap_sections(rep: Report, diag: Diagnosis, where: dict,
                                      "; ".join(f"{g}: {x:+.1%}" for g, x in
                                                v["per_group_gain"].items()))
                                     for k, v in diag.validation.items()]))
+    if diag.transfer is not None:
+        add_transfer_section(rep, diag.transfer)
 
 
 def write_diagnosis(rf: ResultsFile, diag: Diagnosis, where: dict, group: str = "gap") -> None:
@@ -209,3 +270,33 @@ def write_diagnosis(rf: ResultsFile, diag: Diagnosis, where: dict, group: str = 
     g.attrs["error_growth"] = growth_to_json(diag.error_growth)
     g.attrs["residual_scaling_asked"] = diag.scaling_asked
     g.attrs["descriptions"] = json.dumps(diag.descriptions)
+    if diag.transfer is not None:
+        write_transfer(rf, diag.transfer, f"{group}/transfer")
+
+
+def write_transfer(rf: ResultsFile, check: TransferCheck, group: str = "gap/transfer") -> None:
+    """Per held-out motion each set's error and the checked effect's NRMSE and means; the
+    verdict, gains, coefficients and excluded runs as attributes."""
+    ms = check.motions
+    arrays: dict[str, np.ndarray] = {}
+    units: dict[str, str] = {}
+    for label in check.coefficients:
+        arrays[f"error/{label}"] = np.array([m.error[label] for m in ms])
+        units[f"error/{label}"] = "1"
+    for which, label in (("base", BASE), ("effect", check.label)):
+        for comp in (ms[0].nrmse[BASE] if ms else ()):
+            arrays[f"nrmse_{comp}_{which}"] = np.array([m.nrmse[label][comp] for m in ms])
+            units[f"nrmse_{comp}_{which}"] = "1"
+    for key, unit in (("mean_thrust", "N"), ("mean_power", "W")):
+        for which, label in (("cfd", "cfd"), ("base", BASE), ("effect", check.label)):
+            arrays[f"{key}_{which}"] = np.array([getattr(m, key)[label] for m in ms])
+            units[f"{key}_{which}"] = unit
+    rf.write_group(group, arrays, units, {
+        "verdict": check.verdict, "effect": json.dumps(list(check.effect)),
+        "claimed": check.claimed, "carries_over": check.carries_over,
+        "residual_scaling": check.residual_scaling, "gains": json.dumps(check.gains),
+        "n_better": json.dumps(check.n_better),
+        "coefficients": json.dumps(check.coefficients),
+        "excluded": json.dumps(check.excluded),
+        "motion_names": json.dumps([m.name for m in ms]),
+        "motion_labels": json.dumps([m.label for m in ms])})

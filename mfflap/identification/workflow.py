@@ -20,11 +20,14 @@ SOURCE_SEPARATOR = "\n"
 
 
 def failed_cases(folder: str | Path) -> dict[str, str]:
-    """Cases whose CFD failed in a campaign folder, with the reason."""
+    """Cases whose CFD failed in a campaign (or back-test) folder, with the reason: named by
+    the file's ``case_id``, else by its file name without ``.failed.toml`` (a back-test's
+    failure file has no case id)."""
     out = {}
     for p in sorted(Path(folder).glob("*.failed.toml")):
         info = read_toml(p)
-        out[str(info.get("case_id", p.stem))] = f"CFD failed: {info.get('error', '')}"
+        name = info.get("case_id", p.name.removesuffix(".failed.toml"))
+        out[str(name)] = f"CFD failed: {info.get('error', '')}"
     return out
 
 
