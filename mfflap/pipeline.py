@@ -1,6 +1,7 @@
 """The main job, ``mfflap run``: identification -> sinusoid sweep -> optimisation for each
-beta -> back-test against CFD -> coefficient sensitivity -> one HTML report and one HDF5
-file with every number and the inputs.
+beta -> where the motions lie against the identification data -> back-test against CFD ->
+gap diagnosis (its effect checked on the back-tests) -> coefficient sensitivity -> one HTML
+report and one HDF5 file with every number and the inputs.
 
 Each stage that fails is reported and the run goes on with the rest; the report says what is
 missing and why.
@@ -8,6 +9,7 @@ missing and why.
 
 from __future__ import annotations
 
+import json
 import time
 import traceback
 from collections.abc import Callable
@@ -66,6 +68,9 @@ class RunOutcome:
     cases: list = field(default_factory=list)
     model: object | None = None
     gap: tuple | None = None
+    #: per optimised motion (and the best sinusoid): where it lies against the
+    #: identification data (:class:`~mfflap.identification.coverage.Coverage`)
+    coverage: dict = field(default_factory=dict)
     #: the stage a Ctrl-C stopped (the later ones did not run), or None
     interrupted: str | None = None
 
@@ -111,6 +116,23 @@ def coefficient_sensitivity(config: CaseConfig, identification: dict, sweep,
         out[label] = (model, r)
         progress(f"sensitivity {label}: thrust {float(r.summary.mean_thrust):.3g} N, "
                  f"period {float(r.motion.period):.3g} s")
+    return out
+
+
+def motion_coverage(config: CaseConfig, cases: list, motions: dict) -> dict:
+    """Where each motion, as CFD imposes it (the periodic spline through its cycle), lies
+    against the identification cases (:mod:`mfflap.identification.coverage`)."""
+    import numpy as np
+
+    from mfflap.identification.coverage import CoverageReference
+    from mfflap.kinematics.convert import to_spline
+
+    reference = CoverageReference.from_cases(cases, config.morison_model(), config.flow.velocity)
+    out = {}
+    for label, motion in motions.items():
+        spline = to_spline(motion)
+        t = np.linspace(0.0, spline.period, 400, endpoint=False)
+        out[label] = reference.check(spline.sample(t), 1.0 / spline.period)
     return out
 
 
@@ -206,6 +228,12 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
         n = config.optimisation.n_steps
         motions = {"best sinusoid": sinusoid_motion(study.sweep, study.best_sinusoid, n)}
         motions.update({f"β = {b:g}": r.motion for b, r in study.sqp.items()})
+        if outcome.cases:
+            outcome.coverage = _stage(outcome, "identification coverage", progress,
+                                      lambda: motion_coverage(config, outcome.cases,
+                                                              motions)) or {}
+            for label, cov in outcome.coverage.items():
+                progress(f"{label}: {cov.describe()}")
         folders = list(options.backtest_fixtures) or [fixture_dir("backtest")]
         _stage(outcome, "back-test", progress, lambda: backtest_all(
             config, motions, model, fixture_folders=folders, live=options.live,
@@ -242,7 +270,7 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
 def write_outputs(config: CaseConfig, outcome: RunOutcome, h5_path: Path, html_path: Path,
                   source: str) -> None:
     """One HDF5 file with every number and the inputs; one self-contained HTML report."""
-    from mfflap.backtest.store import write_backtests
+    from mfflap.backtest.store import safe_label, write_backtests
     from mfflap.identification.store import write_identification
     from mfflap.optimisation.store import beta_key, write_result
     from mfflap.optimisation.workflow import write_study
@@ -256,6 +284,9 @@ def write_outputs(config: CaseConfig, outcome: RunOutcome, h5_path: Path, html_p
         if outcome.study is not None:
             write_study(rf, config, outcome.study, outcome.gain, outcome.model)
         write_backtests(rf, outcome.backtests)
+        for label, cov in outcome.coverage.items():
+            rf.write_group(f"coverage/{safe_label(label)}", {}, {}, {"label": label,
+                                                        "coverage": json.dumps(cov.as_dict())})
         for label, (_, r) in outcome.sensitivity.items():
             write_result(rf, f"sensitivity/{label}/{beta_key(0.0)}", r)
         if outcome.gap is not None:
@@ -285,6 +316,10 @@ def write_outputs(config: CaseConfig, outcome: RunOutcome, h5_path: Path, html_p
 
         add_optimisation_sections(rep, outcome.study, outcome.model, config.optimisation.scheme,
                                   config.optimisation.max_power, outcome.gain)
+    if outcome.coverage:
+        from mfflap.reports.coverage import add_coverage_section
+
+        add_coverage_section(rep, outcome.coverage, len(outcome.cases))
     add_backtest_sections(rep, outcome.backtests, config.optimisation.max_power)
     if outcome.gap is not None:
         from mfflap.gap.report import add_gap_sections

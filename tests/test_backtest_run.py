@@ -200,8 +200,18 @@ def test_main_job_runs_end_to_end_on_the_shipped_fixtures(tmp_path):
     assert transfer["claimed"] is False and len(transfer["effect"]) == 1
     assert "the 4 held-out motion(s)" in transfer["verdict"]
     assert f"on the back-tested motions: {transfer['verdict']}" in res.output
+    # where the motions lie against the identification data: the β = 1 optimum within it;
+    # the β = 0 optimum pitches faster than any identification case, and its regressors
+    # leave the data's ellipsoid
+    cov = summary["coverage"]
+    assert set(cov) == set(summary["backtest"])
+    assert cov["β = 1"]["extrapolated"] is False
+    assert "peak |pitch acceleration|" in cov["β = 0"]["outside"]
+    assert cov["β = 0"]["leverage_ratio"] > 1
+    assert f"β = 0: {cov['β = 0']['said']}" in res.output
     html = (out / "report.html").read_text()
     assert "Does it carry over to runs outside the cases?" in html
+    assert "Do the motions lie within the identification data?" in html
     for title in ("Identified coefficients", "Optimised motions", "Back-test against CFD",
                   "Coefficient sensitivity", "Sinusoidal sweep", "Sim-to-real gap"):
         assert title in html
@@ -214,6 +224,8 @@ def test_main_job_runs_end_to_end_on_the_shipped_fixtures(tmp_path):
         assert {"identification", "optimisation", "backtest", "sensitivity", "gap"} <= set(rf.h5)
         statuses = {rf.h5[f"backtest/{k}"].attrs["status"] for k in rf.h5["backtest"]}
         assert len(json.loads(rf.h5["gap/transfer"].attrs["motion_names"])) == 4
+        assert rf.h5["coverage/beta__0"].attrs["label"] == "β = 0"
+        assert json.loads(rf.h5["coverage/beta__0"].attrs["coverage"]) == cov["β = 0"]
         assert statuses <= {"back-tested", "not back-tested"}
     assert list((out / "vtk").glob("*.pvd"))
 

@@ -8,14 +8,15 @@ from mfflap.backtest.run import BacktestOutcome
 from mfflap.results import ResultsFile
 
 
-def _safe(label: str) -> str:
+def safe_label(label: str) -> str:
+    """A motion's label as an HDF5 group name ("β = 0" -> "beta__0")."""
     return label.replace(" ", "_").replace("β", "beta").replace("=", "")
 
 
 def write_backtests(rf: ResultsFile, outcomes: dict[str, BacktestOutcome]) -> None:
     """Store status, source, metrics and last-cycle histories of every back-test."""
     for label, o in outcomes.items():
-        group = f"backtest/{_safe(label)}"
+        group = f"backtest/{safe_label(label)}"
         if o.comparison is not None:
             c = o.comparison
             rf.write_group(group, {"time": c.time, "cfd_thrust": c.cfd_thrust,

@@ -95,6 +95,7 @@ def run_summary(outcome) -> dict:
         k: {"used": r.residual_scaling, "asked": r.scaling_asked,
             "errors_ask_for": sorted({g.matching_scaling for g in r.error_growth.values()})}
         for k, r in outcome.identification.items()}
+    out["coverage"] = {k: c.as_dict() for k, c in outcome.coverage.items()}
     if outcome.gap is not None:
         out["gap_verdict"] = outcome.gap[0].verdict
         out["gap_residual_scaling"] = outcome.gap[0].residual_scaling
