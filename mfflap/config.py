@@ -158,6 +158,16 @@ class OptimisationSettings:
     min_period: float = bounded(0.2, low=0.0, low_open=True, unit="s")
     max_period: float = bounded(20.0, low=0.0, low_open=True, unit="s")
     scheme: str = bounded("paper", choices=("paper", "midpoint"), unit="")
+    # the pitch envelope (mfflap; left out: no limit), e.g. what the identification data
+    # reach, so that the optimum stays where the coefficients rest on CFD
+    max_pitch_deg: float | None = bounded(None, low=0.0, low_open=True, unit="deg",
+                                          doc="theta_max")
+    max_pitch_rate: float | None = bounded(None, low=0.0, low_open=True, unit="rad/s",
+                                           doc="thetadot_max")
+    max_pitch_acceleration: float | None = bounded(None, low=0.0, low_open=True,
+                                                   unit="rad/s^2", doc="thetaddot_max")
+    penalty_pitch: float = bounded(1.0e4, low=0.0, unit="N", doc="sigma_theta, per squared "
+                                   "relative excess over the pitch envelope")
 
     def __post_init__(self) -> None:
         check_fields(self, prefix="optimisation.")
@@ -167,6 +177,17 @@ class OptimisationSettings:
                 f"{self.max_period} s: the bounds exclude every period",
                 key="optimisation.min_period",
             )
+
+    def pitch_envelope(self) -> dict[str, float]:
+        """The FlappingProblem keywords of the pitch envelope (rad, rad/s, rad/s^2; inf
+        where no limit is given) and its penalty weight."""
+        return {"max_pitch": (np.inf if self.max_pitch_deg is None
+                              else float(np.radians(self.max_pitch_deg))),
+                "max_pitch_rate": (np.inf if self.max_pitch_rate is None
+                                   else float(self.max_pitch_rate)),
+                "max_pitch_acceleration": (np.inf if self.max_pitch_acceleration is None
+                                           else float(self.max_pitch_acceleration)),
+                "penalty_pitch": self.penalty_pitch}
 
 
 #: the decimals of each grid axis that a campaign case's id keeps

@@ -40,6 +40,9 @@ class RunOptions:
     sensitivity: bool = True
     vtk_dir: Path | None = None
     mesh: str = "coarse"
+    #: keep the optimisation within what the identification cases reach
+    #: (:func:`within_data_config`)
+    within_data: bool = False
 
     def __post_init__(self) -> None:
         allowed = ["case", *(f"identified:{s}" for s in RUN_STRATEGIES)]
@@ -71,6 +74,11 @@ class RunOutcome:
     #: per optimised motion (and the best sinusoid): where it lies against the
     #: identification data (:class:`~mfflap.identification.coverage.Coverage`)
     coverage: dict = field(default_factory=dict)
+    #: the case as the stages ran it (with ``within_data``, its optimisation limited to the
+    #: identification data); None before the identification
+    config: CaseConfig | None = None
+    #: the limits ``within_data`` set: setting -> value
+    within_data_limits: dict = field(default_factory=dict)
     #: the stage a Ctrl-C stopped (the later ones did not run), or None
     interrupted: str | None = None
 
@@ -117,6 +125,32 @@ def coefficient_sensitivity(config: CaseConfig, identification: dict, sweep,
         progress(f"sensitivity {label}: thrust {float(r.summary.mean_thrust):.3g} N, "
                  f"period {float(r.motion.period):.3g} s")
     return out
+
+
+def within_data_config(config: CaseConfig, cases: list) -> tuple[CaseConfig, dict]:
+    """The case with its optimisation limited to what ``cases`` reach: the pitch amplitude,
+    peak pitch rate and acceleration of the pitch envelope, the shortest period and the
+    heave limit (each the tighter of the case's own and the data's); and those settings."""
+    from dataclasses import replace
+
+    from mfflap.identification.coverage import CoverageReference
+
+    ranges = CoverageReference.from_cases(cases, config.morison_model(),
+                                          config.flow.velocity).ranges
+    o = config.optimisation
+
+    def tighter(current, data):
+        return data if current is None else min(current, data)
+
+    limits = {"max_pitch_deg": tighter(o.max_pitch_deg, ranges["pitch amplitude"][1]),
+              "max_pitch_rate": tighter(o.max_pitch_rate, ranges["peak |pitch rate|"][1]),
+              "max_pitch_acceleration": tighter(o.max_pitch_acceleration,
+                                                ranges["peak |pitch acceleration|"][1]),
+              "max_heave": min(o.max_heave, ranges["heave amplitude"][1])}
+    if "frequency" in ranges:
+        limits["min_period"] = min(max(o.min_period, 1.0 / ranges["frequency"][1]),
+                                   0.5 * (o.min_period + o.max_period))
+    return replace(config, optimisation=replace(o, **limits)), limits
 
 
 def motion_coverage(config: CaseConfig, cases: list, motions: dict) -> dict:
@@ -209,6 +243,16 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
             outcome.problems.append(f"optimisation: no identified coefficients for strategy "
                                     f"{strategy!r}; used the case's coefficients")
     outcome.model = model
+    outcome.config = config
+    if options.within_data:
+        if outcome.cases:
+            config, outcome.within_data_limits = within_data_config(config, outcome.cases)
+            outcome.config = config
+            progress("optimisation kept within the identification data: " + ", ".join(
+                f"{k} = {v:.4g}" for k, v in outcome.within_data_limits.items()))
+        else:
+            outcome.problems.append("optimisation: not kept within the identification data "
+                                    "(asked): there are no identification cases")
 
     def optimisation():
         try:

@@ -173,3 +173,66 @@ def test_adjoint_matches_casadi_reverse_mode(scheme):
     adj = problem.gradient(d).flat()
     ca_grad = casadi_gradient(problem, d)
     assert np.max(np.abs(adj - ca_grad)) <= 1e-10 * np.max(np.abs(ca_grad))
+
+
+def _envelope_at(motion, scheme, share=0.7):
+    """Pitch limits at ``share`` of the motion's own peaks: all three penalties active."""
+    st = motion.states(scheme)
+    return {"max_pitch": share * np.max(np.abs(st.pitch_angle)),
+            "max_pitch_rate": share * np.max(np.abs(st.pitch_rate)),
+            "max_pitch_acceleration": share * np.max(np.abs(st.pitch_acceleration))}
+
+
+@pytest.mark.parametrize("compiled", [True, False], ids=["kernel", "arrays"])
+@pytest.mark.parametrize("scheme", ["paper", "midpoint"])
+def test_the_pitch_envelope_adds_its_penalty_and_its_exact_gradient(scheme, compiled):
+    d = perturbed_motion(3)
+    limits = _envelope_at(d, scheme)
+    kw = dict(beta=0.5, max_power=30.0, max_heave=0.4, smoothing_pitch=1e-5,
+              smoothing_heave=1e-3, scheme=scheme, compiled=compiled)
+    free = FlappingProblem(MorisonModel(), **kw)
+    sigma = 1.0e5
+    held = FlappingProblem(MorisonModel(), penalty_pitch=sigma, **limits, **kw)
+    # the penalty by hand: 1/2 sigma (excess / limit)^2, summed over the states, mean over j
+    st = d.states(scheme)
+    by_hand = 0.0
+    for name, limit in zip(("pitch_angle", "pitch_rate", "pitch_acceleration"),
+                           limits.values(), strict=True):
+        excess = np.maximum(np.abs(getattr(st, name)) - limit, 0) / limit
+        assert excess.max() > 0
+        by_hand += 0.5 * sigma * np.mean(excess**2)
+    assert float(held.objective(d)) == pytest.approx(float(free.objective(d)) + by_hand,
+                                                     rel=1e-12)
+    adj = held.gradient(d).flat()
+    cs = complex_step(held, d)
+    assert np.max(np.abs(adj - cs)) <= 1e-10 * np.max(np.abs(cs))
+    assert abs(adj[-1] - cs[-1]) <= 1e-10 * abs(cs[-1])
+    # and the envelope changes the pitch controls' gradient: the test could fail
+    change = np.abs(adj - free.gradient(d).flat())[:N]
+    assert change.max() > 1e-2 * np.max(np.abs(cs[:N]))
+
+
+@pytest.mark.parametrize("scheme", ["paper", "midpoint"])
+def test_the_pitch_envelope_in_casadi_and_the_kernel_equals_the_array_code(scheme):
+    from mfflap.optimisation.casadi_objective import build_objective, casadi_gradient
+
+    d = perturbed_motion(7)
+    kw = dict(beta=0.2, max_power=30.0, max_heave=0.4, scheme=scheme,
+              **_envelope_at(d, scheme, 0.8))
+    slow = FlappingProblem(MorisonModel(), compiled=False, **kw)
+    fast = FlappingProblem(MorisonModel(), compiled=True, **kw)
+    g_ref = slow.gradient(d).flat()
+    np.testing.assert_allclose(fast.gradient(d).flat(), g_ref, rtol=0,
+                               atol=1e-12 * np.abs(g_ref).max())
+    f, _ = build_objective(slow, N)
+    assert np.isclose(float(f(as_vector(d))), slow.objective(d), rtol=1e-13)
+    assert np.max(np.abs(casadi_gradient(slow, d) - g_ref)) <= 1e-10 * np.max(np.abs(g_ref))
+
+
+@pytest.mark.parametrize("kwargs", [{"max_pitch": 0.0}, {"max_pitch_rate": -1.0},
+                                    {"max_pitch_acceleration": float("nan")},
+                                    {"penalty_pitch": -1.0}])
+def test_a_meaningless_pitch_envelope_is_refused_naming_its_key(kwargs):
+    name = next(iter(kwargs))
+    with pytest.raises(ConfigError, match=rf"optimisation\.{name}"):
+        FlappingProblem(MorisonModel(), **kwargs)

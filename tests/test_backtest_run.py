@@ -490,3 +490,47 @@ def test_the_gain_in_cfd_is_not_a_ratio_to_a_drag():
     assert gain_in_cfd(outcomes(None, 0.2)) is None
     assert no_gain_in_cfd_reason(outcomes(None, 0.2)) == "β = 0 was not back-tested"
     assert no_gain_in_cfd_reason({}) == "there is no β = 0 motion (not optimised)"
+
+
+def test_the_main_job_kept_within_the_identification_data(tmp_path):
+    """`mfflap run --within-data`: the pitch envelope, shortest period and heave limit are
+    what the identification cases reach, the optimised motions keep to them (within the
+    coverage's tolerance), and the case file stored with the results says so."""
+    import json
+
+    from mfflap.cli.main import cli
+    from mfflap.identification.coverage import CoverageReference
+    from mfflap.results import ResultsFile
+
+    out = tmp_path / "run"
+    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--starts", "1",
+                                   "--no-ipopt", "--no-gain-table", "--within-data", "--json"])
+    assert res.exit_code == 0, res.output
+    summary = json.loads(res.output[res.output.index("{\n"):])
+    limits = summary["within_data_limits"]
+    cov = summary["coverage"]
+    ranges = next(iter(cov.values()))["ranges"]
+    assert limits["max_pitch_deg"] == pytest.approx(ranges["pitch amplitude"][1])
+    assert limits["max_pitch_rate"] == pytest.approx(ranges["peak |pitch rate|"][1])
+    assert limits["max_pitch_acceleration"] == pytest.approx(
+        ranges["peak |pitch acceleration|"][1])
+    assert limits["min_period"] == pytest.approx(1 / ranges["frequency"][1])
+    assert limits["max_heave"] == pytest.approx(min(0.5, ranges["heave amplitude"][1]))
+    assert "optimisation kept within the identification data: max_pitch_deg = " in res.output
+    for label, c in cov.items():  # the variables the limits hold stay within the data
+        held = {"frequency", "pitch amplitude", "peak |pitch rate|",
+                "peak |pitch acceleration|"}
+        assert not held & set(c["outside"]), (label, c["said"])
+    assert cov["best sinusoid"]["extrapolated"] is False
+    with ResultsFile(out / "results.h5") as rf:
+        assert f"max_pitch_rate = {limits['max_pitch_rate']!r}" in rf.config_toml
+    # the limits are the data's: the same reference gives them
+    from mfflap.campaign.records import fixture_dir, read_records
+    from mfflap.config import load_case
+    from mfflap.identification.data import prepare_cases
+
+    case = load_case(CASE)
+    cases, _ = prepare_cases(read_records(fixture_dir()), case.identification.discard_time,
+                             plate=case.plate, fluid=case.fluid, stream=case.flow)
+    ref = CoverageReference.from_cases(cases, case.morison_model(), case.flow.velocity)
+    assert ref.ranges["peak |pitch rate|"][1] == pytest.approx(limits["max_pitch_rate"])

@@ -94,3 +94,16 @@ def test_a_reference_without_cases_or_without_a_load_component_is_refused():
                            x.cfd.moment)) for x in c]
     with pytest.raises(MfflapError, match="tangential_force is zero throughout"):
         CoverageReference.from_cases(zero, MODEL, VELOCITY)
+
+
+def test_a_motion_at_the_edge_of_the_data_is_within_it_up_to_the_tolerance():
+    from mfflap.identification.coverage import RANGE_TOLERANCE
+
+    cases = _cases()
+    ref = CoverageReference.from_cases(cases, MODEL, VELOCITY)
+    widest = max(cases, key=lambda c: np.ptp(c.state.heave_position))
+    hi = ref.ranges["heave amplitude"][1]
+    assert np.ptp(widest.state.heave_position) / 2 == pytest.approx(hi)
+    just = ref.check(_scaled(widest.state, 1 + 0.5 * RANGE_TOLERANCE), widest.frequency)
+    beyond = ref.check(_scaled(widest.state, 1 + 2 * RANGE_TOLERANCE), widest.frequency)
+    assert "heave amplitude" not in just.outside and "heave amplitude" in beyond.outside

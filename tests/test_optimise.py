@@ -463,3 +463,80 @@ def test_a_stop_during_the_gain_table_writes_the_beta_study_without_it(tmp_path,
         assert list(rf.h5["optimisation/sqp"]) == ["beta_0.50"]
         assert "optimisation/gain_table" not in rf.h5
         assert np.isnan(rf.h5["optimisation"].attrs["interrupted_beta"])
+
+
+ENVELOPE = {"max_pitch": np.deg2rad(40.0), "max_pitch_rate": 3.0,
+            "max_pitch_acceleration": 40.0}
+
+
+def _pitch_peaks(p, motion):
+    st = motion.states(p.scheme)
+    return np.array([np.max(np.abs(st.pitch_angle)), np.max(np.abs(st.pitch_rate)),
+                     np.max(np.abs(st.pitch_acceleration))])
+
+
+def test_the_pitch_envelope_holds_the_optimum_within_it():
+    """The start pitches at 50 deg and 2.1 Hz, beyond every limit; IPOPT keeps the optimum
+    within them at every sample, the penalised SQP within 2 % (sigma_theta = 1e4), and
+    without the envelope the optimum leaves it."""
+    limits = np.array(list(ENVELOPE.values()))
+    free = problem(0.0)
+    held = problem(0.0, **ENVELOPE)
+    assert np.all(_pitch_peaks(held, START) > limits)
+    r_free = optimise_sqp(free, START, min_period=0.2, max_period=20.0)
+    r_sqp = optimise_sqp(held, START, min_period=0.2, max_period=20.0)
+    r_ipopt = optimise_ipopt(held, START, min_period=0.2, max_period=20.0)
+    assert r_sqp.converged and r_ipopt.converged
+    assert np.any(_pitch_peaks(free, r_free.motion) > 1.1 * limits)
+    assert np.all(_pitch_peaks(held, r_sqp.motion) <= 1.02 * limits)
+    assert np.all(_pitch_peaks(held, r_ipopt.motion) <= limits * (1 + 1e-6))
+    # the envelope costs thrust, and the two optimisers agree on how much
+    assert float(r_sqp.summary.mean_thrust) < float(r_free.summary.mean_thrust)
+    assert float(r_sqp.summary.mean_thrust) == pytest.approx(
+        float(r_ipopt.summary.mean_thrust), rel=0.05)
+
+
+def test_the_sweep_and_the_refined_sinusoid_keep_within_the_pitch_envelope():
+    from dataclasses import replace
+
+    from mfflap.optimisation.refine import refine_best_sinusoid
+    from mfflap.optimisation.study import default_sweep, within_pitch_envelope
+
+    c = load_case(CASE)
+    inside = within_pitch_envelope([0.8, 0.8, 2.0], np.deg2rad([30.0, 45.0, 30.0]),
+                                   **ENVELOPE)
+    # 45 deg exceeds the amplitude; at 2 Hz 30 deg pitches at 6.6 rad/s
+    assert inside.tolist() == [True, False, False]
+    o = replace(c.optimisation, max_pitch_deg=40.0, max_pitch_rate=3.0,
+                max_pitch_acceleration=40.0)
+    limited = replace(c, optimisation=o)
+    sweep = default_sweep(limited)
+    best = sweep.best_feasible()
+    w = 2 * np.pi * sweep.frequency[best]
+    a = sweep.pitch_amplitude[best]
+    assert a <= np.deg2rad(40.0) and w * a <= 3.0 and w**2 * a <= 40.0
+    assert sweep.feasible.sum() < default_sweep(c).feasible.sum()
+    env = {k: v for k, v in o.pitch_envelope().items() if k != "penalty_pitch"}
+    r = refine_best_sinusoid(c.morison_model(), sweep, 30, o.max_power, o.max_heave,
+                             o.min_period, o.max_period, pitch_envelope=env)
+    w = 2 * np.pi * r.frequency
+    assert r.pitch_amplitude <= np.deg2rad(40.0) * (1 + 1e-6)
+    assert w * r.pitch_amplitude <= 3.0 * (1 + 1e-6)
+    assert r.mean_thrust >= r.grid_thrust
+
+
+def test_the_pitch_envelope_is_read_from_the_case_file_and_checked():
+    from mfflap.config import loads_case
+    from mfflap.optimisation.study import problem_for
+
+    text = CASE.read_text().replace("[optimisation]\n", "[optimisation]\nmax_pitch_deg = 40.0\n"
+                                    "max_pitch_rate = 3.0\n", 1)
+    c = loads_case(text)
+    p = problem_for(c, 0.0)
+    assert p.max_pitch == pytest.approx(np.deg2rad(40.0)) and p.max_pitch_rate == 3.0
+    assert p.max_pitch_acceleration == np.inf  # left out: no limit
+    assert problem_for(load_case(CASE), 0.0).max_pitch == np.inf
+    bad = CASE.read_text().replace("[optimisation]\n", "[optimisation]\nmax_pitch_rate = -1\n",
+                                   1)
+    with pytest.raises(ConfigError, match=r"optimisation\.max_pitch_rate"):
+        loads_case(bad)

@@ -29,10 +29,15 @@ from mfflap.cli.json_output import echo_json
 @click.option("--gain-table/--no-gain-table", default=True, show_default=True,
               help="Tabulate the beta = 0 gain against N and the smoothing weights.")
 @click.option("--no-ipopt", is_flag=True, help="Skip the hard-constrained IPOPT comparison.")
+@click.option("--within-data", is_flag=True,
+              help="Keep the optimised motions within the identification data: the pitch "
+                   "amplitude, peak pitch rate and acceleration, frequency and heave amplitude "
+                   "its CFD cases reach bound the sweep, the refinement and the optimisers "
+                   "(each the tighter of the case file's and the data's).")
 @click.option("--json", "as_json", is_flag=True, help="Print the key numbers as JSON.")
 def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
             backtest_fixtures: tuple[Path, ...], live: bool, coefficients: str, starts: int,
-            gain_table: bool, no_ipopt: bool, as_json: bool) -> None:
+            gain_table: bool, no_ipopt: bool, within_data: bool, as_json: bool) -> None:
     """Identification, sweep, optimisation, back-test and reports for CASE_FILE.
 
     Writes <out>/report.html (every figure), <out>/results.h5 (every number and the inputs)
@@ -49,10 +54,12 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
     options = RunOptions(fixtures=fixtures, backtest_fixtures=backtest_fixtures, live=live,
                          work_dir=out_dir / "cfd_cases", coefficients=coefficients,
                          n_starts=starts, with_ipopt=not no_ipopt, gain_table=gain_table,
-                         vtk_dir=out_dir / "vtk")  # checked before the folder is made
+                         vtk_dir=out_dir / "vtk",  # checked before the folder is made
+                         within_data=within_data)
     out_dir.mkdir(parents=True, exist_ok=True)
     outcome = run_study(case, options, progress=lambda m: click.echo(m, err=True))
-    write_outputs(case, outcome, out_dir / "results.h5", out_dir / "report.html",
+    write_outputs(outcome.config or case, outcome, out_dir / "results.h5",
+                  out_dir / "report.html",
                   sources_shown(fixtures))
     if outcome.interrupted is not None:
         click.echo(f"interrupted ({outcome.interrupted}): {out_dir / 'report.html'} and "
@@ -96,6 +103,7 @@ def run_summary(outcome) -> dict:
             "errors_ask_for": sorted({g.matching_scaling for g in r.error_growth.values()})}
         for k, r in outcome.identification.items()}
     out["coverage"] = {k: c.as_dict() for k, c in outcome.coverage.items()}
+    out["within_data_limits"] = outcome.within_data_limits or None
     if outcome.gap is not None:
         out["gap_verdict"] = outcome.gap[0].verdict
         out["gap_residual_scaling"] = outcome.gap[0].residual_scaling

@@ -3,7 +3,9 @@
 Two answers, because a reduced model predicts well only where its identification data reach:
 
 - **By variable.** Each motion's period, amplitudes, peak rates and accelerations and peak
-  effective angle of attack, against their range over the identification cases. Readable,
+  effective angle of attack, against their range over the identification cases (beyond
+  it by more than :data:`RANGE_TOLERANCE` of its end: an optimum the optimiser holds at a
+  limit of the data by a penalty overshoots it a little). Readable,
   but blind to combinations: a motion can be within every range and still combine them as
   no case did.
 - **By leverage** (the regression diagnostic for hidden extrapolation; Montgomery, Peck and
@@ -26,6 +28,10 @@ from mfflap.hydro.base import ForceModel
 from mfflap.hydro.morison import RelativeFlow
 from mfflap.identification.data import COMPONENTS, CaseData
 from mfflap.kinematics.state import KinematicState
+
+#: How far beyond the identification data's range a variable may lie, as a share of the
+#: range's end, before the motion is called outside it.
+RANGE_TOLERANCE = 0.02
 
 #: The variables compared, with their units.
 FEATURE_UNITS = {
@@ -156,7 +162,8 @@ class CoverageReference:
         outside = {}
         for name, (lo, hi) in self.ranges.items():
             v = feats[name]
-            if np.isfinite(v) and not lo * (1 - 1e-9) <= v <= hi * (1 + 1e-9):
+            if np.isfinite(v) and not (lo * (1 - RANGE_TOLERANCE) <= v
+                                       <= hi * (1 + RANGE_TOLERANCE)):
                 outside[name] = (v, lo, hi)
         rows = _rows(self.model, state, self.scales)
         lev = np.einsum("ij,jk,ik->i", rows, self.inverse_gram, rows)

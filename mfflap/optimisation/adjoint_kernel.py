@@ -23,7 +23,8 @@ from mfflap.sweep_kernel import drag_sums, drag_sums_and_abs
 def objective_and_gradient(pitch_acc, heave_acc, dt, midpoint, want_gradient, u, chord,
                            n_strips, k_an, k_at, k_dn, k_dt, lbar, l2bar, beta, max_power,
                            max_heave, penalty_power, penalty_heave, smoothing_pitch,
-                           smoothing_heave, grad_out):
+                           smoothing_heave, max_pitch, max_pitch_rate, max_pitch_acc,
+                           penalty_pitch, grad_out):
     """J(u, dt); with ``want_gradient`` also fills ``grad_out`` = [dJ/d pitch_acc (N),
     dJ/d heave_acc (N), dJ/d dt].
 
@@ -77,8 +78,13 @@ def objective_and_gradient(pitch_acc, heave_acc, dt, midpoint, want_gradient, u,
         power = -(fn * c + ft * s) * hd - mo * td
         excess_p = max(power - max_power, 0.0)
         excess_h = max(abs(hp) - max_heave, 0.0)
+        # the pitch envelope: relative excesses (0 where the limit is inf)
+        e_th = max(abs(th) - max_pitch, 0.0) / max_pitch
+        e_td = max(abs(td) - max_pitch_rate, 0.0) / max_pitch_rate
+        e_tdd = max(abs(tdd) - max_pitch_acc, 0.0) / max_pitch_acc
         total += (w_thrust * thrust + beta * power + 0.5 * penalty_power * excess_p * excess_p
-                  + 0.5 * penalty_heave * excess_h * excess_h)
+                  + 0.5 * penalty_heave * excess_h * excess_h
+                  + 0.5 * penalty_pitch * (e_th * e_th + e_td * e_td + e_tdd * e_tdd))
         if want_gradient:
             d0, d1, d2 = 2.0 * a0, 2.0 * a1, 2.0 * a2
             w_power = beta + penalty_power * excess_p
@@ -125,6 +131,13 @@ def objective_and_gradient(pitch_acc, heave_acc, dt, midpoint, want_gradient, u,
             row[6] = w_thrust * t_z + w_power * p_z
             # heave position (penalty only)
             row[7] = penalty_heave * excess_h * (1.0 if hp > 0 else (-1.0 if hp < 0 else 0.0))
+            # the pitch envelope's share of the pitch angle, rate and acceleration partials
+            if e_th > 0.0:
+                row[2] += penalty_pitch * e_th / max_pitch * (1.0 if th > 0 else -1.0)
+            if e_td > 0.0:
+                row[3] += penalty_pitch * e_td / max_pitch_rate * (1.0 if td > 0 else -1.0)
+            if e_tdd > 0.0:
+                row[4] += penalty_pitch * e_tdd / max_pitch_acc * (1.0 if tdd > 0 else -1.0)
         # advance x_j -> x_{j+1} (semi-implicit Euler)
         rp += dt * tdd
         rh += dt * hdd
@@ -198,4 +211,5 @@ def problem_constants(problem) -> tuple | None:
             float(k["k_at"]), float(k["k_dn"]), float(k["k_dt"]), float(k["lbar"]),
             float(k["l2bar"]), problem.beta, problem.max_power, problem.max_heave,
             problem.penalty_power, problem.penalty_heave, problem.smoothing_pitch,
-            problem.smoothing_heave)
+            problem.smoothing_heave, problem.max_pitch, problem.max_pitch_rate,
+            problem.max_pitch_acceleration, problem.penalty_pitch)

@@ -54,6 +54,7 @@ def symbolic_stages(problem: FlappingProblem, n_steps: int) -> dict[str, ca.SX]:
     thrust = fn * s - ft * co
     power = -(fn * co + ft * s) * hd - mo * td
     return {"z": z, "thrust": thrust, "power": power, "heave_position": hp,
+            "pitch_angle": th, "pitch_rate": td,
             "pitch_acceleration": tdd, "heave_acceleration": hdd}
 
 
@@ -114,6 +115,10 @@ def build_objective(problem: FlappingProblem, n_steps: int) -> tuple[ca.Function
     stage = (-(1 - p.beta) * thrust + p.beta * power
              + 0.5 * p.penalty_power * ca.fmax(power - p.max_power, 0) ** 2
              + 0.5 * p.penalty_heave * ca.fmax(ca.fabs(hp) - p.max_heave, 0) ** 2)
+    for name, limit in p.pitch_limits.items():
+        if np.isfinite(limit):
+            stage = stage + 0.5 * p.penalty_pitch * (
+                ca.fmax(ca.fabs(e[name]) - limit, 0) / limit) ** 2
     objective = ca.sum1(stage) / n + smoothness_expr(p, e["pitch_acceleration"],
                                                      e["heave_acceleration"])
     f = ca.Function("J", [z], [objective])

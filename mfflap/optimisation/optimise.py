@@ -168,7 +168,9 @@ def replace_problem(problem: FlappingProblem, **changes) -> FlappingProblem:
     """A copy of ``problem`` with some settings changed (validated again)."""
     kw = {k: getattr(problem, k) for k in ("beta", "max_power", "max_heave", "penalty_power",
                                            "penalty_heave", "smoothing_pitch",
-                                           "smoothing_heave", "scheme", "compiled")}
+                                           "smoothing_heave", "scheme", "compiled",
+                                           "max_pitch", "max_pitch_rate",
+                                           "max_pitch_acceleration", "penalty_pitch")}
     kw.update(changes)
     return FlappingProblem(problem.model, **kw)
 
@@ -181,15 +183,17 @@ def _ipopt_solver(problem: FlappingProblem, n: int, max_iterations: int, toleran
 
     The scaling, beta, P_max, h_max and the smoothing weights are NLP parameters, so one
     build (the expensive part: CasADi's exact Hessian graph) serves a whole beta sweep and
-    every multi-start.
+    every multi-start. With a pitch envelope the pitch angle and rate are constrained too
+    (their limits are bounds given at the solve).
     """
     import casadi as ca
 
     from mfflap.optimisation.casadi_objective import symbolic_stages
 
     m = problem.model
+    envelope = _has_state_envelope(problem)
     key = (n, problem.scheme, tuple(sorted(m.coefficients.items())), m.geometry,
-           m.fluid, m.stream, max_iterations, tolerance)
+           m.fluid, m.stream, max_iterations, tolerance, envelope)
     if key in _IPOPT_CACHE:
         return _IPOPT_CACHE[key]
     e = symbolic_stages(problem, n)
@@ -197,14 +201,15 @@ def _ipopt_solver(problem: FlappingProblem, n: int, max_iterations: int, toleran
     par = ca.SX.sym("p", 2 * n + 6)
     scale, beta, eps_p, eps_h = par[: 2 * n + 1], par[2 * n + 1], par[2 * n + 4], par[2 * n + 5]
     sub = ca.Function("sub", [e["z"]], [e["thrust"], e["power"], e["heave_position"],
-                                        e["pitch_acceleration"], e["heave_acceleration"]])
-    thrust, power, hp, tdd, hdd = sub(xs * scale)
+                                        e["pitch_acceleration"], e["heave_acceleration"],
+                                        e["pitch_angle"], e["pitch_rate"]])
+    thrust, power, hp, tdd, hdd, th, td = sub(xs * scale)
     smooth = 0
     for eps, acc in ((eps_p, tdd), (eps_h, hdd)):
         d = acc[1:] - acc[:-1]
         smooth = smooth + 0.5 * eps * (ca.sumsqr(d) + (acc[0] + acc[n - 1]) ** 2)
     f = ca.sum1(-(1 - beta) * thrust + beta * power) / n + smooth
-    g = ca.vertcat(power - par[2 * n + 2], hp)
+    g = ca.vertcat(power - par[2 * n + 2], hp, *((th, td) if envelope else ()))
     solver = ca.nlpsol("mfflap_ipopt", "ipopt", {"x": xs, "f": f, "g": g, "p": par},
                        {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
                         "ipopt.max_iter": max_iterations, "ipopt.tol": tolerance})
@@ -212,10 +217,17 @@ def _ipopt_solver(problem: FlappingProblem, n: int, max_iterations: int, toleran
     return solver
 
 
+def _has_state_envelope(problem: FlappingProblem) -> bool:
+    """Whether the pitch angle or rate is limited (IPOPT then constrains both)."""
+    return bool(np.isfinite(problem.max_pitch) or np.isfinite(problem.max_pitch_rate))
+
+
 def optimise_ipopt(problem: FlappingProblem, start: DiscreteMotion, *, min_period: float,
                    max_period: float, max_iterations: int = 1000, tolerance: float = 1e-8,
                    start_label: str = "start") -> OptimisationResult:
-    """Hard constraints P_in,j <= P_max and |h_j| <= h_max, solved by IPOPT (CasADi).
+    """Hard constraints P_in,j <= P_max and |h_j| <= h_max, and the pitch envelope's
+    |theta_j| <= theta_max, |thetadot_j| <= thetadot_max, |thetaddot_j| <= thetaddot_max
+    where it is given, solved by IPOPT (CasADi).
 
     The objective is the same beta-weighted mean with the smoothness term and no penalties.
     """
@@ -228,17 +240,26 @@ def optimise_ipopt(problem: FlappingProblem, start: DiscreteMotion, *, min_perio
     solver = _ipopt_solver(problem, n, max_iterations, tolerance)
     par = np.concatenate([scale, [problem.beta, problem.max_power, problem.max_heave,
                                   problem.smoothing_pitch, problem.smoothing_heave]])
-    lbg = np.concatenate([np.full(n, -np.inf), np.full(n, -problem.max_heave)])
-    ubg = np.concatenate([np.zeros(n), np.full(n, problem.max_heave)])
+    bounds_g = [(np.full(n, -np.inf), np.zeros(n)),
+                (np.full(n, -problem.max_heave), np.full(n, problem.max_heave))]
+    if _has_state_envelope(problem):
+        bounds_g += [(np.full(n, -limit), np.full(n, limit))
+                     for limit in (problem.max_pitch, problem.max_pitch_rate)]
+    lbg = np.concatenate([b[0] for b in bounds_g])
+    ubg = np.concatenate([b[1] for b in bounds_g])
     lbx = np.full(2 * n + 1, -np.inf)
     ubx = np.full(2 * n + 1, np.inf)
     lbx[-1], ubx[-1] = lo / scale[-1], hi / scale[-1]
+    # the pitch accelerations are the controls: their limit is a bound
+    lbx[:n] = -problem.max_pitch_acceleration / scale[:n]
+    ubx[:n] = problem.max_pitch_acceleration / scale[:n]
+    x0 = np.clip(_pack(start) / scale, lbx, ubx)
     with interrupts_kept():  # a Ctrl-C stops the solve and the caller, not only IPOPT
-        sol = solver(x0=_pack(start) / scale, p=par, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
+        sol = solver(x0=x0, p=par, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
     stats = solver.stats()
     motion = _unpack(np.asarray(sol["x"]).ravel() * scale, n)
     summary, peak, flags = assess(problem, motion)
-    hard = replace_problem(problem, penalty_power=0.0, penalty_heave=0.0)
+    hard = replace_problem(problem, penalty_power=0.0, penalty_heave=0.0, penalty_pitch=0.0)
     return OptimisationResult(problem.beta, motion, "ipopt-constrained", start_label,
                               bool(stats.get("success", False)),
                               str(stats.get("return_status", "")),

@@ -2,7 +2,9 @@
 
 J = (1/N) sum_j L_j + J_s with
 L_j = -(1 - beta) F_thrust,j + beta P_in,j + 1/2 sigma_P max(0, P_in,j - P_max)^2
-      + 1/2 sigma_h max(0, |h_j| - h_max)^2,
+      + 1/2 sigma_h max(0, |h_j| - h_max)^2
+      + 1/2 sigma_theta sum_x (max(0, |x_j| - x_max) / x_max)^2 over x = theta, thetadot,
+        thetaddot (the pitch envelope; mfflap's addition, off unless a limit is given),
 J_s = 1/2 eps_theta [sum_{j<N} (acc_{j+1} - acc_j)^2 + (acc_1 + acc_N)^2] + the same for heave.
 
 Gradient (discrete adjoint, O(N)): a backward sweep of the semi-implicit Euler steps with
@@ -72,6 +74,11 @@ class FlappingProblem:
     penalty_heave : sigma_h >= 0, N/m^2 (in units of J)
     smoothing_pitch, smoothing_heave : eps_theta, eps_h >= 0
     scheme : ``"paper"`` or ``"midpoint"``
+    max_pitch : rad; max_pitch_rate : rad/s; max_pitch_acceleration : rad/s^2
+        The pitch envelope, > 0 (inf: no limit): e.g. what the identification data reach
+        (:mod:`mfflap.identification.coverage`), so that the optimum stays where the
+        coefficients rest on CFD. The rate is the one the forces see (the scheme's).
+    penalty_pitch : sigma_theta >= 0, N (in units of J) per squared relative excess
     compiled
         Evaluate single real motions with the compiled kernel
         (:mod:`mfflap.optimisation.adjoint_kernel`) when the model allows it; the array code
@@ -81,7 +88,9 @@ class FlappingProblem:
     def __init__(self, model: MorisonModel, beta: float = 0.0, max_power: float = 50.0,
                  max_heave: float = 0.5, penalty_power: float = 10.0,
                  penalty_heave: float = 1.0e4, smoothing_pitch: float = 1e-6,
-                 smoothing_heave: float = 1e-4, scheme: str = "paper", compiled: bool = True):
+                 smoothing_heave: float = 1e-4, scheme: str = "paper", compiled: bool = True,
+                 max_pitch: float = np.inf, max_pitch_rate: float = np.inf,
+                 max_pitch_acceleration: float = np.inf, penalty_pitch: float = 1.0e4):
         checks = [
             ("beta", beta, 0 <= beta <= 1, "[0, 1]"),
             ("max_power", max_power, max_power > 0, "(0, inf) W"),
@@ -91,9 +100,16 @@ class FlappingProblem:
             ("smoothing_pitch", smoothing_pitch, smoothing_pitch >= 0, "[0, inf)"),
             ("smoothing_heave", smoothing_heave, smoothing_heave >= 0, "[0, inf)"),
         ]
+        checks.append(("penalty_pitch", penalty_pitch, penalty_pitch >= 0, "[0, inf)"))
         for name, value, ok, allowed in checks:
             if not (ok and np.isfinite(value)):
                 raise ConfigError(f"value {value!r} is not allowed; allowed: {allowed}",
+                                  key=f"optimisation.{name}")
+        for name, value, unit in (("max_pitch", max_pitch, "rad"),
+                                  ("max_pitch_rate", max_pitch_rate, "rad/s"),
+                                  ("max_pitch_acceleration", max_pitch_acceleration, "rad/s^2")):
+            if not value > 0:  # NaN too; inf is no limit
+                raise ConfigError(f"value {value!r} is not allowed; allowed: (0, inf] {unit}",
                                   key=f"optimisation.{name}")
         if scheme not in SCHEMES:
             raise ConfigError(f"value {scheme!r}; allowed: {SCHEMES}", key="optimisation.scheme")
@@ -112,6 +128,10 @@ class FlappingProblem:
         self.smoothing_heave = float(smoothing_heave)
         self.scheme = scheme
         self.compiled = bool(compiled)
+        self.max_pitch = float(max_pitch)
+        self.max_pitch_rate = float(max_pitch_rate)
+        self.max_pitch_acceleration = float(max_pitch_acceleration)
+        self.penalty_pitch = float(penalty_pitch)
         self._kernel_args: tuple | bool | None = False  # False: not looked up yet
 
     def _kernel(self, motion: DiscreteMotion) -> tuple | None:
@@ -136,7 +156,24 @@ class FlappingProblem:
         excess_p = _positive_part(power - self.max_power)
         excess_h = _positive_part(_abs(state.heave_position) - self.max_heave)
         return (-(1 - self.beta) * thrust + self.beta * power
-                + 0.5 * self.penalty_power * excess_p**2 + 0.5 * self.penalty_heave * excess_h**2)
+                + 0.5 * self.penalty_power * excess_p**2 + 0.5 * self.penalty_heave * excess_h**2
+                + self.pitch_envelope_cost(state))
+
+    @property
+    def pitch_limits(self) -> dict[str, float]:
+        """The pitch envelope: state name -> limit (inf: none)."""
+        return {"pitch_angle": self.max_pitch, "pitch_rate": self.max_pitch_rate,
+                "pitch_acceleration": self.max_pitch_acceleration}
+
+    def pitch_envelope_cost(self, state):
+        """1/2 sigma_theta sum over the limited pitch states of the squared relative excess,
+        shape (..., N). Complex-step safe."""
+        out = 0.0
+        for name, limit in self.pitch_limits.items():
+            if np.isfinite(limit):
+                excess = _positive_part(_abs(getattr(state, name)) - limit) / limit
+                out = out + 0.5 * self.penalty_pitch * excess**2
+        return out
 
     def smoothness(self, motion: DiscreteMotion):
         """J_s with the wrap term (acc_1 + acc_N), shape (...)."""
@@ -217,6 +254,11 @@ class FlappingProblem:
             out[z] = dl_dt * t_z + dl_dp * p_z
         excess_h = np.maximum(np.abs(hp) - self.max_heave, 0)
         out["hp"] = self.penalty_heave * excess_h * np.sign(hp)
+        for z, x, limit in (("th", th, self.max_pitch), ("td", td, self.max_pitch_rate),
+                            ("tdd", tdd, self.max_pitch_acceleration)):
+            if np.isfinite(limit):
+                excess = np.maximum(np.abs(x) - limit, 0)
+                out[z] = out[z] + self.penalty_pitch * excess / limit**2 * np.sign(x)
         return out
 
     def value_and_gradient(self, motion: DiscreteMotion) -> tuple[float, np.ndarray]:

@@ -34,9 +34,14 @@ class RefinedSinusoid:
 
 def refine_best_sinusoid(model, sweep: SweepResult, n_steps: int, max_power: float,
                          max_heave: float, min_period: float, max_period: float,
-                         scheme: str = "paper") -> RefinedSinusoid:
-    """Maximise mean thrust over (f, h, theta, phi) subject to max_j P_j <= P_max and the
-    heave and period bounds (SLSQP, from the best feasible grid point)."""
+                         scheme: str = "paper",
+                         pitch_envelope: dict[str, float] | None = None) -> RefinedSinusoid:
+    """Maximise mean thrust over (f, h, theta, phi) subject to max_j P_j <= P_max, the
+    heave and period bounds and the pitch envelope (``max_pitch`` rad, ``max_pitch_rate``
+    rad/s, ``max_pitch_acceleration`` rad/s^2 on the sinusoid's amplitude, peak rate and
+    peak acceleration; inf or left out: none) (SLSQP, from the best feasible grid point)."""
+    env = {"max_pitch": np.inf, "max_pitch_rate": np.inf, "max_pitch_acceleration": np.inf,
+           **(pitch_envelope or {})}
     i = sweep.best_feasible()
     x0 = np.array([sweep.frequency[i], sweep.heave_amplitude[i], sweep.pitch_amplitude[i],
                    sweep.phase[i]])
@@ -51,13 +56,23 @@ def refine_best_sinusoid(model, sweep: SweepResult, n_steps: int, max_power: flo
     bounds = [(1 / max_period / scale[0], 1 / min_period / scale[0]),
               (0.0, max_heave / scale[1]), (0.0, np.pi / 2 / scale[2]),
               (-np.pi / scale[3], 2 * np.pi / scale[3])]
+    def pitch_margins(xs):  # >= 0 within the envelope (relative to each finite limit)
+        f, _, th, _ = xs * scale
+        w = 2 * np.pi * f
+        peaks = (abs(th), w * abs(th), w**2 * abs(th))
+        limits = (env["max_pitch"], env["max_pitch_rate"], env["max_pitch_acceleration"])
+        return np.array([1.0 - p / lim for p, lim in zip(peaks, limits, strict=True)
+                         if np.isfinite(lim)] or [1.0])
+
     res = minimize(lambda xs: -evaluate(xs)[0], x0 / scale, method="SLSQP", bounds=bounds,
                    constraints=[{"type": "ineq",
-                                 "fun": lambda xs: (max_power - evaluate(xs)[1]) / max_power}],
+                                 "fun": lambda xs: (max_power - evaluate(xs)[1]) / max_power},
+                                {"type": "ineq", "fun": pitch_margins}],
                    options={"maxiter": 200, "ftol": 1e-10})
     thrust, peak = evaluate(res.x)
     f, h, th, ph = res.x * scale
-    if peak > max_power * (1 + 1e-6) or thrust < sweep.mean_thrust[i]:
+    if (peak > max_power * (1 + 1e-6) or thrust < sweep.mean_thrust[i]
+            or pitch_margins(res.x).min() < -1e-6):
         f, h, th, ph = x0  # keep the grid point when the refinement did not improve on it
         thrust, peak = float(sweep.mean_thrust[i]), float(sweep.max_power[i])
     return RefinedSinusoid(float(f), float(h), float(th), float(ph), thrust, peak,

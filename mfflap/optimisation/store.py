@@ -17,7 +17,9 @@ def problem_settings(problem: FlappingProblem) -> dict[str, float | str]:
     """The settings of a problem (for attributes)."""
     return {k: getattr(problem, k) for k in ("beta", "max_power", "max_heave", "penalty_power",
                                              "penalty_heave", "smoothing_pitch",
-                                             "smoothing_heave", "scheme")}
+                                             "smoothing_heave", "scheme", "max_pitch",
+                                             "max_pitch_rate", "max_pitch_acceleration",
+                                             "penalty_pitch")}
 
 
 def write_result(rf: ResultsFile, group: str, result: OptimisationResult,

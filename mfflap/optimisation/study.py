@@ -4,7 +4,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -31,7 +31,7 @@ def problem_for(config: CaseConfig, beta: float, model=None,
     o = settings or config.optimisation
     return FlappingProblem(model or config.morison_model(), beta, o.max_power, o.max_heave,
                            o.penalty_power, o.penalty_heave, o.smoothing_pitch,
-                           o.smoothing_heave, o.scheme)
+                           o.smoothing_heave, o.scheme, **o.pitch_envelope())
 
 
 def default_sweep(config: CaseConfig, model=None, progress: Progress | None = None
@@ -50,9 +50,27 @@ def default_sweep(config: CaseConfig, model=None, progress: Progress | None = No
         if progress is not None and (done == total or done % 20000 == 0):
             progress(f"sinusoid sweep {done}/{total}")
 
-    return sinusoid_sweep(model or config.morison_model(), freqs, heaves, pitches, phases,
-                          n_steps=o.n_steps, max_power=o.max_power, scheme=o.scheme,
-                          progress=report)
+    sweep = sinusoid_sweep(model or config.morison_model(), freqs, heaves, pitches, phases,
+                           n_steps=o.n_steps, max_power=o.max_power, scheme=o.scheme,
+                           progress=report)
+    inside = within_pitch_envelope(sweep.frequency, sweep.pitch_amplitude,
+                                   **_limits(o.pitch_envelope()))
+    return sweep if inside.all() else replace(sweep, feasible=sweep.feasible & inside)
+
+
+def _limits(envelope: dict[str, float]) -> dict[str, float]:
+    return {k: v for k, v in envelope.items() if k != "penalty_pitch"}
+
+
+def within_pitch_envelope(frequency, pitch_amplitude, max_pitch: float = np.inf,
+                          max_pitch_rate: float = np.inf,
+                          max_pitch_acceleration: float = np.inf) -> np.ndarray:
+    """Whether sinusoids theta = theta_a sin(2 pi f t) keep within the pitch envelope: their
+    amplitude theta_a, peak rate w theta_a and peak acceleration w^2 theta_a (w = 2 pi f)
+    at most the limits (rad, rad/s, rad/s^2; inf: none)."""
+    w = 2 * np.pi * np.asarray(frequency, dtype=float)
+    a = np.asarray(pitch_amplitude, dtype=float)
+    return (a <= max_pitch) & (w * a <= max_pitch_rate) & (w**2 * a <= max_pitch_acceleration)
 
 
 def sinusoid_motion(sweep: SweepResult, index: int, n_steps: int) -> DiscreteMotion:
@@ -199,7 +217,8 @@ def beta_study(config: CaseConfig, betas: Sequence[float] | None = None, n_start
     best = sweep.best_feasible()
     starts = starting_points(sweep, o.n_steps, n_starts)
     refined = refine_best_sinusoid(model, sweep, o.n_steps, o.max_power, o.max_heave,
-                                   o.min_period, o.max_period, o.scheme)
+                                   o.min_period, o.max_period, o.scheme,
+                                   pitch_envelope=_limits(o.pitch_envelope()))
     if progress is not None:
         progress(f"refined best feasible sinusoid: f = {refined.frequency:.4g} Hz, h = "
                  f"{refined.heave_amplitude:.4g} m, mean thrust {refined.mean_thrust:.4g} N "
