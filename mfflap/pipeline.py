@@ -129,8 +129,9 @@ def coefficient_sensitivity(config: CaseConfig, identification: dict, sweep,
 
 def within_data_config(config: CaseConfig, cases: list) -> tuple[CaseConfig, dict]:
     """The case with its optimisation limited to what ``cases`` reach: the pitch amplitude,
-    peak pitch rate and acceleration of the pitch envelope, the shortest period and the
-    heave limit (each the tighter of the case's own and the data's); and those settings."""
+    peak pitch rate and acceleration of the pitch envelope, the period bounds and the
+    heave limit (each the tighter of the case's own and the data's; the case's period
+    bounds where the data's frequencies lie outside them); and those settings."""
     from dataclasses import replace
 
     from mfflap.identification.coverage import CoverageReference
@@ -148,8 +149,11 @@ def within_data_config(config: CaseConfig, cases: list) -> tuple[CaseConfig, dic
                                                 ranges["peak |pitch acceleration|"][1]),
               "max_heave": min(o.max_heave, ranges["heave amplitude"][1])}
     if "frequency" in ranges:
-        limits["min_period"] = min(max(o.min_period, 1.0 / ranges["frequency"][1]),
-                                   0.5 * (o.min_period + o.max_period))
+        lo, hi = ranges["frequency"]
+        limits["min_period"] = max(o.min_period, 1.0 / hi)
+        limits["max_period"] = min(o.max_period, 1.0 / lo)
+        if limits["min_period"] >= limits["max_period"]:  # the data's and the case's apart
+            limits["min_period"], limits["max_period"] = o.min_period, o.max_period
     return replace(config, optimisation=replace(o, **limits)), limits
 
 
@@ -210,7 +214,7 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
                 outcome: RunOutcome) -> None:
     """The stages of :func:`run_study`, filling ``outcome``."""
     from mfflap.backtest.workflow import backtest_all
-    from mfflap.campaign.records import fixture_dir
+    from mfflap.campaign.records import backtest_fixture_dirs, fixture_dir
     from mfflap.identification.error_growth import scaling_advice
     from mfflap.identification.workflow import identify_strategies, load_cases
     from mfflap.optimisation.study import (
@@ -278,7 +282,7 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
                                                               motions)) or {}
             for label, cov in outcome.coverage.items():
                 progress(f"{label}: {cov.describe()}")
-        folders = list(options.backtest_fixtures) or [fixture_dir("backtest")]
+        folders = list(options.backtest_fixtures) or backtest_fixture_dirs()
         _stage(outcome, "back-test", progress, lambda: backtest_all(
             config, motions, model, fixture_folders=folders, live=options.live,
             work_dir=options.work_dir, mesh=options.mesh, progress=progress,

@@ -25,12 +25,13 @@ class SweepResult:
     efficiency: np.ndarray  # 1
     max_power: np.ndarray  # W, at the N samples
     strouhal_number: np.ndarray  # 1
-    feasible: np.ndarray  # bool: max_power <= P_max
+    feasible: np.ndarray  # bool: max_power <= P_max (and within the pitch envelope)
 
     def best_feasible(self) -> int:
         """Index of the feasible motion with the largest mean thrust."""
         if not self.feasible.any():
-            raise ConfigError("no sinusoid of the sweep satisfies the power limit")
+            raise ConfigError("no sinusoid of the sweep satisfies the power limit (and the "
+                              "pitch envelope, where one is given)")
         thrust = np.where(self.feasible, self.mean_thrust, -np.inf)
         return int(np.argmax(thrust))
 

@@ -492,10 +492,12 @@ def test_the_gain_in_cfd_is_not_a_ratio_to_a_drag():
     assert no_gain_in_cfd_reason({}) == "there is no β = 0 motion (not optimised)"
 
 
-def test_the_main_job_kept_within_the_identification_data(tmp_path):
-    """`mfflap run --within-data`: the pitch envelope, shortest period and heave limit are
+@pytest.mark.parametrize("coefficients", ["case", "identified:uniform"])
+def test_the_main_job_kept_within_the_identification_data(tmp_path, coefficients):
+    """`mfflap run --within-data`: the pitch envelope, period bounds and heave limit are
     what the identification cases reach, the optimised motions keep to them (within the
-    coverage's tolerance), and the case file stored with the results says so."""
+    coverage's tolerance), and the case file stored with the results says so; with the
+    case file's coefficients and with those identified from the CFD."""
     import json
 
     from mfflap.cli.main import cli
@@ -503,8 +505,10 @@ def test_the_main_job_kept_within_the_identification_data(tmp_path):
     from mfflap.results import ResultsFile
 
     out = tmp_path / "run"
-    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--starts", "1",
-                                   "--no-ipopt", "--no-gain-table", "--within-data", "--json"])
+    # three starts, as the main job's default: its motions' back-tests ship as fixtures
+    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--no-ipopt",
+                                   "--no-gain-table", "--within-data", "--coefficients",
+                                   coefficients, "--json"])
     assert res.exit_code == 0, res.output
     summary = json.loads(res.output[res.output.index("{\n"):])
     limits = summary["within_data_limits"]
@@ -515,6 +519,7 @@ def test_the_main_job_kept_within_the_identification_data(tmp_path):
     assert limits["max_pitch_acceleration"] == pytest.approx(
         ranges["peak |pitch acceleration|"][1])
     assert limits["min_period"] == pytest.approx(1 / ranges["frequency"][1])
+    assert limits["max_period"] == pytest.approx(1 / ranges["frequency"][0])
     assert limits["max_heave"] == pytest.approx(min(0.5, ranges["heave amplitude"][1]))
     assert "optimisation kept within the identification data: max_pitch_deg = " in res.output
     for label, c in cov.items():  # the variables the limits hold stay within the data
@@ -522,10 +527,19 @@ def test_the_main_job_kept_within_the_identification_data(tmp_path):
                 "peak |pitch acceleration|"}
         assert not held & set(c["outside"]), (label, c["said"])
     assert cov["best sinusoid"]["extrapolated"] is False
+    # every motion back-tested from the shipped fixtures of these motions (real OpenFOAM)
+    assert {k: b["status"] for k, b in summary["backtest"].items()} == dict.fromkeys(
+        cov, "back-tested")
+    from mfflap.campaign.records import fixture_dir
+
+    shipped = {f"fixture {p.name}" for p in fixture_dir("backtest_within_data").glob("*.h5")}
+    sources = {b["source"] for b in summary["backtest"].values()}
+    assert len(sources) == 4 and sources <= shipped
+    assert "the 4 held-out motion(s)" in summary["gap_transfer"]["verdict"]
     with ResultsFile(out / "results.h5") as rf:
         assert f"max_pitch_rate = {limits['max_pitch_rate']!r}" in rf.config_toml
     # the limits are the data's: the same reference gives them
-    from mfflap.campaign.records import fixture_dir, read_records
+    from mfflap.campaign.records import read_records
     from mfflap.config import load_case
     from mfflap.identification.data import prepare_cases
 

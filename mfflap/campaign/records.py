@@ -218,6 +218,16 @@ def fixture_dir(name: str = "table1_coarse") -> Path:
     return Path(__file__).resolve().parent.parent / "data" / "fixtures" / name
 
 
+#: The shipped back-test fixture folders: the optimised motions of the shipped case, and
+#: those of ``mfflap run --within-data`` (each record named by its motion's key).
+BACKTEST_FIXTURES = ("backtest", "backtest_within_data")
+
+
+def backtest_fixture_dirs() -> list[Path]:
+    """The shipped back-test fixture folders (:data:`BACKTEST_FIXTURES`)."""
+    return [fixture_dir(name) for name in BACKTEST_FIXTURES]
+
+
 def compact_folder(folder: str | Path) -> list[Path]:
     """Rewrite every full-precision record of ``folder`` in single precision (fixtures)."""
     done = []

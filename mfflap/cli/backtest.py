@@ -32,7 +32,7 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
     status is 1 when a motion could not be back-tested (each is listed with why).
     """
     from mfflap.backtest.workflow import backtest_all
-    from mfflap.campaign.records import fixture_dir
+    from mfflap.campaign.records import backtest_fixture_dirs
     from mfflap.cfd.openfoam.setups import mesh_and_solver
     from mfflap.config import loads_case
     from mfflap.optimisation.store import read_result, read_sweep
@@ -53,7 +53,7 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
             motions[f"β = {r.beta:g}"] = r.motion
     n = next(iter(motions.values())).n_steps
     motions = {"best sinusoid": sinusoid_motion(sweep, best, n), **motions}
-    folders = list(fixture_folders) or [fixture_dir("backtest")]
+    folders = list(fixture_folders) or backtest_fixture_dirs()
     outcomes: dict = {}
     interrupted = None
     try:
