@@ -127,7 +127,8 @@ def coefficient_sensitivity(config: CaseConfig, identification: dict, sweep,
     return out
 
 
-def within_data_config(config: CaseConfig, cases: list) -> tuple[CaseConfig, dict]:
+def within_data_config(config: CaseConfig, cases: list, reference=None
+                       ) -> tuple[CaseConfig, dict]:
     """The case with its optimisation limited to what ``cases`` reach: the pitch amplitude,
     peak pitch rate and acceleration of the pitch envelope, the period bounds and the
     heave limit (each the tighter of the case's own and the data's; the case's period
@@ -136,8 +137,9 @@ def within_data_config(config: CaseConfig, cases: list) -> tuple[CaseConfig, dic
 
     from mfflap.identification.coverage import CoverageReference
 
-    ranges = CoverageReference.from_cases(cases, config.morison_model(),
-                                          config.flow.velocity).ranges
+    reference = reference or CoverageReference.from_cases(cases, config.morison_model(),
+                                                          config.flow.velocity)
+    ranges = reference.ranges
     o = config.optimisation
 
     def tighter(current, data):
@@ -157,15 +159,17 @@ def within_data_config(config: CaseConfig, cases: list) -> tuple[CaseConfig, dic
     return replace(config, optimisation=replace(o, **limits)), limits
 
 
-def motion_coverage(config: CaseConfig, cases: list, motions: dict) -> dict:
+def motion_coverage(config: CaseConfig, cases: list, motions: dict, reference=None) -> dict:
     """Where each motion, as CFD imposes it (the periodic spline through its cycle), lies
-    against the identification cases (:mod:`mfflap.identification.coverage`)."""
+    against the identification cases (:mod:`mfflap.identification.coverage`; ``reference``
+    their :class:`~mfflap.identification.coverage.CoverageReference`, built if not given)."""
     import numpy as np
 
     from mfflap.identification.coverage import CoverageReference
     from mfflap.kinematics.convert import to_spline
 
-    reference = CoverageReference.from_cases(cases, config.morison_model(), config.flow.velocity)
+    reference = reference or CoverageReference.from_cases(cases, config.morison_model(),
+                                                          config.flow.velocity)
     out = {}
     for label, motion in motions.items():
         spline = to_spline(motion)
@@ -248,15 +252,25 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
                                     f"{strategy!r}; used the case's coefficients")
     outcome.model = model
     outcome.config = config
+    reference = None  # the identification data's coverage, built once when asked for
+    if outcome.cases:
+        from mfflap.identification.coverage import CoverageReference
+
+        reference = _stage(outcome, "identification coverage", progress,
+                           lambda: CoverageReference.from_cases(
+                               outcome.cases, config.morison_model(), config.flow.velocity))
     if options.within_data:
-        if outcome.cases:
-            config, outcome.within_data_limits = within_data_config(config, outcome.cases)
+        if reference is not None:
+            config, outcome.within_data_limits = within_data_config(config, outcome.cases,
+                                                                    reference)
             outcome.config = config
             progress("optimisation kept within the identification data: " + ", ".join(
                 f"{k} = {v:.4g}" for k, v in outcome.within_data_limits.items()))
         else:
+            why = ("the identification data's coverage failed (above)" if outcome.cases
+                   else "there are no identification cases")
             outcome.problems.append("optimisation: not kept within the identification data "
-                                    "(asked): there are no identification cases")
+                                    f"(asked): {why}")
 
     def optimisation():
         try:
@@ -276,10 +290,10 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
         n = config.optimisation.n_steps
         motions = {"best sinusoid": sinusoid_motion(study.sweep, study.best_sinusoid, n)}
         motions.update({f"β = {b:g}": r.motion for b, r in study.sqp.items()})
-        if outcome.cases:
-            outcome.coverage = _stage(outcome, "identification coverage", progress,
-                                      lambda: motion_coverage(config, outcome.cases,
-                                                              motions)) or {}
+        if reference is not None:
+            outcome.coverage = _stage(outcome, "motions against the identification data",
+                                      progress, lambda: motion_coverage(
+                                          config, outcome.cases, motions, reference)) or {}
             for label, cov in outcome.coverage.items():
                 progress(f"{label}: {cov.describe()}")
         folders = list(options.backtest_fixtures) or backtest_fixture_dirs()

@@ -548,3 +548,20 @@ def test_the_main_job_kept_within_the_identification_data(tmp_path, coefficients
                              plate=case.plate, fluid=case.fluid, stream=case.flow)
     ref = CoverageReference.from_cases(cases, case.morison_model(), case.flow.velocity)
     assert ref.ranges["peak |pitch rate|"][1] == pytest.approx(limits["max_pitch_rate"])
+
+
+def test_within_data_without_identification_cases_says_so_and_optimises_unlimited(tmp_path):
+    from mfflap.config import load_case
+    from mfflap.pipeline import RunOptions, run_study
+
+    empty = tmp_path / "no_records"
+    empty.mkdir()
+    options = RunOptions(fixtures=(empty,), n_starts=1, with_ipopt=False, sensitivity=False,
+                         within_data=True, work_dir=tmp_path / "cases")
+    outcome = run_study(load_case(CASE), options, progress=lambda m: None)
+    assert any(p.startswith("identification:") for p in outcome.problems)
+    assert ("optimisation: not kept within the identification data (asked): there are no "
+            "identification cases") in outcome.problems
+    assert outcome.within_data_limits == {} and outcome.coverage == {}
+    assert outcome.study is not None  # the optimisation ran, unlimited
+    assert outcome.config.optimisation.max_pitch_rate is None
