@@ -92,8 +92,7 @@ def _transfer_figure(check: TransferCheck):
 def add_transfer_section(rep: Report, check: TransferCheck) -> None:
     """Whether the effect predicts runs outside the diagnosed cases better."""
     s = rep.section("Does it carry over to runs outside the cases?")
-    s.blocks.append(text_html(check.verdict[0].upper() + check.verdict[1:] + ".",
-                              warn=not check.carries_over))
+    s.blocks.append(text_html(f"Verdict: {check.verdict}.", warn=not check.carries_over))
     s.blocks.append(text_html(
         "The base terms alone, with each candidate and with the checked effect, are fitted on "
         "every diagnosed case and compared with CFD runs none of the fits saw (the back-tested "
