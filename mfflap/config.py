@@ -179,15 +179,14 @@ class OptimisationSettings:
             )
 
     def pitch_envelope(self) -> dict[str, float]:
-        """The FlappingProblem keywords of the pitch envelope (rad, rad/s, rad/s^2; inf
-        where no limit is given) and its penalty weight."""
+        """The FlappingProblem keywords of the pitch envelope's limits (rad, rad/s,
+        rad/s^2; inf where no limit is given)."""
         return {"max_pitch": (np.inf if self.max_pitch_deg is None
                               else float(np.radians(self.max_pitch_deg))),
                 "max_pitch_rate": (np.inf if self.max_pitch_rate is None
                                    else float(self.max_pitch_rate)),
                 "max_pitch_acceleration": (np.inf if self.max_pitch_acceleration is None
-                                           else float(self.max_pitch_acceleration)),
-                "penalty_pitch": self.penalty_pitch}
+                                           else float(self.max_pitch_acceleration))}
 
 
 #: the decimals of each grid axis that a campaign case's id keeps

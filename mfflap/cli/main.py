@@ -128,7 +128,8 @@ def gradcheck(case_file: Path, n_steps: int, as_json: bool, figure: Path | None)
         for beta in betas:
             problem = FlappingProblem(case.morison_model(), beta, o.max_power, o.max_heave,
                                       o.penalty_power, o.penalty_heave, o.smoothing_pitch,
-                                      o.smoothing_heave, o.scheme, **o.pitch_envelope())
+                                      o.smoothing_heave, o.scheme, **o.pitch_envelope(),
+                                      penalty_pitch=o.penalty_pitch)
             checks[beta] = check_gradient(problem, motion,
                                           progress=lambda done, total: bar.update())
     figure = figure or Path(f"{case_file.stem}.gradcheck.png")

@@ -99,8 +99,8 @@ class FlappingProblem:
             ("penalty_heave", penalty_heave, penalty_heave >= 0, "[0, inf)"),
             ("smoothing_pitch", smoothing_pitch, smoothing_pitch >= 0, "[0, inf)"),
             ("smoothing_heave", smoothing_heave, smoothing_heave >= 0, "[0, inf)"),
+            ("penalty_pitch", penalty_pitch, penalty_pitch >= 0, "[0, inf)"),
         ]
-        checks.append(("penalty_pitch", penalty_pitch, penalty_pitch >= 0, "[0, inf)"))
         for name, value, ok, allowed in checks:
             if not (ok and np.isfinite(value)):
                 raise ConfigError(f"value {value!r} is not allowed; allowed: {allowed}",

@@ -32,6 +32,19 @@ class RefinedSinusoid:
     message: str
 
 
+def sinusoid_pitch_margins(frequency, pitch_amplitude, max_pitch: float = np.inf,
+                           max_pitch_rate: float = np.inf,
+                           max_pitch_acceleration: float = np.inf) -> np.ndarray:
+    """1 - peak / limit of sinusoids theta = theta_a sin(2 pi f t) for their amplitude
+    |theta_a|, peak rate w |theta_a| and peak acceleration w^2 |theta_a| (w = 2 pi f), shape
+    (3, ...): >= 0 within the pitch envelope (rad, rad/s, rad/s^2; inf: no limit, margin 1).
+    """
+    w = 2 * np.pi * np.asarray(frequency, dtype=float)
+    a = np.abs(np.asarray(pitch_amplitude, dtype=float))
+    return np.stack([1.0 - peak / limit for peak, limit in (
+        (a, max_pitch), (w * a, max_pitch_rate), (w**2 * a, max_pitch_acceleration))])
+
+
 def refine_best_sinusoid(model, sweep: SweepResult, n_steps: int, max_power: float,
                          max_heave: float, min_period: float, max_period: float,
                          scheme: str = "paper",
@@ -40,8 +53,6 @@ def refine_best_sinusoid(model, sweep: SweepResult, n_steps: int, max_power: flo
     heave and period bounds and the pitch envelope (``max_pitch`` rad, ``max_pitch_rate``
     rad/s, ``max_pitch_acceleration`` rad/s^2 on the sinusoid's amplitude, peak rate and
     peak acceleration; inf or left out: none) (SLSQP, from the best feasible grid point)."""
-    env = {"max_pitch": np.inf, "max_pitch_rate": np.inf, "max_pitch_acceleration": np.inf,
-           **(pitch_envelope or {})}
     i = sweep.best_feasible()
     x0 = np.array([sweep.frequency[i], sweep.heave_amplitude[i], sweep.pitch_amplitude[i],
                    sweep.phase[i]])
@@ -56,13 +67,9 @@ def refine_best_sinusoid(model, sweep: SweepResult, n_steps: int, max_power: flo
     bounds = [(1 / max_period / scale[0], 1 / min_period / scale[0]),
               (0.0, max_heave / scale[1]), (0.0, np.pi / 2 / scale[2]),
               (-np.pi / scale[3], 2 * np.pi / scale[3])]
-    def pitch_margins(xs):  # >= 0 within the envelope (relative to each finite limit)
+    def pitch_margins(xs):  # >= 0 within the envelope
         f, _, th, _ = xs * scale
-        w = 2 * np.pi * f
-        peaks = (abs(th), w * abs(th), w**2 * abs(th))
-        limits = (env["max_pitch"], env["max_pitch_rate"], env["max_pitch_acceleration"])
-        return np.array([1.0 - p / lim for p, lim in zip(peaks, limits, strict=True)
-                         if np.isfinite(lim)] or [1.0])
+        return sinusoid_pitch_margins(f, th, **(pitch_envelope or {}))
 
     res = minimize(lambda xs: -evaluate(xs)[0], x0 / scale, method="SLSQP", bounds=bounds,
                    constraints=[{"type": "ineq",

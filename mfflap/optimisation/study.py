@@ -18,7 +18,11 @@ from mfflap.optimisation.optimise import (
     optimise_ipopt,
 )
 from mfflap.optimisation.problem import FlappingProblem
-from mfflap.optimisation.refine import RefinedSinusoid, refine_best_sinusoid
+from mfflap.optimisation.refine import (
+    RefinedSinusoid,
+    refine_best_sinusoid,
+    sinusoid_pitch_margins,
+)
 from mfflap.performance import no_thrust_gain_reason, thrust_gain
 from mfflap.sweep import SweepResult, pareto_front, sinusoid_sweep
 
@@ -31,7 +35,8 @@ def problem_for(config: CaseConfig, beta: float, model=None,
     o = settings or config.optimisation
     return FlappingProblem(model or config.morison_model(), beta, o.max_power, o.max_heave,
                            o.penalty_power, o.penalty_heave, o.smoothing_pitch,
-                           o.smoothing_heave, o.scheme, **o.pitch_envelope())
+                           o.smoothing_heave, o.scheme, **o.pitch_envelope(),
+                           penalty_pitch=o.penalty_pitch)
 
 
 def default_sweep(config: CaseConfig, model=None, progress: Progress | None = None
@@ -54,12 +59,8 @@ def default_sweep(config: CaseConfig, model=None, progress: Progress | None = No
                            n_steps=o.n_steps, max_power=o.max_power, scheme=o.scheme,
                            progress=report)
     inside = within_pitch_envelope(sweep.frequency, sweep.pitch_amplitude,
-                                   **_limits(o.pitch_envelope()))
+                                   **o.pitch_envelope())
     return sweep if inside.all() else replace(sweep, feasible=sweep.feasible & inside)
-
-
-def _limits(envelope: dict[str, float]) -> dict[str, float]:
-    return {k: v for k, v in envelope.items() if k != "penalty_pitch"}
 
 
 def within_pitch_envelope(frequency, pitch_amplitude, max_pitch: float = np.inf,
@@ -68,9 +69,8 @@ def within_pitch_envelope(frequency, pitch_amplitude, max_pitch: float = np.inf,
     """Whether sinusoids theta = theta_a sin(2 pi f t) keep within the pitch envelope: their
     amplitude theta_a, peak rate w theta_a and peak acceleration w^2 theta_a (w = 2 pi f)
     at most the limits (rad, rad/s, rad/s^2; inf: none)."""
-    w = 2 * np.pi * np.asarray(frequency, dtype=float)
-    a = np.asarray(pitch_amplitude, dtype=float)
-    return (a <= max_pitch) & (w * a <= max_pitch_rate) & (w**2 * a <= max_pitch_acceleration)
+    return np.all(sinusoid_pitch_margins(frequency, pitch_amplitude, max_pitch, max_pitch_rate,
+                                         max_pitch_acceleration) >= 0, axis=0)
 
 
 def sinusoid_motion(sweep: SweepResult, index: int, n_steps: int) -> DiscreteMotion:
@@ -218,7 +218,7 @@ def beta_study(config: CaseConfig, betas: Sequence[float] | None = None, n_start
     starts = starting_points(sweep, o.n_steps, n_starts)
     refined = refine_best_sinusoid(model, sweep, o.n_steps, o.max_power, o.max_heave,
                                    o.min_period, o.max_period, o.scheme,
-                                   pitch_envelope=_limits(o.pitch_envelope()))
+                                   pitch_envelope=o.pitch_envelope())
     if progress is not None:
         progress(f"refined best feasible sinusoid: f = {refined.frequency:.4g} Hz, h = "
                  f"{refined.heave_amplitude:.4g} m, mean thrust {refined.mean_thrust:.4g} N "
