@@ -563,3 +563,31 @@ def test_a_case_can_be_left_out_by_name_and_its_fit_is_the_refit_without_it(tmp_
     assert "Invalid value for --exclude: no case 'f2p000_h0p500_phi136p0' among the 43" in (
         res.output)
     assert "f2p000_h0p500_phi135p0" in res.output and not (tmp_path / "typo.h5").exists()
+
+
+def test_a_pooled_back_test_weighs_as_its_own_frequency_and_a_case_of_none_is_refused():
+    """A back-test record (a periodic motion: a period, no frequency) is a frequency of its
+    own, 1 / period; before, its frequency was NaN and it took the lowest frequency's share
+    (with only such records the fit divided by zero). A record of neither is refused."""
+    from mfflap.backtest.run import cfd_motion
+    from mfflap.cfd.openfoam.loads import imposed_state
+    from mfflap.identification.data import CaseData
+    from mfflap.kinematics.convert import harmonic_to_discrete
+
+    model = MorisonModel().with_coefficients(TRUE)
+    cases = []
+    for i, (f, h) in enumerate([(0.8, 0.2), (1.3, 0.1), (2.1, 0.05)]):
+        spline = cfd_motion(harmonic_to_discrete(f, h, np.deg2rad(30), np.deg2rad(90), 40))
+        t = np.linspace(0, 3 * spline.period, 900)
+        state = imposed_state(spline, t, 0.5 * spline.period)
+        cases.append(CfdRecord(f"backtest_{i}", state, model.loads(state),
+                               {"kind": "periodic_spline", "period": spline.period}))
+    prepared, excluded = prepare_cases(cases, discard_time=0.0)
+    assert not excluded
+    assert [c.frequency for c in prepared] == pytest.approx([0.8, 1.3, 2.1], rel=1e-6)
+    res = identify(prepared, MorisonModel(), "uniform", n_bootstrap=0)
+    assert res.coefficients == pytest.approx(TRUE, rel=1e-3)  # the model's own forces
+    bare = CaseData("no_frequency", {"kind": "external"}, prepared[0].state, prepared[0].cfd)
+    with pytest.raises(ConfigError, match="no_frequency: the record gives neither a frequency "
+                                          "nor a period"):
+        identify([*prepared, bare], MorisonModel(), "uniform", n_bootstrap=0)

@@ -54,8 +54,12 @@ class CaseData:
 
     @property
     def frequency(self) -> float:
-        """Carrier frequency, Hz."""
-        return float(self.parameters.get("frequency", np.nan))
+        """Carrier frequency, Hz: the record's ``frequency``, else one over its ``period``
+        (a back-test's periodic motion), else NaN."""
+        if "frequency" in self.parameters:
+            return float(self.parameters["frequency"])
+        period = float(self.parameters.get("period", np.nan))
+        return 1.0 / period if np.isfinite(period) and period > 0 else float("nan")
 
     @property
     def n_samples(self) -> int:

@@ -398,6 +398,11 @@ def identify(cases: Sequence[CaseData], model: ForceModel,
     if not fitted:
         raise ConfigError("every coefficient is fixed: nothing to identify",
                           key="identification.fixed")
+    no_frequency = [c.name for c in cases if not (np.isfinite(c.frequency) and c.frequency > 0)]
+    if no_frequency:  # it would share no frequency's weight, or take another's
+        raise ConfigError(f"case(s) {', '.join(no_frequency)}: the record gives neither a "
+                          "frequency nor a period, so it cannot be weighted by frequency",
+                          key="identification.strategy")
     weights = frequency_weights([c.frequency for c in cases], strategy)
 
     def fit_scaled(scaling: str) -> tuple[_Blocks, _System, np.ndarray]:

@@ -31,7 +31,14 @@ APPLICABLE_NRMSE = 0.10
 
 
 def _param(result: IdentificationResult, key: str) -> np.ndarray:
-    return np.array([float(p.get(key, np.nan)) for p in result.case_parameters])
+    """A motion parameter of every case (NaN where its record has none); a frequency from
+    the period where only that is given (a back-test's periodic motion pooled in)."""
+    def value(p: dict) -> float:
+        if key == "frequency" and key not in p and float(p.get("period", 0) or 0) > 0:
+            return 1.0 / float(p["period"])
+        return float(p.get(key, np.nan))
+
+    return np.array([value(p) for p in result.case_parameters])
 
 
 def heave_strouhal(result: IdentificationResult, velocity: float) -> np.ndarray:
@@ -44,13 +51,15 @@ def map_figure(result: IdentificationResult, signal: str = "normal_force",
     """Heat maps of a metric over (f, h_amp), one panel per phase.
 
     A value marked * is of a case whose CFD had numerical bursts bridged
-    (:mod:`mfflap.cfd.bursts`).
+    (:mod:`mfflap.cfd.bursts`). Cases without a heave amplitude and phase (back-tests of
+    optimised motions pooled in) are not on the grid and not drawn.
     """
     f, h, p = (_param(result, k) for k in ("frequency", "heave_amplitude", "phase_deg"))
     values = result.metrics[signal][metric]
     bridged = [any(BURST_NOTE in n for n in result.notes.get(name, ()))
                for name in result.case_names]
-    fs, hs, ps = np.unique(f), np.unique(h), np.unique(p)
+    grid_case = np.isfinite(f) & np.isfinite(h) & np.isfinite(p)  # not a pooled back-test
+    fs, hs, ps = (np.unique(a[grid_case]) for a in (f, h, p))
     fig, axes = plt.subplots(1, len(ps), figsize=(3.2 * len(ps) + 1, 3.2), squeeze=False)
     cmap = "viridis_r" if metric == "nrmse" else "viridis"
     vmin, vmax = (0, max(0.3, float(np.nanmax(values)))) if metric == "nrmse" else (0, 1)
@@ -123,7 +132,7 @@ def applicability_figure(result: IdentificationResult, velocity: float,
     a1.set_ylabel(f"NRMSE of {SIGNAL_LABELS[signal]}")
     a1.legend(fontsize=8)
     fig.colorbar(sc, ax=a1, label="log10 f [Hz]")
-    fs, hs = np.unique(f), np.unique(h)
+    fs, hs = (np.unique(a[np.isfinite(f) & np.isfinite(h)]) for a in (f, h))
     share = np.full((len(hs), len(fs)), np.nan)
     for r, hv in enumerate(hs):
         for c, fv in enumerate(fs):
@@ -167,7 +176,7 @@ def strategy_error_figure(results: Mapping[str, IdentificationResult],
     fig, ax = plt.subplots(figsize=(6, 3.4))
     for label, res in results.items():
         f = _param(res, "frequency")
-        fs = np.unique(f)
+        fs = np.unique(f[np.isfinite(f)])
         err = res.metrics[signal]["nrmse"]
         ax.plot(fs, [err[f == v].mean() for v in fs], "o-", label=label)
     ax.set_xscale("log")
