@@ -576,3 +576,93 @@ def test_within_data_without_identification_cases_says_so_and_optimises_unlimite
     assert outcome.within_data_limits == {} and outcome.coverage == {}
     assert outcome.study is not None  # the optimisation ran, unlimited
     assert outcome.config.optimisation.max_pitch_rate is None
+
+
+def test_backtest_motion_option_picks_motions_and_refuses_one_not_in_the_file(
+        optimisation_file):
+    from mfflap.cli.main import cli
+
+    for name in ("0.5", "β = 0.5", "beta 0.5", "β=0.50"):
+        res = CliRunner().invoke(cli, ["backtest", str(optimisation_file), "--motion", name,
+                                       "--json"])
+        assert res.exit_code == 0, (name, res.output)
+        import json
+
+        assert list(json.loads(res.stdout)["motions"]) == ["β = 0.5"], name
+    res = CliRunner().invoke(cli, ["backtest", str(optimisation_file), "--motion", "0.3"])
+    assert res.exit_code == 2
+    assert "'0.3' is none of the file's motions: 'best sinusoid', 'β = 0.5'" in res.output
+
+
+def test_a_live_backtest_takes_a_motion_saved_before_on_the_same_set_up(optimisation_file,
+                                                                       tmp_path):
+    """`--save-to` holds the records of earlier live calls: a motion found there, run for
+    this case on the mesh and set-up asked, is not run again (no case is written); one run
+    on another mesh is."""
+    import shutil
+
+    from mfflap.campaign.records import fixture_dir
+    from mfflap.cli.main import cli
+
+    saved = tmp_path / "saved"
+    saved.mkdir()
+    for path in fixture_dir("backtest").glob("backtest_*.h5"):
+        shutil.copy(path, saved / path.name)
+    work = tmp_path / "work"
+    res = CliRunner().invoke(cli, ["backtest", str(optimisation_file), "--live", "--work",
+                                   str(work), "--save-to", str(saved), "--json"])
+    assert res.exit_code == 0, res.output
+    import json
+
+    out = json.loads(res.stdout)["motions"]
+    assert len(out) == 2
+    for label, o in out.items():
+        assert o["status"] == "back-tested", label
+        assert o["source"] == (f"live OpenFOAM, run before "
+                               f"({saved / ('backtest_' + o['motion_key'])}.h5)"), label
+    assert not work.exists()  # nothing was run
+    # asked on another mesh or for another plate, the saved runs are not those: run again
+    from mfflap.backtest.run import _done_before
+    from mfflap.parameters import Plate
+
+    key = next(iter(out.values()))["motion_key"]
+    model = MorisonModel()
+    assert _done_before(key, [saved], model, "coarse", None)[1] == saved / f"backtest_{key}.h5"
+    assert _done_before(key, [saved], model, "medium", None) == (None, None)
+    other = MorisonModel(plate=Plate(chord=0.2))
+    assert _done_before(key, [saved], other, "coarse", None) == (None, None)
+
+
+@pytest.mark.openfoam
+def test_a_motion_whose_case_another_run_holds_is_not_recorded_as_failed(tmp_path):
+    """A live back-test of a case another thread or process is running is not started, and
+    no failure is saved beside the records (it is busy, not failed: a failure record would
+    stand in for the motion's CFD in later look-ups)."""
+    import threading
+
+    from mfflap.cfd.openfoam.case_lock import case_lock
+
+    assert openfoam_available()
+    key = motion_key(MOTION)
+    case = tmp_path / "work" / f"backtest_{key}"
+    case.mkdir(parents=True)
+    held, release = threading.Event(), threading.Event()
+
+    def hold():
+        with case_lock(case):
+            held.set()
+            release.wait(60)
+
+    holder = threading.Thread(target=hold)
+    holder.start()
+    try:
+        held.wait(10)
+        out = backtest_motion(MOTION, "β = 0", MorisonModel(), 50.0, live=True,
+                              work_dir=tmp_path / "work", save_to=tmp_path / "saved")
+    finally:
+        release.set()
+        holder.join()
+    assert out.status == "not back-tested"
+    assert out.source.startswith("live OpenFOAM run not started: ")
+    assert "another thread of this process is running the case" in out.source
+    assert not list((tmp_path / "saved").glob("*.failed.toml"))

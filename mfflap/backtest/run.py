@@ -102,13 +102,30 @@ def _other_set_up(record: CfdRecord, mesh: str | AnyMeshSpec,
     return None
 
 
+def _done_before(key: str, folders: Sequence[str | Path], model, mesh: str | AnyMeshSpec,
+                 solver: SolverSettings | None) -> tuple[CfdRecord | None, Path | None]:
+    """The record of this motion in ``folders`` and its path if it was run for this case on
+    the mesh and solver settings asked (else None, None: it is to be run)."""
+    for folder in folders:
+        path = Path(folder) / f"backtest_{key}.h5"
+        if not path.is_file():
+            continue
+        record = read_record(path)
+        if input_mismatches(record, model.plate, model.fluid, model.stream,
+                            folder_setup(path)) or _other_set_up(record, mesh, solver):
+            continue
+        return record, path
+    return None, None
+
+
 def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float, *,
                     fixture_folders: Sequence[str | Path] = (), live: bool = False,
                     work_dir: str | Path | None = None, n_cycles: float = 3.0,
                     mesh: str = "coarse", plate=None, fluid=None, stream=None,
                     save_to: str | Path | None = None,
                     solver: SolverSettings | None = None,
-                    progress: Callable[[str], None] | None = None) -> BacktestOutcome:
+                    progress: Callable[[str], None] | None = None,
+                    done_folders: Sequence[str | Path] = ()) -> BacktestOutcome:
     """Back-test one periodic motion: run or find its CFD, compare the last cycle.
 
     Parameters
@@ -123,17 +140,23 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
         Folder where a live run's record is written as ``backtest_<key>.h5`` (a fixture).
     progress
         Told every minute how far a live run's solver has got.
+    done_folders
+        Live, records of this motion run before on the same plate, fluid, stream, mesh and
+        solver settings (``backtest_<key>.h5``) are taken instead of a new run (the rounds of
+        :mod:`mfflap.rounds` back-test a motion repeated from an earlier round once).
     """
     from mfflap.campaign.openfoam_run import run_motion
+    from mfflap.cfd.openfoam.case_lock import CaseBusyError
     from mfflap.cfd.openfoam.runner import openfoam_available
 
     key = motion_key(motion)
     spline = cfd_motion(motion)
     period = spline.period
     folders = [Path(f) for f in fixture_folders if Path(f).is_dir()]
-    record = None
-    source = ""
-    if live:
+    record, before = (_done_before(key, done_folders, model, mesh, solver) if live
+                      else (None, None))
+    source = "" if before is None else f"live OpenFOAM, run before ({before})"
+    if live and record is None:
         if not openfoam_available():
             source = "OpenFOAM is not installed"
         elif work_dir is None:
@@ -153,6 +176,8 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
                 source = "live OpenFOAM"
                 if save_to is not None:
                     write_record(Path(save_to) / f"{name}.h5", record, single_precision=True)
+            except CaseBusyError as exc:  # busy, not failed: nothing to record
+                source = f"live OpenFOAM run not started: {str(exc).splitlines()[0]}"
             except MfflapError as exc:
                 source = f"live OpenFOAM run failed: {str(exc).splitlines()[0]}"
                 if save_to is not None:  # a failure is a result too: the report says why

@@ -18,13 +18,14 @@ def backtest_all(config: CaseConfig, motions: dict[str, DiscreteMotion], model, 
                  work_dir: str | Path | None = None, save_to: str | Path | None = None,
                  mesh: str = "coarse", solver: SolverSettings | None = None,
                  progress: Callable[[str], None] | None = None,
-                 into: dict[str, BacktestOutcome] | None = None
-                 ) -> dict[str, BacktestOutcome]:
+                 into: dict[str, BacktestOutcome] | None = None,
+                 done_folders: Sequence[str | Path] = ()) -> dict[str, BacktestOutcome]:
     """Back-test each labelled motion (a failure of one does not stop the others).
 
     ``into``, if given, receives each outcome as soon as it is known and is returned, so
     that a caller stopped part-way (Ctrl-C during a live run) keeps the back-tests done
-    before.
+    before. ``done_folders``: live, records of a motion run before on this set-up, taken
+    instead of a new run (:func:`~mfflap.backtest.run.backtest_motion`).
 
     Raises
     ------
@@ -42,7 +43,7 @@ def backtest_all(config: CaseConfig, motions: dict[str, DiscreteMotion], model, 
             motion, label, model, config.optimisation.max_power,
             fixture_folders=fixture_folders, live=live, work_dir=work_dir, mesh=mesh,
             plate=config.plate, fluid=config.fluid, stream=config.flow, save_to=save_to,
-            solver=solver, progress=None if progress is None else (
+            solver=solver, done_folders=done_folders, progress=None if progress is None else (
                 lambda message, label=label: progress(f"back-test {label}: {message}")))
         if progress is not None:
             o = out[label]

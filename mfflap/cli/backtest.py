@@ -20,12 +20,18 @@ from mfflap.cli.options import mesh_and_setup_options, refuse_given
               type=click.Path(file_okay=False, exists=True, path_type=Path),
               help="Folders of back-test records (default: the shipped ones).")
 @click.option("--save-to", type=click.Path(file_okay=False, path_type=Path), default=None,
-              help="Write live runs as back-test records (fixtures) here.")
+              help="Write live runs as back-test records (fixtures) here; a motion whose "
+                   "record is there already, run for this case on the same mesh and "
+                   "set-up, is not run again.")
+@click.option("--motion", "only", multiple=True,
+              help="Back-test only this motion: 'best sinusoid' or a beta ('0', '0.5' or "
+                   "'β = 0'); repeat for several (default: every motion).")
 @mesh_and_setup_options(" of live runs")
 @click.option("--json", "as_json", is_flag=True)
 def backtest(optimisation_file: Path, live: bool, work_dir: Path,
-             fixture_folders: tuple[Path, ...], save_to: Path | None, mesh: str | None,
-             setup_name: str | None, wall_treatment: str | None, as_json: bool) -> None:
+             fixture_folders: tuple[Path, ...], save_to: Path | None, only: tuple[str, ...],
+             mesh: str | None, setup_name: str | None, wall_treatment: str | None,
+             as_json: bool) -> None:
     """Back-test the optimised motions (and the best sinusoid) of OPTIMISATION_FILE.
 
     Ctrl-C stops the run in flight and shows the motions back-tested before it. The exit
@@ -53,13 +59,15 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
             motions[f"β = {r.beta:g}"] = r.motion
     n = next(iter(motions.values())).n_steps
     motions = {"best sinusoid": sinusoid_motion(sweep, best, n), **motions}
+    motions = _chosen(motions, only)
     folders = list(fixture_folders) or backtest_fixture_dirs()
     outcomes: dict = {}
     interrupted = None
     try:
         backtest_all(case, motions, case.morison_model(), fixture_folders=folders,
                      live=live, work_dir=work_dir, save_to=save_to, mesh=spec.name,
-                     solver=solver, progress=lambda m: click.echo(m, err=True), into=outcomes)
+                     solver=solver, progress=lambda m: click.echo(m, err=True), into=outcomes,
+                     done_folders=() if save_to is None else (save_to,))
     except KeyboardInterrupt:  # the solver is stopped by then; show what was back-tested
         interrupted = next((label for label in motions if label not in outcomes), "the last")
     _show(outcomes, as_json)
@@ -75,6 +83,32 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
         click.echo(f"exit status 1: {len(missing)} of {len(outcomes)} motions not "
                    f"back-tested ({', '.join(missing)})", err=True)
         raise SystemExit(1)
+
+
+def _chosen(motions: dict, only: tuple[str, ...]) -> dict:
+    """The motions ``--motion`` names (all without it), in the file's order.
+
+    Raises
+    ------
+    click.BadParameter
+        Naming a motion the file does not hold, and those it does.
+    """
+    if not only:
+        return motions
+    wanted = set()
+    for name in only:
+        label = name.strip()
+        if label not in motions:  # a beta: "0.5", "beta 0.5", "β=0.5"
+            token = label.removeprefix("beta").removeprefix("β").strip(" =")
+            try:
+                label = f"β = {float(token):g}"
+            except ValueError:
+                pass
+        if label not in motions:
+            raise click.BadParameter(f"{name!r} is none of the file's motions: "
+                                     f"{', '.join(map(repr, motions))}", param_hint="--motion")
+        wanted.add(label)
+    return {k: m for k, m in motions.items() if k in wanted}
 
 
 def _show(outcomes: dict, as_json: bool) -> None:
