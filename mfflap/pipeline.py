@@ -43,6 +43,9 @@ class RunOptions:
     #: keep the optimisation within what the identification cases reach
     #: (:func:`within_data_config`)
     within_data: bool = False
+    #: live, back-test records run before on this set-up, taken instead of a new run (the
+    #: rounds' own records, :mod:`mfflap.rounds`)
+    done_backtests: tuple[Path, ...] = ()
 
     def __post_init__(self) -> None:
         allowed = ["case", *(f"identified:{s}" for s in RUN_STRATEGIES)]
@@ -300,7 +303,8 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
         _stage(outcome, "back-test", progress, lambda: backtest_all(
             config, motions, model, fixture_folders=folders, live=options.live,
             work_dir=options.work_dir, mesh=options.mesh, progress=progress,
-            into=outcome.backtests))  # those done before a failure or Ctrl-C are kept
+            # those done before a failure or Ctrl-C are kept in outcome.backtests
+            into=outcome.backtests, done_folders=options.done_backtests))
         for label, o in outcome.backtests.items():
             if o.status != "back-tested":
                 outcome.problems.append(f"back-test: {label} not back-tested: {o.source}")

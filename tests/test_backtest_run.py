@@ -623,14 +623,21 @@ def test_a_live_backtest_takes_a_motion_saved_before_on_the_same_set_up(optimisa
     assert not work.exists()  # nothing was run
     # asked on another mesh or for another plate, the saved runs are not those: run again
     from mfflap.backtest.run import _done_before
+    from mfflap.config import loads_case
+    from mfflap.optimisation.store import read_result
     from mfflap.parameters import Plate
+    from mfflap.results import ResultsFile
 
-    key = next(iter(out.values()))["motion_key"]
-    model = MorisonModel()
-    assert _done_before(key, [saved], model, "coarse", None)[1] == saved / f"backtest_{key}.h5"
-    assert _done_before(key, [saved], model, "medium", None) == (None, None)
+    with ResultsFile(optimisation_file) as rf:
+        motion = read_result(rf, f"optimisation/sqp/{sorted(rf.h5['optimisation/sqp'])[0]}"
+                             ).motion
+        model = loads_case(rf.config_toml).morison_model()
+    key = motion_key(motion)
+    assert _done_before(motion, key, [saved], model, "coarse", None)[1] == \
+        saved / f"backtest_{key}.h5"
+    assert _done_before(motion, key, [saved], model, "medium", None) == (None, None)
     other = MorisonModel(plate=Plate(chord=0.2))
-    assert _done_before(key, [saved], other, "coarse", None) == (None, None)
+    assert _done_before(motion, key, [saved], other, "coarse", None) == (None, None)
 
 
 @pytest.mark.openfoam

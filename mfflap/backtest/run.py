@@ -102,20 +102,20 @@ def _other_set_up(record: CfdRecord, mesh: str | AnyMeshSpec,
     return None
 
 
-def _done_before(key: str, folders: Sequence[str | Path], model, mesh: str | AnyMeshSpec,
-                 solver: SolverSettings | None) -> tuple[CfdRecord | None, Path | None]:
-    """The record of this motion in ``folders`` and its path if it was run for this case on
-    the mesh and solver settings asked (else None, None: it is to be run)."""
-    for folder in folders:
-        path = Path(folder) / f"backtest_{key}.h5"
-        if not path.is_file():
-            continue
-        record = read_record(path)
-        if input_mismatches(record, model.plate, model.fluid, model.stream,
-                            folder_setup(path)) or _other_set_up(record, mesh, solver):
-            continue
-        return record, path
-    return None, None
+def _done_before(motion: DiscreteMotion, key: str, folders: Sequence[str | Path], model,
+                 mesh: str | AnyMeshSpec, solver: SolverSettings | None
+                 ) -> tuple[CfdRecord | None, Path | None]:
+    """The record of this motion in ``folders`` (by key, else within the fixtures'
+    tolerance) and its path if it was run for this case on the mesh and solver settings asked
+    (else None, None: it is to be run)."""
+    path = _matching_fixture(key, motion, [Path(f) for f in folders if Path(f).is_dir()])
+    if path is None:
+        return None, None
+    record = read_record(path)
+    if input_mismatches(record, model.plate, model.fluid, model.stream,
+                        folder_setup(path)) or _other_set_up(record, mesh, solver):
+        return None, None
+    return record, path
 
 
 def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float, *,
@@ -153,7 +153,7 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
     spline = cfd_motion(motion)
     period = spline.period
     folders = [Path(f) for f in fixture_folders if Path(f).is_dir()]
-    record, before = (_done_before(key, done_folders, model, mesh, solver) if live
+    record, before = (_done_before(motion, key, done_folders, model, mesh, solver) if live
                       else (None, None))
     source = "" if before is None else f"live OpenFOAM, run before ({before})"
     if live and record is None:

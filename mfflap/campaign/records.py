@@ -218,9 +218,10 @@ def fixture_dir(name: str = "table1_coarse") -> Path:
     return Path(__file__).resolve().parent.parent / "data" / "fixtures" / name
 
 
-#: The shipped back-test fixture folders: the optimised motions of the shipped case, and
-#: those of ``mfflap run --within-data`` (each record named by its motion's key).
-BACKTEST_FIXTURES = ("backtest", "backtest_within_data")
+#: The shipped back-test fixture folders: the optimised motions of the shipped case, those
+#: of ``mfflap run --within-data``, and those of the later rounds of ``mfflap run --rounds``
+#: (each record named by its motion's key).
+BACKTEST_FIXTURES = ("backtest", "backtest_within_data", "backtest_rounds")
 
 
 def backtest_fixture_dirs() -> list[Path]:

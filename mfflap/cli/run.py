@@ -34,10 +34,21 @@ from mfflap.cli.json_output import echo_json
                    "amplitude, peak pitch rate and acceleration, frequency and heave amplitude "
                    "its CFD cases reach bound the sweep, the refinement and the optimisers "
                    "(each the tighter of the case file's and the data's).")
+@click.option("--rounds", default=1, show_default=True, type=click.IntRange(min=1),
+              help="CFD in the loop: run the whole job up to this many times, each round "
+                   "identifying the model with the back-test CFD of the rounds before "
+                   "pooled in, until the model predicts its back-tested motions' mean thrust "
+                   "and power within --loop-tolerance (needs --coefficients identified:...; "
+                   "each round in <out>/round_<k>, the rounds in <out>/rounds.html, .h5, "
+                   ".png).")
+@click.option("--loop-tolerance", default=0.1, show_default=True, type=float,
+              help="With --rounds: the relative error of the model's mean thrust and power "
+                   "against CFD at which the rounds stop.")
 @click.option("--json", "as_json", is_flag=True, help="Print the key numbers as JSON.")
 def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
             backtest_fixtures: tuple[Path, ...], live: bool, coefficients: str, starts: int,
-            gain_table: bool, no_ipopt: bool, within_data: bool, as_json: bool) -> None:
+            gain_table: bool, no_ipopt: bool, within_data: bool, rounds: int,
+            loop_tolerance: float, as_json: bool) -> None:
     """Identification, sweep, optimisation, back-test and reports for CASE_FILE.
 
     Writes <out>/report.html (every figure), <out>/results.h5 (every number and the inputs)
@@ -48,7 +59,9 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
     from mfflap.config import load_case
     from mfflap.identification.workflow import sources_shown
     from mfflap.pipeline import RunOptions, run_study, write_outputs
+    from mfflap.rounds import check_rounds
 
+    check_rounds(rounds, loop_tolerance, coefficients)  # before anything runs
     case = load_case(case_file)
     out_dir = out_dir or Path(f"{case.study.name}_run")
     options = RunOptions(fixtures=fixtures, backtest_fixtures=backtest_fixtures, live=live,
@@ -57,6 +70,10 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
                          vtk_dir=out_dir / "vtk",  # checked before the folder is made
                          within_data=within_data)
     out_dir.mkdir(parents=True, exist_ok=True)
+    if rounds > 1:
+        _run_rounds(case, options, rounds, loop_tolerance, out_dir, sources_shown(fixtures),
+                    as_json)
+        return
     outcome = run_study(case, options, progress=lambda m: click.echo(m, err=True))
     write_outputs(outcome.config or case, outcome, out_dir / "results.h5",
                   out_dir / "report.html",
@@ -76,6 +93,33 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
         click.echo(f"{len(outcome.problems)} problem(s), listed in the report:")
         for p in outcome.problems:
             click.echo(f"  - {p.splitlines()[0]}")
+
+
+def _run_rounds(case, options, rounds: int, tolerance: float, out_dir: Path, source: str,
+                as_json: bool) -> None:
+    """``--rounds`` > 1: :func:`mfflap.rounds.run_rounds` and what it wrote."""
+    from mfflap.rounds import run_rounds
+
+    result, outcome = run_rounds(case, options, rounds, tolerance, out_dir,
+                                 progress=lambda m: click.echo(m, err=True), source=source)
+    if outcome is not None and outcome.interrupted is not None:
+        click.echo(f"interrupted in round {len(result.rounds)} ({outcome.interrupted}): "
+                   f"{out_dir / 'rounds.html'} holds the rounds so far; the same command runs "
+                   "them again, finding the back-test CFD done before in "
+                   f"{out_dir / 'loop_records'}", err=True)
+        raise click.Abort()
+    if as_json:
+        echo_json({"rounds": result.as_dict(),
+                   "last_round": None if outcome is None else run_summary(outcome)})
+        return
+    click.echo(f"wrote {out_dir / 'rounds.html'}, {out_dir / 'rounds.h5'} and "
+               f"{out_dir / 'rounds.png'}; each round's report and results in "
+               f"{out_dir}/round_<k>")
+    click.echo(f"{'converged' if result.converged else 'not converged'}: "
+               f"{result.stopped_because}")
+    n_problems = sum(1 for r in result.rounds for _ in r.not_backtested)
+    if n_problems:
+        click.echo(f"{n_problems} motion(s) not back-tested, listed in the rounds' reports")
 
 
 def run_summary(outcome) -> dict:

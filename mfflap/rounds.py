@@ -1,0 +1,405 @@
+"""CFD in the loop: rounds of the main job (``mfflap run --rounds N``).
+
+The model optimises its motions where it has never been checked (three of the four shipped
+optima lie outside the identification data, :mod:`mfflap.identification.coverage`), and
+the back-test says by how much it is wrong there. Each round here feeds that CFD back: it
+runs the whole main job (:func:`mfflap.pipeline.run_study`) with the identification data
+pooled with the back-test records of every round before, so the model is refitted on the
+motions it optimised, optimises again, and is back-tested on the new optima, which its fit
+has not seen. The rounds stop when
+
+- the model predicts the CFD mean thrust and mean input power of every back-tested motion
+  of the round within the tolerance (converged),
+- the round's optimised motions are those of an earlier round (a fixed point: the next round
+  would fit the same data),
+- a motion could not be back-tested, or the identification or optimisation failed (the next
+  round would learn nothing new), or Ctrl-C stopped the round,
+- or the rounds asked for are done.
+
+The back-test records of every round are kept in ``<out>/loop_records`` (one per motion);
+they are looked up before the shipped fixtures and, live, before a new OpenFOAM run, so a
+motion repeated from an earlier round is not run again and the same command run again (after
+a Ctrl-C) finds the CFD done before.
+
+Only motions whose CFD the round's fit has not seen count (a motion repeated from an earlier
+round is in the fit). A motion's mean thrust error counts only where its CFD mean thrust is at least
+:data:`THRUST_FLOOR` of the largest CFD mean thrust among the round's motions: a motion of
+almost no net thrust (beta = 1) has a relative thrust error of no meaning. Its power error
+counts.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+
+from mfflap.config import CaseConfig
+from mfflap.errors import ConfigError
+
+Progress = Callable[[str], None]
+
+#: a motion's relative mean thrust error counts where its CFD mean thrust is at least this
+#: fraction of the largest CFD mean thrust among the round's back-tested motions
+THRUST_FLOOR = 0.05
+
+#: the folder (inside the output folder) holding the back-test records the rounds pool
+RECORDS_FOLDER = "loop_records"
+
+
+@dataclass
+class MotionCheck:
+    """The model against CFD on one back-tested motion of a round.
+
+    Attributes
+    ----------
+    cfd_mean_thrust, model_mean_thrust : N
+    cfd_mean_power, model_mean_power : W
+    thrust_error, power_error : (model - CFD) / |CFD| of the means
+    thrust_counted : whether the thrust error counts (:data:`THRUST_FLOOR`)
+    in_fit : whether the fit of this round had already seen this motion's CFD
+    """
+
+    label: str
+    key: str
+    cfd_mean_thrust: float
+    model_mean_thrust: float
+    cfd_mean_power: float
+    model_mean_power: float
+    thrust_error: float
+    power_error: float
+    thrust_counted: bool
+    in_fit: bool
+
+    @property
+    def error(self) -> float:
+        """The largest counted relative error of the means."""
+        return max(abs(self.power_error), abs(self.thrust_error) if self.thrust_counted else 0)
+
+    def as_dict(self) -> dict:
+        """JSON-friendly."""
+        return {"label": self.label, "key": self.key, "cfd_mean_thrust": self.cfd_mean_thrust,
+                "model_mean_thrust": self.model_mean_thrust,
+                "cfd_mean_power": self.cfd_mean_power,
+                "model_mean_power": self.model_mean_power, "thrust_error": self.thrust_error,
+                "power_error": self.power_error, "thrust_counted": self.thrust_counted,
+                "in_fit": self.in_fit, "error": self.error}
+
+
+@dataclass
+class RoundSummary:
+    """What one round fitted, optimised and found in CFD.
+
+    Attributes
+    ----------
+    index : 1, 2, ...
+    out_dir : the round's report.html and results.h5
+    n_cases : CFD runs the round's identification used
+    loop_records_in_fit : the earlier rounds' back-test records among them
+    coefficients : the coefficients the round optimised with (name -> value)
+    checks : per back-tested motion
+    not_backtested : label -> why
+    """
+
+    index: int
+    out_dir: Path
+    n_cases: int
+    loop_records_in_fit: int
+    coefficients: dict[str, float]
+    checks: dict[str, MotionCheck] = field(default_factory=dict)
+    not_backtested: dict[str, str] = field(default_factory=dict)
+
+    @property
+    def largest_error(self) -> float | None:
+        """The largest counted error over the back-tested motions whose CFD the round's fit
+        had not seen (None: none such)."""
+        return max((c.error for c in self.checks.values() if not c.in_fit), default=None)
+
+    def as_dict(self) -> dict:
+        """JSON-friendly."""
+        return {"round": self.index, "out_dir": str(self.out_dir), "n_cases": self.n_cases,
+                "loop_records_in_fit": self.loop_records_in_fit,
+                "coefficients": self.coefficients, "largest_error": self.largest_error,
+                "checks": {k: c.as_dict() for k, c in self.checks.items()},
+                "not_backtested": self.not_backtested}
+
+
+@dataclass
+class LoopResult:
+    """The rounds run and why they stopped."""
+
+    rounds: list[RoundSummary]
+    tolerance: float
+    converged: bool
+    stopped_because: str
+
+    def as_dict(self) -> dict:
+        """JSON-friendly."""
+        return {"tolerance": self.tolerance, "converged": self.converged,
+                "stopped_because": self.stopped_because,
+                "rounds": [r.as_dict() for r in self.rounds]}
+
+
+def check_rounds(n_rounds: int, tolerance: float, coefficients: str) -> None:
+    """Refuse rounds that cannot learn from their CFD.
+
+    Raises
+    ------
+    ConfigError
+        ``n_rounds`` < 1, ``tolerance`` not in (0, 1), or more than one round with the case
+        file's coefficients (nothing is refitted between rounds, so every round would
+        optimise the same motions).
+    """
+    if n_rounds < 1:
+        raise ConfigError(f"--rounds must be >= 1, got {n_rounds}", key="rounds")
+    if not (np.isfinite(tolerance) and 0 < tolerance < 1):
+        raise ConfigError(f"--loop-tolerance must be a fraction in (0, 1), got {tolerance}",
+                          key="loop_tolerance")
+    if n_rounds > 1 and not coefficients.startswith("identified:"):
+        raise ConfigError("--rounds > 1 refits the model on each round's back-tests, which "
+                          f"only identified coefficients take up; with --coefficients "
+                          f"{coefficients} every round would optimise the same motions: add "
+                          "--coefficients identified:uniform (or low, high)", key="rounds")
+
+
+def motion_checks(backtests: dict, in_fit: set[str]) -> dict[str, MotionCheck]:
+    """Per back-tested motion: the model's mean thrust and power against CFD's; ``in_fit``:
+    the names of the cases the round's fit used (a record's name is its case's)."""
+    done = {k: o for k, o in backtests.items() if o.comparison is not None}
+    largest = max((abs(o.comparison.cfd_mean_thrust) for o in done.values()), default=0.0)
+    out = {}
+    for label, o in done.items():
+        c = o.comparison
+        out[label] = MotionCheck(
+            label, o.key, c.cfd_mean_thrust, c.model_mean_thrust, c.cfd_mean_power,
+            c.model_mean_power, c.mean_thrust_error, c.mean_power_error,
+            thrust_counted=bool(abs(c.cfd_mean_thrust) >= THRUST_FLOOR * largest > 0),
+            in_fit=o.record is not None and o.record.name in in_fit)
+    return out
+
+
+def _keep_records(backtests: dict, folder: Path) -> list[Path]:
+    """Write each back-tested motion's CFD record into ``folder`` under its own name (a
+    fixture found within the look-up's tolerance keeps the name of the motion it ran)."""
+    from mfflap.campaign.records import write_record
+
+    folder.mkdir(parents=True, exist_ok=True)
+    written = []
+    for o in backtests.values():
+        if o.record is None:
+            continue
+        path = folder / f"{o.record.name}.h5"
+        if not path.exists():
+            write_record(path, o.record, single_precision=True)
+            written.append(path)
+    return written
+
+
+def _coefficients(outcome) -> dict[str, float]:
+    """The coefficients the round optimised with (term name -> value)."""
+    return {} if outcome.model is None else {
+        k: float(v) for k, v in outcome.model.coefficients.items()}
+
+
+def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out_dir: Path,
+               progress: Progress = print, source: str = ""):
+    """Run the main job in rounds (module docstring) into ``out_dir/round_<k>``.
+
+    The back-test records of every round are kept in ``out_dir/loop_records`` (one per
+    motion), pooled with the identification data of the later rounds and looked up as
+    back-test fixtures first, so the same command run again finds the CFD already done.
+
+    Returns
+    -------
+    (LoopResult, RunOutcome)
+        The rounds and the last round's outcome.
+    """
+    from mfflap.campaign.records import backtest_fixture_dirs, fixture_dir
+    from mfflap.pipeline import run_study, write_outputs
+
+    check_rounds(n_rounds, tolerance, options.coefficients)
+    records = out_dir / RECORDS_FOLDER
+    base_fixtures = tuple(options.fixtures) or (fixture_dir(),)
+    base_backtests = tuple(options.backtest_fixtures) or tuple(backtest_fixture_dirs())
+    rounds: list[RoundSummary] = []
+    seen: set[str] = set()  # motion keys back-tested in earlier rounds
+    outcome = None
+    converged, why = False, f"ran the {n_rounds} round(s) asked for"
+    for k in range(1, n_rounds + 1):
+        round_dir = out_dir / f"round_{k}"
+        pooled = sorted(records.glob("backtest_*.h5")) if records.is_dir() else []
+        opts = replace(options, fixtures=base_fixtures + tuple(pooled),
+                       backtest_fixtures=(records, *base_backtests),
+                       done_backtests=(records,),
+                       work_dir=round_dir / "cfd_cases",
+                       vtk_dir=None if options.vtk_dir is None else round_dir / "vtk")
+        progress(f"[round {k} of {n_rounds}] identification from {len(pooled)} back-test "
+                 f"record(s) of earlier rounds beside the identification data")
+
+        def told(message: str, k: int = k) -> None:
+            progress(f"[round {k}] {message}")
+
+        outcome = run_study(config, opts, progress=told)
+        round_dir.mkdir(parents=True, exist_ok=True)
+        write_outputs(outcome.config or config, outcome, round_dir / "results.h5",
+                      round_dir / "report.html", source)
+        in_fit = {c.name for c in outcome.cases}
+        summary = RoundSummary(
+            k, round_dir, len(outcome.cases),
+            sum(1 for p in pooled if p.stem in in_fit), _coefficients(outcome),
+            motion_checks(outcome.backtests, in_fit),
+            {lbl: o.source for lbl, o in outcome.backtests.items() if o.comparison is None})
+        rounds.append(summary)
+        _keep_records(outcome.backtests, records)
+        progress(describe_round(summary, tolerance))
+        keys = {o.key for o in outcome.backtests.values()}
+        if outcome.interrupted is not None:
+            why = f"round {k} was stopped (Ctrl-C) in its {outcome.interrupted} stage"
+            break
+        if not outcome.identification or outcome.study is None:
+            why = f"round {k}'s identification or optimisation failed (its report says why)"
+            break
+        if summary.not_backtested:
+            label, reason = next(iter(summary.not_backtested.items()))
+            why = (f"round {k}: {label} was not back-tested ({reason}); the next round would "
+                   "not learn where the model is wrong")
+            break
+        if summary.largest_error is not None and summary.largest_error <= tolerance:
+            converged = True
+            why = (f"round {k}: the model predicts every back-tested motion's CFD mean thrust "
+                   f"and power within {tolerance:.0%} (largest {summary.largest_error:.1%})")
+            break
+        if keys and keys <= seen:
+            why = (f"round {k} optimised the motions of an earlier round (a fixed point): a "
+                   "further round would fit the same data")
+            break
+        seen |= keys
+    result = LoopResult(rounds, tolerance, converged, why)
+    progress(f"rounds: {why}")
+    write_rounds(result, config, out_dir)
+    return result, outcome
+
+
+def describe_round(summary: RoundSummary, tolerance: float) -> str:
+    """One line per motion: model against CFD mean thrust and power."""
+    lines = [f"round {summary.index}: {summary.n_cases} CFD runs in the fit "
+             f"({summary.loop_records_in_fit} from earlier rounds); "
+             + ", ".join(f"{k} {v:.3g}" for k, v in summary.coefficients.items())]
+    for c in summary.checks.values():
+        thrust = (f"{c.thrust_error:+.1%}" if c.thrust_counted
+                  else f"{c.thrust_error:+.1%} (not counted: small thrust)")
+        lines.append(f"  {c.label}: thrust model {c.model_mean_thrust:.3g} N / CFD "
+                     f"{c.cfd_mean_thrust:.3g} N ({thrust}); power model "
+                     f"{c.model_mean_power:.3g} W / CFD {c.cfd_mean_power:.3g} W "
+                     f"({c.power_error:+.1%})" + ("; its CFD was in the fit (not counted)"
+                                                   if c.in_fit else ""))
+    for label, reason in summary.not_backtested.items():
+        lines.append(f"  {label}: not back-tested: {reason.splitlines()[0]}")
+    largest = summary.largest_error
+    if largest is not None:
+        lines.append(f"  largest counted error {largest:.1%} "
+                     f"({'within' if largest <= tolerance else 'beyond'} {tolerance:.0%})")
+    return "\n".join(lines)
+
+
+def write_rounds(result: LoopResult, config: CaseConfig, out_dir: Path) -> None:
+    """``out_dir/rounds.h5`` (every round's numbers, the case file beside them),
+    ``rounds.png`` (model against CFD per motion over the rounds) and ``rounds.html``."""
+    from mfflap.reports.html import Report, figure_html, table_html, text_html
+    from mfflap.results import ResultsFile
+
+    with ResultsFile(out_dir / "rounds.h5", "w", kind="rounds",
+                     config_toml=config.to_toml()) as rf:
+        rf.h5.attrs["tolerance"] = result.tolerance
+        rf.h5.attrs["converged"] = result.converged
+        rf.h5.attrs["stopped_because"] = result.stopped_because
+        for r in result.rounds:
+            labels = list(r.checks)
+            arrays = {name: np.array([getattr(r.checks[lbl], name) for lbl in labels])
+                      for name in ("cfd_mean_thrust", "model_mean_thrust", "cfd_mean_power",
+                                   "model_mean_power")}
+            units = {name: "N" if "thrust" in name else "W" for name in arrays}
+            rf.write_group(f"rounds/round_{r.index}", arrays, units, {
+                "labels": json.dumps(labels), "summary": json.dumps(r.as_dict())})
+    fig = rounds_figure(result)
+    fig.savefig(out_dir / "rounds.png", dpi=110)
+    rep = Report("mfflap run: rounds of CFD in the loop",
+                 f"{config.study.name}: each round refits the model with the back-tests of "
+                 "the rounds before, optimises and back-tests again")
+    s = rep.section("Rounds")
+    s.blocks.append(text_html(f"{'Converged' if result.converged else 'Not converged'}: "
+                              f"{result.stopped_because}.", warn=not result.converged))
+    rows = []
+    for r in result.rounds:
+        for c in r.checks.values():
+            rows.append([r.index, c.label, f"{c.model_mean_thrust:.3g}",
+                         f"{c.cfd_mean_thrust:.3g}",
+                         f"{c.thrust_error:+.1%}" + ("" if c.thrust_counted else " (n.c.)"),
+                         f"{c.model_mean_power:.3g}", f"{c.cfd_mean_power:.3g}",
+                         f"{c.power_error:+.1%}", "yes" if c.in_fit else "no"])
+        for label, reason in r.not_backtested.items():
+            rows.append([r.index, label, "", "", "not back-tested: " + reason.splitlines()[0],
+                         "", "", "", ""])
+    s.blocks.append(table_html(["round", "motion", "thrust model N", "CFD N", "error",
+                                "power model W", "CFD W", "error", "CFD in the fit"], rows))
+    s.blocks.append(table_html(["round", "CFD runs in the fit", "of them from rounds before",
+                                *(result.rounds[0].coefficients if result.rounds else [])],
+                               [[r.index, r.n_cases, r.loop_records_in_fit,
+                                 *(f"{v:.3g}" for v in r.coefficients.values())]
+                                for r in result.rounds]))
+    s.blocks.append(figure_html(fig, "Mean thrust and input power of each back-tested "
+                                     "motion, model (open) and CFD (filled), by round, and "
+                                     "the model's largest counted error of the two (grey: "
+                                     "its CFD was in the round's fit, not counted); each "
+                                     "round's own report: round_<k>/report.html"))
+    rep.write(out_dir / "rounds.html")
+
+
+def rounds_figure(result: LoopResult):
+    """Model (open) and CFD (filled) mean thrust and power of each motion over the rounds,
+    and each motion's counted error against the tolerance (a motion whose CFD was in the
+    round's fit is drawn grey there)."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(12, 3.6), layout="constrained")
+    axes = fig.subplots(1, 3)
+    labels = sorted({lbl for r in result.rounds for lbl in r.checks})
+    for i, label in enumerate(labels):
+        colour = f"C{i % 10}"
+        pts = [(r.index, r.checks[label]) for r in result.rounds if label in r.checks]
+        x = [p[0] for p in pts]
+        for ax, cfd, mod in ((axes[0], "cfd_mean_thrust", "model_mean_thrust"),
+                             (axes[1], "cfd_mean_power", "model_mean_power")):
+            ax.plot(x, [getattr(c, cfd) for _, c in pts], "o-", color=colour, label=label)
+            ax.plot(x, [getattr(c, mod) for _, c in pts], "o--", color=colour,
+                    markerfacecolor="none")
+        axes[2].plot(x, [100 * c.error for _, c in pts], "o-", color=colour, label=label)
+        seen = [(k, c) for k, c in pts if c.in_fit]
+        if seen:
+            axes[2].plot([k for k, _ in seen], [100 * c.error for _, c in seen], "o",
+                         color="0.6")
+    axes[2].axhline(100 * result.tolerance, color="k", ls=":", label="tolerance")
+    axes[0].set_ylabel("mean thrust (N)")
+    axes[1].set_ylabel("mean input power (W)")
+    axes[2].set_ylabel("model's error of the means (%)")
+    for ax in axes:
+        ax.set_xlabel("round")
+        ax.set_xticks([r.index for r in result.rounds])
+    if labels:
+        axes[0].legend(fontsize=8)
+    return fig
+
+
+__all__ = [
+    "THRUST_FLOOR",
+    "LoopResult",
+    "MotionCheck",
+    "RoundSummary",
+    "check_rounds",
+    "motion_checks",
+    "run_rounds",
+    "write_rounds",
+]
