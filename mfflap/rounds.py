@@ -265,7 +265,8 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
         if summary.not_backtested:
             label, reason = next(iter(summary.not_backtested.items()))
             why = (f"round {k}: {label} was not back-tested ({reason}); the next round would "
-                   "not learn where the model is wrong")
+                   "not learn where the model is wrong"
+                   + ("" if options.live else " (--live runs its CFD in OpenFOAM)"))
             break
         if summary.largest_error is not None and summary.largest_error <= tolerance:
             converged = True

@@ -125,6 +125,7 @@ def test_rounds_refit_on_their_back_tests_and_stop_when_a_motion_has_no_cfd(tmp_
     assert rounds[3]["not_backtested"]
     assert loop["stopped_because"].startswith("round 4: ")
     assert "was not back-tested" in loop["stopped_because"]
+    assert loop["stopped_because"].endswith("(--live runs its CFD in OpenFOAM)")
     assert summary["last_round"]["backtest"]  # the last round's own summary
     # one record per motion: round 1's four, rounds 2 and 3's three new ones each
     assert len(list((out / "loop_records").glob("backtest_*.h5"))) == 10
