@@ -30,6 +30,15 @@ DERIVED = {"thrust": "N", "input_power": "W"}
 _STATE_KEYS = tuple(KINEMATIC_UNITS)
 
 
+def motion_frequency(parameters: dict) -> float:
+    """A record's carrier frequency, Hz: its ``frequency``, else one over its ``period`` (a
+    back-test's periodic motion), else NaN."""
+    if "frequency" in parameters:
+        return float(parameters["frequency"])
+    period = float(parameters.get("period", np.nan))
+    return 1.0 / period if np.isfinite(period) and period > 0 else float("nan")
+
+
 @dataclass
 class CaseData:
     """One CFD case ready for fitting and scoring.
@@ -54,12 +63,8 @@ class CaseData:
 
     @property
     def frequency(self) -> float:
-        """Carrier frequency, Hz: the record's ``frequency``, else one over its ``period``
-        (a back-test's periodic motion), else NaN."""
-        if "frequency" in self.parameters:
-            return float(self.parameters["frequency"])
-        period = float(self.parameters.get("period", np.nan))
-        return 1.0 / period if np.isfinite(period) and period > 0 else float("nan")
+        """Carrier frequency, Hz (:func:`motion_frequency`)."""
+        return motion_frequency(self.parameters)
 
     @property
     def n_samples(self) -> int:

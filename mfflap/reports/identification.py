@@ -31,14 +31,13 @@ APPLICABLE_NRMSE = 0.10
 
 
 def _param(result: IdentificationResult, key: str) -> np.ndarray:
-    """A motion parameter of every case (NaN where its record has none); a frequency from
-    the period where only that is given (a back-test's periodic motion pooled in)."""
-    def value(p: dict) -> float:
-        if key == "frequency" and key not in p and float(p.get("period", 0) or 0) > 0:
-            return 1.0 / float(p["period"])
-        return float(p.get(key, np.nan))
+    """A motion parameter of every case (NaN where its record has none); the frequency as
+    identification weighs it (:func:`~mfflap.identification.data.motion_frequency`)."""
+    from mfflap.identification.data import motion_frequency
 
-    return np.array([value(p) for p in result.case_parameters])
+    if key == "frequency":
+        return np.array([motion_frequency(p) for p in result.case_parameters])
+    return np.array([float(p.get(key, np.nan)) for p in result.case_parameters])
 
 
 def heave_strouhal(result: IdentificationResult, velocity: float) -> np.ndarray:
