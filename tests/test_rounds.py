@@ -37,6 +37,11 @@ def test_the_cli_refuses_rounds_with_the_case_coefficients_before_anything_is_wr
     assert res.exit_code == 2
     assert "--coefficients identified:uniform" in res.output
     assert not out.exists()
+    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--loop-tolerance",
+                                   "0.2"])
+    assert res.exit_code == 2
+    assert "--loop-tolerance applies only to rounds of CFD in the loop" in res.output
+    assert not out.exists()
 
 
 def _outcome(key, cfd_thrust, model_thrust, cfd_power, model_power):

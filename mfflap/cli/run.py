@@ -56,11 +56,14 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
     run goes on. Ctrl-C stops the run and writes the report and results of the stages
     finished before it.
     """
+    from mfflap.cli.options import refuse_given
     from mfflap.config import load_case
     from mfflap.identification.workflow import sources_shown
     from mfflap.pipeline import RunOptions, run_study, write_outputs
     from mfflap.rounds import check_rounds
 
+    if rounds == 1:
+        refuse_given(("loop_tolerance",), "rounds of CFD in the loop (--rounds 2 or more)")
     check_rounds(rounds, loop_tolerance, coefficients)  # before anything runs
     case = load_case(case_file)
     out_dir = out_dir or Path(f"{case.study.name}_run")
