@@ -181,21 +181,15 @@ def motion_checks(backtests: dict, in_fit: set[str]) -> dict[str, MotionCheck]:
     return out
 
 
-def _keep_records(backtests: dict, folder: Path) -> list[Path]:
+def _keep_records(backtests: dict, folder: Path) -> None:
     """Write each back-tested motion's CFD record into ``folder`` under its own name (a
     fixture found within the look-up's tolerance keeps the name of the motion it ran)."""
     from mfflap.campaign.records import write_record
 
     folder.mkdir(parents=True, exist_ok=True)
-    written = []
     for o in backtests.values():
-        if o.record is None:
-            continue
-        path = folder / f"{o.record.name}.h5"
-        if not path.exists():
-            write_record(path, o.record, single_precision=True)
-            written.append(path)
-    return written
+        if o.record is not None and not (folder / f"{o.record.name}.h5").exists():
+            write_record(folder / f"{o.record.name}.h5", o.record, single_precision=True)
 
 
 def _coefficients(outcome) -> dict[str, float]:
