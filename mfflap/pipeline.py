@@ -46,6 +46,10 @@ class RunOptions:
     #: live, back-test records run before on this set-up, taken instead of a new run (the
     #: rounds' own records, :mod:`mfflap.rounds`)
     done_backtests: tuple[Path, ...] = ()
+    #: beta -> a motion with its CFD means: that beta is optimised with the model's outputs
+    #: corrected to predict them (:mod:`mfflap.optimisation.output_correction`; the rounds'
+    #: ``--correct-outputs``)
+    correct_at: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         allowed = ["case", *(f"identified:{s}" for s in RUN_STRATEGIES)]
@@ -84,6 +88,8 @@ class RunOutcome:
     within_data_limits: dict = field(default_factory=dict)
     #: the stage a Ctrl-C stopped (the later ones did not run), or None
     interrupted: str | None = None
+    #: beta -> the output correction measured for it (``RunOptions.correct_at``)
+    corrections: dict = field(default_factory=dict)
 
 
 def _stage(outcome: RunOutcome, name: str, progress: Progress, fn):
@@ -275,10 +281,18 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
             outcome.problems.append("optimisation: not kept within the identification data "
                                     f"(asked): {why}")
 
+    if options.correct_at:
+        from mfflap.optimisation.output_correction import OutputCorrection
+
+        outcome.corrections = _stage(outcome, "output correction", progress, lambda: {
+            beta: OutputCorrection.measured(point, model, config.optimisation.scheme)
+            for beta, point in options.correct_at.items()}) or {}
+
     def optimisation():
         try:
             return beta_study(config, n_starts=options.n_starts,
-                              with_ipopt=options.with_ipopt, model=model, progress=progress)
+                              with_ipopt=options.with_ipopt, model=model, progress=progress,
+                              corrections=outcome.corrections)
         except StudyInterrupted as exc:  # the betas finished before it are written
             outcome.study = exc.study
             outcome.problems.append(f"optimisation: {exc.study.interruption}")

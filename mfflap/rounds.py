@@ -56,11 +56,13 @@ class MotionCheck:
 
     Attributes
     ----------
-    cfd_mean_thrust, model_mean_thrust : N
-    cfd_mean_power, model_mean_power : W
-    thrust_error, power_error : (model - CFD) / |CFD| of the means
+    cfd_mean_thrust, model_mean_thrust : N (the model's own)
+    cfd_mean_power, model_mean_power : W (the model's own)
+    thrust_error, power_error : (prediction - CFD) / |CFD| of the means
     thrust_counted : whether the thrust error counts (:data:`THRUST_FLOOR`)
     in_fit : whether the fit of this round had already seen this motion's CFD
+    thrust_scale, power_scale : the output correction the motion was optimised with (1: none);
+        the prediction is the model's mean times it
     """
 
     label: str
@@ -73,6 +75,18 @@ class MotionCheck:
     power_error: float
     thrust_counted: bool
     in_fit: bool
+    thrust_scale: float = 1.0
+    power_scale: float = 1.0
+
+    @property
+    def predicted_thrust(self) -> float:
+        """N: the mean thrust the optimisation relied on (corrected model)."""
+        return self.thrust_scale * self.model_mean_thrust
+
+    @property
+    def predicted_power(self) -> float:
+        """W: the mean input power the optimisation relied on (corrected model)."""
+        return self.power_scale * self.model_mean_power
 
     @property
     def error(self) -> float:
@@ -86,7 +100,10 @@ class MotionCheck:
                 "cfd_mean_power": self.cfd_mean_power,
                 "model_mean_power": self.model_mean_power, "thrust_error": self.thrust_error,
                 "power_error": self.power_error, "thrust_counted": self.thrust_counted,
-                "in_fit": self.in_fit, "error": self.error}
+                "in_fit": self.in_fit, "error": self.error,
+                "thrust_scale": self.thrust_scale, "power_scale": self.power_scale,
+                "predicted_thrust": self.predicted_thrust,
+                "predicted_power": self.predicted_power}
 
 
 @dataclass
@@ -102,6 +119,7 @@ class RoundSummary:
     coefficients : the coefficients the round optimised with (name -> value)
     checks : per back-tested motion
     not_backtested : label -> why
+    corrections : beta -> the output correction the round optimised it with (as a dict)
     """
 
     index: int
@@ -111,6 +129,7 @@ class RoundSummary:
     coefficients: dict[str, float]
     checks: dict[str, MotionCheck] = field(default_factory=dict)
     not_backtested: dict[str, str] = field(default_factory=dict)
+    corrections: dict[float, dict] = field(default_factory=dict)
 
     @property
     def largest_error(self) -> float | None:
@@ -124,7 +143,8 @@ class RoundSummary:
                 "loop_records_in_fit": self.loop_records_in_fit,
                 "coefficients": self.coefficients, "largest_error": self.largest_error,
                 "checks": {k: c.as_dict() for k, c in self.checks.items()},
-                "not_backtested": self.not_backtested}
+                "not_backtested": self.not_backtested,
+                "corrections": {f"{b:g}": c for b, c in self.corrections.items()}}
 
 
 @dataclass
@@ -165,20 +185,52 @@ def check_rounds(n_rounds: int, tolerance: float, coefficients: str) -> None:
                           "--coefficients identified:uniform (or low, high)", key="rounds")
 
 
-def motion_checks(backtests: dict, in_fit: set[str]) -> dict[str, MotionCheck]:
-    """Per back-tested motion: the model's mean thrust and power against CFD's; ``in_fit``:
-    the names of the cases the round's fit used (a record's name is its case's)."""
+def motion_checks(backtests: dict, in_fit: set[str],
+                  scales: dict[str, tuple[float, float]] | None = None
+                  ) -> dict[str, MotionCheck]:
+    """Per back-tested motion: the mean thrust and power predicted for it against CFD's.
+
+    ``in_fit``: the names of the cases the round's fit used (a record's name is its case's);
+    ``scales``: label -> (thrust, power) scale of the output correction the motion was
+    optimised with (a motion not in it: the model's own means).
+    """
     done = {k: o for k, o in backtests.items() if o.comparison is not None}
     largest = max((abs(o.comparison.cfd_mean_thrust) for o in done.values()), default=0.0)
     out = {}
     for label, o in done.items():
         c = o.comparison
+        k_t, k_p = (scales or {}).get(label, (1.0, 1.0))
         out[label] = MotionCheck(
             label, o.key, c.cfd_mean_thrust, c.model_mean_thrust, c.cfd_mean_power,
-            c.model_mean_power, c.mean_thrust_error, c.mean_power_error,
+            c.model_mean_power, _relative(k_t * c.model_mean_thrust, c.cfd_mean_thrust),
+            _relative(k_p * c.model_mean_power, c.cfd_mean_power),
             thrust_counted=bool(abs(c.cfd_mean_thrust) >= THRUST_FLOOR * largest > 0),
-            in_fit=o.record is not None and o.record.name in in_fit)
+            in_fit=o.record is not None and o.record.name in in_fit,
+            thrust_scale=k_t, power_scale=k_p)
     return out
+
+
+def _relative(predicted: float, cfd: float) -> float:
+    """(predicted - CFD) / |CFD|, as the back-test's comparison gives it."""
+    return (predicted - cfd) / max(abs(cfd), 1e-12)
+
+
+def correction_points(outcome, checks: dict[str, MotionCheck], index: int) -> dict:
+    """beta -> :class:`~mfflap.optimisation.output_correction.CorrectionPoint`: each
+    back-tested optimum of round ``index`` with its CFD means, for the next round's output
+    correction."""
+    from mfflap.optimisation.output_correction import CorrectionPoint
+
+    points = {}
+    for beta, result in (outcome.study.sqp.items() if outcome.study is not None else ()):
+        label = f"β = {beta:g}"
+        if label in checks:
+            c = checks[label]
+            points[beta] = CorrectionPoint(
+                result.motion, c.cfd_mean_thrust, c.cfd_mean_power,
+                f"round {index}'s beta = {beta:g} (back-test {c.key})",
+                thrust_usable=c.thrust_counted)
+    return points
 
 
 def _keep_records(backtests: dict, folder: Path) -> None:
@@ -199,8 +251,13 @@ def _coefficients(outcome) -> dict[str, float]:
 
 
 def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out_dir: Path,
-               progress: Progress = print, source: str = ""):
+               progress: Progress = print, source: str = "", correct_outputs: bool = False):
     """Run the main job in rounds (module docstring) into ``out_dir/round_<k>``.
+
+    ``correct_outputs``: from round 2 on, each beta is optimised with the model's thrust and
+    power scaled to predict the CFD means of the previous round's optimum of that beta
+    (:mod:`mfflap.optimisation.output_correction`), and it is those corrected predictions
+    that are checked against the new back-tests.
 
     The back-test records of every round are kept in ``out_dir/loop_records`` (one per
     motion), pooled with the identification data of the later rounds and looked up as
@@ -221,6 +278,7 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
     rounds: list[RoundSummary] = []
     seen: set[str] = set()  # motion keys back-tested in earlier rounds
     outcome = None
+    points: dict = {}  # beta -> the last round's optimum with its CFD (correct_outputs)
     converged, why = False, f"ran the {n_rounds} round(s) asked for"
     for k in range(1, n_rounds + 1):
         round_dir = out_dir / f"round_{k}"
@@ -228,6 +286,7 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
         opts = replace(options, fixtures=base_fixtures + tuple(pooled),
                        backtest_fixtures=(records, *base_backtests),
                        done_backtests=(records,),
+                       correct_at=points if correct_outputs else {},
                        work_dir=round_dir / "cfd_cases",
                        vtk_dir=None if options.vtk_dir is None else round_dir / "vtk")
         progress(f"[round {k} of {n_rounds}] identification from {len(pooled)} back-test "
@@ -241,11 +300,15 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
         write_outputs(outcome.config or config, outcome, round_dir / "results.h5",
                       round_dir / "report.html", source)
         in_fit = {c.name for c in outcome.cases}
+        scales = {f"β = {b:g}": (c.thrust_scale, c.power_scale)
+                  for b, c in outcome.corrections.items()}
         summary = RoundSummary(
             k, round_dir, len(outcome.cases),
             sum(1 for p in pooled if p.stem in in_fit), _coefficients(outcome),
-            motion_checks(outcome.backtests, in_fit),
-            {lbl: o.source for lbl, o in outcome.backtests.items() if o.comparison is None})
+            motion_checks(outcome.backtests, in_fit, scales),
+            {lbl: o.source for lbl, o in outcome.backtests.items() if o.comparison is None},
+            {b: c.as_dict() for b, c in outcome.corrections.items()})
+        points = correction_points(outcome, summary.checks, k)
         rounds.append(summary)
         _keep_records(outcome.backtests, records)
         progress(describe_round(summary, tolerance))
@@ -264,7 +327,8 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
             break
         if summary.largest_error is not None and summary.largest_error <= tolerance:
             converged = True
-            why = (f"round {k}: the model predicts every back-tested motion's CFD mean thrust "
+            who = "the corrected model" if summary.corrections else "the model"
+            why = (f"round {k}: {who} predicts every back-tested motion's CFD mean thrust "
                    f"and power within {tolerance:.0%} (largest {summary.largest_error:.1%})")
             break
         if keys and keys <= seen:
@@ -283,12 +347,17 @@ def describe_round(summary: RoundSummary, tolerance: float) -> str:
     lines = [f"round {summary.index}: {summary.n_cases} CFD runs in the fit "
              f"({summary.loop_records_in_fit} from earlier rounds); "
              + ", ".join(f"{k} {v:.3g}" for k, v in summary.coefficients.items())]
+    for beta, corr in summary.corrections.items():
+        lines.append(f"  beta {beta:g} optimised with the outputs corrected: thrust x "
+                     f"{corr['thrust_scale']:.3f}, power x {corr['power_scale']:.3f} "
+                     f"(measured on {corr['source']})")
     for c in summary.checks.values():
         thrust = (f"{c.thrust_error:+.1%}" if c.thrust_counted
                   else f"{c.thrust_error:+.1%} (not counted: small thrust)")
-        lines.append(f"  {c.label}: thrust model {c.model_mean_thrust:.3g} N / CFD "
-                     f"{c.cfd_mean_thrust:.3g} N ({thrust}); power model "
-                     f"{c.model_mean_power:.3g} W / CFD {c.cfd_mean_power:.3g} W "
+        who = "model" if (c.thrust_scale, c.power_scale) == (1.0, 1.0) else "corrected model"
+        lines.append(f"  {c.label}: thrust {who} {c.predicted_thrust:.3g} N / CFD "
+                     f"{c.cfd_mean_thrust:.3g} N ({thrust}); power {who} "
+                     f"{c.predicted_power:.3g} W / CFD {c.cfd_mean_power:.3g} W "
                      f"({c.power_error:+.1%})" + ("; its CFD was in the fit (not counted)"
                                                    if c.in_fit else ""))
     for label, reason in summary.not_backtested.items():
@@ -314,9 +383,11 @@ def write_rounds(result: LoopResult, config: CaseConfig, out_dir: Path) -> None:
         for r in result.rounds:
             labels = list(r.checks)
             arrays = {name: np.array([getattr(r.checks[lbl], name) for lbl in labels])
-                      for name in ("cfd_mean_thrust", "model_mean_thrust", "cfd_mean_power",
-                                   "model_mean_power")}
-            units = {name: "N" if "thrust" in name else "W" for name in arrays}
+                      for name in ("cfd_mean_thrust", "model_mean_thrust", "predicted_thrust",
+                                   "cfd_mean_power", "model_mean_power", "predicted_power",
+                                   "thrust_scale", "power_scale")}
+            units = {name: "1" if "scale" in name else "N" if "thrust" in name else "W"
+                     for name in arrays}
             rf.write_group(f"rounds/round_{r.index}", arrays, units, {
                 "labels": json.dumps(labels), "summary": json.dumps(r.as_dict())})
     fig = rounds_figure(result)
@@ -330,32 +401,44 @@ def write_rounds(result: LoopResult, config: CaseConfig, out_dir: Path) -> None:
     rows = []
     for r in result.rounds:
         for c in r.checks.values():
-            rows.append([r.index, c.label, f"{c.model_mean_thrust:.3g}",
+            rows.append([r.index, c.label, f"{c.predicted_thrust:.3g}",
                          f"{c.cfd_mean_thrust:.3g}",
                          f"{c.thrust_error:+.1%}" + ("" if c.thrust_counted else " (n.c.)"),
-                         f"{c.model_mean_power:.3g}", f"{c.cfd_mean_power:.3g}",
-                         f"{c.power_error:+.1%}", "yes" if c.in_fit else "no"])
+                         f"{c.predicted_power:.3g}", f"{c.cfd_mean_power:.3g}",
+                         f"{c.power_error:+.1%}", "yes" if c.in_fit else "no",
+                         _scales_text(c)])
         for label, reason in r.not_backtested.items():
             rows.append([r.index, label, "", "", "not back-tested: " + reason.splitlines()[0],
-                         "", "", "", ""])
-    s.blocks.append(table_html(["round", "motion", "thrust model N", "CFD N", "error",
-                                "power model W", "CFD W", "error", "CFD in the fit"], rows))
+                         "", "", "", "", ""])
+    s.blocks.append(table_html(["round", "motion", "thrust predicted N", "CFD N", "error",
+                                "power predicted W", "CFD W", "error", "CFD in the fit",
+                                "output correction (thrust, power)"], rows))
     s.blocks.append(table_html(["round", "CFD runs in the fit", "of them from rounds before",
                                 *(result.rounds[0].coefficients if result.rounds else [])],
                                [[r.index, r.n_cases, r.loop_records_in_fit,
                                  *(f"{v:.3g}" for v in r.coefficients.values())]
                                 for r in result.rounds]))
     s.blocks.append(figure_html(fig, "Mean thrust and input power of each back-tested "
-                                     "motion, model (open) and CFD (filled), by round, and "
-                                     "the model's largest counted error of the two (grey: "
+                                     "motion, predicted (open: the model's, or the corrected "
+                                     "model's where the motion was optimised with corrected "
+                                     "outputs) and CFD (filled), by round, and the "
+                                     "prediction's largest counted error of the two (grey: "
                                      "its CFD was in the round's fit, not counted); each "
                                      "round's own report: round_<k>/report.html"))
     rep.write(out_dir / "rounds.html")
 
 
+def _scales_text(check: MotionCheck) -> str:
+    """The output correction of a motion in a table cell ("none": the model's own)."""
+    if (check.thrust_scale, check.power_scale) == (1.0, 1.0):
+        return "none"
+    return f"x {check.thrust_scale:.3f}, x {check.power_scale:.3f}"
+
+
 def rounds_figure(result: LoopResult):
-    """Model (open) and CFD (filled) mean thrust and power of each motion over the rounds,
-    and each motion's counted error against the tolerance (a motion whose CFD was in the
+    """Predicted (open; the corrected model's where a motion was optimised with corrected
+    outputs) and CFD (filled) mean thrust and power of each motion over the rounds, and each
+    motion's counted error against the tolerance (a motion whose CFD was in the
     round's fit is drawn grey there)."""
     from matplotlib.figure import Figure
 
@@ -366,8 +449,8 @@ def rounds_figure(result: LoopResult):
         colour = f"C{i % 10}"
         pts = [(r.index, r.checks[label]) for r in result.rounds if label in r.checks]
         x = [p[0] for p in pts]
-        for ax, cfd, mod in ((axes[0], "cfd_mean_thrust", "model_mean_thrust"),
-                             (axes[1], "cfd_mean_power", "model_mean_power")):
+        for ax, cfd, mod in ((axes[0], "cfd_mean_thrust", "predicted_thrust"),
+                             (axes[1], "cfd_mean_power", "predicted_power")):
             ax.plot(x, [getattr(c, cfd) for _, c in pts], "o-", color=colour, label=label)
             ax.plot(x, [getattr(c, mod) for _, c in pts], "o--", color=colour,
                     markerfacecolor="none")
@@ -379,7 +462,7 @@ def rounds_figure(result: LoopResult):
     axes[2].axhline(100 * result.tolerance, color="k", ls=":", label="tolerance")
     axes[0].set_ylabel("mean thrust (N)")
     axes[1].set_ylabel("mean input power (W)")
-    axes[2].set_ylabel("model's error of the means (%)")
+    axes[2].set_ylabel("prediction's error of the means (%)")
     for ax in axes:
         ax.set_xlabel("round")
         ax.set_xticks([r.index for r in result.rounds])

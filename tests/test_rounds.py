@@ -42,6 +42,10 @@ def test_the_cli_refuses_rounds_with_the_case_coefficients_before_anything_is_wr
     assert res.exit_code == 2
     assert "--loop-tolerance applies only to rounds of CFD in the loop" in res.output
     assert not out.exists()
+    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--correct-outputs"])
+    assert res.exit_code == 2
+    assert "--correct-outputs applies only to rounds of CFD in the loop" in res.output
+    assert not out.exists()
 
 
 def _outcome(key, cfd_thrust, model_thrust, cfd_power, model_power):
@@ -75,6 +79,38 @@ def test_motion_checks_count_thrust_only_where_there_is_thrust_and_only_unseen_m
     # the motion whose CFD was in the fit is not counted: its error is in-sample
     assert summary.largest_error == pytest.approx(0.2)
     assert np.isfinite(summary.as_dict()["largest_error"])
+
+
+def test_a_corrected_motion_is_checked_by_its_corrected_prediction():
+    """Optimised with thrust x 1.25 and power x 1.1, the beta = 0 motion's prediction is the
+    model's means times those: 24 N x 1.25 = 30 N is CFD's (0 %), 55 W x 1.1 against 50 W
+    is +21 %; the motion without a correction keeps the model's own error."""
+    from mfflap.rounds import RoundSummary, correction_points
+
+    backtests = {"β = 0": _outcome("a", 30.0, 24.0, 50.0, 55.0),
+                 "β = 0.5": _outcome("c", 10.0, 10.5, 8.0, 6.0)}
+    checks = motion_checks(backtests, set(), {"β = 0": (1.25, 1.1)})
+    a = checks["β = 0"]
+    assert (a.model_mean_thrust, a.predicted_thrust) == (24.0, pytest.approx(30.0))
+    assert a.thrust_error == pytest.approx(0.0)
+    assert a.power_error == pytest.approx(55 * 1.1 / 50 - 1)
+    assert checks["β = 0.5"].thrust_error == pytest.approx(0.05)
+    assert (checks["β = 0.5"].thrust_scale, checks["β = 0.5"].power_scale) == (1.0, 1.0)
+    assert a.as_dict()["predicted_power"] == pytest.approx(60.5)
+    summary = RoundSummary(2, Path("r"), 47, 4, {}, checks, {}, {0.0: {"thrust_scale": 1.25}})
+    assert summary.as_dict()["corrections"] == {"0": {"thrust_scale": 1.25}}
+    # the next round's correction points: each back-tested optimum with its CFD means
+    motion0, motion1 = object(), object()
+    study = SimpleNamespace(sqp={0.0: SimpleNamespace(motion=motion0),
+                                 0.5: SimpleNamespace(motion=object()),
+                                 1.0: SimpleNamespace(motion=motion1)})
+    points = correction_points(SimpleNamespace(study=study), checks, 2)
+    assert set(points) == {0.0, 0.5}  # beta = 1 was not back-tested
+    assert points[0.0].motion is motion0
+    assert (points[0.0].cfd_mean_thrust, points[0.0].cfd_mean_power) == (30.0, 50.0)
+    assert points[0.0].source == "round 2's beta = 0 (back-test a)"
+    assert points[0.0].thrust_usable
+    assert correction_points(SimpleNamespace(study=None), checks, 2) == {}
 
 
 @pytest.mark.slow

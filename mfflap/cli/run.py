@@ -44,11 +44,16 @@ from mfflap.cli.json_output import echo_json
 @click.option("--loop-tolerance", default=0.1, show_default=True, type=float,
               help="With --rounds: the relative error of the model's mean thrust and power "
                    "against CFD at which the rounds stop.")
+@click.option("--correct-outputs", is_flag=True,
+              help="With --rounds: from round 2 on, optimise each beta with the model's "
+                   "thrust and power scaled to predict the CFD means of the previous round's "
+                   "optimum of that beta (output space mapping), and check those corrected "
+                   "predictions against the new back-tests.")
 @click.option("--json", "as_json", is_flag=True, help="Print the key numbers as JSON.")
 def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
             backtest_fixtures: tuple[Path, ...], live: bool, coefficients: str, starts: int,
             gain_table: bool, no_ipopt: bool, within_data: bool, rounds: int,
-            loop_tolerance: float, as_json: bool) -> None:
+            loop_tolerance: float, correct_outputs: bool, as_json: bool) -> None:
     """Identification, sweep, optimisation, back-test and reports for CASE_FILE.
 
     Writes <out>/report.html (every figure), <out>/results.h5 (every number and the inputs)
@@ -63,7 +68,8 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
     from mfflap.rounds import check_rounds
 
     if rounds == 1:
-        refuse_given(("loop_tolerance",), "rounds of CFD in the loop (--rounds 2 or more)")
+        refuse_given(("loop_tolerance", "correct_outputs"),
+                     "rounds of CFD in the loop (--rounds 2 or more)")
     check_rounds(rounds, loop_tolerance, coefficients)  # before anything runs
     case = load_case(case_file)
     out_dir = out_dir or Path(f"{case.study.name}_run")
@@ -75,7 +81,7 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
     out_dir.mkdir(parents=True, exist_ok=True)
     if rounds > 1:
         _run_rounds(case, options, rounds, loop_tolerance, out_dir, sources_shown(fixtures),
-                    as_json)
+                    as_json, correct_outputs)
         return
     outcome = run_study(case, options, progress=lambda m: click.echo(m, err=True))
     write_outputs(outcome.config or case, outcome, out_dir / "results.h5",
@@ -99,12 +105,13 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
 
 
 def _run_rounds(case, options, rounds: int, tolerance: float, out_dir: Path, source: str,
-                as_json: bool) -> None:
+                as_json: bool, correct_outputs: bool = False) -> None:
     """``--rounds`` > 1: :func:`mfflap.rounds.run_rounds` and what it wrote."""
     from mfflap.rounds import run_rounds
 
     result, outcome = run_rounds(case, options, rounds, tolerance, out_dir,
-                                 progress=lambda m: click.echo(m, err=True), source=source)
+                                 progress=lambda m: click.echo(m, err=True), source=source,
+                                 correct_outputs=correct_outputs)
     if outcome is not None and outcome.interrupted is not None:
         click.echo(f"interrupted in round {len(result.rounds)} ({outcome.interrupted}): "
                    f"{out_dir / 'rounds.html'} holds the rounds so far; the same command runs "
@@ -141,6 +148,7 @@ def run_summary(outcome) -> dict:
         out["thrust_gain_beta0"] = outcome.study.thrust_gain
         out["thrust_gain_beta0_refined"] = outcome.study.thrust_gain_refined
         out["thrust_gain_beta0_caveat"] = outcome.study.thrust_gain_caveat
+    out["output_corrections"] = {f"{b:g}": c.as_dict() for b, c in outcome.corrections.items()}
     out["backtest"] = {k: {"status": o.status, "source": o.source,
                            **(o.comparison.as_dict() if o.comparison else {})}
                        for k, o in outcome.backtests.items()}

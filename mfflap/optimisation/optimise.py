@@ -270,18 +270,22 @@ def optimise_ipopt(problem: FlappingProblem, start: DiscreteMotion, *, min_perio
 
 def multistart(problem: FlappingProblem, starts: Sequence[tuple[str, DiscreteMotion]], *,
                min_period: float, max_period: float,
-               progress: Callable[[str], None] | None = None, **kwargs
-               ) -> tuple[OptimisationResult, list[OptimisationResult]]:
-    """SQP from each start; the best result (lowest J, converged first) and all of them."""
+               progress: Callable[[str], None] | None = None, label: str | None = None,
+               **kwargs) -> tuple[OptimisationResult, list[OptimisationResult]]:
+    """SQP from each start; the best result (lowest J, converged first) and all of them.
+
+    ``label`` names the problem in the progress lines (default ``beta <beta>``).
+    """
     if not starts:
         raise ConfigError("multistart needs at least one starting motion")
     results = []
-    for label, motion in starts:
+    name = label or f"beta {problem.beta:g}"
+    for start_label, motion in starts:
         res = optimise_sqp(problem, motion, min_period=min_period, max_period=max_period,
-                           start_label=label, **kwargs)
+                           start_label=start_label, **kwargs)
         results.append(res)
         if progress is not None:
-            progress(f"beta {problem.beta:g} from {label}: J = {res.objective:.4g}, "
+            progress(f"{name} from {start_label}: J = {res.objective:.4g}, "
                      f"thrust {float(res.summary.mean_thrust):.3g} N, "
                      f"{'converged' if res.converged else 'NOT converged'}")
     best = min(results, key=lambda r: (not r.converged, r.objective))

@@ -3,7 +3,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -17,6 +17,7 @@ from mfflap.optimisation.optimise import (
     multistart,
     optimise_ipopt,
 )
+from mfflap.optimisation.output_correction import OutputCorrection
 from mfflap.optimisation.problem import FlappingProblem
 from mfflap.optimisation.refine import (
     RefinedSinusoid,
@@ -117,6 +118,9 @@ class BetaStudy:
     #: the betas asked for but not optimised because of that interrupt (the stopped one
     #: first); their partial results are not kept
     betas_not_optimised: tuple[float, ...] = ()
+    #: beta -> the output correction its optimisation used
+    #: (:class:`~mfflap.optimisation.output_correction.OutputCorrection`); none: the model's
+    corrections: dict = field(default_factory=dict)
 
     @property
     def interruption(self) -> str | None:
@@ -167,6 +171,9 @@ class BetaStudy:
         doubts = ([] if result.converged else ["did not converge"]) + \
             ([f"is flagged ({len(result.flags)} flag{'s' if len(result.flags) > 1 else ''})"]
              if result.flags else [])
+        if 0.0 in self.corrections:
+            doubts.append("was optimised with the model's outputs corrected from CFD (its "
+                          "power limit is not the best sinusoid's)")
         if not doubts:
             return None
         return (f"the beta = 0 optimum it is computed from {' and '.join(doubts)}: the gain "
@@ -195,8 +202,13 @@ class StudyInterrupted(KeyboardInterrupt):
 
 def beta_study(config: CaseConfig, betas: Sequence[float] | None = None, n_starts: int = 3,
                with_ipopt: bool = True, model=None, sweep: SweepResult | None = None,
-               progress: Progress | None = None) -> BetaStudy:
+               progress: Progress | None = None,
+               corrections: Mapping[float, OutputCorrection] | None = None) -> BetaStudy:
     """Best feasible sinusoid, then multi-start SQP (and IPOPT) for each beta.
+
+    ``corrections`` (beta -> :class:`OutputCorrection`) optimise those betas with the
+    model's thrust and power scaled as CFD measured them; the sweep and the best sinusoid
+    stay the model's own.
 
     Raises
     ------
@@ -211,8 +223,18 @@ def beta_study(config: CaseConfig, betas: Sequence[float] | None = None, n_start
     if n_starts < 1:
         raise ConfigError(f"n_starts must be >= 1 (the best sinusoid is the first start), got "
                           f"{n_starts!r}", key="n_starts")
+    corrections = dict(corrections or {})
     problems = {beta: problem_for(config, beta, model)
                 for beta in (betas if betas is not None else o.betas)}
+    unknown = sorted(set(corrections) - set(problems))
+    if unknown:
+        raise ConfigError(f"output corrections for beta {unknown} that are not optimised "
+                          f"(betas {list(problems)})", key="corrections")
+    for beta, corr in corrections.items():
+        problems[beta] = corr.problem(problems[beta])
+        if progress is not None:
+            progress(f"beta {beta:g} optimised with the model's outputs corrected: "
+                     f"{corr.describe()}")
     sweep = sweep if sweep is not None else default_sweep(config, model, progress)
     best = sweep.best_feasible()
     starts = starting_points(sweep, o.n_steps, n_starts)
@@ -226,23 +248,40 @@ def beta_study(config: CaseConfig, betas: Sequence[float] | None = None, n_start
     sqp, sqp_all, ipopt = {}, {}, {}
     for beta, problem in problems.items():
         try:
-            found, found_all = multistart(problem, starts, min_period=o.min_period,
-                                          max_period=o.max_period, progress=progress)
+            found, found_all = multistart(
+                problem, starts, min_period=o.min_period, max_period=o.max_period,
+                progress=progress, label=f"beta {beta:g}" + (
+                    " (outputs corrected; J over c)" if beta in corrections else ""))
             found_ipopt = optimise_ipopt(problem, starts[0][1], min_period=o.min_period,
                                          max_period=o.max_period, start_label=starts[0][0]
                                          ) if with_ipopt else None
+            if beta in corrections:  # the case's beta, the corrected J (not J / c)
+                c = corrections[beta].objective_factor(beta)
+                found, found_ipopt = (_corrected(r, beta, c) for r in (found, found_ipopt))
+                found_all = [_corrected(r, beta, c) for r in found_all]
         except KeyboardInterrupt as exc:  # keep the betas finished; this one is dropped
             left = tuple(list(problems)[list(problems).index(beta):])
             raise StudyInterrupted(BetaStudy(sweep, best, sqp, sqp_all, ipopt, refined,
                                              interrupted_beta=beta,
-                                             betas_not_optimised=left)) from exc
+                                             betas_not_optimised=left,
+                                             corrections=corrections)) from exc
         sqp[beta], sqp_all[beta] = found, found_all
         if found_ipopt is not None:
             ipopt[beta] = found_ipopt
             if progress is not None:
                 progress(f"beta {beta:g} IPOPT (hard constraints): thrust "
                          f"{float(found_ipopt.summary.mean_thrust):.3g} N, {found_ipopt.message}")
-    return BetaStudy(sweep, best, sqp, sqp_all, ipopt, refined)
+    return BetaStudy(sweep, best, sqp, sqp_all, ipopt, refined, corrections=corrections)
+
+
+def _corrected(result: OptimisationResult | None, beta: float, factor: float
+               ) -> OptimisationResult | None:
+    """A result of an output-corrected problem labelled with the case's beta, its objective
+    and history the corrected J (``factor`` c times the equivalent problem's)."""
+    if result is None:
+        return None
+    return replace(result, beta=beta, objective=factor * result.objective,
+                   history=factor * np.asarray(result.history))
 
 
 def gain_table(config: CaseConfig, n_steps: Sequence[int] = (25, 50, 100),

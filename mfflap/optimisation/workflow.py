@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from collections.abc import Mapping
 
 import numpy as np
@@ -29,6 +30,11 @@ def write_study(rf: ResultsFile, config: CaseConfig, study: BetaStudy,
     for beta, r in study.sqp.items():
         settings = {**problem_settings(problem_for(config, beta, model)), "n_steps": o.n_steps,
                     "min_period": o.min_period, "max_period": o.max_period}
+        if beta in study.corrections:  # the problem solved: the case's, outputs corrected
+            corr = study.corrections[beta]
+            settings.update({"output_thrust_scale": corr.thrust_scale,
+                             "output_power_scale": corr.power_scale,
+                             "output_correction": json.dumps(corr.as_dict())})
         write_result(rf, f"{prefix}/sqp/{beta_key(beta)}", r, settings)
         for k, other in enumerate(study.sqp_all.get(beta, [])):
             write_result(rf, f"{prefix}/sqp_starts/{beta_key(beta)}/start_{k}", other, settings)

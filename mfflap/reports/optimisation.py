@@ -126,6 +126,16 @@ def add_optimisation_sections(rep: Report, study, model, scheme: str, max_power:
     rows = [result_rows(f"β = {b:g}", r) for b, r in study.sqp.items()]
     rows += [result_rows(f"β = {b:g}", r) for b, r in study.ipopt.items()]
     s.blocks.append(table_html(RESULT_HEADER, rows))
+    for b, corr in study.corrections.items():
+        if b in study.sqp:
+            m = study.sqp[b].summary
+            s.blocks.append(text_html(
+                f"β = {b:g} was optimised with the model's outputs corrected from CFD: "
+                f"{corr.describe()}. The table gives the model's own means; corrected, its "
+                f"mean thrust is {corr.thrust_scale * float(m.mean_thrust):.3g} N and mean "
+                f"power {corr.power_scale * float(m.mean_power):.3g} W, and P_max holds for "
+                f"the corrected power (the model's own at most {max_power / corr.power_scale:.3g}"
+                " W)."))
     if study.thrust_gain is not None:
         s.blocks.append(text_html(f"β = 0 thrust gain over the best feasible sinusoid: "
                                   f"{study.thrust_gain:+.1%} (the paper: +50.29 %)."))
