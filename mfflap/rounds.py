@@ -21,6 +21,13 @@ they are looked up before the shipped fixtures and, live, before a new OpenFOAM 
 motion repeated from an earlier round is not run again and the same command run again (after
 a Ctrl-C) finds the CFD done before.
 
+With ``correct_outputs`` (``--correct-outputs``), round k >= 2 also corrects the model's
+outputs: each beta is optimised with the model's mean thrust and power scaled to predict
+the CFD means of round k - 1's optimum of that beta, measured with round k's refitted model
+(:mod:`mfflap.optimisation.output_correction`), and the error counted is that of the
+corrected prediction, the one the optimiser relied on. If the rounds reach a fixed point,
+the corrected model predicts CFD's means there.
+
 Only motions whose CFD the round's fit has not seen count (a motion repeated from an earlier
 round is in the fit). A motion's mean thrust error counts only where its CFD mean thrust is at least
 :data:`THRUST_FLOOR` of the largest CFD mean thrust among the round's motions: a motion of

@@ -219,9 +219,10 @@ def fixture_dir(name: str = "table1_coarse") -> Path:
 
 
 #: The shipped back-test fixture folders: the optimised motions of the shipped case, those
-#: of ``mfflap run --within-data``, and those of the later rounds of ``mfflap run --rounds``
-#: (each record named by its motion's key).
-BACKTEST_FIXTURES = ("backtest", "backtest_within_data", "backtest_rounds")
+#: of ``mfflap run --within-data``, those of the later rounds of ``mfflap run --rounds`` and
+#: of ``mfflap run --rounds --correct-outputs`` (each record named by its motion's key).
+BACKTEST_FIXTURES = ("backtest", "backtest_within_data", "backtest_rounds",
+                     "backtest_corrected")
 
 
 def backtest_fixture_dirs() -> list[Path]:
