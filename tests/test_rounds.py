@@ -284,6 +284,18 @@ def test_corrected_rounds_predict_their_new_optima_far_better(tmp_path):
         i = labels.index("β = 0")
         assert g["predicted_power"][i] == pytest.approx(
             g["power_scale"][i] * g["model_mean_power"][i])
+    # `mfflap backtest` of a round's results compares with the coefficients it optimised with
+    res = CliRunner().invoke(cli, ["backtest", str(out / "round_2" / "results.h5"), "--json"])
+    assert res.exit_code == 0, res.output
+    again = json.loads(res.stdout[res.stdout.index("{"):])["motions"]["β = 0"]
+    assert again["model_mean_thrust"] == pytest.approx(
+        second["checks"]["β = 0"]["model_mean_thrust"], rel=1e-9)
+    assert again["corrected_prediction"]["mean_thrust"] == pytest.approx(
+        second["checks"]["β = 0"]["predicted_thrust"], rel=1e-9)
+    res = CliRunner().invoke(cli, ["backtest", str(out / "round_2" / "results.h5"),
+                                   "--motion", "0.5"])
+    assert res.exit_code == 0, res.output
+    assert "optimised with corrected outputs (thrust x " in res.stdout
     html = (out / "rounds.html").read_text()
     assert "output correction (thrust, power)" in html
     assert "corrected from CFD" in (out / "round_2" / "report.html").read_text().replace(

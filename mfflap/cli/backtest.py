@@ -53,24 +53,31 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
     with ResultsFile(optimisation_file, kinds=("optimisation", "run")) as rf:
         case = loads_case(rf.config_toml, source=f"{optimisation_file}:/inputs")
         sweep, best = read_sweep(rf, "optimisation/sweep")
-        motions = {}
+        model = optimised_with(rf, case)
+        motions, scales = {}, {}
         for key in sorted(rf.h5["optimisation/sqp"]):
             r = read_result(rf, f"optimisation/sqp/{key}")
             motions[f"β = {r.beta:g}"] = r.motion
+            attrs = rf.h5[f"optimisation/sqp/{key}"].attrs
+            if "setting_output_thrust_scale" in attrs:  # optimised with corrected outputs
+                scales[f"β = {r.beta:g}"] = (float(attrs["setting_output_thrust_scale"]),
+                                             float(attrs["setting_output_power_scale"]))
     n = next(iter(motions.values())).n_steps
     motions = {"best sinusoid": sinusoid_motion(sweep, best, n), **motions}
     motions = _chosen(motions, only)
+    click.echo("model: the coefficients the motions were optimised with, " + ", ".join(
+        f"{k} {v:.3g}" for k, v in model.coefficients.items()), err=True)
     folders = list(fixture_folders) or backtest_fixture_dirs()
     outcomes: dict = {}
     interrupted = None
     try:
-        backtest_all(case, motions, case.morison_model(), fixture_folders=folders,
+        backtest_all(case, motions, model, fixture_folders=folders,
                      live=live, work_dir=work_dir, save_to=save_to, mesh=spec.name,
                      solver=solver, progress=lambda m: click.echo(m, err=True), into=outcomes,
                      done_folders=() if save_to is None else (save_to,))
     except KeyboardInterrupt:  # the solver is stopped by then; show what was back-tested
         interrupted = next((label for label in motions if label not in outcomes), "the last")
-    _show(outcomes, as_json)
+    _show(outcomes, as_json, scales)
     if interrupted is not None:
         click.echo(f"interrupted during the back-test of {interrupted}: {len(outcomes)} of "
                    f"{len(motions)} motions back-tested{' (shown above)' if outcomes else ''};"
@@ -111,13 +118,33 @@ def _chosen(motions: dict, only: tuple[str, ...]) -> dict:
     return {k: m for k, m in motions.items() if k in wanted}
 
 
-def _show(outcomes: dict, as_json: bool) -> None:
-    """Print the back-tests: a line per motion, or JSON."""
+def optimised_with(rf, case):
+    """The model the motions of an optimisation or run file were optimised with: the case's
+    with the coefficients stored beside them (``--coefficients identified:...`` runs), or
+    the case's own for files written before they were stored."""
+    import json
+
+    stored = rf.h5["optimisation"].attrs.get("model_coefficients")
+    model = case.morison_model()
+    return model if stored is None else model.with_coefficients(json.loads(stored))
+
+
+def _show(outcomes: dict, as_json: bool, scales: dict | None = None) -> None:
+    """Print the back-tests: a line per motion, or JSON. ``scales``: label -> (thrust, power)
+    scale of the output correction a motion was optimised with; its corrected prediction is
+    shown beside the model's own."""
     from mfflap.backtest.workflow import gain_in_cfd, no_gain_in_cfd_reason
 
     data = {label: {"status": o.status, "source": o.source, "motion_key": o.key,
                     **(o.comparison.as_dict() if o.comparison else {})}
             for label, o in outcomes.items()}
+    for label, (k_t, k_p) in (scales or {}).items():
+        d = data.get(label)
+        if d is not None and "model_mean_thrust" in d:
+            d["corrected_prediction"] = {
+                "thrust_scale": k_t, "power_scale": k_p,
+                "mean_thrust": k_t * d["model_mean_thrust"],
+                "mean_power": k_p * d["model_mean_power"]}
     gain = gain_in_cfd(outcomes)
     if as_json:
         echo_json({"motions": data, "cfd_thrust_gain": gain,
@@ -131,6 +158,11 @@ def _show(outcomes: dict, as_json: bool) -> None:
                    f"{d['model_mean_thrust']:.3f} N; power CFD {d['cfd_mean_power']:.3f} W "
                    f"model {d['model_mean_power']:.3f} W; NRMSE thrust "
                    f"{d['nrmse']['thrust']:.3f}; CFD max power {d['cfd_max_power']:.1f} W")
+        if "corrected_prediction" in d:
+            c = d["corrected_prediction"]
+            click.echo(f"{'':14s} optimised with corrected outputs (thrust x "
+                       f"{c['thrust_scale']:.3f}, power x {c['power_scale']:.3f}): predicted "
+                       f"{c['mean_thrust']:.3f} N, {c['mean_power']:.3f} W")
         if "instead of a live run" in d["source"]:  # said here, not only in the progress
             click.echo(f"{'':14s} CFD: {d['source']}")
     if gain is not None:

@@ -24,9 +24,13 @@ def _or_nan(value: float | None) -> float:
 def write_study(rf: ResultsFile, config: CaseConfig, study: BetaStudy,
                 gain: Mapping[str, np.ndarray] | None = None, model=None,
                 prefix: str = "optimisation") -> None:
-    """Store the sweep, every beta's SQP optimum (and all starts), IPOPT results, the gain."""
+    """Store the sweep, every beta's SQP optimum (and all starts), IPOPT results, the gain,
+    and the coefficients of the model they were optimised with."""
     write_sweep(rf, f"{prefix}/sweep", study.sweep, study.best_sinusoid)
     o = config.optimisation
+    # the coefficients the motions were optimised with (the case file's, or identified ones)
+    rf.h5[prefix].attrs["model_coefficients"] = json.dumps(
+        {k: float(v) for k, v in (model or config.morison_model()).coefficients.items()})
     for beta, r in study.sqp.items():
         settings = {**problem_settings(problem_for(config, beta, model)), "n_steps": o.n_steps,
                     "min_period": o.min_period, "max_period": o.max_period}
