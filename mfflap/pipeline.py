@@ -230,6 +230,7 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
     from mfflap.campaign.records import backtest_fixture_dirs, fixture_dir
     from mfflap.identification.error_growth import scaling_advice
     from mfflap.identification.workflow import identify_strategies, load_cases
+    from mfflap.optimisation.store import beta_label
     from mfflap.optimisation.study import (
         StudyInterrupted,
         beta_study,
@@ -306,7 +307,7 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
     if study is not None:
         n = config.optimisation.n_steps
         motions = {"best sinusoid": sinusoid_motion(study.sweep, study.best_sinusoid, n)}
-        motions.update({f"β = {b:g}": r.motion for b, r in study.sqp.items()})
+        motions.update({beta_label(b): r.motion for b, r in study.sqp.items()})
         if reference is not None:
             outcome.coverage = _stage(outcome, "motions against the identification data",
                                       progress, lambda: motion_coverage(

@@ -227,10 +227,11 @@ def correction_points(outcome, checks: dict[str, MotionCheck], index: int) -> di
     back-tested optimum of round ``index`` with its CFD means, for the next round's output
     correction."""
     from mfflap.optimisation.output_correction import CorrectionPoint
+    from mfflap.optimisation.store import beta_label
 
     points = {}
     for beta, result in (outcome.study.sqp.items() if outcome.study is not None else ()):
-        label = f"β = {beta:g}"
+        label = beta_label(beta)
         if label in checks:
             c = checks[label]
             points[beta] = CorrectionPoint(
@@ -276,6 +277,7 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
         The rounds and the last round's outcome.
     """
     from mfflap.campaign.records import backtest_fixture_dirs, fixture_dir
+    from mfflap.optimisation.store import beta_label
     from mfflap.pipeline import run_study, write_outputs
 
     check_rounds(n_rounds, tolerance, options.coefficients)
@@ -307,7 +309,7 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
         write_outputs(outcome.config or config, outcome, round_dir / "results.h5",
                       round_dir / "report.html", source)
         in_fit = {c.name for c in outcome.cases}
-        scales = {f"β = {b:g}": (c.thrust_scale, c.power_scale)
+        scales = {beta_label(b): (c.thrust_scale, c.power_scale)
                   for b, c in outcome.corrections.items()}
         summary = RoundSummary(
             k, round_dir, len(outcome.cases),

@@ -41,7 +41,7 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
     from mfflap.campaign.records import backtest_fixture_dirs
     from mfflap.cfd.openfoam.setups import mesh_and_solver
     from mfflap.config import loads_case
-    from mfflap.optimisation.store import read_result, read_sweep
+    from mfflap.optimisation.store import beta_label, read_result, read_sweep
     from mfflap.optimisation.study import sinusoid_motion
     from mfflap.results import ResultsFile
 
@@ -57,10 +57,10 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
         motions, scales = {}, {}
         for key in sorted(rf.h5["optimisation/sqp"]):
             r = read_result(rf, f"optimisation/sqp/{key}")
-            motions[f"β = {r.beta:g}"] = r.motion
+            motions[beta_label(r.beta)] = r.motion
             attrs = rf.h5[f"optimisation/sqp/{key}"].attrs
             if "setting_output_thrust_scale" in attrs:  # optimised with corrected outputs
-                scales[f"β = {r.beta:g}"] = (float(attrs["setting_output_thrust_scale"]),
+                scales[beta_label(r.beta)] = (float(attrs["setting_output_thrust_scale"]),
                                              float(attrs["setting_output_power_scale"]))
     n = next(iter(motions.values())).n_steps
     motions = {"best sinusoid": sinusoid_motion(sweep, best, n), **motions}
@@ -100,6 +100,8 @@ def _chosen(motions: dict, only: tuple[str, ...]) -> dict:
     click.BadParameter
         Naming a motion the file does not hold, and those it does.
     """
+    from mfflap.optimisation.store import beta_label
+
     if not only:
         return motions
     wanted = set()
@@ -108,7 +110,7 @@ def _chosen(motions: dict, only: tuple[str, ...]) -> dict:
         if label not in motions:  # a beta: "0.5", "beta 0.5", "β=0.5"
             token = label.removeprefix("beta").removeprefix("β").strip(" =")
             try:
-                label = f"β = {float(token):g}"
+                label = beta_label(float(token))
             except ValueError:
                 pass
         if label not in motions:

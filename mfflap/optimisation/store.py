@@ -73,6 +73,12 @@ def read_sweep(rf: ResultsFile, group: str) -> tuple[SweepResult, int]:
     return SweepResult(**arrays), int(attrs["best_feasible"])
 
 
+def beta_label(beta: float) -> str:
+    """The label of a beta's optimised motion among a run's motions and back-tests, e.g.
+    ``β = 0.5``."""
+    return f"β = {beta:g}"
+
+
 def beta_key(beta: float) -> str:
     """Group name of a beta, e.g. ``beta_0.50``."""
     return f"beta_{beta:.2f}"

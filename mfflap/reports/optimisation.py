@@ -160,11 +160,12 @@ def add_optimisation_sections(rep: Report, study, model, scheme: str, max_power:
                 "flow drives the plate), as the paper reports for β = 1."))
         if r.flags:
             s.blocks.append(text_html(f"β = {b:g}: " + " ".join(r.flags), warn=True))
+    from mfflap.optimisation.store import beta_label
     from mfflap.optimisation.study import sinusoid_motion
 
     motions = {"best sinusoid": sinusoid_motion(sw, best, next(iter(study.sqp.values()))
                                                 .motion.n_steps)}
-    motions.update({f"β = {b:g}": r.motion for b, r in study.sqp.items()})
+    motions.update({beta_label(b): r.motion for b, r in study.sqp.items()})
     s.blocks.append(figure_html(motion_figure(model, motions, scheme, max_power),
                                 "Motion, thrust and power over a cycle (Fig. 4c-e)"))
     s.blocks.append(figure_html(history_figure(study.sqp), "SQP convergence"))
