@@ -210,20 +210,20 @@ def test_a_stop_in_a_round_ends_the_rounds_and_keeps_what_was_done(tmp_path):
 
 @pytest.mark.slow
 def test_corrected_rounds_predict_their_new_optima_far_better(tmp_path):
-    """`mfflap run --rounds 5 --correct-outputs` on the shipped fixtures: round 1 is the
+    """`mfflap run --rounds 6 --correct-outputs` on the shipped fixtures: round 1 is the
     plain loop's; from round 2 on each beta is optimised with the outputs scaled to round
-    k - 1's CFD of that beta (rounds 2-4 back-tested in real OpenFOAM,
+    k - 1's CFD of that beta (rounds 2-5 back-tested in real OpenFOAM,
     backtest_corrected). The corrected predictions of rounds 2 and 3's new optima come
     within 3-18 % where the model alone was 15-53 % off, and beta = 0 then holds a mean
-    power below P_max in CFD, which round 1's optimum did not; round 4's error grows again
-    (README, "Output correction"). Round 5's motions have no CFD here, so the rounds stop
-    there."""
+    power below P_max in CFD, which round 1's optimum did not; rounds 4 and 5 widen again,
+    beta = 0 predicted low, then high (README, "Output correction"). Round 6's motions have
+    no CFD here, so the rounds stop there."""
     import json
 
     import h5py
 
     out = tmp_path / "loop"
-    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--rounds", "5",
+    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--rounds", "6",
                                    "--coefficients", "identified:uniform", "--within-data",
                                    "--correct-outputs", "--no-ipopt", "--no-gain-table",
                                    "--json"])
@@ -231,7 +231,7 @@ def test_corrected_rounds_predict_their_new_optima_far_better(tmp_path):
     summary = json.loads(res.stdout[res.stdout.index("{"):])
     loop = summary["rounds"]
     rounds = loop["rounds"]
-    assert [r["round"] for r in rounds] == [1, 2, 3, 4, 5]
+    assert [r["round"] for r in rounds] == [1, 2, 3, 4, 5, 6]
     first, second = rounds[0], rounds[1]
     assert first["corrections"] == {}
     assert set(second["corrections"]) == {"0", "0.5", "1"}
@@ -262,17 +262,19 @@ def test_corrected_rounds_predict_their_new_optima_far_better(tmp_path):
         # the corrected power limit: beta = 0's CFD mean power under P_max = 50 W
         assert r["checks"]["β = 0"]["cfd_mean_power"] < 45.0
     assert first["checks"]["β = 0"]["cfd_mean_power"] > 50.0
-    # ... but the rounds do not converge: round 4's optima move to where the ratio of CFD to
-    # model differs again (beta = 0.5 about +29 %, beta = 0 about -12 %)
-    assert rounds[3]["largest_error"] > max(rounds[1]["largest_error"],
-                                            rounds[2]["largest_error"])
-    assert rounds[3]["largest_error"] < first["largest_error"]
+    # ... but the rounds do not converge: the optima of rounds 4 and 5 move to where the
+    # ratio of CFD to model differs again, beta = 0 predicted low (-12 %), then high (+18 %)
+    for r in rounds[3:5]:
+        assert max(rounds[1]["largest_error"], rounds[2]["largest_error"]) < \
+            r["largest_error"] < first["largest_error"]
+    assert rounds[3]["checks"]["β = 0"]["thrust_error"] < -0.05
+    assert rounds[4]["checks"]["β = 0"]["thrust_error"] > 0.05
     assert not loop["converged"]
     assert second["checks"]["best sinusoid"]["thrust_scale"] == 1.0  # not corrected
-    assert rounds[4]["not_backtested"]
-    assert loop["stopped_because"].startswith("round 5: ")
+    assert rounds[5]["not_backtested"]
+    assert loop["stopped_because"].startswith("round 6: ")
     assert summary["last_round"]["output_corrections"]["0"]["source"].startswith(
-        "round 4's beta = 0")
+        "round 5's beta = 0")
     with h5py.File(out / "round_2" / "results.h5") as f:
         attrs = f["optimisation/sqp/beta_0.00"].attrs
         assert attrs["beta"] == 0.0
