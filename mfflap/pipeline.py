@@ -50,6 +50,9 @@ class RunOptions:
     #: corrected to predict them (:mod:`mfflap.optimisation.output_correction`; the rounds'
     #: ``--correct-outputs``)
     correct_at: dict = field(default_factory=dict)
+    #: K of the first-order filter from each point's scales to the measured ones (1: none;
+    #: :meth:`~mfflap.optimisation.output_correction.OutputCorrection.filtered`)
+    correction_gain: float = 1.0
 
     def __post_init__(self) -> None:
         allowed = ["case", *(f"identified:{s}" for s in RUN_STRATEGIES)]
@@ -58,6 +61,9 @@ class RunOptions:
                               f"use one of {', '.join(allowed)}", key="coefficients")
         if self.n_starts < 1:
             raise ConfigError(f"n_starts must be >= 1, got {self.n_starts!r}", key="n_starts")
+        from mfflap.optimisation.output_correction import check_gain
+
+        check_gain(self.correction_gain)
         if self.live:  # the live back-test's cases go there: refused before the first stage
             from mfflap.cfd.openfoam.case_path import check_case_path
 
@@ -286,7 +292,8 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
         from mfflap.optimisation.output_correction import OutputCorrection
 
         outcome.corrections = _stage(outcome, "output correction", progress, lambda: {
-            beta: OutputCorrection.measured(point, model, config.optimisation.scheme)
+            beta: OutputCorrection.measured(point, model, config.optimisation.scheme).filtered(
+                point.scales, options.correction_gain)
             for beta, point in options.correct_at.items()}) or {}
 
     def optimisation():

@@ -26,7 +26,10 @@ outputs: each beta is optimised with the model's mean thrust and power scaled to
 the CFD means of round k - 1's optimum of that beta, measured with round k's refitted model
 (:mod:`mfflap.optimisation.output_correction`), and the error counted is that of the
 corrected prediction, the one the optimiser relied on. If the rounds reach a fixed point,
-the corrected model predicts CFD's means there.
+the corrected model predicts CFD's means there. With ``correction_gain`` K < 1
+(``--correction-gain``), the scales move only that fraction of the way from those the last
+optimum was optimised with to the measured ones (a first-order filter, the usual cure for
+the oscillation of the undamped correction).
 
 Only motions whose CFD the round's fit has not seen count (a motion repeated from an earlier
 round is in the fit). A motion's mean thrust error counts only where its CFD mean thrust is at least
@@ -162,11 +165,15 @@ class LoopResult:
     tolerance: float
     converged: bool
     stopped_because: str
+    correct_outputs: bool = False
+    correction_gain: float = 1.0
 
     def as_dict(self) -> dict:
         """JSON-friendly."""
         return {"tolerance": self.tolerance, "converged": self.converged,
                 "stopped_because": self.stopped_because,
+                "correct_outputs": self.correct_outputs,
+                "correction_gain": self.correction_gain,
                 "rounds": [r.as_dict() for r in self.rounds]}
 
 
@@ -237,7 +244,7 @@ def correction_points(outcome, checks: dict[str, MotionCheck], index: int) -> di
             points[beta] = CorrectionPoint(
                 result.motion, c.cfd_mean_thrust, c.cfd_mean_power,
                 f"round {index}'s beta = {beta:g} (back-test {c.key})",
-                thrust_usable=c.thrust_counted)
+                thrust_usable=c.thrust_counted, scales=(c.thrust_scale, c.power_scale))
     return points
 
 
@@ -259,13 +266,15 @@ def _coefficients(outcome) -> dict[str, float]:
 
 
 def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out_dir: Path,
-               progress: Progress = print, source: str = "", correct_outputs: bool = False):
+               progress: Progress = print, source: str = "", correct_outputs: bool = False,
+               correction_gain: float = 1.0):
     """Run the main job in rounds (module docstring) into ``out_dir/round_<k>``.
 
     ``correct_outputs``: from round 2 on, each beta is optimised with the model's thrust and
     power scaled to predict the CFD means of the previous round's optimum of that beta
     (:mod:`mfflap.optimisation.output_correction`), and it is those corrected predictions
-    that are checked against the new back-tests.
+    that are checked against the new back-tests. ``correction_gain``: K of the filter from
+    the scales that optimum was optimised with to the measured ones (1: the measured ones).
 
     The back-test records of every round are kept in ``out_dir/loop_records`` (one per
     motion), pooled with the identification data of the later rounds and looked up as
@@ -296,6 +305,7 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
                        backtest_fixtures=(records, *base_backtests),
                        done_backtests=(records,),
                        correct_at=points if correct_outputs else {},
+                       correction_gain=correction_gain,
                        work_dir=round_dir / "cfd_cases",
                        vtk_dir=None if options.vtk_dir is None else round_dir / "vtk")
         progress(f"[round {k} of {n_rounds}] identification from {len(pooled)} back-test "
@@ -345,7 +355,7 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
                    "further round would fit the same data")
             break
         seen |= keys
-    result = LoopResult(rounds, tolerance, converged, why)
+    result = LoopResult(rounds, tolerance, converged, why, correct_outputs, correction_gain)
     progress(f"rounds: {why}")
     write_rounds(result, config, out_dir)
     return result, outcome
@@ -353,13 +363,14 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
 
 def describe_round(summary: RoundSummary, tolerance: float) -> str:
     """One line per motion: model against CFD mean thrust and power."""
+    from mfflap.optimisation.output_correction import describe_correction
+
     lines = [f"round {summary.index}: {summary.n_cases} CFD runs in the fit "
              f"({summary.loop_records_in_fit} from earlier rounds); "
              + ", ".join(f"{k} {v:.3g}" for k, v in summary.coefficients.items())]
     for beta, corr in summary.corrections.items():
-        lines.append(f"  beta {beta:g} optimised with the outputs corrected: thrust x "
-                     f"{corr['thrust_scale']:.3f}, power x {corr['power_scale']:.3f} "
-                     f"(measured on {corr['source']})")
+        lines.append(f"  beta {beta:g} optimised with the outputs corrected: "
+                     + describe_correction(corr))
     for c in summary.checks.values():
         thrust = (f"{c.thrust_error:+.1%}" if c.thrust_counted
                   else f"{c.thrust_error:+.1%} (not counted: small thrust)")
@@ -381,6 +392,7 @@ def describe_round(summary: RoundSummary, tolerance: float) -> str:
 def write_rounds(result: LoopResult, config: CaseConfig, out_dir: Path) -> None:
     """``out_dir/rounds.h5`` (every round's numbers, the case file beside them),
     ``rounds.png`` (model against CFD per motion over the rounds) and ``rounds.html``."""
+    from mfflap.optimisation.output_correction import describe_correction
     from mfflap.reports.html import Report, figure_html, table_html, text_html
     from mfflap.results import ResultsFile
 
@@ -389,6 +401,8 @@ def write_rounds(result: LoopResult, config: CaseConfig, out_dir: Path) -> None:
         rf.h5.attrs["tolerance"] = result.tolerance
         rf.h5.attrs["converged"] = result.converged
         rf.h5.attrs["stopped_because"] = result.stopped_because
+        rf.h5.attrs["correct_outputs"] = result.correct_outputs
+        rf.h5.attrs["correction_gain"] = result.correction_gain
         for r in result.rounds:
             labels = list(r.checks)
             arrays = {name: np.array([getattr(r.checks[lbl], name) for lbl in labels])
@@ -422,6 +436,13 @@ def write_rounds(result: LoopResult, config: CaseConfig, out_dir: Path) -> None:
     s.blocks.append(table_html(["round", "motion", "thrust predicted N", "CFD N", "error",
                                 "power predicted W", "CFD W", "error", "CFD in the fit",
                                 "output correction (thrust, power)"], rows))
+    corrected = [f"round {r.index}, beta {b:g}: {describe_correction(c)}"
+                 for r in result.rounds for b, c in r.corrections.items()]
+    if corrected:
+        s.blocks.append(text_html(
+            "Output corrections (" + ("measured scales" if result.correction_gain == 1.0
+                                      else f"filtered, gain {result.correction_gain:g}")
+            + "): " + "; ".join(corrected) + "."))
     s.blocks.append(table_html(["round", "CFD runs in the fit", "of them from rounds before",
                                 *(result.rounds[0].coefficients if result.rounds else [])],
                                [[r.index, r.n_cases, r.loop_records_in_fit,

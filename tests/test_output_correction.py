@@ -118,6 +118,51 @@ def test_a_scale_that_means_nothing_is_left_at_one_and_says_why():
     assert corr.thrust_scale == 1.0 and "too small" in corr.notes[0]
 
 
+def test_the_filter_moves_the_scales_the_gains_fraction_of_the_way():
+    model = MorisonModel()
+    d = harmonic_to_discrete(1.0, 0.3, np.deg2rad(20), np.pi / 2, 50)
+    s = evaluate_discrete(model, d).summary
+    point = CorrectionPoint(d, 1.2 * float(s.mean_thrust), 0.85 * float(s.mean_power),
+                            "round 2, beta = 0", scales=(1.4, 1.1))
+    measured = OutputCorrection.measured(point, model, "paper")
+    half = measured.filtered(point.scales, 0.5)
+    # (1 - K) kappa_previous + K kappa_measured, worked by hand
+    assert half.thrust_scale == pytest.approx(1.3)
+    assert half.power_scale == pytest.approx(0.975)
+    assert half.measured_scales == (pytest.approx(1.2), pytest.approx(0.85))
+    assert half.previous_scales == (1.4, 1.1) and half.gain == 0.5
+    assert half.describe() == ("thrust x 1.300, power x 0.975 (filter gain 0.5 from 1.400, "
+                               "1.100 towards 1.200, 0.850 measured on round 2, beta = 0)")
+    # filtering again moves from the measured scales, not from the filtered ones
+    assert half.filtered((1.0, 1.0), 0.25).thrust_scale == pytest.approx(0.75 + 0.25 * 1.2)
+    # gain 1: the measured correction itself, described as before
+    same = measured.filtered(point.scales, 1.0)
+    assert (same.thrust_scale, same.power_scale) == (measured.thrust_scale,
+                                                    measured.power_scale)
+    assert same.describe() == measured.describe()
+    # the dict written into results.h5 describes the same (a dict from before the filter,
+    # without its keys, reads as unfiltered)
+    from mfflap.optimisation.output_correction import describe_correction
+
+    assert describe_correction(half.as_dict()) == half.describe()
+    old = {k: v for k, v in measured.as_dict().items()
+           if k not in ("gain", "measured_scales", "previous_scales")}
+    assert describe_correction(old) == measured.describe()
+
+
+@pytest.mark.parametrize("gain", [0.0, -0.5, 1.5, np.nan])
+def test_a_filter_gain_outside_zero_to_one_is_refused(gain):
+    from mfflap.pipeline import RunOptions
+
+    corr = OutputCorrection(1.1, 0.9, "x")
+    with pytest.raises(ConfigError, match="correction_gain"):
+        corr.filtered((1.0, 1.0), gain)
+    with pytest.raises(ConfigError, match="correction_gain"):
+        RunOptions(correction_gain=gain)
+    with pytest.raises(ConfigError, match="previous power scale"):
+        corr.filtered((1.0, -1.0), 0.5)
+
+
 @pytest.mark.parametrize("bad", [0.0, -1.0, np.nan, np.inf])
 def test_an_impossible_scale_is_refused(bad):
     with pytest.raises(ConfigError, match="thrust_scale"):

@@ -46,6 +46,17 @@ def test_the_cli_refuses_rounds_with_the_case_coefficients_before_anything_is_wr
     assert res.exit_code == 2
     assert "--correct-outputs applies only to rounds of CFD in the loop" in res.output
     assert not out.exists()
+    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--rounds", "2",
+                                   "--coefficients", "identified:uniform",
+                                   "--correction-gain", "0.5"])
+    assert res.exit_code == 2
+    assert "--correction-gain applies only to corrected outputs" in res.output
+    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--rounds", "2",
+                                   "--coefficients", "identified:uniform",
+                                   "--correct-outputs", "--correction-gain", "0"])
+    assert res.exit_code == 2
+    assert "correction_gain" in res.output and "(0, 1]" in res.output
+    assert not out.exists()
 
 
 def _outcome(key, cfd_thrust, model_thrust, cfd_power, model_power):

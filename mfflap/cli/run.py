@@ -49,11 +49,17 @@ from mfflap.cli.json_output import echo_json
                    "thrust and power scaled to predict the CFD means of the previous round's "
                    "optimum of that beta (output space mapping), and check those corrected "
                    "predictions against the new back-tests.")
+@click.option("--correction-gain", default=1.0, show_default=True, type=float,
+              help="With --correct-outputs: K in (0, 1] of a first-order filter of the "
+                   "scales, each round moving them only this fraction of the way from "
+                   "those the previous optimum was optimised with to the measured ones "
+                   "(damps the rounds' oscillation; 1: no filter).")
 @click.option("--json", "as_json", is_flag=True, help="Print the key numbers as JSON.")
 def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
             backtest_fixtures: tuple[Path, ...], live: bool, coefficients: str, starts: int,
             gain_table: bool, no_ipopt: bool, within_data: bool, rounds: int,
-            loop_tolerance: float, correct_outputs: bool, as_json: bool) -> None:
+            loop_tolerance: float, correct_outputs: bool, correction_gain: float,
+            as_json: bool) -> None:
     """Identification, sweep, optimisation, back-test and reports for CASE_FILE.
 
     Writes <out>/report.html (every figure), <out>/results.h5 (every number and the inputs)
@@ -64,13 +70,17 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
     from mfflap.cli.options import refuse_given
     from mfflap.config import load_case
     from mfflap.identification.workflow import sources_shown
+    from mfflap.optimisation.output_correction import check_gain
     from mfflap.pipeline import RunOptions, run_study, write_outputs
     from mfflap.rounds import check_rounds
 
     if rounds == 1:
-        refuse_given(("loop_tolerance", "correct_outputs"),
+        refuse_given(("loop_tolerance", "correct_outputs", "correction_gain"),
                      "rounds of CFD in the loop (--rounds 2 or more)")
+    if not correct_outputs:
+        refuse_given(("correction_gain",), "corrected outputs (--correct-outputs)")
     check_rounds(rounds, loop_tolerance, coefficients)  # before anything runs
+    check_gain(correction_gain)
     case = load_case(case_file)
     out_dir = out_dir or Path(f"{case.study.name}_run")
     options = RunOptions(fixtures=fixtures, backtest_fixtures=backtest_fixtures, live=live,
@@ -81,7 +91,7 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
     out_dir.mkdir(parents=True, exist_ok=True)
     if rounds > 1:
         _run_rounds(case, options, rounds, loop_tolerance, out_dir, sources_shown(fixtures),
-                    as_json, correct_outputs)
+                    as_json, correct_outputs, correction_gain)
         return
     outcome = run_study(case, options, progress=lambda m: click.echo(m, err=True))
     write_outputs(outcome.config or case, outcome, out_dir / "results.h5",
@@ -105,13 +115,15 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
 
 
 def _run_rounds(case, options, rounds: int, tolerance: float, out_dir: Path, source: str,
-                as_json: bool, correct_outputs: bool = False) -> None:
+                as_json: bool, correct_outputs: bool = False,
+                correction_gain: float = 1.0) -> None:
     """``--rounds`` > 1: :func:`mfflap.rounds.run_rounds` and what it wrote."""
     from mfflap.rounds import run_rounds
 
     result, outcome = run_rounds(case, options, rounds, tolerance, out_dir,
                                  progress=lambda m: click.echo(m, err=True), source=source,
-                                 correct_outputs=correct_outputs)
+                                 correct_outputs=correct_outputs,
+                                 correction_gain=correction_gain)
     if outcome is not None and outcome.interrupted is not None:
         click.echo(f"interrupted in round {len(result.rounds)} ({outcome.interrupted}): "
                    f"{out_dir / 'rounds.html'} holds the rounds so far; the same command runs "

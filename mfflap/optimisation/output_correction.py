@@ -33,11 +33,22 @@ labels their results with the case's beta and the corrected J.
 A scale is taken only where both means are finite, nonzero and of one sign, so that it is
 positive (a thrust that the rounds do not count, :data:`mfflap.rounds.THRUST_FLOOR`, is not
 taken either); otherwise it is 1 and :attr:`OutputCorrection.notes` says why.
+
+Filter. Applied round after round, the measured scales alone can make the optima oscillate:
+each optimum moves to where the ratio of CFD to model differs, the next scale overshoots
+the other way (README, "Output correction"). The usual cure in modifier adaptation is a
+first-order filter of the modifiers (Marchetti, Chachuat and Bonvin 2009),
+
+    kappa_k = (1 - K) kappa_(k-1) + K kappa_measured,     0 < K <= 1,
+
+where kappa_(k-1) is the scale the measured motion was optimised with
+(:attr:`CorrectionPoint.scales`) and K the gain (:meth:`OutputCorrection.filtered`);
+K = 1 takes the measured scale as it is.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -56,6 +67,8 @@ class CorrectionPoint:
     cfd_mean_power : W
     source : where the motion and its CFD come from, e.g. ``round 1, beta = 0 (key ...)``
     thrust_usable : False where the CFD thrust is too small for a ratio to mean anything
+    scales : (kappa_T, kappa_P) the motion was optimised with ((1, 1): the model's own), from
+        which a filter (:meth:`OutputCorrection.filtered`) moves
     """
 
     motion: object
@@ -63,6 +76,7 @@ class CorrectionPoint:
     cfd_mean_power: float
     source: str
     thrust_usable: bool = True
+    scales: tuple[float, float] = (1.0, 1.0)
 
 
 @dataclass(frozen=True)
@@ -71,12 +85,15 @@ class OutputCorrection:
 
     Attributes
     ----------
-    thrust_scale : kappa_T, 1 where not measured
-    power_scale : kappa_P, 1 where not measured
+    thrust_scale : kappa_T the model is corrected by, 1 where not measured
+    power_scale : kappa_P the model is corrected by, 1 where not measured
     source : the motion it was measured on
     model_mean_thrust, cfd_mean_thrust : N, at that motion
     model_mean_power, cfd_mean_power : W, at that motion
     notes : why a scale was left at 1
+    gain : K of the filter that made the scales (1: the measured scales themselves)
+    measured_scales : (kappa_T, kappa_P) measured at the motion, before the filter
+    previous_scales : (kappa_T, kappa_P) the filter moved from
     """
 
     thrust_scale: float
@@ -87,6 +104,9 @@ class OutputCorrection:
     model_mean_power: float = float("nan")
     cfd_mean_power: float = float("nan")
     notes: tuple[str, ...] = field(default=())
+    gain: float = 1.0
+    measured_scales: tuple[float, float] | None = None
+    previous_scales: tuple[float, float] = (1.0, 1.0)
 
     def __post_init__(self) -> None:
         for name in ("thrust_scale", "power_scale"):
@@ -94,6 +114,9 @@ class OutputCorrection:
             if not (np.isfinite(value) and value > 0):
                 raise ConfigError(f"an output correction's {name} must be finite and > 0, "
                                   f"got {value!r}", key=name)
+        check_gain(self.gain)
+        if self.measured_scales is None:
+            object.__setattr__(self, "measured_scales", (self.thrust_scale, self.power_scale))
 
     @classmethod
     def measured(cls, point: CorrectionPoint, model, scheme: str) -> OutputCorrection:
@@ -119,6 +142,31 @@ class OutputCorrection:
                    model_thrust, float(point.cfd_mean_thrust), model_power,
                    float(point.cfd_mean_power), tuple(notes))
 
+    def filtered(self, previous: tuple[float, float], gain: float) -> OutputCorrection:
+        """This measured correction through the first-order filter (module docstring).
+
+        Parameters
+        ----------
+        previous : (kappa_T, kappa_P) the measured motion was optimised with
+        gain : K in (0, 1]; 1 returns the measured scales (a scale left at 1, see
+            :attr:`notes`, counts as measured 1)
+
+        Raises
+        ------
+        ConfigError
+            ``gain`` outside (0, 1], or a previous scale not finite and > 0.
+        """
+        check_gain(gain)
+        for name, value in zip(("thrust", "power"), previous, strict=True):
+            if not (np.isfinite(value) and value > 0):
+                raise ConfigError(f"the previous {name} scale of an output correction must be "
+                                  f"finite and > 0, got {value!r}", key="scales")
+        measured = self.measured_scales
+        k_t, k_p = ((1 - gain) * p + gain * m for p, m in zip(previous, measured, strict=True))
+        return replace(self, thrust_scale=k_t, power_scale=k_p, gain=float(gain),
+                       measured_scales=measured,
+                       previous_scales=(float(previous[0]), float(previous[1])))
+
     def objective_factor(self, beta: float) -> float:
         """c = (1 - beta) kappa_T + beta kappa_P: corrected objective = c x that of
         :meth:`problem`'s."""
@@ -141,9 +189,7 @@ class OutputCorrection:
 
     def describe(self) -> str:
         """One line: the scales and where they were measured."""
-        text = (f"thrust x {self.thrust_scale:.3f}, power x {self.power_scale:.3f} "
-                f"(measured on {self.source})")
-        return text + "".join(f"; {n}" for n in self.notes)
+        return describe_correction(self.as_dict())
 
     def as_dict(self) -> dict:
         """JSON-friendly."""
@@ -151,7 +197,31 @@ class OutputCorrection:
                 "source": self.source, "model_mean_thrust": self.model_mean_thrust,
                 "cfd_mean_thrust": self.cfd_mean_thrust,
                 "model_mean_power": self.model_mean_power,
-                "cfd_mean_power": self.cfd_mean_power, "notes": list(self.notes)}
+                "cfd_mean_power": self.cfd_mean_power, "notes": list(self.notes),
+                "gain": self.gain, "measured_scales": list(self.measured_scales),
+                "previous_scales": list(self.previous_scales)}
 
 
-__all__ = ["CorrectionPoint", "OutputCorrection"]
+def describe_correction(correction: dict) -> str:
+    """One line of an :meth:`OutputCorrection.as_dict`: the scales, where they were measured
+    and, filtered, from what towards what (a dict written before the filter: unfiltered)."""
+    text = (f"thrust x {correction['thrust_scale']:.3f}, power x "
+            f"{correction['power_scale']:.3f} ")
+    if correction.get("gain", 1.0) == 1.0:
+        text += f"(measured on {correction['source']})"
+    else:
+        (m_t, m_p), (p_t, p_p) = correction["measured_scales"], correction["previous_scales"]
+        text += (f"(filter gain {correction['gain']:g} from {p_t:.3f}, {p_p:.3f} towards "
+                 f"{m_t:.3f}, {m_p:.3f} measured on {correction['source']})")
+    return text + "".join(f"; {n}" for n in correction.get("notes", ()))
+
+
+def check_gain(gain: float) -> None:
+    """Refuse a filter gain outside (0, 1] (:class:`~mfflap.errors.ConfigError`, key
+    ``correction_gain``)."""
+    if not (np.isfinite(gain) and 0 < gain <= 1):
+        raise ConfigError(f"the output correction's filter gain must be in (0, 1] (1: no "
+                          f"filter), got {gain!r}", key="correction_gain")
+
+
+__all__ = ["CorrectionPoint", "OutputCorrection", "check_gain", "describe_correction"]
