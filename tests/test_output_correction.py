@@ -246,3 +246,32 @@ def test_a_beta_study_with_a_correction_optimises_the_corrected_outputs(tmp_path
     with pytest.raises(ConfigError, match=r"output corrections for beta \[0.5\]"):
         beta_study(config, [0.0], n_starts=1, with_ipopt=False, model=model, sweep=sweep,
                    corrections={0.5: corr})
+
+
+def test_a_corrected_optimums_peak_power_flag_is_in_corrected_watts_against_the_case_p_max():
+    """The optimiser flags a peak over P_max' = P_max / kappa_P in model watts; the result
+    of the corrected problem says it in corrected watts against the case's P_max (the same
+    test), and keeps its other flags."""
+    from dataclasses import replace
+
+    from mfflap.optimisation.optimise import OptimisationResult, assess, peak_power_flag
+    from mfflap.optimisation.study import _corrected
+
+    model = MorisonModel()
+    d = harmonic_to_discrete(1.0, 0.3, np.deg2rad(20), np.pi / 2, 50)
+    corr = OutputCorrection(1.1, 2.0, "a test")
+    # a limit the motion's peak passes by far: the equivalent problem's P_max' = 5 / 2 W
+    equivalent = corr.problem(FlappingProblem(model, beta=0.0, max_power=5.0))
+    summary, peak, flags = assess(equivalent, d)
+    assert peak_power_flag(peak, 500, 2.5) in flags
+    result = OptimisationResult(0.0, d, "sqp-penalty", "s", True, "", 1.0, np.ones(2),
+                                summary, peak, [*flags, "another flag"])
+    out = _corrected(result, 0.0, corr, equivalent)
+    assert out.flags[0] == "another flag"
+    assert out.flags[1].startswith(f"corrected peak power {2 * peak:.3g} W after resampling "
+                                   "to 500 steps exceeds P_max 5 W by more than")
+    assert len(out.flags) == 2
+    # under the limit, corrected or not, no flag (nor one added to a result without it)
+    assert peak_power_flag(peak, 500, peak) is None
+    fine = replace(result, flags=["another flag"])
+    assert _corrected(fine, 0.0, corr, equivalent).flags == ["another flag"]

@@ -108,11 +108,19 @@ def assess(problem: FlappingProblem, motion: DiscreteMotion
         flags.append(f"energy residual {float(s.energy_residual):.3g} W is {share:.0%} of the "
                      f"mean power {float(s.mean_power):.3g} W: the scheme's energy error may "
                      "carry the optimum (try scheme = 'midpoint')")
-    if peak > (1 + RESAMPLED_POWER_MARGIN) * problem.max_power:
-        flags.append(f"peak power {peak:.3g} W after resampling to {10 * motion.n_steps} "
-                     f"steps exceeds P_max {problem.max_power:g} W by more than "
-                     f"{RESAMPLED_POWER_MARGIN:.0%}: the optimum exploits the sampling")
-    return s, peak, flags
+    flag = peak_power_flag(peak, 10 * motion.n_steps, problem.max_power)
+    return s, peak, flags + ([flag] if flag else [])
+
+
+def peak_power_flag(peak: float, n_resampled: int, max_power: float,
+                    what: str = "peak power") -> str | None:
+    """The artefact flag of a peak power (W, after resampling to ``n_resampled`` steps) over
+    ``max_power`` (W) by more than :data:`RESAMPLED_POWER_MARGIN`; None when it is not."""
+    if peak <= (1 + RESAMPLED_POWER_MARGIN) * max_power:
+        return None
+    return (f"{what} {peak:.3g} W after resampling to {n_resampled} steps exceeds P_max "
+            f"{max_power:g} W by more than {RESAMPLED_POWER_MARGIN:.0%}: the optimum exploits "
+            "the sampling")
 
 
 def optimise_sqp(problem: FlappingProblem, start: DiscreteMotion, *, min_period: float,
@@ -293,4 +301,4 @@ def multistart(problem: FlappingProblem, starts: Sequence[tuple[str, DiscreteMot
 
 
 __all__ = ["OptimisationResult", "assess", "multistart", "optimise_ipopt", "optimise_sqp",
-           "replace_problem", "time_step_bounds"]
+           "peak_power_flag", "replace_problem", "time_step_bounds"]

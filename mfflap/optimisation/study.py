@@ -16,6 +16,7 @@ from mfflap.optimisation.optimise import (
     OptimisationResult,
     multistart,
     optimise_ipopt,
+    peak_power_flag,
 )
 from mfflap.optimisation.output_correction import OutputCorrection
 from mfflap.optimisation.problem import FlappingProblem
@@ -256,9 +257,10 @@ def beta_study(config: CaseConfig, betas: Sequence[float] | None = None, n_start
                                          max_period=o.max_period, start_label=starts[0][0]
                                          ) if with_ipopt else None
             if beta in corrections:  # the case's beta, the corrected J (not J / c)
-                c = corrections[beta].objective_factor(beta)
-                found, found_ipopt = (_corrected(r, beta, c) for r in (found, found_ipopt))
-                found_all = [_corrected(r, beta, c) for r in found_all]
+                corr = corrections[beta]
+                found, found_ipopt = (_corrected(r, beta, corr, problem)
+                                      for r in (found, found_ipopt))
+                found_all = [_corrected(r, beta, corr, problem) for r in found_all]
         except KeyboardInterrupt as exc:  # keep the betas finished; this one is dropped
             left = tuple(list(problems)[list(problems).index(beta):])
             raise StudyInterrupted(BetaStudy(sweep, best, sqp, sqp_all, ipopt, refined,
@@ -274,14 +276,23 @@ def beta_study(config: CaseConfig, betas: Sequence[float] | None = None, n_start
     return BetaStudy(sweep, best, sqp, sqp_all, ipopt, refined, corrections=corrections)
 
 
-def _corrected(result: OptimisationResult | None, beta: float, factor: float
-               ) -> OptimisationResult | None:
-    """A result of an output-corrected problem labelled with the case's beta, its objective
-    and history the corrected J (``factor`` c times the equivalent problem's)."""
+def _corrected(result: OptimisationResult | None, beta: float, correction,
+               problem: FlappingProblem) -> OptimisationResult | None:
+    """A result of an output-corrected ``problem`` (the equivalent one) labelled with the
+    case's beta, its objective and history the corrected J (c times the equivalent
+    problem's), and its peak-power flag in corrected watts against the case's P_max (the
+    same test: kappa_P peak > margin kappa_P P_max')."""
     if result is None:
         return None
-    return replace(result, beta=beta, objective=factor * result.objective,
-                   history=factor * np.asarray(result.history))
+    c, k_p = correction.objective_factor(beta), correction.power_scale
+    n_fine = 10 * result.motion.n_steps
+    own = peak_power_flag(result.resampled_max_power, n_fine, problem.max_power)
+    flags = [f for f in result.flags if f != own]
+    if own is not None and own in result.flags:
+        flags.append(str(peak_power_flag(k_p * result.resampled_max_power, n_fine,
+                                         k_p * problem.max_power, "corrected peak power")))
+    return replace(result, beta=beta, objective=c * result.objective,
+                   history=c * np.asarray(result.history), flags=flags)
 
 
 def gain_table(config: CaseConfig, n_steps: Sequence[int] = (25, 50, 100),
