@@ -21,6 +21,10 @@ they are looked up before the shipped fixtures and, live, before a new OpenFOAM 
 motion repeated from an earlier round is not run again and the same command run again (after
 a Ctrl-C) finds the CFD done before.
 
+With ``refit`` False (``--no-refit``) or the case file's coefficients, the back-tests are
+not pooled into the fits: every round optimises with round 1's coefficients, and only the
+output correction learns from the CFD (the classical modifier adaptation of a fixed model).
+
 With ``correct_outputs`` (``--correct-outputs``), round k >= 2 also corrects the model's
 outputs: each beta is optimised with the model's mean thrust and power scaled to predict
 the CFD means of round k - 1's optimum of that beta, measured with round k's refitted model
@@ -167,36 +171,47 @@ class LoopResult:
     stopped_because: str
     correct_outputs: bool = False
     correction_gain: float = 1.0
+    refit: bool = True
 
     def as_dict(self) -> dict:
         """JSON-friendly."""
         return {"tolerance": self.tolerance, "converged": self.converged,
                 "stopped_because": self.stopped_because,
                 "correct_outputs": self.correct_outputs,
-                "correction_gain": self.correction_gain,
+                "correction_gain": self.correction_gain, "refit": self.refit,
                 "rounds": [r.as_dict() for r in self.rounds]}
 
 
-def check_rounds(n_rounds: int, tolerance: float, coefficients: str) -> None:
+def check_rounds(n_rounds: int, tolerance: float, coefficients: str,
+                 correct_outputs: bool = False, refit: bool = True) -> None:
     """Refuse rounds that cannot learn from their CFD.
+
+    Rounds learn by the refit of identified coefficients on the back-tests, by the output
+    correction (``correct_outputs``), or both.
 
     Raises
     ------
     ConfigError
-        ``n_rounds`` < 1, ``tolerance`` not in (0, 1), or more than one round with the case
-        file's coefficients (nothing is refitted between rounds, so every round would
-        optimise the same motions).
+        ``n_rounds`` < 1, ``tolerance`` not in (0, 1), or more than one round where nothing
+        learns: neither a refit (the case file's coefficients, or ``refit`` False) nor an
+        output correction, so that every round would optimise the same motions.
     """
     if n_rounds < 1:
         raise ConfigError(f"--rounds must be >= 1, got {n_rounds}", key="rounds")
     if not (np.isfinite(tolerance) and 0 < tolerance < 1):
         raise ConfigError(f"--loop-tolerance must be a fraction in (0, 1), got {tolerance}",
                           key="loop_tolerance")
-    if n_rounds > 1 and not coefficients.startswith("identified:"):
-        raise ConfigError("--rounds > 1 refits the model on each round's back-tests, which "
-                          f"only identified coefficients take up; with --coefficients "
-                          f"{coefficients} every round would optimise the same motions: add "
-                          "--coefficients identified:uniform (or low, high)", key="rounds")
+    if n_rounds > 1 and not correct_outputs:
+        if not coefficients.startswith("identified:"):
+            raise ConfigError(
+                "--rounds > 1 refits the model on each round's back-tests, which only "
+                f"identified coefficients take up; with --coefficients {coefficients} every "
+                "round would optimise the same motions: add --coefficients identified:uniform "
+                "(or low, high), or --correct-outputs", key="rounds")
+        if not refit:
+            raise ConfigError("--no-refit keeps the coefficients of round 1, so without "
+                              "--correct-outputs every round would optimise the same motions",
+                              key="refit")
 
 
 def motion_checks(backtests: dict, in_fit: set[str],
@@ -267,7 +282,7 @@ def _coefficients(outcome) -> dict[str, float]:
 
 def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out_dir: Path,
                progress: Progress = print, source: str = "", correct_outputs: bool = False,
-               correction_gain: float = 1.0):
+               correction_gain: float = 1.0, refit: bool = True):
     """Run the main job in rounds (module docstring) into ``out_dir/round_<k>``.
 
     ``correct_outputs``: from round 2 on, each beta is optimised with the model's thrust and
@@ -275,6 +290,9 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
     (:mod:`mfflap.optimisation.output_correction`), and it is those corrected predictions
     that are checked against the new back-tests. ``correction_gain``: K of the filter from
     the scales that optimum was optimised with to the measured ones (1: the measured ones).
+    ``refit`` False: every round identifies from the identification data alone (round 1's
+    coefficients), so only the output correction learns from the back-tests (the classical
+    modifier adaptation of a fixed model).
 
     The back-test records of every round are kept in ``out_dir/loop_records`` (one per
     motion), pooled with the identification data of the later rounds and looked up as
@@ -289,7 +307,8 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
     from mfflap.optimisation.store import beta_label
     from mfflap.pipeline import run_study, write_outputs
 
-    check_rounds(n_rounds, tolerance, options.coefficients)
+    check_rounds(n_rounds, tolerance, options.coefficients, correct_outputs, refit)
+    refit = refit and options.coefficients.startswith("identified:")  # case: none to refit
     records = out_dir / RECORDS_FOLDER
     base_fixtures = tuple(options.fixtures) or (fixture_dir(),)
     base_backtests = tuple(options.backtest_fixtures) or tuple(backtest_fixture_dirs())
@@ -300,7 +319,7 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
     converged, why = False, f"ran the {n_rounds} round(s) asked for"
     for k in range(1, n_rounds + 1):
         round_dir = out_dir / f"round_{k}"
-        pooled = sorted(records.glob("backtest_*.h5")) if records.is_dir() else []
+        pooled = sorted(records.glob("backtest_*.h5")) if refit and records.is_dir() else []
         opts = replace(options, fixtures=base_fixtures + tuple(pooled),
                        backtest_fixtures=(records, *base_backtests),
                        done_backtests=(records,),
@@ -309,7 +328,8 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
                        work_dir=round_dir / "cfd_cases",
                        vtk_dir=None if options.vtk_dir is None else round_dir / "vtk")
         progress(f"[round {k} of {n_rounds}] identification from {len(pooled)} back-test "
-                 f"record(s) of earlier rounds beside the identification data")
+                 "record(s) of earlier rounds beside the identification data"
+                 + ("" if refit else " (nothing refitted: the coefficients of round 1)"))
 
         def told(message: str, k: int = k) -> None:
             progress(f"[round {k}] {message}")
@@ -355,7 +375,8 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
                    "further round would fit the same data")
             break
         seen |= keys
-    result = LoopResult(rounds, tolerance, converged, why, correct_outputs, correction_gain)
+    result = LoopResult(rounds, tolerance, converged, why, correct_outputs, correction_gain,
+                        refit)
     progress(f"rounds: {why}")
     write_rounds(result, config, out_dir)
     return result, outcome
@@ -403,6 +424,7 @@ def write_rounds(result: LoopResult, config: CaseConfig, out_dir: Path) -> None:
         rf.h5.attrs["stopped_because"] = result.stopped_because
         rf.h5.attrs["correct_outputs"] = result.correct_outputs
         rf.h5.attrs["correction_gain"] = result.correction_gain
+        rf.h5.attrs["refit"] = result.refit
         for r in result.rounds:
             labels = list(r.checks)
             arrays = {name: np.array([getattr(r.checks[lbl], name) for lbl in labels])
@@ -415,9 +437,12 @@ def write_rounds(result: LoopResult, config: CaseConfig, out_dir: Path) -> None:
                 "labels": json.dumps(labels), "summary": json.dumps(r.as_dict())})
     fig = rounds_figure(result)
     fig.savefig(out_dir / "rounds.png", dpi=110)
+    learns = ("refits the model with the back-tests of the rounds before" if result.refit
+              else "keeps round 1's coefficients")
+    if result.correct_outputs:
+        learns += ", corrects its outputs to the CFD of the round before"
     rep = Report("mfflap run: rounds of CFD in the loop",
-                 f"{config.study.name}: each round refits the model with the back-tests of "
-                 "the rounds before, optimises and back-tests again")
+                 f"{config.study.name}: each round {learns}, optimises and back-tests again")
     s = rep.section("Rounds")
     s.blocks.append(text_html(f"{'Converged' if result.converged else 'Not converged'}: "
                               f"{result.stopped_because}.", warn=not result.converged))

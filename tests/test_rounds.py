@@ -30,6 +30,16 @@ def test_one_round_with_the_case_coefficients_is_the_main_job():
     check_rounds(1, 0.1, "case")  # no error: the default run
 
 
+def test_rounds_learn_by_a_refit_or_an_output_correction():
+    check_rounds(3, 0.1, "identified:uniform")  # the refit learns
+    check_rounds(3, 0.1, "case", correct_outputs=True)  # the correction learns
+    check_rounds(3, 0.1, "identified:uniform", correct_outputs=True, refit=False)
+    with pytest.raises(ConfigError, match="--no-refit keeps the coefficients of round 1"):
+        check_rounds(3, 0.1, "identified:uniform", refit=False)
+    with pytest.raises(ConfigError, match="or --correct-outputs"):
+        check_rounds(3, 0.1, "case", refit=False)
+
+
 def test_the_cli_refuses_rounds_with_the_case_coefficients_before_anything_is_written(
         tmp_path):
     out = tmp_path / "run"
@@ -56,6 +66,17 @@ def test_the_cli_refuses_rounds_with_the_case_coefficients_before_anything_is_wr
                                    "--correct-outputs", "--correction-gain", "0"])
     assert res.exit_code == 2
     assert "correction_gain" in res.output and "(0, 1]" in res.output
+    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--no-refit"])
+    assert res.exit_code == 2
+    assert "--no-refit applies only to rounds of CFD in the loop" in res.output
+    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--rounds", "2",
+                                   "--correct-outputs", "--no-refit"])
+    assert res.exit_code == 2
+    assert "--no-refit applies only to identified coefficients" in res.output
+    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--rounds", "2",
+                                   "--coefficients", "identified:low", "--no-refit"])
+    assert res.exit_code == 2
+    assert "without --correct-outputs every round would optimise the same" in res.output
     assert not out.exists()
 
 
@@ -313,3 +334,59 @@ def test_corrected_rounds_predict_their_new_optima_far_better(tmp_path):
     assert "output correction (thrust, power)" in html
     assert "corrected from CFD" in (out / "round_2" / "report.html").read_text().replace(
         "&#x27;", "'")
+
+
+@pytest.mark.slow
+def test_rounds_without_a_refit_keep_round_ones_model_and_filter_its_correction(tmp_path):
+    """`--rounds 2 --correct-outputs --no-refit --correction-gain 0.5`: round 2 fits the
+    identification data alone (round 1's coefficients, no back-test pooled in), so the
+    correction measured on round 1's optima is CFD's mean over round 1's own model mean
+    (1 / (1 + error)), and the filter takes half of the way from 1 to it. Round 2's motions
+    have no CFD here."""
+    import json
+
+    import h5py
+
+    out = tmp_path / "loop"
+    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--rounds", "2",
+                                   "--coefficients", "identified:uniform", "--within-data",
+                                   "--correct-outputs", "--no-refit", "--correction-gain",
+                                   "0.5", "--no-ipopt", "--no-gain-table", "--json"])
+    assert res.exit_code == 0, res.output
+    loop = json.loads(res.stdout[res.stdout.index("{"):])["rounds"]
+    first, second = loop["rounds"]
+    assert loop["refit"] is False and loop["correction_gain"] == 0.5
+    assert second["loop_records_in_fit"] == 0 and second["n_cases"] == first["n_cases"]
+    assert second["coefficients"] == first["coefficients"]
+    assert "(nothing refitted: the coefficients of round 1)" in res.stderr
+    for beta, label in (("0", "β = 0"), ("0.5", "β = 0.5")):
+        corr, before = second["corrections"][beta], first["checks"][label]
+        # the same model on the same motion: the correction's model mean is round 1's
+        # optimiser's (the discrete motion, what the scale multiplies), the back-test's is
+        # the model on the kinematics CFD imposed; they differ by the discretisation only
+        assert corr["model_mean_thrust"] == pytest.approx(before["model_mean_thrust"],
+                                                          rel=0.03)
+        assert corr["model_mean_power"] == pytest.approx(before["model_mean_power"],
+                                                         rel=0.03)
+        measured = corr["cfd_mean_thrust"] / corr["model_mean_thrust"]
+        assert measured == pytest.approx(1 / (1 + before["thrust_error"]), rel=0.03)
+        assert corr["cfd_mean_thrust"] == before["cfd_mean_thrust"]
+        assert corr["measured_scales"][0] == pytest.approx(measured, rel=1e-12)
+        assert corr["previous_scales"] == [1.0, 1.0] and corr["gain"] == 0.5
+        assert corr["thrust_scale"] == pytest.approx(0.5 + 0.5 * measured, rel=1e-12)
+        assert corr["power_scale"] == pytest.approx(
+            0.5 + 0.5 * corr["cfd_mean_power"] / corr["model_mean_power"], rel=1e-12)
+    # round 1's own optimiser gave the discrete means the correction was measured with
+    from mfflap.optimisation.store import read_result
+    from mfflap.results import ResultsFile
+
+    with ResultsFile(out / "round_1" / "results.h5") as rf:
+        optimum = read_result(rf, "optimisation/sqp/beta_0.00")
+    assert float(optimum.summary.mean_thrust) == pytest.approx(
+        second["corrections"]["0"]["model_mean_thrust"], rel=1e-9)
+    assert "filter gain 0.5 from 1.000, 1.000 towards" in res.stderr
+    assert second["not_backtested"] and not loop["converged"]
+    with h5py.File(out / "rounds.h5") as f:
+        assert f.attrs["refit"] == 0 and f.attrs["correction_gain"] == 0.5
+    assert "keeps round 1&#x27;s coefficients, corrects its outputs" in (
+        out / "rounds.html").read_text()

@@ -217,9 +217,15 @@ def mesh_and_setup_options(runs: str = "") -> Callable:
 
 def given_options(*names: str) -> list[str]:
     """The options of the running command among the parameters ``names`` that its command
-    line gives, as their flags (``work_dir`` given as ``--work`` is ``"--work"``)."""
+    line gives, as their flags (``work_dir`` given as ``--work`` is ``"--work"``; an on/off
+    flag given off, ``--no-refit``, by its off flag)."""
     context = click.get_current_context()
-    flags = {param.name: param.opts[0] for param in context.command.params}
+
+    def flag(param: click.Parameter) -> str:
+        off = getattr(param, "secondary_opts", None)
+        return off[0] if off and context.params.get(param.name) is False else param.opts[0]
+
+    flags = {param.name: flag(param) for param in context.command.params}
     return [flags[name] for name in names
             if context.get_parameter_source(name) is ParameterSource.COMMANDLINE]
 

@@ -38,7 +38,8 @@ from mfflap.cli.json_output import echo_json
               help="CFD in the loop: run the whole job up to this many times, each round "
                    "identifying the model with the back-test CFD of the rounds before "
                    "pooled in, until the model predicts its back-tested motions' mean thrust "
-                   "and power within --loop-tolerance (needs --coefficients identified:...; "
+                   "and power within --loop-tolerance (needs --coefficients identified:... "
+                   "or --correct-outputs; "
                    "each round in <out>/round_<k>, the rounds in <out>/rounds.html, .h5, "
                    ".png).")
 @click.option("--loop-tolerance", default=0.1, show_default=True, type=float,
@@ -54,12 +55,16 @@ from mfflap.cli.json_output import echo_json
                    "scales, each round moving them only this fraction of the way from "
                    "those the previous optimum was optimised with to the measured ones "
                    "(damps the rounds' oscillation; 1: no filter).")
+@click.option("--refit/--no-refit", default=True, show_default=True,
+              help="With --rounds and identified coefficients: refit the model on the "
+                   "back-tests of the rounds before; --no-refit keeps round 1's "
+                   "coefficients, so that only --correct-outputs learns from the CFD.")
 @click.option("--json", "as_json", is_flag=True, help="Print the key numbers as JSON.")
 def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
             backtest_fixtures: tuple[Path, ...], live: bool, coefficients: str, starts: int,
             gain_table: bool, no_ipopt: bool, within_data: bool, rounds: int,
             loop_tolerance: float, correct_outputs: bool, correction_gain: float,
-            as_json: bool) -> None:
+            refit: bool, as_json: bool) -> None:
     """Identification, sweep, optimisation, back-test and reports for CASE_FILE.
 
     Writes <out>/report.html (every figure), <out>/results.h5 (every number and the inputs)
@@ -75,11 +80,13 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
     from mfflap.rounds import check_rounds
 
     if rounds == 1:
-        refuse_given(("loop_tolerance", "correct_outputs", "correction_gain"),
+        refuse_given(("loop_tolerance", "correct_outputs", "correction_gain", "refit"),
                      "rounds of CFD in the loop (--rounds 2 or more)")
     if not correct_outputs:
         refuse_given(("correction_gain",), "corrected outputs (--correct-outputs)")
-    check_rounds(rounds, loop_tolerance, coefficients)  # before anything runs
+    if not coefficients.startswith("identified:"):
+        refuse_given(("refit",), "identified coefficients (--coefficients identified:...)")
+    check_rounds(rounds, loop_tolerance, coefficients, correct_outputs, refit)
     check_gain(correction_gain)
     case = load_case(case_file)
     out_dir = out_dir or Path(f"{case.study.name}_run")
@@ -91,7 +98,7 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
     out_dir.mkdir(parents=True, exist_ok=True)
     if rounds > 1:
         _run_rounds(case, options, rounds, loop_tolerance, out_dir, sources_shown(fixtures),
-                    as_json, correct_outputs, correction_gain)
+                    as_json, correct_outputs, correction_gain, refit)
         return
     outcome = run_study(case, options, progress=lambda m: click.echo(m, err=True))
     write_outputs(outcome.config or case, outcome, out_dir / "results.h5",
@@ -116,14 +123,14 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
 
 def _run_rounds(case, options, rounds: int, tolerance: float, out_dir: Path, source: str,
                 as_json: bool, correct_outputs: bool = False,
-                correction_gain: float = 1.0) -> None:
+                correction_gain: float = 1.0, refit: bool = True) -> None:
     """``--rounds`` > 1: :func:`mfflap.rounds.run_rounds` and what it wrote."""
     from mfflap.rounds import run_rounds
 
     result, outcome = run_rounds(case, options, rounds, tolerance, out_dir,
                                  progress=lambda m: click.echo(m, err=True), source=source,
                                  correct_outputs=correct_outputs,
-                                 correction_gain=correction_gain)
+                                 correction_gain=correction_gain, refit=refit)
     if outcome is not None and outcome.interrupted is not None:
         click.echo(f"interrupted in round {len(result.rounds)} ({outcome.interrupted}): "
                    f"{out_dir / 'rounds.html'} holds the rounds so far; the same command runs "
