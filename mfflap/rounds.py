@@ -11,7 +11,8 @@ has not seen. The rounds stop when
 - the model predicts the CFD mean thrust and mean input power of every back-tested motion
   of the round within the tolerance (converged),
 - the round's optimised motions are those of an earlier round (a fixed point: the next round
-  would fit the same data),
+  would fit the same data; with filtered output corrections, not a stop: the filter still
+  moves the scales),
 - a motion could not be back-tested, or the identification or optimisation failed (the next
   round would learn nothing new), or Ctrl-C stopped the round,
 - or the rounds asked for are done.
@@ -352,27 +353,11 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
         _keep_records(outcome.backtests, records)
         progress(describe_round(summary, tolerance))
         keys = {o.key for o in outcome.backtests.values()}
-        if outcome.interrupted is not None:
-            why = f"round {k} was stopped (Ctrl-C) in its {outcome.interrupted} stage"
-            break
-        if not outcome.identification or outcome.study is None:
-            why = f"round {k}'s identification or optimisation failed (its report says why)"
-            break
-        if summary.not_backtested:
-            label, reason = next(iter(summary.not_backtested.items()))
-            why = (f"round {k}: {label} was not back-tested ({reason}); the next round would "
-                   "not learn where the model is wrong"
-                   + ("" if options.live else " (--live runs its CFD in OpenFOAM)"))
-            break
-        if summary.largest_error is not None and summary.largest_error <= tolerance:
-            converged = True
-            who = "the corrected model" if summary.corrections else "the model"
-            why = (f"round {k}: {who} predicts every back-tested motion's CFD mean thrust "
-                   f"and power within {tolerance:.0%} (largest {summary.largest_error:.1%})")
-            break
-        if keys and keys <= seen:
-            why = (f"round {k} optimised the motions of an earlier round (a fixed point): a "
-                   "further round would fit the same data")
+        stop = stop_reason(summary, outcome, keys, seen, tolerance, live=options.live,
+                           corrected=correct_outputs,
+                           filtered=correct_outputs and correction_gain < 1)
+        if stop is not None:
+            converged, why = stop
             break
         seen |= keys
     result = LoopResult(rounds, tolerance, converged, why, correct_outputs, correction_gain,
@@ -380,6 +365,44 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
     progress(f"rounds: {why}")
     write_rounds(result, config, out_dir)
     return result, outcome
+
+
+def stop_reason(summary: RoundSummary, outcome, keys: set[str], seen: set[str],
+                tolerance: float, *, live: bool = False, corrected: bool = False,
+                filtered: bool = False) -> tuple[bool, str] | None:
+    """Whether the rounds stop after ``summary``'s round (module docstring), and why.
+
+    Parameters
+    ----------
+    summary, outcome : the round's summary and run outcome
+    keys : the motion keys the round back-tested; ``seen``: those of the rounds before
+    live : whether the back-tests run OpenFOAM (said where a motion had no CFD)
+    corrected, filtered : output corrections, filtered (gain < 1): a repeated motion is then
+        no fixed point, the filter still moves the scales
+
+    Returns
+    -------
+    (converged, why), or None to go on.
+    """
+    k = summary.index
+    if outcome.interrupted is not None:
+        return False, f"round {k} was stopped (Ctrl-C) in its {outcome.interrupted} stage"
+    if not outcome.identification or outcome.study is None:
+        return False, f"round {k}'s identification or optimisation failed (its report says why)"
+    if summary.not_backtested:
+        label, reason = next(iter(summary.not_backtested.items()))
+        return False, (f"round {k}: {label} was not back-tested ({reason}); the next round "
+                       "would not learn where the model is wrong"
+                       + ("" if live else " (--live runs its CFD in OpenFOAM)"))
+    if summary.largest_error is not None and summary.largest_error <= tolerance:
+        who = "the corrected model" if summary.corrections else "the model"
+        return True, (f"round {k}: {who} predicts every back-tested motion's CFD mean thrust "
+                      f"and power within {tolerance:.0%} (largest {summary.largest_error:.1%})")
+    if keys and keys <= seen and not filtered:
+        return False, (f"round {k} optimised the motions of an earlier round (a fixed point): "
+                       "a further round would fit the same data"
+                       + (" and measure the same corrections" if corrected else ""))
+    return None
 
 
 def describe_round(summary: RoundSummary, tolerance: float) -> str:

@@ -9,7 +9,14 @@ from click.testing import CliRunner
 
 from mfflap.cli.main import cli
 from mfflap.errors import ConfigError
-from mfflap.rounds import THRUST_FLOOR, check_rounds, motion_checks
+from mfflap.rounds import (
+    THRUST_FLOOR,
+    MotionCheck,
+    RoundSummary,
+    check_rounds,
+    motion_checks,
+    stop_reason,
+)
 
 CASE = Path(__file__).parents[1] / "cases" / "paper2026.toml"
 
@@ -143,6 +150,45 @@ def test_a_corrected_motion_is_checked_by_its_corrected_prediction():
     assert points[0.0].source == "round 2's beta = 0 (back-test a)"
     assert points[0.0].thrust_usable
     assert correction_points(SimpleNamespace(study=None), checks, 2) == {}
+
+
+def _round(k, error, not_backtested=None, corrections=None):
+    check = MotionCheck("β = 0", "a", 30.0, 30.0 * (1 + error), 50.0, 50.0 * (1 + error),
+                        error, error, True, False)
+    return RoundSummary(k, Path("."), 43, 0, {}, {"β = 0": check}, not_backtested or {},
+                        corrections or {})
+
+
+def test_the_rounds_stop_for_the_first_reason_that_holds():
+    done = SimpleNamespace(interrupted=None, identification={"uniform": 1}, study=object())
+    assert stop_reason(_round(2, 0.2), done, {"b"}, {"a"}, 0.1) is None  # go on
+    # converged: every unseen motion within the tolerance
+    converged, why = stop_reason(_round(2, 0.08), done, {"b"}, {"a"}, 0.1)
+    assert converged and why == ("round 2: the model predicts every back-tested motion's CFD "
+                                 "mean thrust and power within 10% (largest 8.0%)")
+    assert "the corrected model" in stop_reason(
+        _round(2, 0.08, corrections={0.0: {}}), done, {"b"}, set(), 0.1)[1]
+    # a fixed point: the motions of earlier rounds, unless a filter still moves the scales
+    converged, why = stop_reason(_round(3, 0.2), done, {"a", "b"}, {"a", "b", "c"}, 0.1)
+    assert not converged and why.startswith("round 3 optimised the motions of an earlier")
+    assert why.endswith("would fit the same data")
+    assert stop_reason(_round(3, 0.2), done, {"a"}, {"a"}, 0.1,
+                       corrected=True)[1].endswith("and measure the same corrections")
+    assert stop_reason(_round(3, 0.2), done, {"a"}, {"a"}, 0.1, corrected=True,
+                       filtered=True) is None
+    # a motion without CFD comes before convergence; live it does not suggest --live
+    no_cfd = _round(2, 0.05, not_backtested={"β = 1": "no CFD fixture\nmore"})
+    converged, why = stop_reason(no_cfd, done, {"b"}, set(), 0.1)
+    assert not converged
+    assert why == ("round 2: β = 1 was not back-tested (no CFD fixture\nmore); the next round "
+                   "would not learn where the model is wrong (--live runs its CFD in OpenFOAM)")
+    assert stop_reason(no_cfd, done, {"b"}, set(), 0.1, live=True)[1].endswith("is wrong")
+    failed = SimpleNamespace(interrupted=None, identification={}, study=None)
+    assert "identification or optimisation failed" in stop_reason(
+        _round(2, 0.05), failed, set(), set(), 0.1)[1]
+    stopped = SimpleNamespace(interrupted="back-test", identification={}, study=None)
+    assert stop_reason(_round(2, 0.05), stopped, set(), set(), 0.1) == (
+        False, "round 2 was stopped (Ctrl-C) in its back-test stage")
 
 
 @pytest.mark.slow
