@@ -1,6 +1,7 @@
 """OpenFOAM adapter: writer, parser (three dialects), loads conversion, and a real run."""
 
 import dataclasses
+import re
 import shutil
 from pathlib import Path
 
@@ -1160,6 +1161,65 @@ def test_restart_skips_time_folders_that_hold_only_the_y_plus_field(tmp_path):
     assert np.all(np.diff(y_plus.time) > 0)
     np.testing.assert_array_equal(y_plus.time[y_plus.time >= restart_rows[0]], restart_rows)
     assert y_plus.time[-1] == pytest.approx(read_y_plus(whole).time[-1])
+
+
+@pytest.mark.openfoam
+def test_a_restart_from_a_folder_named_past_the_time_precision_starts_there(tmp_path):
+    """OpenFOAM raises its time precision while it runs, to tell two times apart, and does
+    not write it down. At the case's precision (here 1) the restart time 0.015 s is named
+    0.01: a folder of that name holding only y+ (as the yPlus function object writes one
+    where the time steps have collapsed) made pimpleFoam start there and stop, cannot find
+    0.01/p (seen on a back-test of the filtered rounds, restarting at 2.20850674 s with
+    precision 8). The restart raises timePrecision to the folder's digits and runs from
+    0.015 s to the end."""
+    from mfflap.cfd.openfoam.writer import MeshSpec, SolverSettings
+
+    spec = MeshSpec("tiny", n_chord=20, n_edge=4, n_radial=20, radial_expansion=100.0,
+                    radius_chords=8.0)
+    settings = SolverSettings(write_interval=0.015)
+    case = write_case(tmp_path / "restarted", MOTION, end_time=0.03, mesh=spec,
+                      solver=settings)
+    control = case / "system" / "controlDict"
+    control.write_text(re.sub(r"^timePrecision\s+\d+;", "timePrecision   1;",
+                              control.read_text(), flags=re.M))
+    run_case(case, timeout_s=300)
+    assert (case / "0.015" / "p").is_file()  # written with the precision raised to 2
+    shutil.rmtree(case / "0.03")
+    (case / "0.01").mkdir()
+    (case / "0.01" / "yPlus").write_bytes((case / "0.015" / "p").read_bytes())
+    run_case(case, timeout_s=300)
+    text = control.read_text()
+    assert "startTime       0.015;" in text and "timePrecision   2;" in text
+    log = (case / "log.pimpleFoam").read_text()
+    assert "Create time" in log and log.rstrip().endswith("End")
+    assert "cannot find file" not in log
+    assert (case / "0.03" / "p").is_file() and not (case / "0.01" / "p").exists()
+    # (at precision 1 the forces' time column repeats itself: not compared here)
+
+
+def test_the_start_time_carries_the_time_precision_that_names_it(tmp_path):
+    from mfflap.cfd.openfoam.runner import set_start_time, significant_digits
+
+    assert [significant_digits(n) for n in ("2.20850674", "0.015", "1e-05", "10", "0",
+                                            "0.0001230", "3.5E+2")] == [9, 2, 1, 2, 1, 4, 2]
+    case = write_case(tmp_path / "case", MOTION, end_time=0.1)
+    control = case / "system" / "controlDict"
+    original = control.read_text()
+    precision = int(re.search(r"^timePrecision\s+(\d+);", original, re.M).group(1))
+    set_start_time(case, "0.05")  # fewer digits: the precision stays
+    assert control.read_text().count(f"timePrecision   {precision};") == 1
+    set_start_time(case, "2.20850674123")
+    text = control.read_text()
+    assert "timePrecision   12;" in text and "startTime       2.20850674123;" in text
+    assert text.count("timePrecision") == 1
+    set_start_time(case, "0.05")  # never lowered
+    assert "timePrecision   12;" in control.read_text()
+    # a controlDict without the entry (OpenFOAM's default 6) gets one where 6 would not do
+    control.write_text(re.sub(r"^timePrecision.*\n", "", original, flags=re.M))
+    set_start_time(case, "0.123456")
+    assert "timePrecision" not in control.read_text()
+    set_start_time(case, "0.1234567")
+    assert control.read_text().count("timePrecision   7;") == 1
 
 
 @pytest.mark.openfoam

@@ -449,6 +449,13 @@ def latest_solution_time(case_dir: str | Path, layout: str = "latest") -> str | 
 def set_start_time(case_dir: str | Path, time_name: str) -> None:
     """Make pimpleFoam start from the time folder ``time_name`` (``startFrom startTime``).
 
+    OpenFOAM names the start time with the case's ``timePrecision`` significant digits. A
+    folder written where the time steps had collapsed can carry more (OpenFOAM raises the
+    precision while it runs to tell two times apart, and does not write that down), and at
+    the case's precision the name may be that of another folder, one the yPlus function
+    object wrote a step earlier: the run then starts from that folder and stops for want of
+    p. So ``timePrecision`` is raised to the digits of ``time_name`` (never lowered).
+
     Raises
     ------
     CfdRunError
@@ -462,8 +469,28 @@ def set_start_time(case_dir: str | Path, time_name: str) -> None:
     if not (n_from and n_time):
         raise CfdRunError(f"{path} has no startFrom or startTime entry at the start of a line",
                           case=str(case_dir))
+    digits = significant_digits(time_name)
+    found = _TIME_PRECISION.search(new)
+    if found is None and digits > OPENFOAM_TIME_PRECISION:  # OpenFOAM's default
+        new = re.sub(r"^(startTime\s+[^;]*;)", rf"\1\ntimePrecision   {digits};", new,
+                     flags=re.M)
+    elif found is not None and int(found.group(1)) < digits:
+        new = _TIME_PRECISION.sub(f"timePrecision   {digits};", new)
     if new != text:
         path.write_text(new)
+
+
+_TIME_PRECISION = re.compile(r"^timePrecision\s+(\d+)\s*;", re.M)
+
+#: OpenFOAM's timePrecision where controlDict gives none
+OPENFOAM_TIME_PRECISION = 6
+
+
+def significant_digits(time_name: str) -> int:
+    """The significant digits of a time folder's name (``2.20850674``: 9; ``0.015``: 2;
+    ``1e-05``: 1), the ``timePrecision`` that names it."""
+    mantissa = re.split(r"[eE]", time_name.strip().lstrip("+-"))[0]
+    return max(len(mantissa.replace(".", "").lstrip("0")), 1)
 
 
 _END_TIME = re.compile(r"^endTime\s+([^;\s]+)\s*;", re.M)
