@@ -222,7 +222,7 @@ def fixture_dir(name: str = "table1_coarse") -> Path:
 #: of ``mfflap run --within-data``, those of the later rounds of ``mfflap run --rounds`` and
 #: of ``mfflap run --rounds --correct-outputs`` (each record named by its motion's key).
 BACKTEST_FIXTURES = ("backtest", "backtest_within_data", "backtest_rounds",
-                     "backtest_corrected", "backtest_filtered")
+                     "backtest_corrected", "backtest_filtered", "backtest_fixed_model")
 
 
 def backtest_fixture_dirs() -> list[Path]:
