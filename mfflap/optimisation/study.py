@@ -276,7 +276,7 @@ def beta_study(config: CaseConfig, betas: Sequence[float] | None = None, n_start
     return BetaStudy(sweep, best, sqp, sqp_all, ipopt, refined, corrections=corrections)
 
 
-def _corrected(result: OptimisationResult | None, beta: float, correction,
+def _corrected(result: OptimisationResult | None, beta: float, correction: OutputCorrection,
                problem: FlappingProblem) -> OptimisationResult | None:
     """A result of an output-corrected ``problem`` (the equivalent one) labelled with the
     case's beta, its objective and history the corrected J (c times the equivalent
