@@ -128,3 +128,16 @@ def test_a_back_test_fixture_of_the_same_motion_but_another_plate_is_not_used(
     assert res.stdout.count("NOT BACK-TESTED: fixture backtest_") == 2
     assert ("matches the motion but ran for plate.span = 0.18 (its provenance span_m), the "
             "case has 0.36") in res.stdout
+
+
+def test_a_records_parameters_are_read_without_its_histories(tmp_path):
+    from mfflap.campaign.records import read_record_parameters
+    from mfflap.errors import MfflapError
+
+    for path in sorted(fixture_dir("backtest_filtered").glob("backtest_*.h5"))[:3]:
+        assert read_record_parameters(path) == read_record(path).parameters
+        assert read_record_parameters(path)["period"] > 0
+    other = tmp_path / "other.h5"
+    other.write_bytes(b"not an HDF5 file")
+    with pytest.raises(MfflapError, match=r"other\.h5"):
+        read_record_parameters(other)

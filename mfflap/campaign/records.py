@@ -167,6 +167,23 @@ def read_record(path: str | Path) -> CfdRecord:
             raise MfflapError(f"{path}: not a complete CFD record ({err})") from err
 
 
+def read_record_parameters(path: str | Path) -> dict[str, Any]:
+    """The parameters of a record written by :func:`write_record` (its motion's, e.g.
+    ``period``), without reading its histories: what a look-up over many records checks
+    first.
+
+    Raises
+    ------
+    MfflapError
+        If the file is not a CFD record or has no parameters (the message names the file).
+    """
+    path = Path(path)
+    with ResultsFile(path, "r", kinds=("cfd_record",)) as rf:
+        if "parameters" not in rf.h5:
+            raise MfflapError(f"{path}: not a complete CFD record (no parameters)")
+        return {k: _attr(v) for k, v in rf.h5["parameters"].attrs.items()}
+
+
 def _read_record(rf: ResultsFile, path: Path) -> CfdRecord:
     """The record in an open results file of kind ``cfd_record``."""
     state = rf.read_state("kinematics")
