@@ -53,6 +53,9 @@ class RunOptions:
     #: K of the first-order filter from each point's scales to the measured ones (1: none;
     #: :meth:`~mfflap.optimisation.output_correction.OutputCorrection.filtered`)
     correction_gain: float = 1.0
+    #: beta -> the trust region that beta's optimum is kept in
+    #: (:class:`~mfflap.optimisation.trust_region.TrustRegion`; the rounds' ``--trust-region``)
+    trust_at: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         allowed = ["case", *(f"identified:{s}" for s in RUN_STRATEGIES)]
@@ -300,7 +303,8 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
         try:
             return beta_study(config, n_starts=options.n_starts,
                               with_ipopt=options.with_ipopt, model=model, progress=progress,
-                              corrections=outcome.corrections)
+                              corrections=outcome.corrections,
+                              trust_regions=options.trust_at)
         except StudyInterrupted as exc:  # the betas finished before it are written
             outcome.study = exc.study
             outcome.problems.append(f"optimisation: {exc.study.interruption}")

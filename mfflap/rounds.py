@@ -54,6 +54,7 @@ import numpy as np
 
 from mfflap.config import CaseConfig
 from mfflap.errors import ConfigError
+from mfflap.optimisation.trust_region import MIN_RADIUS
 
 Progress = Callable[[str], None]
 
@@ -135,6 +136,8 @@ class RoundSummary:
     checks : per back-tested motion
     not_backtested : label -> why
     corrections : beta -> the output correction the round optimised it with (as a dict)
+    trust_steps : beta -> the round's step in that beta's trust region, judged by its CFD
+        (:class:`~mfflap.optimisation.trust_region.TrustStep`)
     """
 
     index: int
@@ -145,6 +148,7 @@ class RoundSummary:
     checks: dict[str, MotionCheck] = field(default_factory=dict)
     not_backtested: dict[str, str] = field(default_factory=dict)
     corrections: dict[float, dict] = field(default_factory=dict)
+    trust_steps: dict = field(default_factory=dict)
 
     @property
     def largest_error(self) -> float | None:
@@ -159,7 +163,8 @@ class RoundSummary:
                 "coefficients": self.coefficients, "largest_error": self.largest_error,
                 "checks": {k: c.as_dict() for k, c in self.checks.items()},
                 "not_backtested": self.not_backtested,
-                "corrections": {f"{b:g}": c for b, c in self.corrections.items()}}
+                "corrections": {f"{b:g}": c for b, c in self.corrections.items()},
+                "trust_steps": {f"{b:g}": t.as_dict() for b, t in self.trust_steps.items()}}
 
 
 @dataclass
@@ -173,6 +178,8 @@ class LoopResult:
     correct_outputs: bool = False
     correction_gain: float = 1.0
     refit: bool = True
+    #: the trust region's first radius (None: none)
+    trust_radius: float | None = None
 
     def as_dict(self) -> dict:
         """JSON-friendly."""
@@ -180,11 +187,13 @@ class LoopResult:
                 "stopped_because": self.stopped_because,
                 "correct_outputs": self.correct_outputs,
                 "correction_gain": self.correction_gain, "refit": self.refit,
+                "trust_radius": self.trust_radius,
                 "rounds": [r.as_dict() for r in self.rounds]}
 
 
 def check_rounds(n_rounds: int, tolerance: float, coefficients: str,
-                 correct_outputs: bool = False, refit: bool = True) -> None:
+                 correct_outputs: bool = False, refit: bool = True,
+                 trust_radius: float | None = None) -> None:
     """Refuse rounds that cannot learn from their CFD.
 
     Rounds learn by the refit of identified coefficients on the back-tests, by the output
@@ -195,7 +204,9 @@ def check_rounds(n_rounds: int, tolerance: float, coefficients: str,
     ConfigError
         ``n_rounds`` < 1, ``tolerance`` not in (0, 1), or more than one round where nothing
         learns: neither a refit (the case file's coefficients, or ``refit`` False) nor an
-        output correction, so that every round would optimise the same motions.
+        output correction, so that every round would optimise the same motions; a trust
+        region's radius not in (0, :data:`~mfflap.optimisation.trust_region.MAX_RADIUS`], or
+        a trust region for one round (it bounds the rounds after the first).
     """
     if n_rounds < 1:
         raise ConfigError(f"--rounds must be >= 1, got {n_rounds}", key="rounds")
@@ -213,6 +224,13 @@ def check_rounds(n_rounds: int, tolerance: float, coefficients: str,
             raise ConfigError("--no-refit keeps the coefficients of round 1, so without "
                               "--correct-outputs every round would optimise the same motions",
                               key="refit")
+    if trust_radius is not None:
+        from mfflap.optimisation.trust_region import check_radius
+
+        check_radius(trust_radius)
+        if n_rounds < 2:
+            raise ConfigError("--trust-region bounds each round's optimum about the last one "
+                              "CFD confirmed, so it needs --rounds 2 or more", key="trust_region")
 
 
 def motion_checks(backtests: dict, in_fit: set[str],
@@ -264,6 +282,33 @@ def correction_points(outcome, checks: dict[str, MotionCheck], index: int) -> di
     return points
 
 
+def trust_steps(outcome, checks: dict[str, MotionCheck], regions: dict, centres: dict,
+                scheme: str) -> dict:
+    """beta -> :class:`~mfflap.optimisation.trust_region.TrustStep`: each back-tested
+    optimum of a round with trust ``regions`` (beta -> region) judged by its CFD against that
+    of its centre (``centres``: beta -> the centre's
+    :class:`~mfflap.optimisation.output_correction.CorrectionPoint`), the prediction at the
+    centre being the round's model scaled as the optimum was."""
+    from mfflap.optimisation.store import beta_label
+    from mfflap.optimisation.trust_region import TrustStep
+    from mfflap.performance import evaluate_discrete
+
+    steps = {}
+    sqp = outcome.study.sqp if outcome.study is not None else {}
+    for beta, region in regions.items():
+        label = beta_label(beta)
+        if beta not in sqp or label not in checks or outcome.model is None:
+            continue
+        c, centre = checks[label], centres[beta]
+        s = evaluate_discrete(outcome.model, centre.motion, scheme).summary
+        steps[beta] = TrustStep.judged(
+            region, beta, sqp[beta].motion, (centre.cfd_mean_thrust, centre.cfd_mean_power),
+            (c.cfd_mean_thrust, c.cfd_mean_power),
+            (c.thrust_scale * float(s.mean_thrust), c.power_scale * float(s.mean_power)),
+            (c.predicted_thrust, c.predicted_power))
+    return steps
+
+
 def _keep_records(backtests: dict, folder: Path) -> None:
     """Write each back-tested motion's CFD record into ``folder`` under its own name (a
     fixture found within the look-up's tolerance keeps the name of the motion it ran)."""
@@ -283,7 +328,8 @@ def _coefficients(outcome) -> dict[str, float]:
 
 def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out_dir: Path,
                progress: Progress = print, source: str = "", correct_outputs: bool = False,
-               correction_gain: float = 1.0, refit: bool = True):
+               correction_gain: float = 1.0, refit: bool = True,
+               trust_radius: float | None = None):
     """Run the main job in rounds (module docstring) into ``out_dir/round_<k>``.
 
     ``correct_outputs``: from round 2 on, each beta is optimised with the model's thrust and
@@ -306,9 +352,11 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
     """
     from mfflap.campaign.records import backtest_fixture_dirs, fixture_dir
     from mfflap.optimisation.store import beta_label
+    from mfflap.optimisation.trust_region import TrustRegion
     from mfflap.pipeline import run_study, write_outputs
 
-    check_rounds(n_rounds, tolerance, options.coefficients, correct_outputs, refit)
+    check_rounds(n_rounds, tolerance, options.coefficients, correct_outputs, refit,
+                 trust_radius)
     refit = refit and options.coefficients.startswith("identified:")  # case: none to refit
     records = out_dir / RECORDS_FOLDER
     base_fixtures = tuple(options.fixtures) or (fixture_dir(),)
@@ -317,14 +365,19 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
     seen: set[str] = set()  # motion keys back-tested in earlier rounds
     outcome = None
     points: dict = {}  # beta -> the last round's optimum with its CFD (correct_outputs)
+    centres: dict = {}  # beta -> the trust region's centre with its CFD (trust_radius)
+    radii: dict[float, float] = {}  # beta -> the trust region's radius
     converged, why = False, f"ran the {n_rounds} round(s) asked for"
     for k in range(1, n_rounds + 1):
         round_dir = out_dir / f"round_{k}"
         pooled = sorted(records.glob("backtest_*.h5")) if refit and records.is_dir() else []
+        regions = {b: TrustRegion(p.motion, radii[b], p.source) for b, p in centres.items()}
         opts = replace(options, fixtures=base_fixtures + tuple(pooled),
                        backtest_fixtures=(records, *base_backtests),
                        done_backtests=(records,),
-                       correct_at=points if correct_outputs else {},
+                       correct_at=(centres if trust_radius else points) if correct_outputs
+                       else {},
+                       trust_at=regions,
                        correction_gain=correction_gain,
                        work_dir=round_dir / "cfd_cases",
                        vtk_dir=None if options.vtk_dir is None else round_dir / "vtk")
@@ -349,19 +402,29 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
             {lbl: o.source for lbl, o in outcome.backtests.items() if o.comparison is None},
             {b: c.as_dict() for b, c in outcome.corrections.items()})
         points = correction_points(outcome, summary.checks, k)
+        if trust_radius is not None:
+            summary.trust_steps = trust_steps(outcome, summary.checks, regions, centres,
+                                              (outcome.config or config).optimisation.scheme)
+            for beta, step in summary.trust_steps.items():
+                radii[beta] = step.next_radius
+                if step.accepted and beta in points:
+                    centres[beta] = points[beta]
+            if k == 1:
+                centres, radii = dict(points), {b: float(trust_radius) for b in points}
         rounds.append(summary)
         _keep_records(outcome.backtests, records)
         progress(describe_round(summary, tolerance))
         keys = {o.key for o in outcome.backtests.values()}
         stop = stop_reason(summary, outcome, keys, seen, tolerance, live=options.live,
                            corrected=correct_outputs,
-                           filtered=correct_outputs and correction_gain < 1)
+                           filtered=correct_outputs and correction_gain < 1,
+                           bounded=trust_radius is not None)
         if stop is not None:
             converged, why = stop
             break
         seen |= keys
     result = LoopResult(rounds, tolerance, converged, why, correct_outputs, correction_gain,
-                        refit)
+                        refit, trust_radius)
     progress(f"rounds: {why}")
     write_rounds(result, config, out_dir)
     return result, outcome
@@ -369,7 +432,7 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
 
 def stop_reason(summary: RoundSummary, outcome, keys: set[str], seen: set[str],
                 tolerance: float, *, live: bool = False, corrected: bool = False,
-                filtered: bool = False) -> tuple[bool, str] | None:
+                filtered: bool = False, bounded: bool = False) -> tuple[bool, str] | None:
     """Whether the rounds stop after ``summary``'s round (module docstring), and why.
 
     Parameters
@@ -379,6 +442,9 @@ def stop_reason(summary: RoundSummary, outcome, keys: set[str], seen: set[str],
     live : whether the back-tests run OpenFOAM (said where a motion had no CFD)
     corrected, filtered : output corrections, filtered (gain < 1): a repeated motion is then
         no fixed point, the filter still moves the scales
+    bounded : trust regions (``summary.trust_steps``): a repeated motion is no fixed point
+        (the radius still moves), the rounds converge only where no optimum is on its
+        region's boundary, and stop when a radius collapses
 
     Returns
     -------
@@ -394,11 +460,20 @@ def stop_reason(summary: RoundSummary, outcome, keys: set[str], seen: set[str],
         return False, (f"round {k}: {label} was not back-tested ({reason}); the next round "
                        "would not learn where the model is wrong"
                        + ("" if live else " (--live runs its CFD in OpenFOAM)"))
-    if summary.largest_error is not None and summary.largest_error <= tolerance:
+    edge = sorted(b for b, t in summary.trust_steps.items() if t.on_boundary)
+    if summary.largest_error is not None and summary.largest_error <= tolerance and not edge:
         who = "the corrected model" if summary.corrections else "the model"
+        inside = " with every optimum inside its trust region" if summary.trust_steps else ""
         return True, (f"round {k}: {who} predicts every back-tested motion's CFD mean thrust "
-                      f"and power within {tolerance:.0%} (largest {summary.largest_error:.1%})")
-    if keys and keys <= seen and not filtered:
+                      f"and power within {tolerance:.0%} (largest {summary.largest_error:.1%})"
+                      + inside)
+    collapsed = sorted(b for b, t in summary.trust_steps.items()
+                       if t.next_radius < MIN_RADIUS)
+    if collapsed:
+        return False, (f"round {k}: the trust region of beta "
+                       f"{', '.join(f'{b:g}' for b in collapsed)} collapsed (radius below "
+                       f"{MIN_RADIUS:g}): CFD confirms no step of the model there")
+    if keys and keys <= seen and not filtered and not bounded:
         return False, (f"round {k} optimised the motions of an earlier round (a fixed point): "
                        "a further round would fit the same data"
                        + (" and measure the same corrections" if corrected else ""))
@@ -415,6 +490,8 @@ def describe_round(summary: RoundSummary, tolerance: float) -> str:
     for beta, corr in summary.corrections.items():
         lines.append(f"  beta {beta:g} optimised with the outputs corrected: "
                      + describe_correction(corr))
+    for beta, step in summary.trust_steps.items():
+        lines.append(f"  beta {beta:g}: {step.describe()}")
     for c in summary.checks.values():
         thrust = (f"{c.thrust_error:+.1%}" if c.thrust_counted
                   else f"{c.thrust_error:+.1%} (not counted: small thrust)")
@@ -448,6 +525,8 @@ def write_rounds(result: LoopResult, config: CaseConfig, out_dir: Path) -> None:
         rf.h5.attrs["correct_outputs"] = result.correct_outputs
         rf.h5.attrs["correction_gain"] = result.correction_gain
         rf.h5.attrs["refit"] = result.refit
+        rf.h5.attrs["trust_radius"] = np.nan if result.trust_radius is None else \
+            result.trust_radius
         for r in result.rounds:
             labels = list(r.checks)
             arrays = {name: np.array([getattr(r.checks[lbl], name) for lbl in labels])
@@ -464,6 +543,9 @@ def write_rounds(result: LoopResult, config: CaseConfig, out_dir: Path) -> None:
               else "keeps round 1's coefficients")
     if result.correct_outputs:
         learns += ", corrects its outputs to the CFD of the round before"
+    if result.trust_radius is not None:
+        learns += (f", keeps each optimum in a trust region (first radius "
+                   f"{result.trust_radius:g}) about the last one CFD confirmed")
     rep = Report("mfflap run: rounds of CFD in the loop",
                  f"{config.study.name}: each round {learns}, optimises and back-tests again")
     s = rep.section("Rounds")
@@ -491,6 +573,21 @@ def write_rounds(result: LoopResult, config: CaseConfig, out_dir: Path) -> None:
             "Output corrections (" + ("measured scales" if result.correction_gain == 1.0
                                       else f"filtered, gain {result.correction_gain:g}")
             + "): " + "; ".join(corrected) + "."))
+    steps = [[r.index, f"{b:g}", f"{t.radius:.3g}", t.centre, f"{t.step_fraction:.2f}",
+              "yes" if t.on_boundary else "no", f"{t.cfd_decrease:.4g}",
+              f"{t.predicted_decrease:.4g}", f"{t.ratio:.3g}",
+              "accepted" if t.accepted else "rejected", f"{t.next_radius:.3g}"]
+             for r in result.rounds for b, t in r.trust_steps.items()]
+    if steps:
+        s.blocks.append(text_html(
+            "Trust-region steps: f = -(1 - beta) mean thrust + beta mean power; the ratio is "
+            "CFD's decrease of f from the centre to the optimum over the decrease the "
+            "(corrected) model predicted; a step of ratio below 0.1 is rejected (the centre "
+            "stays), below 0.25 the radius halves, above 0.75 on the boundary it doubles."))
+        s.blocks.append(table_html(["round", "beta", "radius", "centre", "step / radius",
+                                    "on the boundary", "CFD decrease of f",
+                                    "predicted decrease", "ratio", "step", "next radius"],
+                                   steps))
     s.blocks.append(table_html(["round", "CFD runs in the fit", "of them from rounds before",
                                 *(result.rounds[0].coefficients if result.rounds else [])],
                                [[r.index, r.n_cases, r.loop_records_in_fit,

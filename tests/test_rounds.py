@@ -508,3 +508,113 @@ def test_filtered_corrected_rounds_close_in_then_part_again_with_the_refit(tmp_p
     assert sixth["largest_error"] > 0.25 and sixth["checks"]["β = 0"]["power_error"] > 0.2
     assert not loop["converged"] and rounds[6]["not_backtested"]
     assert loop["stopped_because"].startswith("round 7: ")
+
+
+def test_a_trust_region_needs_several_rounds_and_a_radius_in_its_range(tmp_path):
+    check_rounds(3, 0.1, "identified:uniform", correct_outputs=True, refit=False,
+                 trust_radius=0.25)
+    with pytest.raises(ConfigError, match="needs --rounds 2 or more") as err:
+        check_rounds(1, 0.1, "case", trust_radius=0.25)
+    assert err.value.key == "trust_region"
+    with pytest.raises(ConfigError, match="radius must be a fraction in"):
+        check_rounds(3, 0.1, "identified:uniform", trust_radius=0.0)
+    out = tmp_path / "run"
+    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--trust-region",
+                                   "0.25"])
+    assert res.exit_code == 2
+    assert "--trust-region applies only to rounds of CFD in the loop" in res.output
+    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--rounds", "2",
+                                   "--coefficients", "identified:uniform", "--trust-region",
+                                   "-1"])
+    assert res.exit_code != 0 and "radius must be a fraction" in res.output
+    assert not out.exists()
+
+
+def _step(beta, on_boundary, next_radius=0.25):
+    from mfflap.optimisation.trust_region import TrustStep
+
+    return TrustStep(beta, 0.25, "round 1's beta = 0", 1.0 if on_boundary else 0.4,
+                     on_boundary, 1.0, 1.2, 0.83, True, next_radius)
+
+
+def test_rounds_in_trust_regions_converge_only_inside_them_and_stop_when_one_collapses():
+    done = SimpleNamespace(interrupted=None, identification={"uniform": 1}, study=object())
+    inside = _round(3, 0.05)
+    inside.trust_steps = {0.0: _step(0.0, False)}
+    converged, why = stop_reason(inside, done, {"b"}, {"a"}, 0.1, bounded=True)
+    assert converged and why.endswith("(largest 5.0%) with every optimum inside its trust "
+                                      "region")
+    # within the tolerance, but an optimum is on its boundary: the model wants to go on
+    edge = _round(3, 0.05)
+    edge.trust_steps = {0.0: _step(0.0, True), 0.5: _step(0.5, False)}
+    assert stop_reason(edge, done, {"b"}, {"a"}, 0.1, bounded=True) is None
+    # a repeated motion is no fixed point: the radius still moves
+    assert stop_reason(edge, done, {"a"}, {"a"}, 0.1, bounded=True) is None
+    collapsed = _round(4, 0.3)
+    collapsed.trust_steps = {0.5: _step(0.5, True, next_radius=4e-4)}
+    converged, why = stop_reason(collapsed, done, {"c"}, {"a"}, 0.1, bounded=True)
+    assert not converged and why.startswith("round 4: the trust region of beta 0.5 "
+                                            "collapsed (radius below 0.001)")
+    assert collapsed.as_dict()["trust_steps"]["0.5"]["next_radius"] == 4e-4
+
+
+def test_a_rounds_step_is_judged_against_the_model_at_its_centre_scaled_as_the_optimum():
+    """The predicted decrease is the round's model at the centre, times the scales the optimum
+    was optimised with, less the optimum's corrected prediction; CFD's is the two CFD
+    means'."""
+    from mfflap.config import load_case
+    from mfflap.kinematics.convert import harmonic_to_discrete
+    from mfflap.optimisation.output_correction import CorrectionPoint
+    from mfflap.optimisation.trust_region import TrustRegion
+    from mfflap.performance import evaluate_discrete
+    from mfflap.rounds import trust_steps
+
+    config = load_case(CASE)
+    model, n = config.morison_model(), config.optimisation.n_steps
+    centre = harmonic_to_discrete(0.6, 0.3, 0.5, 1.5, n)
+    optimum = harmonic_to_discrete(0.62, 0.31, 0.5, 1.5, n)
+    checks = motion_checks({"β = 0.5": _outcome("u", 12.0, 10.0, 30.0, 25.0)}, set(),
+                           {"β = 0.5": (1.1, 1.2)})
+    outcome = SimpleNamespace(study=SimpleNamespace(sqp={0.5: SimpleNamespace(
+        motion=optimum), 0.0: SimpleNamespace(motion=centre)}), model=model)
+    region = TrustRegion(centre, 0.25, "round 1's beta = 0.5")
+    regions = {0.5: region, 0.0: TrustRegion(centre, 0.25)}  # beta 0: no back-test
+    steps = trust_steps(outcome, checks, regions,
+                        {0.5: CorrectionPoint(centre, 11.0, 31.0, "c"), 0.0: None}, "paper")
+    assert set(steps) == {0.5}
+    s = evaluate_discrete(model, centre, "paper").summary
+    f_centre = 0.5 * (-1.1 * float(s.mean_thrust) + 1.2 * float(s.mean_power))
+    step = steps[0.5]
+    assert step.predicted_decrease == pytest.approx(f_centre - 0.5 * (-11.0 + 30.0))
+    assert step.cfd_decrease == pytest.approx(0.5 * (-11 + 31) - 0.5 * (-12 + 30))
+    assert step.step_fraction == pytest.approx(region.step_fraction(optimum))
+    assert step.centre == "round 1's beta = 0.5"
+
+
+def test_the_rounds_files_keep_the_trust_regions_steps(tmp_path):
+    import json
+
+    import h5py
+
+    from mfflap.config import load_case
+    from mfflap.rounds import LoopResult, write_rounds
+
+    first, second = _round(1, 0.3), _round(2, 0.12)
+    second.trust_steps = {0.0: _step(0.0, True)}
+    result = LoopResult([first, second], 0.1, False, "ran the 2 round(s) asked for",
+                        correct_outputs=True, refit=False, trust_radius=0.25)
+    write_rounds(result, load_case(CASE), tmp_path)
+    with h5py.File(tmp_path / "rounds.h5") as f:
+        assert f.attrs["trust_radius"] == 0.25 and not f.attrs["refit"]
+        kept = json.loads(f["rounds/round_2"].attrs["summary"])["trust_steps"]["0"]
+        assert kept["on_boundary"] and kept["ratio"] == pytest.approx(0.83)
+        assert json.loads(f["rounds/round_1"].attrs["summary"])["trust_steps"] == {}
+    html = (tmp_path / "rounds.html").read_text()
+    assert "keeps each optimum in a trust region (first radius 0.25)" in html
+    assert "Trust-region steps" in html and "<td>0.83</td>" in html
+    assert (tmp_path / "rounds.png").stat().st_size > 0
+    unbounded = LoopResult([first], 0.1, False, "x")
+    write_rounds(unbounded, load_case(CASE), tmp_path)
+    with h5py.File(tmp_path / "rounds.h5") as f:
+        assert np.isnan(f.attrs["trust_radius"])
+    assert "Trust-region steps" not in (tmp_path / "rounds.html").read_text()

@@ -59,12 +59,18 @@ from mfflap.cli.json_output import echo_json
               help="With --rounds and identified coefficients: refit the model on the "
                    "back-tests of the rounds before; --no-refit keeps round 1's "
                    "coefficients, so that only --correct-outputs learns from the CFD.")
+@click.option("--trust-region", "trust_radius", default=None, type=float,
+              help="With --rounds: from round 2 on, keep each beta's optimum within this "
+                   "fraction (the first radius, e.g. 0.25) of the accelerations and time "
+                   "step of the last optimum CFD confirmed, halving or doubling it as the "
+                   "back-tests confirm the predicted gains (trust-region modifier "
+                   "adaptation).")
 @click.option("--json", "as_json", is_flag=True, help="Print the key numbers as JSON.")
 def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
             backtest_fixtures: tuple[Path, ...], live: bool, coefficients: str, starts: int,
             gain_table: bool, no_ipopt: bool, within_data: bool, rounds: int,
             loop_tolerance: float, correct_outputs: bool, correction_gain: float,
-            refit: bool, as_json: bool) -> None:
+            refit: bool, trust_radius: float | None, as_json: bool) -> None:
     """Identification, sweep, optimisation, back-test and reports for CASE_FILE.
 
     Writes <out>/report.html (every figure), <out>/results.h5 (every number and the inputs)
@@ -80,13 +86,14 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
     from mfflap.rounds import check_rounds
 
     if rounds == 1:
-        refuse_given(("loop_tolerance", "correct_outputs", "correction_gain", "refit"),
+        refuse_given(("loop_tolerance", "correct_outputs", "correction_gain", "refit",
+                      "trust_radius"),
                      "rounds of CFD in the loop (--rounds 2 or more)")
     if not correct_outputs:
         refuse_given(("correction_gain",), "corrected outputs (--correct-outputs)")
     if not coefficients.startswith("identified:"):
         refuse_given(("refit",), "identified coefficients (--coefficients identified:...)")
-    check_rounds(rounds, loop_tolerance, coefficients, correct_outputs, refit)
+    check_rounds(rounds, loop_tolerance, coefficients, correct_outputs, refit, trust_radius)
     check_gain(correction_gain)
     case = load_case(case_file)
     out_dir = out_dir or Path(f"{case.study.name}_run")
@@ -98,7 +105,7 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
     out_dir.mkdir(parents=True, exist_ok=True)
     if rounds > 1:
         _run_rounds(case, options, rounds, loop_tolerance, out_dir, sources_shown(fixtures),
-                    as_json, correct_outputs, correction_gain, refit)
+                    as_json, correct_outputs, correction_gain, refit, trust_radius)
         return
     outcome = run_study(case, options, progress=lambda m: click.echo(m, err=True))
     write_outputs(outcome.config or case, outcome, out_dir / "results.h5",
@@ -123,14 +130,16 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
 
 def _run_rounds(case, options, rounds: int, tolerance: float, out_dir: Path, source: str,
                 as_json: bool, correct_outputs: bool = False,
-                correction_gain: float = 1.0, refit: bool = True) -> None:
+                correction_gain: float = 1.0, refit: bool = True,
+                trust_radius: float | None = None) -> None:
     """``--rounds`` > 1: :func:`mfflap.rounds.run_rounds` and what it wrote."""
     from mfflap.rounds import run_rounds
 
     result, outcome = run_rounds(case, options, rounds, tolerance, out_dir,
                                  progress=lambda m: click.echo(m, err=True), source=source,
                                  correct_outputs=correct_outputs,
-                                 correction_gain=correction_gain, refit=refit)
+                                 correction_gain=correction_gain, refit=refit,
+                                 trust_radius=trust_radius)
     if outcome is not None and outcome.interrupted is not None:
         click.echo(f"interrupted in round {len(result.rounds)} ({outcome.interrupted}): "
                    f"{out_dir / 'rounds.html'} holds the rounds so far; the same command runs "

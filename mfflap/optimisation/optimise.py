@@ -21,6 +21,7 @@ from mfflap.kinematics.convert import resample
 from mfflap.kinematics.discrete import DiscreteMotion
 from mfflap.optimisation.interrupts import interrupts_kept
 from mfflap.optimisation.problem import FlappingProblem
+from mfflap.optimisation.trust_region import TrustRegion
 from mfflap.performance import CycleSummary, evaluate_discrete
 
 #: An optimum is flagged when |mean energy residual| exceeds this share of its mean power.
@@ -126,12 +127,15 @@ def peak_power_flag(peak: float, n_resampled: int, max_power: float,
 def optimise_sqp(problem: FlappingProblem, start: DiscreteMotion, *, min_period: float,
                  max_period: float, continuation: Sequence[float] = (0.01, 0.1, 1.0),
                  max_iterations: int = 400, tolerance: float = 1e-9, start_label: str = "start",
-                 callback: Callable[[int, float], None] | None = None) -> OptimisationResult:
+                 callback: Callable[[int, float], None] | None = None,
+                 trust_region: TrustRegion | None = None) -> OptimisationResult:
     """SLSQP on the penalised objective with the exact adjoint gradient.
 
     The power penalty is raised through ``continuation`` (multipliers of the problem's
     sigma_P, ending at 1): early stages explore, the last one enforces P_max.
     Non-convergence is reported in the result (``converged`` False, the last iterate kept).
+    ``trust_region`` bounds every variable to its box
+    (:class:`~mfflap.optimisation.trust_region.TrustRegion`); the start is moved into it.
     """
     if not continuation or continuation[-1] != 1.0 or any(c <= 0 for c in continuation):
         raise ConfigError(f"continuation {list(continuation)} must be positive multipliers "
@@ -143,6 +147,10 @@ def optimise_sqp(problem: FlappingProblem, start: DiscreteMotion, *, min_period:
     scale = _scales(start)
     bounds = [(None, None)] * (2 * n) + [(lo / scale[-1], hi / scale[-1])]
     x = _pack(start) / scale
+    if trust_region is not None:
+        lower, upper = trust_region.bounds(n, (lo, hi))
+        bounds = list(zip(lower / scale, upper / scale, strict=True))
+        x = np.clip(x, lower / scale, upper / scale)
     history: list[float] = []
     t0 = time.perf_counter()
     converged, message, iterations = False, "not run", 0
@@ -232,12 +240,14 @@ def _has_state_envelope(problem: FlappingProblem) -> bool:
 
 def optimise_ipopt(problem: FlappingProblem, start: DiscreteMotion, *, min_period: float,
                    max_period: float, max_iterations: int = 1000, tolerance: float = 1e-8,
-                   start_label: str = "start") -> OptimisationResult:
+                   start_label: str = "start", trust_region: TrustRegion | None = None
+                   ) -> OptimisationResult:
     """Hard constraints P_in,j <= P_max and |h_j| <= h_max, and the pitch envelope's
     |theta_j| <= theta_max, |thetadot_j| <= thetadot_max, |thetaddot_j| <= thetaddot_max
     where it is given, solved by IPOPT (CasADi).
 
     The objective is the same beta-weighted mean with the smoothness term and no penalties.
+    ``trust_region`` bounds the variables to its box as in :func:`optimise_sqp`.
     """
     n = start.n_steps
     lo, hi = time_step_bounds(n, min_period, max_period)
@@ -261,6 +271,14 @@ def optimise_ipopt(problem: FlappingProblem, start: DiscreteMotion, *, min_perio
     # the pitch accelerations are the controls: their limit is a bound
     lbx[:n] = -problem.max_pitch_acceleration / scale[:n]
     ubx[:n] = problem.max_pitch_acceleration / scale[:n]
+    if trust_region is not None:
+        lower, upper = trust_region.bounds(n, (lo, hi))
+        lbx, ubx = np.maximum(lbx, lower / scale), np.minimum(ubx, upper / scale)
+        if np.any(lbx > ubx):
+            raise ConfigError(f"the trust region about {trust_region.source or 'its centre'} "
+                              "lies outside the pitch acceleration limit "
+                              f"{problem.max_pitch_acceleration:g} rad/s^2",
+                              key="trust_region")
     x0 = np.clip(_pack(start) / scale, lbx, ubx)
     with interrupts_kept():  # a Ctrl-C stops the solve and the caller, not only IPOPT
         sol = solver(x0=x0, p=par, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)

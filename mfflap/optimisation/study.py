@@ -25,6 +25,7 @@ from mfflap.optimisation.refine import (
     refine_best_sinusoid,
     sinusoid_pitch_margins,
 )
+from mfflap.optimisation.trust_region import TrustRegion
 from mfflap.performance import no_thrust_gain_reason, thrust_gain
 from mfflap.sweep import SweepResult, pareto_front, sinusoid_sweep
 
@@ -122,6 +123,9 @@ class BetaStudy:
     #: beta -> the output correction its optimisation used
     #: (:class:`~mfflap.optimisation.output_correction.OutputCorrection`); none: the model's
     corrections: dict = field(default_factory=dict)
+    #: beta -> the trust region its optimum was kept in
+    #: (:class:`~mfflap.optimisation.trust_region.TrustRegion`); none: unbounded
+    trust_regions: dict = field(default_factory=dict)
 
     @property
     def interruption(self) -> str | None:
@@ -175,6 +179,8 @@ class BetaStudy:
         if 0.0 in self.corrections:
             doubts.append("was optimised with the model's outputs corrected from CFD (its "
                           "power limit is not the best sinusoid's)")
+        if 0.0 in self.trust_regions:
+            doubts.append("was kept in a trust region about an earlier optimum")
         if not doubts:
             return None
         return (f"the beta = 0 optimum it is computed from {' and '.join(doubts)}: the gain "
@@ -204,12 +210,14 @@ class StudyInterrupted(KeyboardInterrupt):
 def beta_study(config: CaseConfig, betas: Sequence[float] | None = None, n_starts: int = 3,
                with_ipopt: bool = True, model=None, sweep: SweepResult | None = None,
                progress: Progress | None = None,
-               corrections: Mapping[float, OutputCorrection] | None = None) -> BetaStudy:
+               corrections: Mapping[float, OutputCorrection] | None = None,
+               trust_regions: Mapping[float, TrustRegion] | None = None) -> BetaStudy:
     """Best feasible sinusoid, then multi-start SQP (and IPOPT) for each beta.
 
     ``corrections`` (beta -> :class:`OutputCorrection`) optimise those betas with the
     model's thrust and power scaled as CFD measured them; the sweep and the best sinusoid
-    stay the model's own.
+    stay the model's own. ``trust_regions`` (beta -> :class:`TrustRegion`) keep those betas'
+    optima within their boxes, SQP and IPOPT started from the centre alone.
 
     Raises
     ------
@@ -225,12 +233,15 @@ def beta_study(config: CaseConfig, betas: Sequence[float] | None = None, n_start
         raise ConfigError(f"n_starts must be >= 1 (the best sinusoid is the first start), got "
                           f"{n_starts!r}", key="n_starts")
     corrections = dict(corrections or {})
+    trust_regions = dict(trust_regions or {})
     problems = {beta: problem_for(config, beta, model)
                 for beta in (betas if betas is not None else o.betas)}
-    unknown = sorted(set(corrections) - set(problems))
-    if unknown:
-        raise ConfigError(f"output corrections for beta {unknown} that are not optimised "
-                          f"(betas {list(problems)})", key="corrections")
+    for what, key, given in (("output corrections", "corrections", corrections),
+                             ("trust regions", "trust_regions", trust_regions)):
+        unknown = sorted(set(given) - set(problems))
+        if unknown:
+            raise ConfigError(f"{what} for beta {unknown} that are not optimised "
+                              f"(betas {list(problems)})", key=key)
     for beta, corr in corrections.items():
         problems[beta] = corr.problem(problems[beta])
         if progress is not None:
@@ -248,13 +259,19 @@ def beta_study(config: CaseConfig, betas: Sequence[float] | None = None, n_start
                  f"(grid {refined.grid_thrust:.4g} N)")
     sqp, sqp_all, ipopt = {}, {}, {}
     for beta, problem in problems.items():
+        region = trust_regions.get(beta)
+        own_starts = starts if region is None else [
+            (f"trust-region centre ({region.source or 'given'}, radius {region.radius:.3g})",
+             region.centre)]
         try:
             found, found_all = multistart(
-                problem, starts, min_period=o.min_period, max_period=o.max_period,
-                progress=progress, label=f"beta {beta:g}" + (
-                    " (outputs corrected; J over c)" if beta in corrections else ""))
-            found_ipopt = optimise_ipopt(problem, starts[0][1], min_period=o.min_period,
-                                         max_period=o.max_period, start_label=starts[0][0]
+                problem, own_starts, min_period=o.min_period, max_period=o.max_period,
+                progress=progress, trust_region=region, label=f"beta {beta:g}" + (
+                    " (outputs corrected; J over c)" if beta in corrections else "")
+                + ("" if region is None else f" (trust region {region.radius:.3g})"))
+            found_ipopt = optimise_ipopt(problem, own_starts[0][1], min_period=o.min_period,
+                                         max_period=o.max_period,
+                                         start_label=own_starts[0][0], trust_region=region
                                          ) if with_ipopt else None
             if beta in corrections:  # the case's beta, the corrected J (not J / c)
                 corr = corrections[beta]
@@ -266,14 +283,16 @@ def beta_study(config: CaseConfig, betas: Sequence[float] | None = None, n_start
             raise StudyInterrupted(BetaStudy(sweep, best, sqp, sqp_all, ipopt, refined,
                                              interrupted_beta=beta,
                                              betas_not_optimised=left,
-                                             corrections=corrections)) from exc
+                                             corrections=corrections,
+                                             trust_regions=trust_regions)) from exc
         sqp[beta], sqp_all[beta] = found, found_all
         if found_ipopt is not None:
             ipopt[beta] = found_ipopt
             if progress is not None:
                 progress(f"beta {beta:g} IPOPT (hard constraints): thrust "
                          f"{float(found_ipopt.summary.mean_thrust):.3g} N, {found_ipopt.message}")
-    return BetaStudy(sweep, best, sqp, sqp_all, ipopt, refined, corrections=corrections)
+    return BetaStudy(sweep, best, sqp, sqp_all, ipopt, refined, corrections=corrections,
+                     trust_regions=trust_regions)
 
 
 def _corrected(result: OptimisationResult | None, beta: float, correction: OutputCorrection,

@@ -39,6 +39,11 @@ def write_study(rf: ResultsFile, config: CaseConfig, study: BetaStudy,
             settings.update({"output_thrust_scale": corr.thrust_scale,
                              "output_power_scale": corr.power_scale,
                              "output_correction": json.dumps(corr.as_dict())})
+        if beta in study.trust_regions:  # kept in a box about an earlier optimum
+            region = study.trust_regions[beta]
+            settings.update({"trust_region_radius": region.radius,
+                             "trust_region_centre": region.source,
+                             "trust_region_step_fraction": region.step_fraction(r.motion)})
         write_result(rf, f"{prefix}/sqp/{beta_key(beta)}", r, settings)
         for k, other in enumerate(study.sqp_all.get(beta, [])):
             write_result(rf, f"{prefix}/sqp_starts/{beta_key(beta)}/start_{k}", other, settings)

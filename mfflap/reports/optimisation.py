@@ -136,6 +136,15 @@ def add_optimisation_sections(rep: Report, study, model, scheme: str, max_power:
                 f"power {corr.power_scale * float(m.mean_power):.3g} W, and P_max holds for "
                 f"the corrected power (the model's own at most {max_power / corr.power_scale:.3g}"
                 " W)."))
+    for b, region in study.trust_regions.items():
+        if b in study.sqp:
+            fraction = region.step_fraction(study.sqp[b].motion)
+            s.blocks.append(text_html(
+                f"β = {b:g} was kept in a trust region of radius {region.radius:.3g} about "
+                f"{region.source or 'an earlier motion'} (started there alone): its step is "
+                f"{fraction:.2f} of the radius, "
+                + ("on the boundary (the model would go further)." if region.on_boundary(
+                    study.sqp[b].motion) else "inside it.")))
     if study.thrust_gain is not None:
         s.blocks.append(text_html(f"β = 0 thrust gain over the best feasible sinusoid: "
                                   f"{study.thrust_gain:+.1%} (the paper: +50.29 %)."))

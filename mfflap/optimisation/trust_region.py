@@ -1,0 +1,247 @@
+"""Trust region of the rounds: each optimum kept near the last motion CFD confirmed.
+
+The output correction is measured at one motion (a zeroth-order modifier,
+:mod:`mfflap.optimisation.output_correction`): the corrected model is exact there and its error
+grows with the distance from it. Unbounded, each round's optimum moves to where the ratio of
+CFD to model differs and the rounds do not converge (README, "Filtered output correction").
+A trust region bounds the step instead (trust-region modifier adaptation; Conn, Gould and
+Toint 2000 for the radius update, del Rio Chanona et al. 2021 for its use with modifiers).
+
+The region is a box about the centre motion c in the optimiser's own scaled variables:
+
+    |theta_ddot_j - theta_ddot_c,j| <= r max_i |theta_ddot_c,i|,
+    |h_ddot_j - h_ddot_c,j|         <= r max_i |h_ddot_c,i|,
+    |dt - dt_c|                     <= r dt_c,
+
+for every step j, with r the radius (a fraction). After CFD has run the new optimum u, the
+step is judged by the ratio of the CFD's decrease of the beta-weighted objective of the means,
+f = -(1 - beta) F_bar + beta P_bar, to the decrease the (corrected) model predicted:
+
+    rho = (f_CFD(c) - f_CFD(u)) / (f_model(c) - f_model(u)).
+
+rho >= :data:`ACCEPT_RATIO`: the step is accepted (u becomes the centre); otherwise the centre
+stays. rho < :data:`SHRINK_RATIO`: the radius halves; rho > :data:`GROW_RATIO` with u on the
+region's boundary: it doubles (at most :data:`MAX_RADIUS`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from mfflap.errors import ConfigError
+
+#: a step is accepted when CFD confirms at least this share of the predicted decrease
+ACCEPT_RATIO = 0.1
+#: below this share the radius halves
+SHRINK_RATIO = 0.25
+#: above this share, with the optimum on the boundary, the radius doubles
+GROW_RATIO = 0.75
+#: the largest radius the update reaches
+MAX_RADIUS = 2.0
+#: a radius below this is a collapsed region: the rounds stop
+MIN_RADIUS = 1e-3
+#: an optimum within this share of the radius from a face of the box is on the boundary
+BOUNDARY_SHARE = 1e-3
+
+
+def check_radius(radius: float, key: str = "trust_region") -> None:
+    """Refuse a radius that is not a finite fraction in (0, :data:`MAX_RADIUS`]
+    (:class:`~mfflap.errors.ConfigError` naming ``key``)."""
+    if not (isinstance(radius, int | float) and not isinstance(radius, bool)
+            and math.isfinite(radius)
+            and 0 < radius <= MAX_RADIUS):
+        raise ConfigError(f"a trust region's radius must be a fraction in (0, {MAX_RADIUS:g}] "
+                          f"of the centre motion's accelerations and time step, got {radius!r}",
+                          key=key)
+
+
+@dataclass(frozen=True)
+class TrustRegion:
+    """The box of motions within ``radius`` of ``centre`` (module docstring).
+
+    Attributes
+    ----------
+    centre : :class:`~mfflap.kinematics.discrete.DiscreteMotion`
+    radius : fraction of the centre's peak accelerations and of its time step
+    source : where the centre comes from, e.g. ``round 2's beta = 0``
+    """
+
+    centre: object
+    radius: float
+    source: str = ""
+
+    def __post_init__(self) -> None:
+        check_radius(self.radius)
+
+    def half_widths(self) -> np.ndarray:
+        """Per packed variable (N pitch, N heave accelerations, dt): how far it may move."""
+        c = self.centre
+        n = c.n_steps
+        peak_pitch = max(float(np.max(np.abs(np.real(c.pitch_acceleration)))), 1e-3)
+        peak_heave = max(float(np.max(np.abs(np.real(c.heave_acceleration)))), 1e-3)
+        return self.radius * np.concatenate([np.full(n, peak_pitch), np.full(n, peak_heave),
+                                             [float(np.real(c.time_step))]])
+
+    def bounds(self, n_steps: int, time_step_bounds: tuple[float, float]
+               ) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper bounds of the packed variables (unscaled), dt within both the
+        region and ``time_step_bounds`` (s).
+
+        Raises
+        ------
+        ConfigError
+            The centre has not ``n_steps`` steps, or its dt range misses the period bounds.
+        """
+        from mfflap.optimisation.optimise import _pack
+
+        if self.centre.n_steps != n_steps:
+            raise ConfigError(f"the trust region's centre ({self.source or 'a motion'}) has "
+                              f"{self.centre.n_steps} steps, the optimisation {n_steps}",
+                              key="trust_region")
+        x_c, width = _pack(self.centre), self.half_widths()
+        lower, upper = x_c - width, x_c + width
+        lower[-1] = max(lower[-1], time_step_bounds[0])
+        upper[-1] = min(upper[-1], time_step_bounds[1])
+        if lower[-1] > upper[-1]:
+            raise ConfigError(f"the trust region about {self.source or 'its centre'} (dt "
+                              f"{x_c[-1]:.4g} s +/- {width[-1]:.3g} s) misses the time steps "
+                              f"the period bounds allow ({time_step_bounds[0]:.4g}-"
+                              f"{time_step_bounds[1]:.4g} s)", key="trust_region")
+        return lower, upper
+
+    def step_fraction(self, motion) -> float:
+        """The step from the centre to ``motion`` as a share of the radius (the largest over
+        the variables; 1: on the boundary)."""
+        from mfflap.optimisation.optimise import _pack
+
+        return float(np.max(np.abs(_pack(motion) - _pack(self.centre)) / self.half_widths()))
+
+    def on_boundary(self, motion) -> bool:
+        """Whether ``motion`` lies on a face of the box (within :data:`BOUNDARY_SHARE`)."""
+        return self.step_fraction(motion) >= 1 - BOUNDARY_SHARE
+
+
+def beta_objective(mean_thrust: float, mean_power: float, beta: float) -> float:
+    """f = -(1 - beta) F_bar + beta P_bar of cycle means (N, W): what the ratio test compares
+    (lower is better)."""
+    return -(1 - beta) * mean_thrust + beta * mean_power
+
+
+def step_ratio(actual_decrease: float, predicted_decrease: float) -> float:
+    """rho = CFD's decrease of f over the predicted one (module docstring).
+
+    A step the model predicted no decrease for (<= 0) has rho = +inf when CFD decreased f
+    (a bonus), else -inf (nothing to confirm).
+    """
+    if not (math.isfinite(actual_decrease) and math.isfinite(predicted_decrease)):
+        raise ConfigError(f"a trust-region step needs finite decreases, got CFD "
+                          f"{actual_decrease!r} and predicted {predicted_decrease!r}",
+                          key="trust_region")
+    if predicted_decrease <= 0:
+        return math.inf if actual_decrease > 0 else -math.inf
+    return actual_decrease / predicted_decrease
+
+
+def updated_radius(radius: float, ratio: float, on_boundary: bool) -> float:
+    """The next radius after a step of ``ratio`` (module docstring)."""
+    if ratio < SHRINK_RATIO:
+        return 0.5 * radius
+    if ratio > GROW_RATIO and on_boundary:
+        return min(2.0 * radius, MAX_RADIUS)
+    return radius
+
+
+def accepted(ratio: float) -> bool:
+    """Whether a step of ``ratio`` is taken (its optimum becomes the centre)."""
+    return ratio >= ACCEPT_RATIO
+
+
+@dataclass(frozen=True)
+class TrustStep:
+    """One beta's step in its trust region, judged by CFD (module docstring).
+
+    Attributes
+    ----------
+    beta : the beta optimised
+    radius : the radius it was optimised within
+    centre : where the centre came from
+    step_fraction : the step as a share of the radius (1: on the boundary)
+    on_boundary : whether the optimum lies on the region's boundary
+    cfd_decrease : f_CFD(centre) - f_CFD(optimum), of the means (N or W, beta-weighted)
+    predicted_decrease : f_model(centre) - f_model(optimum), the (corrected) model's
+    ratio : rho, their ratio
+    accepted : whether the optimum becomes the next centre
+    next_radius : the radius of the next round
+    """
+
+    beta: float
+    radius: float
+    centre: str
+    step_fraction: float
+    on_boundary: bool
+    cfd_decrease: float
+    predicted_decrease: float
+    ratio: float
+    accepted: bool
+    next_radius: float
+
+    @classmethod
+    def judged(cls, region: TrustRegion, beta: float, optimum, cfd_centre: tuple[float, float],
+               cfd_optimum: tuple[float, float], predicted_centre: tuple[float, float],
+               predicted_optimum: tuple[float, float]) -> TrustStep:
+        """The step from ``region``'s centre to ``optimum`` (a motion), from the (mean thrust
+        N, mean power W) of CFD and of the model the optimisation used, at both."""
+        def f(means: tuple[float, float]) -> float:
+            return beta_objective(means[0], means[1], beta)
+
+        cfd, predicted = f(cfd_centre) - f(cfd_optimum), f(predicted_centre) - f(
+            predicted_optimum)
+        rho, edge = step_ratio(cfd, predicted), region.on_boundary(optimum)
+        return cls(float(beta), region.radius, region.source, region.step_fraction(optimum),
+                   edge, cfd, predicted, rho, accepted(rho),
+                   updated_radius(region.radius, rho, edge))
+
+    def describe(self) -> str:
+        """One line: the step, its ratio and what follows."""
+        return describe_step(self.as_dict())
+
+    def as_dict(self) -> dict:
+        """JSON-friendly (an infinite ratio as a string)."""
+        return {"beta": self.beta, "radius": self.radius, "centre": self.centre,
+                "step_fraction": self.step_fraction, "on_boundary": self.on_boundary,
+                "cfd_decrease": self.cfd_decrease,
+                "predicted_decrease": self.predicted_decrease,
+                "ratio": self.ratio if math.isfinite(self.ratio) else str(self.ratio),
+                "accepted": self.accepted, "next_radius": self.next_radius}
+
+
+def describe_step(step: dict) -> str:
+    """One line of a :meth:`TrustStep.as_dict`."""
+    ratio = float(step["ratio"])
+    where = "on the boundary" if step["on_boundary"] else "inside"
+    return (f"trust region {step['radius']:.3g} about {step['centre']}: step "
+            f"{step['step_fraction']:.2f} of it ({where}); CFD decreased f by "
+            f"{step['cfd_decrease']:.4g}, predicted {step['predicted_decrease']:.4g} "
+            f"(ratio {ratio:.3g}): {'accepted' if step['accepted'] else 'rejected'}, "
+            f"next radius {step['next_radius']:.3g}")
+
+
+__all__ = [
+    "ACCEPT_RATIO",
+    "BOUNDARY_SHARE",
+    "GROW_RATIO",
+    "MAX_RADIUS",
+    "MIN_RADIUS",
+    "SHRINK_RATIO",
+    "TrustRegion",
+    "TrustStep",
+    "accepted",
+    "beta_objective",
+    "check_radius",
+    "describe_step",
+    "step_ratio",
+    "updated_radius",
+]
