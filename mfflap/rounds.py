@@ -283,29 +283,48 @@ def correction_points(outcome, checks: dict[str, MotionCheck], index: int) -> di
 
 
 def trust_steps(outcome, checks: dict[str, MotionCheck], regions: dict, centres: dict,
-                scheme: str) -> dict:
+                config: CaseConfig) -> dict:
     """beta -> :class:`~mfflap.optimisation.trust_region.TrustStep`: each back-tested
-    optimum of a round with trust ``regions`` (beta -> region) judged by its CFD against that
-    of its centre (``centres``: beta -> the centre's
-    :class:`~mfflap.optimisation.output_correction.CorrectionPoint`), the prediction at the
-    centre being the round's model scaled as the optimum was."""
+    optimum of a round with trust ``regions`` (beta -> region) judged against its centre
+    (``centres``: beta -> the centre's
+    :class:`~mfflap.optimisation.output_correction.CorrectionPoint`).
+
+    The predicted objective is the one the round optimised (``config``'s problem with the
+    round's model, its outputs corrected as they were); CFD's is the same problem with the
+    model's outputs scaled to each motion's own CFD means.
+    """
+    from mfflap.optimisation.output_correction import CorrectionPoint, OutputCorrection
     from mfflap.optimisation.store import beta_label
+    from mfflap.optimisation.study import problem_for
     from mfflap.optimisation.trust_region import TrustStep
-    from mfflap.performance import evaluate_discrete
 
     steps = {}
     sqp = outcome.study.sqp if outcome.study is not None else {}
+    cfg = outcome.config or config
+    scheme = cfg.optimisation.scheme
     for beta, region in regions.items():
         label = beta_label(beta)
         if beta not in sqp or label not in checks or outcome.model is None:
             continue
-        c, centre = checks[label], centres[beta]
-        s = evaluate_discrete(outcome.model, centre.motion, scheme).summary
+        c, centre, optimum = checks[label], centres[beta], sqp[beta].motion
+        base = problem_for(cfg, beta, outcome.model)
+
+        def corrected(correction: OutputCorrection | None, motion, base=base) -> float:
+            if correction is None:
+                return float(base.objective(motion))
+            return correction.objective_factor(base.beta) * float(
+                correction.problem(base).objective(motion))
+
+        def cfd(point: CorrectionPoint, corrected=corrected) -> float:
+            return corrected(OutputCorrection.measured(point, outcome.model, scheme),
+                             point.motion)
+
+        own = outcome.corrections.get(beta)
         steps[beta] = TrustStep.judged(
-            region, beta, sqp[beta].motion, (centre.cfd_mean_thrust, centre.cfd_mean_power),
-            (c.cfd_mean_thrust, c.cfd_mean_power),
-            (c.thrust_scale * float(s.mean_thrust), c.power_scale * float(s.mean_power)),
-            (c.predicted_thrust, c.predicted_power))
+            region, beta, optimum, cfd(centre),
+            cfd(CorrectionPoint(optimum, c.cfd_mean_thrust, c.cfd_mean_power, label,
+                                thrust_usable=c.thrust_counted)),
+            corrected(own, centre.motion), corrected(own, optimum))
     return steps
 
 
@@ -404,7 +423,7 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
         points = correction_points(outcome, summary.checks, k)
         if trust_radius is not None:
             summary.trust_steps = trust_steps(outcome, summary.checks, regions, centres,
-                                              (outcome.config or config).optimisation.scheme)
+                                              config)
             for beta, step in summary.trust_steps.items():
                 radii[beta] = step.next_radius
                 if step.accepted and beta in points:
@@ -442,9 +461,10 @@ def stop_reason(summary: RoundSummary, outcome, keys: set[str], seen: set[str],
     live : whether the back-tests run OpenFOAM (said where a motion had no CFD)
     corrected, filtered : output corrections, filtered (gain < 1): a repeated motion is then
         no fixed point, the filter still moves the scales
-    bounded : trust regions (``summary.trust_steps``): a repeated motion is no fixed point
-        (the radius still moves), the rounds converge only where no optimum is on its
-        region's boundary, and stop when a radius collapses
+    bounded : trust regions (``summary.trust_steps``): a repeated motion is a fixed point
+        only where no optimum left its centre (else the radius still moves), the rounds
+        converge only where no optimum is on its region's boundary, and stop when a radius
+        collapses
 
     Returns
     -------
@@ -473,7 +493,8 @@ def stop_reason(summary: RoundSummary, outcome, keys: set[str], seen: set[str],
         return False, (f"round {k}: the trust region of beta "
                        f"{', '.join(f'{b:g}' for b in collapsed)} collapsed (radius below "
                        f"{MIN_RADIUS:g}): CFD confirms no step of the model there")
-    if keys and keys <= seen and not filtered and not bounded:
+    still = bool(summary.trust_steps) and not any(t.moved for t in summary.trust_steps.values())
+    if keys and keys <= seen and not filtered and (not bounded or still):
         return False, (f"round {k} optimised the motions of an earlier round (a fixed point): "
                        "a further round would fit the same data"
                        + (" and measure the same corrections" if corrected else ""))
@@ -575,17 +596,19 @@ def write_rounds(result: LoopResult, config: CaseConfig, out_dir: Path) -> None:
             + "): " + "; ".join(corrected) + "."))
     steps = [[r.index, f"{b:g}", f"{t.radius:.3g}", t.centre, f"{t.step_fraction:.2f}",
               "yes" if t.on_boundary else "no", f"{t.cfd_decrease:.4g}",
-              f"{t.predicted_decrease:.4g}", f"{t.ratio:.3g}",
-              "accepted" if t.accepted else "rejected", f"{t.next_radius:.3g}"]
+              f"{t.predicted_decrease:.4g}", f"{t.ratio:.3g}" if t.moved else "–",
+              ("accepted" if t.accepted else "rejected") if t.moved else "no step",
+              f"{t.next_radius:.3g}"]
              for r in result.rounds for b, t in r.trust_steps.items()]
     if steps:
         s.blocks.append(text_html(
-            "Trust-region steps: f = -(1 - beta) mean thrust + beta mean power; the ratio is "
-            "CFD's decrease of f from the centre to the optimum over the decrease the "
-            "(corrected) model predicted; a step of ratio below 0.1 is rejected (the centre "
+            "Trust-region steps: the ratio is CFD's decrease of the objective J from the "
+            "centre to the optimum over the decrease the round's optimisation predicted (J "
+            "with the model's thrust and power scaled to each motion's own CFD means, against "
+            "J as the round optimised it); a step of ratio below 0.1 is rejected (the centre "
             "stays), below 0.25 the radius halves, above 0.75 on the boundary it doubles."))
         s.blocks.append(table_html(["round", "beta", "radius", "centre", "step / radius",
-                                    "on the boundary", "CFD decrease of f",
+                                    "on the boundary", "CFD decrease of J",
                                     "predicted decrease", "ratio", "step", "next radius"],
                                    steps))
     s.blocks.append(table_html(["round", "CFD runs in the fit", "of them from rounds before",

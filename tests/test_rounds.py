@@ -550,6 +550,14 @@ def test_rounds_in_trust_regions_converge_only_inside_them_and_stop_when_one_col
     assert stop_reason(edge, done, {"b"}, {"a"}, 0.1, bounded=True) is None
     # a repeated motion is no fixed point: the radius still moves
     assert stop_reason(edge, done, {"a"}, {"a"}, 0.1, bounded=True) is None
+    # ... unless no optimum left its centre
+    from mfflap.optimisation.trust_region import TrustStep
+
+    still = _round(3, 0.2)
+    still.trust_steps = {0.0: TrustStep(0.0, 0.25, "c", 0.0, False, 0.0, 0.0, float("nan"),
+                                        True, 0.25)}
+    converged, why = stop_reason(still, done, {"a"}, {"a"}, 0.1, bounded=True)
+    assert not converged and why.startswith("round 3 optimised the motions of an earlier")
     collapsed = _round(4, 0.3)
     collapsed.trust_steps = {0.5: _step(0.5, True, next_radius=4e-4)}
     converged, why = stop_reason(collapsed, done, {"c"}, {"a"}, 0.1, bounded=True)
@@ -558,37 +566,57 @@ def test_rounds_in_trust_regions_converge_only_inside_them_and_stop_when_one_col
     assert collapsed.as_dict()["trust_steps"]["0.5"]["next_radius"] == 4e-4
 
 
-def test_a_rounds_step_is_judged_against_the_model_at_its_centre_scaled_as_the_optimum():
-    """The predicted decrease is the round's model at the centre, times the scales the optimum
-    was optimised with, less the optimum's corrected prediction; CFD's is the two CFD
-    means'."""
+def test_a_rounds_step_is_judged_by_the_objective_with_each_motions_own_cfd_means():
+    """Predicted: J of the round's corrected problem at the centre and at the optimum. CFD:
+    J with the model's outputs scaled to each motion's own CFD means; a power that CFD finds
+    over the model's is penalised there beyond P_max."""
     from mfflap.config import load_case
     from mfflap.kinematics.convert import harmonic_to_discrete
-    from mfflap.optimisation.output_correction import CorrectionPoint
+    from mfflap.optimisation.output_correction import CorrectionPoint, OutputCorrection
+    from mfflap.optimisation.study import problem_for
     from mfflap.optimisation.trust_region import TrustRegion
     from mfflap.performance import evaluate_discrete
     from mfflap.rounds import trust_steps
 
     config = load_case(CASE)
     model, n = config.morison_model(), config.optimisation.n_steps
+    scheme = config.optimisation.scheme
     centre = harmonic_to_discrete(0.6, 0.3, 0.5, 1.5, n)
     optimum = harmonic_to_discrete(0.62, 0.31, 0.5, 1.5, n)
-    checks = motion_checks({"β = 0.5": _outcome("u", 12.0, 10.0, 30.0, 25.0)}, set(),
-                           {"β = 0.5": (1.1, 1.2)})
-    outcome = SimpleNamespace(study=SimpleNamespace(sqp={0.5: SimpleNamespace(
-        motion=optimum), 0.0: SimpleNamespace(motion=centre)}), model=model)
-    region = TrustRegion(centre, 0.25, "round 1's beta = 0.5")
-    regions = {0.5: region, 0.0: TrustRegion(centre, 0.25)}  # beta 0: no back-test
-    steps = trust_steps(outcome, checks, regions,
-                        {0.5: CorrectionPoint(centre, 11.0, 31.0, "c"), 0.0: None}, "paper")
-    assert set(steps) == {0.5}
-    s = evaluate_discrete(model, centre, "paper").summary
-    f_centre = 0.5 * (-1.1 * float(s.mean_thrust) + 1.2 * float(s.mean_power))
-    step = steps[0.5]
-    assert step.predicted_decrease == pytest.approx(f_centre - 0.5 * (-11.0 + 30.0))
-    assert step.cfd_decrease == pytest.approx(0.5 * (-11 + 31) - 0.5 * (-12 + 30))
+    own = evaluate_discrete(model, optimum, scheme).summary
+    cfd_t, cfd_p = 1.2 * float(own.mean_thrust), 1.5 * float(own.mean_power)
+    checks = motion_checks({"β = 0": _outcome("u", cfd_t, float(own.mean_thrust), cfd_p,
+                                              float(own.mean_power))}, set(),
+                           {"β = 0": (1.1, 1.2)})
+    at_centre = CorrectionPoint(centre, 11.0, 31.0, "c")
+    correction = OutputCorrection.measured(at_centre, model, scheme)
+    outcome = SimpleNamespace(
+        study=SimpleNamespace(sqp={0.0: SimpleNamespace(motion=optimum),
+                                   0.5: SimpleNamespace(motion=centre)}),
+        model=model, config=None, corrections={0.0: correction})
+    region = TrustRegion(centre, 0.25, "round 1's beta = 0")
+    steps = trust_steps(outcome, checks, {0.0: region, 0.5: TrustRegion(centre, 0.25)},
+                        {0.0: at_centre, 0.5: None}, config)
+    assert set(steps) == {0.0}  # beta = 0.5 was not back-tested
+    base = problem_for(config, 0.0, model)
+    # beta = 0: J = -kappa_T mean thrust + penalties, so c = kappa_T
+    predicted = [correction.thrust_scale * float(correction.problem(base).objective(m))
+                 for m in (centre, optimum)]
+    at_optimum = OutputCorrection.measured(CorrectionPoint(optimum, cfd_t, cfd_p, "u"), model,
+                                           scheme)
+    assert (at_optimum.thrust_scale, at_optimum.power_scale) == (pytest.approx(1.2),
+                                                                 pytest.approx(1.5))
+    measured = [correction.thrust_scale * float(correction.problem(base).objective(centre)),
+                1.2 * float(at_optimum.problem(base).objective(optimum))]
+    step = steps[0.0]
+    assert step.predicted_decrease == pytest.approx(predicted[0] - predicted[1])
+    assert step.cfd_decrease == pytest.approx(measured[0] - measured[1])
+    # at the centre, corrected there, the predicted J is CFD's
+    assert predicted[0] == pytest.approx(measured[0])
+    # J with the CFD means: -1.2 T and the penalties and smoothing, which are positive
+    assert measured[1] > -1.2 * float(own.mean_thrust)
     assert step.step_fraction == pytest.approx(region.step_fraction(optimum))
-    assert step.centre == "round 1's beta = 0.5"
+    assert step.centre == "round 1's beta = 0"
 
 
 def test_the_rounds_files_keep_the_trust_regions_steps(tmp_path):

@@ -16,7 +16,6 @@ from mfflap.optimisation.trust_region import (
     MAX_RADIUS,
     TrustRegion,
     TrustStep,
-    beta_objective,
     check_radius,
     step_ratio,
     updated_radius,
@@ -82,27 +81,29 @@ def test_the_step_ratio_and_the_radius_update_follow_the_textbook_rule():
     assert updated_radius(1.5, 0.9, True) == MAX_RADIUS
 
 
-def test_a_step_is_judged_by_the_cfd_decrease_of_the_beta_weighted_means():
+def test_a_step_is_judged_by_the_decrease_cfd_confirms_of_the_one_predicted():
     c = DiscreteMotion(np.ones(4), np.ones(4), 0.1)
     optimum = DiscreteMotion(np.ones(4), np.ones(4), 0.1 * (1 + 0.2))  # on the boundary
     region = TrustRegion(c, 0.2, "round 1's beta = 0.5")
-    # beta 0.5: f = (-T + P) / 2; CFD: 5 -> 4 (decrease 1), model: 5 -> 3 (decrease 2)
-    assert beta_objective(10.0, 20.0, 0.5) == 5.0
-    step = TrustStep.judged(region, 0.5, optimum, (10.0, 20.0), (12.0, 20.0), (10.0, 20.0),
-                            (14.0, 20.0))
+    # J: CFD 5 -> 4 (decrease 1), predicted 5 -> 3 (decrease 2)
+    step = TrustStep.judged(region, 0.5, optimum, 5.0, 4.0, 5.0, 3.0)
     assert (step.cfd_decrease, step.predicted_decrease, step.ratio) == (1.0, 2.0, 0.5)
     assert step.accepted and step.on_boundary and step.next_radius == 0.2
     assert "(ratio 0.5): accepted, next radius 0.2" in step.describe()
     # CFD worse at the optimum than at the centre: rejected, and the radius halves
-    bad = TrustStep.judged(region, 0.5, optimum, (10.0, 20.0), (9.0, 20.0), (10.0, 20.0),
-                           (14.0, 20.0))
+    bad = TrustStep.judged(region, 0.5, optimum, 5.0, 5.5, 5.0, 3.0)
     assert bad.ratio == -0.25 and not bad.accepted and bad.next_radius == pytest.approx(0.1)
     assert "rejected" in bad.describe()
-    # beta = 1 weighs the power alone; the dict of an infinite ratio keeps it as text
-    free = TrustStep.judged(region, 1.0, optimum, (10.0, 20.0), (99.0, 19.0), (10.0, 20.0),
-                            (10.0, 20.0))
+    # nothing predicted, CFD better: a bonus; the dict keeps an infinite ratio as text
+    free = TrustStep.judged(region, 1.0, optimum, 5.0, 4.9, 5.0, 5.0)
     assert free.ratio == math.inf and free.as_dict()["ratio"] == "inf"
     assert free.accepted and free.next_radius == pytest.approx(0.4)
+    # an optimum that did not leave the centre: nothing judged, centre and radius kept
+    still = TrustStep.judged(region, 1.0, c, 5.0, 5.0 + 1e-9, 5.0, 5.0 - 1e-12)
+    assert not still.moved and still.accepted and still.next_radius == 0.2
+    assert math.isnan(still.ratio) and still.as_dict()["ratio"] == "nan"
+    assert still.describe().endswith("no step (the centre is the optimum); centre and radius "
+                                     "kept")
 
 
 def test_sqp_keeps_its_optimum_in_the_box_and_improves_on_the_centre(config, centre):

@@ -14,14 +14,24 @@ The region is a box about the centre motion c in the optimiser's own scaled vari
     |dt - dt_c|                     <= r dt_c,
 
 for every step j, with r the radius (a fraction). After CFD has run the new optimum u, the
-step is judged by the ratio of the CFD's decrease of the beta-weighted objective of the means,
-f = -(1 - beta) F_bar + beta P_bar, to the decrease the (corrected) model predicted:
+step is judged by the ratio of the decrease of the objective J that CFD found to the decrease
+the optimisation predicted:
 
-    rho = (f_CFD(c) - f_CFD(u)) / (f_model(c) - f_model(u)).
+    rho = (J_CFD(c) - J_CFD(u)) / (J_pred(c) - J_pred(u)),
+
+J being the penalised objective of the optimisation (beta-weighted means, power, heave and
+pitch penalties, smoothing). J_pred is the one the round optimised, its outputs corrected as
+they were; J_CFD at a motion is the same objective with the model's thrust and power scaled
+to that motion's own CFD means
+(:meth:`~mfflap.optimisation.output_correction.OutputCorrection.measured`): CFD's means
+with the model's shape of the power over the cycle, so that a step which brings the power
+back under P_max counts for what it gains, as in the optimiser's own merit.
 
 rho >= :data:`ACCEPT_RATIO`: the step is accepted (u becomes the centre); otherwise the centre
 stays. rho < :data:`SHRINK_RATIO`: the radius halves; rho > :data:`GROW_RATIO` with u on the
-region's boundary: it doubles (at most :data:`MAX_RADIUS`).
+region's boundary: it doubles (at most :data:`MAX_RADIUS`). An optimum that did not leave
+the centre (within :data:`NO_STEP_SHARE` of the radius) made no step: nothing to judge, the
+centre and the radius stay.
 """
 
 from __future__ import annotations
@@ -45,6 +55,9 @@ MAX_RADIUS = 2.0
 MIN_RADIUS = 1e-3
 #: an optimum within this share of the radius from a face of the box is on the boundary
 BOUNDARY_SHARE = 1e-3
+#: an optimum within this share of the radius of the centre made no step: the centre is the
+#: corrected model's optimum, and the difference of J between them is round-off
+NO_STEP_SHARE = 1e-3
 
 
 def check_radius(radius: float, key: str = "trust_region") -> None:
@@ -124,12 +137,6 @@ class TrustRegion:
         return self.step_fraction(motion) >= 1 - BOUNDARY_SHARE
 
 
-def beta_objective(mean_thrust: float, mean_power: float, beta: float) -> float:
-    """f = -(1 - beta) F_bar + beta P_bar of cycle means (N, W): what the ratio test compares
-    (lower is better)."""
-    return -(1 - beta) * mean_thrust + beta * mean_power
-
-
 def step_ratio(actual_decrease: float, predicted_decrease: float) -> float:
     """rho = CFD's decrease of f over the predicted one (module docstring).
 
@@ -170,8 +177,8 @@ class TrustStep:
     centre : where the centre came from
     step_fraction : the step as a share of the radius (1: on the boundary)
     on_boundary : whether the optimum lies on the region's boundary
-    cfd_decrease : f_CFD(centre) - f_CFD(optimum), of the means (N or W, beta-weighted)
-    predicted_decrease : f_model(centre) - f_model(optimum), the (corrected) model's
+    cfd_decrease : J_CFD(centre) - J_CFD(optimum)
+    predicted_decrease : J_pred(centre) - J_pred(optimum), the objective the round optimised
     ratio : rho, their ratio
     accepted : whether the optimum becomes the next centre
     next_radius : the radius of the next round
@@ -189,20 +196,25 @@ class TrustStep:
     next_radius: float
 
     @classmethod
-    def judged(cls, region: TrustRegion, beta: float, optimum, cfd_centre: tuple[float, float],
-               cfd_optimum: tuple[float, float], predicted_centre: tuple[float, float],
-               predicted_optimum: tuple[float, float]) -> TrustStep:
-        """The step from ``region``'s centre to ``optimum`` (a motion), from the (mean thrust
-        N, mean power W) of CFD and of the model the optimisation used, at both."""
-        def f(means: tuple[float, float]) -> float:
-            return beta_objective(means[0], means[1], beta)
-
-        cfd, predicted = f(cfd_centre) - f(cfd_optimum), f(predicted_centre) - f(
-            predicted_optimum)
+    def judged(cls, region: TrustRegion, beta: float, optimum, cfd_centre: float,
+               cfd_optimum: float, predicted_centre: float, predicted_optimum: float
+               ) -> TrustStep:
+        """The step from ``region``'s centre to ``optimum`` (a motion), from the objective J
+        of CFD and the predicted one (module docstring) at both."""
+        cfd = float(cfd_centre) - float(cfd_optimum)
+        predicted = float(predicted_centre) - float(predicted_optimum)
+        fraction = region.step_fraction(optimum)
+        if fraction < NO_STEP_SHARE:  # no step: the ratio of two round-offs means nothing
+            return cls(float(beta), region.radius, region.source, fraction, False, cfd,
+                       predicted, math.nan, True, region.radius)
         rho, edge = step_ratio(cfd, predicted), region.on_boundary(optimum)
-        return cls(float(beta), region.radius, region.source, region.step_fraction(optimum),
-                   edge, cfd, predicted, rho, accepted(rho),
-                   updated_radius(region.radius, rho, edge))
+        return cls(float(beta), region.radius, region.source, fraction, edge, cfd, predicted,
+                   rho, accepted(rho), updated_radius(region.radius, rho, edge))
+
+    @property
+    def moved(self) -> bool:
+        """Whether the optimum left the centre (see :data:`NO_STEP_SHARE`)."""
+        return self.step_fraction >= NO_STEP_SHARE
 
     def describe(self) -> str:
         """One line: the step, its ratio and what follows."""
@@ -220,10 +232,13 @@ class TrustStep:
 
 def describe_step(step: dict) -> str:
     """One line of a :meth:`TrustStep.as_dict`."""
+    if step["step_fraction"] < NO_STEP_SHARE:
+        return (f"trust region {step['radius']:.3g} about {step['centre']}: no step (the "
+                "centre is the optimum); centre and radius kept")
     ratio = float(step["ratio"])
     where = "on the boundary" if step["on_boundary"] else "inside"
     return (f"trust region {step['radius']:.3g} about {step['centre']}: step "
-            f"{step['step_fraction']:.2f} of it ({where}); CFD decreased f by "
+            f"{step['step_fraction']:.2f} of it ({where}); CFD decreased J by "
             f"{step['cfd_decrease']:.4g}, predicted {step['predicted_decrease']:.4g} "
             f"(ratio {ratio:.3g}): {'accepted' if step['accepted'] else 'rejected'}, "
             f"next radius {step['next_radius']:.3g}")
@@ -235,11 +250,11 @@ __all__ = [
     "GROW_RATIO",
     "MAX_RADIUS",
     "MIN_RADIUS",
+    "NO_STEP_SHARE",
     "SHRINK_RATIO",
     "TrustRegion",
     "TrustStep",
     "accepted",
-    "beta_objective",
     "check_radius",
     "describe_step",
     "step_ratio",
