@@ -99,6 +99,8 @@ class RunOutcome:
     interrupted: str | None = None
     #: beta -> the output correction measured for it (``RunOptions.correct_at``)
     corrections: dict = field(default_factory=dict)
+    #: label -> the discrete motion back-tested under it (the best sinusoid, each beta's)
+    backtest_motions: dict = field(default_factory=dict)
 
 
 def _stage(outcome: RunOutcome, name: str, progress: Progress, fn):
@@ -319,6 +321,7 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
         n = config.optimisation.n_steps
         motions = {"best sinusoid": sinusoid_motion(study.sweep, study.best_sinusoid, n)}
         motions.update({beta_label(b): r.motion for b, r in study.sqp.items()})
+        outcome.backtest_motions = motions
         if reference is not None:
             outcome.coverage = _stage(outcome, "motions against the identification data",
                                       progress, lambda: motion_coverage(

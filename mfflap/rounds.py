@@ -72,13 +72,18 @@ class MotionCheck:
 
     Attributes
     ----------
-    cfd_mean_thrust, model_mean_thrust : N (the model's own)
-    cfd_mean_power, model_mean_power : W (the model's own)
+    cfd_mean_thrust, model_mean_thrust : N (the model's own on the kinematics CFD imposed,
+        as the back-test compares them)
+    cfd_mean_power, model_mean_power : W (likewise)
     thrust_error, power_error : (prediction - CFD) / |CFD| of the means
     thrust_counted : whether the thrust error counts (:data:`THRUST_FLOOR`)
     in_fit : whether the fit of this round had already seen this motion's CFD
     thrust_scale, power_scale : the output correction the motion was optimised with (1: none);
-        the prediction is the model's mean times it
+        the prediction is the optimiser's mean times it
+    optimised_mean_thrust, optimised_mean_power : N, W, the model's means as the optimiser
+        saw them (:func:`~mfflap.performance.discrete_means`: at the motion's N samples, the
+        ones the correction's scales are measured with); NaN where not known, the
+        back-test's model means then stand in
     """
 
     label: str
@@ -93,16 +98,20 @@ class MotionCheck:
     in_fit: bool
     thrust_scale: float = 1.0
     power_scale: float = 1.0
+    optimised_mean_thrust: float = float("nan")
+    optimised_mean_power: float = float("nan")
 
     @property
     def predicted_thrust(self) -> float:
         """N: the mean thrust the optimisation relied on (corrected model)."""
-        return self.thrust_scale * self.model_mean_thrust
+        own = self.optimised_mean_thrust
+        return self.thrust_scale * (own if np.isfinite(own) else self.model_mean_thrust)
 
     @property
     def predicted_power(self) -> float:
         """W: the mean input power the optimisation relied on (corrected model)."""
-        return self.power_scale * self.model_mean_power
+        own = self.optimised_mean_power
+        return self.power_scale * (own if np.isfinite(own) else self.model_mean_power)
 
     @property
     def error(self) -> float:
@@ -119,7 +128,9 @@ class MotionCheck:
                 "in_fit": self.in_fit, "error": self.error,
                 "thrust_scale": self.thrust_scale, "power_scale": self.power_scale,
                 "predicted_thrust": self.predicted_thrust,
-                "predicted_power": self.predicted_power}
+                "predicted_power": self.predicted_power,
+                "optimised_mean_thrust": _finite_or_none(self.optimised_mean_thrust),
+                "optimised_mean_power": _finite_or_none(self.optimised_mean_power)}
 
 
 @dataclass
@@ -234,13 +245,16 @@ def check_rounds(n_rounds: int, tolerance: float, coefficients: str,
 
 
 def motion_checks(backtests: dict, in_fit: set[str],
-                  scales: dict[str, tuple[float, float]] | None = None
+                  scales: dict[str, tuple[float, float]] | None = None,
+                  optimised: dict[str, tuple[float, float]] | None = None
                   ) -> dict[str, MotionCheck]:
     """Per back-tested motion: the mean thrust and power predicted for it against CFD's.
 
     ``in_fit``: the names of the cases the round's fit used (a record's name is its case's);
     ``scales``: label -> (thrust, power) scale of the output correction the motion was
-    optimised with (a motion not in it: the model's own means).
+    optimised with (a motion not in it: the model's own means); ``optimised``: label ->
+    (thrust N, power W) the optimiser's own means of the motion, which the prediction is
+    made of (a motion not in it: the back-test's model means).
     """
     done = {k: o for k, o in backtests.items() if o.comparison is not None}
     largest = max((abs(o.comparison.cfd_mean_thrust) for o in done.values()), default=0.0)
@@ -248,14 +262,35 @@ def motion_checks(backtests: dict, in_fit: set[str],
     for label, o in done.items():
         c = o.comparison
         k_t, k_p = (scales or {}).get(label, (1.0, 1.0))
+        own_t, own_p = (optimised or {}).get(label, (c.model_mean_thrust, c.model_mean_power))
         out[label] = MotionCheck(
             label, o.key, c.cfd_mean_thrust, c.model_mean_thrust, c.cfd_mean_power,
-            c.model_mean_power, _relative(k_t * c.model_mean_thrust, c.cfd_mean_thrust),
-            _relative(k_p * c.model_mean_power, c.cfd_mean_power),
+            c.model_mean_power, _relative(k_t * own_t, c.cfd_mean_thrust),
+            _relative(k_p * own_p, c.cfd_mean_power),
             thrust_counted=bool(abs(c.cfd_mean_thrust) >= THRUST_FLOOR * largest > 0),
             in_fit=o.record is not None and o.record.name in in_fit,
-            thrust_scale=k_t, power_scale=k_p)
+            thrust_scale=k_t, power_scale=k_p,
+            optimised_mean_thrust=float((optimised or {}).get(label, (np.nan,))[0]),
+            optimised_mean_power=float((optimised or {}).get(label, (np.nan, np.nan))[1]))
     return out
+
+
+def _finite_or_none(value: float) -> float | None:
+    """A number for JSON: None where it is NaN (not known)."""
+    return float(value) if np.isfinite(value) else None
+
+
+def optimised_means(outcome, config: CaseConfig) -> dict[str, tuple[float, float]]:
+    """label -> (mean thrust N, mean power W) of each back-tested motion of a round as its
+    optimiser saw them (:func:`~mfflap.performance.discrete_means`, the round's model and
+    scheme); empty without a model."""
+    from mfflap.performance import discrete_means
+
+    if outcome.model is None:
+        return {}
+    scheme = (outcome.config or config).optimisation.scheme
+    return {label: discrete_means(outcome.model, motion, scheme)
+            for label, motion in getattr(outcome, "backtest_motions", {}).items()}
 
 
 def _relative(predicted: float, cfd: float) -> float:
@@ -417,7 +452,7 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
         summary = RoundSummary(
             k, round_dir, len(outcome.cases),
             sum(1 for p in pooled if p.stem in in_fit), _coefficients(outcome),
-            motion_checks(outcome.backtests, in_fit, scales),
+            motion_checks(outcome.backtests, in_fit, scales, optimised_means(outcome, config)),
             {lbl: o.source for lbl, o in outcome.backtests.items() if o.comparison is None},
             {b: c.as_dict() for b, c in outcome.corrections.items()})
         points = correction_points(outcome, summary.checks, k)
@@ -463,8 +498,9 @@ def stop_reason(summary: RoundSummary, outcome, keys: set[str], seen: set[str],
         no fixed point, the filter still moves the scales
     bounded : trust regions (``summary.trust_steps``): a repeated motion is a fixed point
         only where no optimum left its centre (else the radius still moves), the rounds
-        converge only where no optimum is on its region's boundary, and stop when a radius
-        collapses
+        converge only where every optimum is inside its region and no step was rejected
+        (a rejected optimum is not the rounds' answer: its centre is), and stop when a
+        radius collapses
 
     Returns
     -------
@@ -480,10 +516,12 @@ def stop_reason(summary: RoundSummary, outcome, keys: set[str], seen: set[str],
         return False, (f"round {k}: {label} was not back-tested ({reason}); the next round "
                        "would not learn where the model is wrong"
                        + ("" if live else " (--live runs its CFD in OpenFOAM)"))
-    edge = sorted(b for b, t in summary.trust_steps.items() if t.on_boundary)
+    edge = sorted(b for b, t in summary.trust_steps.items()
+                  if t.on_boundary or not t.accepted)
     if summary.largest_error is not None and summary.largest_error <= tolerance and not edge:
         who = "the corrected model" if summary.corrections else "the model"
-        inside = " with every optimum inside its trust region" if summary.trust_steps else ""
+        inside = (" with every optimum inside its trust region and its step confirmed by CFD"
+                  if summary.trust_steps else "")
         return True, (f"round {k}: {who} predicts every back-tested motion's CFD mean thrust "
                       f"and power within {tolerance:.0%} (largest {summary.largest_error:.1%})"
                       + inside)
@@ -553,7 +591,8 @@ def write_rounds(result: LoopResult, config: CaseConfig, out_dir: Path) -> None:
             arrays = {name: np.array([getattr(r.checks[lbl], name) for lbl in labels])
                       for name in ("cfd_mean_thrust", "model_mean_thrust", "predicted_thrust",
                                    "cfd_mean_power", "model_mean_power", "predicted_power",
-                                   "thrust_scale", "power_scale")}
+                                   "thrust_scale", "power_scale", "optimised_mean_thrust",
+                                   "optimised_mean_power")}
             units = {name: "1" if "scale" in name else "N" if "thrust" in name else "W"
                      for name in arrays}
             rf.write_group(f"rounds/round_{r.index}", arrays, units, {

@@ -79,6 +79,9 @@ def test_the_step_ratio_and_the_radius_update_follow_the_textbook_rule():
     assert updated_radius(0.2, 0.9, False) == 0.2  # good, but the box did not bind
     assert updated_radius(0.2, 0.9, True) == pytest.approx(0.4)  # good and bound: doubles
     assert updated_radius(1.5, 0.9, True) == MAX_RADIUS
+    # a poor step inside the region: half the step, so its optimum is not found again
+    assert updated_radius(0.2, 0.1, False, 0.3) == pytest.approx(0.03)
+    assert updated_radius(0.2, 0.5, False, 0.3) == 0.2
 
 
 def test_a_step_is_judged_by_the_decrease_cfd_confirms_of_the_one_predicted():

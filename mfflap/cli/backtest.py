@@ -77,7 +77,11 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
                      done_folders=() if save_to is None else (save_to,))
     except KeyboardInterrupt:  # the solver is stopped by then; show what was back-tested
         interrupted = next((label for label in motions if label not in outcomes), "the last")
-    _show(outcomes, as_json, scales)
+    from mfflap.performance import discrete_means
+
+    _show(outcomes, as_json, scales, {
+        label: discrete_means(model, motions[label], case.optimisation.scheme)
+        for label in scales if label in motions})
     if interrupted is not None:
         click.echo(f"interrupted during the back-test of {interrupted}: {len(outcomes)} of "
                    f"{len(motions)} motions back-tested{' (shown above)' if outcomes else ''};"
@@ -131,10 +135,13 @@ def optimised_with(rf, case):
     return model if stored is None else model.with_coefficients(json.loads(stored))
 
 
-def _show(outcomes: dict, as_json: bool, scales: dict | None = None) -> None:
+def _show(outcomes: dict, as_json: bool, scales: dict | None = None,
+          optimised: dict | None = None) -> None:
     """Print the back-tests: a line per motion, or JSON. ``scales``: label -> (thrust, power)
-    scale of the output correction a motion was optimised with; its corrected prediction is
-    shown beside the model's own."""
+    scale of the output correction a motion was optimised with; its corrected prediction,
+    the scales times ``optimised`` (label -> the optimiser's own mean thrust and power, the
+    means the scales were measured with; else the back-test's model means), is shown beside
+    the model's own."""
     from mfflap.backtest.workflow import gain_in_cfd, no_gain_in_cfd_reason
 
     data = {label: {"status": o.status, "source": o.source, "motion_key": o.key,
@@ -143,10 +150,12 @@ def _show(outcomes: dict, as_json: bool, scales: dict | None = None) -> None:
     for label, (k_t, k_p) in (scales or {}).items():
         d = data.get(label)
         if d is not None and "model_mean_thrust" in d:
+            own_t, own_p = (optimised or {}).get(label, (d["model_mean_thrust"],
+                                                         d["model_mean_power"]))
             d["corrected_prediction"] = {
-                "thrust_scale": k_t, "power_scale": k_p,
-                "mean_thrust": k_t * d["model_mean_thrust"],
-                "mean_power": k_p * d["model_mean_power"]}
+                "thrust_scale": k_t, "power_scale": k_p, "mean_thrust": k_t * own_t,
+                "mean_power": k_p * own_p, "optimised_mean_thrust": own_t,
+                "optimised_mean_power": own_p}
     gain = gain_in_cfd(outcomes)
     if as_json:
         echo_json({"motions": data, "cfd_thrust_gain": gain,

@@ -28,8 +28,11 @@ with the model's shape of the power over the cycle, so that a step which brings 
 back under P_max counts for what it gains, as in the optimiser's own merit.
 
 rho >= :data:`ACCEPT_RATIO`: the step is accepted (u becomes the centre); otherwise the centre
-stays. rho < :data:`SHRINK_RATIO`: the radius halves; rho > :data:`GROW_RATIO` with u on the
-region's boundary: it doubles (at most :data:`MAX_RADIUS`). An optimum that did not leave
+stays. rho < :data:`SHRINK_RATIO`: the radius becomes half the step's length (half the radius
+when u is on the boundary; Conn, Gould and Toint allow any radius between a fraction of the
+step and a fraction of the radius, and the step's keeps a rejected optimum from being found
+again); rho > :data:`GROW_RATIO` with u on the boundary: it doubles (at most
+:data:`MAX_RADIUS`). An optimum that did not leave
 the centre (within :data:`NO_STEP_SHARE` of the radius) made no step: nothing to judge, the
 centre and the radius stay.
 """
@@ -152,10 +155,13 @@ def step_ratio(actual_decrease: float, predicted_decrease: float) -> float:
     return actual_decrease / predicted_decrease
 
 
-def updated_radius(radius: float, ratio: float, on_boundary: bool) -> float:
-    """The next radius after a step of ``ratio`` (module docstring)."""
+def updated_radius(radius: float, ratio: float, on_boundary: bool,
+                   step_fraction: float = 1.0) -> float:
+    """The next radius after a step of ``ratio`` that went ``step_fraction`` of ``radius``
+    (module docstring): a poor step halves the radius or the step, whichever is shorter, so
+    that the next optimum differs from a rejected one inside the region."""
     if ratio < SHRINK_RATIO:
-        return 0.5 * radius
+        return 0.5 * radius * min(step_fraction, 1.0)
     if ratio > GROW_RATIO and on_boundary:
         return min(2.0 * radius, MAX_RADIUS)
     return radius
@@ -209,7 +215,7 @@ class TrustStep:
                        predicted, math.nan, True, region.radius)
         rho, edge = step_ratio(cfd, predicted), region.on_boundary(optimum)
         return cls(float(beta), region.radius, region.source, fraction, edge, cfd, predicted,
-                   rho, accepted(rho), updated_radius(region.radius, rho, edge))
+                   rho, accepted(rho), updated_radius(region.radius, rho, edge, fraction))
 
     @property
     def moved(self) -> bool:
