@@ -36,6 +36,17 @@ the corrected model predicts CFD's means there. With ``correction_gain`` K < 1
 optimum was optimised with to the measured ones (a first-order filter, the usual cure for
 the oscillation of the undamped correction).
 
+The prediction checked is made of the model's means as the optimiser saw them (at the
+motion's N samples of its scheme, :func:`mfflap.performance.discrete_means`), the ones the
+correction's scales are measured with, so that at a fixed point it is CFD's exactly; the
+back-test reports keep the model on the kinematics CFD imposed, which differs by the
+scheme's discretisation.
+
+With ``trust_radius`` (``--trust-region``), each round's optimum of a beta is kept near the
+last one CFD confirmed (:mod:`mfflap.optimisation.trust_region`); the rounds then converge
+only where no optimum is on its region's boundary and no step was refused, and stop when a
+region collapses.
+
 Only motions whose CFD the round's fit has not seen count (a motion repeated from an earlier
 round is in the fit). A motion's mean thrust error counts only where its CFD mean thrust is at least
 :data:`THRUST_FLOOR` of the largest CFD mean thrust among the round's motions: a motion of
@@ -262,7 +273,8 @@ def motion_checks(backtests: dict, in_fit: set[str],
     for label, o in done.items():
         c = o.comparison
         k_t, k_p = (scales or {}).get(label, (1.0, 1.0))
-        own_t, own_p = (optimised or {}).get(label, (c.model_mean_thrust, c.model_mean_power))
+        own = (optimised or {}).get(label)
+        own_t, own_p = own if own is not None else (c.model_mean_thrust, c.model_mean_power)
         out[label] = MotionCheck(
             label, o.key, c.cfd_mean_thrust, c.model_mean_thrust, c.cfd_mean_power,
             c.model_mean_power, _relative(k_t * own_t, c.cfd_mean_thrust),
@@ -270,8 +282,8 @@ def motion_checks(backtests: dict, in_fit: set[str],
             thrust_counted=bool(abs(c.cfd_mean_thrust) >= THRUST_FLOOR * largest > 0),
             in_fit=o.record is not None and o.record.name in in_fit,
             thrust_scale=k_t, power_scale=k_p,
-            optimised_mean_thrust=float((optimised or {}).get(label, (np.nan,))[0]),
-            optimised_mean_power=float((optimised or {}).get(label, (np.nan, np.nan))[1]))
+            optimised_mean_thrust=np.nan if own is None else float(own_t),
+            optimised_mean_power=np.nan if own is None else float(own_p))
     return out
 
 
