@@ -21,6 +21,20 @@ from mfflap.rounds import (
 CASE = Path(__file__).parents[1] / "cases" / "paper2026.toml"
 
 
+def _series(out, n_rounds, *flags):
+    """`mfflap run` of the shipped case in ``n_rounds`` rounds of the series the shipped
+    back-tests were run for (identified coefficients, kept within the data, no IPOPT or
+    gain table) with ``flags``: the result and its JSON summary."""
+    import json
+
+    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--rounds",
+                                   str(n_rounds), "--coefficients", "identified:uniform",
+                                   "--within-data", *flags, "--no-ipopt", "--no-gain-table",
+                                   "--json"])
+    assert res.exit_code == 0, res.output
+    return res, json.loads(res.stdout[res.stdout.index("{"):])
+
+
 @pytest.mark.parametrize(("rounds", "tolerance", "coefficients", "says"), [
     (0, 0.1, "identified:uniform", "--rounds must be >= 1"),
     (2, 0.0, "identified:uniform", "--loop-tolerance must be a fraction in (0, 1)"),
@@ -244,11 +258,7 @@ def test_rounds_refit_on_their_back_tests_and_stop_when_a_motion_has_no_cfd(tmp_
     from mfflap.results import ResultsFile
 
     out = tmp_path / "loop"
-    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--rounds", "4",
-                                   "--coefficients", "identified:uniform", "--within-data",
-                                   "--no-ipopt", "--no-gain-table", "--json"])
-    assert res.exit_code == 0, res.output
-    summary = json.loads(res.stdout[res.stdout.index("{"):])
+    _, summary = _series(out, 4)
     loop = summary["rounds"]
     rounds = loop["rounds"]
     assert [r["round"] for r in rounds] == [1, 2, 3, 4]
@@ -338,12 +348,7 @@ def test_corrected_rounds_predict_their_new_optima_far_better(tmp_path):
     import h5py
 
     out = tmp_path / "loop"
-    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--rounds", "6",
-                                   "--coefficients", "identified:uniform", "--within-data",
-                                   "--correct-outputs", "--loop-tolerance", "0.05",
-                                   "--no-ipopt", "--no-gain-table", "--json"])
-    assert res.exit_code == 0, res.output
-    summary = json.loads(res.stdout[res.stdout.index("{"):])
+    res, summary = _series(out, 6, "--correct-outputs", "--loop-tolerance", "0.05")
     loop = summary["rounds"]
     rounds = loop["rounds"]
     assert [r["round"] for r in rounds] == [1, 2, 3, 4, 5, 6]
@@ -436,17 +441,13 @@ def test_rounds_without_a_refit_keep_round_ones_model_and_filter_its_correction(
     the model is another, and is 15-17 % high (README, "Filtered output correction").
     Round 6's motions have no CFD here."""
     import itertools
-    import json
 
     import h5py
 
     out = tmp_path / "loop"
-    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--rounds", "6",
-                                   "--coefficients", "identified:uniform", "--within-data",
-                                   "--correct-outputs", "--no-refit", "--correction-gain",
-                                   "0.5", "--no-ipopt", "--no-gain-table", "--json"])
-    assert res.exit_code == 0, res.output
-    loop = json.loads(res.stdout[res.stdout.index("{"):])["rounds"]
+    res, summary = _series(out, 6, "--correct-outputs", "--no-refit", "--correction-gain",
+                           "0.5")
+    loop = summary["rounds"]
     rounds = loop["rounds"]
     first, second = rounds[:2]
     assert [r["round"] for r in rounds] == [1, 2, 3, 4, 5, 6]
@@ -514,15 +515,10 @@ def test_filtered_corrected_rounds_close_in_then_part_again_with_the_refit(tmp_p
     refit, its tangential added mass driven to zero, moves round 6's optima where the
     corrected model is 15-25 % high (README, "Filtered output correction")."""
     import itertools
-    import json
 
     out = tmp_path / "loop"
-    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--rounds", "7",
-                                   "--coefficients", "identified:uniform", "--within-data",
-                                   "--correct-outputs", "--correction-gain", "0.5",
-                                   "--no-ipopt", "--no-gain-table", "--json"])
-    assert res.exit_code == 0, res.output
-    loop = json.loads(res.stdout[res.stdout.index("{"):])["rounds"]
+    _, summary = _series(out, 7, "--correct-outputs", "--correction-gain", "0.5")
+    loop = summary["rounds"]
     rounds = loop["rounds"]
     assert [r["round"] for r in rounds] == [1, 2, 3, 4, 5, 6, 7]
     assert loop["correction_gain"] == 0.5 and loop["refit"] is True
@@ -707,17 +703,13 @@ def test_rounds_in_a_trust_region_take_the_steps_cfd_confirms_until_one_collapse
     its centre (no step), predicted within 1 %; in round 5 beta = 0's radius collapses:
     CFD confirms no step of the corrected model about round 2's optimum (README, "Trust
     region")."""
-    import json
 
     import h5py
 
     out = tmp_path / "loop"
-    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--rounds", "6",
-                                   "--coefficients", "identified:uniform", "--within-data",
-                                   "--correct-outputs", "--no-refit", "--trust-region",
-                                   "0.25", "--no-ipopt", "--no-gain-table", "--json"])
-    assert res.exit_code == 0, res.output
-    loop = json.loads(res.stdout[res.stdout.index("{"):])["rounds"]
+    _, summary = _series(out, 6, "--correct-outputs", "--no-refit", "--trust-region",
+                         "0.25")
+    loop = summary["rounds"]
     rounds = loop["rounds"]
     assert [r["round"] for r in rounds] == [1, 2, 3, 4, 5]
     assert loop["trust_radius"] == 0.25 and not loop["converged"]
