@@ -95,6 +95,8 @@ class MotionCheck:
         saw them (:func:`~mfflap.performance.discrete_means`: at the motion's N samples, the
         ones the correction's scales are measured with); NaN where not known, the
         back-test's model means then stand in
+    cfd_record : the name of the CFD record compared ("": not known); another motion's
+        (:attr:`cfd_of_neighbour`) where the back-test look-up found one within its tolerance
     """
 
     label: str
@@ -111,6 +113,13 @@ class MotionCheck:
     power_scale: float = 1.0
     optimised_mean_thrust: float = float("nan")
     optimised_mean_power: float = float("nan")
+    cfd_record: str = ""
+
+    @property
+    def cfd_of_neighbour(self) -> bool:
+        """Whether the CFD compared is that of a motion within the look-up's tolerance, not of
+        this motion itself (its record is named for another key)."""
+        return bool(self.cfd_record) and self.cfd_record != f"backtest_{self.key}"
 
     @property
     def predicted_thrust(self) -> float:
@@ -141,7 +150,8 @@ class MotionCheck:
                 "predicted_thrust": self.predicted_thrust,
                 "predicted_power": self.predicted_power,
                 "optimised_mean_thrust": _finite_or_none(self.optimised_mean_thrust),
-                "optimised_mean_power": _finite_or_none(self.optimised_mean_power)}
+                "optimised_mean_power": _finite_or_none(self.optimised_mean_power),
+                "cfd_record": self.cfd_record, "cfd_of_neighbour": self.cfd_of_neighbour}
 
 
 @dataclass
@@ -283,7 +293,8 @@ def motion_checks(backtests: dict, in_fit: set[str],
             in_fit=o.record is not None and o.record.name in in_fit,
             thrust_scale=k_t, power_scale=k_p,
             optimised_mean_thrust=np.nan if own is None else float(own_t),
-            optimised_mean_power=np.nan if own is None else float(own_p))
+            optimised_mean_power=np.nan if own is None else float(own_p),
+            cfd_record="" if o.record is None else str(o.record.name))
     return out
 
 
@@ -441,8 +452,8 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
         opts = replace(options, fixtures=base_fixtures + tuple(pooled),
                        backtest_fixtures=(records, *base_backtests),
                        done_backtests=(records,),
-                       correct_at=(centres if trust_radius else points) if correct_outputs
-                       else {},
+                       correct_at=(centres if trust_radius is not None else points)
+                       if correct_outputs else {},
                        trust_at=regions,
                        correction_gain=correction_gain,
                        work_dir=round_dir / "cfd_cases",
@@ -571,7 +582,9 @@ def describe_round(summary: RoundSummary, tolerance: float) -> str:
                      f"{c.cfd_mean_thrust:.3g} N ({thrust}); power {who} "
                      f"{c.predicted_power:.3g} W / CFD {c.cfd_mean_power:.3g} W "
                      f"({c.power_error:+.1%})" + ("; its CFD was in the fit (not counted)"
-                                                   if c.in_fit else ""))
+                                                   if c.in_fit else "")
+                     + (f"; the CFD of {c.cfd_record}, a motion within the back-test "
+                        "look-up's tolerance" if c.cfd_of_neighbour else ""))
     for label, reason in summary.not_backtested.items():
         lines.append(f"  {label}: not back-tested: {reason.splitlines()[0]}")
     largest = summary.largest_error
@@ -626,7 +639,9 @@ def write_rounds(result: LoopResult, config: CaseConfig, out_dir: Path) -> None:
     rows = []
     for r in result.rounds:
         for c in r.checks.values():
-            rows.append([r.index, c.label, f"{c.predicted_thrust:.3g}",
+            shown = c.label + (f" (CFD of {c.cfd_record}, within the look-up's tolerance)"
+                               if c.cfd_of_neighbour else "")
+            rows.append([r.index, shown, f"{c.predicted_thrust:.3g}",
                          f"{c.cfd_mean_thrust:.3g}",
                          f"{c.thrust_error:+.1%}" + ("" if c.thrust_counted else " (n.c.)"),
                          f"{c.predicted_power:.3g}", f"{c.cfd_mean_power:.3g}",

@@ -128,10 +128,27 @@ def test_motion_checks_count_thrust_only_where_there_is_thrust_and_only_unseen_m
     assert checks["β = 0.5"].error == pytest.approx(0.25)
     from mfflap.rounds import RoundSummary
 
+    assert not any(c.cfd_of_neighbour for c in checks.values())
+    assert checks["β = 0"].cfd_record == "backtest_a"
     summary = RoundSummary(1, Path("r"), 43, 0, {}, checks)
     # the motion whose CFD was in the fit is not counted: its error is in-sample
     assert summary.largest_error == pytest.approx(0.2)
     assert np.isfinite(summary.as_dict()["largest_error"])
+
+
+def test_a_motion_checked_on_a_neighbours_cfd_says_so():
+    """The back-test look-up takes a record whose motion lies within its tolerance: the
+    check names that record, and the round's lines say whose CFD it is."""
+    from mfflap.rounds import describe_round
+
+    near = _outcome("a", 30.0, 24.0, 50.0, 55.0)
+    near.record = SimpleNamespace(name="backtest_b")  # run for a motion 0.1 % away
+    checks = motion_checks({"β = 0": near}, set())
+    assert checks["β = 0"].cfd_of_neighbour
+    assert checks["β = 0"].as_dict()["cfd_record"] == "backtest_b"
+    text = describe_round(RoundSummary(3, Path("r"), 43, 0, {}, checks), 0.1)
+    assert "the CFD of backtest_b, a motion within the back-test look-up's tolerance" in text
+    assert not MotionCheck("x", "k", 1, 1, 1, 1, 0, 0, True, False).cfd_of_neighbour
 
 
 def test_a_corrected_motion_is_checked_by_its_corrected_prediction():
@@ -740,6 +757,11 @@ def test_rounds_in_a_trust_region_take_the_steps_cfd_confirms_until_one_collapse
     assert abs(third["checks"]["β = 1"]["power_error"]) < 0.01
     # round 4 is optimised about the same centres, the corrections measured there
     assert fourth["corrections"]["0"]["source"].startswith("round 2's beta = 0")
+    # beta = 0's shorter steps find round 3's run within the look-up's tolerance, and say so
+    assert not third["checks"]["β = 0"]["cfd_of_neighbour"]
+    for r in (fourth, fifth):
+        assert r["checks"]["β = 0"]["cfd_of_neighbour"]
+        assert r["checks"]["β = 0"]["cfd_record"] == f"backtest_{third['checks']['β = 0']['key']}"
     assert fourth["trust_steps"]["0.5"]["accepted"]
     assert abs(fourth["checks"]["β = 0.5"]["thrust_error"]) < 0.02
     assert fifth["corrections"]["0.5"]["source"].startswith("round 4's beta = 0.5")
