@@ -673,3 +673,41 @@ def test_a_motion_whose_case_another_run_holds_is_not_recorded_as_failed(tmp_pat
     assert out.source.startswith("live OpenFOAM run not started: ")
     assert "another thread of this process is running the case" in out.source
     assert not list((tmp_path / "saved").glob("*.failed.toml"))
+
+
+def test_the_look_up_takes_a_record_of_a_motion_within_its_tolerance_and_no_other(tmp_path):
+    """A motion without a record of its own key is matched to a record whose imposed
+    kinematics (after the start-up ramp) lie within the tolerance of its own; a motion
+    further off, or of another period, is not."""
+    from dataclasses import replace
+
+    from mfflap.backtest.run import _matching_fixture
+    from mfflap.hydro.loads import Loads
+    from mfflap.kinematics.convert import harmonic_to_discrete
+    from mfflap.kinematics.discrete import DiscreteMotion
+
+    motion = harmonic_to_discrete(0.8, 0.3, 0.5, 1.5, 40)
+    spline = cfd_motion(motion)
+    t = np.linspace(0.0, 3 * spline.period, 1201)
+    state = spline.sample(t)
+    h0 = spline.sample(np.array([0.0])).heave_position[0]
+    state = replace(state, heave_position=state.heave_position - h0)
+    zero = np.zeros_like(t)
+    write_record(tmp_path / "backtest_run_before.h5", CfdRecord(
+        "backtest_run_before", state, Loads(t, zero, zero, zero),
+        {"kind": "table", "period": spline.period, "ramp_time": 0.0}))
+
+    def scaled(factor: float) -> DiscreteMotion:
+        return DiscreteMotion(factor * motion.pitch_acceleration, motion.heave_acceleration,
+                              motion.time_step)
+
+    assert _matching_fixture("own", motion, [tmp_path]) == tmp_path / "backtest_run_before.h5"
+    assert _matching_fixture("near", scaled(1.001), [tmp_path]) is not None  # 0.1 % off
+    assert _matching_fixture("far", scaled(1.01), [tmp_path]) is None  # 1 % off
+    slower = DiscreteMotion(motion.pitch_acceleration, motion.heave_acceleration,
+                            motion.time_step * 1.01)
+    assert _matching_fixture("slower", slower, [tmp_path]) is None  # another period
+    # a record of the motion's own key is taken first
+    write_record(tmp_path / "backtest_far.h5", CfdRecord(
+        "backtest_far", state, Loads(t, zero, zero, zero), {"kind": "table", "period": 1.0}))
+    assert _matching_fixture("far", scaled(1.01), [tmp_path]) == tmp_path / "backtest_far.h5"
