@@ -212,6 +212,9 @@ class LoopResult:
     refit: bool = True
     #: the trust region's first radius (None: none)
     trust_radius: float | None = None
+    #: with a trust region, beta -> the rounds' answer: the last motion of that beta CFD
+    #: confirmed (its region's centre when the rounds stopped), in words with its CFD means
+    answers: dict = field(default_factory=dict)
 
     def as_dict(self) -> dict:
         """JSON-friendly."""
@@ -220,6 +223,7 @@ class LoopResult:
                 "correct_outputs": self.correct_outputs,
                 "correction_gain": self.correction_gain, "refit": self.refit,
                 "trust_radius": self.trust_radius,
+                "answers": {f"{b:g}": a for b, a in self.answers.items()},
                 "rounds": [r.as_dict() for r in self.rounds]}
 
 
@@ -500,9 +504,13 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
             converged, why = stop
             break
         seen |= keys
+    answers = {b: f"{p.source}: CFD mean thrust {p.cfd_mean_thrust:.4g} N, mean power "
+                  f"{p.cfd_mean_power:.4g} W" for b, p in centres.items()}
     result = LoopResult(rounds, tolerance, converged, why, correct_outputs, correction_gain,
-                        refit, trust_radius)
+                        refit, trust_radius, answers)
     progress(f"rounds: {why}")
+    for beta, answer in answers.items():
+        progress(f"rounds: beta {beta:g}'s last motion CFD confirmed: {answer}")
     write_rounds(result, config, out_dir)
     return result, outcome
 
@@ -653,6 +661,11 @@ def write_rounds(result: LoopResult, config: CaseConfig, out_dir: Path) -> None:
     s.blocks.append(table_html(["round", "motion", "thrust predicted N", "CFD N", "error",
                                 "power predicted W", "CFD W", "error", "CFD in the fit",
                                 "output correction (thrust, power)"], rows))
+    if result.answers:
+        s.blocks.append(text_html(
+            "The last motion of each β that CFD confirmed (its trust region's centre when the "
+            "rounds stopped; each round's own report holds it): " + "; ".join(
+                f"β = {b:g}: {a}" for b, a in result.answers.items()) + "."))
     corrected = [f"round {r.index}, beta {b:g}: {describe_correction(c)}"
                  for r in result.rounds for b, c in r.corrections.items()]
     if corrected:

@@ -691,7 +691,8 @@ def test_the_rounds_files_keep_the_trust_regions_steps(tmp_path):
     first, second = _round(1, 0.3), _round(2, 0.12)
     second.trust_steps = {0.0: _step(0.0, True)}
     result = LoopResult([first, second], 0.1, False, "ran the 2 round(s) asked for",
-                        correct_outputs=True, refit=False, trust_radius=0.25)
+                        correct_outputs=True, refit=False, trust_radius=0.25,
+                        answers={0.0: "round 1's beta = 0 (back-test a): CFD mean thrust 30 N"})
     write_rounds(result, load_case(CASE), tmp_path)
     with h5py.File(tmp_path / "rounds.h5") as f:
         assert f.attrs["trust_radius"] == 0.25 and not f.attrs["refit"]
@@ -701,6 +702,7 @@ def test_the_rounds_files_keep_the_trust_regions_steps(tmp_path):
     html = (tmp_path / "rounds.html").read_text()
     assert "keeps each optimum in a trust region (first radius 0.25)" in html
     assert "Trust-region steps" in html and "<td>0.83</td>" in html
+    assert "β = 0: round 1&#x27;s beta = 0 (back-test a): CFD mean thrust 30 N." in html
     assert (tmp_path / "rounds.png").stat().st_size > 0
     unbounded = LoopResult([first], 0.1, False, "x")
     write_rounds(unbounded, load_case(CASE), tmp_path)
@@ -724,13 +726,17 @@ def test_rounds_in_a_trust_region_take_the_steps_cfd_confirms_until_one_collapse
     import h5py
 
     out = tmp_path / "loop"
-    _, summary = _series(out, 6, "--correct-outputs", "--no-refit", "--trust-region",
-                         "0.25")
+    res, summary = _series(out, 6, "--correct-outputs", "--no-refit", "--trust-region",
+                           "0.25")
     loop = summary["rounds"]
     rounds = loop["rounds"]
     assert [r["round"] for r in rounds] == [1, 2, 3, 4, 5]
     assert loop["trust_radius"] == 0.25 and not loop["converged"]
     assert loop["stopped_because"].startswith("round 5: the trust region of beta 0 collapsed")
+    # the rounds' answer: the last motion of each beta CFD confirmed
+    assert loop["answers"]["0"].startswith("round 2's beta = 0 (back-test")
+    assert loop["answers"]["0.5"].startswith("round 4's beta = 0.5 (back-test")
+    assert "beta 0's last motion CFD confirmed: round 2's beta = 0" in res.stderr
     assert rounds[0]["trust_steps"] == {}
     for r in rounds[1:]:
         assert set(r["trust_steps"]) == {"0", "0.5", "1"}
