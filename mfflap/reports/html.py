@@ -40,10 +40,7 @@ def figure_html(fig: Figure, caption: str = "", dpi: int = 110) -> str:
     import matplotlib.pyplot as plt
 
     buf = io.BytesIO()
-    # a figure laid out already (tight_layout, or a layout engine) is drawn once; the
-    # "tight" bounding box of one that is not costs a second drawing
-    laid_out = fig.get_layout_engine() is not None
-    fig.savefig(buf, format="png", dpi=dpi, bbox_inches=None if laid_out else "tight")
+    fig.savefig(buf, format="png", dpi=dpi, bbox_inches="tight")
     plt.close(fig)
     data = base64.b64encode(buf.getvalue()).decode()
     return (f'<figure><img src="data:image/png;base64,{data}" alt="{html.escape(caption)}">'
