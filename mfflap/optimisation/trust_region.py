@@ -48,7 +48,7 @@ from mfflap.errors import ConfigError
 
 #: a step is accepted when CFD confirms at least this share of the predicted decrease
 ACCEPT_RATIO = 0.1
-#: below this share the radius halves
+#: below this share the radius becomes half the step (half the radius on the boundary)
 SHRINK_RATIO = 0.25
 #: above this share, with the optimum on the boundary, the radius doubles
 GROW_RATIO = 0.75
