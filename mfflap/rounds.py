@@ -317,7 +317,7 @@ def optimised_means(outcome, config: CaseConfig) -> dict[str, tuple[float, float
         return {}
     scheme = (outcome.config or config).optimisation.scheme
     return {label: discrete_means(outcome.model, motion, scheme)
-            for label, motion in getattr(outcome, "backtest_motions", {}).items()}
+            for label, motion in outcome.backtest_motions.items()}
 
 
 def _relative(predicted: float, cfd: float) -> float:
@@ -547,9 +547,9 @@ def stop_reason(summary: RoundSummary, outcome, keys: set[str], seen: set[str],
         return False, (f"round {k}: {label} was not back-tested ({reason}); the next round "
                        "would not learn where the model is wrong"
                        + ("" if live else " (--live runs its CFD in OpenFOAM)"))
-    edge = sorted(b for b, t in summary.trust_steps.items()
-                  if t.on_boundary or not t.accepted)
-    if summary.largest_error is not None and summary.largest_error <= tolerance and not edge:
+    unsettled = [t for t in summary.trust_steps.values() if t.on_boundary or not t.accepted]
+    if (summary.largest_error is not None and summary.largest_error <= tolerance
+            and not unsettled):
         who = "the corrected model" if summary.corrections else "the model"
         inside = (" with every optimum inside its trust region and its step confirmed by CFD"
                   if summary.trust_steps else "")
