@@ -53,6 +53,12 @@ class RunOptions:
     #: K of the first-order filter from each point's scales to the measured ones (1: none;
     #: :meth:`~mfflap.optimisation.output_correction.OutputCorrection.filtered`)
     correction_gain: float = 1.0
+    #: beta -> earlier motions of that beta with their CFD means
+    #: (:class:`~mfflap.optimisation.output_correction.CorrectionPoint`): its output
+    #: correction (``correct_at``) gets slopes that meet CFD there too
+    #: (:meth:`~mfflap.optimisation.output_correction.OutputCorrection.with_slopes`; the
+    #: rounds' ``--first-order``)
+    secant_at: dict = field(default_factory=dict)
     #: beta -> the trust region that beta's optimum is kept in
     #: (:class:`~mfflap.optimisation.trust_region.TrustRegion`; the rounds' ``--trust-region``)
     trust_at: dict = field(default_factory=dict)
@@ -296,10 +302,21 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
     if options.correct_at:
         from mfflap.optimisation.output_correction import OutputCorrection
 
-        outcome.corrections = _stage(outcome, "output correction", progress, lambda: {
-            beta: OutputCorrection.measured(point, model, config.optimisation.scheme).filtered(
-                point.scales, options.correction_gain)
-            for beta, point in options.correct_at.items()}) or {}
+        scheme = config.optimisation.scheme
+
+        def corrections() -> dict:
+            out = {}
+            for beta, point in options.correct_at.items():
+                corr = OutputCorrection.measured(point, model, scheme).filtered(
+                    point.scales, options.correction_gain)
+                if beta in options.secant_at:
+                    corr = corr.with_slopes(point.motion, options.secant_at[beta], model,
+                                            scheme)
+                out[beta] = corr
+            return out
+
+        outcome.corrections = _stage(outcome, "output correction", progress,
+                                     corrections) or {}
 
     def optimisation():
         try:

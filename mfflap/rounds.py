@@ -97,6 +97,8 @@ class MotionCheck:
         back-test's model means then stand in
     cfd_record : the name of the CFD record compared ("": not known); another motion's
         (:attr:`cfd_of_neighbour`) where the back-test look-up found one within its tolerance
+    thrust_shift, power_shift : N, W the correction's slopes add to the scaled means
+        (:meth:`~mfflap.optimisation.output_correction.OutputCorrection.shifts`; 0: none)
     """
 
     label: str
@@ -114,6 +116,8 @@ class MotionCheck:
     optimised_mean_thrust: float = float("nan")
     optimised_mean_power: float = float("nan")
     cfd_record: str = ""
+    thrust_shift: float = 0.0
+    power_shift: float = 0.0
 
     @property
     def cfd_of_neighbour(self) -> bool:
@@ -125,13 +129,15 @@ class MotionCheck:
     def predicted_thrust(self) -> float:
         """N: the mean thrust the optimisation relied on (corrected model)."""
         own = self.optimised_mean_thrust
-        return self.thrust_scale * (own if np.isfinite(own) else self.model_mean_thrust)
+        return self.thrust_scale * (own if np.isfinite(own) else self.model_mean_thrust) + \
+            self.thrust_shift
 
     @property
     def predicted_power(self) -> float:
         """W: the mean input power the optimisation relied on (corrected model)."""
         own = self.optimised_mean_power
-        return self.power_scale * (own if np.isfinite(own) else self.model_mean_power)
+        return self.power_scale * (own if np.isfinite(own) else self.model_mean_power) + \
+            self.power_shift
 
     @property
     def error(self) -> float:
@@ -151,7 +157,8 @@ class MotionCheck:
                 "predicted_power": self.predicted_power,
                 "optimised_mean_thrust": _finite_or_none(self.optimised_mean_thrust),
                 "optimised_mean_power": _finite_or_none(self.optimised_mean_power),
-                "cfd_record": self.cfd_record, "cfd_of_neighbour": self.cfd_of_neighbour}
+                "cfd_record": self.cfd_record, "cfd_of_neighbour": self.cfd_of_neighbour,
+                "thrust_shift": self.thrust_shift, "power_shift": self.power_shift}
 
 
 @dataclass
@@ -215,6 +222,8 @@ class LoopResult:
     #: with a trust region, beta -> the rounds' answer: the last motion of that beta CFD
     #: confirmed (its region's centre when the rounds stopped), in words with its CFD means
     answers: dict = field(default_factory=dict)
+    #: whether the output corrections had slopes through the earlier motions (first order)
+    first_order: bool = False
 
     def as_dict(self) -> dict:
         """JSON-friendly."""
@@ -222,14 +231,15 @@ class LoopResult:
                 "stopped_because": self.stopped_because,
                 "correct_outputs": self.correct_outputs,
                 "correction_gain": self.correction_gain, "refit": self.refit,
-                "trust_radius": self.trust_radius,
+                "trust_radius": self.trust_radius, "first_order": self.first_order,
                 "answers": {f"{b:g}": a for b, a in self.answers.items()},
                 "rounds": [r.as_dict() for r in self.rounds]}
 
 
 def check_rounds(n_rounds: int, tolerance: float, coefficients: str,
                  correct_outputs: bool = False, refit: bool = True,
-                 trust_radius: float | None = None) -> None:
+                 trust_radius: float | None = None, first_order: bool = False,
+                 correction_gain: float = 1.0) -> None:
     """Refuse rounds that cannot learn from their CFD.
 
     Rounds learn by the refit of identified coefficients on the back-tests, by the output
@@ -242,7 +252,9 @@ def check_rounds(n_rounds: int, tolerance: float, coefficients: str,
         learns: neither a refit (the case file's coefficients, or ``refit`` False) nor an
         output correction, so that every round would optimise the same motions; a trust
         region's radius not in (0, :data:`~mfflap.optimisation.trust_region.MAX_RADIUS`], or
-        a trust region for one round (it bounds the rounds after the first).
+        a trust region for one round (it bounds the rounds after the first); slopes
+        (``first_order``) without the output correction, its measured scales (gain 1) and a
+        trust region.
     """
     if n_rounds < 1:
         raise ConfigError(f"--rounds must be >= 1, got {n_rounds}", key="rounds")
@@ -267,11 +279,24 @@ def check_rounds(n_rounds: int, tolerance: float, coefficients: str,
         if n_rounds < 2:
             raise ConfigError("--trust-region bounds each round's optimum about the last one "
                               "CFD confirmed, so it needs --rounds 2 or more", key="trust_region")
+    if first_order:
+        missing = [flag for flag, given in (("--correct-outputs", correct_outputs),
+                                            ("--trust-region", trust_radius is not None))
+                   if not given]
+        if missing:
+            raise ConfigError("--first-order adds slopes to the output correction, which "
+                              "without a trust region would lead the optimiser off along a "
+                              f"secant; it needs {' and '.join(missing)}", key="first_order")
+        if correction_gain != 1.0:
+            raise ConfigError("--first-order meets CFD at the centre with the measured "
+                              f"scales; --correction-gain {correction_gain:g} filters them",
+                              key="first_order")
 
 
 def motion_checks(backtests: dict, in_fit: set[str],
                   scales: dict[str, tuple[float, float]] | None = None,
-                  optimised: dict[str, tuple[float, float]] | None = None
+                  optimised: dict[str, tuple[float, float]] | None = None,
+                  shifts: dict[str, tuple[float, float]] | None = None
                   ) -> dict[str, MotionCheck]:
     """Per back-tested motion: the mean thrust and power predicted for it against CFD's.
 
@@ -279,7 +304,8 @@ def motion_checks(backtests: dict, in_fit: set[str],
     ``scales``: label -> (thrust, power) scale of the output correction the motion was
     optimised with (a motion not in it: the model's own means); ``optimised``: label ->
     (thrust N, power W) the optimiser's own means of the motion, which the prediction is
-    made of (a motion not in it: the back-test's model means).
+    made of (a motion not in it: the back-test's model means); ``shifts``: label -> (N, W)
+    the correction's slopes add to them (none: 0).
     """
     done = {k: o for k, o in backtests.items() if o.comparison is not None}
     largest = max((abs(o.comparison.cfd_mean_thrust) for o in done.values()), default=0.0)
@@ -289,16 +315,18 @@ def motion_checks(backtests: dict, in_fit: set[str],
         k_t, k_p = (scales or {}).get(label, (1.0, 1.0))
         own = (optimised or {}).get(label)
         own_t, own_p = own if own is not None else (c.model_mean_thrust, c.model_mean_power)
+        d_t, d_p = (shifts or {}).get(label, (0.0, 0.0))
         out[label] = MotionCheck(
             label, o.key, c.cfd_mean_thrust, c.model_mean_thrust, c.cfd_mean_power,
-            c.model_mean_power, _relative(k_t * own_t, c.cfd_mean_thrust),
-            _relative(k_p * own_p, c.cfd_mean_power),
+            c.model_mean_power, _relative(k_t * own_t + d_t, c.cfd_mean_thrust),
+            _relative(k_p * own_p + d_p, c.cfd_mean_power),
             thrust_counted=bool(abs(c.cfd_mean_thrust) >= THRUST_FLOOR * largest > 0),
             in_fit=o.record is not None and o.record.name in in_fit,
             thrust_scale=k_t, power_scale=k_p,
             optimised_mean_thrust=np.nan if own is None else float(own_t),
             optimised_mean_power=np.nan if own is None else float(own_p),
-            cfd_record="" if o.record is None else str(o.record.name))
+            cfd_record="" if o.record is None else str(o.record.name),
+            thrust_shift=float(d_t), power_shift=float(d_p))
     return out
 
 
@@ -410,7 +438,7 @@ def _coefficients(outcome) -> dict[str, float]:
 def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out_dir: Path,
                progress: Progress = print, source: str = "", correct_outputs: bool = False,
                correction_gain: float = 1.0, refit: bool = True,
-               trust_radius: float | None = None):
+               trust_radius: float | None = None, first_order: bool = False):
     """Run the main job in rounds (module docstring) into ``out_dir/round_<k>``.
 
     ``correct_outputs``: from round 2 on, each beta is optimised with the model's thrust and
@@ -420,7 +448,10 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
     the scales that optimum was optimised with to the measured ones (1: the measured ones).
     ``refit`` False: every round identifies from the identification data alone (round 1's
     coefficients), so only the output correction learns from the back-tests (the classical
-    modifier adaptation of a fixed model).
+    modifier adaptation of a fixed model). ``first_order`` (with ``trust_radius``): the
+    correction gets slopes that make it meet CFD at every earlier back-tested motion of the
+    beta too (:meth:`~mfflap.optimisation.output_correction.OutputCorrection.with_slopes`);
+    a motion whose CFD is a neighbour's (found within the look-up's tolerance) is left out.
 
     The back-test records of every round are kept in ``out_dir/loop_records`` (one per
     motion), pooled with the identification data of the later rounds and looked up as
@@ -437,7 +468,7 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
     from mfflap.pipeline import run_study, write_outputs
 
     check_rounds(n_rounds, tolerance, options.coefficients, correct_outputs, refit,
-                 trust_radius)
+                 trust_radius, first_order, correction_gain)
     refit = refit and options.coefficients.startswith("identified:")  # case: none to refit
     records = out_dir / RECORDS_FOLDER
     base_fixtures = tuple(options.fixtures) or (fixture_dir(),)
@@ -448,6 +479,7 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
     points: dict = {}  # beta -> the last round's optimum with its CFD (correct_outputs)
     centres: dict = {}  # beta -> the trust region's centre with its CFD (trust_radius)
     radii: dict[float, float] = {}  # beta -> the trust region's radius
+    visited: dict = {}  # beta -> every back-tested optimum with its own CFD (first_order)
     converged, why = False, f"ran the {n_rounds} round(s) asked for"
     for k in range(1, n_rounds + 1):
         round_dir = out_dir / f"round_{k}"
@@ -459,6 +491,8 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
                        correct_at=(centres if trust_radius is not None else points)
                        if correct_outputs else {},
                        trust_at=regions,
+                       secant_at={b: tuple(p for p in visited.get(b, ()) if p is not c)
+                                  for b, c in centres.items()} if first_order else {},
                        correction_gain=correction_gain,
                        work_dir=round_dir / "cfd_cases",
                        vtk_dir=None if options.vtk_dir is None else round_dir / "vtk")
@@ -476,13 +510,20 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
         in_fit = {c.name for c in outcome.cases}
         scales = {beta_label(b): (c.thrust_scale, c.power_scale)
                   for b, c in outcome.corrections.items()}
+        shifts = {beta_label(b): c.shifts(outcome.backtest_motions[beta_label(b)])
+                  for b, c in outcome.corrections.items()
+                  if c.slopes is not None and beta_label(b) in outcome.backtest_motions}
         summary = RoundSummary(
             k, round_dir, len(outcome.cases),
             sum(1 for p in pooled if p.stem in in_fit), _coefficients(outcome),
-            motion_checks(outcome.backtests, in_fit, scales, optimised_means(outcome, config)),
+            motion_checks(outcome.backtests, in_fit, scales, optimised_means(outcome, config),
+                          shifts),
             {lbl: o.source for lbl, o in outcome.backtests.items() if o.comparison is None},
             {b: c.as_dict() for b, c in outcome.corrections.items()})
         points = correction_points(outcome, summary.checks, k)
+        for beta, point in points.items():
+            if not summary.checks[beta_label(beta)].cfd_of_neighbour:
+                visited.setdefault(beta, []).append(point)
         if trust_radius is not None:
             summary.trust_steps = trust_steps(outcome, summary.checks, regions, centres,
                                               config)
@@ -507,7 +548,7 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
     answers = {b: f"{p.source}: CFD mean thrust {p.cfd_mean_thrust:.4g} N, mean power "
                   f"{p.cfd_mean_power:.4g} W" for b, p in centres.items()}
     result = LoopResult(rounds, tolerance, converged, why, correct_outputs, correction_gain,
-                        refit, trust_radius, answers)
+                        refit, trust_radius, answers, first_order)
     progress(f"rounds: {why}")
     for beta, answer in answers.items():
         progress(f"rounds: beta {beta:g}'s last motion CFD confirmed: {answer}")
@@ -619,13 +660,14 @@ def write_rounds(result: LoopResult, config: CaseConfig, out_dir: Path) -> None:
         rf.h5.attrs["refit"] = result.refit
         rf.h5.attrs["trust_radius"] = np.nan if result.trust_radius is None else \
             result.trust_radius
+        rf.h5.attrs["first_order"] = result.first_order
         for r in result.rounds:
             labels = list(r.checks)
             arrays = {name: np.array([getattr(r.checks[lbl], name) for lbl in labels])
                       for name in ("cfd_mean_thrust", "model_mean_thrust", "predicted_thrust",
                                    "cfd_mean_power", "model_mean_power", "predicted_power",
                                    "thrust_scale", "power_scale", "optimised_mean_thrust",
-                                   "optimised_mean_power")}
+                                   "optimised_mean_power", "thrust_shift", "power_shift")}
             units = {name: "1" if "scale" in name else "N" if "thrust" in name else "W"
                      for name in arrays}
             rf.write_group(f"rounds/round_{r.index}", arrays, units, {
@@ -639,6 +681,8 @@ def write_rounds(result: LoopResult, config: CaseConfig, out_dir: Path) -> None:
     if result.trust_radius is not None:
         learns += (f", keeps each optimum in a trust region (first radius "
                    f"{result.trust_radius:g}) about the last one CFD confirmed")
+    if result.first_order:
+        learns += ", and gives the correction slopes that meet CFD at every earlier motion"
     rep = Report("mfflap run: rounds of CFD in the loop",
                  f"{config.study.name}: each round {learns}, optimises and back-tests again")
     s = rep.section("Rounds")
@@ -709,7 +753,10 @@ def _scales_text(check: MotionCheck) -> str:
     """The output correction of a motion in a table cell ("none": the model's own)."""
     if (check.thrust_scale, check.power_scale) == (1.0, 1.0):
         return "none"
-    return f"x {check.thrust_scale:.3f}, x {check.power_scale:.3f}"
+    text = f"x {check.thrust_scale:.3f}, x {check.power_scale:.3f}"
+    if (check.thrust_shift, check.power_shift) != (0.0, 0.0):
+        text += f"; slopes {check.thrust_shift:+.3g} N, {check.power_shift:+.3g} W"
+    return text
 
 
 def rounds_figure(result: LoopResult):

@@ -236,3 +236,61 @@ def test_a_meaningless_pitch_envelope_is_refused_naming_its_key(kwargs):
     name = next(iter(kwargs))
     with pytest.raises(ConfigError, match=rf"optimisation\.{name}"):
         FlappingProblem(MorisonModel(), **kwargs)
+
+
+def _modifier(seed=0, size=1.0):
+    """A linear modifier about another motion, g . (z - z_c) = ``size`` at perturbed_motion."""
+    from mfflap.optimisation.problem import LinearModifier
+
+    rng = np.random.default_rng(seed)
+    centre = as_vector(perturbed_motion(seed + 1))
+    g = rng.normal(size=2 * N + 1) * np.r_[np.full(2 * N, 0.01), 10.0]
+    return LinearModifier(g * size / (g @ (as_vector(perturbed_motion()) - centre)), centre)
+
+
+@pytest.mark.parametrize("compiled", [True, False], ids=["kernel", "arrays"])
+@pytest.mark.parametrize("scheme", ["paper", "midpoint"])
+def test_a_linear_modifier_adds_its_value_and_its_exact_gradient(scheme, compiled):
+    """g . (z - z_c) (the first-order output correction): J grows by it, the adjoint by g,
+    checked against complex steps, CasADi's reverse mode and the packed entry point."""
+    from mfflap.optimisation.casadi_objective import build_objective, casadi_gradient
+
+    d = perturbed_motion()
+    kw = dict(beta=0.5, max_power=30.0, max_heave=0.4, scheme=scheme, compiled=compiled)
+    plain = FlappingProblem(MorisonModel(), **kw)
+    mod = _modifier(size=-0.1 * abs(plain.objective(d)))
+    problem = FlappingProblem(MorisonModel(), linear_modifier=mod, **kw)
+    shift = mod.gradient @ (as_vector(d) - mod.centre)
+    assert shift == pytest.approx(-0.1 * abs(plain.objective(d)))  # a term that shows
+    assert problem.objective(d) == pytest.approx(plain.objective(d) + shift, rel=1e-12)
+    adj = problem.gradient(d).flat()
+    assert np.max(np.abs(adj - plain.gradient(d).flat() - mod.gradient)) <= 1e-9 * np.max(
+        np.abs(adj))
+    cs = complex_step(problem, d)
+    assert np.max(np.abs(adj - cs)) <= 1e-10 * np.max(np.abs(cs))
+    value, packed = problem.packed_value_and_gradient(as_vector(d))
+    assert value == pytest.approx(problem.objective(d), rel=1e-12)
+    assert np.max(np.abs(packed - adj)) <= 1e-10 * np.max(np.abs(adj))
+    f, _ = build_objective(problem, N)
+    assert float(f(as_vector(d))) == pytest.approx(problem.objective(d), rel=1e-12)
+    assert np.max(np.abs(casadi_gradient(problem, d) - adj)) <= 1e-10 * np.max(np.abs(adj))
+    # batches (array code) carry it per motion
+    batch = DiscreteMotion(np.stack([d.pitch_acceleration] * 2),
+                           np.stack([d.heave_acceleration] * 2), np.array([d.time_step] * 2))
+    assert np.allclose(problem.objective(batch), problem.objective(d), rtol=1e-12)
+
+
+def test_a_linear_modifier_of_another_length_is_refused_naming_its_key():
+    from mfflap.optimisation.problem import LinearModifier
+
+    with pytest.raises(ConfigError) as err:
+        LinearModifier(np.ones(2 * N + 1), np.ones(2 * N))
+    assert err.value.key == "linear_modifier"
+    with pytest.raises(ConfigError, match="finite"):
+        LinearModifier(np.r_[np.ones(2 * N), np.nan], np.ones(2 * N + 1))
+    problem = FlappingProblem(MorisonModel(), linear_modifier=_modifier())
+    short = harmonic_to_discrete(1.2, 0.45, np.deg2rad(35), 1.4, N - 2)
+    with pytest.raises(ConfigError, match="N = 24 steps, the motion has 22"):
+        problem.objective(short)
+    with pytest.raises(ConfigError, match="N = 24 steps"):
+        problem.packed_value_and_gradient(as_vector(short))

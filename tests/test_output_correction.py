@@ -275,3 +275,116 @@ def test_a_corrected_optimums_peak_power_flag_is_in_corrected_watts_against_the_
     assert peak_power_flag(peak, 500, peak) is None
     fine = replace(result, flags=["another flag"])
     assert _corrected(fine, 0.0, corr, equivalent).flags == ["another flag"]
+
+
+def _cfd_stand_in():
+    """A "CFD" unlike the model in shape: other coefficients, so its means are not a fixed
+    multiple of the model's (the secants then have something to correct)."""
+    from mfflap.parameters import MorisonCoefficients
+
+    return MorisonModel(coefficients=MorisonCoefficients(
+        drag_normal=1.6, drag_tangential=0.2, added_mass_normal=1.4, added_mass_tangential=0.3))
+
+
+def _point(cfd_model, motion, source):
+    from mfflap.performance import discrete_means
+
+    thrust, power = discrete_means(cfd_model, motion, "paper")
+    return CorrectionPoint(motion, thrust, power, source)
+
+
+@pytest.mark.parametrize("beta", [0.0, 0.5, 1.0])
+def test_slopes_make_the_corrected_model_meet_cfd_at_every_earlier_motion(beta):
+    """kappa F_model(u) + lambda . (u - c) is CFD's mean at the centre (the scales) and at
+    each earlier motion u_i (the slopes); J of the equivalent problem, times c, is the
+    corrected objective with those means; the slope is minimum-norm: it lies in the span of
+    the scaled secants."""
+    from mfflap.optimisation.optimise import _pack
+    from mfflap.optimisation.trust_region import control_scales
+    from mfflap.performance import discrete_means
+
+    model, cfd = MorisonModel(), _cfd_stand_in()
+    centre = _point(cfd, motion(0), "centre")
+    others = [_point(cfd, motion(seed), f"round {seed}") for seed in (1, 2)]
+    corr = OutputCorrection.measured(centre, model, "paper")
+    assert corr.thrust_scale != pytest.approx(1.0, abs=0.05)
+    sloped = corr.with_slopes(centre.motion, [*others, centre], model, "paper")
+    assert sloped.slopes.sources == ("round 1", "round 2")  # the centre itself left out
+    for p in (centre, *others):
+        model_t, model_p = discrete_means(model, p.motion, "paper")
+        d_t, d_p = sloped.shifts(p.motion)
+        assert sloped.thrust_scale * model_t + d_t == pytest.approx(p.cfd_mean_thrust,
+                                                                    rel=1e-9)
+        assert sloped.power_scale * model_p + d_p == pytest.approx(p.cfd_mean_power, rel=1e-9)
+        # without slopes the earlier motions are missed by the residuals
+        if p is not centre:
+            assert abs(d_t) > 1e-3 * abs(p.cfd_mean_thrust)
+    w = control_scales(centre.motion)
+    secants = np.array([(_pack(p.motion) - _pack(centre.motion)) / w for p in others])
+    for slope in (sloped.slopes.thrust, sloped.slopes.power):
+        scaled = slope * w
+        in_span = secants.T @ np.linalg.lstsq(secants.T, scaled, rcond=None)[0]
+        assert np.allclose(in_span, scaled, rtol=1e-9, atol=1e-12 * np.abs(scaled).max())
+    # the equivalent problem's J, times c, is the corrected objective with the shifted means
+    p = problem(beta)
+    base = problem(beta, penalty_power=0.0)  # the slopes correct the means, not the peaks
+    equivalent = sloped.problem(base)
+    c = sloped.objective_factor(beta)
+    for q in others:
+        d_t, d_p = sloped.shifts(q.motion)
+        expected = corrected_objective(base, q.motion, sloped.thrust_scale,
+                                       sloped.power_scale) - (1 - beta) * d_t + beta * d_p
+        assert c * float(equivalent.objective(q.motion)) == pytest.approx(float(expected),
+                                                                         rel=1e-11)
+    assert p.linear_modifier is None and equivalent.linear_modifier is not None
+    text = sloped.describe()
+    assert "slopes through 2 earlier motion(s)" in text and "thrust " in text
+    assert sloped.as_dict()["slopes"]["sources"] == ["round 1", "round 2"]
+
+
+def test_slopes_with_nothing_to_meet_are_zero_and_a_filtered_correction_refuses_them():
+    model, cfd = MorisonModel(), _cfd_stand_in()
+    centre = _point(cfd, motion(0), "centre")
+    corr = OutputCorrection.measured(centre, model, "paper")
+    alone = corr.with_slopes(centre.motion, [centre], model, "paper")
+    assert alone.slopes.sources == () and not alone.slopes.thrust.any()
+    assert alone.shifts(motion(3)) == (0.0, 0.0)
+    assert "slopes: no earlier motion to meet (zero)" in alone.describe()
+    with pytest.raises(ConfigError, match="filter gain 1") as err:
+        corr.filtered((1.0, 1.0), 0.5).with_slopes(centre.motion, [], model, "paper")
+    assert err.value.key == "correction_gain"
+    other_n = harmonic_to_discrete(1.2, 0.45, np.deg2rad(35), 1.4, N + 2)
+    with pytest.raises(ConfigError, match="slopes are for N = 24"):
+        alone.shifts(other_n)
+
+
+def test_an_unused_thrust_scale_gets_no_thrust_slope():
+    model, cfd = MorisonModel(), _cfd_stand_in()
+    c = _point(cfd, motion(0), "centre")
+    small = CorrectionPoint(c.motion, c.cfd_mean_thrust, c.cfd_mean_power, "centre",
+                            thrust_usable=False)
+    corr = OutputCorrection.measured(small, model, "paper")
+    sloped = corr.with_slopes(c.motion, [_point(cfd, motion(1), "round 1")], model, "paper")
+    assert not sloped.slopes.thrust.any() and sloped.slopes.power.any()
+    assert "thrust slope: not corrected" in sloped.describe()
+
+
+def test_ipopt_and_sqp_follow_a_linear_modifier_within_a_trust_region():
+    """A modifier that rewards a longer time step takes both optimisers' dt to the trust
+    region's upper face; the same modifier reversed takes it to the lower face."""
+    from mfflap.optimisation.optimise import optimise_sqp
+    from mfflap.optimisation.problem import LinearModifier
+    from mfflap.optimisation.trust_region import TrustRegion
+
+    start = harmonic_to_discrete(1.0, 0.3, np.deg2rad(20), np.pi / 2, 30)
+    region = TrustRegion(start, 0.1, "test")
+    z_c = np.r_[start.pitch_acceleration, start.heave_acceleration, start.time_step]
+    for sign in (1.0, -1.0):
+        g = np.zeros(61)
+        g[-1] = -sign * 1e7  # J falls by 1e7 per second of dt (1700 per % of dt here)
+        p = FlappingProblem(MorisonModel(), beta=0.0, max_power=500.0, max_heave=1.0,
+                            linear_modifier=LinearModifier(g, z_c))  # IPOPT: feasible box
+        for optimiser in (optimise_sqp, optimise_ipopt):
+            r = optimiser(p, start, min_period=0.5, max_period=3.0, trust_region=region)
+            assert r.motion.time_step == pytest.approx(start.time_step * (1 + sign * 0.1),
+                                                       rel=1e-6), optimiser.__name__

@@ -585,6 +585,40 @@ def test_a_trust_region_needs_several_rounds_and_a_radius_in_its_range(tmp_path)
     assert not out.exists()
 
 
+def test_first_order_rounds_need_the_correction_its_measured_scales_and_a_trust_region(
+        tmp_path):
+    check_rounds(3, 0.1, "identified:uniform", correct_outputs=True, refit=False,
+                 trust_radius=0.25, first_order=True)
+    for kwargs, says in (({"correct_outputs": True}, "it needs --trust-region"),
+                         ({"trust_radius": 0.25}, "it needs --correct-outputs"),
+                         ({}, "it needs --correct-outputs and --trust-region"),
+                         ({"correct_outputs": True, "trust_radius": 0.25,
+                           "correction_gain": 0.5}, "--correction-gain 0.5 filters them")):
+        with pytest.raises(ConfigError, match=says) as err:
+            check_rounds(3, 0.1, "identified:uniform", first_order=True, **kwargs)
+        assert err.value.key == "first_order"
+    out = tmp_path / "run"
+    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--first-order"])
+    assert res.exit_code == 2
+    assert "--first-order applies only to rounds of CFD in the loop" in res.output
+    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--rounds", "2",
+                                   "--coefficients", "identified:uniform", "--first-order",
+                                   "--correct-outputs"])
+    assert res.exit_code != 0 and "it needs --trust-region" in res.output
+    assert not out.exists()
+
+
+def test_a_checks_prediction_adds_the_slopes_shift_to_the_scaled_mean():
+    from mfflap.rounds import MotionCheck
+
+    check = MotionCheck("β = 0", "k", 30.0, 20.0, 40.0, 35.0, 0.0, 0.0, True, False,
+                        thrust_scale=1.2, power_scale=1.1, optimised_mean_thrust=21.0,
+                        optimised_mean_power=36.0, thrust_shift=-1.5, power_shift=0.4)
+    assert check.predicted_thrust == pytest.approx(1.2 * 21.0 - 1.5)
+    assert check.predicted_power == pytest.approx(1.1 * 36.0 + 0.4)
+    assert check.as_dict()["thrust_shift"] == -1.5
+
+
 def _step(beta, on_boundary, next_radius=0.25):
     from mfflap.optimisation.trust_region import TrustStep
 

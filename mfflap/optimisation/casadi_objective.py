@@ -121,6 +121,9 @@ def build_objective(problem: FlappingProblem, n_steps: int) -> tuple[ca.Function
                 ca.fmax(ca.fabs(e[name]) - limit, 0) / limit) ** 2
     objective = ca.sum1(stage) / n + smoothness_expr(p, e["pitch_acceleration"],
                                                      e["heave_acceleration"])
+    if p.linear_modifier is not None:
+        objective = objective + ca.dot(ca.DM(p.linear_modifier.gradient),
+                                       z - ca.DM(p.linear_modifier.centre))
     f = ca.Function("J", [z], [objective])
     grad = ca.Function("dJ", [z], [ca.gradient(objective, z)])
     return f, grad

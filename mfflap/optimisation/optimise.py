@@ -186,7 +186,8 @@ def replace_problem(problem: FlappingProblem, **changes) -> FlappingProblem:
                                            "penalty_heave", "smoothing_pitch",
                                            "smoothing_heave", "scheme", "compiled",
                                            "max_pitch", "max_pitch_rate",
-                                           "max_pitch_acceleration", "penalty_pitch")}
+                                           "max_pitch_acceleration", "penalty_pitch",
+                                           "linear_modifier")}
     kw.update(changes)
     return FlappingProblem(problem.model, **kw)
 
@@ -197,7 +198,8 @@ _IPOPT_CACHE: dict[tuple, object] = {}
 def _ipopt_solver(problem: FlappingProblem, n: int, max_iterations: int, tolerance: float):
     """The IPOPT NLP for N steps of this model and scheme, built once and cached.
 
-    The scaling, beta, P_max, h_max and the smoothing weights are NLP parameters, so one
+    The scaling, beta, P_max, h_max, the smoothing weights and the linear modifier's
+    gradient (:class:`~mfflap.optimisation.problem.LinearModifier`) are NLP parameters, so one
     build (the expensive part: CasADi's exact Hessian graph) serves a whole beta sweep and
     every multi-start. With a pitch envelope the pitch angle and rate are constrained too
     (their limits are bounds given at the solve).
@@ -214,8 +216,9 @@ def _ipopt_solver(problem: FlappingProblem, n: int, max_iterations: int, toleran
         return _IPOPT_CACHE[key]
     e = symbolic_stages(problem, n)
     xs = ca.SX.sym("x", 2 * n + 1)
-    par = ca.SX.sym("p", 2 * n + 6)
+    par = ca.SX.sym("p", 4 * n + 7)
     scale, beta, eps_p, eps_h = par[: 2 * n + 1], par[2 * n + 1], par[2 * n + 4], par[2 * n + 5]
+    modifier = par[2 * n + 6:]  # g of the linear modifier (its constant does not move x)
     sub = ca.Function("sub", [e["z"]], [e["thrust"], e["power"], e["heave_position"],
                                         e["pitch_acceleration"], e["heave_acceleration"],
                                         e["pitch_angle"], e["pitch_rate"]])
@@ -224,7 +227,8 @@ def _ipopt_solver(problem: FlappingProblem, n: int, max_iterations: int, toleran
     for eps, acc in ((eps_p, tdd), (eps_h, hdd)):
         d = acc[1:] - acc[:-1]
         smooth = smooth + 0.5 * eps * (ca.sumsqr(d) + (acc[0] + acc[n - 1]) ** 2)
-    f = ca.sum1(-(1 - beta) * thrust + beta * power) / n + smooth
+    f = (ca.sum1(-(1 - beta) * thrust + beta * power) / n + smooth
+         + ca.dot(modifier, xs * scale))
     g = ca.vertcat(power - par[2 * n + 2], hp, *((th, td) if envelope else ()))
     solver = ca.nlpsol("mfflap_ipopt", "ipopt", {"x": xs, "f": f, "g": g, "p": par},
                        {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
@@ -246,7 +250,8 @@ def optimise_ipopt(problem: FlappingProblem, start: DiscreteMotion, *, min_perio
     |theta_j| <= theta_max, |thetadot_j| <= thetadot_max, |thetaddot_j| <= thetaddot_max
     where it is given, solved by IPOPT (CasADi).
 
-    The objective is the same beta-weighted mean with the smoothness term and no penalties.
+    The objective is the same beta-weighted mean with the smoothness term (and the linear
+    modifier) and no penalties.
     ``trust_region`` bounds the variables to its box as in :func:`optimise_sqp`.
     """
     n = start.n_steps
@@ -256,8 +261,13 @@ def optimise_ipopt(problem: FlappingProblem, start: DiscreteMotion, *, min_perio
     scale = _scales(start)
     t0 = time.perf_counter()
     solver = _ipopt_solver(problem, n, max_iterations, tolerance)
+    modifier = problem.linear_modifier
+    if modifier is not None and modifier.n_steps != n:
+        raise ConfigError(f"the objective's linear modifier is for N = {modifier.n_steps} "
+                          f"steps, the start has {n}", key="linear_modifier")
     par = np.concatenate([scale, [problem.beta, problem.max_power, problem.max_heave,
-                                  problem.smoothing_pitch, problem.smoothing_heave]])
+                                  problem.smoothing_pitch, problem.smoothing_heave],
+                          np.zeros(2 * n + 1) if modifier is None else modifier.gradient])
     bounds_g = [(np.full(n, -np.inf), np.zeros(n)),
                 (np.full(n, -problem.max_heave), np.full(n, problem.max_heave))]
     if _has_state_envelope(problem):

@@ -44,6 +44,27 @@ first-order filter of the modifiers (Marchetti, Chachuat and Bonvin 2009),
 where kappa_(k-1) is the scale the measured motion was optimised with
 (:attr:`CorrectionPoint.scales`) and K the gain (:meth:`OutputCorrection.filtered`);
 K = 1 takes the measured scale as it is.
+
+First-order correction (slopes). The scales make the corrected model exact at the motion
+they were measured on, with the model's own slope there; in the trust-region rounds CFD then
+refuses steps whose direction that slope gets wrong (README, "Trust region"). CFD gradients
+of 2N + 1 controls are out of reach (one CFD run per control), but every earlier back-tested
+motion u_i of the same beta is a secant from the centre c. The slopes lambda_T, lambda_P
+(N and W per packed control) make the corrected model meet CFD there too:
+
+    F_bar_corr(u) = kappa_T F_bar_model(u) + lambda_T . (u - c),     lambda_T . (u_i - c) = r_i,
+    r_i = F_bar_CFD(u_i) - kappa_T F_bar_model(u_i)                  (the same for power),
+
+taken as the minimum-norm solution in the controls scaled as a trust region scales them
+(:func:`~mfflap.optimisation.trust_region.control_scales`): the slope is corrected only along
+the secants, the model's own slope is kept across them (minimum-norm interpolation of
+derivative-free trust-region methods, Conn, Scheinberg and Vicente 2009, applied to the
+residual of a physics model as in first-order-consistent model management, Alexandrov and
+Lewis 2001). The means F_bar_model are the optimiser's own (the N samples of its scheme,
+:func:`~mfflap.performance.discrete_means`). The affine term enters J as a
+:class:`~mfflap.optimisation.problem.LinearModifier`; it corrects the means, not the power's
+shape over the cycle, so the P_max penalty keeps kappa_P P_in,j. Unbounded it would lead the
+optimiser off along a secant: it belongs in a trust region.
 """
 
 from __future__ import annotations
@@ -79,6 +100,57 @@ class CorrectionPoint:
     scales: tuple[float, float] = (1.0, 1.0)
 
 
+#: a secant shorter than this (largest scaled control change) is left out: the motion is the
+#: centre's, or so near it that CFD's difference is noise
+SECANT_MIN_STEP = 1e-4
+
+
+@dataclass(frozen=True)
+class Slopes:
+    """The first-order part of an output correction (module docstring).
+
+    Attributes
+    ----------
+    centre : packed controls c where the affine term vanishes, shape (2N + 1,)
+    thrust : lambda_T, N per packed control (zeros where the thrust is not corrected)
+    power : lambda_P, W per packed control
+    sources : the earlier motions the slopes meet CFD at
+    thrust_residuals : N, r_i = CFD mean thrust - kappa_T model mean at each
+    power_residuals : W, the same for power
+    """
+
+    centre: np.ndarray = field(compare=False)
+    thrust: np.ndarray = field(compare=False)
+    power: np.ndarray = field(compare=False)
+    sources: tuple[str, ...] = ()
+    thrust_residuals: tuple[float, ...] = ()
+    power_residuals: tuple[float, ...] = ()
+
+    def shifts(self, motion) -> tuple[float, float]:
+        """(N, W): lambda_T . (u - c) and lambda_P . (u - c) at ``motion``."""
+        from mfflap.optimisation.optimise import _pack
+
+        z = _pack(motion)
+        if z.size != self.centre.size:
+            raise ConfigError(f"the output correction's slopes are for N = "
+                              f"{(self.centre.size - 1) // 2} steps, the motion has "
+                              f"{motion.n_steps}", key="slopes")
+        step = z - self.centre
+        return float(self.thrust @ step), float(self.power @ step)
+
+    def as_dict(self) -> dict:
+        """JSON-friendly: the sources, residuals and the slopes' scaled lengths."""
+        from mfflap.optimisation.optimise import _unpack
+        from mfflap.optimisation.trust_region import control_scales
+
+        w = control_scales(_unpack(self.centre, (self.centre.size - 1) // 2))
+        return {"sources": list(self.sources),
+                "thrust_residuals": list(self.thrust_residuals),
+                "power_residuals": list(self.power_residuals),
+                "thrust_slope_scaled_norm": float(np.linalg.norm(self.thrust * w)),
+                "power_slope_scaled_norm": float(np.linalg.norm(self.power * w))}
+
+
 @dataclass(frozen=True)
 class OutputCorrection:
     """Scales of the model's thrust and input power (module docstring).
@@ -94,6 +166,7 @@ class OutputCorrection:
     gain : K of the filter that made the scales (1: the measured scales themselves)
     measured_scales : (kappa_T, kappa_P) measured at the motion, before the filter
     previous_scales : (kappa_T, kappa_P) the filter moved from
+    slopes : the first-order part (:meth:`with_slopes`; None: scales only)
     """
 
     thrust_scale: float
@@ -107,6 +180,7 @@ class OutputCorrection:
     gain: float = 1.0
     measured_scales: tuple[float, float] | None = None
     previous_scales: tuple[float, float] = (1.0, 1.0)
+    slopes: Slopes | None = None
 
     def __post_init__(self) -> None:
         for name in ("thrust_scale", "power_scale"):
@@ -167,6 +241,70 @@ class OutputCorrection:
                        measured_scales=measured,
                        previous_scales=(float(previous[0]), float(previous[1])))
 
+    def with_slopes(self, centre, points, model, scheme: str) -> OutputCorrection:
+        """This correction with slopes that make it meet CFD at ``points`` too (module
+        docstring).
+
+        Parameters
+        ----------
+        centre : the :class:`~mfflap.kinematics.discrete.DiscreteMotion` this correction's
+            scales were measured on
+        points : earlier :class:`CorrectionPoint` of the same beta; those within
+            :data:`SECANT_MIN_STEP` of the centre or of another N are left out
+        model, scheme : the model and scheme of the optimisation
+
+        Returns
+        -------
+        OutputCorrection
+            With :attr:`slopes` (zero slopes, and no sources, when no point is left). The
+            thrust slope stays zero where the thrust is not corrected (a note says so).
+
+        Raises
+        ------
+        ConfigError
+            The scales come through a filter (gain < 1): the centre would not be met.
+        """
+        from mfflap.optimisation.optimise import _pack
+        from mfflap.optimisation.trust_region import control_scales
+        from mfflap.performance import discrete_means
+
+        if self.gain != 1.0:
+            raise ConfigError("slopes need the measured scales (filter gain 1), so that the "
+                              f"corrected model meets CFD at the centre; gain {self.gain:g}",
+                              key="correction_gain")
+        c, w = _pack(centre), control_scales(centre)
+        rows, r_t, r_p, sources = [], [], [], []
+        for p in points:
+            if p.motion.n_steps != centre.n_steps:
+                continue
+            step = (_pack(p.motion) - c) / w
+            if np.max(np.abs(step)) < SECANT_MIN_STEP:
+                continue
+            model_t, model_p = discrete_means(model, p.motion, scheme)
+            rows.append(step)
+            r_t.append(float(p.cfd_mean_thrust) - self.thrust_scale * model_t)
+            r_p.append(float(p.cfd_mean_power) - self.power_scale * model_p)
+            sources.append(p.source)
+        notes = list(self.notes)
+        if rows:
+            pinv = np.linalg.pinv(np.array(rows), rcond=1e-10)
+            thrust, power = (pinv @ np.array(r_t)) / w, (pinv @ np.array(r_p)) / w
+            if not np.isfinite(r_t).all() or any("thrust:" in n for n in self.notes):
+                thrust = np.zeros_like(c)
+                notes.append("thrust slope: not corrected (nor is its scale)")
+            if not np.isfinite(power).all():
+                raise ConfigError(f"the power slopes through {sources} are not finite",
+                                  key="slopes")
+        else:
+            thrust = power = np.zeros_like(c)
+        slopes = Slopes(c, thrust, power, tuple(sources), tuple(r_t), tuple(r_p))
+        return replace(self, slopes=slopes, notes=tuple(notes))
+
+    def shifts(self, motion) -> tuple[float, float]:
+        """(N, W) the slopes add to the scaled mean thrust and power at ``motion`` ((0, 0)
+        without slopes)."""
+        return (0.0, 0.0) if self.slopes is None else self.slopes.shifts(motion)
+
     def objective_factor(self, beta: float) -> float:
         """c = (1 - beta) kappa_T + beta kappa_P: corrected objective = c x that of
         :meth:`problem`'s."""
@@ -175,9 +313,14 @@ class OutputCorrection:
     def problem(self, problem: FlappingProblem) -> FlappingProblem:
         """The ordinary problem whose objective is the corrected one of ``problem`` over c."""
         from mfflap.optimisation.optimise import replace_problem
+        from mfflap.optimisation.problem import LinearModifier
 
         c = self.objective_factor(problem.beta)
         k_p = self.power_scale
+        modifier = None
+        if self.slopes is not None:
+            g = (-(1 - problem.beta) * self.slopes.thrust + problem.beta * self.slopes.power)
+            modifier = LinearModifier(g / c, self.slopes.centre)
         return replace_problem(
             problem, beta=min(max(problem.beta * k_p / c, 0.0), 1.0),
             max_power=problem.max_power / k_p,
@@ -185,7 +328,7 @@ class OutputCorrection:
             penalty_heave=problem.penalty_heave / c,
             smoothing_pitch=problem.smoothing_pitch / c,
             smoothing_heave=problem.smoothing_heave / c,
-            penalty_pitch=problem.penalty_pitch / c)
+            penalty_pitch=problem.penalty_pitch / c, linear_modifier=modifier)
 
     def describe(self) -> str:
         """One line: the scales and where they were measured."""
@@ -199,7 +342,8 @@ class OutputCorrection:
                 "model_mean_power": self.model_mean_power,
                 "cfd_mean_power": self.cfd_mean_power, "notes": list(self.notes),
                 "gain": self.gain, "measured_scales": list(self.measured_scales),
-                "previous_scales": list(self.previous_scales)}
+                "previous_scales": list(self.previous_scales),
+                **({} if self.slopes is None else {"slopes": self.slopes.as_dict()})}
 
 
 def describe_correction(correction: dict) -> str:
@@ -213,6 +357,15 @@ def describe_correction(correction: dict) -> str:
         (m_t, m_p), (p_t, p_p) = correction["measured_scales"], correction["previous_scales"]
         text += (f"(filter gain {correction['gain']:g} from {p_t:.3f}, {p_p:.3f} towards "
                  f"{m_t:.3f}, {m_p:.3f} measured on {correction['source']})")
+    slopes = correction.get("slopes")
+    if slopes is not None:
+        n = len(slopes["sources"])
+        text += (f"; slopes through {n} earlier motion(s)" if n else
+                 "; slopes: no earlier motion to meet (zero)")
+        if n:
+            text += " (residuals of the scales there: thrust " + ", ".join(
+                f"{r:+.3g}" for r in slopes["thrust_residuals"]) + " N, power " + ", ".join(
+                f"{r:+.3g}" for r in slopes["power_residuals"]) + " W)"
     return text + "".join(f"; {n}" for n in correction.get("notes", ()))
 
 
@@ -224,4 +377,5 @@ def check_gain(gain: float) -> None:
                           f"filter), got {gain!r}", key="correction_gain")
 
 
-__all__ = ["CorrectionPoint", "OutputCorrection", "check_gain", "describe_correction"]
+__all__ = ["SECANT_MIN_STEP", "CorrectionPoint", "OutputCorrection", "Slopes", "check_gain",
+           "describe_correction"]

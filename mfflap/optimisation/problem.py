@@ -5,7 +5,9 @@ L_j = -(1 - beta) F_thrust,j + beta P_in,j + 1/2 sigma_P max(0, P_in,j - P_max)^
       + 1/2 sigma_h max(0, |h_j| - h_max)^2
       + 1/2 sigma_theta sum_x (max(0, |x_j| - x_max) / x_max)^2 over x = theta, thetadot,
         thetaddot (the pitch envelope; mfflap's addition, off unless a limit is given),
-J_s = 1/2 eps_theta [sum_{j<N} (acc_{j+1} - acc_j)^2 + (acc_1 + acc_N)^2] + the same for heave.
+J_s = 1/2 eps_theta [sum_{j<N} (acc_{j+1} - acc_j)^2 + (acc_1 + acc_N)^2] + the same for heave,
+and, where a :class:`LinearModifier` is given (the first-order output correction of the rounds,
+:mod:`mfflap.optimisation.output_correction`), + g . (z - z_c) over the packed controls z.
 
 Gradient (discrete adjoint, O(N)): a backward sweep of the semi-implicit Euler steps with
 lambda_{N+1} = 0 gives dJ/dx_1 and the partial gradients at fixed x_1; the closed-form linear
@@ -55,6 +57,51 @@ def _abs(x):
     return x * np.sign(x.real) if np.iscomplexobj(x) else np.abs(x)
 
 
+@dataclass(frozen=True, eq=False)
+class LinearModifier:
+    """An affine term g . (z - z_c) added to J, z = [pitch acc (N), heave acc (N), dt].
+
+    Attributes
+    ----------
+    gradient : g, shape (2N + 1,), units of J per unit of each packed control
+    centre : z_c, shape (2N + 1,), the packed motion where the term vanishes
+    """
+
+    gradient: np.ndarray
+    centre: np.ndarray
+
+    def __post_init__(self) -> None:
+        g = np.asarray(self.gradient, dtype=float)
+        c = np.asarray(self.centre, dtype=float)
+        if g.ndim != 1 or g.shape != c.shape or g.size < 5 or g.size % 2 != 1:
+            raise ConfigError(f"a linear modifier needs a gradient and a centre of one length "
+                              f"2N + 1, got shapes {g.shape} and {c.shape}",
+                              key="linear_modifier")
+        if not (np.isfinite(g).all() and np.isfinite(c).all()):
+            raise ConfigError("a linear modifier's gradient and centre must be finite",
+                              key="linear_modifier")
+        object.__setattr__(self, "gradient", g)
+        object.__setattr__(self, "centre", c)
+
+    @property
+    def n_steps(self) -> int:
+        """N of the motions it applies to."""
+        return (self.gradient.size - 1) // 2
+
+    def value(self, motion: DiscreteMotion):
+        """g . (z - z_c), shape (...). Complex-step safe."""
+        n = self.n_steps
+        g, c = self.gradient, self.centre
+        dt = np.asarray(motion.time_step)
+        return ((motion.pitch_acceleration - c[:n]) @ g[:n]
+                + (motion.heave_acceleration - c[n:2 * n]) @ g[n:2 * n]
+                + (dt - c[-1]) * g[-1])
+
+    def packed_value(self, z: np.ndarray) -> float:
+        """g . (z - z_c) at packed controls."""
+        return float(self.gradient @ (z - self.centre))
+
+
 _NO_GRAD = np.empty(0)
 _MORISON_TERMS = ("normal_added_mass", "tangential_added_mass", "normal_drag",
                   "tangential_drag")
@@ -79,6 +126,8 @@ class FlappingProblem:
         (:mod:`mfflap.identification.coverage`), so that the optimum stays where the
         coefficients rest on CFD. The rate is the one the forces see (the scheme's).
     penalty_pitch : sigma_theta >= 0, N (in units of J) per squared relative excess
+    linear_modifier
+        An affine term added to J (:class:`LinearModifier`; None: none).
     compiled
         Evaluate single real motions with the compiled kernel
         (:mod:`mfflap.optimisation.adjoint_kernel`) when the model allows it; the array code
@@ -90,7 +139,8 @@ class FlappingProblem:
                  penalty_heave: float = 1.0e4, smoothing_pitch: float = 1e-6,
                  smoothing_heave: float = 1e-4, scheme: str = "paper", compiled: bool = True,
                  max_pitch: float = np.inf, max_pitch_rate: float = np.inf,
-                 max_pitch_acceleration: float = np.inf, penalty_pitch: float = 1.0e4):
+                 max_pitch_acceleration: float = np.inf, penalty_pitch: float = 1.0e4,
+                 linear_modifier: LinearModifier | None = None):
         checks = [
             ("beta", beta, 0 <= beta <= 1, "[0, 1]"),
             ("max_power", max_power, max_power > 0, "(0, inf) W"),
@@ -132,6 +182,7 @@ class FlappingProblem:
         self.max_pitch_rate = float(max_pitch_rate)
         self.max_pitch_acceleration = float(max_pitch_acceleration)
         self.penalty_pitch = float(penalty_pitch)
+        self.linear_modifier = linear_modifier
         self._kernel_args: tuple | bool | None = False  # False: not looked up yet
 
     def _kernel(self, motion: DiscreteMotion) -> tuple | None:
@@ -186,7 +237,9 @@ class FlappingProblem:
         return out
 
     def objective(self, motion: DiscreteMotion):
-        """J = mean_j L_j + J_s, shape (...)."""
+        """J = mean_j L_j + J_s (+ the linear modifier), shape (...)."""
+        self._check_modifier(motion.n_steps)
+        extra = 0.0 if self.linear_modifier is None else self.linear_modifier.value(motion)
         args = self._kernel(motion)
         if args is not None:
             from mfflap.optimisation.adjoint_kernel import objective_and_gradient
@@ -194,8 +247,16 @@ class FlappingProblem:
             return objective_and_gradient(
                 np.ascontiguousarray(motion.pitch_acceleration, dtype=float),
                 np.ascontiguousarray(motion.heave_acceleration, dtype=float),
-                float(motion.time_step), self.scheme == "midpoint", False, *args, _NO_GRAD)
-        return self.stage_costs(motion).mean(axis=-1) + self.smoothness(motion)
+                float(motion.time_step), self.scheme == "midpoint", False, *args,
+                _NO_GRAD) + extra
+        return self.stage_costs(motion).mean(axis=-1) + self.smoothness(motion) + extra
+
+    def _check_modifier(self, n_steps: int) -> None:
+        """Refuse motions of another N than the linear modifier's."""
+        if self.linear_modifier is not None and self.linear_modifier.n_steps != n_steps:
+            raise ConfigError(f"the objective's linear modifier is for N = "
+                              f"{self.linear_modifier.n_steps} steps, the motion has {n_steps}",
+                              key="linear_modifier")
 
     # -- gradient ----------------------------------------------------------------------------
     def _local_partials(self, motion: DiscreteMotion,
@@ -269,11 +330,15 @@ class FlappingProblem:
             return float(self.objective(motion)), self.gradient(motion).flat()
         from mfflap.optimisation.adjoint_kernel import objective_and_gradient
 
+        self._check_modifier(motion.n_steps)
         out = np.empty(2 * motion.n_steps + 1)
         value = objective_and_gradient(
             np.ascontiguousarray(motion.pitch_acceleration, dtype=float),
             np.ascontiguousarray(motion.heave_acceleration, dtype=float),
             float(motion.time_step), self.scheme == "midpoint", True, *args, out)
+        if self.linear_modifier is not None:
+            value += float(self.linear_modifier.value(motion))
+            out += self.linear_modifier.gradient
         return value, out
 
     def packed_value_and_gradient(self, z: np.ndarray, want_gradient: bool = True
@@ -297,10 +362,15 @@ class FlappingProblem:
             return float(self.objective(motion)), self.adjoint_gradient(motion).flat()
         from mfflap.optimisation.adjoint_kernel import objective_and_gradient
 
+        self._check_modifier(n)
         out = np.empty(2 * n + 1) if want_gradient else _NO_GRAD
         value = objective_and_gradient(np.ascontiguousarray(z[:n]),
                                        np.ascontiguousarray(z[n:2 * n]), float(z[-1]),
                                        self.scheme == "midpoint", want_gradient, *args, out)
+        if self.linear_modifier is not None:
+            value += self.linear_modifier.packed_value(z)
+            if want_gradient:
+                out += self.linear_modifier.gradient
         return value, (out if want_gradient else None)
 
     def gradient(self, motion: DiscreteMotion) -> Gradient:
@@ -358,4 +428,9 @@ class FlappingProblem:
             gs[..., 0] += eps * wrap
             gs[..., -1] += eps * wrap
             grads[dof] = grads[dof] + gs
+        if self.linear_modifier is not None:
+            self._check_modifier(n)
+            g = self.linear_modifier.gradient
+            grads = {"pitch": grads["pitch"] + g[:n], "heave": grads["heave"] + g[n:2 * n]}
+            grad_dt = grad_dt + g[-1]
         return Gradient(grads["pitch"], grads["heave"], grad_dt)

@@ -74,6 +74,18 @@ def check_radius(radius: float, key: str = "trust_region") -> None:
                           key=key)
 
 
+def control_scales(motion) -> np.ndarray:
+    """The scale of each packed control (N pitch, N heave accelerations, dt) of ``motion``:
+    its peak pitch and heave accelerations (at least 1e-3) and its time step. A trust
+    region's radius, and a secant's length (:mod:`~mfflap.optimisation.output_correction`),
+    are measured in these units."""
+    n = motion.n_steps
+    peak_pitch = max(float(np.max(np.abs(np.real(motion.pitch_acceleration)))), 1e-3)
+    peak_heave = max(float(np.max(np.abs(np.real(motion.heave_acceleration)))), 1e-3)
+    return np.concatenate([np.full(n, peak_pitch), np.full(n, peak_heave),
+                           [float(np.real(motion.time_step))]])
+
+
 @dataclass(frozen=True)
 class TrustRegion:
     """The box of motions within ``radius`` of ``centre`` (module docstring).
@@ -94,12 +106,7 @@ class TrustRegion:
 
     def half_widths(self) -> np.ndarray:
         """Per packed variable (N pitch, N heave accelerations, dt): how far it may move."""
-        c = self.centre
-        n = c.n_steps
-        peak_pitch = max(float(np.max(np.abs(np.real(c.pitch_acceleration)))), 1e-3)
-        peak_heave = max(float(np.max(np.abs(np.real(c.heave_acceleration)))), 1e-3)
-        return self.radius * np.concatenate([np.full(n, peak_pitch), np.full(n, peak_heave),
-                                             [float(np.real(c.time_step))]])
+        return self.radius * control_scales(self.centre)
 
     def bounds(self, n_steps: int, time_step_bounds: tuple[float, float]
                ) -> tuple[np.ndarray, np.ndarray]:
@@ -262,6 +269,7 @@ __all__ = [
     "TrustStep",
     "accepted",
     "check_radius",
+    "control_scales",
     "describe_step",
     "step_ratio",
     "updated_radius",
