@@ -450,7 +450,8 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
     coefficients), so only the output correction learns from the back-tests (the classical
     modifier adaptation of a fixed model). ``first_order`` (with ``trust_radius``): the
     correction gets slopes that make it meet CFD at every earlier back-tested motion of the
-    beta too (:meth:`~mfflap.optimisation.output_correction.OutputCorrection.with_slopes`);
+    beta too (:meth:`~mfflap.optimisation.output_correction.OutputCorrection.with_slopes`)
+    within :data:`~mfflap.optimisation.output_correction.SECANT_REACH` radii of the centre;
     a motion whose CFD is a neighbour's (found within the look-up's tolerance) is left out.
 
     The back-test records of every round are kept in ``out_dir/loop_records`` (one per
@@ -463,6 +464,7 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
         The rounds and the last round's outcome.
     """
     from mfflap.campaign.records import backtest_fixture_dirs, fixture_dir
+    from mfflap.optimisation.output_correction import SECANT_REACH, secants_within
     from mfflap.optimisation.store import beta_label
     from mfflap.optimisation.trust_region import TrustRegion
     from mfflap.pipeline import run_study, write_outputs
@@ -491,8 +493,10 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
                        correct_at=(centres if trust_radius is not None else points)
                        if correct_outputs else {},
                        trust_at=regions,
-                       secant_at={b: tuple(p for p in visited.get(b, ()) if p is not c)
-                                  for b, c in centres.items()} if first_order else {},
+                       secant_at={b: tuple(secants_within(
+                           c.motion, [p for p in visited.get(b, ()) if p is not c],
+                           SECANT_REACH * radii[b])) for b, c in centres.items()}
+                       if first_order else {},
                        correction_gain=correction_gain,
                        work_dir=round_dir / "cfd_cases",
                        vtk_dir=None if options.vtk_dir is None else round_dir / "vtk")

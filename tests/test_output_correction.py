@@ -388,3 +388,19 @@ def test_ipopt_and_sqp_follow_a_linear_modifier_within_a_trust_region():
             r = optimiser(p, start, min_period=0.5, max_period=3.0, trust_region=region)
             assert r.motion.time_step == pytest.approx(start.time_step * (1 + sign * 0.1),
                                                        rel=1e-6), optimiser.__name__
+
+
+def test_secants_within_a_reach_keep_the_near_motions_and_drop_the_far_ones():
+    """The largest scaled control change decides (the trust region's own measure)."""
+    from mfflap.optimisation.output_correction import secants_within
+
+    centre = motion(0)
+    near, far = (DiscreteMotion(centre.pitch_acceleration * f, centre.heave_acceleration,
+                                centre.time_step) for f in (1.1, 1.3))
+    other_n = harmonic_to_discrete(1.2, 0.45, np.deg2rad(35), 1.4, N + 2)
+    points = [CorrectionPoint(m, 1.0, 1.0, name) for m, name in
+              ((near, "near"), (far, "far"), (other_n, "other N"))]
+    # near moves the peak pitch acceleration by 10 % of itself, far by 30 %
+    assert [p.source for p in secants_within(centre, points, 0.2)] == ["near"]
+    assert [p.source for p in secants_within(centre, points, 0.3)] == ["near", "far"]
+    assert secants_within(centre, points, 0.05) == []

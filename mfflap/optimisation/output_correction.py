@@ -60,11 +60,12 @@ taken as the minimum-norm solution in the controls scaled as a trust region scal
 the secants, the model's own slope is kept across them (minimum-norm interpolation of
 derivative-free trust-region methods, Conn, Scheinberg and Vicente 2009, applied to the
 residual of a physics model as in first-order-consistent model management, Alexandrov and
-Lewis 2001). The means F_bar_model are the optimiser's own (the N samples of its scheme,
-:func:`~mfflap.performance.discrete_means`). The affine term enters J as a
-:class:`~mfflap.optimisation.problem.LinearModifier`; it corrects the means, not the power's
-shape over the cycle, so the P_max penalty keeps kappa_P P_in,j. Unbounded it would lead the
-optimiser off along a secant: it belongs in a trust region.
+Lewis 2001). The rounds take the earlier motions within :data:`SECANT_REACH` radii of the
+centre (:func:`secants_within`). The means F_bar_model are the optimiser's own (the N
+samples of its scheme, :func:`~mfflap.performance.discrete_means`). The affine term enters
+J as a :class:`~mfflap.optimisation.problem.LinearModifier`; it corrects the means, not the
+power's shape over the cycle, so the P_max penalty keeps kappa_P P_in,j. Unbounded it would
+lead the optimiser off along a secant: it belongs in a trust region.
 """
 
 from __future__ import annotations
@@ -103,6 +104,29 @@ class CorrectionPoint:
 #: a secant shorter than this (largest scaled control change) is left out: the motion is the
 #: centre's, or so near it that CFD's difference is noise
 SECANT_MIN_STEP = 1e-4
+#: the rounds take secants to earlier motions within this many trust radii of the centre
+#: (:func:`secants_within`): a linear model is good only near where it is used
+SECANT_REACH = 2.0
+
+
+def secants_within(centre, points, reach: float) -> list:
+    """The ``points`` (:class:`CorrectionPoint`) within ``reach`` of the ``centre`` motion,
+    the largest change of a control scaled as a trust region scales it
+    (:func:`~mfflap.optimisation.trust_region.control_scales`); points of another N are
+    left out too.
+
+    Derivative-free trust-region methods build their linear models from points within a
+    multiple of the radius (Conn, Scheinberg and Vicente 2009, ch. 6 and 10), so that the
+    model is accurate where it is used. With :data:`SECANT_REACH` = 2 the rounds keep the
+    step just refused (a refused step halves the radius) and drop the older, farther ones
+    as the region shrinks.
+    """
+    from mfflap.optimisation.optimise import _pack
+    from mfflap.optimisation.trust_region import control_scales
+
+    c, w = _pack(centre), control_scales(centre)
+    return [p for p in points if p.motion.n_steps == centre.n_steps
+            and np.max(np.abs((_pack(p.motion) - c) / w)) <= reach * (1 + 1e-9)]
 
 
 @dataclass(frozen=True)
@@ -377,5 +401,5 @@ def check_gain(gain: float) -> None:
                           f"filter), got {gain!r}", key="correction_gain")
 
 
-__all__ = ["SECANT_MIN_STEP", "CorrectionPoint", "OutputCorrection", "Slopes", "check_gain",
-           "describe_correction"]
+__all__ = ["SECANT_MIN_STEP", "SECANT_REACH", "CorrectionPoint", "OutputCorrection", "Slopes",
+           "check_gain", "describe_correction", "secants_within"]
