@@ -55,7 +55,7 @@ class RunOptions:
     correction_gain: float = 1.0
     #: beta -> earlier motions of that beta with their CFD means
     #: (:class:`~mfflap.optimisation.output_correction.CorrectionPoint`): its output
-    #: correction (``correct_at``) gets slopes that meet CFD there too
+    #: corrected objective (``correct_at``) gets a slope that makes it CFD's there too
     #: (:meth:`~mfflap.optimisation.output_correction.OutputCorrection.with_slopes`; the
     #: rounds' ``--first-order``)
     secant_at: dict = field(default_factory=dict)
@@ -301,6 +301,7 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
 
     if options.correct_at:
         from mfflap.optimisation.output_correction import OutputCorrection
+        from mfflap.optimisation.study import problem_for
 
         scheme = config.optimisation.scheme
 
@@ -310,8 +311,8 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
                 corr = OutputCorrection.measured(point, model, scheme).filtered(
                     point.scales, options.correction_gain)
                 if beta in options.secant_at:
-                    corr = corr.with_slopes(point.motion, options.secant_at[beta], model,
-                                            scheme)
+                    corr = corr.with_slopes(point.motion, options.secant_at[beta],
+                                            problem_for(config, beta, model))
                 out[beta] = corr
             return out
 

@@ -45,7 +45,11 @@ scheme's discretisation.
 With ``trust_radius`` (``--trust-region``), each round's optimum of a beta is kept near the
 last one CFD confirmed (:mod:`mfflap.optimisation.trust_region`); the rounds then converge
 only where no optimum is on its region's boundary and no step was refused, and stop when a
-region collapses.
+region collapses. With ``first_order`` (``--first-order``) the corrected objective also gets
+a slope through the earlier back-tested motions of the beta near the centre, so that it is
+CFD's objective there too
+(:meth:`~mfflap.optimisation.output_correction.OutputCorrection.with_slopes`); the predicted
+means stay the scaled ones.
 
 Only motions whose CFD the round's fit has not seen count (a motion repeated from an earlier
 round is in the fit). A motion's mean thrust error counts only where its CFD mean thrust is at least
@@ -97,8 +101,6 @@ class MotionCheck:
         back-test's model means then stand in
     cfd_record : the name of the CFD record compared ("": not known); another motion's
         (:attr:`cfd_of_neighbour`) where the back-test look-up found one within its tolerance
-    thrust_shift, power_shift : N, W the correction's slopes add to the scaled means
-        (:meth:`~mfflap.optimisation.output_correction.OutputCorrection.shifts`; 0: none)
     """
 
     label: str
@@ -116,8 +118,6 @@ class MotionCheck:
     optimised_mean_thrust: float = float("nan")
     optimised_mean_power: float = float("nan")
     cfd_record: str = ""
-    thrust_shift: float = 0.0
-    power_shift: float = 0.0
 
     @property
     def cfd_of_neighbour(self) -> bool:
@@ -129,15 +129,13 @@ class MotionCheck:
     def predicted_thrust(self) -> float:
         """N: the mean thrust the optimisation relied on (corrected model)."""
         own = self.optimised_mean_thrust
-        return self.thrust_scale * (own if np.isfinite(own) else self.model_mean_thrust) + \
-            self.thrust_shift
+        return self.thrust_scale * (own if np.isfinite(own) else self.model_mean_thrust)
 
     @property
     def predicted_power(self) -> float:
         """W: the mean input power the optimisation relied on (corrected model)."""
         own = self.optimised_mean_power
-        return self.power_scale * (own if np.isfinite(own) else self.model_mean_power) + \
-            self.power_shift
+        return self.power_scale * (own if np.isfinite(own) else self.model_mean_power)
 
     @property
     def error(self) -> float:
@@ -157,8 +155,7 @@ class MotionCheck:
                 "predicted_power": self.predicted_power,
                 "optimised_mean_thrust": _finite_or_none(self.optimised_mean_thrust),
                 "optimised_mean_power": _finite_or_none(self.optimised_mean_power),
-                "cfd_record": self.cfd_record, "cfd_of_neighbour": self.cfd_of_neighbour,
-                "thrust_shift": self.thrust_shift, "power_shift": self.power_shift}
+                "cfd_record": self.cfd_record, "cfd_of_neighbour": self.cfd_of_neighbour}
 
 
 @dataclass
@@ -295,8 +292,7 @@ def check_rounds(n_rounds: int, tolerance: float, coefficients: str,
 
 def motion_checks(backtests: dict, in_fit: set[str],
                   scales: dict[str, tuple[float, float]] | None = None,
-                  optimised: dict[str, tuple[float, float]] | None = None,
-                  shifts: dict[str, tuple[float, float]] | None = None
+                  optimised: dict[str, tuple[float, float]] | None = None
                   ) -> dict[str, MotionCheck]:
     """Per back-tested motion: the mean thrust and power predicted for it against CFD's.
 
@@ -304,8 +300,7 @@ def motion_checks(backtests: dict, in_fit: set[str],
     ``scales``: label -> (thrust, power) scale of the output correction the motion was
     optimised with (a motion not in it: the model's own means); ``optimised``: label ->
     (thrust N, power W) the optimiser's own means of the motion, which the prediction is
-    made of (a motion not in it: the back-test's model means); ``shifts``: label -> (N, W)
-    the correction's slopes add to them (none: 0).
+    made of (a motion not in it: the back-test's model means).
     """
     done = {k: o for k, o in backtests.items() if o.comparison is not None}
     largest = max((abs(o.comparison.cfd_mean_thrust) for o in done.values()), default=0.0)
@@ -315,18 +310,16 @@ def motion_checks(backtests: dict, in_fit: set[str],
         k_t, k_p = (scales or {}).get(label, (1.0, 1.0))
         own = (optimised or {}).get(label)
         own_t, own_p = own if own is not None else (c.model_mean_thrust, c.model_mean_power)
-        d_t, d_p = (shifts or {}).get(label, (0.0, 0.0))
         out[label] = MotionCheck(
             label, o.key, c.cfd_mean_thrust, c.model_mean_thrust, c.cfd_mean_power,
-            c.model_mean_power, _relative(k_t * own_t + d_t, c.cfd_mean_thrust),
-            _relative(k_p * own_p + d_p, c.cfd_mean_power),
+            c.model_mean_power, _relative(k_t * own_t, c.cfd_mean_thrust),
+            _relative(k_p * own_p, c.cfd_mean_power),
             thrust_counted=bool(abs(c.cfd_mean_thrust) >= THRUST_FLOOR * largest > 0),
             in_fit=o.record is not None and o.record.name in in_fit,
             thrust_scale=k_t, power_scale=k_p,
             optimised_mean_thrust=np.nan if own is None else float(own_t),
             optimised_mean_power=np.nan if own is None else float(own_p),
-            cfd_record="" if o.record is None else str(o.record.name),
-            thrust_shift=float(d_t), power_shift=float(d_p))
+            cfd_record="" if o.record is None else str(o.record.name))
     return out
 
 
@@ -383,7 +376,11 @@ def trust_steps(outcome, checks: dict[str, MotionCheck], regions: dict, centres:
     round's model, its outputs corrected as they were); CFD's is the same problem with the
     model's outputs scaled to each motion's own CFD means.
     """
-    from mfflap.optimisation.output_correction import CorrectionPoint, OutputCorrection
+    from mfflap.optimisation.output_correction import (
+        CorrectionPoint,
+        OutputCorrection,
+        cfd_objective,
+    )
     from mfflap.optimisation.store import beta_label
     from mfflap.optimisation.study import problem_for
     from mfflap.optimisation.trust_region import TrustStep
@@ -391,7 +388,6 @@ def trust_steps(outcome, checks: dict[str, MotionCheck], regions: dict, centres:
     steps = {}
     sqp = outcome.study.sqp if outcome.study is not None else {}
     cfg = outcome.config or config
-    scheme = cfg.optimisation.scheme
     for beta, region in regions.items():
         label = beta_label(beta)
         if beta not in sqp or label not in checks or outcome.model is None:
@@ -405,15 +401,11 @@ def trust_steps(outcome, checks: dict[str, MotionCheck], regions: dict, centres:
             return correction.objective_factor(base.beta) * float(
                 correction.problem(base).objective(motion))
 
-        def cfd(point: CorrectionPoint, corrected=corrected) -> float:
-            return corrected(OutputCorrection.measured(point, outcome.model, scheme),
-                             point.motion)
-
         own = outcome.corrections.get(beta)
         steps[beta] = TrustStep.judged(
-            region, beta, optimum, cfd(centre),
-            cfd(CorrectionPoint(optimum, c.cfd_mean_thrust, c.cfd_mean_power, label,
-                                thrust_usable=c.thrust_counted)),
+            region, beta, optimum, cfd_objective(centre, base),
+            cfd_objective(CorrectionPoint(optimum, c.cfd_mean_thrust, c.cfd_mean_power, label,
+                                          thrust_usable=c.thrust_counted), base),
             corrected(own, centre.motion), corrected(own, optimum))
     return steps
 
@@ -449,8 +441,8 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
     ``refit`` False: every round identifies from the identification data alone (round 1's
     coefficients), so only the output correction learns from the back-tests (the classical
     modifier adaptation of a fixed model). ``first_order`` (with ``trust_radius``): the
-    correction gets slopes that make it meet CFD at every earlier back-tested motion of the
-    beta too (:meth:`~mfflap.optimisation.output_correction.OutputCorrection.with_slopes`)
+    corrected objective gets a slope that makes it CFD's at the earlier back-tested motions
+    of the beta (:meth:`~mfflap.optimisation.output_correction.OutputCorrection.with_slopes`)
     within :data:`~mfflap.optimisation.output_correction.SECANT_REACH` radii of the centre;
     a motion whose CFD is a neighbour's (found within the look-up's tolerance) is left out.
 
@@ -514,14 +506,10 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
         in_fit = {c.name for c in outcome.cases}
         scales = {beta_label(b): (c.thrust_scale, c.power_scale)
                   for b, c in outcome.corrections.items()}
-        shifts = {beta_label(b): c.shifts(outcome.backtest_motions[beta_label(b)])
-                  for b, c in outcome.corrections.items()
-                  if c.slopes is not None and beta_label(b) in outcome.backtest_motions}
         summary = RoundSummary(
             k, round_dir, len(outcome.cases),
             sum(1 for p in pooled if p.stem in in_fit), _coefficients(outcome),
-            motion_checks(outcome.backtests, in_fit, scales, optimised_means(outcome, config),
-                          shifts),
+            motion_checks(outcome.backtests, in_fit, scales, optimised_means(outcome, config)),
             {lbl: o.source for lbl, o in outcome.backtests.items() if o.comparison is None},
             {b: c.as_dict() for b, c in outcome.corrections.items()})
         points = correction_points(outcome, summary.checks, k)
@@ -671,7 +659,7 @@ def write_rounds(result: LoopResult, config: CaseConfig, out_dir: Path) -> None:
                       for name in ("cfd_mean_thrust", "model_mean_thrust", "predicted_thrust",
                                    "cfd_mean_power", "model_mean_power", "predicted_power",
                                    "thrust_scale", "power_scale", "optimised_mean_thrust",
-                                   "optimised_mean_power", "thrust_shift", "power_shift")}
+                                   "optimised_mean_power")}
             units = {name: "1" if "scale" in name else "N" if "thrust" in name else "W"
                      for name in arrays}
             rf.write_group(f"rounds/round_{r.index}", arrays, units, {
@@ -686,7 +674,8 @@ def write_rounds(result: LoopResult, config: CaseConfig, out_dir: Path) -> None:
         learns += (f", keeps each optimum in a trust region (first radius "
                    f"{result.trust_radius:g}) about the last one CFD confirmed")
     if result.first_order:
-        learns += ", and gives the correction slopes that meet CFD at every earlier motion"
+        learns += (", and gives the corrected objective a slope that makes it CFD's at the "
+                   "earlier motions near the centre")
     rep = Report("mfflap run: rounds of CFD in the loop",
                  f"{config.study.name}: each round {learns}, optimises and back-tests again")
     s = rep.section("Rounds")
@@ -757,10 +746,7 @@ def _scales_text(check: MotionCheck) -> str:
     """The output correction of a motion in a table cell ("none": the model's own)."""
     if (check.thrust_scale, check.power_scale) == (1.0, 1.0):
         return "none"
-    text = f"x {check.thrust_scale:.3f}, x {check.power_scale:.3f}"
-    if (check.thrust_shift, check.power_shift) != (0.0, 0.0):
-        text += f"; slopes {check.thrust_shift:+.3g} N, {check.power_shift:+.3g} W"
-    return text
+    return f"x {check.thrust_scale:.3f}, x {check.power_scale:.3f}"
 
 
 def rounds_figure(result: LoopResult):

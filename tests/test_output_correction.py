@@ -294,79 +294,65 @@ def _point(cfd_model, motion, source):
 
 
 @pytest.mark.parametrize("beta", [0.0, 0.5, 1.0])
-def test_slopes_make_the_corrected_model_meet_cfd_at_every_earlier_motion(beta):
-    """kappa F_model(u) + lambda . (u - c) is CFD's mean at the centre (the scales) and at
-    each earlier motion u_i (the slopes); J of the equivalent problem, times c, is the
-    corrected objective with those means; the slope is minimum-norm: it lies in the span of
-    the scaled secants."""
+def test_a_slope_makes_the_corrected_objective_cfds_at_every_earlier_motion(beta):
+    """J_0(u) + lambda . (u - c) is CFD's objective (the outputs scaled to each motion's own
+    CFD means, power penalty active) at the centre and at each earlier motion; lambda is
+    minimum-norm: it lies in the span of the scaled secants; the optimisers' problem, times
+    c, is that objective."""
     from mfflap.optimisation.optimise import _pack
+    from mfflap.optimisation.output_correction import cfd_objective
     from mfflap.optimisation.trust_region import control_scales
-    from mfflap.performance import discrete_means
 
     model, cfd = MorisonModel(), _cfd_stand_in()
+    p = problem(beta)
     centre = _point(cfd, motion(0), "centre")
     others = [_point(cfd, motion(seed), f"round {seed}") for seed in (1, 2)]
     corr = OutputCorrection.measured(centre, model, "paper")
     assert corr.thrust_scale != pytest.approx(1.0, abs=0.05)
-    sloped = corr.with_slopes(centre.motion, [*others, centre], model, "paper")
+    sloped = corr.with_slopes(centre.motion, [*others, centre], p)
     assert sloped.slopes.sources == ("round 1", "round 2")  # the centre itself left out
-    for p in (centre, *others):
-        model_t, model_p = discrete_means(model, p.motion, "paper")
-        d_t, d_p = sloped.shifts(p.motion)
-        assert sloped.thrust_scale * model_t + d_t == pytest.approx(p.cfd_mean_thrust,
-                                                                    rel=1e-9)
-        assert sloped.power_scale * model_p + d_p == pytest.approx(p.cfd_mean_power, rel=1e-9)
-        # without slopes the earlier motions are missed by the residuals
-        if p is not centre:
-            assert abs(d_t) > 1e-3 * abs(p.cfd_mean_thrust)
+    equivalent, c = sloped.problem(p), sloped.objective_factor(beta)
+    zeroth = corr.problem(p)
+    for q in (centre, *others):
+        target = cfd_objective(q, p)
+        assert c * float(equivalent.objective(q.motion)) == pytest.approx(target, rel=1e-9)
+        if q is not centre:  # the scales alone miss it
+            assert abs(c * float(zeroth.objective(q.motion)) - target) > 1e-3 * abs(target)
+    # CFD's objective by hand at one point: the scales measured there, power penalty active
+    q = others[0]
+    own = OutputCorrection.measured(q, model, "paper")
+    st = q.motion.states("paper")
+    _, power = thrust_and_power(model.loads(st), st)
+    assert np.max(own.power_scale * power) > p.max_power
+    assert cfd_objective(q, p) == pytest.approx(float(corrected_objective(
+        p, q.motion, own.thrust_scale, own.power_scale)), rel=1e-11)
     w = control_scales(centre.motion)
-    secants = np.array([(_pack(p.motion) - _pack(centre.motion)) / w for p in others])
-    for slope in (sloped.slopes.thrust, sloped.slopes.power):
-        scaled = slope * w
-        in_span = secants.T @ np.linalg.lstsq(secants.T, scaled, rcond=None)[0]
-        assert np.allclose(in_span, scaled, rtol=1e-9, atol=1e-12 * np.abs(scaled).max())
-    # the equivalent problem's J, times c, is the corrected objective with the shifted means
-    p = problem(beta)
-    base = problem(beta, penalty_power=0.0)  # the slopes correct the means, not the peaks
-    equivalent = sloped.problem(base)
-    c = sloped.objective_factor(beta)
-    for q in others:
-        d_t, d_p = sloped.shifts(q.motion)
-        expected = corrected_objective(base, q.motion, sloped.thrust_scale,
-                                       sloped.power_scale) - (1 - beta) * d_t + beta * d_p
-        assert c * float(equivalent.objective(q.motion)) == pytest.approx(float(expected),
-                                                                         rel=1e-11)
+    secants = np.array([(_pack(x.motion) - _pack(centre.motion)) / w for x in others])
+    scaled = sloped.slopes.objective * w
+    in_span = secants.T @ np.linalg.lstsq(secants.T, scaled, rcond=None)[0]
+    assert np.allclose(in_span, scaled, rtol=1e-9, atol=1e-12 * np.abs(scaled).max())
     assert p.linear_modifier is None and equivalent.linear_modifier is not None
-    text = sloped.describe()
-    assert "slopes through 2 earlier motion(s)" in text and "thrust " in text
+    assert "a slope of J through 2 earlier motion(s)" in sloped.describe()
     assert sloped.as_dict()["slopes"]["sources"] == ["round 1", "round 2"]
+    assert sloped.shift(others[1].motion) == pytest.approx(
+        c * float(equivalent.objective(others[1].motion))
+        - c * float(zeroth.objective(others[1].motion)), rel=1e-9)
 
 
-def test_slopes_with_nothing_to_meet_are_zero_and_a_filtered_correction_refuses_them():
+def test_a_slope_with_nothing_to_meet_is_zero_and_a_filtered_correction_refuses_it():
     model, cfd = MorisonModel(), _cfd_stand_in()
     centre = _point(cfd, motion(0), "centre")
     corr = OutputCorrection.measured(centre, model, "paper")
-    alone = corr.with_slopes(centre.motion, [centre], model, "paper")
-    assert alone.slopes.sources == () and not alone.slopes.thrust.any()
-    assert alone.shifts(motion(3)) == (0.0, 0.0)
-    assert "slopes: no earlier motion to meet (zero)" in alone.describe()
+    alone = corr.with_slopes(centre.motion, [centre], problem(0.0))
+    assert alone.slopes.sources == () and not alone.slopes.objective.any()
+    assert alone.shift(motion(3)) == 0.0 and corr.shift(motion(3)) == 0.0
+    assert "a slope of J: no earlier motion near (zero)" in alone.describe()
     with pytest.raises(ConfigError, match="filter gain 1") as err:
-        corr.filtered((1.0, 1.0), 0.5).with_slopes(centre.motion, [], model, "paper")
+        corr.filtered((1.0, 1.0), 0.5).with_slopes(centre.motion, [], problem(0.0))
     assert err.value.key == "correction_gain"
     other_n = harmonic_to_discrete(1.2, 0.45, np.deg2rad(35), 1.4, N + 2)
     with pytest.raises(ConfigError, match="slopes are for N = 24"):
-        alone.shifts(other_n)
-
-
-def test_an_unused_thrust_scale_gets_no_thrust_slope():
-    model, cfd = MorisonModel(), _cfd_stand_in()
-    c = _point(cfd, motion(0), "centre")
-    small = CorrectionPoint(c.motion, c.cfd_mean_thrust, c.cfd_mean_power, "centre",
-                            thrust_usable=False)
-    corr = OutputCorrection.measured(small, model, "paper")
-    sloped = corr.with_slopes(c.motion, [_point(cfd, motion(1), "round 1")], model, "paper")
-    assert not sloped.slopes.thrust.any() and sloped.slopes.power.any()
-    assert "thrust slope: not corrected" in sloped.describe()
+        alone.shift(other_n)
 
 
 def test_ipopt_and_sqp_follow_a_linear_modifier_within_a_trust_region():

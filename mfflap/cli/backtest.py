@@ -54,7 +54,7 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
         case = loads_case(rf.config_toml, source=f"{optimisation_file}:/inputs")
         sweep, best = read_sweep(rf, "optimisation/sweep")
         model = optimised_with(rf, case)
-        motions, scales, shifts = {}, {}, {}
+        motions, scales = {}, {}
         for key in sorted(rf.h5["optimisation/sqp"]):
             r = read_result(rf, f"optimisation/sqp/{key}")
             motions[beta_label(r.beta)] = r.motion
@@ -62,9 +62,6 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
             if "setting_output_thrust_scale" in attrs:  # optimised with corrected outputs
                 scales[beta_label(r.beta)] = (float(attrs["setting_output_thrust_scale"]),
                                              float(attrs["setting_output_power_scale"]))
-                shifts[beta_label(r.beta)] = (  # the slopes' part (first order; else 0)
-                    float(attrs.get("setting_output_thrust_shift", 0.0)),
-                    float(attrs.get("setting_output_power_shift", 0.0)))
     n = next(iter(motions.values())).n_steps
     motions = {"best sinusoid": sinusoid_motion(sweep, best, n), **motions}
     motions = _chosen(motions, only)
@@ -84,7 +81,7 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
 
     _show(outcomes, as_json, scales, {
         label: discrete_means(model, motions[label], case.optimisation.scheme)
-        for label in scales if label in motions}, shifts)
+        for label in scales if label in motions})
     if interrupted is not None:
         click.echo(f"interrupted during the back-test of {interrupted}: {len(outcomes)} of "
                    f"{len(motions)} motions back-tested{' (shown above)' if outcomes else ''};"
@@ -139,13 +136,12 @@ def optimised_with(rf, case):
 
 
 def _show(outcomes: dict, as_json: bool, scales: dict | None = None,
-          optimised: dict | None = None, shifts: dict | None = None) -> None:
+          optimised: dict | None = None) -> None:
     """Print the back-tests: a line per motion, or JSON. ``scales``: label -> (thrust, power)
     scale of the output correction a motion was optimised with; its corrected prediction,
     the scales times ``optimised`` (label -> the optimiser's own mean thrust and power, the
-    means the scales were measured with; else the back-test's model means) plus ``shifts``
-    (label -> N, W the correction's slopes add; first order), is shown beside the model's
-    own."""
+    means the scales were measured with; else the back-test's model means), is shown beside
+    the model's own."""
     from mfflap.backtest.workflow import gain_in_cfd, no_gain_in_cfd_reason
 
     data = {label: {"status": o.status, "source": o.source, "motion_key": o.key,
@@ -156,11 +152,10 @@ def _show(outcomes: dict, as_json: bool, scales: dict | None = None,
         if d is not None and "model_mean_thrust" in d:
             own_t, own_p = (optimised or {}).get(label, (d["model_mean_thrust"],
                                                          d["model_mean_power"]))
-            d_t, d_p = (shifts or {}).get(label, (0.0, 0.0))
             d["corrected_prediction"] = {
-                "thrust_scale": k_t, "power_scale": k_p, "mean_thrust": k_t * own_t + d_t,
-                "mean_power": k_p * own_p + d_p, "optimised_mean_thrust": own_t,
-                "optimised_mean_power": own_p, "thrust_shift": d_t, "power_shift": d_p}
+                "thrust_scale": k_t, "power_scale": k_p, "mean_thrust": k_t * own_t,
+                "mean_power": k_p * own_p, "optimised_mean_thrust": own_t,
+                "optimised_mean_power": own_p}
     gain = gain_in_cfd(outcomes)
     if as_json:
         echo_json({"motions": data, "cfd_thrust_gain": gain,
@@ -176,11 +171,9 @@ def _show(outcomes: dict, as_json: bool, scales: dict | None = None,
                    f"{d['nrmse']['thrust']:.3f}; CFD max power {d['cfd_max_power']:.1f} W")
         if "corrected_prediction" in d:
             c = d["corrected_prediction"]
-            slopes = ("" if (c["thrust_shift"], c["power_shift"]) == (0.0, 0.0) else
-                      f", slopes {c['thrust_shift']:+.3f} N, {c['power_shift']:+.3f} W")
             click.echo(f"{'':14s} optimised with corrected outputs (thrust x "
-                       f"{c['thrust_scale']:.3f}, power x {c['power_scale']:.3f}{slopes}): "
-                       f"predicted {c['mean_thrust']:.3f} N, {c['mean_power']:.3f} W")
+                       f"{c['thrust_scale']:.3f}, power x {c['power_scale']:.3f}): predicted "
+                       f"{c['mean_thrust']:.3f} N, {c['mean_power']:.3f} W")
         if "instead of a live run" in d["source"]:  # said here, not only in the progress
             click.echo(f"{'':14s} CFD: {d['source']}")
     if gain is not None:

@@ -45,27 +45,33 @@ where kappa_(k-1) is the scale the measured motion was optimised with
 (:attr:`CorrectionPoint.scales`) and K the gain (:meth:`OutputCorrection.filtered`);
 K = 1 takes the measured scale as it is.
 
-First-order correction (slopes). The scales make the corrected model exact at the motion
-they were measured on, with the model's own slope there; in the trust-region rounds CFD then
-refuses steps whose direction that slope gets wrong (README, "Trust region"). CFD gradients
-of 2N + 1 controls are out of reach (one CFD run per control), but every earlier back-tested
-motion u_i of the same beta is a secant from the centre c. The slopes lambda_T, lambda_P
-(N and W per packed control) make the corrected model meet CFD there too:
+First-order correction (a slope of J). The scales make the corrected model exact at the
+motion they were measured on, with the model's own slope there; in the trust-region rounds
+CFD then refuses steps whose direction that slope gets wrong (README, "Trust region"). CFD
+gradients of 2N + 1 controls are out of reach (one CFD run per control), but every earlier
+back-tested motion u_i of the same beta is a secant from the centre c. As in modifier
+adaptation, the first-order modifier goes on the objective: with J_CFD(u) the objective with
+the model's outputs scaled to u's own CFD means (what a trust region judges steps by,
+:func:`cfd_objective`) and J_0(u) the objective corrected by the centre's scales,
 
-    F_bar_corr(u) = kappa_T F_bar_model(u) + lambda_T . (u - c),     lambda_T . (u_i - c) = r_i,
-    r_i = F_bar_CFD(u_i) - kappa_T F_bar_model(u_i)                  (the same for power),
+    J_corr(u) = J_0(u) + lambda . (u - c),     lambda . (u_i - c) = J_CFD(u_i) - J_0(u_i),
 
-taken as the minimum-norm solution in the controls scaled as a trust region scales them
+so the corrected objective is CFD's at the centre and at every u_i: its values, and so its
+slope along the secants, power penalty included. lambda is the minimum-norm solution in the
+controls scaled as a trust region scales them
 (:func:`~mfflap.optimisation.trust_region.control_scales`): the slope is corrected only along
-the secants, the model's own slope is kept across them (minimum-norm interpolation of
-derivative-free trust-region methods, Conn, Scheinberg and Vicente 2009, applied to the
-residual of a physics model as in first-order-consistent model management, Alexandrov and
-Lewis 2001). The rounds take the earlier motions within :data:`SECANT_REACH` radii of the
-centre (:func:`secants_within`). The means F_bar_model are the optimiser's own (the N
-samples of its scheme, :func:`~mfflap.performance.discrete_means`). The affine term enters
-J as a :class:`~mfflap.optimisation.problem.LinearModifier`; it corrects the means, not the
-power's shape over the cycle, so the P_max penalty keeps kappa_P P_in,j. Unbounded it would
-lead the optimiser off along a secant: it belongs in a trust region.
+the secants, the model's own kept across them (minimum-norm interpolation of derivative-free
+trust-region methods, Conn, Scheinberg and Vicente 2009, applied to the residual of a physics
+model as in first-order-consistent model management, Alexandrov and Lewis 2001). The rounds
+take the earlier motions within :data:`SECANT_REACH` radii of the centre
+(:func:`secants_within`). The term enters J as a
+:class:`~mfflap.optimisation.problem.LinearModifier`; the predicted means stay the scaled
+ones. Unbounded it would lead the optimiser off along a secant: it belongs in a trust region.
+
+A first version put the slopes on the mean thrust and power instead. It was inconsistent:
+the power penalty still saw the centre's scale, while CFD's objective sees each motion's own,
+so round 5 of the shipped series chose a step whose CFD power peaks, scaled so, raised J by
+35 where 0.6 of decrease was predicted.
 """
 
 from __future__ import annotations
@@ -129,6 +135,15 @@ def secants_within(centre, points, reach: float) -> list:
             and np.max(np.abs((_pack(p.motion) - c) / w)) <= reach * (1 + 1e-9)]
 
 
+def cfd_objective(point: CorrectionPoint, problem: FlappingProblem) -> float:
+    """J of ``problem`` at ``point``'s motion with the model's thrust and power scaled to
+    that motion's own CFD means (:meth:`OutputCorrection.measured`): CFD's means with the
+    model's shape of the power over the cycle, so the power penalty counts too."""
+    corr = OutputCorrection.measured(point, problem.model, problem.scheme)
+    return corr.objective_factor(problem.beta) * float(
+        corr.problem(problem).objective(point.motion))
+
+
 @dataclass(frozen=True)
 class Slopes:
     """The first-order part of an output correction (module docstring).
@@ -136,22 +151,18 @@ class Slopes:
     Attributes
     ----------
     centre : packed controls c where the affine term vanishes, shape (2N + 1,)
-    thrust : lambda_T, N per packed control (zeros where the thrust is not corrected)
-    power : lambda_P, W per packed control
-    sources : the earlier motions the slopes meet CFD at
-    thrust_residuals : N, r_i = CFD mean thrust - kappa_T model mean at each
-    power_residuals : W, the same for power
+    objective : lambda, units of J per packed control
+    sources : the earlier motions the corrected objective meets CFD's at
+    residuals : J_CFD(u_i) - J_0(u_i) at each (units of J)
     """
 
     centre: np.ndarray = field(compare=False)
-    thrust: np.ndarray = field(compare=False)
-    power: np.ndarray = field(compare=False)
+    objective: np.ndarray = field(compare=False)
     sources: tuple[str, ...] = ()
-    thrust_residuals: tuple[float, ...] = ()
-    power_residuals: tuple[float, ...] = ()
+    residuals: tuple[float, ...] = ()
 
-    def shifts(self, motion) -> tuple[float, float]:
-        """(N, W): lambda_T . (u - c) and lambda_P . (u - c) at ``motion``."""
+    def shift(self, motion) -> float:
+        """lambda . (u - c) at ``motion`` (units of J)."""
         from mfflap.optimisation.optimise import _pack
 
         z = _pack(motion)
@@ -159,20 +170,16 @@ class Slopes:
             raise ConfigError(f"the output correction's slopes are for N = "
                               f"{(self.centre.size - 1) // 2} steps, the motion has "
                               f"{motion.n_steps}", key="slopes")
-        step = z - self.centre
-        return float(self.thrust @ step), float(self.power @ step)
+        return float(self.objective @ (z - self.centre))
 
     def as_dict(self) -> dict:
-        """JSON-friendly: the sources, residuals and the slopes' scaled lengths."""
+        """JSON-friendly: the sources, residuals and the slope's scaled length."""
         from mfflap.optimisation.optimise import _unpack
         from mfflap.optimisation.trust_region import control_scales
 
         w = control_scales(_unpack(self.centre, (self.centre.size - 1) // 2))
-        return {"sources": list(self.sources),
-                "thrust_residuals": list(self.thrust_residuals),
-                "power_residuals": list(self.power_residuals),
-                "thrust_slope_scaled_norm": float(np.linalg.norm(self.thrust * w)),
-                "power_slope_scaled_norm": float(np.linalg.norm(self.power * w))}
+        return {"sources": list(self.sources), "residuals": list(self.residuals),
+                "scaled_norm": float(np.linalg.norm(self.objective * w))}
 
 
 @dataclass(frozen=True)
@@ -265,9 +272,9 @@ class OutputCorrection:
                        measured_scales=measured,
                        previous_scales=(float(previous[0]), float(previous[1])))
 
-    def with_slopes(self, centre, points, model, scheme: str) -> OutputCorrection:
-        """This correction with slopes that make it meet CFD at ``points`` too (module
-        docstring).
+    def with_slopes(self, centre, points, problem: FlappingProblem) -> OutputCorrection:
+        """This correction with a slope of J that makes the corrected objective CFD's at
+        ``points`` too (module docstring).
 
         Parameters
         ----------
@@ -275,13 +282,12 @@ class OutputCorrection:
             scales were measured on
         points : earlier :class:`CorrectionPoint` of the same beta; those within
             :data:`SECANT_MIN_STEP` of the centre or of another N are left out
-        model, scheme : the model and scheme of the optimisation
+        problem : the case's problem of that beta (uncorrected; its model and scheme)
 
         Returns
         -------
         OutputCorrection
-            With :attr:`slopes` (zero slopes, and no sources, when no point is left). The
-            thrust slope stays zero where the thrust is not corrected (a note says so).
+            With :attr:`slopes` (a zero slope, and no sources, when no point is left).
 
         Raises
         ------
@@ -290,44 +296,36 @@ class OutputCorrection:
         """
         from mfflap.optimisation.optimise import _pack
         from mfflap.optimisation.trust_region import control_scales
-        from mfflap.performance import discrete_means
 
         if self.gain != 1.0:
             raise ConfigError("slopes need the measured scales (filter gain 1), so that the "
                               f"corrected model meets CFD at the centre; gain {self.gain:g}",
                               key="correction_gain")
         c, w = _pack(centre), control_scales(centre)
-        rows, r_t, r_p, sources = [], [], [], []
+        zeroth = self.problem(problem)
+        factor = self.objective_factor(problem.beta)
+        rows, residuals, sources = [], [], []
         for p in points:
             if p.motion.n_steps != centre.n_steps:
                 continue
             step = (_pack(p.motion) - c) / w
             if np.max(np.abs(step)) < SECANT_MIN_STEP:
                 continue
-            model_t, model_p = discrete_means(model, p.motion, scheme)
             rows.append(step)
-            r_t.append(float(p.cfd_mean_thrust) - self.thrust_scale * model_t)
-            r_p.append(float(p.cfd_mean_power) - self.power_scale * model_p)
+            residuals.append(cfd_objective(p, problem)
+                             - factor * float(zeroth.objective(p.motion)))
             sources.append(p.source)
-        notes = list(self.notes)
+        slope = np.zeros_like(c)
         if rows:
-            pinv = np.linalg.pinv(np.array(rows), rcond=1e-10)
-            thrust, power = (pinv @ np.array(r_t)) / w, (pinv @ np.array(r_p)) / w
-            if not np.isfinite(r_t).all() or any("thrust:" in n for n in self.notes):
-                thrust = np.zeros_like(c)
-                notes.append("thrust slope: not corrected (nor is its scale)")
-            if not np.isfinite(power).all():
-                raise ConfigError(f"the power slopes through {sources} are not finite",
+            slope = (np.linalg.pinv(np.array(rows), rcond=1e-10) @ np.array(residuals)) / w
+            if not np.isfinite(slope).all():
+                raise ConfigError(f"the slope of J through {sources} is not finite",
                                   key="slopes")
-        else:
-            thrust = power = np.zeros_like(c)
-        slopes = Slopes(c, thrust, power, tuple(sources), tuple(r_t), tuple(r_p))
-        return replace(self, slopes=slopes, notes=tuple(notes))
+        return replace(self, slopes=Slopes(c, slope, tuple(sources), tuple(residuals)))
 
-    def shifts(self, motion) -> tuple[float, float]:
-        """(N, W) the slopes add to the scaled mean thrust and power at ``motion`` ((0, 0)
-        without slopes)."""
-        return (0.0, 0.0) if self.slopes is None else self.slopes.shifts(motion)
+    def shift(self, motion) -> float:
+        """What the slope adds to the corrected J at ``motion`` (0 without slopes)."""
+        return 0.0 if self.slopes is None else self.slopes.shift(motion)
 
     def objective_factor(self, beta: float) -> float:
         """c = (1 - beta) kappa_T + beta kappa_P: corrected objective = c x that of
@@ -343,8 +341,7 @@ class OutputCorrection:
         k_p = self.power_scale
         modifier = None
         if self.slopes is not None:
-            g = (-(1 - problem.beta) * self.slopes.thrust + problem.beta * self.slopes.power)
-            modifier = LinearModifier(g / c, self.slopes.centre)
+            modifier = LinearModifier(self.slopes.objective / c, self.slopes.centre)
         return replace_problem(
             problem, beta=min(max(problem.beta * k_p / c, 0.0), 1.0),
             max_power=problem.max_power / k_p,
@@ -384,12 +381,9 @@ def describe_correction(correction: dict) -> str:
     slopes = correction.get("slopes")
     if slopes is not None:
         n = len(slopes["sources"])
-        text += (f"; slopes through {n} earlier motion(s)" if n else
-                 "; slopes: no earlier motion to meet (zero)")
-        if n:
-            text += " (residuals of the scales there: thrust " + ", ".join(
-                f"{r:+.3g}" for r in slopes["thrust_residuals"]) + " N, power " + ", ".join(
-                f"{r:+.3g}" for r in slopes["power_residuals"]) + " W)"
+        text += (f"; a slope of J through {n} earlier motion(s) (J of CFD minus J of the "
+                 "scales there: " + ", ".join(f"{r:+.3g}" for r in slopes["residuals"]) + ")"
+                 if n else "; a slope of J: no earlier motion near (zero)")
     return text + "".join(f"; {n}" for n in correction.get("notes", ()))
 
 
@@ -401,5 +395,14 @@ def check_gain(gain: float) -> None:
                           f"filter), got {gain!r}", key="correction_gain")
 
 
-__all__ = ["SECANT_MIN_STEP", "SECANT_REACH", "CorrectionPoint", "OutputCorrection", "Slopes",
-           "check_gain", "describe_correction", "secants_within"]
+__all__ = [
+    "SECANT_MIN_STEP",
+    "SECANT_REACH",
+    "CorrectionPoint",
+    "OutputCorrection",
+    "Slopes",
+    "cfd_objective",
+    "check_gain",
+    "describe_correction",
+    "secants_within",
+]

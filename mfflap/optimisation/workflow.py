@@ -39,11 +39,9 @@ def write_study(rf: ResultsFile, config: CaseConfig, study: BetaStudy,
             settings.update({"output_thrust_scale": corr.thrust_scale,
                              "output_power_scale": corr.power_scale,
                              "output_correction": json.dumps(corr.as_dict())})
-            if corr.slopes is not None:  # first order: the affine term and its value here
-                d_t, d_p = corr.shifts(r.motion)
-                settings.update({"output_thrust_shift": d_t, "output_power_shift": d_p,
-                                 "output_thrust_slope": corr.slopes.thrust,
-                                 "output_power_slope": corr.slopes.power,
+            if corr.slopes is not None:  # first order: the affine term of J, its value here
+                settings.update({"output_objective_shift": corr.shift(r.motion),
+                                 "output_objective_slope": corr.slopes.objective,
                                  "output_slope_centre": corr.slopes.centre})
         if beta in study.trust_regions:  # kept in a box about an earlier optimum
             region = study.trust_regions[beta]
