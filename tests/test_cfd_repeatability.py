@@ -1,12 +1,13 @@
 """How far two OpenFOAM runs of one motion agree: the noise floor under every back-test.
 
-The two shipped records (``mfflap/data/fixtures/cfd_repeatability``) are real coarse-mesh
-pimpleFoam runs of the same optimised motion (round 3's beta = 0.5 of the first-order
-rounds, key 4a429ce3a09cada1), written twice from the optimiser's output: their motion
-tables are identical, their controlDicts differ only in the 13th digit of endTime and
-writeInterval (the period as recomputed from the same optimum). With an adjustable time step
-that lands on the write times, the time steps differ, and the flow separates the difference
-into the forces (README, "Trust region", repeatability).
+Two real coarse-mesh pimpleFoam runs of the same optimised motion (round 3's beta = 0.5 of
+the first-order rounds, key 4a429ce3a09cada1): the one the rounds use
+(``backtest_first_order``) and a first run of it (``cfd_repeatability``, made by an earlier
+version of the rounds that found the same optimum), each case written from the optimiser's
+output: their motion tables are identical, their controlDicts differ only in the 13th digit
+of endTime and writeInterval (the period as recomputed from the same optimum). With an
+adjustable time step that lands on the write times, the time steps differ, and the flow
+separates the difference into the forces (README, "First-order corrections").
 """
 
 import numpy as np
@@ -17,8 +18,9 @@ from mfflap.hydro import MorisonModel
 
 
 def _runs():
-    folder = fixture_dir("cfd_repeatability")
-    return [read_record(folder / f"{name}.h5") for name in ("run_a", "run_b")]
+    name = "backtest_4a429ce3a09cada1"
+    return [read_record(fixture_dir("cfd_repeatability") / f"{name}_first_run.h5"),
+            read_record(fixture_dir("backtest_first_order") / f"{name}.h5")]
 
 
 def test_two_runs_of_one_motion_agree_early_and_part_in_the_last_cycle():
