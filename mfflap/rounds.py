@@ -221,6 +221,8 @@ class LoopResult:
     answers: dict = field(default_factory=dict)
     #: whether the output corrections had slopes through the earlier motions (first order)
     first_order: bool = False
+    #: the share by which two CFD runs of one motion differ, as given (None: not known)
+    cfd_repeatability: float | None = None
 
     def as_dict(self) -> dict:
         """JSON-friendly."""
@@ -229,6 +231,7 @@ class LoopResult:
                 "correct_outputs": self.correct_outputs,
                 "correction_gain": self.correction_gain, "refit": self.refit,
                 "trust_radius": self.trust_radius, "first_order": self.first_order,
+                "cfd_repeatability": self.cfd_repeatability,
                 "answers": {f"{b:g}": a for b, a in self.answers.items()},
                 "rounds": [r.as_dict() for r in self.rounds]}
 
@@ -236,7 +239,8 @@ class LoopResult:
 def check_rounds(n_rounds: int, tolerance: float, coefficients: str,
                  correct_outputs: bool = False, refit: bool = True,
                  trust_radius: float | None = None, first_order: bool = False,
-                 correction_gain: float = 1.0) -> None:
+                 correction_gain: float = 1.0, cfd_repeatability: float | None = None
+                 ) -> None:
     """Refuse rounds that cannot learn from their CFD.
 
     Rounds learn by the refit of identified coefficients on the back-tests, by the output
@@ -251,7 +255,7 @@ def check_rounds(n_rounds: int, tolerance: float, coefficients: str,
         region's radius not in (0, :data:`~mfflap.optimisation.trust_region.MAX_RADIUS`], or
         a trust region for one round (it bounds the rounds after the first); slopes
         (``first_order``) without the output correction, its measured scales (gain 1) and a
-        trust region.
+        trust region; a CFD repeatability not in (0, 1) or without a trust region.
     """
     if n_rounds < 1:
         raise ConfigError(f"--rounds must be >= 1, got {n_rounds}", key="rounds")
@@ -276,6 +280,14 @@ def check_rounds(n_rounds: int, tolerance: float, coefficients: str,
         if n_rounds < 2:
             raise ConfigError("--trust-region bounds each round's optimum about the last one "
                               "CFD confirmed, so it needs --rounds 2 or more", key="trust_region")
+    if cfd_repeatability is not None:
+        from mfflap.optimisation.trust_region import check_repeatability
+
+        check_repeatability(cfd_repeatability)
+        if trust_radius is None:
+            raise ConfigError("--cfd-repeatability relaxes the trust region's judgement of "
+                              "each step by CFD's noise, so it needs --trust-region",
+                              key="cfd_repeatability")
     if first_order:
         missing = [flag for flag, given in (("--correct-outputs", correct_outputs),
                                             ("--trust-region", trust_radius is not None))
@@ -366,7 +378,7 @@ def correction_points(outcome, checks: dict[str, MotionCheck], index: int) -> di
 
 
 def trust_steps(outcome, checks: dict[str, MotionCheck], regions: dict, centres: dict,
-                config: CaseConfig) -> dict:
+                config: CaseConfig, repeatability: float | None = None) -> dict:
     """beta -> :class:`~mfflap.optimisation.trust_region.TrustStep`: each back-tested
     optimum of a round with trust ``regions`` (beta -> region) judged against its centre
     (``centres``: beta -> the centre's
@@ -374,7 +386,9 @@ def trust_steps(outcome, checks: dict[str, MotionCheck], regions: dict, centres:
 
     The predicted objective is the one the round optimised (``config``'s problem with the
     round's model, its outputs corrected as they were); CFD's is the same problem with the
-    model's outputs scaled to each motion's own CFD means.
+    model's outputs scaled to each motion's own CFD means. ``repeatability``: the share by
+    which two CFD runs of one motion differ, which relaxes the ratio by the noise of J at the
+    centre (:func:`~mfflap.optimisation.trust_region.noise_of_objective`; None: not known).
     """
     from mfflap.optimisation.output_correction import (
         CorrectionPoint,
@@ -383,7 +397,7 @@ def trust_steps(outcome, checks: dict[str, MotionCheck], regions: dict, centres:
     )
     from mfflap.optimisation.store import beta_label
     from mfflap.optimisation.study import problem_for
-    from mfflap.optimisation.trust_region import TrustStep
+    from mfflap.optimisation.trust_region import TrustStep, noise_of_objective
 
     steps = {}
     sqp = outcome.study.sqp if outcome.study is not None else {}
@@ -406,7 +420,9 @@ def trust_steps(outcome, checks: dict[str, MotionCheck], regions: dict, centres:
             region, beta, optimum, cfd_objective(centre, base),
             cfd_objective(CorrectionPoint(optimum, c.cfd_mean_thrust, c.cfd_mean_power, label,
                                           thrust_usable=c.thrust_counted), base),
-            corrected(own, centre.motion), corrected(own, optimum))
+            corrected(own, centre.motion), corrected(own, optimum),
+            0.0 if repeatability is None else noise_of_objective(
+                repeatability, beta, centre.cfd_mean_thrust, centre.cfd_mean_power))
     return steps
 
 
@@ -430,7 +446,8 @@ def _coefficients(outcome) -> dict[str, float]:
 def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out_dir: Path,
                progress: Progress = print, source: str = "", correct_outputs: bool = False,
                correction_gain: float = 1.0, refit: bool = True,
-               trust_radius: float | None = None, first_order: bool = False):
+               trust_radius: float | None = None, first_order: bool = False,
+               cfd_repeatability: float | None = None):
     """Run the main job in rounds (module docstring) into ``out_dir/round_<k>``.
 
     ``correct_outputs``: from round 2 on, each beta is optimised with the model's thrust and
@@ -445,6 +462,9 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
     of the beta (:meth:`~mfflap.optimisation.output_correction.OutputCorrection.with_slopes`)
     within :data:`~mfflap.optimisation.output_correction.SECANT_REACH` radii of the centre;
     a motion whose CFD is a neighbour's (found within the look-up's tolerance) is left out.
+    ``cfd_repeatability`` (with ``trust_radius``): the share by which two CFD runs of one
+    motion differ; the trust regions' ratios are relaxed by the noise it makes in J, and a
+    step predicted to gain less than that noise counts as settled.
 
     The back-test records of every round are kept in ``out_dir/loop_records`` (one per
     motion), pooled with the identification data of the later rounds and looked up as
@@ -462,7 +482,7 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
     from mfflap.pipeline import run_study, write_outputs
 
     check_rounds(n_rounds, tolerance, options.coefficients, correct_outputs, refit,
-                 trust_radius, first_order, correction_gain)
+                 trust_radius, first_order, correction_gain, cfd_repeatability)
     refit = refit and options.coefficients.startswith("identified:")  # case: none to refit
     records = out_dir / RECORDS_FOLDER
     base_fixtures = tuple(options.fixtures) or (fixture_dir(),)
@@ -518,7 +538,7 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
                 visited.setdefault(beta, []).append(point)
         if trust_radius is not None:
             summary.trust_steps = trust_steps(outcome, summary.checks, regions, centres,
-                                              config)
+                                              config, cfd_repeatability)
             for beta, step in summary.trust_steps.items():
                 radii[beta] = step.next_radius
                 if step.accepted and beta in points:
@@ -540,7 +560,7 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
     answers = {b: f"{p.source}: CFD mean thrust {p.cfd_mean_thrust:.4g} N, mean power "
                   f"{p.cfd_mean_power:.4g} W" for b, p in centres.items()}
     result = LoopResult(rounds, tolerance, converged, why, correct_outputs, correction_gain,
-                        refit, trust_radius, answers, first_order)
+                        refit, trust_radius, answers, first_order, cfd_repeatability)
     progress(f"rounds: {why}")
     for beta, answer in answers.items():
         progress(f"rounds: beta {beta:g}'s last motion CFD confirmed: {answer}")
@@ -580,12 +600,16 @@ def stop_reason(summary: RoundSummary, outcome, keys: set[str], seen: set[str],
         return False, (f"round {k}: {label} was not back-tested ({reason}); the next round "
                        "would not learn where the model is wrong"
                        + ("" if live else " (--live runs its CFD in OpenFOAM)"))
-    unsettled = [t for t in summary.trust_steps.values() if t.on_boundary or not t.accepted]
+    unsettled = [t for t in summary.trust_steps.values()
+                 if not t.within_noise and (t.on_boundary or not t.accepted)]
     if (summary.largest_error is not None and summary.largest_error <= tolerance
             and not unsettled):
         who = "the corrected model" if summary.corrections else "the model"
         inside = (" with every optimum inside its trust region and its step confirmed by CFD"
                   if summary.trust_steps else "")
+        if any(t.within_noise for t in summary.trust_steps.values()):
+            inside = (" with every step confirmed by CFD, its optimum inside its trust region, "
+                      "or predicted to gain less than CFD's noise")
         return True, (f"round {k}: {who} predicts every back-tested motion's CFD mean thrust "
                       f"and power within {tolerance:.0%} (largest {summary.largest_error:.1%})"
                       + inside)
@@ -653,6 +677,8 @@ def write_rounds(result: LoopResult, config: CaseConfig, out_dir: Path) -> None:
         rf.h5.attrs["trust_radius"] = np.nan if result.trust_radius is None else \
             result.trust_radius
         rf.h5.attrs["first_order"] = result.first_order
+        rf.h5.attrs["cfd_repeatability"] = np.nan if result.cfd_repeatability is None else \
+            result.cfd_repeatability
         for r in result.rounds:
             labels = list(r.checks)
             arrays = {name: np.array([getattr(r.checks[lbl], name) for lbl in labels])
@@ -673,6 +699,9 @@ def write_rounds(result: LoopResult, config: CaseConfig, out_dir: Path) -> None:
     if result.trust_radius is not None:
         learns += (f", keeps each optimum in a trust region (first radius "
                    f"{result.trust_radius:g}) about the last one CFD confirmed")
+    if result.cfd_repeatability is not None:
+        learns += (f", counts CFD's noise ({result.cfd_repeatability:.1%} of the means "
+                   "between two runs) in judging each step")
     if result.first_order:
         learns += (", and gives the corrected objective a slope that makes it CFD's at the "
                    "earlier motions near the centre")

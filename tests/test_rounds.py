@@ -608,6 +608,39 @@ def test_first_order_rounds_need_the_correction_its_measured_scales_and_a_trust_
     assert not out.exists()
 
 
+def test_a_cfd_repeatability_needs_a_trust_region_and_a_share_in_its_range(tmp_path):
+    check_rounds(3, 0.1, "identified:uniform", correct_outputs=True, trust_radius=0.25,
+                 cfd_repeatability=0.03)
+    with pytest.raises(ConfigError, match="needs --trust-region") as err:
+        check_rounds(3, 0.1, "identified:uniform", correct_outputs=True,
+                     cfd_repeatability=0.03)
+    assert err.value.key == "cfd_repeatability"
+    with pytest.raises(ConfigError, match=r"in \(0, 1\)"):
+        check_rounds(3, 0.1, "identified:uniform", correct_outputs=True, trust_radius=0.25,
+                     cfd_repeatability=3.0)
+    out = tmp_path / "run"
+    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--cfd-repeatability",
+                                   "0.03"])
+    assert res.exit_code == 2
+    assert "--cfd-repeatability applies only to rounds of CFD in the loop" in res.output
+    assert not out.exists()
+
+
+def test_a_step_within_cfds_noise_does_not_keep_the_rounds_from_converging():
+    from mfflap.optimisation.trust_region import TrustStep
+
+    done = SimpleNamespace(interrupted=None, identification={"uniform": 1}, study=object())
+    refused = _round(3, 0.05)
+    # predicted to gain 0.3 where CFD's noise is 0.8, CFD found -0.04: not a refusal
+    refused.trust_steps = {0.0: TrustStep(0.0, 0.25, "c", 0.03, False, -0.04, 0.3, -0.13,
+                                          False, 0.004)}
+    assert stop_reason(refused, done, {"b"}, {"a"}, 0.1, bounded=True) is None  # goes on
+    refused.trust_steps = {0.0: TrustStep(0.0, 0.25, "c", 0.03, False, -0.04, 0.3, 0.69,
+                                          True, 0.25, noise=0.8)}
+    converged, why = stop_reason(refused, done, {"b"}, {"a"}, 0.1, bounded=True)
+    assert converged and why.endswith("or predicted to gain less than CFD's noise")
+
+
 def _step(beta, on_boundary, next_radius=0.25):
     from mfflap.optimisation.trust_region import TrustStep
 
@@ -869,3 +902,33 @@ def test_first_order_rounds_predict_gains_at_the_boxs_corners_that_cfd_refuses(t
     with h5py.File(out / "rounds.h5") as f:
         assert f.attrs["first_order"]
     assert "a slope that makes it CFD" in (out / "rounds.html").read_text()
+
+
+@pytest.mark.slow
+def test_trust_region_rounds_that_know_cfds_noise_converge_in_round_3(tmp_path):
+    """The trust series with `--cfd-repeatability 0.03` (two runs of one motion differ by
+    2.8 % of the mean thrust, tests/test_cfd_repeatability.py): round 3's steps, which CFD
+    refused without it, were predicted to gain less than CFD's noise (beta = 0: 0.31 of J
+    against 0.84), so they settle nothing and refuse nothing, and the rounds converge with
+    every prediction within 10 % (README, "First-order corrections")."""
+    import h5py
+
+    out = tmp_path / "loop"
+    res, summary = _series(out, 6, "--correct-outputs", "--no-refit", "--trust-region",
+                           "0.25", "--cfd-repeatability", "0.03")
+    loop = summary["rounds"]
+    assert loop["converged"] and loop["cfd_repeatability"] == 0.03
+    assert [r["round"] for r in loop["rounds"]] == [1, 2, 3]
+    assert loop["stopped_because"].endswith("or predicted to gain less than CFD's noise")
+    second, third = loop["rounds"][1:]
+    assert second["trust_steps"]["0"]["accepted"] and not second["trust_steps"]["0"][
+        "within_noise"]  # 493 of J, far above the noise
+    assert second["trust_steps"]["0.5"]["within_noise"]  # 0.011 predicted, noise 0.23
+    assert third["largest_error"] < 0.1
+    b0 = third["trust_steps"]["0"]
+    assert b0["within_noise"] and 0.8 < b0["noise"] < 0.9 and b0["predicted_decrease"] < 0.4
+    assert b0["cfd_decrease"] < 0  # what refused it without the noise
+    assert "CFD's noise 0.837" in res.stderr
+    with h5py.File(out / "rounds.h5") as f:
+        assert f.attrs["cfd_repeatability"] == 0.03
+    assert "counts CFD&#x27;s noise (3.0% of the means" in (out / "rounds.html").read_text()

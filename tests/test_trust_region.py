@@ -17,11 +17,47 @@ from mfflap.optimisation.trust_region import (
     TrustRegion,
     TrustStep,
     check_radius,
+    check_repeatability,
+    noise_of_objective,
     step_ratio,
     updated_radius,
 )
 
 CASE = Path(__file__).parents[1] / "cases" / "paper2026.toml"
+
+
+def test_cfds_noise_relaxes_the_ratio_and_settles_a_step_it_cannot_judge():
+    """rho = (CFD decrease + eps) / (predicted + eps) (Sun and Nocedal's relaxation); a step
+    predicted to gain no more than eps is within CFD's noise."""
+    c = DiscreteMotion(np.ones(4), np.ones(4), 0.1)
+    optimum = DiscreteMotion(np.ones(4), np.ones(4), 0.1 * 1.1)  # inside, half the radius
+    region = TrustRegion(c, 0.2, "round 2's beta = 0")
+    # eps of J at beta = 0.5 from a CFD of 9 N and 7 W, two runs 3 % apart: 0.24
+    eps = noise_of_objective(0.03, 0.5, 9.0, -7.0)
+    assert eps == pytest.approx(0.03 * (0.5 * 9.0 + 0.5 * 7.0))
+    # predicted 0.1, CFD -0.1 (worse): refused without the noise, within it with
+    exact = TrustStep.judged(region, 0.5, optimum, 5.0, 5.1, 5.0, 4.9)
+    assert exact.ratio == pytest.approx(-1.0) and not exact.accepted
+    assert not exact.within_noise and exact.noise == 0.0
+    noisy = TrustStep.judged(region, 0.5, optimum, 5.0, 5.1, 5.0, 4.9, noise=eps)
+    assert noisy.ratio == pytest.approx((-0.1 + eps) / (0.1 + eps))
+    assert noisy.accepted and noisy.within_noise
+    assert "CFD's noise 0.24; ratio relaxed by it 0.412; within CFD's noise" in noisy.describe()
+    assert noisy.as_dict()["within_noise"] and noisy.as_dict()["noise"] == eps
+    # a gain well above the noise is judged as before: CFD's -3 for a predicted 3, refused
+    big = TrustStep.judged(region, 0.5, optimum, 5.0, 8.0, 5.0, 2.0, noise=eps)
+    assert not big.within_noise and not big.accepted
+    assert big.ratio == pytest.approx((-3 + eps) / (3 + eps))
+    with pytest.raises(ConfigError, match="noise of J") as err:
+        TrustStep.judged(region, 0.5, optimum, 5.0, 5.1, 5.0, 4.9, noise=-0.1)
+    assert err.value.key == "cfd_repeatability"
+
+
+@pytest.mark.parametrize("share", [0.0, 1.0, -0.03, math.nan, True, "0.03"])
+def test_a_repeatability_outside_zero_to_one_is_refused_by_name(share):
+    with pytest.raises(ConfigError) as err:
+        check_repeatability(share)
+    assert err.value.key == "cfd_repeatability"
 
 
 @pytest.fixture(scope="module")

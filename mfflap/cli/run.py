@@ -71,13 +71,19 @@ from mfflap.cli.json_output import echo_json
                    "thrust and power at every earlier back-tested motion of that beta, not "
                    "only at the last one (minimum-norm secant slopes: first-order modifiers "
                    "without CFD gradients).")
+@click.option("--cfd-repeatability", "cfd_repeatability", default=None, type=float,
+              help="With --trust-region: the share by which two CFD runs of one motion differ "
+                   "in their mean thrust and power (e.g. 0.03; README, 'First-order "
+                   "corrections'). Each step's ratio is relaxed by the noise it makes in the "
+                   "objective, and a step predicted to gain less than that noise counts as "
+                   "settled.")
 @click.option("--json", "as_json", is_flag=True, help="Print the key numbers as JSON.")
 def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
             backtest_fixtures: tuple[Path, ...], live: bool, coefficients: str, starts: int,
             gain_table: bool, no_ipopt: bool, within_data: bool, rounds: int,
             loop_tolerance: float, correct_outputs: bool, correction_gain: float,
             refit: bool, trust_radius: float | None, first_order: bool,
-            as_json: bool) -> None:
+            cfd_repeatability: float | None, as_json: bool) -> None:
     """Identification, sweep, optimisation, back-test and reports for CASE_FILE.
 
     Writes <out>/report.html (every figure), <out>/results.h5 (every number and the inputs)
@@ -94,14 +100,14 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
 
     if rounds == 1:
         refuse_given(("loop_tolerance", "correct_outputs", "correction_gain", "refit",
-                      "trust_radius", "first_order"),
+                      "trust_radius", "first_order", "cfd_repeatability"),
                      "rounds of CFD in the loop (--rounds 2 or more)")
     if not correct_outputs:
         refuse_given(("correction_gain",), "corrected outputs (--correct-outputs)")
     if not coefficients.startswith("identified:"):
         refuse_given(("refit",), "identified coefficients (--coefficients identified:...)")
     check_rounds(rounds, loop_tolerance, coefficients, correct_outputs, refit, trust_radius,
-                 first_order, correction_gain)
+                 first_order, correction_gain, cfd_repeatability)
     check_gain(correction_gain)
     case = load_case(case_file)
     out_dir = out_dir or Path(f"{case.study.name}_run")
@@ -114,7 +120,7 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
     if rounds > 1:
         _run_rounds(case, options, rounds, loop_tolerance, out_dir, sources_shown(fixtures),
                     as_json, correct_outputs, correction_gain, refit, trust_radius,
-                    first_order)
+                    first_order, cfd_repeatability)
         return
     outcome = run_study(case, options, progress=lambda m: click.echo(m, err=True))
     write_outputs(outcome.config or case, outcome, out_dir / "results.h5",
@@ -140,7 +146,8 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
 def _run_rounds(case, options, rounds: int, tolerance: float, out_dir: Path, source: str,
                 as_json: bool, correct_outputs: bool = False,
                 correction_gain: float = 1.0, refit: bool = True,
-                trust_radius: float | None = None, first_order: bool = False) -> None:
+                trust_radius: float | None = None, first_order: bool = False,
+                cfd_repeatability: float | None = None) -> None:
     """``--rounds`` > 1: :func:`mfflap.rounds.run_rounds` and what it wrote."""
     from mfflap.rounds import run_rounds
 
@@ -148,7 +155,8 @@ def _run_rounds(case, options, rounds: int, tolerance: float, out_dir: Path, sou
                                  progress=lambda m: click.echo(m, err=True), source=source,
                                  correct_outputs=correct_outputs,
                                  correction_gain=correction_gain, refit=refit,
-                                 trust_radius=trust_radius, first_order=first_order)
+                                 trust_radius=trust_radius, first_order=first_order,
+                                 cfd_repeatability=cfd_repeatability)
     if outcome is not None and outcome.interrupted is not None:
         click.echo(f"interrupted in round {len(result.rounds)} ({outcome.interrupted}): "
                    f"{out_dir / 'rounds.html'} holds the rounds so far; the same command runs "

@@ -35,6 +35,20 @@ again); rho > :data:`GROW_RATIO` with u on the boundary: it doubles (at most
 :data:`MAX_RADIUS`). An optimum that did not leave
 the centre (within :data:`NO_STEP_SHARE` of the radius) made no step: nothing to judge, the
 centre and the radius stay.
+
+CFD's noise. Two runs of one motion differ (README, "First-order corrections": 2.8 % of the
+last cycle's mean thrust). Where that repeatability is known, as a share e of the means, the
+noise of J at the centre is
+
+    eps_J = e ((1 - beta) |F_bar_CFD(c)| + beta |P_bar_CFD(c)|),
+
+the ratio is relaxed by it (Sun and Nocedal 2023: a term proportional to the noise level in
+numerator and denominator),
+
+    rho = (J_CFD(c) - J_CFD(u) + eps_J) / (J_pred(c) - J_pred(u) + eps_J),
+
+and a step predicted to gain no more than eps_J is within CFD's noise: one run can neither
+confirm nor refuse it, and the rounds count it as settled.
 """
 
 from __future__ import annotations
@@ -84,6 +98,22 @@ def control_scales(motion) -> np.ndarray:
     peak_heave = max(float(np.max(np.abs(np.real(motion.heave_acceleration)))), 1e-3)
     return np.concatenate([np.full(n, peak_pitch), np.full(n, peak_heave),
                            [float(np.real(motion.time_step))]])
+
+
+def check_repeatability(share: float, key: str = "cfd_repeatability") -> None:
+    """Refuse a CFD repeatability that is not a share in (0, 1)
+    (:class:`~mfflap.errors.ConfigError` naming ``key``)."""
+    if not (isinstance(share, int | float) and not isinstance(share, bool)
+            and math.isfinite(share) and 0 < share < 1):
+        raise ConfigError("CFD's repeatability is the share by which two runs of one motion "
+                          f"differ in their means, in (0, 1) (e.g. 0.03), got {share!r}",
+                          key=key)
+
+
+def noise_of_objective(share: float, beta: float, cfd_mean_thrust: float,
+                       cfd_mean_power: float) -> float:
+    """eps_J = share ((1 - beta) |F_bar| + beta |P_bar|) of CFD's means (module docstring)."""
+    return float(share) * ((1 - beta) * abs(cfd_mean_thrust) + beta * abs(cfd_mean_power))
 
 
 @dataclass(frozen=True)
@@ -195,6 +225,7 @@ class TrustStep:
     ratio : rho, their ratio
     accepted : whether the optimum becomes the next centre
     next_radius : the radius of the next round
+    noise : eps_J, CFD's noise of J at the centre (0: not known; module docstring)
     """
 
     beta: float
@@ -207,22 +238,41 @@ class TrustStep:
     ratio: float
     accepted: bool
     next_radius: float
+    noise: float = 0.0
 
     @classmethod
     def judged(cls, region: TrustRegion, beta: float, optimum, cfd_centre: float,
-               cfd_optimum: float, predicted_centre: float, predicted_optimum: float
-               ) -> TrustStep:
+               cfd_optimum: float, predicted_centre: float, predicted_optimum: float,
+               noise: float = 0.0) -> TrustStep:
         """The step from ``region``'s centre to ``optimum`` (a motion), from the objective J
-        of CFD and the predicted one (module docstring) at both."""
+        of CFD and the predicted one (module docstring) at both; ``noise``: eps_J, which
+        relaxes the ratio (0: CFD taken as exact).
+
+        Raises
+        ------
+        ConfigError
+            ``noise`` negative or not finite.
+        """
+        if not (math.isfinite(noise) and noise >= 0):
+            raise ConfigError(f"CFD's noise of J must be finite and >= 0, got {noise!r}",
+                              key="cfd_repeatability")
         cfd = float(cfd_centre) - float(cfd_optimum)
         predicted = float(predicted_centre) - float(predicted_optimum)
         fraction = region.step_fraction(optimum)
         if fraction < NO_STEP_SHARE:  # no step: the ratio of two round-offs means nothing
             return cls(float(beta), region.radius, region.source, fraction, False, cfd,
-                       predicted, math.nan, True, region.radius)
-        rho, edge = step_ratio(cfd, predicted), region.on_boundary(optimum)
+                       predicted, math.nan, True, region.radius, float(noise))
+        rho = step_ratio(cfd + noise, predicted + noise)
+        edge = region.on_boundary(optimum)
         return cls(float(beta), region.radius, region.source, fraction, edge, cfd, predicted,
-                   rho, accepted(rho), updated_radius(region.radius, rho, edge, fraction))
+                   rho, accepted(rho), updated_radius(region.radius, rho, edge, fraction),
+                   float(noise))
+
+    @property
+    def within_noise(self) -> bool:
+        """Whether the step was predicted to gain no more than CFD's noise (known noise
+        only): one run can neither confirm nor refuse it."""
+        return self.noise > 0 and self.predicted_decrease <= self.noise
 
     @property
     def moved(self) -> bool:
@@ -240,7 +290,8 @@ class TrustStep:
                 "cfd_decrease": self.cfd_decrease,
                 "predicted_decrease": self.predicted_decrease,
                 "ratio": self.ratio if math.isfinite(self.ratio) else str(self.ratio),
-                "accepted": self.accepted, "next_radius": self.next_radius}
+                "accepted": self.accepted, "next_radius": self.next_radius,
+                "noise": self.noise, "within_noise": self.within_noise}
 
 
 def describe_step(step: dict) -> str:
@@ -250,10 +301,14 @@ def describe_step(step: dict) -> str:
                 "centre is the optimum); centre and radius kept")
     ratio = float(step["ratio"])
     where = "on the boundary" if step["on_boundary"] else "inside"
+    noise = step.get("noise", 0.0)
     return (f"trust region {step['radius']:.3g} about {step['centre']}: step "
             f"{step['step_fraction']:.2f} of it ({where}); CFD decreased J by "
             f"{step['cfd_decrease']:.4g}, predicted {step['predicted_decrease']:.4g} "
-            f"(ratio {ratio:.3g}): {'accepted' if step['accepted'] else 'rejected'}, "
+            + (f"(ratio {ratio:.3g}" if not noise else
+               f"(CFD's noise {noise:.3g}; ratio relaxed by it {ratio:.3g}")
+            + ("; within CFD's noise" if step.get("within_noise") else "")
+            + f"): {'accepted' if step['accepted'] else 'rejected'}, "
             f"next radius {step['next_radius']:.3g}")
 
 
@@ -269,8 +324,10 @@ __all__ = [
     "TrustStep",
     "accepted",
     "check_radius",
+    "check_repeatability",
     "control_scales",
     "describe_step",
+    "noise_of_objective",
     "step_ratio",
     "updated_radius",
 ]
