@@ -839,7 +839,7 @@ def test_rounds_in_a_trust_region_take_the_steps_cfd_confirms_until_one_collapse
 
 
 @pytest.mark.slow
-def test_first_order_rounds_predict_gains_at_the_boxs_corners_that_cfd_refuses(tmp_path):
+def test_first_order_rounds_predict_gains_on_the_boxs_faces_that_cfd_refuses(tmp_path):
     """`--rounds 5 --correct-outputs --no-refit --trust-region 0.25 --first-order` on the
     shipped fixtures (rounds 3-5 back-tested in real OpenFOAM, backtest_first_order; rounds
     1-2 are the trust series'): from round 3 on the corrected objective meets CFD's at the
