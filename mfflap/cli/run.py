@@ -66,11 +66,11 @@ from mfflap.cli.json_output import echo_json
                    "back-tests confirm the predicted gains (trust-region modifier "
                    "adaptation).")
 @click.option("--first-order", is_flag=True, default=False,
-              help="With --correct-outputs and --trust-region: give each beta's output "
-                   "correction slopes too, so that the corrected model meets CFD's mean "
-                   "thrust and power at every earlier back-tested motion of that beta, not "
-                   "only at the last one (minimum-norm secant slopes: first-order modifiers "
-                   "without CFD gradients).")
+              help="With --correct-outputs and --trust-region: give each beta's corrected "
+                   "objective a slope too, so that it is CFD's objective at the earlier "
+                   "back-tested motions of that beta near the centre, not only at the "
+                   "centre (a minimum-norm secant slope: a first-order modifier without CFD "
+                   "gradients).")
 @click.option("--cfd-repeatability", "cfd_repeatability", default=None, type=float,
               help="With --trust-region: the share by which two CFD runs of one motion differ "
                    "in their mean thrust and power (e.g. 0.03; README, 'First-order "
