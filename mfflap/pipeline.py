@@ -54,8 +54,8 @@ class RunOptions:
     #: :meth:`~mfflap.optimisation.output_correction.OutputCorrection.filtered`)
     correction_gain: float = 1.0
     #: beta -> earlier motions of that beta with their CFD means
-    #: (:class:`~mfflap.optimisation.output_correction.CorrectionPoint`): its output
-    #: corrected objective (``correct_at``) gets a slope that makes it CFD's there too
+    #: (:class:`~mfflap.optimisation.output_correction.CorrectionPoint`): its corrected
+    #: objective (``correct_at``) gets a slope that makes it CFD's there too
     #: (:meth:`~mfflap.optimisation.output_correction.OutputCorrection.with_slopes`; the
     #: rounds' ``--first-order``)
     secant_at: dict = field(default_factory=dict)

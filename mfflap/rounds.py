@@ -293,7 +293,7 @@ def check_rounds(n_rounds: int, tolerance: float, coefficients: str,
                                             ("--trust-region", trust_radius is not None))
                    if not given]
         if missing:
-            raise ConfigError("--first-order adds slopes to the output correction, which "
+            raise ConfigError("--first-order gives the corrected objective a slope, which "
                               "without a trust region would lead the optimiser off along a "
                               f"secant; it needs {' and '.join(missing)}", key="first_order")
         if correction_gain != 1.0:
