@@ -11,9 +11,11 @@ separates the difference into the forces (README, "First-order corrections").
 """
 
 import numpy as np
+import pytest
 
 from mfflap.backtest.compare import compare_last_cycle
 from mfflap.campaign.records import fixture_dir, read_record
+from mfflap.errors import ConfigError
 from mfflap.hydro import MorisonModel
 
 
@@ -45,3 +47,61 @@ def test_two_runs_of_one_motion_agree_early_and_part_in_the_last_cycle():
     # the last cycle's means, what the rounds compare, 2-3 % apart
     assert 0.02 < abs(thrust[1] - thrust[0]) / np.mean(thrust) < 0.04
     assert 0.01 < abs(power[1] - power[0]) / np.mean(power) < 0.03
+
+
+def test_the_repeatability_of_the_two_runs_is_their_spread_of_last_cycle_means():
+    from mfflap.backtest.repeat import repeatability_of
+
+    a, b = _runs()
+    rep = repeatability_of([a, b], "β = 0.5", MorisonModel(), a.parameters["period"], 50.0)
+    direct = [compare_last_cycle(r, MorisonModel(), a.parameters["period"], 50.0)
+              for r in (a, b)]
+    thrust = [d.cfd_mean_thrust for d in direct]
+    assert list(rep.mean_thrust) == thrust
+    assert rep.thrust_spread == pytest.approx(abs(thrust[1] - thrust[0]) / np.mean(thrust))
+    assert 0.02 < rep.thrust_spread < 0.04 and 0.01 < rep.power_spread < 0.03
+    assert rep.share == rep.thrust_spread and rep.key == "4a429ce3a09cada1"
+    assert rep.describe().startswith("β = 0.5: 2 runs, mean thrust 8.802, 9.05 N (spread 2.78%)")
+    assert rep.as_dict()["share"] == rep.share
+
+
+def test_a_repeatability_needs_two_runs_of_one_motion():
+    from mfflap.backtest.repeat import repeatability_of
+    from mfflap.campaign.records import backtest_fixture_dirs, record_paths
+
+    a, _ = _runs()
+    with pytest.raises(ConfigError, match="two runs or more") as err:
+        repeatability_of([a], "x", MorisonModel(), 1.0, 50.0)
+    assert err.value.key == "repeat"
+    other = read_record(next(p for p in record_paths(backtest_fixture_dirs()[0])))
+    with pytest.raises(ConfigError, match="different motions"):
+        repeatability_of([a, other], "x", MorisonModel(), 1.0, 50.0)
+
+
+def test_each_copy_differs_in_its_first_time_step_alone():
+    from dataclasses import asdict
+
+    from mfflap.backtest.repeat import REPEAT_PERTURBATION, copy_settings
+    from mfflap.cfd.openfoam.writer import SolverSettings
+
+    base = SolverSettings(max_courant=2.0)
+    assert copy_settings(base, 0) == base
+    second = copy_settings(base, 2)
+    assert second.initial_time_step == base.initial_time_step * (1 + 2 * REPEAT_PERTURBATION)
+    changed = {k for k, v in asdict(second).items() if asdict(base)[k] != v}
+    assert changed == {"initial_time_step"}
+    assert copy_settings(None, 1).initial_time_step == pytest.approx(
+        SolverSettings().initial_time_step * (1 + REPEAT_PERTURBATION), rel=1e-15)
+
+
+def test_repeat_needs_live_runs_and_two_copies(tmp_path, optimisation_file):
+    from click.testing import CliRunner
+
+    from mfflap.cli.main import cli
+
+    res = CliRunner().invoke(cli, ["backtest", str(optimisation_file), "--repeat", "3"])
+    assert res.exit_code == 2 and "--repeat applies only to live runs" in res.output
+    res = CliRunner().invoke(cli, ["backtest", str(optimisation_file), "--live", "--repeat",
+                                   "1", "--work", str(tmp_path / "w")])
+    assert res.exit_code == 2 and "must be 2 or more runs" in res.output
+    assert not (tmp_path / "w").exists()

@@ -27,11 +27,16 @@ from mfflap.cli.options import mesh_and_setup_options, refuse_given
               help="Back-test only this motion: 'best sinusoid' or a beta ('0', '0.5' or "
                    "'β = 0'); repeat for several (default: every motion).")
 @mesh_and_setup_options(" of live runs")
+@click.option("--repeat", "repeat", type=int, default=None,
+              help="With --live: run each motion this many times (2 or more), each copy's "
+                   "first time step a millionth apart, and print how far their last-cycle "
+                   "mean thrust and power spread: CFD's repeatability, which mfflap run "
+                   "--cfd-repeatability takes.")
 @click.option("--json", "as_json", is_flag=True)
 def backtest(optimisation_file: Path, live: bool, work_dir: Path,
              fixture_folders: tuple[Path, ...], save_to: Path | None, only: tuple[str, ...],
              mesh: str | None, setup_name: str | None, wall_treatment: str | None,
-             as_json: bool) -> None:
+             repeat: int | None, as_json: bool) -> None:
     """Back-test the optimised motions (and the best sinusoid) of OPTIMISATION_FILE.
 
     Ctrl-C stops the run in flight and shows the motions back-tested before it. The exit
@@ -46,7 +51,8 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
     from mfflap.results import ResultsFile
 
     if not live:  # the fixtures' runs are read as they were made
-        refuse_given(("work_dir", "save_to", "mesh", "setup_name", "wall_treatment"),
+        refuse_given(("work_dir", "save_to", "mesh", "setup_name", "wall_treatment",
+                      "repeat"),
                      "live runs (--live); without it the back-test reads CFD records "
                      "(--fixtures), run on the mesh and set-up they were made with")
     spec, solver = mesh_and_solver(mesh, setup_name, wall_treatment)
@@ -67,6 +73,9 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
     motions = _chosen(motions, only)
     click.echo("model: the coefficients the motions were optimised with, " + ", ".join(
         f"{k} {v:.3g}" for k, v in model.coefficients.items()), err=True)
+    if repeat is not None:
+        _repeat(case, motions, model, repeat, work_dir, save_to, spec.name, solver, as_json)
+        return
     folders = list(fixture_folders) or backtest_fixture_dirs()
     outcomes: dict = {}
     interrupted = None
@@ -94,6 +103,33 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
         click.echo(f"exit status 1: {len(missing)} of {len(outcomes)} motions not "
                    f"back-tested ({', '.join(missing)})", err=True)
         raise SystemExit(1)
+
+
+def _repeat(case, motions: dict, model, copies: int, work_dir: Path, save_to: Path | None,
+            mesh: str, solver, as_json: bool) -> None:
+    """``--repeat``: each motion's copies (:func:`mfflap.backtest.repeat.repeat_runs`)."""
+    from mfflap.backtest.repeat import repeat_runs
+    from mfflap.cfd.openfoam.case_path import check_case_path
+
+    if copies < 2:
+        raise click.BadParameter(f"must be 2 or more runs, got {copies}",
+                                 param_hint="--repeat")
+    check_case_path(work_dir)
+    found = {}
+    for label, motion in motions.items():
+        found[label] = repeat_runs(
+            motion, label, model, case.optimisation.max_power, copies=copies,
+            work_dir=work_dir, save_to=save_to, mesh=mesh, solver=solver, plate=case.plate,
+            fluid=case.fluid, stream=case.flow,
+            progress=lambda m, label=label: click.echo(f"repeat {label}: {m}", err=True))
+    if as_json:
+        echo_json({"repeatability": {label: r.as_dict() for label, r in found.items()}})
+        return
+    for r in found.values():
+        click.echo(r.describe())
+    worst = max(found.values(), key=lambda r: r.share)
+    click.echo(f"CFD's repeatability: {worst.share:.2%} ({worst.label}); mfflap run "
+               f"--cfd-repeatability {worst.share:.3g}")
 
 
 def _chosen(motions: dict, only: tuple[str, ...]) -> dict:

@@ -1,0 +1,180 @@
+"""How far CFD repeats itself: one motion run several times, each a hair apart.
+
+Two OpenFOAM runs of one optimised motion whose controlDicts differed only in the 13th digit
+of endTime and writeInterval took different time steps and parted in the flow's vortex
+shedding: the last cycle's mean thrust 2.8 % apart (README, "First-order corrections";
+``tests/test_cfd_repeatability.py``). That spread is the noise under every back-test's
+comparison and every trust-region step the rounds judge (``mfflap run
+--cfd-repeatability``).
+
+:func:`repeat_runs` measures it: copy k of a motion runs with the first time step
+multiplied by 1 + k :data:`REPEAT_PERTURBATION` (copy 0: the settings as given), everything
+else the same, and :func:`repeatability_of` compares the copies' last-cycle means. The
+perturbation is far below anything the flow could resolve; whatever the copies differ by
+beyond it is the flow's own sensitivity (a deterministic solver run twice on bit-identical
+input repeats itself; copies of an ordered, periodic flow agree to round-off).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from mfflap.errors import ConfigError
+
+#: the relative change of the first time step between two copies
+REPEAT_PERTURBATION = 1e-6
+
+
+@dataclass(frozen=True)
+class Repeatability:
+    """The last-cycle CFD means of several runs of one motion.
+
+    Attributes
+    ----------
+    label, key : the motion's label and key
+    mean_thrust : N, one per run
+    mean_power : W, one per run
+    sources : where each run comes from (a record's name and how it was had)
+    """
+
+    label: str
+    key: str
+    mean_thrust: np.ndarray
+    mean_power: np.ndarray
+    sources: tuple[str, ...]
+
+    @staticmethod
+    def _spread(values: np.ndarray) -> float:
+        centre = abs(float(np.mean(values)))
+        return float(np.ptp(values)) / centre if centre > 0 else float("inf")
+
+    @property
+    def thrust_spread(self) -> float:
+        """(largest - smallest) / |mean| of the runs' mean thrust."""
+        return self._spread(self.mean_thrust)
+
+    @property
+    def power_spread(self) -> float:
+        """(largest - smallest) / |mean| of the runs' mean power."""
+        return self._spread(self.mean_power)
+
+    @property
+    def share(self) -> float:
+        """The larger spread: what ``mfflap run --cfd-repeatability`` takes."""
+        return max(self.thrust_spread, self.power_spread)
+
+    def describe(self) -> str:
+        """One line: the runs' means and their spreads."""
+        return (f"{self.label}: {len(self.sources)} runs, mean thrust "
+                + ", ".join(f"{t:.4g}" for t in self.mean_thrust)
+                + f" N (spread {self.thrust_spread:.2%}), mean power "
+                + ", ".join(f"{p:.4g}" for p in self.mean_power)
+                + f" W (spread {self.power_spread:.2%})")
+
+    def as_dict(self) -> dict:
+        """JSON-friendly."""
+        return {"label": self.label, "motion_key": self.key,
+                "mean_thrust": [float(t) for t in self.mean_thrust],
+                "mean_power": [float(p) for p in self.mean_power],
+                "thrust_spread": self.thrust_spread, "power_spread": self.power_spread,
+                "share": self.share, "sources": list(self.sources)}
+
+
+def repeatability_of(records: Sequence, label: str, model, period: float,
+                     max_power: float) -> Repeatability:
+    """Compare the last cycles of ``records`` (:class:`~mfflap.campaign.records.CfdRecord`
+    of one motion) as the back-test does (:func:`~mfflap.backtest.compare.compare_last_cycle`).
+
+    Raises
+    ------
+    ConfigError
+        Fewer than two records, or records of different motions (key ``repeat``).
+    """
+    from mfflap.backtest.compare import compare_last_cycle
+
+    if len(records) < 2:
+        raise ConfigError(f"a repeatability needs two runs or more, got {len(records)}",
+                          key="repeat")
+    keys = {r.parameters.get("motion_key") for r in records}
+    if len(keys) != 1:
+        raise ConfigError(f"the runs compared are of different motions: {sorted(map(str, keys))}",
+                          key="repeat")
+    means = [compare_last_cycle(r, model, period, max_power) for r in records]
+    return Repeatability(label, str(keys.pop()),
+                         np.array([m.cfd_mean_thrust for m in means]),
+                         np.array([m.cfd_mean_power for m in means]),
+                         tuple(r.name for r in records))
+
+
+def copy_settings(solver, copy: int):
+    """The solver settings of copy ``copy`` (module docstring; copy 0: ``solver`` itself)."""
+    from mfflap.cfd.openfoam.writer import SolverSettings
+
+    base = solver or SolverSettings()
+    return replace(base, initial_time_step=base.initial_time_step
+                   * (1 + copy * REPEAT_PERTURBATION))
+
+
+def repeat_runs(motion, label: str, model, max_power: float, *, copies: int,
+                work_dir: str | Path, save_to: str | Path | None = None, n_cycles: float = 3.0,
+                mesh: str = "coarse", solver=None, plate=None, fluid=None, stream=None,
+                progress: Callable[[str], None] | None = None) -> Repeatability:
+    """Run ``motion`` ``copies`` times in OpenFOAM (module docstring) and compare them.
+
+    ``mesh``, ``solver``, ``plate``, ``fluid`` and ``stream`` as for a live back-test
+    (:func:`~mfflap.backtest.run.backtest_motion`). Each copy is a case
+    ``work_dir/backtest_<key>_copy<k>`` (a killed run resumes there) and,
+    with ``save_to``, a record ``backtest_<key>_copy<k>.h5`` there, which a later call takes
+    instead of running the copy again.
+
+    Raises
+    ------
+    ConfigError
+        ``copies`` below 2.
+    MfflapError
+        A copy's run failed (the copies before it are kept).
+    """
+    from mfflap.backtest.run import cfd_motion, motion_key
+    from mfflap.campaign.openfoam_run import run_motion
+    from mfflap.campaign.records import read_record, write_record
+
+    if not (isinstance(copies, int) and copies >= 2):
+        raise ConfigError(f"--repeat must be 2 or more runs, got {copies!r}", key="repeat")
+    key = motion_key(motion)
+    spline = cfd_motion(motion)
+    period = spline.period
+    records = []
+    for k in range(copies):
+        name = f"backtest_{key}_copy{k}"
+        saved = None if save_to is None else Path(save_to) / f"{name}.h5"
+        settings = replace(copy_settings(solver, k), write_interval=n_cycles * period / 4)
+        if saved is not None and saved.is_file():
+            record = read_record(saved)
+            first = float(record.provenance.get("solver_initial_time_step", float("nan")))
+            if np.isclose(first, settings.initial_time_step, rtol=1e-12, atol=0):
+                if progress is not None:
+                    progress(f"copy {k} of {copies}: taken from {saved}")
+                records.append(record)
+                continue
+        if progress is not None:
+            progress(f"copy {k} of {copies}: first time step "
+                     f"{settings.initial_time_step!r} s")
+        params = {"kind": "periodic_spline", "label": label, "period": period,
+                  "n_steps": motion.n_steps, "ramp_time": 0.5 * period, "n_cycles": n_cycles,
+                  "motion_key": key, "copy": k}
+        record = run_motion(Path(work_dir) / name, spline, name, params, n_cycles * period,
+                            mesh=mesh, ramp_time=0.5 * period, plate=plate, fluid=fluid,
+                            stream=stream, solver=settings,
+                            progress=progress)
+        if saved is not None:
+            write_record(saved, record, single_precision=True)
+        records.append(record)
+    return repeatability_of(records, label, model, period, max_power)
+
+
+__all__ = ["REPEAT_PERTURBATION", "Repeatability", "copy_settings", "repeat_runs",
+           "repeatability_of"]
