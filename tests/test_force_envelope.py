@@ -67,24 +67,36 @@ def test_a_heaving_plate_is_bounded_by_added_mass_and_drag_over_the_convective_t
 
 def test_every_real_run_that_kept_its_numerics_stays_inside_the_bound():
     """All shipped fixtures and real test records, bursts bridged, but those above (the
-    shipped fixtures are reruns of the lost ones)."""
+    shipped fixtures are reruns of the lost ones); the optimised motions' back-tests apart
+    from the runs of prescribed motions."""
     folders = [p for p in (ROOT / "mfflap" / "data" / "fixtures").iterdir() if p.is_dir()]
-    records = [r for f in folders for r in read_records(f)]
-    records += [read_record(p) for p in sorted((ROOT / "tests" / "data").rglob("*.h5"))
-                if p.parent.name not in ("bursts", "lost_numerics")]
-    assert len(records) > 100
-    worst = []
-    for rec in records:
-        if rec.name == AFTERMATH:
-            continue
-        loads, _ = bridge_load_bursts(rec.loads, rec.time >= 0)
-        plate = Plate(chord=rec.provenance.get("chord_m", PLATE.chord),
-                      span=rec.provenance.get("span_m", PLATE.span))
-        worst.append(float(envelope_ratio(rec.state, loads, plate, FLUID, STREAM).max()))
+    optimised = [r for f in folders if f.name.startswith(("backtest", "cfd_repeatability"))
+                 for r in read_records(f)]
+    prescribed = [r for f in folders if not f.name.startswith(("backtest", "cfd_repeatability"))
+                  for r in read_records(f)]
+    prescribed += [read_record(p) for p in sorted((ROOT / "tests" / "data").rglob("*.h5"))
+                   if p.parent.name not in ("bursts", "lost_numerics")]
+    assert len(optimised) > 50 and len(prescribed) > 100
+
+    def worst(records):
+        out = []
+        for rec in records:
+            if rec.name == AFTERMATH:
+                continue
+            loads, _ = bridge_load_bursts(rec.loads, rec.time >= 0)
+            plate = Plate(chord=rec.provenance.get("chord_m", PLATE.chord),
+                          span=rec.provenance.get("span_m", PLATE.span))
+            out.append(float(envelope_ratio(rec.state, loads, plate, FLUID, STREAM).max()))
+        return np.array(out)
+
+    by_motion, by_optimum = worst(prescribed), worst(optimised)
     # the closest real run (f = 2 Hz, h = 0.5 m) comes within a factor of about 1.1 of the
-    # breach level; the typical run uses about a third of the bound
-    assert max(worst) < BREACH_FACTOR
-    assert np.median(worst) < 0.5
+    # breach level; a run of a prescribed motion (identification grid, small motions, test
+    # records) typically uses a third of the bound, an optimised motion, which runs at P_max,
+    # about 85 % of it
+    assert max(by_motion.max(), by_optimum.max()) < BREACH_FACTOR
+    assert np.median(by_motion) < 0.4
+    assert 0.7 < np.median(by_optimum) < 1.0
 
 
 def test_shipped_runs_that_lost_their_numerics_are_found_where_bursts_are_not():

@@ -935,3 +935,23 @@ def test_trust_region_rounds_that_know_cfds_noise_converge_in_round_3(tmp_path):
     with h5py.File(out / "rounds.h5") as f:
         assert f.attrs["cfd_repeatability"] == 0.03
     assert "counts CFD&#x27;s noise (3.0% of the means" in (out / "rounds.html").read_text()
+    # the repeatability of round 2's beta = 0 optimum, from its three shipped copies (taken,
+    # not run again: `--repeat` finds them in --save-to)
+    import json
+    import shutil
+
+    from mfflap.campaign.records import fixture_dir
+
+    saved = tmp_path / "copies"
+    shutil.copytree(fixture_dir("cfd_repeatability"), saved)
+    rep = CliRunner().invoke(cli, ["backtest", str(out / "round_2" / "results.h5"), "--live",
+                                   "--repeat", "3", "--motion", "0", "--save-to", str(saved),
+                                   "--work", str(tmp_path / "w"), "--json"])
+    assert rep.exit_code == 0, rep.output
+    assert rep.stderr.count("taken from") == 3 and "pimpleFoam" not in rep.stderr
+    found = json.loads(rep.stdout[rep.stdout.index("{"):])["repeatability"]["β = 0"]
+    assert found["motion_key"] == "f85edc06d9cf46a0" and len(found["mean_thrust"]) == 3
+    assert found["mean_thrust"][0] == pytest.approx(27.894, abs=1e-3)  # the series' own run
+    # copies 1 and 2 (every time step a millionth longer, two millionths) part from copy 0:
+    # thrust 27.89, 28.05, 28.09 N, power 43.69, 43.76, 44.08 W
+    assert 0.005 < found["thrust_spread"] < 0.01 and 0.005 < found["power_spread"] < 0.012

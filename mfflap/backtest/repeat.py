@@ -7,12 +7,14 @@ shedding: the last cycle's mean thrust 2.8 % apart (README, "First-order correct
 comparison and every trust-region step the rounds judge (``mfflap run
 --cfd-repeatability``).
 
-:func:`repeat_runs` measures it: copy k of a motion runs with the first time step
-multiplied by 1 + k :data:`REPEAT_PERTURBATION` (copy 0: the settings as given), everything
-else the same, and :func:`repeatability_of` compares the copies' last-cycle means. The
-perturbation is far below anything the flow could resolve; whatever the copies differ by
-beyond it is the flow's own sensitivity (a deterministic solver run twice on bit-identical
-input repeats itself; copies of an ordered, periodic flow agree to round-off).
+:func:`repeat_runs` measures it: copy k of a motion runs with the Courant limit multiplied
+by 1 + k :data:`REPEAT_PERTURBATION` (copy 0: the settings as given), everything else the
+same, and :func:`repeatability_of` compares the copies' last-cycle means. Every time step of
+copy k is then that much longer: a change far below anything the flow could resolve, so
+whatever the copies differ by beyond it is the flow's own sensitivity. (pimpleFoam run twice
+on the same case repeats itself bit for bit, and a first time step perturbed alone is not a
+probe: the solver resets it from the Courant number at the start, which cancels it; both
+were found running this module, ``tests/test_cfd_repeatability.py``.)
 """
 
 from __future__ import annotations
@@ -25,7 +27,7 @@ import numpy as np
 
 from mfflap.errors import ConfigError
 
-#: the relative change of the first time step between two copies
+#: the relative change of the Courant limit (so of every time step) between two copies
 REPEAT_PERTURBATION = 1e-6
 
 
@@ -115,8 +117,7 @@ def copy_settings(solver, copy: int):
     from mfflap.cfd.openfoam.writer import SolverSettings
 
     base = solver or SolverSettings()
-    return replace(base, initial_time_step=base.initial_time_step
-                   * (1 + copy * REPEAT_PERTURBATION))
+    return replace(base, max_courant=base.max_courant * (1 + copy * REPEAT_PERTURBATION))
 
 
 def repeat_runs(motion, label: str, model, max_power: float, *, copies: int,
@@ -154,15 +155,14 @@ def repeat_runs(motion, label: str, model, max_power: float, *, copies: int,
         settings = replace(copy_settings(solver, k), write_interval=n_cycles * period / 4)
         if saved is not None and saved.is_file():
             record = read_record(saved)
-            first = float(record.provenance.get("solver_initial_time_step", float("nan")))
-            if np.isclose(first, settings.initial_time_step, rtol=1e-12, atol=0):
+            limit = float(record.provenance.get("solver_max_courant", float("nan")))
+            if np.isclose(limit, settings.max_courant, rtol=1e-12, atol=0):
                 if progress is not None:
                     progress(f"copy {k} of {copies}: taken from {saved}")
                 records.append(record)
                 continue
         if progress is not None:
-            progress(f"copy {k} of {copies}: first time step "
-                     f"{settings.initial_time_step!r} s")
+            progress(f"copy {k} of {copies}: Courant limit {settings.max_courant!r}")
         params = {"kind": "periodic_spline", "label": label, "period": period,
                   "n_steps": motion.n_steps, "ramp_time": 0.5 * period, "n_cycles": n_cycles,
                   "motion_key": key, "copy": k}

@@ -29,7 +29,7 @@ from mfflap.cli.options import mesh_and_setup_options, refuse_given
 @mesh_and_setup_options(" of live runs")
 @click.option("--repeat", "repeat", type=int, default=None,
               help="With --live: run each motion this many times (2 or more), each copy's "
-                   "first time step a millionth apart, and print how far their last-cycle "
+                   "Courant limit a millionth apart, and print how far their last-cycle "
                    "mean thrust and power spread: CFD's repeatability, which mfflap run "
                    "--cfd-repeatability takes.")
 @click.option("--json", "as_json", is_flag=True)
