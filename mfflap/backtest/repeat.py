@@ -139,37 +139,32 @@ def repeat_runs(motion, label: str, model, max_power: float, *, copies: int,
     MfflapError
         A copy's run failed (the copies before it are kept).
     """
-    from mfflap.backtest.run import cfd_motion, motion_key
-    from mfflap.campaign.openfoam_run import run_motion
+    from mfflap.backtest.run import cfd_motion, motion_key, run_backtest_case
     from mfflap.campaign.records import read_record, write_record
 
     if not (isinstance(copies, int) and copies >= 2):
         raise ConfigError(f"--repeat must be 2 or more runs, got {copies!r}", key="repeat")
     key = motion_key(motion)
-    spline = cfd_motion(motion)
-    period = spline.period
+    period = cfd_motion(motion).period
     records = []
     for k in range(copies):
         name = f"backtest_{key}_copy{k}"
         saved = None if save_to is None else Path(save_to) / f"{name}.h5"
-        settings = replace(copy_settings(solver, k), write_interval=n_cycles * period / 4)
+        limit = copy_settings(solver, k).max_courant
         if saved is not None and saved.is_file():
             record = read_record(saved)
-            limit = float(record.provenance.get("solver_max_courant", float("nan")))
-            if np.isclose(limit, settings.max_courant, rtol=1e-12, atol=0):
+            had = float(record.provenance.get("solver_max_courant", float("nan")))
+            if np.isclose(had, limit, rtol=1e-12, atol=0):
                 if progress is not None:
                     progress(f"copy {k} of {copies}: taken from {saved}")
                 records.append(record)
                 continue
         if progress is not None:
-            progress(f"copy {k} of {copies}: Courant limit {settings.max_courant!r}")
-        params = {"kind": "periodic_spline", "label": label, "period": period,
-                  "n_steps": motion.n_steps, "ramp_time": 0.5 * period, "n_cycles": n_cycles,
-                  "motion_key": key, "copy": k}
-        record = run_motion(Path(work_dir) / name, spline, name, params, n_cycles * period,
-                            mesh=mesh, ramp_time=0.5 * period, plate=plate, fluid=fluid,
-                            stream=stream, solver=settings,
-                            progress=progress)
+            progress(f"copy {k} of {copies}: Courant limit {limit!r}")
+        record = run_backtest_case(motion, label, name, work_dir=work_dir, n_cycles=n_cycles,
+                                   mesh=mesh, solver=copy_settings(solver, k), plate=plate,
+                                   fluid=fluid, stream=stream, progress=progress,
+                                   parameters={"copy": k})
         if saved is not None:
             write_record(saved, record, single_precision=True)
         records.append(record)

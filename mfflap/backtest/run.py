@@ -118,6 +118,36 @@ def _done_before(motion: DiscreteMotion, key: str, folders: Sequence[str | Path]
     return record, path
 
 
+def run_backtest_case(motion: DiscreteMotion, label: str, name: str, *,
+                      work_dir: str | Path, n_cycles: float = 3.0,
+                      mesh: str | AnyMeshSpec = "coarse", solver: SolverSettings | None = None,
+                      plate=None, fluid=None, stream=None,
+                      progress: Callable[[str], None] | None = None,
+                      parameters: dict | None = None) -> CfdRecord:
+    """Run the back-test CFD of ``motion`` as the case ``work_dir/name``: the periodic
+    spline through its cycle (:func:`cfd_motion`) after a start-up ramp of half a period,
+    for ``n_cycles`` periods, written every quarter of the run (a killed run resumes from
+    there). The record's parameters say so, with ``parameters`` added.
+
+    Raises
+    ------
+    MfflapError
+        The run failed (:func:`~mfflap.campaign.openfoam_run.run_motion`).
+    """
+    from mfflap.campaign.openfoam_run import run_motion
+
+    spline = cfd_motion(motion)
+    period = spline.period
+    params = {"kind": "periodic_spline", "label": label, "period": period,
+              "n_steps": motion.n_steps, "ramp_time": 0.5 * period, "n_cycles": n_cycles,
+              "motion_key": motion_key(motion), **(parameters or {})}
+    settings = None if solver is None else replace(solver,
+                                                   write_interval=n_cycles * period / 4)
+    return run_motion(Path(work_dir) / name, spline, name, params, n_cycles * period,
+                      mesh=mesh, ramp_time=0.5 * period, plate=plate, fluid=fluid,
+                      stream=stream, solver=settings, progress=progress)
+
+
 def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float, *,
                     fixture_folders: Sequence[str | Path] = (), live: bool = False,
                     work_dir: str | Path | None = None, n_cycles: float = 3.0,
@@ -145,7 +175,6 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
         solver settings (``backtest_<key>.h5``) are taken instead of a new run (the rounds of
         :mod:`mfflap.rounds` back-test a motion repeated from an earlier round once).
     """
-    from mfflap.campaign.openfoam_run import run_motion
     from mfflap.cfd.openfoam.case_lock import CaseBusyError
     from mfflap.cfd.openfoam.runner import openfoam_available
 
@@ -163,16 +192,11 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
             source = "no work folder for the live run"
         else:
             name = f"backtest_{key}"
-            params = {"kind": "periodic_spline", "label": label, "period": period,
-                      "n_steps": motion.n_steps, "ramp_time": 0.5 * period,
-                      "n_cycles": n_cycles, "motion_key": key}
             try:
-                settings = None if solver is None else replace(
-                    solver, write_interval=n_cycles * period / 4)
-                record = run_motion(Path(work_dir) / name, spline, name, params,
-                                    n_cycles * period, mesh=mesh, ramp_time=0.5 * period,
-                                    plate=plate, fluid=fluid, stream=stream, solver=settings,
-                                    progress=progress)
+                record = run_backtest_case(motion, label, name, work_dir=work_dir,
+                                           n_cycles=n_cycles, mesh=mesh, solver=solver,
+                                           plate=plate, fluid=fluid, stream=stream,
+                                           progress=progress)
                 source = "live OpenFOAM"
                 if save_to is not None:
                     write_record(Path(save_to) / f"{name}.h5", record, single_precision=True)
