@@ -28,6 +28,10 @@ class BacktestComparison:
     cycle_to_cycle_thrust_change : fraction between the last two cycles (periodicity check)
     numerical_bursts : the CFD's numerical bursts in the last two cycles
         (:mod:`mfflap.cfd.bursts`), bridged before any of the numbers above
+    cycles_averaged : the whole cycles the CFD means are taken over (1: the last cycle);
+        the curves, NRMSE, Pearson and maximum power are the last cycle's
+    cfd_thrust_standard_error : N; cfd_power_standard_error : W; of the CFD means over
+        ``cycles_averaged`` cycles (:class:`~mfflap.backtest.cycles.CycleMeans`; NaN with one)
     """
 
     time: np.ndarray
@@ -45,6 +49,9 @@ class BacktestComparison:
     max_power_ok: bool
     cycle_to_cycle_thrust_change: float
     numerical_bursts: list[str] = field(default_factory=list)
+    cycles_averaged: int = 1
+    cfd_thrust_standard_error: float = float("nan")
+    cfd_power_standard_error: float = float("nan")
 
     @property
     def mean_thrust_error(self) -> float:
@@ -58,6 +65,17 @@ class BacktestComparison:
         return (self.model_mean_power - self.cfd_mean_power) / max(abs(self.cfd_mean_power),
                                                                    1e-12)
 
+    @property
+    def cycle_scatter(self) -> float:
+        """The larger of one cycle's CFD mean thrust and power scatter (standard deviation
+        of the cycle means over |their mean|) over ``cycles_averaged`` cycles: the noise of
+        a back-test that reads one cycle (NaN with one cycle averaged)."""
+        if self.cycles_averaged < 2:
+            return float("nan")
+        root = np.sqrt(self.cycles_averaged)
+        return max(self.cfd_thrust_standard_error * root / max(abs(self.cfd_mean_thrust), 1e-12),
+                   self.cfd_power_standard_error * root / max(abs(self.cfd_mean_power), 1e-12))
+
     def as_dict(self) -> dict[str, float | bool | dict]:
         """Scalars only (for JSON and HDF5 attributes)."""
         return {"nrmse": self.nrmse, "pearson": self.pearson,
@@ -68,14 +86,26 @@ class BacktestComparison:
                 "mean_power_error": self.mean_power_error, "cfd_max_power": self.cfd_max_power,
                 "max_power_ok": self.max_power_ok,
                 "cycle_to_cycle_thrust_change": self.cycle_to_cycle_thrust_change,
-                "numerical_bursts": list(self.numerical_bursts)}
+                "numerical_bursts": list(self.numerical_bursts),
+                "cycles_averaged": self.cycles_averaged,
+                "cfd_thrust_standard_error": _or_none(self.cfd_thrust_standard_error),
+                "cfd_power_standard_error": _or_none(self.cfd_power_standard_error),
+                "cycle_scatter": _or_none(self.cycle_scatter)}
+
+
+def _or_none(value: float) -> float | None:
+    """JSON has no NaN."""
+    return None if np.isnan(value) else float(value)
 
 
 def compare_last_cycle(record: CfdRecord, model, period: float,
-                       max_power: float) -> BacktestComparison:
+                       max_power: float, *, average_cycles: int = 1) -> BacktestComparison:
     """Model (on the imposed kinematics) against CFD over the last full period of the record.
 
     Numerical bursts of the CFD in the last two periods are bridged first (and listed).
+    With ``average_cycles`` above 1, the CFD and model means are those over the record's
+    last ``average_cycles`` whole cycles, with the CFD's standard errors
+    (:mod:`mfflap.backtest.cycles`: one cycle's mean can lie far from the run's).
 
     Raises
     ------
@@ -83,7 +113,14 @@ def compare_last_cycle(record: CfdRecord, model, period: float,
         If the CFD forces of the last two periods leave what the motion can drive
         (:mod:`mfflap.cfd.force_envelope`): the run lost its numerics and says nothing about
         the model.
+    ConfigError
+        ``average_cycles`` more than the whole cycles the record holds after its start-up
+        (key ``average_cycles``).
     """
+    from mfflap.backtest.cycles import cycle_means
+
+    averaged = (None if average_cycles == 1
+                else cycle_means(record, period).last(average_cycles))
     t = record.time
     end = t[-1]
     last = t >= end - period
@@ -113,11 +150,23 @@ def compare_last_cycle(record: CfdRecord, model, period: float,
         before = time_mean(t[prev], c_thrust[prev])
         change = abs(cfd_mean_thrust - before) / max(abs(cfd_mean_thrust), 1e-12)
     cfd_max = float(np.max(c_power[last]))
+    means = {"cfd_mean_thrust": cfd_mean_thrust,
+             "model_mean_thrust": time_mean(tl, m_thrust[last]),
+             "cfd_mean_power": time_mean(tl, c_power[last]),
+             "model_mean_power": time_mean(tl, m_power[last])}
+    errors = {}
+    if averaged is not None:
+        window = t >= averaged.start_s[0]
+        means = {"cfd_mean_thrust": averaged.mean_thrust,
+                 "model_mean_thrust": time_mean(t[window], m_thrust[window]),
+                 "cfd_mean_power": averaged.mean_power,
+                 "model_mean_power": time_mean(t[window], m_power[window])}
+        errors = {"cycles_averaged": averaged.n_cycles,
+                  "cfd_thrust_standard_error": averaged.thrust_standard_error,
+                  "cfd_power_standard_error": averaged.power_standard_error}
     return BacktestComparison(
         time=tl, cfd_thrust=c_thrust[last], model_thrust=m_thrust[last],
         cfd_power=c_power[last], model_power=m_power[last], nrmse=nr, pearson=pe,
-        cfd_mean_thrust=cfd_mean_thrust, model_mean_thrust=time_mean(tl, m_thrust[last]),
-        cfd_mean_power=time_mean(tl, c_power[last]),
-        model_mean_power=time_mean(tl, m_power[last]), cfd_max_power=cfd_max,
+        **means, cfd_max_power=cfd_max,
         max_power_ok=bool(cfd_max <= max_power), cycle_to_cycle_thrust_change=float(change),
-        numerical_bursts=[b.describe() for b in bursts])
+        numerical_bursts=[b.describe() for b in bursts], **errors)

@@ -128,8 +128,9 @@ def repeat_runs(motion, label: str, model, max_power: float, *, copies: int,
 
     ``mesh``, ``solver``, ``plate``, ``fluid`` and ``stream`` as for a live back-test
     (:func:`~mfflap.backtest.run.backtest_motion`). Each copy is a case
-    ``work_dir/backtest_<key>_copy<k>`` (a killed run resumes there) and,
-    with ``save_to``, a record ``backtest_<key>_copy<k>.h5`` there, which a later call takes
+    ``work_dir/backtest_<key>_copy<k>`` (with ``_<n>cycles`` after it for other than 3
+    periods; a killed run resumes there) and, with ``save_to``, a record
+    ``backtest_<key>_copy<k>.h5`` there, which a later call for as many periods takes
     instead of running the copy again.
 
     Raises
@@ -154,14 +155,16 @@ def repeat_runs(motion, label: str, model, max_power: float, *, copies: int,
         if saved is not None and saved.is_file():
             record = read_record(saved)
             had = float(record.provenance.get("solver_max_courant", float("nan")))
-            if np.isclose(had, limit, rtol=1e-12, atol=0):
+            cycles = float(record.parameters.get("n_cycles", 3.0))
+            if np.isclose(had, limit, rtol=1e-12, atol=0) and np.isclose(cycles, n_cycles):
                 if progress is not None:
                     progress(f"copy {k} of {copies}: taken from {saved}")
                 records.append(record)
                 continue
         if progress is not None:
             progress(f"copy {k} of {copies}: Courant limit {limit!r}")
-        record = run_backtest_case(motion, label, name, work_dir=work_dir, n_cycles=n_cycles,
+        case = name if n_cycles == 3 else f"{name}_{n_cycles:g}cycles"
+        record = run_backtest_case(motion, label, case, work_dir=work_dir, n_cycles=n_cycles,
                                    mesh=mesh, solver=copy_settings(solver, k), plate=plate,
                                    fluid=fluid, stream=stream, progress=progress,
                                    parameters={"copy": k})

@@ -89,9 +89,13 @@ def _matching_fixture(key: str, motion: DiscreteMotion, folders: Sequence[Path],
 
 
 def _other_set_up(record: CfdRecord, mesh: str | AnyMeshSpec,
-                  solver: SolverSettings | None) -> str | None:
+                  solver: SolverSettings | None, n_cycles: float = 3.0) -> str | None:
     """How a fixture's run differs from the live run asked for (its mesh, a solver setting
-    its provenance gives), or None: then it is the CFD that run would have been."""
+    its provenance gives, fewer periods), or None: then it is the CFD that run would have
+    been (a longer run holds the shorter one's cycles after its own start-up too)."""
+    had_cycles = float(record.parameters.get("n_cycles", 3.0))
+    if had_cycles < n_cycles - 1e-9:
+        return f"for {had_cycles:g} periods, not {n_cycles:g} as asked"
     asked_mesh = mesh if isinstance(mesh, str) else mesh.name
     had_mesh = record.provenance.get("mesh")
     if had_mesh is not None and had_mesh != asked_mesh:
@@ -103,8 +107,8 @@ def _other_set_up(record: CfdRecord, mesh: str | AnyMeshSpec,
 
 
 def _done_before(motion: DiscreteMotion, key: str, folders: Sequence[str | Path], model,
-                 mesh: str | AnyMeshSpec, solver: SolverSettings | None
-                 ) -> tuple[CfdRecord | None, Path | None]:
+                 mesh: str | AnyMeshSpec, solver: SolverSettings | None,
+                 n_cycles: float = 3.0) -> tuple[CfdRecord | None, Path | None]:
     """The record of this motion in ``folders`` (by key, else within the fixtures'
     tolerance) and its path if it was run for this case on the mesh and solver settings asked
     (else None, None: it is to be run)."""
@@ -113,7 +117,7 @@ def _done_before(motion: DiscreteMotion, key: str, folders: Sequence[str | Path]
         return None, None
     record = read_record(path)
     if input_mismatches(record, model.plate, model.fluid, model.stream,
-                        folder_setup(path)) or _other_set_up(record, mesh, solver):
+                        folder_setup(path)) or _other_set_up(record, mesh, solver, n_cycles):
         return None, None
     return record, path
 
@@ -155,13 +159,22 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
                     save_to: str | Path | None = None,
                     solver: SolverSettings | None = None,
                     progress: Callable[[str], None] | None = None,
-                    done_folders: Sequence[str | Path] = ()) -> BacktestOutcome:
+                    done_folders: Sequence[str | Path] = (),
+                    average_cycles: int = 1) -> BacktestOutcome:
     """Back-test one periodic motion: run or find its CFD, compare the last cycle.
 
     Parameters
     ----------
     live
         Run OpenFOAM (requires it installed and ``work_dir``).
+    n_cycles
+        Periods a live run simulates (its case is ``backtest_<key>``, or
+        ``backtest_<key>_<n>cycles`` for other than 3, so that a work folder holds both).
+        A record of this motion run for fewer periods is not taken for a live run.
+    average_cycles
+        The CFD and model means are those over the last ``average_cycles`` whole cycles
+        (:func:`~mfflap.backtest.compare.compare_last_cycle`); a record with fewer after its
+        start-up is not back-tested, with the reason.
     mesh, solver
         Mesh and solver settings of a live run (default: the coarse mesh at the default
         settings; a named set-up of setups.toml gives both); they are in the record's
@@ -182,8 +195,8 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
     spline = cfd_motion(motion)
     period = spline.period
     folders = [Path(f) for f in fixture_folders if Path(f).is_dir()]
-    record, before = (_done_before(motion, key, done_folders, model, mesh, solver) if live
-                      else (None, None))
+    record, before = (_done_before(motion, key, done_folders, model, mesh, solver, n_cycles)
+                      if live else (None, None))
     source = "" if before is None else f"live OpenFOAM, run before ({before})"
     if live and record is None:
         if not openfoam_available():
@@ -192,8 +205,9 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
             source = "no work folder for the live run"
         else:
             name = f"backtest_{key}"
+            case = name if n_cycles == 3 else f"{name}_{n_cycles:g}cycles"
             try:
-                record = run_backtest_case(motion, label, name, work_dir=work_dir,
+                record = run_backtest_case(motion, label, case, work_dir=work_dir,
                                            n_cycles=n_cycles, mesh=mesh, solver=solver,
                                            plate=plate, fluid=fluid, stream=stream,
                                            progress=progress)
@@ -216,7 +230,7 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
         mismatches = [] if found is None else input_mismatches(
             found, model.plate, model.fluid, model.stream, folder_setup(path))
         other_setup = (None if found is None or not live
-                       else _other_set_up(found, mesh, solver))
+                       else _other_set_up(found, mesh, solver, n_cycles))
         if mismatches:  # the same motion, but not this case's CFD: its plate, fluid, stream
             m = mismatches[0]
             source = ((f"{source}; " if source else "")
@@ -240,7 +254,8 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
     if record is None:
         return BacktestOutcome(label, key, "not back-tested", source)
     try:
-        comparison = compare_last_cycle(record, model, period, max_power)
+        comparison = compare_last_cycle(record, model, period, max_power,
+                                        average_cycles=average_cycles)
     except MfflapError as exc:  # the CFD run lost its numerics: no verdict on the model
         return BacktestOutcome(label, key, "not back-tested", f"{source}; {exc}")
     return BacktestOutcome(label, key, "back-tested", source, record, comparison)

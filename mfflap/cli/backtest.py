@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import click
+import numpy as np
 
 from mfflap.cli.json_output import echo_json
 from mfflap.cli.options import mesh_and_setup_options, refuse_given
@@ -32,11 +33,22 @@ from mfflap.cli.options import mesh_and_setup_options, refuse_given
                    "Courant limit a millionth apart, and print how far their last-cycle "
                    "mean thrust and power spread: CFD's repeatability, which mfflap run "
                    "--cfd-repeatability takes.")
+@click.option("--cycles", type=float, default=None,
+              help="With --live: the periods each run simulates, after a start-up ramp of "
+                   "half a period [default: 3]. A record of the motion run for fewer is not "
+                   "taken for it.")
+@click.option("--average-cycles", type=int, default=1, show_default=True,
+              help="Compare the CFD's and the model's mean thrust and power over the last "
+                   "this many whole cycles, with the CFD's standard errors from its cycle "
+                   "means (one cycle's mean can lie 10 % or more from the run's: README, "
+                   "'How long a back-test runs'); curves, NRMSE and maximum power stay the "
+                   "last cycle's.")
 @click.option("--json", "as_json", is_flag=True)
 def backtest(optimisation_file: Path, live: bool, work_dir: Path,
              fixture_folders: tuple[Path, ...], save_to: Path | None, only: tuple[str, ...],
              mesh: str | None, setup_name: str | None, wall_treatment: str | None,
-             repeat: int | None, as_json: bool) -> None:
+             repeat: int | None, cycles: float | None, average_cycles: int,
+             as_json: bool) -> None:
     """Back-test the optimised motions (and the best sinusoid) of OPTIMISATION_FILE.
 
     Ctrl-C stops the run in flight and shows the motions back-tested before it. The exit
@@ -52,9 +64,10 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
 
     if not live:  # the fixtures' runs are read as they were made
         refuse_given(("work_dir", "save_to", "mesh", "setup_name", "wall_treatment",
-                      "repeat"),
+                      "repeat", "cycles"),
                      "live runs (--live); without it the back-test reads CFD records "
                      "(--fixtures), run on the mesh and set-up they were made with")
+    n_cycles = check_cycles(cycles, average_cycles)
     spec, solver = mesh_and_solver(mesh, setup_name, wall_treatment)
     with ResultsFile(optimisation_file, kinds=("optimisation", "run")) as rf:
         case = loads_case(rf.config_toml, source=f"{optimisation_file}:/inputs")
@@ -74,7 +87,8 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
     click.echo("model: the coefficients the motions were optimised with, " + ", ".join(
         f"{k} {v:.3g}" for k, v in model.coefficients.items()), err=True)
     if repeat is not None:
-        _repeat(case, motions, model, repeat, work_dir, save_to, spec.name, solver, as_json)
+        _repeat(case, motions, model, repeat, work_dir, save_to, spec.name, solver, as_json,
+                n_cycles)
         return
     folders = list(fixture_folders) or backtest_fixture_dirs()
     outcomes: dict = {}
@@ -83,7 +97,8 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
         backtest_all(case, motions, model, fixture_folders=folders,
                      live=live, work_dir=work_dir, save_to=save_to, mesh=spec.name,
                      solver=solver, progress=lambda m: click.echo(m, err=True), into=outcomes,
-                     done_folders=() if save_to is None else (save_to,))
+                     done_folders=() if save_to is None else (save_to,), n_cycles=n_cycles,
+                     average_cycles=average_cycles)
     except KeyboardInterrupt:  # the solver is stopped by then; show what was back-tested
         interrupted = next((label for label in motions if label not in outcomes), "the last")
     from mfflap.performance import discrete_means
@@ -105,8 +120,35 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
         raise SystemExit(1)
 
 
+def check_cycles(cycles: float | None, average_cycles: int) -> float:
+    """The periods of a live run (``--cycles``, default 3), checked with ``--average-cycles``
+    against the whole cycles it holds after its start-up ramp of half a period.
+
+    Raises
+    ------
+    click.BadParameter
+        Fewer than one whole cycle after the ramp, fewer than one cycle averaged, or more
+        averaged than a live run of ``cycles`` periods holds.
+    """
+    n_cycles = 3.0 if cycles is None else float(cycles)
+    if not (np.isfinite(n_cycles) and n_cycles >= 1.5):
+        raise click.BadParameter(f"must be 1.5 or more periods (a whole cycle after the "
+                                 f"start-up ramp of half a period), got {cycles}",
+                                 param_hint="--cycles")
+    if average_cycles < 1:
+        raise click.BadParameter(f"must be 1 or more cycles, got {average_cycles}",
+                                 param_hint="--average-cycles")
+    held = int(np.floor(n_cycles - 0.5 + 1e-9))
+    if cycles is not None and average_cycles > held:
+        raise click.BadParameter(f"{average_cycles} cycles averaged, but a run of --cycles "
+                                 f"{n_cycles:g} holds {held} whole cycle(s) after its "
+                                 "start-up ramp of half a period",
+                                 param_hint="--average-cycles")
+    return n_cycles
+
+
 def _repeat(case, motions: dict, model, copies: int, work_dir: Path, save_to: Path | None,
-            mesh: str, solver, as_json: bool) -> None:
+            mesh: str, solver, as_json: bool, n_cycles: float = 3.0) -> None:
     """``--repeat``: each motion's copies (:func:`mfflap.backtest.repeat.repeat_runs`)."""
     from mfflap.backtest.repeat import repeat_runs
     from mfflap.cfd.openfoam.case_path import check_case_path
@@ -120,7 +162,7 @@ def _repeat(case, motions: dict, model, copies: int, work_dir: Path, save_to: Pa
         found[label] = repeat_runs(
             motion, label, model, case.optimisation.max_power, copies=copies,
             work_dir=work_dir, save_to=save_to, mesh=mesh, solver=solver, plate=case.plate,
-            fluid=case.fluid, stream=case.flow,
+            fluid=case.fluid, stream=case.flow, n_cycles=n_cycles,
             progress=lambda m, label=label: click.echo(f"repeat {label}: {m}", err=True))
     if as_json:
         echo_json({"repeatability": {label: r.as_dict() for label, r in found.items()}})
@@ -171,6 +213,12 @@ def optimised_with(rf, case):
     return model if stored is None else model.with_coefficients(json.loads(stored))
 
 
+def _error(data: dict, signal: str) -> str:
+    """' ± <standard error>' of a back-test's CFD mean over several cycles, else ''."""
+    error = data.get(f"cfd_{signal}_standard_error")
+    return "" if error is None else f" ± {error:.2g}"
+
+
 def _show(outcomes: dict, as_json: bool, scales: dict | None = None,
           optimised: dict | None = None) -> None:
     """Print the back-tests: a line per motion, or JSON. ``scales``: label -> (thrust, power)
@@ -201,10 +249,13 @@ def _show(outcomes: dict, as_json: bool, scales: dict | None = None,
         if d["status"] != "back-tested":
             click.echo(f"{label:14s} NOT BACK-TESTED: {d['source']}")
             continue
-        click.echo(f"{label:14s} thrust CFD {d['cfd_mean_thrust']:.3f} N model "
-                   f"{d['model_mean_thrust']:.3f} N; power CFD {d['cfd_mean_power']:.3f} W "
+        click.echo(f"{label:14s} thrust CFD {d['cfd_mean_thrust']:.3f}{_error(d, 'thrust')} N "
+                   f"model {d['model_mean_thrust']:.3f} N; power CFD "
+                   f"{d['cfd_mean_power']:.3f}{_error(d, 'power')} W "
                    f"model {d['model_mean_power']:.3f} W; NRMSE thrust "
-                   f"{d['nrmse']['thrust']:.3f}; CFD max power {d['cfd_max_power']:.1f} W")
+                   f"{d['nrmse']['thrust']:.3f}; CFD max power {d['cfd_max_power']:.1f} W"
+                   + (f"; means over the last {d['cycles_averaged']} cycles"
+                      if d["cycles_averaged"] > 1 else ""))
         if "corrected_prediction" in d:
             c = d["corrected_prediction"]
             click.echo(f"{'':14s} optimised with corrected outputs (thrust x "
@@ -212,6 +263,13 @@ def _show(outcomes: dict, as_json: bool, scales: dict | None = None,
                        f"{c['mean_thrust']:.3f} N, {c['mean_power']:.3f} W")
         if "instead of a live run" in d["source"]:  # said here, not only in the progress
             click.echo(f"{'':14s} CFD: {d['source']}")
+    scattered = [(d["cycle_scatter"], label) for label, d in data.items()
+                 if d.get("cycle_scatter") is not None and d["cycles_averaged"] >= 3]
+    if scattered:
+        share, label = max(scattered)
+        click.echo(f"one cycle's CFD means scatter by up to {share:.1%} of the mean ({label}): "
+                   "the noise of a back-test that reads one cycle; mfflap run "
+                   f"--cfd-repeatability {share:.3g}")
     if gain is not None:
         click.echo(f"beta = 0 thrust gain over the best sinusoid in CFD: {gain:+.1%}")
     else:
