@@ -165,3 +165,31 @@ def test_two_long_copies_agree_in_their_means_though_not_in_their_cycles():
     first = cycle_means(*_record(f"{BETA0}_10_cycles"))
     again = cycle_means(*_record(f"{BETA0}_copy1_10_cycles"))
     assert first.thrust[0] == pytest.approx(again.thrust[0], rel=1e-3)
+
+
+@pytest.mark.openfoam
+def test_a_live_back_test_runs_the_cycles_asked_and_averages_them(tmp_path,
+                                                                  optimisation_file):
+    """Real pimpleFoam, coarse mesh: the beta = 0.5 optimum (period 0.46 s) for 2.5 periods,
+    its two whole cycles after the ramp averaged; the case is named for its periods, the
+    record says how many it ran, and the same command takes the saved record."""
+    from mfflap.campaign.records import read_record_parameters
+
+    work, saved = tmp_path / "work", tmp_path / "saved"
+    args = ["backtest", str(optimisation_file), "--live", "--motion", "0.5", "--cycles",
+            "2.5", "--average-cycles", "2", "--work", str(work), "--save-to", str(saved),
+            "--json"]
+    res = CliRunner().invoke(cli, args)
+    assert res.exit_code == 0, res.output
+    d = json.loads(res.stdout)["motions"]["β = 0.5"]
+    assert d["source"] == "live OpenFOAM" and d["cycles_averaged"] == 2
+    assert d["cfd_thrust_standard_error"] > 0 and d["cfd_power_standard_error"] > 0
+    key = d["motion_key"]
+    assert (work / f"backtest_{key}_2.5cycles").is_dir()
+    assert not (work / f"backtest_{key}").exists()
+    assert read_record_parameters(saved / f"backtest_{key}.h5")["n_cycles"] == 2.5
+    again = CliRunner().invoke(cli, args)
+    assert again.exit_code == 0, again.output
+    d2 = json.loads(again.stdout)["motions"]["β = 0.5"]
+    assert d2["source"].startswith("live OpenFOAM, run before")
+    assert d2["cfd_mean_thrust"] == pytest.approx(d["cfd_mean_thrust"], rel=1e-5)

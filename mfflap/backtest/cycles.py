@@ -26,6 +26,9 @@ from mfflap.errors import ConfigError
 from mfflap.metrics import time_mean
 from mfflap.performance import thrust_and_power
 
+#: fraction of a period a cycle may start before the earliest start asked for
+_START_SLACK = 1e-4
+
 
 @dataclass(frozen=True)
 class CycleMeans:
@@ -163,7 +166,9 @@ def cycle_means(record: CfdRecord, period: float, *, after_s: float | None = Non
     t = record.time
     start = float(record.parameters.get("ramp_time", 0.0)) if after_s is None else after_s
     end = float(t[-1])
-    n = int(np.floor((end - max(start, float(t[0]))) / period + 1e-9))
+    # a cycle may start a ten-thousandth of a period before ``after_s``: the times a solver
+    # writes are rounded (a run of 2.5 periods ends at 1.15100043 s, 2.5 P is 1.1510004334 s)
+    n = int(np.floor((end - max(start, float(t[0]))) / period + _START_SLACK))
     if n < 1:
         raise ConfigError(f"{record.name}: no whole cycle of {period:.6g} s between "
                           f"{start:.6g} s and its end at {end:.6g} s", key="period")
