@@ -193,3 +193,34 @@ def test_a_live_back_test_runs_the_cycles_asked_and_averages_them(tmp_path,
     d2 = json.loads(again.stdout)["motions"]["β = 0.5"]
     assert d2["source"].startswith("live OpenFOAM, run before")
     assert d2["cfd_mean_thrust"] == pytest.approx(d["cfd_mean_thrust"], rel=1e-5)
+
+
+def test_cfd_cycles_command_gives_each_runs_cycles_and_settled_mean(tmp_path):
+    folder = fixture_dir("cfd_repeatability")
+    ten, short = folder / f"{BETA0}_10_cycles.h5", folder / f"{BETA0}_copy0.h5"
+    figure = tmp_path / "cycles.png"
+    res = CliRunner().invoke(cli, ["cfd", "cycles", str(ten), str(short), "--figure",
+                                   str(figure), "--json"])
+    assert res.exit_code == 0, res.output
+    runs = json.loads(res.stdout)["runs"]
+    long_run = runs[str(ten)]
+    assert long_run["cycle_numbers"] == list(range(2, 11))
+    assert long_run["settled"]["mean_thrust"] == pytest.approx(28.66, abs=0.01)
+    assert len(long_run["settled"]["cycle_mean_thrust"]) == 8  # cycle 2 left out
+    assert runs[str(short)]["settled"]["thrust_standard_error"] is None  # cycle 3 alone
+    assert figure.stat().st_size > 10_000
+    text = CliRunner().invoke(cli, ["cfd", "cycles", str(ten), str(short), "--skip-cycles",
+                                    "0"])
+    assert text.exit_code == 0 and "settled (cycles 2-10)" in text.stdout
+    assert "settled (cycles 2-3)" in text.stdout
+    one = CliRunner().invoke(cli, ["cfd", "cycles", str(short)])
+    assert "cycle 3 alone: no cycle-to-cycle scatter" in one.stdout
+
+
+def test_cfd_cycles_refuses_pitch_ramp_runs_and_cycles_skipped_past_the_end():
+    ramp = sorted(fixture_dir("table1_coarse").glob("*.h5"))[0]
+    res = CliRunner().invoke(cli, ["cfd", "cycles", str(ramp)])
+    assert res.exit_code == 2 and "pitch ramp" in res.output and ramp.stem in res.output
+    short = fixture_dir("cfd_repeatability") / f"{BETA0}_copy0.h5"
+    res = CliRunner().invoke(cli, ["cfd", "cycles", str(short), "--skip-cycles", "2"])
+    assert res.exit_code == 2 and "skip_cycles" in res.output and "leave none" in res.output

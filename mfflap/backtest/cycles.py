@@ -54,6 +54,25 @@ class CycleMeans:
         """The cycles held."""
         return len(self.thrust)
 
+    @property
+    def numbers(self) -> np.ndarray:
+        """Each cycle's number counted from the run's start (1: the one with the ramp)."""
+        return np.rint(self.start_s / self.period_s).astype(int) + 1
+
+    def after(self, n_skipped: int) -> CycleMeans:
+        """The cycles held but the first ``n_skipped`` (start-up).
+
+        Raises
+        ------
+        ConfigError
+            None would be left, or ``n_skipped`` below 0 (key ``skip_cycles``).
+        """
+        if not (isinstance(n_skipped, int | np.integer) and 0 <= n_skipped < self.n_cycles):
+            raise ConfigError(f"{self.record}: {n_skipped!r} start-up cycle(s) left out of its "
+                              f"{self.n_cycles} whole cycle(s) after the ramp leave none",
+                              key="skip_cycles")
+        return self.last(self.n_cycles - n_skipped)
+
     def last(self, n_cycles: int) -> CycleMeans:
         """The last ``n_cycles`` cycles.
 
@@ -143,6 +162,59 @@ class CycleMeans:
                 "power_scatter": num(self.power_scatter)}
 
 
+def record_period(record: CfdRecord) -> float:
+    """A record's period, s: its ``period`` parameter (a back-test), else 1 / ``frequency``
+    (a sinusoid).
+
+    Raises
+    ------
+    ConfigError
+        A record of a motion meant not to repeat (the identification's pitch ramp,
+        ``ramp_harmonic``), or with neither parameter (key ``period``, naming the record).
+    """
+    params = record.parameters
+    if params.get("kind") == "ramp_harmonic":
+        raise ConfigError(f"{record.name}: a sinusoid with the pitch ramp theta_kamp t, whose "
+                          "cycles are not meant to repeat; its cycle means say nothing of "
+                          "periodicity", key="period")
+    if "period" in params:
+        return float(params["period"])
+    if float(params.get("frequency", 0.0)) > 0:
+        return 1.0 / float(params["frequency"])
+    raise ConfigError(f"{record.name}: its parameters give no period or frequency "
+                      f"({sorted(params)})", key="period")
+
+
+def cycles_figure(runs: list[tuple[CycleMeans, CycleMeans]]):
+    """Mean thrust and power per cycle of each run, with the mean over its settled cycles
+    and its standard error as a band; ``runs``: (every cycle, the settled ones) per run."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(11, 3.8))
+    for every, settled in runs:
+        for ax, values, mean, error in (
+                (axes[0], every.thrust, settled.mean_thrust, settled.thrust_standard_error),
+                (axes[1], every.power, settled.mean_power, settled.power_standard_error)):
+            line = ax.plot(every.numbers, values, "o-", ms=4, lw=1, label=every.record)[0]
+            span = (settled.numbers[0] - 0.3, settled.numbers[-1] + 0.3)
+            ax.hlines(mean, *span, color=line.get_color(), lw=1, ls="--")
+            if not np.isnan(error):
+                ax.fill_between(span, mean - error, mean + error, color=line.get_color(),
+                                alpha=0.15)
+    axes[0].set_ylabel("CFD mean thrust per cycle [N]")
+    axes[1].set_ylabel("CFD mean input power per cycle [W]")
+    for ax in axes:
+        ax.set_xlabel("cycle (1: with the start-up ramp)")
+        ax.xaxis.get_major_locator().set_params(integer=True)
+    axes[0].legend(fontsize=7)
+    fig.suptitle("dashed: mean over the settled cycles; band: its standard error", fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
 def cycle_means(record: CfdRecord, period: float, *, after_s: float | None = None
                 ) -> CycleMeans:
     """Mean thrust and power of each whole cycle of ``record`` (module docstring).
@@ -185,4 +257,4 @@ def cycle_means(record: CfdRecord, period: float, *, after_s: float | None = Non
     return CycleMeans(record.name, float(period), starts, np.array(means_t), np.array(means_p))
 
 
-__all__ = ["CycleMeans", "cycle_means"]
+__all__ = ["CycleMeans", "cycle_means", "cycles_figure", "record_period"]
