@@ -40,6 +40,10 @@ class RunOptions:
     sensitivity: bool = True
     vtk_dir: Path | None = None
     mesh: str = "coarse"
+    #: periods a live back-test runs (:func:`~mfflap.backtest.run.backtest_motion`)
+    backtest_cycles: float = 3.0
+    #: whole cycles the back-test's CFD and model means are taken over (1: the last)
+    average_cycles: int = 1
     #: keep the optimisation within what the identification cases reach
     #: (:func:`within_data_config`)
     within_data: bool = False
@@ -351,7 +355,8 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
             config, motions, model, fixture_folders=folders, live=options.live,
             work_dir=options.work_dir, mesh=options.mesh, progress=progress,
             # those done before a failure or Ctrl-C are kept in outcome.backtests
-            into=outcome.backtests, done_folders=options.done_backtests))
+            into=outcome.backtests, done_folders=options.done_backtests,
+            n_cycles=options.backtest_cycles, average_cycles=options.average_cycles))
         for label, o in outcome.backtests.items():
             if o.status != "back-tested":
                 outcome.problems.append(f"back-test: {label} not back-tested: {o.source}")

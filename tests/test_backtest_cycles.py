@@ -6,6 +6,7 @@ beta = 0 one (README, "How long a back-test runs")."""
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -224,3 +225,42 @@ def test_cfd_cycles_refuses_pitch_ramp_runs_and_cycles_skipped_past_the_end():
     short = fixture_dir("cfd_repeatability") / f"{BETA0}_copy0.h5"
     res = CliRunner().invoke(cli, ["cfd", "cycles", str(short), "--skip-cycles", "2"])
     assert res.exit_code == 2 and "skip_cycles" in res.output and "leave none" in res.output
+
+
+def test_run_and_its_rounds_judge_the_means_over_the_cycles_asked(tmp_path):
+    """`mfflap run --rounds 2 --average-cycles 2` on the shipped three-period fixtures: round
+    1's back-tests (the main job's) and the rounds' checks take the means of the last two
+    cycles, not the last cycle's; --backtest-cycles needs --live."""
+    from mfflap.campaign.records import backtest_fixture_dirs
+
+    case = Path(__file__).parents[1] / "cases" / "paper2026.toml"
+    out = tmp_path / "loop"
+    res = CliRunner().invoke(cli, [
+        "run", str(case), "--out", str(out), "--rounds", "2", "--coefficients",
+        "identified:uniform", "--within-data", "--correct-outputs", "--no-refit",
+        "--trust-region", "0.25", "--no-ipopt", "--no-gain-table", "--average-cycles", "2",
+        "--json"])
+    assert res.exit_code == 0, res.output
+    checks = json.loads(res.stdout[res.stdout.index("{"):])["rounds"]["rounds"][0]["checks"]
+    assert checks
+    for check in checks.values():
+        path = next(f / f"{check['cfd_record']}.h5" for f in backtest_fixture_dirs()
+                    if (f / f"{check['cfd_record']}.h5").exists())
+        rec = read_record(path)
+        means = cycle_means(rec, float(rec.parameters["period"])).last(2)
+        assert check["cfd_mean_thrust"] == pytest.approx(means.mean_thrust, rel=1e-9)
+        assert check["cfd_mean_power"] == pytest.approx(means.mean_power, rel=1e-9)
+        assert check["cfd_mean_thrust"] != pytest.approx(means.thrust[-1], rel=1e-3)
+    import h5py
+
+    with h5py.File(out / "round_1" / "results.h5") as f:
+        metrics = json.loads(f["backtest/beta__0"].attrs["metrics"])
+        assert metrics["cycles_averaged"] == 2 and f["backtest/beta__0"].attrs[
+            "cfd_n_cycles"] == 3
+    assert "Means over the last 2 whole cycles" in (out / "round_1" / "report.html").read_text()
+    for args, says in ((["--backtest-cycles", "10"], "--backtest-cycles applies only to live"),
+                       (["--average-cycles", "0"], "must be 1 or more cycles"),
+                       (["--live", "--backtest-cycles", "4", "--average-cycles", "4"],
+                        "a run of --backtest-cycles 4 holds 3 whole cycle(s)")):
+        res = CliRunner().invoke(cli, ["run", str(case), "--out", str(tmp_path / "x"), *args])
+        assert res.exit_code == 2 and says in res.output, (args, res.output)

@@ -32,3 +32,4 @@ def write_backtests(rf: ResultsFile, outcomes: dict[str, BacktestOutcome]) -> No
                         "motion_key": o.key})
         if o.record is not None:
             g.attrs["cfd_provenance"] = json.dumps(o.record.provenance, default=str)
+            g.attrs["cfd_n_cycles"] = float(o.record.parameters.get("n_cycles", float("nan")))

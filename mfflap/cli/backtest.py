@@ -120,8 +120,8 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
         raise SystemExit(1)
 
 
-def check_cycles(cycles: float | None, average_cycles: int) -> float:
-    """The periods of a live run (``--cycles``, default 3), checked with ``--average-cycles``
+def check_cycles(cycles: float | None, average_cycles: int, option: str = "--cycles") -> float:
+    """The periods of a live run (``option``, default 3), checked with ``--average-cycles``
     against the whole cycles it holds after its start-up ramp of half a period.
 
     Raises
@@ -134,13 +134,13 @@ def check_cycles(cycles: float | None, average_cycles: int) -> float:
     if not (np.isfinite(n_cycles) and n_cycles >= 1.5):
         raise click.BadParameter(f"must be 1.5 or more periods (a whole cycle after the "
                                  f"start-up ramp of half a period), got {cycles}",
-                                 param_hint="--cycles")
+                                 param_hint=option)
     if average_cycles < 1:
         raise click.BadParameter(f"must be 1 or more cycles, got {average_cycles}",
                                  param_hint="--average-cycles")
     held = int(np.floor(n_cycles - 0.5 + 1e-9))
     if cycles is not None and average_cycles > held:
-        raise click.BadParameter(f"{average_cycles} cycles averaged, but a run of --cycles "
+        raise click.BadParameter(f"{average_cycles} cycles averaged, but a run of {option} "
                                  f"{n_cycles:g} holds {held} whole cycle(s) after its "
                                  "start-up ramp of half a period",
                                  param_hint="--average-cycles")

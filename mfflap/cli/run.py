@@ -77,13 +77,21 @@ from mfflap.cli.json_output import echo_json
                    "corrections'). Each step's ratio is relaxed by the noise it makes in the "
                    "objective, and a step predicted to gain less than that noise counts as "
                    "settled.")
+@click.option("--backtest-cycles", type=float, default=None,
+              help="With --live: the periods each back-test runs after its start-up ramp of "
+                   "half a period [default: 3] (mfflap backtest --cycles).")
+@click.option("--average-cycles", type=int, default=1, show_default=True,
+              help="Compare the back-tests' CFD and model means over their last this many "
+                   "whole cycles, with the CFD's standard errors (mfflap backtest "
+                   "--average-cycles); with --rounds, the rounds judge those means.")
 @click.option("--json", "as_json", is_flag=True, help="Print the key numbers as JSON.")
 def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
             backtest_fixtures: tuple[Path, ...], live: bool, coefficients: str, starts: int,
             gain_table: bool, no_ipopt: bool, within_data: bool, rounds: int,
             loop_tolerance: float, correct_outputs: bool, correction_gain: float,
             refit: bool, trust_radius: float | None, first_order: bool,
-            cfd_repeatability: float | None, as_json: bool) -> None:
+            cfd_repeatability: float | None, backtest_cycles: float | None,
+            average_cycles: int, as_json: bool) -> None:
     """Identification, sweep, optimisation, back-test and reports for CASE_FILE.
 
     Writes <out>/report.html (every figure), <out>/results.h5 (every number and the inputs)
@@ -91,6 +99,7 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
     run goes on. Ctrl-C stops the run and writes the report and results of the stages
     finished before it.
     """
+    from mfflap.cli.backtest import check_cycles
     from mfflap.cli.options import refuse_given
     from mfflap.config import load_case
     from mfflap.identification.workflow import sources_shown
@@ -109,13 +118,18 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
     check_rounds(rounds, loop_tolerance, coefficients, correct_outputs, refit, trust_radius,
                  first_order, correction_gain, cfd_repeatability)
     check_gain(correction_gain)
+    if not live:
+        refuse_given(("backtest_cycles",), "live back-tests (--live); without it the "
+                     "back-test reads CFD records, run for as many periods as they were")
+    n_cycles = check_cycles(backtest_cycles, average_cycles, option="--backtest-cycles")
     case = load_case(case_file)
     out_dir = out_dir or Path(f"{case.study.name}_run")
     options = RunOptions(fixtures=fixtures, backtest_fixtures=backtest_fixtures, live=live,
                          work_dir=out_dir / "cfd_cases", coefficients=coefficients,
                          n_starts=starts, with_ipopt=not no_ipopt, gain_table=gain_table,
                          vtk_dir=out_dir / "vtk",  # checked before the folder is made
-                         within_data=within_data)
+                         within_data=within_data, backtest_cycles=n_cycles,
+                         average_cycles=average_cycles)
     out_dir.mkdir(parents=True, exist_ok=True)
     if rounds > 1:
         _run_rounds(case, options, rounds, loop_tolerance, out_dir, sources_shown(fixtures),
