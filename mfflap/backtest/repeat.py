@@ -87,9 +87,10 @@ class Repeatability:
 
 
 def repeatability_of(records: Sequence, label: str, model, period: float,
-                     max_power: float) -> Repeatability:
+                     max_power: float, *, average_cycles: int = 1) -> Repeatability:
     """Compare the last cycles of ``records`` (:class:`~mfflap.campaign.records.CfdRecord`
-    of one motion) as the back-test does (:func:`~mfflap.backtest.compare.compare_last_cycle`).
+    of one motion) as the back-test does (:func:`~mfflap.backtest.compare.compare_last_cycle`),
+    or the means over their last ``average_cycles`` cycles.
 
     Raises
     ------
@@ -105,7 +106,8 @@ def repeatability_of(records: Sequence, label: str, model, period: float,
     if len(keys) != 1:
         raise ConfigError(f"the runs compared are of different motions: {sorted(map(str, keys))}",
                           key="repeat")
-    means = [compare_last_cycle(r, model, period, max_power) for r in records]
+    means = [compare_last_cycle(r, model, period, max_power, average_cycles=average_cycles)
+             for r in records]
     return Repeatability(label, str(keys.pop()),
                          np.array([m.cfd_mean_thrust for m in means]),
                          np.array([m.cfd_mean_power for m in means]),
@@ -123,8 +125,10 @@ def copy_settings(solver, copy: int):
 def repeat_runs(motion, label: str, model, max_power: float, *, copies: int,
                 work_dir: str | Path, save_to: str | Path | None = None, n_cycles: float = 3.0,
                 mesh: str = "coarse", solver=None, plate=None, fluid=None, stream=None,
-                progress: Callable[[str], None] | None = None) -> Repeatability:
-    """Run ``motion`` ``copies`` times in OpenFOAM (module docstring) and compare them.
+                progress: Callable[[str], None] | None = None,
+                average_cycles: int = 1) -> Repeatability:
+    """Run ``motion`` ``copies`` times in OpenFOAM (module docstring) and compare them: their
+    last cycles, or their means over the last ``average_cycles`` cycles.
 
     ``mesh``, ``solver``, ``plate``, ``fluid`` and ``stream`` as for a live back-test
     (:func:`~mfflap.backtest.run.backtest_motion`). Each copy is a case
@@ -171,7 +175,8 @@ def repeat_runs(motion, label: str, model, max_power: float, *, copies: int,
         if saved is not None:
             write_record(saved, record, single_precision=True)
         records.append(record)
-    return repeatability_of(records, label, model, period, max_power)
+    return repeatability_of(records, label, model, period, max_power,
+                            average_cycles=average_cycles)
 
 
 __all__ = ["REPEAT_PERTURBATION", "Repeatability", "copy_settings", "repeat_runs",

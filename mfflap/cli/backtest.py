@@ -31,7 +31,8 @@ from mfflap.cli.options import mesh_and_setup_options, refuse_given
 @click.option("--repeat", "repeat", type=int, default=None,
               help="With --live: run each motion this many times (2 or more), each copy's "
                    "Courant limit a millionth apart, and print how far their last-cycle "
-                   "mean thrust and power spread: CFD's repeatability, which mfflap run "
+                   "mean thrust and power (with --average-cycles, their means over that many "
+                   "cycles) spread: CFD's repeatability, which mfflap run "
                    "--cfd-repeatability takes.")
 @click.option("--cycles", type=float, default=None,
               help="With --live: the periods each run simulates, after a start-up ramp of "
@@ -88,7 +89,7 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
         f"{k} {v:.3g}" for k, v in model.coefficients.items()), err=True)
     if repeat is not None:
         _repeat(case, motions, model, repeat, work_dir, save_to, spec.name, solver, as_json,
-                n_cycles)
+                n_cycles, average_cycles)
         return
     folders = list(fixture_folders) or backtest_fixture_dirs()
     outcomes: dict = {}
@@ -148,7 +149,8 @@ def check_cycles(cycles: float | None, average_cycles: int, option: str = "--cyc
 
 
 def _repeat(case, motions: dict, model, copies: int, work_dir: Path, save_to: Path | None,
-            mesh: str, solver, as_json: bool, n_cycles: float = 3.0) -> None:
+            mesh: str, solver, as_json: bool, n_cycles: float = 3.0,
+            average_cycles: int = 1) -> None:
     """``--repeat``: each motion's copies (:func:`mfflap.backtest.repeat.repeat_runs`)."""
     from mfflap.backtest.repeat import repeat_runs
     from mfflap.cfd.openfoam.case_path import check_case_path
@@ -163,6 +165,7 @@ def _repeat(case, motions: dict, model, copies: int, work_dir: Path, save_to: Pa
             motion, label, model, case.optimisation.max_power, copies=copies,
             work_dir=work_dir, save_to=save_to, mesh=mesh, solver=solver, plate=case.plate,
             fluid=case.fluid, stream=case.flow, n_cycles=n_cycles,
+            average_cycles=average_cycles,
             progress=lambda m, label=label: click.echo(f"repeat {label}: {m}", err=True))
     if as_json:
         echo_json({"repeatability": {label: r.as_dict() for label, r in found.items()}})
