@@ -294,3 +294,16 @@ def test_two_long_copies_of_the_beta_05_optimum_settle_7_percent_apart():
                                average_cycles=8)
     assert settled.thrust_spread < 1e-3 < 0.1 < repeatability_of(
         b0, "β = 0", MorisonModel(), b0[0].parameters["period"], 50.0).thrust_spread
+
+
+def test_cycles_are_numbered_by_the_period_they_start_in():
+    from mfflap.backtest.cycles import CycleMeans
+
+    period = 0.46
+    # a run of 2.5 periods whose written end fell a hair short: starts 0.5 P and 1.5 P less
+    # 3e-9 s; one of 3 periods: starts at P and 2P
+    half = CycleMeans("x", period, np.array([0.5, 1.5]) * period - 3e-9, np.ones(2),
+                      np.ones(2))
+    whole = CycleMeans("x", period, np.array([1.0, 2.0]) * period - 3e-9, np.ones(2),
+                       np.ones(2))
+    assert list(half.numbers) == [1, 2] and list(whole.numbers) == [2, 3]

@@ -59,8 +59,9 @@ class CycleMeans:
 
     @property
     def numbers(self) -> np.ndarray:
-        """Each cycle's number counted from the run's start (1: the one with the ramp)."""
-        return np.rint(self.start_s / self.period_s).astype(int) + 1
+        """Each cycle's number counted from the run's start: the period it starts in (1: the
+        one with the ramp; a cycle from 0.5 P to 1.5 P is cycle 1)."""
+        return np.floor(self.start_s / self.period_s + _START_SLACK).astype(int) + 1
 
     def after(self, n_skipped: int) -> CycleMeans:
         """The cycles held but the first ``n_skipped`` (start-up).
