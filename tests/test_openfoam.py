@@ -1021,10 +1021,12 @@ def test_the_larger_domain_keeps_the_medium_mesh_near_the_plate():
     from mfflap.cfd.openfoam.writer import mesh_specs
 
     specs = mesh_specs()
-    medium, large = specs["medium"], specs["medium_r20"]
-    assert large.radius_chords == 2 * medium.radius_chords
-    assert (large.n_chord, large.n_edge) == (medium.n_chord, medium.n_edge)
-    assert first_radial_cell_m(large) == pytest.approx(first_radial_cell_m(medium), rel=0.01)
+    for near, far in (("medium", "medium_r20"), ("coarse", "coarse_r20")):
+        medium, large = specs[near], specs[far]
+        assert large.radius_chords == 2 * medium.radius_chords
+        assert (large.n_chord, large.n_edge) == (medium.n_chord, medium.n_edge)
+        assert first_radial_cell_m(large) == pytest.approx(first_radial_cell_m(medium),
+                                                           rel=0.01)
 
 
 def test_the_edge_study_meshes_change_only_the_cells_across_the_plates_ends():
@@ -1042,7 +1044,7 @@ def test_the_edge_study_meshes_change_only_the_cells_across_the_plates_ends():
 
 @pytest.mark.openfoam
 @pytest.mark.parametrize("mesh", ["coarse", "lean", "graded", "medium", "medium_r20", "fine",
-                                  "medium_edge6"])
+                                  "medium_edge6", "coarse_r20"])
 def test_every_named_mesh_builds_and_passes_checkmesh(tmp_path, mesh):
     """blockMesh + checkMesh on each resolution of meshes.toml; the cell count is the spec's,
     and the lean mesh's chordwise cells really are crowded toward the plate's ends."""

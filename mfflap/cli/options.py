@@ -9,7 +9,7 @@ from click.core import ParameterSource
 
 MESH_NAMES = ("coarse | lean | medium | medium_r20 | fine | graded | medium_edge10 | "
               "medium_edge9 | medium_edge6 | medium_edge4 | openfoam_md | "
-              "openfoam_md_medium | openfoam_md_fine")  # meshes.toml's order
+              "openfoam_md_medium | openfoam_md_fine | coarse_r20")  # meshes.toml's order
 #: The U convection schemes of the case template (writer.VELOCITY_CONVECTION_SCHEMES), named
 #: here so that the command line does not import the writer to build its help
 VELOCITY_CONVECTION_NAMES = ("linearUpwind", "LUST")
