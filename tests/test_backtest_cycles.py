@@ -168,6 +168,7 @@ def test_two_long_copies_agree_in_their_means_though_not_in_their_cycles():
     assert first.thrust[0] == pytest.approx(again.thrust[0], rel=1e-3)
 
 
+@pytest.mark.slow
 @pytest.mark.openfoam
 def test_a_live_back_test_runs_the_cycles_asked_and_averages_them(tmp_path,
                                                                   optimisation_file):
@@ -227,6 +228,7 @@ def test_cfd_cycles_refuses_pitch_ramp_runs_and_cycles_skipped_past_the_end():
     assert res.exit_code == 2 and "skip_cycles" in res.output and "leave none" in res.output
 
 
+@pytest.mark.slow
 def test_run_and_its_rounds_judge_the_means_over_the_cycles_asked(tmp_path):
     """`mfflap run --rounds 2 --average-cycles 2` on the shipped three-period fixtures: round
     1's back-tests (the main job's) and the rounds' checks take the means of the last two
