@@ -6,11 +6,12 @@ heave amplitudes that meeting is not the same from one cycle to the next: a ten-
 mesh run of the trust series' beta = 0 optimum (README, "How long a back-test runs") has
 cycle means of 24.7-32.6 N after its third cycle, a scatter of 9 % of their mean, where two
 copies of its three-cycle run agree within 0.7 % (:mod:`mfflap.backtest.repeat`: the copies
-part only after their third cycle). One cycle's mean is then one draw of that scatter; the
-mean over several cycles says more, but not as much as its standard error claims: the
-cycles are not independent draws. Two eight-period copies of the beta = 0.5 optimum settle
-7 % apart, 3.5 combined standard errors (``mfflap backtest --repeat --average-cycles``
-measures that spread).
+part only after their third cycle). One cycle's mean is then one draw of that scatter, and
+the mean over several cycles is what the motion makes: two ten-period copies' eight-cycle
+means agree within 0.05 %. The standard error assumes independent cycles, and it covers
+only the run's own settings: a run whose time step collapsed and was retried at half the
+Courant limit (:func:`~mfflap.campaign.openfoam_run.run_motion`; the record's ``retries``)
+settles elsewhere (7 % at the beta = 0.5 optimum).
 
 :func:`cycle_means` takes each whole cycle of a record, counted back from its end as
 :func:`~mfflap.backtest.compare.compare_last_cycle` counts its last cycle, after the start-up

@@ -27,15 +27,20 @@ def cycles(records: tuple[Path, ...], skip_cycles: int, figure: Path | None,
     standard error, and one cycle's scatter: the noise of a comparison that reads one cycle.
 
     Cycles are counted back from each run's end, after its start-up ramp, with numerical
-    bursts bridged (mfflap.backtest.cycles). A record of the identification's pitch-ramp
-    sinusoids, whose cycles are not meant to repeat, is refused.
+    bursts bridged (mfflap.backtest.cycles). The retries a run made (a collapsed time step
+    rerun with another far field or Courant limit) are shown: its cycles before and after
+    them are not of one set-up. A record of the identification's pitch-ramp sinusoids,
+    whose cycles are not meant to repeat, is refused.
     """
     from mfflap.backtest.cycles import cycle_means, cycles_figure, record_period
     from mfflap.campaign.records import read_record
 
-    found = []
+    found, retries = [], {}
     for path in records:
         record = read_record(path)
+        # a retried run changed its settings part-way (run_motion): its cycles before and
+        # after are not of one set-up
+        retries[path] = str(record.provenance.get("retries", "")) or None
         every = cycle_means(record, record_period(record))
         found.append((path, every, every.after(skip_cycles)))
     if figure is not None:
@@ -46,13 +51,16 @@ def cycles(records: tuple[Path, ...], skip_cycles: int, figure: Path | None,
     if as_json:
         echo_json({"skip_cycles": skip_cycles, "runs": {
             str(path): {"cycle_numbers": [int(n) for n in every.numbers],
-                        "every_cycle": every.as_dict(), "settled": settled.as_dict()}
+                        "every_cycle": every.as_dict(), "settled": settled.as_dict(),
+                        "retries": retries[path]}
             for path, every, settled in found}})
         return
     for path, every, settled in found:
         click.echo(f"{path}: cycles {', '.join(str(n) for n in every.numbers)} after the "
                    f"ramp; thrust {', '.join(f'{t:.4g}' for t in every.thrust)} N; power "
                    f"{', '.join(f'{p:.4g}' for p in every.power)} W")
+        if retries[path]:
+            click.echo(f"  retried part-way, so not one set-up throughout: {retries[path]}")
         if settled.n_cycles < 2:
             click.echo(f"  settled: cycle {settled.numbers[0]} alone: no cycle-to-cycle "
                        "scatter from one cycle (run more periods, or --skip-cycles 0)")
