@@ -426,6 +426,14 @@ def trust_steps(outcome, checks: dict[str, MotionCheck], regions: dict, centres:
     return steps
 
 
+def _run_of(outcome, beta: float):
+    """The CFD record of this round's back-test of ``beta``'s optimum, or None."""
+    from mfflap.optimisation.store import beta_label
+
+    found = outcome.backtests.get(beta_label(beta))
+    return None if found is None else found.record
+
+
 def _keep_records(backtests: dict, folder: Path) -> None:
     """Write each back-tested motion's CFD record into ``folder`` under its own name (a
     fixture found within the look-up's tolerance keeps the name of the motion it ran)."""
@@ -475,6 +483,7 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
     (LoopResult, RunOutcome)
         The rounds and the last round's outcome.
     """
+    from mfflap.backtest.as_run import as_run_differences
     from mfflap.campaign.records import backtest_fixture_dirs, fixture_dir
     from mfflap.optimisation.output_correction import SECANT_REACH, secants_within
     from mfflap.optimisation.store import beta_label
@@ -493,6 +502,7 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
     points: dict = {}  # beta -> the last round's optimum with its CFD (correct_outputs)
     centres: dict = {}  # beta -> the trust region's centre with its CFD (trust_radius)
     radii: dict[float, float] = {}  # beta -> the trust region's radius
+    centre_runs: dict = {}  # beta -> the centre's CFD record (how it ran: as_run_differences)
     visited: dict = {}  # beta -> every back-tested optimum with its own CFD (first_order)
     converged, why = False, f"ran the {n_rounds} round(s) asked for"
     for k in range(1, n_rounds + 1):
@@ -539,12 +549,18 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
         if trust_radius is not None:
             summary.trust_steps = trust_steps(outcome, summary.checks, regions, centres,
                                               config, cfd_repeatability)
-            for beta, step in summary.trust_steps.items():
+            for beta, step in list(summary.trust_steps.items()):
+                run = _run_of(outcome, beta)
+                if beta in centre_runs and run is not None:
+                    step = summary.trust_steps[beta] = replace(step, ran_otherwise=tuple(
+                        as_run_differences(centre_runs[beta], run)))
                 radii[beta] = step.next_radius
                 if step.accepted and beta in points:
                     centres[beta] = points[beta]
+                    centre_runs[beta] = run
             if k == 1:
                 centres, radii = dict(points), {b: float(trust_radius) for b in points}
+                centre_runs = {b: _run_of(outcome, b) for b in points}
         rounds.append(summary)
         _keep_records(outcome.backtests, records)
         progress(describe_round(summary, tolerance))
@@ -743,7 +759,7 @@ def write_rounds(result: LoopResult, config: CaseConfig, out_dir: Path) -> None:
               "yes" if t.on_boundary else "no", f"{t.cfd_decrease:.4g}",
               f"{t.predicted_decrease:.4g}", f"{t.ratio:.3g}" if t.moved else "–",
               ("accepted" if t.accepted else "rejected") if t.moved else "no step",
-              f"{t.next_radius:.3g}"]
+              f"{t.next_radius:.3g}", "; ".join(t.ran_otherwise) or "alike"]
              for r in result.rounds for b, t in r.trust_steps.items()]
     if steps:
         s.blocks.append(text_html(
@@ -754,8 +770,16 @@ def write_rounds(result: LoopResult, config: CaseConfig, out_dir: Path) -> None:
             "stays), below 0.25 the radius halves, above 0.75 on the boundary it doubles."))
         s.blocks.append(table_html(["round", "beta", "radius", "centre", "step / radius",
                                     "on the boundary", "CFD decrease of J",
-                                    "predicted decrease", "ratio", "step", "next radius"],
+                                    "predicted decrease", "ratio", "step", "next radius",
+                                    "CFD runs (centre against optimum)"],
                                    steps))
+        if any(t.ran_otherwise for r in result.rounds for t in r.trust_steps.values()):
+            s.blocks.append(text_html(
+                "Some steps compare CFD runs that did not run alike: a retry of a run whose "
+                "time step collapsed changed its far field or Courant limit, and its CFD "
+                "decrease holds that change as well as the motion's (at the trust series' "
+                "beta = 0.5 optimum, max Co 2 instead of 4 moves the mean thrust by 7 %).",
+                warn=True))
     s.blocks.append(table_html(["round", "CFD runs in the fit", "of them from rounds before",
                                 *(result.rounds[0].coefficients if result.rounds else [])],
                                [[r.index, r.n_cases, r.loop_records_in_fit,

@@ -309,3 +309,19 @@ def test_cycles_are_numbered_by_the_period_they_start_in():
     whole = CycleMeans("x", period, np.array([1.0, 2.0]) * period - 3e-9, np.ones(2),
                        np.ones(2))
     assert list(half.numbers) == [1, 2] and list(whole.numbers) == [2, 3]
+
+
+def test_as_run_differences_name_what_a_retry_changed():
+    from mfflap.backtest.as_run import as_run_differences
+
+    run_a, _ = _record(f"{BETA05}_8_cycles")  # inletOutlet, max Co 2 after its retries
+    run_b, _ = _record(f"{BETA05}_copy1_8_cycles")  # inletOutlet, max Co 4.000004
+    clean, _ = _record(f"{BETA0}_10_cycles")  # freestream, max Co 4
+    copy, _ = _record(f"{BETA0}_copy1_10_cycles")  # max Co 4.000004: a copy, alike
+    assert as_run_differences(run_a, run_b) == ["max Co 2 against 4"]
+    assert as_run_differences(clean, copy) == []
+    assert as_run_differences(clean, run_a) == ["max Co 4 against 2",
+                                                "far field freestream against inletOutlet"]
+    # a record that does not say is not taken as different
+    bare = type(clean)(clean.name, clean.state, clean.loads, clean.parameters, {})
+    assert as_run_differences(bare, run_a) == []

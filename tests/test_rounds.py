@@ -807,6 +807,17 @@ def test_rounds_in_a_trust_region_take_the_steps_cfd_confirms_until_one_collapse
     assert float(second["trust_steps"]["0"]["ratio"]) == pytest.approx(1.0, abs=0.01)
     assert second["trust_steps"]["1"]["on_boundary"]
     assert second["trust_steps"]["1"]["next_radius"] == 0.5  # doubled
+    # the runs round 2 compares were retried differently (README, "How long a back-test
+    # runs"): the centres' with the inletOutlet far field (beta = 0) and at max Co 4
+    # (beta = 0.5), the optima's with the freestream one and at max Co 2; round 3's alike
+    assert second["trust_steps"]["0"]["ran_otherwise"] == ["far field inletOutlet against "
+                                                           "freestream"]
+    assert second["trust_steps"]["0.5"]["ran_otherwise"] == ["max Co 4 against 2"]
+    assert second["trust_steps"]["1"]["ran_otherwise"] == []
+    assert "did not run alike (centre against optimum: max Co 4 against 2)" in res.stderr
+    assert all(t["ran_otherwise"] == [] for t in third["trust_steps"].values())
+    html = (out / "rounds.html").read_text()
+    assert "max Co 4 against 2" in html and "did not run alike" in html
     b0 = second["checks"]["β = 0"]
     assert abs(b0["thrust_error"]) < 0.03 and abs(b0["power_error"]) < 0.03
     assert b0["cfd_mean_power"] < 45.0 < rounds[0]["checks"]["β = 0"]["cfd_mean_power"]

@@ -226,6 +226,9 @@ class TrustStep:
     accepted : whether the optimum becomes the next centre
     next_radius : the radius of the next round
     noise : eps_J, CFD's noise of J at the centre (0: not known; module docstring)
+    ran_otherwise : how the optimum's CFD ran otherwise than the centre's (a retry's far
+        field or Courant limit, :func:`~mfflap.backtest.as_run.as_run_differences`; empty:
+        alike), so that ``cfd_decrease`` holds that change as well as the motion's
     """
 
     beta: float
@@ -239,6 +242,7 @@ class TrustStep:
     accepted: bool
     next_radius: float
     noise: float = 0.0
+    ran_otherwise: tuple[str, ...] = ()
 
     @classmethod
     def judged(cls, region: TrustRegion, beta: float, optimum, cfd_centre: float,
@@ -291,7 +295,8 @@ class TrustStep:
                 "predicted_decrease": self.predicted_decrease,
                 "ratio": self.ratio if math.isfinite(self.ratio) else str(self.ratio),
                 "accepted": self.accepted, "next_radius": self.next_radius,
-                "noise": self.noise, "within_noise": self.within_noise}
+                "noise": self.noise, "within_noise": self.within_noise,
+                "ran_otherwise": list(self.ran_otherwise)}
 
 
 def describe_step(step: dict) -> str:
@@ -309,7 +314,9 @@ def describe_step(step: dict) -> str:
                f"(CFD's noise {noise:.3g}; ratio relaxed by it {ratio:.3g}")
             + ("; within CFD's noise" if step.get("within_noise") else "")
             + f"): {'accepted' if step['accepted'] else 'rejected'}, "
-            f"next radius {step['next_radius']:.3g}")
+            f"next radius {step['next_radius']:.3g}"
+            + ("; the CFD runs compared did not run alike (centre against optimum: "
+               + ", ".join(step["ran_otherwise"]) + ")" if step.get("ran_otherwise") else ""))
 
 
 __all__ = [
