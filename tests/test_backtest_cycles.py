@@ -178,6 +178,7 @@ def test_a_live_back_test_runs_the_cycles_asked_and_averages_them(tmp_path,
     assert (work / f"backtest_{key}_2.5cycles").is_dir()
     assert not (work / f"backtest_{key}").exists()
     assert read_record_parameters(saved / f"backtest_{key}.h5")["n_cycles"] == 2.5
+    assert read_record(saved / f"backtest_{key}.h5").name == f"backtest_{key}"
     again = CliRunner().invoke(cli, args)
     assert again.exit_code == 0, again.output
     d2 = json.loads(again.stdout)["motions"]["β = 0.5"]

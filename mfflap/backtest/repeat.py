@@ -167,8 +167,7 @@ def repeat_runs(motion, label: str, model, max_power: float, *, copies: int,
                 continue
         if progress is not None:
             progress(f"copy {k} of {copies}: Courant limit {limit!r}")
-        case = name if n_cycles == 3 else f"{name}_{n_cycles:g}cycles"
-        record = run_backtest_case(motion, label, case, work_dir=work_dir, n_cycles=n_cycles,
+        record = run_backtest_case(motion, label, name, work_dir=work_dir, n_cycles=n_cycles,
                                    mesh=mesh, solver=copy_settings(solver, k), plate=plate,
                                    fluid=fluid, stream=stream, progress=progress,
                                    parameters={"copy": k})

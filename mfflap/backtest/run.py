@@ -128,10 +128,11 @@ def run_backtest_case(motion: DiscreteMotion, label: str, name: str, *,
                       plate=None, fluid=None, stream=None,
                       progress: Callable[[str], None] | None = None,
                       parameters: dict | None = None) -> CfdRecord:
-    """Run the back-test CFD of ``motion`` as the case ``work_dir/name``: the periodic
-    spline through its cycle (:func:`cfd_motion`) after a start-up ramp of half a period,
-    for ``n_cycles`` periods, written every quarter of the run (a killed run resumes from
-    there). The record's parameters say so, with ``parameters`` added.
+    """Run the back-test CFD of ``motion``, the record ``name``: the periodic spline through
+    its cycle (:func:`cfd_motion`) after a start-up ramp of half a period, for ``n_cycles``
+    periods, written every quarter of the run (a killed run resumes from there). Its case
+    is ``work_dir/name``, with ``_<n>cycles`` after it for other than 3 periods (so that a
+    work folder holds both). The record's parameters say so, with ``parameters`` added.
 
     Raises
     ------
@@ -147,7 +148,8 @@ def run_backtest_case(motion: DiscreteMotion, label: str, name: str, *,
               "motion_key": motion_key(motion), **(parameters or {})}
     settings = None if solver is None else replace(solver,
                                                    write_interval=n_cycles * period / 4)
-    return run_motion(Path(work_dir) / name, spline, name, params, n_cycles * period,
+    case = name if n_cycles == 3 else f"{name}_{n_cycles:g}cycles"
+    return run_motion(Path(work_dir) / case, spline, name, params, n_cycles * period,
                       mesh=mesh, ramp_time=0.5 * period, plate=plate, fluid=fluid,
                       stream=stream, solver=settings, progress=progress)
 
@@ -168,9 +170,8 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
     live
         Run OpenFOAM (requires it installed and ``work_dir``).
     n_cycles
-        Periods a live run simulates (its case is ``backtest_<key>``, or
-        ``backtest_<key>_<n>cycles`` for other than 3, so that a work folder holds both).
-        A record of this motion run for fewer periods is not taken for a live run.
+        Periods a live run simulates (:func:`run_backtest_case`). A record of this motion
+        run for fewer periods is not taken for a live run.
     average_cycles
         The CFD and model means are those over the last ``average_cycles`` whole cycles
         (:func:`~mfflap.backtest.compare.compare_last_cycle`); a record with fewer after its
@@ -205,9 +206,8 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
             source = "no work folder for the live run"
         else:
             name = f"backtest_{key}"
-            case = name if n_cycles == 3 else f"{name}_{n_cycles:g}cycles"
             try:
-                record = run_backtest_case(motion, label, case, work_dir=work_dir,
+                record = run_backtest_case(motion, label, name, work_dir=work_dir,
                                            n_cycles=n_cycles, mesh=mesh, solver=solver,
                                            plate=plate, fluid=fluid, stream=stream,
                                            progress=progress)
