@@ -551,7 +551,7 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
                                               config, cfd_repeatability)
             for beta, step in list(summary.trust_steps.items()):
                 run = _run_of(outcome, beta)
-                if beta in centre_runs and run is not None:
+                if centre_runs.get(beta) is not None and run is not None:
                     step = summary.trust_steps[beta] = replace(step, ran_otherwise=tuple(
                         as_run_differences(centre_runs[beta], run)))
                 radii[beta] = step.next_radius

@@ -193,8 +193,7 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
     from mfflap.cfd.openfoam.runner import openfoam_available
 
     key = motion_key(motion)
-    spline = cfd_motion(motion)
-    period = spline.period
+    period = cfd_motion(motion).period
     folders = [Path(f) for f in fixture_folders if Path(f).is_dir()]
     record, before = (_done_before(motion, key, done_folders, model, mesh, solver, n_cycles)
                       if live else (None, None))

@@ -57,17 +57,16 @@ def add_backtest_sections(rep: Report, outcomes: Mapping[str, BacktestOutcome],
                      c.cfd_mean_power, c.model_mean_power, c.nrmse["thrust"],
                      c.pearson["thrust"], c.cfd_max_power,
                      "yes" if c.max_power_ok else "NO"])
-    averaged = [o.comparison for o in outcomes.values()
-                if o.comparison is not None and o.comparison.cycles_averaged > 1]
+    averaged = {label: o.comparison for label, o in outcomes.items()
+                if o.comparison is not None and o.comparison.cycles_averaged > 1}
     if averaged:
         s.blocks.append(text_html(
-            "Means over the last " + ", ".join(sorted({str(c.cycles_averaged) for c in averaged}))
+            "Means over the last "
+            + ", ".join(sorted({str(c.cycles_averaged) for c in averaged.values()}))
             + " whole cycles of each run (curves, NRMSE and maximum power: the last cycle's); "
             "CFD's standard errors from its cycle means: " + "; ".join(
-                f"{label} thrust ± {o.comparison.cfd_thrust_standard_error:.2g} N, power ± "
-                f"{o.comparison.cfd_power_standard_error:.2g} W"
-                for label, o in outcomes.items()
-                if o.comparison is not None and o.comparison.cycles_averaged > 1) + "."))
+                f"{label} thrust ± {c.cfd_thrust_standard_error:.2g} N, power ± "
+                f"{c.cfd_power_standard_error:.2g} W" for label, c in averaged.items()) + "."))
     s.blocks.append(table_html(["motion", "status", "CFD from", "CFD thrust [N]",
                                 "model thrust [N]", "CFD power [W]", "model power [W]",
                                 "NRMSE thrust", "Pearson thrust", "CFD max power [W]",
