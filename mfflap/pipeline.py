@@ -44,6 +44,9 @@ class RunOptions:
     backtest_cycles: float = 3.0
     #: whole cycles the back-test's CFD and model means are taken over (1: the last)
     average_cycles: int = 1
+    #: a live back-test's retries rerun it from t = 0 s: one set-up throughout
+    #: (:func:`~mfflap.campaign.openfoam_run.run_motion`)
+    retries_from_start: bool = False
     #: keep the optimisation within what the identification cases reach
     #: (:func:`within_data_config`)
     within_data: bool = False
@@ -356,7 +359,8 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
             work_dir=options.work_dir, mesh=options.mesh, progress=progress,
             # those done before a failure or Ctrl-C are kept in outcome.backtests
             into=outcome.backtests, done_folders=options.done_backtests,
-            n_cycles=options.backtest_cycles, average_cycles=options.average_cycles))
+            n_cycles=options.backtest_cycles, average_cycles=options.average_cycles,
+            retries_from_start=options.retries_from_start))
         for label, o in outcome.backtests.items():
             if o.status != "back-tested":
                 outcome.problems.append(f"back-test: {label} not back-tested: {o.source}")

@@ -434,6 +434,19 @@ def _run_of(outcome, beta: float):
     return None if found is None else found.record
 
 
+def _mixed_set_up(outcome, beta: float, whose: str) -> list[str]:
+    """``whose`` run's compared cycles mixing two set-ups (a retry resumed it part-way
+    through them), said for a trust step's ``ran_otherwise``; empty if not."""
+    from mfflap.optimisation.store import beta_label
+
+    found = outcome.backtests.get(beta_label(beta))
+    c = None if found is None else found.comparison
+    if c is None or not c.compared_cycles_mixed_set_up:
+        return []
+    return [f"{whose}'s compared cycles mix two set-ups (its settings changed at t = "
+            f"{c.cfd_settings_since_s:.4g} s, after t = {c.compared_from_s:.4g} s)"]
+
+
 def _keep_records(backtests: dict, folder: Path) -> None:
     """Write each back-tested motion's CFD record into ``folder`` under its own name (a
     fixture found within the look-up's tolerance keeps the name of the motion it ran)."""
@@ -503,6 +516,7 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
     centres: dict = {}  # beta -> the trust region's centre with its CFD (trust_radius)
     radii: dict[float, float] = {}  # beta -> the trust region's radius
     centre_runs: dict = {}  # beta -> the centre's CFD record (how it ran: as_run_differences)
+    centre_mixed: dict = {}  # beta -> whether the centre's compared cycles mix two set-ups
     visited: dict = {}  # beta -> every back-tested optimum with its own CFD (first_order)
     converged, why = False, f"ran the {n_rounds} round(s) asked for"
     for k in range(1, n_rounds + 1):
@@ -551,16 +565,21 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
                                               config, cfd_repeatability)
             for beta, step in list(summary.trust_steps.items()):
                 run = _run_of(outcome, beta)
+                mixed = _mixed_set_up(outcome, beta, "the optimum")
                 if centre_runs.get(beta) is not None and run is not None:
                     step = summary.trust_steps[beta] = replace(step, ran_otherwise=tuple(
-                        as_run_differences(centre_runs[beta], run)))
+                        as_run_differences(centre_runs[beta], run)
+                        + centre_mixed.get(beta, []) + mixed))
                 radii[beta] = step.next_radius
                 if step.accepted and beta in points:
                     centres[beta] = points[beta]
                     centre_runs[beta] = run
+                    centre_mixed[beta] = [m.replace("the optimum", "the centre", 1)
+                                          for m in mixed]
             if k == 1:
                 centres, radii = dict(points), {b: float(trust_radius) for b in points}
                 centre_runs = {b: _run_of(outcome, b) for b in points}
+                centre_mixed = {b: _mixed_set_up(outcome, b, "the centre") for b in points}
         rounds.append(summary)
         _keep_records(outcome.backtests, records)
         progress(describe_round(summary, tolerance))
@@ -778,7 +797,9 @@ def write_rounds(result: LoopResult, config: CaseConfig, out_dir: Path) -> None:
                 "Some steps compare CFD runs that did not run alike: a retry of a run whose "
                 "time step collapsed changed its far field or Courant limit, and its CFD "
                 "decrease holds that change as well as the motion's (at the trust series' "
-                "beta = 0.5 optimum, max Co 2 instead of 4 moves the mean thrust by 7 %).",
+                "beta = 0.5 optimum, max Co 2 instead of 4 moves the mean thrust by 7 %); "
+                "a run resumed part-way by a retry may mix two set-ups in the cycles "
+                "compared. --retries-from-start reruns a retried run from t = 0 s.",
                 warn=True))
     s.blocks.append(table_html(["round", "CFD runs in the fit", "of them from rounds before",
                                 *(result.rounds[0].coefficients if result.rounds else [])],

@@ -11,6 +11,8 @@ instead of 4 moves the settled mean thrust by 7 % (README, "How long a back-test
 
 from __future__ import annotations
 
+import re
+
 from mfflap.campaign.records import CfdRecord
 
 #: (what it is called, the as-run provenance key, the written one it falls back to)
@@ -45,4 +47,22 @@ def as_run_differences(first: CfdRecord, second: CfdRecord) -> list[str]:
     return out
 
 
-__all__ = ["COMPARED", "as_run_differences"]
+#: where a retry in a record's ``retries`` provenance (the lines of
+#: :data:`~mfflap.campaign.openfoam_run.RETRY_LOG`) restarted the run from: group 1 a
+#: resume's written time, else a rerun from the start
+_RESTART = re.compile(r"resumed from t = ([0-9.eE+-]+) s with |rerun from t = 0(?: s)? with ")
+
+
+def as_run_since_s(record: CfdRecord) -> float:
+    """The flow time since which ``record`` ran the settings it ran last with (its
+    ``as_run_*`` provenance), s: 0 when it ran one set-up throughout (no retry, or every
+    retry reran it from t = 0 s, as ``run_motion(..., retries_from_start=True)`` does), else
+    the written time its last retry resumed from. Its cycles before then ran with the
+    settings before that retry."""
+    found = list(_RESTART.finditer(str(record.provenance.get("retries") or "")))
+    if not found or found[-1].group(1) is None:
+        return 0.0
+    return float(found[-1].group(1))
+
+
+__all__ = ["COMPARED", "as_run_differences", "as_run_since_s"]

@@ -32,6 +32,10 @@ class BacktestComparison:
         the curves, NRMSE, Pearson and maximum power are the last cycle's
     cfd_thrust_standard_error : N; cfd_power_standard_error : W; of the CFD means over
         ``cycles_averaged`` cycles (:class:`~mfflap.backtest.cycles.CycleMeans`; NaN with one)
+    compared_from_s : s, where the cycles the CFD means are taken over start
+    cfd_settings_since_s : s, since when the CFD ran the settings it ended with
+        (:func:`~mfflap.backtest.as_run.as_run_since_s`: 0 unless a retry resumed it
+        part-way with another far field or Courant limit)
     """
 
     time: np.ndarray
@@ -52,6 +56,23 @@ class BacktestComparison:
     cycles_averaged: int = 1
     cfd_thrust_standard_error: float = float("nan")
     cfd_power_standard_error: float = float("nan")
+    compared_from_s: float = float("nan")
+    cfd_settings_since_s: float = 0.0
+
+    @property
+    def compared_cycles_mixed_set_up(self) -> bool:
+        """Whether the CFD's settings changed within the cycles its means are taken over
+        (a retry resumed the run part-way through them): those means mix two set-ups."""
+        return bool(self.cfd_settings_since_s > self.compared_from_s + 1e-9)
+
+    def describe_mixed_set_up(self) -> str:
+        """Why the compared cycles mix two set-ups ('' when they do not)."""
+        if not self.compared_cycles_mixed_set_up:
+            return ""
+        return (f"the CFD's settings changed at t = {self.cfd_settings_since_s:.4g} s (a retry "
+                f"resumed it with another far field or Courant limit), within the cycles "
+                f"compared from t = {self.compared_from_s:.4g} s: its means mix two set-ups "
+                "(rerun with --retries-from-start, or more --cycles)")
 
     @property
     def mean_thrust_error(self) -> float:
@@ -90,7 +111,10 @@ class BacktestComparison:
                 "cycles_averaged": self.cycles_averaged,
                 "cfd_thrust_standard_error": _or_none(self.cfd_thrust_standard_error),
                 "cfd_power_standard_error": _or_none(self.cfd_power_standard_error),
-                "cycle_scatter": _or_none(self.cycle_scatter)}
+                "cycle_scatter": _or_none(self.cycle_scatter),
+                "compared_from_s": _or_none(self.compared_from_s),
+                "cfd_settings_since_s": self.cfd_settings_since_s,
+                "compared_cycles_mixed_set_up": self.compared_cycles_mixed_set_up}
 
 
 def _or_none(value: float) -> float | None:
@@ -117,6 +141,7 @@ def compare_last_cycle(record: CfdRecord, model, period: float,
         ``average_cycles`` more than the whole cycles the record holds after its start-up
         (key ``average_cycles``).
     """
+    from mfflap.backtest.as_run import as_run_since_s
     from mfflap.backtest.cycles import cycle_means
 
     averaged = (None if average_cycles == 1
@@ -154,14 +179,15 @@ def compare_last_cycle(record: CfdRecord, model, period: float,
              "model_mean_thrust": time_mean(tl, m_thrust[last]),
              "cfd_mean_power": time_mean(tl, c_power[last]),
              "model_mean_power": time_mean(tl, m_power[last])}
-    errors = {}
+    errors = {"compared_from_s": float(tl[0]), "cfd_settings_since_s": as_run_since_s(record)}
     if averaged is not None:
         window = t >= averaged.start_s[0]
         means = {"cfd_mean_thrust": averaged.mean_thrust,
                  "model_mean_thrust": time_mean(t[window], m_thrust[window]),
                  "cfd_mean_power": averaged.mean_power,
                  "model_mean_power": time_mean(t[window], m_power[window])}
-        errors = {"cycles_averaged": averaged.n_cycles,
+        errors |= {"compared_from_s": float(averaged.start_s[0]),
+                   "cycles_averaged": averaged.n_cycles,
                   "cfd_thrust_standard_error": averaged.thrust_standard_error,
                   "cfd_power_standard_error": averaged.power_standard_error}
     return BacktestComparison(

@@ -126,12 +126,13 @@ def repeat_runs(motion, label: str, model, max_power: float, *, copies: int,
                 work_dir: str | Path, save_to: str | Path | None = None, n_cycles: float = 3.0,
                 mesh: str = "coarse", solver=None, plate=None, fluid=None, stream=None,
                 progress: Callable[[str], None] | None = None,
-                average_cycles: int = 1) -> Repeatability:
+                average_cycles: int = 1, retries_from_start: bool = False) -> Repeatability:
     """Run ``motion`` ``copies`` times in OpenFOAM (module docstring) and compare them: their
     last cycles, or their means over the last ``average_cycles`` cycles.
 
-    ``mesh``, ``solver``, ``plate``, ``fluid`` and ``stream`` as for a live back-test
-    (:func:`~mfflap.backtest.run.backtest_motion`). Each copy is a case
+    ``mesh``, ``solver``, ``plate``, ``fluid``, ``stream`` and ``retries_from_start`` as for
+    a live back-test (:func:`~mfflap.backtest.run.backtest_motion`; a saved copy retried
+    part-way is then run again). Each copy is a case
     ``work_dir/backtest_<key>_copy<k>`` (with ``_<n>cycles`` after it for other than 3
     periods; a killed run resumes there) and, with ``save_to``, a record
     ``backtest_<key>_copy<k>.h5`` there, which a later call for as many periods takes
@@ -144,6 +145,7 @@ def repeat_runs(motion, label: str, model, max_power: float, *, copies: int,
     MfflapError
         A copy's run failed (the copies before it are kept).
     """
+    from mfflap.backtest.as_run import as_run_since_s
     from mfflap.backtest.run import cfd_motion, motion_key, run_backtest_case
     from mfflap.campaign.records import read_record, write_record
 
@@ -160,7 +162,9 @@ def repeat_runs(motion, label: str, model, max_power: float, *, copies: int,
             record = read_record(saved)
             had = float(record.provenance.get("solver_max_courant", float("nan")))
             cycles = float(record.parameters.get("n_cycles", 3.0))
-            if np.isclose(had, limit, rtol=1e-12, atol=0) and np.isclose(cycles, n_cycles):
+            part_way = retries_from_start and as_run_since_s(record) > 0.0
+            if (np.isclose(had, limit, rtol=1e-12, atol=0) and np.isclose(cycles, n_cycles)
+                    and not part_way):
                 if progress is not None:
                     progress(f"copy {k} of {copies}: taken from {saved}")
                 records.append(record)
@@ -170,7 +174,8 @@ def repeat_runs(motion, label: str, model, max_power: float, *, copies: int,
         record = run_backtest_case(motion, label, name, work_dir=work_dir, n_cycles=n_cycles,
                                    mesh=mesh, solver=copy_settings(solver, k), plate=plate,
                                    fluid=fluid, stream=stream, progress=progress,
-                                   parameters={"copy": k})
+                                   parameters={"copy": k},
+                                   retries_from_start=retries_from_start)
         if saved is not None:
             write_record(saved, record, single_precision=True)
         records.append(record)

@@ -89,13 +89,20 @@ def _matching_fixture(key: str, motion: DiscreteMotion, folders: Sequence[Path],
 
 
 def _other_set_up(record: CfdRecord, mesh: str | AnyMeshSpec,
-                  solver: SolverSettings | None, n_cycles: float = 3.0) -> str | None:
+                  solver: SolverSettings | None, n_cycles: float = 3.0,
+                  retries_from_start: bool = False) -> str | None:
     """How a fixture's run differs from the live run asked for (its mesh, a solver setting
-    its provenance gives, fewer periods), or None: then it is the CFD that run would have
-    been (a longer run holds the shorter one's cycles after its own start-up too)."""
+    its provenance gives, fewer periods, with ``retries_from_start`` a retry part-way), or
+    None: then it is the CFD that run would have been (a longer run holds the shorter one's
+    cycles after its own start-up too)."""
+    from mfflap.backtest.as_run import as_run_since_s
+
     had_cycles = float(record.parameters.get("n_cycles", 3.0))
     if had_cycles < n_cycles - 1e-9:
         return f"for {had_cycles:g} periods, not {n_cycles:g} as asked"
+    if retries_from_start and (since := as_run_since_s(record)) > 0.0:
+        return (f"with a retry that resumed it from t = {since:.4g} s, not one set-up "
+                "throughout as --retries-from-start asks")
     asked_mesh = mesh if isinstance(mesh, str) else mesh.name
     had_mesh = record.provenance.get("mesh")
     if had_mesh is not None and had_mesh != asked_mesh:
@@ -108,7 +115,8 @@ def _other_set_up(record: CfdRecord, mesh: str | AnyMeshSpec,
 
 def _done_before(motion: DiscreteMotion, key: str, folders: Sequence[str | Path], model,
                  mesh: str | AnyMeshSpec, solver: SolverSettings | None,
-                 n_cycles: float = 3.0) -> tuple[CfdRecord | None, Path | None]:
+                 n_cycles: float = 3.0, retries_from_start: bool = False
+                 ) -> tuple[CfdRecord | None, Path | None]:
     """The record of this motion in ``folders`` (by key, else within the fixtures'
     tolerance) and its path if it was run for this case on the mesh and solver settings asked
     (else None, None: it is to be run)."""
@@ -117,7 +125,8 @@ def _done_before(motion: DiscreteMotion, key: str, folders: Sequence[str | Path]
         return None, None
     record = read_record(path)
     if input_mismatches(record, model.plate, model.fluid, model.stream,
-                        folder_setup(path)) or _other_set_up(record, mesh, solver, n_cycles):
+                        folder_setup(path)) or _other_set_up(record, mesh, solver, n_cycles,
+                                                             retries_from_start):
         return None, None
     return record, path
 
@@ -127,12 +136,15 @@ def run_backtest_case(motion: DiscreteMotion, label: str, name: str, *,
                       mesh: str | AnyMeshSpec = "coarse", solver: SolverSettings | None = None,
                       plate=None, fluid=None, stream=None,
                       progress: Callable[[str], None] | None = None,
-                      parameters: dict | None = None) -> CfdRecord:
+                      parameters: dict | None = None,
+                      retries_from_start: bool = False) -> CfdRecord:
     """Run the back-test CFD of ``motion``, the record ``name``: the periodic spline through
     its cycle (:func:`cfd_motion`) after a start-up ramp of half a period, for ``n_cycles``
     periods, written every quarter of the run (a killed run resumes from there). Its case
     is ``work_dir/name``, with ``_<n>cycles`` after it for other than 3 periods (so that a
     work folder holds both). The record's parameters say so, with ``parameters`` added.
+    ``retries_from_start``: a retry reruns the case from t = 0 s, so that the record ran one
+    set-up throughout (:func:`~mfflap.campaign.openfoam_run.run_motion`).
 
     Raises
     ------
@@ -151,7 +163,8 @@ def run_backtest_case(motion: DiscreteMotion, label: str, name: str, *,
     case = name if n_cycles == 3 else f"{name}_{n_cycles:g}cycles"
     return run_motion(Path(work_dir) / case, spline, name, params, n_cycles * period,
                       mesh=mesh, ramp_time=0.5 * period, plate=plate, fluid=fluid,
-                      stream=stream, solver=settings, progress=progress)
+                      stream=stream, solver=settings, progress=progress,
+                      retries_from_start=retries_from_start)
 
 
 def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float, *,
@@ -162,7 +175,8 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
                     solver: SolverSettings | None = None,
                     progress: Callable[[str], None] | None = None,
                     done_folders: Sequence[str | Path] = (),
-                    average_cycles: int = 1) -> BacktestOutcome:
+                    average_cycles: int = 1,
+                    retries_from_start: bool = False) -> BacktestOutcome:
     """Back-test one periodic motion: run or find its CFD, compare the last cycle.
 
     Parameters
@@ -172,6 +186,10 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
     n_cycles
         Periods a live run simulates (:func:`run_backtest_case`). A record of this motion
         run for fewer periods is not taken for a live run.
+    retries_from_start
+        A live run's retries rerun it from t = 0 s, so that it runs one set-up throughout
+        (:func:`~mfflap.campaign.openfoam_run.run_motion`); a record of this motion retried
+        part-way is then not taken for it.
     average_cycles
         The CFD and model means are those over the last ``average_cycles`` whole cycles
         (:func:`~mfflap.backtest.compare.compare_last_cycle`); a record with fewer after its
@@ -195,8 +213,8 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
     key = motion_key(motion)
     period = cfd_motion(motion).period
     folders = [Path(f) for f in fixture_folders if Path(f).is_dir()]
-    record, before = (_done_before(motion, key, done_folders, model, mesh, solver, n_cycles)
-                      if live else (None, None))
+    record, before = (_done_before(motion, key, done_folders, model, mesh, solver, n_cycles,
+                                   retries_from_start) if live else (None, None))
     source = "" if before is None else f"live OpenFOAM, run before ({before})"
     if live and record is None:
         if not openfoam_available():
@@ -209,7 +227,8 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
                 record = run_backtest_case(motion, label, name, work_dir=work_dir,
                                            n_cycles=n_cycles, mesh=mesh, solver=solver,
                                            plate=plate, fluid=fluid, stream=stream,
-                                           progress=progress)
+                                           progress=progress,
+                                           retries_from_start=retries_from_start)
                 source = "live OpenFOAM"
                 if save_to is not None:
                     write_record(Path(save_to) / f"{name}.h5", record, single_precision=True)
@@ -229,7 +248,7 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
         mismatches = [] if found is None else input_mismatches(
             found, model.plate, model.fluid, model.stream, folder_setup(path))
         other_setup = (None if found is None or not live
-                       else _other_set_up(found, mesh, solver, n_cycles))
+                       else _other_set_up(found, mesh, solver, n_cycles, retries_from_start))
         if mismatches:  # the same motion, but not this case's CFD: its plate, fluid, stream
             m = mismatches[0]
             source = ((f"{source}; " if source else "")

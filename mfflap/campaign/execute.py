@@ -64,6 +64,10 @@ class CampaignSetup:
     #: store records in float32 like the shipped fixtures (half the size), so that a fixture
     #: campaign commits each record once instead of at full precision and again compacted
     single_precision: bool = False
+    #: a retried run reruns from t = 0 s, one set-up throughout
+    #: (:func:`~mfflap.campaign.openfoam_run.run_motion`); how a run is retried, not what it
+    #: computes: not in campaign.toml, and a campaign may go on with it changed
+    retries_from_start: bool = False
 
     def as_dict(self) -> dict[str, Any]:
         """Plain nested values for campaign.toml (what the runs depend on, and the time
@@ -142,7 +146,8 @@ def run_one(case: CampaignCase, out_dir: str, setup: CampaignSetup) -> CaseStatu
                                 {"kind": case.kind, **case.as_dict()}, case.duration,
                                 mesh=setup.mesh, ramp_time=case.ramp_time, solver=solver,
                                 plate=setup.plate, fluid=setup.fluid, stream=setup.stream,
-                                timeout_s=setup.timeout_s)
+                                timeout_s=setup.timeout_s,
+                                retries_from_start=setup.retries_from_start)
         write_record(record_path, record, single_precision=setup.single_precision)
     except CaseBusyError as exc:  # not a failure: the process running it records it
         return CaseStatus(case.case_id, "busy", str(exc).splitlines()[0])

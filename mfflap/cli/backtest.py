@@ -8,7 +8,7 @@ import click
 import numpy as np
 
 from mfflap.cli.json_output import echo_json
-from mfflap.cli.options import mesh_and_setup_options, refuse_given
+from mfflap.cli.options import mesh_and_setup_options, refuse_given, retries_from_start_option
 
 
 @click.command()
@@ -44,12 +44,13 @@ from mfflap.cli.options import mesh_and_setup_options, refuse_given
                    "means (one cycle's mean can lie 10 % or more from the run's: README, "
                    "'How long a back-test runs'); curves, NRMSE and maximum power stay the "
                    "last cycle's.")
+@retries_from_start_option()
 @click.option("--json", "as_json", is_flag=True)
 def backtest(optimisation_file: Path, live: bool, work_dir: Path,
              fixture_folders: tuple[Path, ...], save_to: Path | None, only: tuple[str, ...],
              mesh: str | None, setup_name: str | None, wall_treatment: str | None,
              repeat: int | None, cycles: float | None, average_cycles: int,
-             as_json: bool) -> None:
+             retries_from_start: bool, as_json: bool) -> None:
     """Back-test the optimised motions (and the best sinusoid) of OPTIMISATION_FILE.
 
     Ctrl-C stops the run in flight and shows the motions back-tested before it. The exit
@@ -65,7 +66,7 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
 
     if not live:  # the fixtures' runs are read as they were made
         refuse_given(("work_dir", "save_to", "mesh", "setup_name", "wall_treatment",
-                      "repeat", "cycles"),
+                      "repeat", "cycles", "retries_from_start"),
                      "live runs (--live); without it the back-test reads CFD records "
                      "(--fixtures), run on the mesh and set-up they were made with")
     n_cycles = check_cycles(cycles, average_cycles)
@@ -89,7 +90,7 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
         f"{k} {v:.3g}" for k, v in model.coefficients.items()), err=True)
     if repeat is not None:
         _repeat(case, motions, model, repeat, work_dir, save_to, spec.name, solver, as_json,
-                n_cycles, average_cycles)
+                n_cycles, average_cycles, retries_from_start)
         return
     folders = list(fixture_folders) or backtest_fixture_dirs()
     outcomes: dict = {}
@@ -99,7 +100,7 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
                      live=live, work_dir=work_dir, save_to=save_to, mesh=spec.name,
                      solver=solver, progress=lambda m: click.echo(m, err=True), into=outcomes,
                      done_folders=() if save_to is None else (save_to,), n_cycles=n_cycles,
-                     average_cycles=average_cycles)
+                     average_cycles=average_cycles, retries_from_start=retries_from_start)
     except KeyboardInterrupt:  # the solver is stopped by then; show what was back-tested
         interrupted = next((label for label in motions if label not in outcomes), "the last")
     from mfflap.performance import discrete_means
@@ -150,7 +151,7 @@ def check_cycles(cycles: float | None, average_cycles: int, option: str = "--cyc
 
 def _repeat(case, motions: dict, model, copies: int, work_dir: Path, save_to: Path | None,
             mesh: str, solver, as_json: bool, n_cycles: float = 3.0,
-            average_cycles: int = 1) -> None:
+            average_cycles: int = 1, retries_from_start: bool = False) -> None:
     """``--repeat``: each motion's copies (:func:`mfflap.backtest.repeat.repeat_runs`)."""
     from mfflap.backtest.repeat import repeat_runs
     from mfflap.cfd.openfoam.case_path import check_case_path
@@ -165,7 +166,7 @@ def _repeat(case, motions: dict, model, copies: int, work_dir: Path, save_to: Pa
             motion, label, model, case.optimisation.max_power, copies=copies,
             work_dir=work_dir, save_to=save_to, mesh=mesh, solver=solver, plate=case.plate,
             fluid=case.fluid, stream=case.flow, n_cycles=n_cycles,
-            average_cycles=average_cycles,
+            average_cycles=average_cycles, retries_from_start=retries_from_start,
             progress=lambda m, label=label: click.echo(f"repeat {label}: {m}", err=True))
     if as_json:
         echo_json({"repeatability": {label: r.as_dict() for label, r in found.items()}})
@@ -266,6 +267,9 @@ def _show(outcomes: dict, as_json: bool, scales: dict | None = None,
                        f"{c['mean_thrust']:.3f} N, {c['mean_power']:.3f} W")
         if "instead of a live run" in d["source"]:  # said here, not only in the progress
             click.echo(f"{'':14s} CFD: {d['source']}")
+        if d["compared_cycles_mixed_set_up"]:
+            click.echo(f"{'':14s} WARNING: "
+                       + outcomes[label].comparison.describe_mixed_set_up())
     scattered = [(d["cycle_scatter"], label) for label, d in data.items()
                  if d.get("cycle_scatter") is not None and d["cycles_averaged"] >= 3]
     if scattered:

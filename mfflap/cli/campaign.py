@@ -18,6 +18,7 @@ from mfflap.cli.options import (
     ResultsOutput,
     mesh_and_setup_options,
     refuse_given,
+    retries_from_start_option,
 )
 
 
@@ -61,6 +62,7 @@ def campaign() -> None:
               "finished cases whose forces leave what the motion can drive (status 'lost'; "
               "their records kept as <case>.lost.h5).")
 @click.option("--keep-cases", is_flag=True, help="Keep the OpenFOAM case folders.")
+@retries_from_start_option("A run")
 @click.option("--single-precision", is_flag=True,
               help="Store the records in float32, like the shipped fixtures (half the size).")
 @click.option("--timeout", default=6 * 3600.0, show_default=True, type=POSITIVE,
@@ -72,7 +74,8 @@ def run_cmd(case_file: Path, out_dir: Path, frequencies: list[float] | None,
             heave_amplitudes: list[float] | None, phases: list[float] | None, mesh: str | None,
             setup_name: str | None, wall_treatment: str | None, workers: int,
             scheduler: str | None, retry_failed: bool, keep_cases: bool,
-            single_precision: bool, timeout: float, dry_run: bool) -> None:
+            retries_from_start: bool, single_precision: bool, timeout: float,
+            dry_run: bool) -> None:
     """Run the identification grid of CASE_FILE in OpenFOAM.
 
     Finished cases are never rerun: rerun the same command to continue a campaign that was
@@ -99,7 +102,8 @@ def run_cmd(case_file: Path, out_dir: Path, frequencies: list[float] | None,
     campaign_setup = CampaignSetup(mesh=spec.name, solver=solver, plate=case.plate,
                                    fluid=case.fluid, stream=case.flow, timeout_s=timeout,
                                    keep_case_dirs=keep_cases,
-                                   single_precision=single_precision)
+                                   single_precision=single_precision,
+                                   retries_from_start=retries_from_start)
     if dry_run:  # what the run would do: refused as it would be, or each case's state
         check_same_setup(out_dir, campaign_setup)
         check_same_cases(out_dir, cases)

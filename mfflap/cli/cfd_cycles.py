@@ -28,19 +28,23 @@ def cycles(records: tuple[Path, ...], skip_cycles: int, figure: Path | None,
 
     Cycles are counted back from each run's end, after its start-up ramp, with numerical
     bursts bridged (mfflap.backtest.cycles). The retries a run made (a collapsed time step
-    rerun with another far field or Courant limit) are shown: its cycles before and after
-    them are not of one set-up. A record of the identification's pitch-ramp sinusoids,
-    whose cycles are not meant to repeat, is refused.
+    rerun with another far field or Courant limit) are shown, and the cycles that ran before
+    a retry that resumed the run part-way: they are not of the set-up of the cycles after
+    it (a retry from t = 0 s, mfflap backtest --retries-from-start, leaves one). A record
+    of the identification's pitch-ramp sinusoids, whose cycles are not meant to repeat, is
+    refused.
     """
+    from mfflap.backtest.as_run import as_run_since_s
     from mfflap.backtest.cycles import cycle_means, cycles_figure, record_period
     from mfflap.campaign.records import read_record
 
-    found, retries = [], {}
+    found, retries, since = [], {}, {}
     for path in records:
         record = read_record(path)
-        # a retried run changed its settings part-way (run_motion): its cycles before and
-        # after are not of one set-up
+        # a retry that resumed the run part-way changed its settings there (run_motion):
+        # its cycles before and after are not of one set-up
         retries[path] = str(record.provenance.get("retries", "")) or None
+        since[path] = as_run_since_s(record)
         every = cycle_means(record, record_period(record))
         found.append((path, every, every.after(skip_cycles)))
     if figure is not None:
@@ -52,15 +56,27 @@ def cycles(records: tuple[Path, ...], skip_cycles: int, figure: Path | None,
         echo_json({"skip_cycles": skip_cycles, "runs": {
             str(path): {"cycle_numbers": [int(n) for n in every.numbers],
                         "every_cycle": every.as_dict(), "settled": settled.as_dict(),
-                        "retries": retries[path]}
+                        "retries": retries[path], "settings_since_s": since[path],
+                        "cycles_before_settings": [
+                            int(n) for n, t in zip(every.numbers, every.start_s, strict=True)
+                            if t < since[path] - 1e-9]}
             for path, every, settled in found}})
         return
     for path, every, settled in found:
         click.echo(f"{path}: cycles {', '.join(str(n) for n in every.numbers)} after the "
                    f"ramp; thrust {', '.join(f'{t:.4g}' for t in every.thrust)} N; power "
                    f"{', '.join(f'{p:.4g}' for p in every.power)} W")
-        if retries[path]:
-            click.echo(f"  retried part-way, so not one set-up throughout: {retries[path]}")
+        before = [n for n, t in zip(every.numbers, every.start_s, strict=True)
+                  if t < since[path] - 1e-9]
+        if since[path] > 0.0:
+            click.echo(f"  retried part-way, so not one set-up throughout: its settings changed"
+                       f" at t = {since[path]:.4g} s"
+                       + (f"; cycle(s) {', '.join(map(str, before))} ran (at least partly) "
+                          "before that, with other settings" if before else
+                          ", before every whole cycle")
+                       + f" (retries: {retries[path]})")
+        elif retries[path]:
+            click.echo(f"  retried from t = 0 s, so one set-up throughout: {retries[path]}")
         if settled.n_cycles < 2:
             click.echo(f"  settled: cycle {settled.numbers[0]} alone: no cycle-to-cycle "
                        "scatter from one cycle (run more periods, or --skip-cycles 0)")

@@ -215,6 +215,19 @@ def mesh_and_setup_options(runs: str = "") -> Callable:
     return decorate
 
 
+def retries_from_start_option(runs: str = "With --live: a run") -> Callable:
+    """``--retries-from-start`` (:func:`mfflap.campaign.openfoam_run.run_motion`'s
+    ``retries_from_start``); ``runs`` opens its help, saying which runs it applies to."""
+    return click.option(
+        "--retries-from-start", is_flag=True,
+        help=f"{runs} that is retried (its time step collapsed, or its forces left what the "
+             "motion can drive) reruns from t = 0 s with the inletOutlet far field or a "
+             "lower Courant limit, instead of resuming from a written time, so that all its "
+             "cycles ran one set-up (resumed, a back-test's last cycle can straddle the "
+             "change: README, 'Retries and one set-up'). It costs the flow time run before "
+             "the retry again.")
+
+
 def given_options(*names: str) -> list[str]:
     """The options of the running command among the parameters ``names`` that its command
     line gives, as their flags (``work_dir`` given as ``--work`` is ``"--work"``; an on/off

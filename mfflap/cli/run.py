@@ -7,6 +7,7 @@ from pathlib import Path
 import click
 
 from mfflap.cli.json_output import echo_json
+from mfflap.cli.options import retries_from_start_option
 
 
 @click.command("run")
@@ -87,6 +88,7 @@ from mfflap.cli.json_output import echo_json
               help="Compare the back-tests' CFD and model means over their last this many "
                    "whole cycles, with the CFD's standard errors (mfflap backtest "
                    "--average-cycles); with --rounds, the rounds judge those means.")
+@retries_from_start_option()
 @click.option("--json", "as_json", is_flag=True, help="Print the key numbers as JSON.")
 def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
             backtest_fixtures: tuple[Path, ...], live: bool, coefficients: str, starts: int,
@@ -94,7 +96,7 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
             loop_tolerance: float, correct_outputs: bool, correction_gain: float,
             refit: bool, trust_radius: float | None, first_order: bool,
             cfd_repeatability: float | None, backtest_cycles: float | None,
-            average_cycles: int, as_json: bool) -> None:
+            average_cycles: int, retries_from_start: bool, as_json: bool) -> None:
     """Identification, sweep, optimisation, back-test and reports for CASE_FILE.
 
     Writes <out>/report.html (every figure), <out>/results.h5 (every number and the inputs)
@@ -122,8 +124,9 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
                  first_order, correction_gain, cfd_repeatability)
     check_gain(correction_gain)
     if not live:
-        refuse_given(("backtest_cycles",), "live back-tests (--live); without it the "
-                     "back-test reads CFD records, run for as many periods as they were")
+        refuse_given(("backtest_cycles", "retries_from_start"),
+                     "live back-tests (--live); without it the back-test reads CFD records, "
+                     "run for as many periods as they were, with the retries they made")
     n_cycles = check_cycles(backtest_cycles, average_cycles, option="--backtest-cycles")
     case = load_case(case_file)
     out_dir = out_dir or Path(f"{case.study.name}_run")
@@ -132,7 +135,8 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
                          n_starts=starts, with_ipopt=not no_ipopt, gain_table=gain_table,
                          vtk_dir=out_dir / "vtk",  # checked before the folder is made
                          within_data=within_data, backtest_cycles=n_cycles,
-                         average_cycles=average_cycles)
+                         average_cycles=average_cycles,
+                         retries_from_start=retries_from_start)
     out_dir.mkdir(parents=True, exist_ok=True)
     if rounds > 1:
         _run_rounds(case, options, rounds, loop_tolerance, out_dir, sources_shown(fixtures),

@@ -84,7 +84,11 @@ def add_backtest_sections(rep: Report, outcomes: Mapping[str, BacktestOutcome],
     for label, o in outcomes.items():
         if o.comparison is None:
             s.blocks.append(text_html(f"{label}: not back-tested ({o.source}).", warn=True))
-        elif not np.isnan(o.comparison.cycle_to_cycle_thrust_change) and \
+            continue
+        if o.comparison.compared_cycles_mixed_set_up:
+            s.blocks.append(text_html(f"{label}: {o.comparison.describe_mixed_set_up()}.",
+                                      warn=True))
+        if not np.isnan(o.comparison.cycle_to_cycle_thrust_change) and \
                 o.comparison.cycle_to_cycle_thrust_change > 0.05:
             s.blocks.append(text_html(
                 f"{label}: CFD mean thrust changed by "

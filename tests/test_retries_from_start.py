@@ -1,0 +1,252 @@
+"""Retries from t = 0 s (one set-up per run) and the cycles a retry part-way leaves mixed:
+real pimpleFoam reruns, the shipped back-test records that were retried, and the commands
+that say so."""
+
+import json
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from mfflap.backtest.as_run import as_run_since_s
+from mfflap.backtest.compare import compare_last_cycle
+from mfflap.backtest.repeat import copy_settings
+from mfflap.backtest.run import _other_set_up
+from mfflap.campaign.cases import CfdCase
+from mfflap.campaign.openfoam_run import run_motion
+from mfflap.campaign.records import fixture_dir, read_record
+from mfflap.cfd.openfoam.writer import SolverSettings
+from mfflap.cli.main import cli
+from mfflap.hydro import MorisonModel
+
+SHORT = CfdCase(1.0, 0.3, 90.0, 10.0, duration=0.04, ramp_time=0.02)
+FIXTURES = fixture_dir().parent
+#: retried at 4.26 s with the inletOutlet far field, 0.75 of a period before its end
+RESUMED_LATE = FIXTURES / "backtest_within_data" / "backtest_de1ba4adb3e991be.h5"
+#: 8 periods; the inletOutlet far field from t = 0 s, then max Co 2 from t = 6.08 s
+RESUMED_AT_6S = FIXTURES / "cfd_repeatability" / "backtest_34cd2b07c53664ae_8_cycles.h5"
+#: 8 periods; the inletOutlet far field from t = 0 s only: one set-up throughout
+FROM_ZERO = FIXTURES / "cfd_repeatability" / "backtest_34cd2b07c53664ae_copy1_8_cycles.h5"
+
+
+def _with_retries(text: str | None):
+    record = read_record(FROM_ZERO)
+    provenance = {k: v for k, v in record.provenance.items() if k != "retries"}
+    if text is not None:
+        provenance["retries"] = text
+    return replace(record, provenance=provenance)
+
+
+@pytest.mark.parametrize("retries, since", [
+    (None, 0.0),
+    ("time step collapsed at t = 3.0 s; resumed from t = 0 s with the inletOutlet far field",
+     0.0),
+    ("time step collapsed at t = 3.0 s; resumed from t = 2.25 s with the inletOutlet far "
+     "field", 2.25),
+    # the last retry counts: it went back before the first one's resume
+    ("forces beyond what the motion can drive from t = 4.5 s at max Co 4; resumed from "
+     "t = 3.9 s with the inletOutlet far field; time step collapsed at t = 2.1 s; resumed "
+     "from t = 1.5 s with maxCo 2", 1.5),
+    ("time step collapsed at t = 3.0 s; resumed from t = 2.25 s with the inletOutlet far "
+     "field; rerun from t = 0 s with max Co 2: the forces left what the motion can drive "
+     "from t = 2.9 s again, as at max Co 4", 0.0),
+    ("time step collapsed at t = 0.344 s with maxCo 4; rerun from t = 0 with maxCo 2", 0.0),
+])
+def test_the_settings_as_run_hold_since_the_last_retrys_restart(retries, since):
+    assert as_run_since_s(_with_retries(retries)) == since
+
+
+def test_shipped_records_say_where_their_settings_changed():
+    assert as_run_since_s(read_record(RESUMED_LATE)) == pytest.approx(4.2597888856)
+    assert as_run_since_s(read_record(RESUMED_AT_6S)) == pytest.approx(6.0806809)
+    assert as_run_since_s(read_record(FROM_ZERO)) == 0.0
+
+
+def test_a_last_cycle_that_straddles_a_retry_is_flagged_and_averages_say_which():
+    """The shipped back-test resumed 0.75 of a period before its end: its last cycle mixes
+    the freestream far field (max Co 4) and the inletOutlet one. The 8-period run whose
+    Courant limit halved at 6.08 s (2.02 periods after its ramp's end) mixes them in its
+    last 7 cycles, not in its last 5; the run retried from t = 0 s nowhere."""
+    model = MorisonModel()
+    late = compare_last_cycle(read_record(RESUMED_LATE), model,
+                              float(read_record(RESUMED_LATE).parameters["period"]), 1e6)
+    assert late.compared_cycles_mixed_set_up
+    assert late.compared_from_s < late.cfd_settings_since_s < late.time[-1]
+    assert "changed at t = 4.26 s" in late.describe_mixed_set_up()
+    assert late.as_dict()["compared_cycles_mixed_set_up"] is True
+    at_6s = read_record(RESUMED_AT_6S)
+    period = float(at_6s.parameters["period"])
+    five = compare_last_cycle(at_6s, model, period, 1e6, average_cycles=5)
+    seven = compare_last_cycle(at_6s, model, period, 1e6, average_cycles=7)
+    assert not five.compared_cycles_mixed_set_up and five.describe_mixed_set_up() == ""
+    assert seven.compared_cycles_mixed_set_up
+    assert seven.compared_from_s == pytest.approx(at_6s.time[-1] - 7 * period, abs=0.01)
+    once = read_record(FROM_ZERO)
+    assert not compare_last_cycle(once, model, period, 1e6,
+                                  average_cycles=7).compared_cycles_mixed_set_up
+
+
+def test_a_record_retried_part_way_is_not_taken_for_a_run_retried_from_the_start():
+    at_6s, once = read_record(RESUMED_AT_6S), read_record(FROM_ZERO)
+    assert _other_set_up(at_6s, "coarse", SolverSettings(), 8.0) is None
+    why = _other_set_up(at_6s, "coarse", SolverSettings(), 8.0, retries_from_start=True)
+    assert why is not None and "resumed it from t = 6.081 s" in why
+    assert _other_set_up(once, "coarse", copy_settings(None, 1), 8.0,
+                         retries_from_start=True) is None
+
+
+def test_cfd_cycles_names_the_cycles_run_before_a_retry_part_way():
+    result = CliRunner().invoke(cli, ["cfd", "cycles", str(RESUMED_AT_6S), str(FROM_ZERO)])
+    assert result.exit_code == 0, result.output
+    lines = result.output.splitlines()
+    assert ("its settings changed at t = 6.081 s; cycle(s) 2 ran (at least partly) before "
+            "that, with other settings") in lines[1]
+    assert lines[4].startswith("  retried from t = 0 s, so one set-up throughout")
+    result = CliRunner().invoke(cli, ["cfd", "cycles", "--json", str(RESUMED_AT_6S)])
+    run = json.loads(result.output)["runs"][str(RESUMED_AT_6S)]
+    assert run["settings_since_s"] == pytest.approx(6.0806809)
+    assert run["cycles_before_settings"] == [2]
+
+
+@pytest.mark.parametrize("command", [["backtest"], ["run"]])
+def test_retries_from_start_is_refused_without_live_runs(tmp_path, command):
+    target = (str(tmp_path / "missing.h5") if command == ["backtest"]
+              else str(tmp_path / "case.toml"))
+    (tmp_path / "missing.h5").write_bytes(b"")
+    (tmp_path / "case.toml").write_text("")
+    result = CliRunner().invoke(cli, [*command, target, "--retries-from-start"])
+    assert result.exit_code != 0
+    assert "--retries-from-start applies only to live" in result.output
+
+
+@pytest.mark.openfoam
+def test_a_retry_from_the_start_reruns_the_case_from_zero(tmp_path, monkeypatch):
+    """Real pimpleFoam reruns with a scripted bound judgement: the loss at t = 0.036 s is
+    retried from t = 0 s with the inletOutlet far field (resumed, it would have gone on from
+    the write at 0.03 s): the record's forces are the rerun's alone, one set-up."""
+    from mfflap.campaign import openfoam_run
+    from mfflap.cfd.force_envelope import EnvelopeBreach
+
+    verdicts = iter([0.036, None])
+
+    def scripted(*args, **kwargs):
+        start = next(verdicts)
+        return None if start is None else EnvelopeBreach(start, start + 1e-3, 3, start, 5.0)
+
+    monkeypatch.setattr(openfoam_run, "_forces_beyond_bound", scripted)
+    case_dir = tmp_path / "c"
+    rec = run_motion(case_dir, SHORT.motion(), "c", {}, 0.04, ramp_time=0.035,
+                     bound_watch_every_s=1e6, retries_from_start=True)
+    notes = (case_dir / "mfflap_retries.txt").read_text().splitlines()
+    assert notes == ["forces beyond what the motion can drive from t = 0.036 s at max Co 4; "
+                     "resumed from t = 0 s with the inletOutlet far field"]
+    log = (case_dir / "log.pimpleFoam").read_text()
+    assert log.count("Starting time loop") == 2 and log.count("Time = 0.01\n") == 2
+    assert rec.provenance["retries_from_start"] is True
+    assert rec.provenance["as_run_far_field"] == "inletOutlet"
+    assert as_run_since_s(rec) == 0.0
+    assert rec.time[0] < 0.005 and np.all(np.diff(rec.time) > 0)
+    assert rec.time[-1] == pytest.approx(0.04, abs=1e-3)
+
+
+@pytest.mark.openfoam
+def test_a_collapsed_run_retried_from_the_start_reruns_from_zero(tmp_path, monkeypatch):
+    """The first (real) run is reported collapsed at its end: retried from the start, the
+    second runs the whole 0.04 s again with the inletOutlet far field."""
+    from mfflap.campaign import openfoam_run
+    from mfflap.errors import CfdRunError
+
+    real = openfoam_run.run_case
+    calls = []
+
+    def collapses_once(case_dir, **kwargs):
+        real(case_dir, **kwargs)
+        calls.append(case_dir)
+        if len(calls) == 1:
+            raise CfdRunError("time step collapsed to 1e-09 s at t = 0.04 s", case=str(case_dir))
+
+    monkeypatch.setattr(openfoam_run, "run_case", collapses_once)
+    case_dir = tmp_path / "c"
+    rec = run_motion(case_dir, SHORT.motion(), "c", {}, 0.04, ramp_time=0.02,
+                     bound_watch_every_s=1e6, retries_from_start=True)
+    assert len(calls) == 2
+    assert (case_dir / "mfflap_retries.txt").read_text().splitlines() == [
+        "time step collapsed at t = 0.04 s; resumed from t = 0 s with the inletOutlet far "
+        "field"]
+    assert (case_dir / "log.pimpleFoam").read_text().count("Time = 0.01\n") == 2
+    assert as_run_since_s(rec) == 0.0 and rec.provenance["as_run_far_field"] == "inletOutlet"
+    assert rec.time[0] < 0.005 and np.all(np.diff(rec.time) > 0)
+
+
+@pytest.mark.openfoam
+def test_a_campaign_case_is_retried_from_the_start_when_asked(tmp_path, monkeypatch):
+    """``mfflap campaign run --retries-from-start``'s setting reaches the run: the scripted
+    loss at t = 0.036 s reruns the identification case from t = 0 s, and the record kept in
+    the campaign folder says so."""
+    from mfflap.campaign import openfoam_run
+    from mfflap.campaign.execute import CampaignSetup, run_one
+    from mfflap.cfd.force_envelope import EnvelopeBreach
+
+    verdicts = iter([0.036, None])
+
+    def scripted(*args, **kwargs):
+        start = next(verdicts, None)  # (a watch on a slow machine may ask first)
+        return None if start is None else EnvelopeBreach(start, start + 1e-3, 3, start, 5.0)
+
+    monkeypatch.setattr(openfoam_run, "_forces_beyond_bound", scripted)
+    case = CfdCase(1.0, 0.3, 90.0, 10.0, duration=0.04, ramp_time=0.035)
+    status = run_one(case, str(tmp_path), CampaignSetup(retries_from_start=True))
+    assert status.state == "done", status
+    record = read_record(tmp_path / f"{case.case_id}.h5")
+    assert record.provenance["retries_from_start"] is True
+    assert record.provenance["retries"].endswith("resumed from t = 0 s with the inletOutlet "
+                                                 "far field")
+    assert as_run_since_s(record) == 0.0 and record.time[0] < 0.005
+    assert "retries_from_start" not in CampaignSetup(retries_from_start=True).as_dict()
+
+
+def test_backtest_output_warns_of_a_last_cycle_that_mixes_two_set_ups(capsys):
+    from mfflap.backtest.run import BacktestOutcome
+    from mfflap.cli.backtest import _show
+
+    record = read_record(RESUMED_LATE)
+    comparison = compare_last_cycle(record, MorisonModel(), float(record.parameters["period"]),
+                                    1e6)
+    outcomes = {"best sinusoid": BacktestOutcome("best sinusoid", "k", "back-tested",
+                                                 "fixture x", record, comparison)}
+    _show(outcomes, as_json=False)
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[1].strip().startswith("WARNING: the CFD's settings changed at t = 4.26 s")
+    _show(outcomes, as_json=True)
+    shown = json.loads(capsys.readouterr().out)["motions"]["best sinusoid"]
+    assert shown["compared_cycles_mixed_set_up"] is True
+    assert shown["cfd_settings_since_s"] == pytest.approx(4.2597888856)
+
+
+def test_the_beta_05_optimum_at_max_co_2_from_the_start_settles_where_the_resumed_run_did():
+    """Round 2's beta = 0.5 optimum run 8 periods with --retries-from-start (README, "Retries
+    and one set-up"): its time step collapsed where run A's did (3.04 s, then 6.23 s with
+    the inletOutlet far field), and its rerun from t = 0 s at max Co 2 settles at run A's
+    mean (resumed at max Co 2 from 6.08 s, before its settled cycles), 2 or more combined
+    standard errors below run B's at max Co 4: the 7 % is the Courant limit's."""
+    from mfflap.backtest.cycles import cycle_means, record_period
+
+    one = read_record(FIXTURES / "cfd_repeatability"
+                      / "backtest_34cd2b07c53664ae_from_start_8_cycles.h5")
+    assert one.provenance["retries_from_start"] is True and as_run_since_s(one) == 0.0
+    assert (one.provenance["as_run_max_courant"], one.provenance["as_run_far_field"]) == (
+        2.0, "inletOutlet")
+    assert one.provenance["retries"].count("resumed from t = 0 s") == 2
+    settled = {}
+    for name, record in (("from start", one), ("A", read_record(RESUMED_AT_6S)),
+                         ("B", read_record(FROM_ZERO))):
+        every = cycle_means(record, record_period(record))
+        assert list(every.numbers) == [2, 3, 4, 5, 6, 7, 8]
+        settled[name] = every.after(1)
+    start, a, b = settled["from start"], settled["A"], settled["B"]
+    assert abs(start.mean_thrust - a.mean_thrust) < 0.01 * a.mean_thrust
+    assert abs(start.mean_power - a.mean_power) < 0.01 * a.mean_power
+    gap = b.mean_thrust - start.mean_thrust
+    assert 0.05 * b.mean_thrust < gap
+    assert gap > 2 * np.hypot(b.thrust_standard_error, start.thrust_standard_error)
