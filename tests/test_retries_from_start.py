@@ -250,3 +250,28 @@ def test_the_beta_05_optimum_at_max_co_2_from_the_start_settles_where_the_resume
     gap = b.mean_thrust - start.mean_thrust
     assert 0.05 * b.mean_thrust < gap
     assert gap > 2 * np.hypot(b.thrust_standard_error, start.thrust_standard_error)
+
+
+def test_runs_that_did_not_run_alike_are_no_repeatability():
+    """Run A (max Co 2 from 6.08 s) and run B (max Co 4) of the beta = 0.5 optimum spread
+    by 7 %: that is the Courant limit's, and the repeatability says so; over seven cycles
+    run A's also mix two set-ups. Run A and its rerun from the start, both at max Co 2 for
+    every cycle compared, ran alike and agree within 0.5 %."""
+    from mfflap.backtest.repeat import repeatability_of
+
+    a, b = read_record(RESUMED_AT_6S), read_record(FROM_ZERO)
+    start = read_record(FIXTURES / "cfd_repeatability"
+                        / "backtest_34cd2b07c53664ae_from_start_8_cycles.h5")
+    period = float(a.parameters["period"])
+    model = MorisonModel()
+    ab = repeatability_of([a, b], "β = 0.5", model, period, 1e6, average_cycles=6)
+    assert not ab.alike and ab.share > 0.06
+    assert ab.ran_otherwise == ("backtest_34cd2b07c53664ae_copy1: max Co 2 against 4",)
+    assert "not a repeatability: the runs did not run alike" in ab.describe()
+    assert ab.as_dict()["alike"] is False
+    seven = repeatability_of([a, b], "β = 0.5", model, period, 1e6, average_cycles=7)
+    assert seven.ran_otherwise[1] == ("backtest_34cd2b07c53664ae: compared cycles mix two "
+                                      "set-ups (its settings changed at t = 6.081 s)")
+    same = repeatability_of([start, a], "β = 0.5", model, period, 1e6, average_cycles=6)
+    assert same.alike and same.share < 0.005
+    assert "not a repeatability" not in same.describe()

@@ -41,6 +41,10 @@ class Repeatability:
     mean_thrust : N, one per run
     mean_power : W, one per run
     sources : where each run comes from (a record's name and how it was had)
+    ran_otherwise : how a run did not run as the first did (a retry's far field or Courant
+        limit, :func:`~mfflap.backtest.as_run.as_run_differences`), or mixed two set-ups in
+        the cycles compared (a retry resumed it within them); empty: the runs ran alike, and
+        their spread is CFD's repeatability
     """
 
     label: str
@@ -48,6 +52,7 @@ class Repeatability:
     mean_thrust: np.ndarray
     mean_power: np.ndarray
     sources: tuple[str, ...]
+    ran_otherwise: tuple[str, ...] = ()
 
     @staticmethod
     def _spread(values: np.ndarray) -> float:
@@ -65,6 +70,11 @@ class Repeatability:
         return self._spread(self.mean_power)
 
     @property
+    def alike(self) -> bool:
+        """Whether the runs ran alike, so that their spread is CFD's repeatability."""
+        return not self.ran_otherwise
+
+    @property
     def share(self) -> float:
         """The larger spread: what ``mfflap run --cfd-repeatability`` takes."""
         return max(self.thrust_spread, self.power_spread)
@@ -75,7 +85,9 @@ class Repeatability:
                 + ", ".join(f"{t:.4g}" for t in self.mean_thrust)
                 + f" N (spread {self.thrust_spread:.2%}), mean power "
                 + ", ".join(f"{p:.4g}" for p in self.mean_power)
-                + f" W (spread {self.power_spread:.2%})")
+                + f" W (spread {self.power_spread:.2%})"
+                + ("" if self.alike else "; not a repeatability: the runs did not run alike ("
+                   + "; ".join(self.ran_otherwise) + "), and their spread holds that too"))
 
     def as_dict(self) -> dict:
         """JSON-friendly."""
@@ -83,20 +95,24 @@ class Repeatability:
                 "mean_thrust": [float(t) for t in self.mean_thrust],
                 "mean_power": [float(p) for p in self.mean_power],
                 "thrust_spread": self.thrust_spread, "power_spread": self.power_spread,
-                "share": self.share, "sources": list(self.sources)}
+                "share": self.share, "sources": list(self.sources),
+                "alike": self.alike, "ran_otherwise": list(self.ran_otherwise)}
 
 
 def repeatability_of(records: Sequence, label: str, model, period: float,
                      max_power: float, *, average_cycles: int = 1) -> Repeatability:
     """Compare the last cycles of ``records`` (:class:`~mfflap.campaign.records.CfdRecord`
     of one motion) as the back-test does (:func:`~mfflap.backtest.compare.compare_last_cycle`),
-    or the means over their last ``average_cycles`` cycles.
+    or the means over their last ``average_cycles`` cycles. Runs that a retry left with
+    another far field or Courant limit than the first, or whose compared cycles it split
+    between two set-ups, are named in ``ran_otherwise``: their spread is no repeatability.
 
     Raises
     ------
     ConfigError
         Fewer than two records, or records of different motions (key ``repeat``).
     """
+    from mfflap.backtest.as_run import as_run_differences
     from mfflap.backtest.compare import compare_last_cycle
 
     if len(records) < 2:
@@ -108,10 +124,15 @@ def repeatability_of(records: Sequence, label: str, model, period: float,
                           key="repeat")
     means = [compare_last_cycle(r, model, period, max_power, average_cycles=average_cycles)
              for r in records]
+    otherwise = [f"{r.name}: {d}" for r in records[1:]
+                 for d in as_run_differences(records[0], r)]
+    otherwise += [f"{r.name}: compared cycles mix two set-ups (its settings changed at t = "
+                  f"{m.cfd_settings_since_s:.4g} s)"
+                  for r, m in zip(records, means, strict=True) if m.compared_cycles_mixed_set_up]
     return Repeatability(label, str(keys.pop()),
                          np.array([m.cfd_mean_thrust for m in means]),
                          np.array([m.cfd_mean_power for m in means]),
-                         tuple(r.name for r in records))
+                         tuple(r.name for r in records), tuple(otherwise))
 
 
 def copy_settings(solver, copy: int):

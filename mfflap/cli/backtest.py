@@ -173,9 +173,17 @@ def _repeat(case, motions: dict, model, copies: int, work_dir: Path, save_to: Pa
         return
     for r in found.values():
         click.echo(r.describe())
-    worst = max(found.values(), key=lambda r: r.share)
-    click.echo(f"CFD's repeatability: {worst.share:.2%} ({worst.label}); mfflap run "
-               f"--cfd-repeatability {worst.share:.3g}")
+    alike = [r for r in found.values() if r.alike]
+    if not alike:  # a spread of runs made otherwise is no measure of CFD's noise
+        click.echo("CFD's repeatability: not measured: no motion's runs ran alike (a retry "
+                   "changed the far field or the Courant limit of some; README, 'Retries and "
+                   "one set-up')")
+        return
+    worst = max(alike, key=lambda r: r.share)
+    click.echo(f"CFD's repeatability: {worst.share:.2%} ({worst.label}"
+               + (f"; of the {len(alike)} motions whose runs ran alike"
+                  if len(alike) < len(found) else "")
+               + f"); mfflap run --cfd-repeatability {worst.share:.3g}")
 
 
 def _chosen(motions: dict, only: tuple[str, ...]) -> dict:
