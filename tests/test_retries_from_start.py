@@ -136,11 +136,13 @@ def test_a_retry_from_the_start_reruns_the_case_from_zero(tmp_path, monkeypatch)
 
     monkeypatch.setattr(openfoam_run, "_forces_beyond_bound", scripted)
     case_dir = tmp_path / "c"
+    told = []
     rec = run_motion(case_dir, SHORT.motion(), "c", {}, 0.04, ramp_time=0.035,
-                     bound_watch_every_s=1e6, retries_from_start=True)
+                     bound_watch_every_s=1e6, retries_from_start=True, progress=told.append)
     notes = (case_dir / "mfflap_retries.txt").read_text().splitlines()
     assert notes == ["forces beyond what the motion can drive from t = 0.036 s at max Co 4; "
                      "resumed from t = 0 s with the inletOutlet far field"]
+    assert f"retry 1 of 3: {notes[0]}" in told  # the user is told as it happens
     log = (case_dir / "log.pimpleFoam").read_text()
     assert log.count("Starting time loop") == 2 and log.count("Time = 0.01\n") == 2
     assert rec.provenance["retries_from_start"] is True
@@ -168,9 +170,13 @@ def test_a_collapsed_run_retried_from_the_start_reruns_from_zero(tmp_path, monke
 
     monkeypatch.setattr(openfoam_run, "run_case", collapses_once)
     case_dir = tmp_path / "c"
+    told = []
     rec = run_motion(case_dir, SHORT.motion(), "c", {}, 0.04, ramp_time=0.02,
-                     bound_watch_every_s=1e6, retries_from_start=True)
+                     bound_watch_every_s=1e6, retries_from_start=True, progress=told.append)
     assert len(calls) == 2
+    assert [m for m in told if m.startswith("retry ")] == [
+        "retry 1 of 3: time step collapsed at t = 0.04 s; resumed from t = 0 s with the "
+        "inletOutlet far field"]
     assert (case_dir / "mfflap_retries.txt").read_text().splitlines() == [
         "time step collapsed at t = 0.04 s; resumed from t = 0 s with the inletOutlet far "
         "field"]

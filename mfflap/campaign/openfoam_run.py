@@ -293,6 +293,16 @@ def request_rerun(case_dir: str | Path) -> None:
             fh.write(RERUN_REQUESTED + "\n")
 
 
+def _log_retry(case_dir: Path, line: str, progress: Callable[[str], None] | None,
+               n_retries: int, max_retries: int) -> None:
+    """Keep one retry in the case's :data:`RETRY_LOG` (so that a run resumed by a later
+    call still records it) and tell ``progress`` of it."""
+    with open(case_dir / RETRY_LOG, "a") as fh:
+        fh.write(line + "\n")
+    if progress is not None:
+        progress(f"retry {n_retries} of {max_retries}: {line}")
+
+
 def _earlier_retries(case_dir: Path) -> list[str]:
     """The retries that earlier calls spent on this case since the last
     :data:`RERUN_REQUESTED`: a run resumed after its process was killed continues with what
@@ -474,12 +484,11 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
                     if retries_from_start:  # before the remedy: it rewrites the kept fields
                         rewind_case(case_dir, 0.0)
                     retries.append(_apply_next_remedy(case_dir, len(retries), max_retries))
-                    # kept in the case, so that a run resumed by a later call still records them
                     where = _COLLAPSED_AT.search(str(exc))
-                    with open(case_dir / RETRY_LOG, "a") as fh:
-                        fh.write(f"time step collapsed{f' at t = {where[1]} s' if where else ''}; "
-                                 f"resumed from t = {latest_solution_time(case_dir) or 0} s with "
-                                 f"{retries[-1]}\n")
+                    _log_retry(case_dir, f"time step collapsed"
+                               f"{f' at t = {where[1]} s' if where else ''}; resumed from t = "
+                               f"{latest_solution_time(case_dir) or 0} s with {retries[-1]}",
+                               progress, len(retries), max_retries)
                     continue
             record = record_from_case(case_dir, motion, name, parameters, plate)
             breach = _forces_beyond_bound(record, ramp_time, plate, fluid, stream,
@@ -505,10 +514,10 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
                 # have been spoiled already; one rerun from the start with the settings it has now
                 rewind_case(case_dir, 0.0)
                 retries.append(f"{FROM_ZERO} with max Co {max_co:g}")
-                with open(case_dir / RETRY_LOG, "a") as fh:
-                    fh.write(f"{FROM_ZERO} with max Co {max_co:g}: the forces left what the motion"
-                             f" can drive from t = {breach.start_s:.6g} s again, as at max Co "
-                             f"{last_breach[1]:g}, so the flow written before may be spoiled\n")
+                _log_retry(case_dir, f"{FROM_ZERO} with max Co {max_co:g}: the forces left what "
+                           f"the motion can drive from t = {breach.start_s:.6g} s again, as at "
+                           f"max Co {last_breach[1]:g}, so the flow written before may be "
+                           "spoiled", progress, len(retries), max_retries)
                 last_breach = (breach.start_s, max_co)
                 continue
             if same_time and max_co < last_breach[1]:  # and the last retry ran from t = 0
@@ -522,10 +531,9 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
             last_breach = (breach.start_s, max_co)
             resume = rewind_case(case_dir, 0.0 if retries_from_start else breach.start_s)
             retries.append(_apply_next_remedy(case_dir, len(retries), max_retries))
-            with open(case_dir / RETRY_LOG, "a") as fh:
-                fh.write(f"forces beyond what the motion can drive from t = {breach.start_s:.6g} s"
-                         f" at max Co {max_co:g}; resumed from t = {resume} s with "
-                         f"{retries[-1]}\n")
+            _log_retry(case_dir, f"forces beyond what the motion can drive from t = "
+                       f"{breach.start_s:.6g} s at max Co {max_co:g}; resumed from t = {resume} s"
+                       f" with {retries[-1]}", progress, len(retries), max_retries)
         if (case_dir / RETRY_LOG).is_file():
             record.provenance["retries"] = "; ".join(
                 (case_dir / RETRY_LOG).read_text().splitlines())
