@@ -555,6 +555,9 @@ def test_the_main_job_kept_within_the_identification_data(tmp_path, coefficients
     assert len(sources & mixed) == 1  # case: the best sinusoid's; identified: beta = 0's
     report = (out / "report.html").read_text()
     assert report.count("its means mix two set-ups") == 1
+    # the back-test table says how each CFD run ran, and since when for the one retried late
+    assert "<th>CFD as run</th>" in report
+    assert report.count("mesh coarse, max Co ") == 4 and "s (a retry resumed it)" in report
     with ResultsFile(out / "results.h5") as rf:
         assert f"max_pitch_rate = {limits['max_pitch_rate']!r}" in rf.config_toml
     # the limits are the data's: the same reference gives them

@@ -228,6 +228,9 @@ def test_backtest_output_warns_of_a_last_cycle_that_mixes_two_set_ups(capsys):
     shown = json.loads(capsys.readouterr().out)["motions"]["best sinusoid"]
     assert shown["compared_cycles_mixed_set_up"] is True
     assert shown["cfd_settings_since_s"] == pytest.approx(4.2597888856)
+    assert shown["cfd_as_run"] == (
+        "mesh coarse, max Co 4, far field inletOutlet, k-epsilon convection limitedLinear, "
+        "wall treatment log_law, since t = 4.26 s (a retry resumed it)")
 
 
 def test_the_beta_05_optimum_at_max_co_2_from_the_start_settles_where_the_resumed_run_did():

@@ -65,4 +65,19 @@ def as_run_since_s(record: CfdRecord) -> float:
     return float(found[-1].group(1))
 
 
-__all__ = ["COMPARED", "as_run_differences", "as_run_since_s"]
+def describe_as_run(record: CfdRecord) -> str:
+    """How ``record``'s run ran at its end, in one line: each setting of :data:`COMPARED`
+    its provenance gives, and since when if a retry changed them part-way
+    (:func:`as_run_since_s`); '' if it says none."""
+    said = []
+    for name, as_run, written in COMPARED:
+        value = _setting(record, as_run, written)
+        if value is not None:
+            said.append(f"{name} {value:g}" if isinstance(value, float) else f"{name} {value}")
+    since = as_run_since_s(record)
+    if said and since > 0.0:
+        said.append(f"since t = {since:.4g} s (a retry resumed it)")
+    return ", ".join(said)
+
+
+__all__ = ["COMPARED", "as_run_differences", "as_run_since_s", "describe_as_run"]

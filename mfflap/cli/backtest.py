@@ -238,9 +238,11 @@ def _show(outcomes: dict, as_json: bool, scales: dict | None = None,
     the scales times ``optimised`` (label -> the optimiser's own mean thrust and power, the
     means the scales were measured with; else the back-test's model means), is shown beside
     the model's own."""
+    from mfflap.backtest.as_run import describe_as_run
     from mfflap.backtest.workflow import gain_in_cfd, no_gain_in_cfd_reason
 
     data = {label: {"status": o.status, "source": o.source, "motion_key": o.key,
+                    **({"cfd_as_run": describe_as_run(o.record)} if o.record else {}),
                     **(o.comparison.as_dict() if o.comparison else {})}
             for label, o in outcomes.items()}
     for label, (k_t, k_p) in (scales or {}).items():

@@ -47,13 +47,16 @@ def add_backtest_sections(rep: Report, outcomes: Mapping[str, BacktestOutcome],
     if not outcomes:
         s.blocks.append(text_html("No back-test was run.", warn=True))
         return
+    from mfflap.backtest.as_run import describe_as_run
+
     rows = []
     for label, o in outcomes.items():
         if o.comparison is None:
-            rows.append([label, o.status, o.source] + ["-"] * 8)
+            rows.append([label, o.status, o.source] + ["-"] * 9)
             continue
         c = o.comparison
-        rows.append([label, o.status, o.source, c.cfd_mean_thrust, c.model_mean_thrust,
+        rows.append([label, o.status, o.source, describe_as_run(o.record) or "-",
+                     c.cfd_mean_thrust, c.model_mean_thrust,
                      c.cfd_mean_power, c.model_mean_power, c.nrmse["thrust"],
                      c.pearson["thrust"], c.cfd_max_power,
                      "yes" if c.max_power_ok else "NO"])
@@ -67,7 +70,7 @@ def add_backtest_sections(rep: Report, outcomes: Mapping[str, BacktestOutcome],
             "CFD's standard errors from its cycle means: " + "; ".join(
                 f"{label} thrust ± {c.cfd_thrust_standard_error:.2g} N, power ± "
                 f"{c.cfd_power_standard_error:.2g} W" for label, c in averaged.items()) + "."))
-    s.blocks.append(table_html(["motion", "status", "CFD from", "CFD thrust [N]",
+    s.blocks.append(table_html(["motion", "status", "CFD from", "CFD as run", "CFD thrust [N]",
                                 "model thrust [N]", "CFD power [W]", "model power [W]",
                                 "NRMSE thrust", "Pearson thrust", "CFD max power [W]",
                                 "CFD power ≤ P_max"], rows))
