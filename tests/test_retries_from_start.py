@@ -284,3 +284,26 @@ def test_runs_that_did_not_run_alike_are_no_repeatability():
     same = repeatability_of([start, a], "β = 0.5", model, period, 1e6, average_cycles=6)
     assert same.alike and same.share < 0.005
     assert "not a repeatability" not in same.describe()
+
+
+def test_an_identification_case_retried_within_its_fitted_window_says_so():
+    """A record resumed with other settings after its start-up is fitted as it is, with a
+    note; one resumed before the window, or rerun from t = 0 s, has none."""
+    from mfflap.identification.data import SET_UP_NOTE, prepare_case
+
+    record = read_record(fixture_dir() / "f1p000_h0p300_phi090p0.h5")
+    assert not record.provenance.get("retries")
+
+    def retried(text):
+        return replace(record, provenance={**record.provenance, "retries": text})
+
+    late = prepare_case(retried("time step collapsed at t = 2.6 s; resumed from t = 2.25 s "
+                                "with the inletOutlet far field"))
+    noted = [n for n in late.notes if n.startswith(SET_UP_NOTE)]
+    assert len(noted) == 1 and "at t = 2.25 s, after the start at " in noted[0]
+    early = prepare_case(retried("time step collapsed at t = 0.6 s; resumed from t = 0.5 s "
+                                 "with the inletOutlet far field"))
+    again = prepare_case(retried("time step collapsed at t = 2.6 s; resumed from t = 0 s "
+                                 "with the inletOutlet far field"))
+    assert not any(n.startswith(SET_UP_NOTE) for n in early.notes + again.notes)
+    assert np.array_equal(late.cfd.normal_force, prepare_case(record).cfd.normal_force)

@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.ndimage import median_filter
 
+from mfflap.backtest.as_run import as_run_since_s
 from mfflap.campaign.records import CfdRecord
 from mfflap.cfd.bursts import bridge_bursts, bridge_load_bursts
 from mfflap.cfd.force_envelope import find_envelope_breaches
@@ -25,6 +26,8 @@ COMPONENTS = LOAD_UNITS
 BURST_NOTE = "numerical burst(s) bridged by linear interpolation"
 #: How a case's notes say that stretches beyond the physical force bound were bridged.
 ENVELOPE_NOTE = "stretch(es) beyond the forces the motion can drive bridged"
+#: How a case's notes say that a retry changed the run's settings within the fitted window.
+SET_UP_NOTE = "a retry changed the CFD's settings within the fitted window"
 #: Derived signals that are scored (not fitted directly).
 DERIVED = {"thrust": "N", "input_power": "W"}
 _STATE_KEYS = tuple(KINEMATIC_UNITS)
@@ -137,7 +140,8 @@ def prepare_case(record: CfdRecord, discard_time: float = 0.75, n_samples: int =
     by linear interpolation, and so are stretches whose forces the motion cannot have
     driven (:mod:`mfflap.cfd.force_envelope`: a run that lost its numerics gradually); then
     isolated spikes are replaced by the running median (:func:`despike`). All are listed in
-    the case's notes.
+    the case's notes, and so is a retry that resumed the run with other settings after the
+    start (:func:`~mfflap.backtest.as_run.as_run_since_s`): the fit then mixes two set-ups.
 
     Parameters
     ----------
@@ -198,6 +202,11 @@ def prepare_case(record: CfdRecord, discard_time: float = 0.75, n_samples: int =
                                     for k in COMPONENTS), source=loads.source)
         notes.append(f"{len(breaches)} {ENVELOPE_NOTE}: "
                      + "; ".join(b.describe() for b in breaches))
+    since = as_run_since_s(record)
+    if since > start:
+        notes.append(f"{SET_UP_NOTE}: at t = {since:.4g} s, after the start at {start:.4g} s "
+                     f"({record.provenance.get('retries')}); rerun the case with "
+                     "--retries-from-start for one set-up")
     for k in COMPONENTS:
         values, mask = despike(getattr(loads, k)[kept])
         if mask.any():
