@@ -516,7 +516,7 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
     centres: dict = {}  # beta -> the trust region's centre with its CFD (trust_radius)
     radii: dict[float, float] = {}  # beta -> the trust region's radius
     centre_runs: dict = {}  # beta -> the centre's CFD record (how it ran: as_run_differences)
-    centre_mixed: dict = {}  # beta -> whether the centre's compared cycles mix two set-ups
+    centre_mixed: dict = {}  # beta -> what mixes two set-ups in the centre's compared cycles
     visited: dict = {}  # beta -> every back-tested optimum with its own CFD (first_order)
     converged, why = False, f"ran the {n_rounds} round(s) asked for"
     for k in range(1, n_rounds + 1):
@@ -574,8 +574,7 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
                 if step.accepted and beta in points:
                     centres[beta] = points[beta]
                     centre_runs[beta] = run
-                    centre_mixed[beta] = [m.replace("the optimum", "the centre", 1)
-                                          for m in mixed]
+                    centre_mixed[beta] = _mixed_set_up(outcome, beta, "the centre")
             if k == 1:
                 centres, radii = dict(points), {b: float(trust_radius) for b in points}
                 centre_runs = {b: _run_of(outcome, b) for b in points}

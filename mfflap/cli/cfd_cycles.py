@@ -38,7 +38,7 @@ def cycles(records: tuple[Path, ...], skip_cycles: int, figure: Path | None,
     from mfflap.backtest.cycles import cycle_means, cycles_figure, record_period
     from mfflap.campaign.records import read_record
 
-    found, retries, since = [], {}, {}
+    found, retries, since, before = [], {}, {}, {}
     for path in records:
         record = read_record(path)
         # a retry that resumed the run part-way changed its settings there (run_motion):
@@ -46,6 +46,8 @@ def cycles(records: tuple[Path, ...], skip_cycles: int, figure: Path | None,
         retries[path] = str(record.provenance.get("retries", "")) or None
         since[path] = as_run_since_s(record)
         every = cycle_means(record, record_period(record))
+        before[path] = [int(n) for n, t in zip(every.numbers, every.start_s, strict=True)
+                        if t < since[path] - 1e-9]
         found.append((path, every, every.after(skip_cycles)))
     if figure is not None:
         from mfflap.plots import save_figure
@@ -57,22 +59,18 @@ def cycles(records: tuple[Path, ...], skip_cycles: int, figure: Path | None,
             str(path): {"cycle_numbers": [int(n) for n in every.numbers],
                         "every_cycle": every.as_dict(), "settled": settled.as_dict(),
                         "retries": retries[path], "settings_since_s": since[path],
-                        "cycles_before_settings": [
-                            int(n) for n, t in zip(every.numbers, every.start_s, strict=True)
-                            if t < since[path] - 1e-9]}
+                        "cycles_before_settings": before[path]}
             for path, every, settled in found}})
         return
     for path, every, settled in found:
         click.echo(f"{path}: cycles {', '.join(str(n) for n in every.numbers)} after the "
                    f"ramp; thrust {', '.join(f'{t:.4g}' for t in every.thrust)} N; power "
                    f"{', '.join(f'{p:.4g}' for p in every.power)} W")
-        before = [n for n, t in zip(every.numbers, every.start_s, strict=True)
-                  if t < since[path] - 1e-9]
         if since[path] > 0.0:
             click.echo(f"  retried part-way, so not one set-up throughout: its settings changed"
                        f" at t = {since[path]:.4g} s"
-                       + (f"; cycle(s) {', '.join(map(str, before))} ran (at least partly) "
-                          "before that, with other settings" if before else
+                       + (f"; cycle(s) {', '.join(map(str, before[path]))} ran (at least "
+                          "partly) before that, with other settings" if before[path] else
                           ", before every whole cycle")
                        + f" (retries: {retries[path]})")
         elif retries[path]:
