@@ -1,0 +1,99 @@
+"""What a round hands the next: each back-tested optimum as a point of the output correction,
+and each trust region's step judged by CFD, with whatever made its two runs differ."""
+
+from __future__ import annotations
+
+from mfflap.config import CaseConfig
+from mfflap.rounds.checks import MotionCheck
+
+
+def correction_points(outcome, checks: dict[str, MotionCheck], index: int) -> dict:
+    """beta -> :class:`~mfflap.optimisation.output_correction.CorrectionPoint`: each
+    back-tested optimum of round ``index`` with its CFD means, for the next round's output
+    correction."""
+    from mfflap.optimisation.output_correction import CorrectionPoint
+    from mfflap.optimisation.store import beta_label
+
+    points = {}
+    for beta, result in (outcome.study.sqp.items() if outcome.study is not None else ()):
+        label = beta_label(beta)
+        if label in checks:
+            c = checks[label]
+            points[beta] = CorrectionPoint(
+                result.motion, c.cfd_mean_thrust, c.cfd_mean_power,
+                f"round {index}'s beta = {beta:g} (back-test {c.key})",
+                thrust_usable=c.thrust_counted, scales=(c.thrust_scale, c.power_scale))
+    return points
+
+
+def trust_steps(outcome, checks: dict[str, MotionCheck], regions: dict, centres: dict,
+                config: CaseConfig, repeatability: float | None = None) -> dict:
+    """beta -> :class:`~mfflap.optimisation.trust_region.TrustStep`: each back-tested
+    optimum of a round with trust ``regions`` (beta -> region) judged against its centre
+    (``centres``: beta -> the centre's
+    :class:`~mfflap.optimisation.output_correction.CorrectionPoint`).
+
+    The predicted objective is the one the round optimised (``config``'s problem with the
+    round's model, its outputs corrected as they were); CFD's is the same problem with the
+    model's outputs scaled to each motion's own CFD means. ``repeatability``: the share by
+    which two CFD runs of one motion differ, which relaxes the ratio by the noise of J at the
+    centre (:func:`~mfflap.optimisation.trust_region.noise_of_objective`; None: not known).
+    """
+    from mfflap.optimisation.output_correction import (
+        CorrectionPoint,
+        OutputCorrection,
+        cfd_objective,
+    )
+    from mfflap.optimisation.store import beta_label
+    from mfflap.optimisation.study import problem_for
+    from mfflap.optimisation.trust_region import TrustStep, noise_of_objective
+
+    steps = {}
+    sqp = outcome.study.sqp if outcome.study is not None else {}
+    cfg = outcome.config or config
+    for beta, region in regions.items():
+        label = beta_label(beta)
+        if beta not in sqp or label not in checks or outcome.model is None:
+            continue
+        c, centre, optimum = checks[label], centres[beta], sqp[beta].motion
+        base = problem_for(cfg, beta, outcome.model)
+
+        def corrected(correction: OutputCorrection | None, motion, base=base) -> float:
+            if correction is None:
+                return float(base.objective(motion))
+            return correction.objective_factor(base.beta) * float(
+                correction.problem(base).objective(motion))
+
+        own = outcome.corrections.get(beta)
+        steps[beta] = TrustStep.judged(
+            region, beta, optimum, cfd_objective(centre, base),
+            cfd_objective(CorrectionPoint(optimum, c.cfd_mean_thrust, c.cfd_mean_power, label,
+                                          thrust_usable=c.thrust_counted), base),
+            corrected(own, centre.motion), corrected(own, optimum),
+            0.0 if repeatability is None else noise_of_objective(
+                repeatability, beta, centre.cfd_mean_thrust, centre.cfd_mean_power))
+    return steps
+
+
+def _run_of(outcome, beta: float):
+    """The CFD record of this round's back-test of ``beta``'s optimum, or None."""
+    from mfflap.optimisation.store import beta_label
+
+    found = outcome.backtests.get(beta_label(beta))
+    return None if found is None else found.record
+
+
+def _mixed_set_up(outcome, beta: float, whose: str) -> list[str]:
+    """``whose`` run's compared cycles mixing two set-ups (a retry resumed it part-way
+    through them), said for a trust step's ``ran_otherwise``; empty if not."""
+    from mfflap.optimisation.store import beta_label
+
+    found = outcome.backtests.get(beta_label(beta))
+    c = None if found is None else found.comparison
+    if c is None or not c.compared_cycles_mixed_set_up:
+        return []
+    return [f"{whose}'s compared cycles mix two set-ups (its settings changed at t = "
+            f"{c.cfd_settings_since_s:.4g} s, after t = {c.compared_from_s:.4g} s)"]
+
+
+__all__ = ["correction_points", "trust_steps"]
