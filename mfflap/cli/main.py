@@ -39,13 +39,17 @@ def _register_subgroups() -> None:
     from mfflap.cli.backtest import backtest
     from mfflap.cli.campaign import campaign
     from mfflap.cli.cfd import cfd
+    from mfflap.cli.cfd_convergence import convergence
     from mfflap.cli.cfd_cycles import cycles
+    from mfflap.cli.cfd_linear_check import linear_check
+    from mfflap.cli.cfd_motion_table import motion_table_cmd
     from mfflap.cli.gap import gap
     from mfflap.cli.identify import identify, report
     from mfflap.cli.optimise import optimise
     from mfflap.cli.run import run_cmd
 
-    cfd.add_command(cycles)
+    for command in (convergence, cycles, linear_check, motion_table_cmd):
+        cfd.add_command(command)
     cli.add_command(cfd)
     cli.add_command(campaign)
     cli.add_command(identify)
