@@ -56,6 +56,13 @@ round is in the fit). A motion's mean thrust error counts only where its CFD mea
 :data:`THRUST_FLOOR` of the largest CFD mean thrust among the round's motions: a motion of
 almost no net thrust (beta = 1) has a relative thrust error of no meaning. Its power error
 counts.
+
+The package's modules: :mod:`~mfflap.rounds.checks` (the model against CFD per motion),
+:mod:`~mfflap.rounds.summary` (a round, and the rounds as run),
+:mod:`~mfflap.rounds.refusals` (rounds that cannot learn), :mod:`~mfflap.rounds.steps`
+(what a round hands the next: correction points, trust steps),
+:mod:`~mfflap.rounds.loop` (the rounds and why they stop) and
+:mod:`~mfflap.rounds.output` (``rounds.h5``, ``rounds.png``, ``rounds.html``).
 """
 
 from mfflap.rounds.checks import THRUST_FLOOR, MotionCheck, motion_checks, optimised_means

@@ -12,7 +12,12 @@ from mfflap.optimisation.trust_region import MIN_RADIUS
 from mfflap.rounds.checks import motion_checks, optimised_means
 from mfflap.rounds.output import write_rounds
 from mfflap.rounds.refusals import check_rounds
-from mfflap.rounds.steps import _mixed_set_up, _run_of, correction_points, trust_steps
+from mfflap.rounds.steps import (
+    backtest_record_of,
+    correction_points,
+    mixed_set_up_notes,
+    trust_steps,
+)
 from mfflap.rounds.summary import LoopResult, RoundSummary, describe_round
 
 Progress = Callable[[str], None]
@@ -140,8 +145,8 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
             summary.trust_steps = trust_steps(outcome, summary.checks, regions, centres,
                                               config, cfd_repeatability)
             for beta, step in list(summary.trust_steps.items()):
-                run = _run_of(outcome, beta)
-                mixed = _mixed_set_up(outcome, beta, "the optimum")
+                run = backtest_record_of(outcome, beta)
+                mixed = mixed_set_up_notes(outcome, beta, "the optimum")
                 if centre_runs.get(beta) is not None and run is not None:
                     step = summary.trust_steps[beta] = replace(step, ran_otherwise=tuple(
                         as_run_differences(centre_runs[beta], run)
@@ -150,11 +155,11 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
                 if step.accepted and beta in points:
                     centres[beta] = points[beta]
                     centre_runs[beta] = run
-                    centre_mixed[beta] = _mixed_set_up(outcome, beta, "the centre")
+                    centre_mixed[beta] = mixed_set_up_notes(outcome, beta, "the centre")
             if k == 1:
                 centres, radii = dict(points), {b: float(trust_radius) for b in points}
-                centre_runs = {b: _run_of(outcome, b) for b in points}
-                centre_mixed = {b: _mixed_set_up(outcome, b, "the centre") for b in points}
+                centre_runs = {b: backtest_record_of(outcome, b) for b in points}
+                centre_mixed = {b: mixed_set_up_notes(outcome, b, "the centre") for b in points}
         rounds.append(summary)
         _keep_records(outcome.backtests, records)
         progress(describe_round(summary, tolerance))

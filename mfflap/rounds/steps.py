@@ -75,7 +75,7 @@ def trust_steps(outcome, checks: dict[str, MotionCheck], regions: dict, centres:
     return steps
 
 
-def _run_of(outcome, beta: float):
+def backtest_record_of(outcome, beta: float):
     """The CFD record of this round's back-test of ``beta``'s optimum, or None."""
     from mfflap.optimisation.store import beta_label
 
@@ -83,7 +83,7 @@ def _run_of(outcome, beta: float):
     return None if found is None else found.record
 
 
-def _mixed_set_up(outcome, beta: float, whose: str) -> list[str]:
+def mixed_set_up_notes(outcome, beta: float, whose: str) -> list[str]:
     """``whose`` run's compared cycles mixing two set-ups (a retry resumed it part-way
     through them), said for a trust step's ``ran_otherwise``; empty if not."""
     from mfflap.optimisation.store import beta_label
@@ -96,4 +96,4 @@ def _mixed_set_up(outcome, beta: float, whose: str) -> list[str]:
             f"{c.cfd_settings_since_s:.4g} s, after t = {c.compared_from_s:.4g} s)"]
 
 
-__all__ = ["correction_points", "trust_steps"]
+__all__ = ["backtest_record_of", "correction_points", "mixed_set_up_notes", "trust_steps"]
