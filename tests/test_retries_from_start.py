@@ -2,6 +2,7 @@
 real pimpleFoam reruns, the shipped back-test records that were retried, and the commands
 that say so."""
 
+import itertools
 import json
 from dataclasses import replace
 
@@ -362,6 +363,24 @@ MIXED_BETA_0 = {
 }
 
 
+def _phase_thrust(record, period: float, starts: list[float], switch: float) -> np.ndarray:
+    """Mean thrust (N) of each cycle starting at ``starts`` (in periods) before and after
+    the fraction ``switch`` of it: one row per cycle, bursts bridged."""
+    from mfflap.cfd.bursts import bridge_load_bursts
+    from mfflap.metrics import time_mean
+    from mfflap.performance import thrust_and_power
+
+    t = record.time
+    loads, _ = bridge_load_bursts(record.loads, t > 0.5 * period)
+    thrust, _ = thrust_and_power(loads, record.state)
+    rows = []
+    for k in starts:
+        edges = (k * period, (k + switch) * period, (k + 1) * period)
+        rows.append([time_mean(t[m], thrust[m]) for m in (
+            (t >= a - 1e-9) & (t <= b + 1e-9) for a, b in itertools.pairwise(edges))])
+    return np.array(rows)
+
+
 @pytest.mark.parametrize("key", sorted(MIXED_BETA_0))
 def test_a_mixed_last_cycle_reads_high_against_eight_periods_of_one_set_up(key):
     """Each of the four beta = 0 optima whose shipped back-test compares a last cycle that
@@ -396,6 +415,13 @@ def test_a_mixed_last_cycle_reads_high_against_eight_periods_of_one_set_up(key):
         above = cfd / mean - 1
         assert share[0] < above < share[1]
         assert 0 < above < 2 * scatter  # within two of one cycle's scatter
+    assert settled.thrust[0] < settled.mean_thrust  # one set-up's cycle 3 reads low
+    # both parts of the mixed cycle, before the switch and after it, read above the same
+    # phase of the one set-up's cycles
+    switch = (last.cfd_settings_since_s - last.compared_from_s) / period
+    mixed_parts = _phase_thrust(mixed, period, [last.compared_from_s / period], switch)
+    one_parts = _phase_thrust(eight, period, [2, 3, 4, 5, 6, 7], switch)
+    assert np.all(mixed_parts[0] > one_parts.mean(axis=0))
     # the counted errors were the mixed cycle's; against the mean of one set-up
     for p, cfd, mean, error in zip(predicted, (last.cfd_mean_thrust, last.cfd_mean_power),
                                    (settled.mean_thrust, settled.mean_power), counted,
