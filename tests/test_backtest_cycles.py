@@ -356,3 +356,43 @@ def test_the_beta_0_optimum_with_a_retrys_set_up_from_the_start_is_not_resolved_
         combined = np.hypot(settled.thrust_standard_error, free.thrust_standard_error)
         assert (free.mean_thrust - settled.mean_thrust) / combined < 1.5  # not resolved
     assert settled.last(3).mean_thrust > free.mean_thrust  # still climbing
+
+
+def test_procs_applies_only_to_live_runs(optimisation_file):
+    res = CliRunner().invoke(cli, ["backtest", str(optimisation_file), "--procs", "2"])
+    assert res.exit_code == 2 and "--procs applies only to live runs" in res.output
+    res = CliRunner().invoke(cli, ["backtest", str(optimisation_file), "--live", "--procs",
+                                   "0"])
+    assert res.exit_code == 2 and "--procs" in res.output
+
+
+@pytest.mark.slow
+@pytest.mark.openfoam
+def test_a_live_back_test_on_two_processes_runs_the_serial_runs_flow(tmp_path,
+                                                                     optimisation_file):
+    """Real pimpleFoam decomposed on two ranks under mpirun (`--procs 2`), coarse mesh: the
+    beta = 0.5 optimum for 1.5 periods. Its record says it ran on two processes, and its
+    forces follow the shipped serial run of the same motion and set-up (backtest/) within
+    1 % NRMSE over that time: the decomposition changes round-off, not the flow, before
+    the wake's chaos parts the two runs (README, 'How long a back-test runs')."""
+    from mfflap.cfd.openfoam.runner import processor_folders
+    from mfflap.metrics import nrmse
+
+    work, saved = tmp_path / "work", tmp_path / "saved"
+    res = CliRunner().invoke(cli, ["backtest", str(optimisation_file), "--live", "--motion",
+                                   "0.5", "--cycles", "1.5", "--procs", "2", "--work",
+                                   str(work), "--save-to", str(saved), "--json"])
+    assert res.exit_code == 0, res.output
+    d = json.loads(res.stdout)["motions"]["β = 0.5"]
+    assert d["source"] == "live OpenFOAM"
+    key = d["motion_key"]
+    assert len(processor_folders(work / f"backtest_{key}_1.5cycles")) == 2
+    record = read_record(saved / f"backtest_{key}.h5")
+    assert record.provenance["n_processes"] == 2
+    serial = read_record(fixture_dir("backtest") / f"backtest_{key}.h5")
+    assert "n_processes" not in serial.provenance  # run before the option (serial)
+    assert serial.provenance["solver_max_courant"] == record.provenance["solver_max_courant"]
+    t = record.loads.time
+    for name in ("normal_force", "moment"):
+        along = np.interp(t, serial.loads.time, getattr(serial.loads, name))
+        assert nrmse(getattr(record.loads, name), along) < 0.01, name

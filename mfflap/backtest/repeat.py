@@ -147,13 +147,14 @@ def repeat_runs(motion, label: str, model, max_power: float, *, copies: int,
                 work_dir: str | Path, save_to: str | Path | None = None, n_cycles: float = 3.0,
                 mesh: str = "coarse", solver=None, plate=None, fluid=None, stream=None,
                 progress: Callable[[str], None] | None = None,
-                average_cycles: int = 1, retries_from_start: bool = False) -> Repeatability:
+                average_cycles: int = 1, retries_from_start: bool = False,
+                n_procs: int = 1) -> Repeatability:
     """Run ``motion`` ``copies`` times in OpenFOAM (module docstring) and compare them: their
     last cycles, or their means over the last ``average_cycles`` cycles.
 
-    ``mesh``, ``solver``, ``plate``, ``fluid``, ``stream`` and ``retries_from_start`` as for
-    a live back-test (:func:`~mfflap.backtest.run.backtest_motion`; a saved copy retried
-    part-way is then run again). Each copy is a case
+    ``mesh``, ``solver``, ``plate``, ``fluid``, ``stream``, ``retries_from_start`` and
+    ``n_procs`` as for a live back-test (:func:`~mfflap.backtest.run.backtest_motion`; a
+    saved copy retried part-way is then run again). Each copy is a case
     ``work_dir/backtest_<key>_copy<k>`` (with ``_<n>cycles`` after it for other than 3
     periods; a killed run resumes there) and, with ``save_to``, a record
     ``backtest_<key>_copy<k>.h5`` there, which a later call for as many periods takes
@@ -196,7 +197,7 @@ def repeat_runs(motion, label: str, model, max_power: float, *, copies: int,
                                    mesh=mesh, solver=copy_settings(solver, k), plate=plate,
                                    fluid=fluid, stream=stream, progress=progress,
                                    parameters={"copy": k},
-                                   retries_from_start=retries_from_start)
+                                   retries_from_start=retries_from_start, n_procs=n_procs)
         if saved is not None:
             write_record(saved, record, single_precision=True)
         records.append(record)

@@ -60,32 +60,125 @@ def cfd_motion(motion: DiscreteMotion) -> PeriodicSplineMotion:
     return to_spline(motion)
 
 
-def _matching_fixture(key: str, motion: DiscreteMotion, folders: Sequence[Path],
-                      tolerance: float = 2e-3) -> Path | None:
-    """A record with this key; else one whose stored motion matches within ``tolerance``."""
+@dataclass(frozen=True)
+class FixtureMatch:
+    """A record of a motion's CFD: its path and the time shift of its cycle.
+
+    ``shift_s`` is 0 for a record of the motion as asked, else the s (-period/2 < s <=
+    period/2) with the record's imposed motion at time t that of the motion asked at
+    t + s: the same periodic motion shifted in time. A periodic optimum is defined up to
+    such a shift when nothing in the problem fixes its phase (beta = 1's least power:
+    a start changed in its 12th digit moved it by a third of its period, J by 1e-8), so
+    machines that round differently find it at other phases. Its cycle means are the
+    same; the comparison is made on the record's own kinematics
+    (:func:`~mfflap.backtest.compare.compare_last_cycle`).
+    """
+
+    path: Path
+    shift_s: float = 0.0
+
+    def describe(self) -> str:
+        """``fixture <name>``, with the shift when there is one."""
+        if self.shift_s == 0.0:
+            return f"fixture {self.path.name}"
+        return (f"fixture {self.path.name} (the same periodic motion shifted in time by "
+                f"{self.shift_s:+.4g} s)")
+
+
+def _kinematics_within(rec: CfdRecord, spline: PeriodicSplineMotion,
+                       tolerance: float) -> bool:
+    """Whether a record's imposed kinematics after its start-up ramp are ``spline``'s (the
+    heave less its value at t = 0, where the CFD starts) within ``tolerance`` of each
+    signal's range."""
+    ref = spline.sample(rec.time)
+    scale_p = max(np.ptp(ref.pitch_angle), 1e-9)
+    scale_h = max(np.ptp(ref.heave_position), 1e-9)
+    after = rec.time >= float(rec.parameters.get("ramp_time", 0.0))
+    dp = np.max(np.abs(rec.state.pitch_angle[after] - ref.pitch_angle[after])) / scale_p
+    h0 = spline.sample(np.array([0.0])).heave_position[0]
+    dh = np.max(np.abs(rec.state.heave_position[after] - (ref.heave_position[after]
+                                                          - h0))) / scale_h
+    return bool(dp < tolerance and dh < tolerance)
+
+
+def cycle_shift(rec: CfdRecord, spline: PeriodicSplineMotion, tolerance: float = 2e-3,
+                n_samples: int = 512) -> float | None:
+    """The time shift s (-period/2 < s <= period/2) with the record's imposed motion over its
+    last period that of ``spline`` at t + s within ``tolerance`` of each signal's range
+    (heave about its mean, so that the CFD's zero displacement at t = 0 drops out), or None
+    (:func:`closest_cycle_shift`)."""
+    found = closest_cycle_shift(rec, spline, n_samples)
+    return None if found is None or found[1] >= tolerance else found[0]
+
+
+def closest_cycle_shift(rec: CfdRecord, spline: PeriodicSplineMotion,
+                        n_samples: int = 512) -> tuple[float, float] | None:
+    """The time shift s (-period/2 < s <= period/2) that brings ``spline`` at t + s closest
+    to the record's imposed motion over its last period, and that distance: the larger of
+    pitch's and heave's (about its mean) greatest difference as a share of its range.
+
+    The shift is found on ``n_samples`` shifts, then refined between the neighbours of the
+    best. None for a record whose last period does not follow its start-up ramp.
+    """
+    from scipy.optimize import minimize_scalar
+
+    period = spline.period
+    t_end = float(rec.time[-1])
+    if t_end - period < float(rec.parameters.get("ramp_time", 0.0)) - 1e-12:
+        return None
+    t = t_end - period + period * np.arange(n_samples) / n_samples
+    pitch = np.interp(t, rec.time, rec.state.pitch_angle)
+    heave = np.interp(t, rec.time, rec.state.heave_position)
+    heave = heave - heave.mean()
+    cycle = spline.sample(period * np.arange(n_samples) / n_samples)
+    scale_p = max(np.ptp(cycle.pitch_angle), 1e-9)
+    scale_h = max(np.ptp(cycle.heave_position), 1e-9)
+
+    def distance(shift: float) -> float:
+        ref = spline.sample(t + shift)  # periodic: any t
+        return max(np.max(np.abs(pitch - ref.pitch_angle)) / scale_p,
+                   np.max(np.abs(heave - (ref.heave_position - ref.heave_position.mean())))
+                   / scale_h)
+
+    step = period / n_samples
+    grid = step * np.arange(n_samples)
+    best = grid[int(np.argmin([distance(s) for s in grid]))]
+    fine = minimize_scalar(distance, bounds=(best - step, best + step), method="bounded",
+                           options={"xatol": 1e-6 * period})
+    shift, found = ((float(fine.x), float(fine.fun)) if fine.fun < distance(best)
+                    else (float(best), distance(best)))
+    shift = float(np.mod(shift, period))
+    return (shift - period if shift > period / 2 else shift), found
+
+
+def matching_fixture(key: str, motion: DiscreteMotion, folders: Sequence[Path],
+                     tolerance: float = 2e-3) -> FixtureMatch | None:
+    """The record of ``motion``'s CFD in ``folders``: one of its key; else one whose imposed
+    kinematics after the start-up ramp lie within ``tolerance`` of its own; else one of the
+    same periodic motion shifted in time, the closest if several (:func:`cycle_shift`);
+    else None."""
     for folder in folders:
         exact = folder / f"backtest_{key}.h5"
         if exact.exists():
-            return exact
+            return FixtureMatch(exact)
     spline = cfd_motion(motion)
+    candidates = []
     for folder in folders:
         for path in sorted(folder.glob("backtest_*.h5")):
             period = float(read_record_parameters(path).get("period", -1))
             if abs(period - spline.period) > tolerance * spline.period:
                 continue  # not read whole: most records of a folder are other motions'
             rec = read_record(path)
-            ref = spline.sample(rec.time)
-            scale_p = max(np.ptp(ref.pitch_angle), 1e-9)
-            scale_h = max(np.ptp(ref.heave_position), 1e-9)
-            start = float(rec.parameters.get("ramp_time", 0.0))
-            after = rec.time >= start
-            dp = np.max(np.abs(rec.state.pitch_angle[after] - ref.pitch_angle[after])) / scale_p
-            h0 = spline.sample(np.array([0.0])).heave_position[0]
-            dh = np.max(np.abs(rec.state.heave_position[after] - (ref.heave_position[after]
-                                                                   - h0))) / scale_h
-            if dp < tolerance and dh < tolerance:
-                return path
-    return None
+            if _kinematics_within(rec, spline, tolerance):
+                return FixtureMatch(path)
+            candidates.append((path, rec))
+    shifted = [(found[1], found[0], path) for path, rec in candidates
+               if (found := closest_cycle_shift(rec, spline)) is not None
+               and found[1] < tolerance]
+    if not shifted:
+        return None
+    _, shift, path = min(shifted, key=lambda m: m[0])
+    return FixtureMatch(path, shift)
 
 
 def _other_set_up(record: CfdRecord, mesh: str | AnyMeshSpec,
@@ -120,9 +213,10 @@ def _done_before(motion: DiscreteMotion, key: str, folders: Sequence[str | Path]
     """The record of this motion in ``folders`` (by key, else within the fixtures'
     tolerance) and its path if it was run for this case on the mesh and solver settings asked
     (else None, None: it is to be run)."""
-    path = _matching_fixture(key, motion, [Path(f) for f in folders if Path(f).is_dir()])
-    if path is None:
+    match = matching_fixture(key, motion, [Path(f) for f in folders if Path(f).is_dir()])
+    if match is None:
         return None, None
+    path = match.path
     record = read_record(path)
     if input_mismatches(record, model.plate, model.fluid, model.stream,
                         folder_setup(path)) or _other_set_up(record, mesh, solver, n_cycles,
@@ -137,14 +231,15 @@ def run_backtest_case(motion: DiscreteMotion, label: str, name: str, *,
                       plate=None, fluid=None, stream=None,
                       progress: Callable[[str], None] | None = None,
                       parameters: dict | None = None,
-                      retries_from_start: bool = False) -> CfdRecord:
+                      retries_from_start: bool = False, n_procs: int = 1) -> CfdRecord:
     """Run the back-test CFD of ``motion``, the record ``name``: the periodic spline through
     its cycle (:func:`cfd_motion`) after a start-up ramp of half a period, for ``n_cycles``
     periods, written every quarter of the run (a killed run resumes from there). Its case
     is ``work_dir/name``, with ``_<n>cycles`` after it for other than 3 periods (so that a
     work folder holds both). The record's parameters say so, with ``parameters`` added.
     ``retries_from_start``: a retry reruns the case from t = 0 s, so that the record ran one
-    set-up throughout (:func:`~mfflap.campaign.openfoam_run.run_motion`).
+    set-up throughout (:func:`~mfflap.campaign.openfoam_run.run_motion`). ``n_procs`` > 1
+    runs it decomposed on that many processes under mpirun; its provenance says so.
 
     Raises
     ------
@@ -164,7 +259,7 @@ def run_backtest_case(motion: DiscreteMotion, label: str, name: str, *,
     return run_motion(Path(work_dir) / case, spline, name, params, n_cycles * period,
                       mesh=mesh, ramp_time=0.5 * period, plate=plate, fluid=fluid,
                       stream=stream, solver=settings, progress=progress,
-                      retries_from_start=retries_from_start)
+                      retries_from_start=retries_from_start, n_procs=n_procs)
 
 
 def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float, *,
@@ -176,7 +271,7 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
                     progress: Callable[[str], None] | None = None,
                     done_folders: Sequence[str | Path] = (),
                     average_cycles: int = 1,
-                    retries_from_start: bool = False) -> BacktestOutcome:
+                    retries_from_start: bool = False, n_procs: int = 1) -> BacktestOutcome:
     """Back-test one periodic motion: run or find its CFD, compare the last cycle.
 
     Parameters
@@ -190,6 +285,9 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
         A live run's retries rerun it from t = 0 s, so that it runs one set-up throughout
         (:func:`~mfflap.campaign.openfoam_run.run_motion`); a record of this motion retried
         part-way is then not taken for it.
+    n_procs
+        Processes a live run is decomposed on (1: serial). A record run on another count
+        is taken: the layout changes round-off, not the set-up.
     average_cycles
         The CFD and model means are those over the last ``average_cycles`` whole cycles
         (:func:`~mfflap.backtest.compare.compare_last_cycle`); a record with fewer after its
@@ -228,7 +326,8 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
                                            n_cycles=n_cycles, mesh=mesh, solver=solver,
                                            plate=plate, fluid=fluid, stream=stream,
                                            progress=progress,
-                                           retries_from_start=retries_from_start)
+                                           retries_from_start=retries_from_start,
+                                           n_procs=n_procs)
                 source = "live OpenFOAM"
                 if save_to is not None:
                     write_record(Path(save_to) / f"{name}.h5", record, single_precision=True)
@@ -241,7 +340,8 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
                     (Path(save_to) / f"{name}.failed.toml").write_text(dumps(
                         {"motion_key": key, "label": label, "error": str(exc)[:4000]}))
     if record is None:
-        path = _matching_fixture(key, motion, folders)
+        match = matching_fixture(key, motion, folders)
+        path = None if match is None else match.path
         failed = [f / f"backtest_{key}.failed.toml" for f in folders
                   if (f / f"backtest_{key}.failed.toml").exists()]
         found = None if path is None else read_record(path)
@@ -259,8 +359,8 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
         elif found is not None:
             record = found
             # a live run asked for and not had is said, not replaced by the fixture's name
-            source = f"fixture {path.name}" + (f" instead of a live run: {source}" if source
-                                               else "")
+            source = match.describe() + (f" instead of a live run: {source}" if source
+                                         else "")
         elif failed and not source:
             error = str(read_toml(failed[0]).get("error", "")).splitlines()[0]
             source = f"the CFD run of this motion failed ({failed[0].name}): {error}"

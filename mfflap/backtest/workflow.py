@@ -20,8 +20,8 @@ def backtest_all(config: CaseConfig, motions: dict[str, DiscreteMotion], model, 
                  progress: Callable[[str], None] | None = None,
                  into: dict[str, BacktestOutcome] | None = None,
                  done_folders: Sequence[str | Path] = (), n_cycles: float = 3.0,
-                 average_cycles: int = 1,
-                 retries_from_start: bool = False) -> dict[str, BacktestOutcome]:
+                 average_cycles: int = 1, retries_from_start: bool = False,
+                 n_procs: int = 1) -> dict[str, BacktestOutcome]:
     """Back-test each labelled motion (a failure of one does not stop the others).
 
     ``into``, if given, receives each outcome as soon as it is known and is returned, so
@@ -29,8 +29,8 @@ def backtest_all(config: CaseConfig, motions: dict[str, DiscreteMotion], model, 
     before. ``done_folders``: live, records of a motion run before on this set-up, taken
     instead of a new run (:func:`~mfflap.backtest.run.backtest_motion`, which also says
     what ``n_cycles``, the periods of a live run, ``average_cycles``, the cycles the
-    means are taken over, and ``retries_from_start``, a live run's retries from t = 0 s,
-    do).
+    means are taken over, ``retries_from_start``, a live run's retries from t = 0 s, and
+    ``n_procs``, the processes a live run is decomposed on, do).
 
     Raises
     ------
@@ -50,7 +50,7 @@ def backtest_all(config: CaseConfig, motions: dict[str, DiscreteMotion], model, 
             plate=config.plate, fluid=config.fluid, stream=config.flow, save_to=save_to,
             solver=solver, done_folders=done_folders, n_cycles=n_cycles,
             average_cycles=average_cycles, retries_from_start=retries_from_start,
-            progress=None if progress is None else (
+            n_procs=n_procs, progress=None if progress is None else (
                 lambda message, label=label: progress(f"back-test {label}: {message}")))
         if progress is not None:
             o = out[label]

@@ -541,5 +541,6 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
             raise CfdRunError(f"the run stopped at t = {record.time[-1]:.4g} s before endTime "
                               f"{end_time:.4g} s", case=str(case_dir))
         record.provenance["retries_from_start"] = retries_from_start
+        record.provenance["n_processes"] = n_procs
         record.provenance["wall_time_this_session_s"] = time.perf_counter() - started
         return record

@@ -45,12 +45,17 @@ from mfflap.cli.options import mesh_and_setup_options, refuse_given, retries_fro
                    "'How long a back-test runs'); curves, NRMSE and maximum power stay the "
                    "last cycle's.")
 @retries_from_start_option()
+@click.option("--procs", type=click.IntRange(min=1), default=None,
+              help="With --live: MPI ranks of each run: above 1 the case is decomposed "
+                   "(method simple) and pimpleFoam runs under mpirun [default: 1]. A record "
+                   "run on another count is taken: the layout changes round-off, not the "
+                   "set-up.")
 @click.option("--json", "as_json", is_flag=True)
 def backtest(optimisation_file: Path, live: bool, work_dir: Path,
              fixture_folders: tuple[Path, ...], save_to: Path | None, only: tuple[str, ...],
              mesh: str | None, setup_name: str | None, wall_treatment: str | None,
              repeat: int | None, cycles: float | None, average_cycles: int,
-             retries_from_start: bool, as_json: bool) -> None:
+             retries_from_start: bool, procs: int | None, as_json: bool) -> None:
     """Back-test the optimised motions (and the best sinusoid) of OPTIMISATION_FILE.
 
     Ctrl-C stops the run in flight and shows the motions back-tested before it. The exit
@@ -66,10 +71,11 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
 
     if not live:  # the fixtures' runs are read as they were made
         refuse_given(("work_dir", "save_to", "mesh", "setup_name", "wall_treatment",
-                      "repeat", "cycles", "retries_from_start"),
+                      "repeat", "cycles", "retries_from_start", "procs"),
                      "live runs (--live); without it the back-test reads CFD records "
                      "(--fixtures), run on the mesh and set-up they were made with")
     n_cycles = check_cycles(cycles, average_cycles)
+    n_procs = 1 if procs is None else procs
     spec, solver = mesh_and_solver(mesh, setup_name, wall_treatment)
     with ResultsFile(optimisation_file, kinds=("optimisation", "run")) as rf:
         case = loads_case(rf.config_toml, source=f"{optimisation_file}:/inputs")
@@ -90,7 +96,7 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
         f"{k} {v:.3g}" for k, v in model.coefficients.items()), err=True)
     if repeat is not None:
         _repeat(case, motions, model, repeat, work_dir, save_to, spec.name, solver, as_json,
-                n_cycles, average_cycles, retries_from_start)
+                n_cycles, average_cycles, retries_from_start, n_procs)
         return
     folders = list(fixture_folders) or backtest_fixture_dirs()
     outcomes: dict = {}
@@ -100,7 +106,8 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
                      live=live, work_dir=work_dir, save_to=save_to, mesh=spec.name,
                      solver=solver, progress=lambda m: click.echo(m, err=True), into=outcomes,
                      done_folders=() if save_to is None else (save_to,), n_cycles=n_cycles,
-                     average_cycles=average_cycles, retries_from_start=retries_from_start)
+                     average_cycles=average_cycles, retries_from_start=retries_from_start,
+                     n_procs=n_procs)
     except KeyboardInterrupt:  # the solver is stopped by then; show what was back-tested
         interrupted = next((label for label in motions if label not in outcomes), "the last")
     from mfflap.performance import discrete_means
@@ -151,7 +158,8 @@ def check_cycles(cycles: float | None, average_cycles: int, option: str = "--cyc
 
 def _repeat(case, motions: dict, model, copies: int, work_dir: Path, save_to: Path | None,
             mesh: str, solver, as_json: bool, n_cycles: float = 3.0,
-            average_cycles: int = 1, retries_from_start: bool = False) -> None:
+            average_cycles: int = 1, retries_from_start: bool = False,
+            n_procs: int = 1) -> None:
     """``--repeat``: each motion's copies (:func:`mfflap.backtest.repeat.repeat_runs`)."""
     from mfflap.backtest.repeat import repeat_runs
     from mfflap.cfd.openfoam.case_path import check_case_path
@@ -167,6 +175,7 @@ def _repeat(case, motions: dict, model, copies: int, work_dir: Path, save_to: Pa
             work_dir=work_dir, save_to=save_to, mesh=mesh, solver=solver, plate=case.plate,
             fluid=case.fluid, stream=case.flow, n_cycles=n_cycles,
             average_cycles=average_cycles, retries_from_start=retries_from_start,
+            n_procs=n_procs,
             progress=lambda m, label=label: click.echo(f"repeat {label}: {m}", err=True))
     if as_json:
         echo_json({"repeatability": {label: r.as_dict() for label, r in found.items()}})
