@@ -358,6 +358,42 @@ def test_the_beta_0_optimum_with_a_retrys_set_up_from_the_start_is_not_resolved_
     assert settled.last(3).mean_thrust > free.mean_thrust  # still climbing
 
 
+def test_the_beta_0_optimum_on_the_medium_mesh_reads_the_coarse_meshs_means_over_cycles_3_to_5():
+    """Round 2's beta = 0 optimum on the medium mesh (12,880 cells) with the set-up the
+    coarse mesh's eight-period run above ended with (inletOutlet far field, max Co 2, from
+    t = 0 s), five periods decomposed on two ranks (`--procs 2`), with no retry. Over cycles
+    3-5 it reads 25.18 N / 38.28 W, 1.2 % and 2.5 % below the coarse mesh's same cycles
+    (25.48 N / 39.25 W), a quarter of their combined standard error; cycle by cycle the two
+    meshes lie up to 12 % apart, within the coarse mesh's 9 % cycle scatter, and the medium
+    mesh scatters less (3.7 %). So the coarse back-tests' means hold on the medium mesh for
+    this optimum, as far as three cycles tell (README, "How long a back-test runs")."""
+    medium, period = _record(f"{BETA0}_medium_5_cycles")
+    coarse, _ = _record(f"{BETA0}_inlet_outlet_8_cycles")
+    assert medium.parameters["motion_key"] == BETA0.removeprefix("backtest_")
+    assert medium.provenance["mesh"] == "medium" and medium.provenance["n_cells"] == 12880
+    assert coarse.provenance["mesh"] == "coarse"
+    assert medium.provenance["n_processes"] == 2
+    assert medium.provenance.get("retries") is None  # one set-up throughout
+    for key in ("as_run_far_field", "as_run_max_courant"):
+        assert medium.provenance[key] == coarse.provenance[key]
+    fine = cycle_means(medium, period).after(1)
+    assert list(fine.numbers) == [3, 4, 5]
+    assert fine.mean_thrust == pytest.approx(25.18, abs=0.01)
+    assert fine.mean_power == pytest.approx(38.28, abs=0.01)
+    assert fine.thrust_scatter < 0.04
+    both = cycle_means(coarse, period).after(1)
+    same = np.isin(both.numbers, [3, 4, 5])
+    thrust, power = both.thrust[same].mean(), both.power[same].mean()
+    assert thrust == pytest.approx(25.48, abs=0.01) and power == pytest.approx(39.25, abs=0.01)
+    assert -0.015 < fine.mean_thrust / thrust - 1 < -0.01
+    assert -0.03 < fine.mean_power / power - 1 < -0.02
+    combined = np.hypot(fine.thrust_standard_error,
+                        both.thrust[same].std(ddof=1) / np.sqrt(same.sum()))
+    assert abs(fine.mean_thrust - thrust) / combined < 0.3
+    per_cycle = np.abs(fine.thrust / both.thrust[same] - 1)
+    assert 0.10 < per_cycle.max() < 0.13 and both.thrust_scatter > 0.09
+
+
 def test_procs_applies_only_to_live_runs(optimisation_file):
     res = CliRunner().invoke(cli, ["backtest", str(optimisation_file), "--procs", "2"])
     assert res.exit_code == 2 and "--procs applies only to live runs" in res.output
