@@ -68,7 +68,7 @@ class FixtureMatch:
     period/2) with the record's imposed motion at time t that of the motion asked at
     t + s: the same periodic motion shifted in time. A periodic optimum is defined up to
     such a shift when nothing in the problem fixes its phase (beta = 1's least power:
-    a start changed in its 12th digit moved it by a third of its period, J by 1e-8), so
+    a start changed in its 12th digit moved it 1.4 s along its 10 s cycle, J by 1e-8), so
     machines that round differently find it at other phases. Its cycle means are the
     same; the comparison is made on the record's own kinematics
     (:func:`~mfflap.backtest.compare.compare_last_cycle`).
