@@ -636,7 +636,7 @@ def test_a_live_backtest_takes_a_motion_saved_before_on_the_same_set_up(optimisa
                                f"({saved / ('backtest_' + o['motion_key'])}.h5)"), label
     assert not work.exists()  # nothing was run
     # asked on another mesh or for another plate, the saved runs are not those: run again
-    from mfflap.backtest.run import _done_before
+    from mfflap.backtest.run import FixtureMatch, _done_before
     from mfflap.config import loads_case
     from mfflap.optimisation.store import read_result
     from mfflap.parameters import Plate
@@ -647,8 +647,8 @@ def test_a_live_backtest_takes_a_motion_saved_before_on_the_same_set_up(optimisa
                              ).motion
         model = loads_case(rf.config_toml).morison_model()
     key = motion_key(motion)
-    assert _done_before(motion, key, [saved], model, "coarse", None)[1] == \
-        saved / f"backtest_{key}.h5"
+    assert _done_before(motion, key, [saved], model, "coarse", None)[1] == FixtureMatch(
+        saved / f"backtest_{key}.h5")
     assert _done_before(motion, key, [saved], model, "medium", None) == (None, None)
     other = MorisonModel(plate=Plate(chord=0.2))
     assert _done_before(motion, key, [saved], other, "coarse", None) == (None, None)
@@ -758,6 +758,11 @@ def test_the_look_up_takes_a_record_of_the_same_periodic_motion_shifted_in_time(
     assert found.shift_s == pytest.approx(shift, abs=1e-4 * spline.period)
     assert f"shifted in time by {shift:+.4g} s" in found.describe()
     assert FixtureMatch(found.path).describe() == "fixture backtest_shifted.h5"
+    # live, a record run before is taken shifted too, and its source says so as well
+    outcome = backtest_motion(motion, "β = 1", MorisonModel(), 50.0, live=True,
+                              done_folders=[tmp_path])
+    assert outcome.source == (f"live OpenFOAM, run before ({tmp_path / 'backtest_shifted.h5'}"
+                              f", the same periodic motion shifted in time by {shift:+.4g} s)")
     # pitch leading heave by another phase: the same period, another motion
     other = harmonic_to_discrete(0.8, 0.3, 0.5, 1.3, 40)
     assert cycle_shift(record, cfd_motion(other)) is None

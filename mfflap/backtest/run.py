@@ -77,12 +77,16 @@ class FixtureMatch:
     path: Path
     shift_s: float = 0.0
 
+    def shift_note(self) -> str:
+        """``the same periodic motion shifted in time by <s> s``, or "" without a shift."""
+        if self.shift_s == 0.0:
+            return ""
+        return f"the same periodic motion shifted in time by {self.shift_s:+.4g} s"
+
     def describe(self) -> str:
         """``fixture <name>``, with the shift when there is one."""
-        if self.shift_s == 0.0:
-            return f"fixture {self.path.name}"
-        return (f"fixture {self.path.name} (the same periodic motion shifted in time by "
-                f"{self.shift_s:+.4g} s)")
+        note = self.shift_note()
+        return f"fixture {self.path.name}" + (f" ({note})" if note else "")
 
 
 def _kinematics_within(rec: CfdRecord, spline: PeriodicSplineMotion,
@@ -209,20 +213,20 @@ def _other_set_up(record: CfdRecord, mesh: str | AnyMeshSpec,
 def _done_before(motion: DiscreteMotion, key: str, folders: Sequence[str | Path], model,
                  mesh: str | AnyMeshSpec, solver: SolverSettings | None,
                  n_cycles: float = 3.0, retries_from_start: bool = False
-                 ) -> tuple[CfdRecord | None, Path | None]:
+                 ) -> tuple[CfdRecord | None, FixtureMatch | None]:
     """The record of this motion in ``folders`` (by key, else within the fixtures'
-    tolerance) and its path if it was run for this case on the mesh and solver settings asked
-    (else None, None: it is to be run)."""
+    tolerance, else shifted in time: :func:`matching_fixture`) and where it was found, if it
+    was run for this case on the mesh and solver settings asked (else None, None: it is to
+    be run)."""
     match = matching_fixture(key, motion, [Path(f) for f in folders if Path(f).is_dir()])
     if match is None:
         return None, None
-    path = match.path
-    record = read_record(path)
+    record = read_record(match.path)
     if input_mismatches(record, model.plate, model.fluid, model.stream,
-                        folder_setup(path)) or _other_set_up(record, mesh, solver, n_cycles,
-                                                             retries_from_start):
+                        folder_setup(match.path)) or _other_set_up(
+                            record, mesh, solver, n_cycles, retries_from_start):
         return None, None
-    return record, path
+    return record, match
 
 
 def run_backtest_case(motion: DiscreteMotion, label: str, name: str, *,
@@ -313,7 +317,8 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
     folders = [Path(f) for f in fixture_folders if Path(f).is_dir()]
     record, before = (_done_before(motion, key, done_folders, model, mesh, solver, n_cycles,
                                    retries_from_start) if live else (None, None))
-    source = "" if before is None else f"live OpenFOAM, run before ({before})"
+    source = "" if before is None else "live OpenFOAM, run before ({})".format(
+        ", ".join(filter(None, (str(before.path), before.shift_note()))))
     if live and record is None:
         if not openfoam_available():
             source = "OpenFOAM is not installed"
