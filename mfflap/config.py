@@ -168,6 +168,11 @@ class OptimisationSettings:
                                                    unit="rad/s^2", doc="thetaddot_max")
     penalty_pitch: float = bounded(1.0e4, low=0.0, unit="N", doc="sigma_theta, per squared "
                                    "relative excess over the pitch envelope")
+    # mfflap: "fixed" keeps the pitch's first harmonic at the phase of sin(2 pi t / T), so
+    # that round-off cannot move a periodic optimum along its cycle (mfflap.optimisation.phase)
+    phase: str = bounded("free", choices=("free", "fixed"), unit="",
+                         doc="the phase of the optimised motions: free (as the paper) or "
+                             "fixed (the pitch's first harmonic in phase with sin(2 pi t/T))")
 
     def __post_init__(self) -> None:
         check_fields(self, prefix="optimisation.")

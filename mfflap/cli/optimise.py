@@ -7,7 +7,7 @@ from pathlib import Path
 import click
 
 from mfflap.cli.json_output import echo_json
-from mfflap.cli.options import FloatList, ResultsOutput
+from mfflap.cli.options import FloatList, ResultsOutput, fix_phase_option, with_phase_fixed
 
 
 @click.command()
@@ -24,9 +24,10 @@ from mfflap.cli.options import FloatList, ResultsOutput
               default=Path("optimisation.h5"), show_default=True)
 @click.option("--report", "report_path", type=click.Path(dir_okay=False, path_type=Path),
               default=None, help="HTML report (default: <output>.html).")
+@fix_phase_option()
 @click.option("--json", "as_json", is_flag=True, help="Print the optimised means as JSON.")
 def optimise(case_file: Path, betas: list[float] | None, starts: int, ipopt: bool, gain_table: bool,
-             output: Path, report_path: Path | None, as_json: bool) -> None:
+             output: Path, report_path: Path | None, fix_phase: bool, as_json: bool) -> None:
     """Optimise the motion of CASE_FILE for each beta with the discrete adjoint.
 
     Ctrl-C (or SIGTERM, SIGUSR1) stops it and writes the betas optimised before it.
@@ -35,7 +36,8 @@ def optimise(case_file: Path, betas: list[float] | None, starts: int, ipopt: boo
     from mfflap.optimisation.study import StudyInterrupted, beta_study
     from mfflap.optimisation.study import gain_table as make_gain_table
 
-    case = load_case(case_file)
+    case = with_phase_fixed(load_case(case_file), fix_phase)
+
     def progress(msg: str) -> None:
         if not as_json:
             click.echo(msg, err=True)

@@ -7,7 +7,7 @@ from pathlib import Path
 import click
 
 from mfflap.cli.json_output import echo_json
-from mfflap.cli.options import retries_from_start_option
+from mfflap.cli.options import fix_phase_option, retries_from_start_option, with_phase_fixed
 
 
 @click.command("run")
@@ -89,6 +89,7 @@ from mfflap.cli.options import retries_from_start_option
                    "whole cycles, with the CFD's standard errors (mfflap backtest "
                    "--average-cycles); with --rounds, the rounds judge those means.")
 @retries_from_start_option()
+@fix_phase_option()
 @click.option("--json", "as_json", is_flag=True, help="Print the key numbers as JSON.")
 def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
             backtest_fixtures: tuple[Path, ...], live: bool, coefficients: str, starts: int,
@@ -96,7 +97,8 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
             loop_tolerance: float, correct_outputs: bool, correction_gain: float,
             refit: bool, trust_radius: float | None, first_order: bool,
             cfd_repeatability: float | None, backtest_cycles: float | None,
-            average_cycles: int, retries_from_start: bool, as_json: bool) -> None:
+            average_cycles: int, retries_from_start: bool, fix_phase: bool,
+            as_json: bool) -> None:
     """Identification, sweep, optimisation, back-test and reports for CASE_FILE.
 
     Writes <out>/report.html (every figure), <out>/results.h5 (every number and the inputs)
@@ -128,7 +130,7 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
                      "live back-tests (--live); without it the back-test reads CFD records, "
                      "run for as many periods as they were, with the retries they made")
     n_cycles = check_cycles(backtest_cycles, average_cycles, option="--backtest-cycles")
-    case = load_case(case_file)
+    case = with_phase_fixed(load_case(case_file), fix_phase)
     out_dir = out_dir or Path(f"{case.study.name}_run")
     options = RunOptions(fixtures=fixtures, backtest_fixtures=backtest_fixtures, live=live,
                          work_dir=out_dir / "cfd_cases", coefficients=coefficients,

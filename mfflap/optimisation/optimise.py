@@ -20,6 +20,7 @@ from mfflap.errors import ConfigError
 from mfflap.kinematics.convert import resample
 from mfflap.kinematics.discrete import DiscreteMotion
 from mfflap.optimisation.interrupts import interrupts_kept
+from mfflap.optimisation.phase import check_phase_can_be_fixed, phase_condition_row
 from mfflap.optimisation.problem import FlappingProblem
 from mfflap.optimisation.trust_region import TrustRegion
 from mfflap.performance import CycleSummary, evaluate_discrete
@@ -128,7 +129,8 @@ def optimise_sqp(problem: FlappingProblem, start: DiscreteMotion, *, min_period:
                  max_period: float, continuation: Sequence[float] = (0.01, 0.1, 1.0),
                  max_iterations: int = 400, tolerance: float = 1e-9, start_label: str = "start",
                  callback: Callable[[int, float], None] | None = None,
-                 trust_region: TrustRegion | None = None) -> OptimisationResult:
+                 trust_region: TrustRegion | None = None,
+                 fix_phase: bool = False) -> OptimisationResult:
     """SLSQP on the penalised objective with the exact adjoint gradient.
 
     The power penalty is raised through ``continuation`` (multipliers of the problem's
@@ -136,6 +138,9 @@ def optimise_sqp(problem: FlappingProblem, start: DiscreteMotion, *, min_period:
     Non-convergence is reported in the result (``converged`` False, the last iterate kept).
     ``trust_region`` bounds every variable to its box
     (:class:`~mfflap.optimisation.trust_region.TrustRegion`); the start is moved into it.
+    ``fix_phase`` keeps the pitch's first harmonic at the phase of sin(2 pi t / T), a linear
+    equality (:mod:`mfflap.optimisation.phase`): without it the motion's phase is free,
+    and where J is flat round-off decides it.
     """
     if not continuation or continuation[-1] != 1.0 or any(c <= 0 for c in continuation):
         raise ConfigError(f"continuation {list(continuation)} must be positive multipliers "
@@ -151,6 +156,7 @@ def optimise_sqp(problem: FlappingProblem, start: DiscreteMotion, *, min_period:
         lower, upper = trust_region.bounds(n, (lo, hi))
         bounds = list(zip(lower / scale, upper / scale, strict=True))
         x = np.clip(x, lower / scale, upper / scale)
+    constraints = _phase_constraints(start, start_label) if fix_phase else ()
     history: list[float] = []
     t0 = time.perf_counter()
     converged, message, iterations = False, "not run", 0
@@ -169,6 +175,7 @@ def optimise_sqp(problem: FlappingProblem, start: DiscreteMotion, *, min_period:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)
             res = minimize(fun, x, jac=True, method="SLSQP", bounds=bounds, callback=record,
+                           constraints=constraints,
                            options={"maxiter": max_iterations, "ftol": tolerance})
         x = res.x
         converged, message = bool(res.success), str(res.message)
@@ -178,6 +185,16 @@ def optimise_sqp(problem: FlappingProblem, start: DiscreteMotion, *, min_period:
     return OptimisationResult(problem.beta, motion, "sqp-penalty", start_label, converged,
                               message, float(problem.objective(motion)), np.array(history),
                               summary, peak, flags, iterations, time.perf_counter() - t0)
+
+
+def _phase_constraints(start: DiscreteMotion, start_label: str) -> list[dict]:
+    """SLSQP's form of the phase condition on the packed, scaled variables (the pitch
+    accelerations share one scale, so the row holds for the scaled ones alike)."""
+    check_phase_can_be_fixed(start, start_label)
+    n = start.n_steps
+    row = np.concatenate([phase_condition_row(n), np.zeros(n + 1)])
+    return [{"type": "eq", "fun": lambda xs: np.array([row @ xs]),
+             "jac": lambda xs: row[None, :]}]
 
 
 def replace_problem(problem: FlappingProblem, **changes) -> FlappingProblem:
@@ -195,14 +212,16 @@ def replace_problem(problem: FlappingProblem, **changes) -> FlappingProblem:
 _IPOPT_CACHE: dict[tuple, object] = {}
 
 
-def _ipopt_solver(problem: FlappingProblem, n: int, max_iterations: int, tolerance: float):
+def _ipopt_solver(problem: FlappingProblem, n: int, max_iterations: int, tolerance: float,
+                  fix_phase: bool = False):
     """The IPOPT NLP for N steps of this model and scheme, built once and cached.
 
     The scaling, beta, P_max, h_max, the smoothing weights and the linear modifier's
     gradient (:class:`~mfflap.optimisation.problem.LinearModifier`) are NLP parameters, so one
     build (the expensive part: CasADi's exact Hessian graph) serves a whole beta sweep and
     every multi-start. With a pitch envelope the pitch angle and rate are constrained too
-    (their limits are bounds given at the solve).
+    (their limits are bounds given at the solve); with ``fix_phase`` the phase condition is
+    the last constraint (:mod:`mfflap.optimisation.phase`).
     """
     import casadi as ca
 
@@ -211,7 +230,7 @@ def _ipopt_solver(problem: FlappingProblem, n: int, max_iterations: int, toleran
     m = problem.model
     envelope = _has_state_envelope(problem)
     key = (n, problem.scheme, tuple(sorted(m.coefficients.items())), m.geometry,
-           m.fluid, m.stream, max_iterations, tolerance, envelope)
+           m.fluid, m.stream, max_iterations, tolerance, envelope, fix_phase)
     if key in _IPOPT_CACHE:
         return _IPOPT_CACHE[key]
     e = symbolic_stages(problem, n)
@@ -229,7 +248,8 @@ def _ipopt_solver(problem: FlappingProblem, n: int, max_iterations: int, toleran
         smooth = smooth + 0.5 * eps * (ca.sumsqr(d) + (acc[0] + acc[n - 1]) ** 2)
     f = (ca.sum1(-(1 - beta) * thrust + beta * power) / n + smooth
          + ca.dot(modifier, xs * scale))
-    g = ca.vertcat(power - par[2 * n + 2], hp, *((th, td) if envelope else ()))
+    g = ca.vertcat(power - par[2 * n + 2], hp, *((th, td) if envelope else ()),
+                   *((ca.dot(ca.DM(phase_condition_row(n)), xs[:n]),) if fix_phase else ()))
     solver = ca.nlpsol("mfflap_ipopt", "ipopt", {"x": xs, "f": f, "g": g, "p": par},
                        {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
                         "ipopt.max_iter": max_iterations, "ipopt.tol": tolerance})
@@ -244,23 +264,26 @@ def _has_state_envelope(problem: FlappingProblem) -> bool:
 
 def optimise_ipopt(problem: FlappingProblem, start: DiscreteMotion, *, min_period: float,
                    max_period: float, max_iterations: int = 1000, tolerance: float = 1e-8,
-                   start_label: str = "start", trust_region: TrustRegion | None = None
-                   ) -> OptimisationResult:
+                   start_label: str = "start", trust_region: TrustRegion | None = None,
+                   fix_phase: bool = False) -> OptimisationResult:
     """Hard constraints P_in,j <= P_max and |h_j| <= h_max, and the pitch envelope's
     |theta_j| <= theta_max, |thetadot_j| <= thetadot_max, |thetaddot_j| <= thetaddot_max
     where it is given, solved by IPOPT (CasADi).
 
     The objective is the same beta-weighted mean with the smoothness term (and the linear
     modifier) and no penalties.
-    ``trust_region`` bounds the variables to its box as in :func:`optimise_sqp`.
+    ``trust_region`` bounds the variables to its box, and ``fix_phase`` fixes the phase,
+    as in :func:`optimise_sqp`.
     """
     n = start.n_steps
+    if fix_phase:
+        check_phase_can_be_fixed(start, start_label)
     lo, hi = time_step_bounds(n, min_period, max_period)
     dt0 = float(np.clip(start.time_step, lo, hi))
     start = DiscreteMotion(start.pitch_acceleration, start.heave_acceleration, dt0)
     scale = _scales(start)
     t0 = time.perf_counter()
-    solver = _ipopt_solver(problem, n, max_iterations, tolerance)
+    solver = _ipopt_solver(problem, n, max_iterations, tolerance, fix_phase)
     modifier = problem.linear_modifier
     if modifier is not None and modifier.n_steps != n:
         raise ConfigError(f"the objective's linear modifier is for N = {modifier.n_steps} "
@@ -273,6 +296,8 @@ def optimise_ipopt(problem: FlappingProblem, start: DiscreteMotion, *, min_perio
     if _has_state_envelope(problem):
         bounds_g += [(np.full(n, -limit), np.full(n, limit))
                      for limit in (problem.max_pitch, problem.max_pitch_rate)]
+    if fix_phase:
+        bounds_g.append((np.zeros(1), np.zeros(1)))
     lbg = np.concatenate([b[0] for b in bounds_g])
     ubg = np.concatenate([b[1] for b in bounds_g])
     lbx = np.full(2 * n + 1, -np.inf)

@@ -33,7 +33,7 @@ def write_study(rf: ResultsFile, config: CaseConfig, study: BetaStudy,
         {k: float(v) for k, v in (model or config.morison_model()).coefficients.items()})
     for beta, r in study.sqp.items():
         settings = {**problem_settings(problem_for(config, beta, model)), "n_steps": o.n_steps,
-                    "min_period": o.min_period, "max_period": o.max_period}
+                    "min_period": o.min_period, "max_period": o.max_period, "phase": o.phase}
         if beta in study.corrections:  # the problem solved: the case's, outputs corrected
             corr = study.corrections[beta]
             settings.update({"output_thrust_scale": corr.thrust_scale,

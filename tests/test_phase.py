@@ -1,0 +1,165 @@
+"""The phase of periodic motions and the condition that fixes it in the optimisation
+(mfflap.optimisation.phase, optimisation.phase = "fixed", --fix-phase)."""
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from mfflap.cli.main import cli
+from mfflap.config import load_case, loads_case
+from mfflap.errors import ConfigError
+from mfflap.kinematics.convert import harmonic_to_discrete
+from mfflap.kinematics.discrete import DiscreteMotion
+from mfflap.optimisation.optimise import optimise_ipopt, optimise_sqp
+from mfflap.optimisation.phase import (
+    check_phase_can_be_fixed,
+    first_harmonic,
+    phase_condition_row,
+    pitch_phase_rad,
+)
+from mfflap.optimisation.study import problem_for
+
+CASE = Path(__file__).parents[1] / "cases" / "paper2026.toml"
+
+
+def _shifted(motion: DiscreteMotion, steps: int) -> DiscreteMotion:
+    """The motion begun ``steps`` time steps later in its cycle: x'(t) = x(t + steps dt)
+    (the half cycle rotated, what wraps round flipped in sign: the second half cycle)."""
+    def rotate(a):
+        return np.concatenate([a[steps:], -a[:steps]])
+
+    return DiscreteMotion(rotate(motion.pitch_acceleration),
+                          rotate(motion.heave_acceleration), motion.time_step)
+
+
+@pytest.mark.parametrize(("frequency", "heave", "pitch", "phase", "n_steps"), [
+    (0.8, 0.3, 0.5, 1.5, 40), (2.0, 0.1, 0.9, -0.7, 25), (0.15, 0.45, 0.2, 3.0, 100)])
+def test_the_first_harmonic_of_a_sinusoid_is_its_amplitude_at_its_phase(
+        frequency, heave, pitch, phase, n_steps):
+    """theta_a sin(2 pi f t) and h_a sin(2 pi f t + phi), sampled exactly by the discrete
+    scheme, have the Fourier coefficients -i theta_a / 2 and -i h_a e^{i phi} / 2, and the
+    pitch is at phase 0; begun k steps later, at phase pi k / N."""
+    motion = harmonic_to_discrete(frequency, heave, pitch, phase, n_steps)
+    assert first_harmonic(motion, "pitch") == pytest.approx(-0.5j * pitch, rel=1e-11)
+    assert first_harmonic(motion, "heave") == pytest.approx(-0.5j * heave * np.exp(1j * phase),
+                                                            rel=1e-11)
+    assert abs(pitch_phase_rad(motion)) < 1e-11
+    assert abs(phase_condition_row(n_steps) @ motion.pitch_acceleration) < 1e-9 * np.max(
+        np.abs(motion.pitch_acceleration))
+    for steps in (1, n_steps // 3, n_steps - 1):
+        later = _shifted(motion, steps)
+        _, p_later, _ = later.full_cycle_positions()
+        _, p, _ = motion.full_cycle_positions()
+        assert np.allclose(p_later, np.roll(p, -steps), atol=1e-12)  # the same motion, later
+        expected = np.angle(np.exp(1j * np.pi * steps / n_steps))
+        assert pitch_phase_rad(later) == pytest.approx(expected, abs=1e-10)
+        assert abs(first_harmonic(later, "pitch")) == pytest.approx(0.5 * pitch, rel=1e-11)
+        assert abs(phase_condition_row(n_steps) @ later.pitch_acceleration) > 1e-3 * np.max(
+            np.abs(later.pitch_acceleration))
+
+
+def test_a_start_without_a_pitch_harmonic_cannot_have_its_phase_fixed():
+    no_pitch = harmonic_to_discrete(1.0, 0.3, 0.0, 1.5, 30)
+    with pytest.raises(ConfigError, match="has none") as err:
+        check_phase_can_be_fixed(no_pitch, "the heave-only start")
+    assert err.value.key == "optimisation.phase" and "heave-only start" in str(err.value)
+    problem = problem_for(load_case(CASE), 0.0)
+    with pytest.raises(ConfigError, match=r"optimisation\.phase"):
+        optimise_sqp(problem, no_pitch, min_period=0.5, max_period=5.0, fix_phase=True)
+    with pytest.raises(ConfigError, match=r"optimisation\.phase"):
+        optimise_ipopt(problem, no_pitch, min_period=0.5, max_period=5.0, fix_phase=True)
+    check_phase_can_be_fixed(harmonic_to_discrete(1.0, 0.3, 0.2, 1.5, 30))  # has one
+
+
+def test_the_case_key_takes_free_or_fixed_and_nothing_else():
+    text = CASE.read_text()
+    assert load_case(CASE).optimisation.phase == "free"  # the paper's problem by default
+    fixed = loads_case(text.replace("[optimisation]", '[optimisation]\nphase = "fixed"'))
+    assert fixed.optimisation.phase == "fixed"
+    assert 'phase = "fixed"' in fixed.to_toml()
+    with pytest.raises(ConfigError, match=r"optimisation\.phase"):
+        loads_case(text.replace("[optimisation]", '[optimisation]\nphase = "locked"'))
+
+
+def test_a_fixed_phase_keeps_the_optimum_in_phase_with_its_start_sqp_and_ipopt():
+    """beta = 1 on the paper's case: free, SQP's optimum drifts a quarter radian from its
+    start's phase; fixed, SQP and IPOPT end in phase with sin(2 pi t / T), at a J within
+    0.1 % of the free one's (a shift in time costs only the scheme's error)."""
+    config = load_case(CASE)
+    o = config.optimisation
+    problem = problem_for(config, 1.0)
+    from mfflap.optimisation.study import default_sweep, sinusoid_motion
+
+    sweep = default_sweep(config)
+    start = sinusoid_motion(sweep, sweep.best_feasible(), o.n_steps)
+    assert abs(pitch_phase_rad(start)) < 1e-10
+    free = optimise_sqp(problem, start, min_period=o.min_period, max_period=o.max_period)
+    fixed = optimise_sqp(problem, start, min_period=o.min_period, max_period=o.max_period,
+                         fix_phase=True)
+    assert free.converged and fixed.converged
+    assert abs(pitch_phase_rad(free.motion)) > 0.1
+    assert abs(pitch_phase_rad(fixed.motion)) < 1e-8
+    assert fixed.objective == pytest.approx(free.objective, rel=1e-3)
+    ipopt = optimise_ipopt(problem, start, min_period=o.min_period, max_period=o.max_period,
+                           fix_phase=True)
+    assert ipopt.converged, ipopt.message
+    assert abs(pitch_phase_rad(ipopt.motion)) < 1e-6
+
+
+def test_optimise_fix_phase_stores_the_setting_and_optimises_in_phase(tmp_path):
+    from mfflap.optimisation.store import read_result
+    from mfflap.results import ResultsFile
+
+    out = tmp_path / "opt.h5"
+    res = CliRunner().invoke(cli, ["optimise", str(CASE), "--betas", "1", "--starts", "1",
+                                   "--no-ipopt", "--fix-phase", "--output", str(out)])
+    assert res.exit_code == 0, res.output
+    with ResultsFile(out) as rf:
+        assert loads_case(rf.config_toml).optimisation.phase == "fixed"
+        assert rf.h5["optimisation/sqp/beta_1.00"].attrs["setting_phase"] == "fixed"
+        assert abs(pitch_phase_rad(read_result(rf, "optimisation/sqp/beta_1.00").motion)
+                   ) < 1e-8
+
+
+@pytest.mark.slow
+def test_a_fixed_phase_puts_beta_1s_optimum_in_one_place_and_finds_the_shipped_cfd(tmp_path):
+    """The main job on identified coefficients within the data (the series' round 1), run
+    with one and with two OpenBLAS threads: free, beta = 1's least-power optimum has no
+    phase the problem fixes and lands where round-off steers it (on one machine here 0.5 s
+    apart in its 10 s cycle); with --fix-phase both runs give one motion (within the
+    back-test look-up's 0.2 %) and J to 1e-6, and every motion's shipped CFD is found (the
+    free optima's records, matched shifted in time)."""
+    procs = {}
+    for threads in (1, 2):
+        env = {**os.environ, "OPENBLAS_NUM_THREADS": str(threads)}
+        procs[threads] = subprocess.Popen(
+            [sys.executable, "-c", "from mfflap.cli.main import cli; cli()", "run", str(CASE),
+             "--out", str(tmp_path / f"threads_{threads}"), "--no-ipopt", "--no-gain-table",
+             "--within-data", "--coefficients", "identified:uniform", "--fix-phase", "--json"],
+            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    from mfflap.optimisation.store import read_result
+    from mfflap.results import ResultsFile
+
+    results = {}
+    for threads, proc in procs.items():
+        stdout, stderr = proc.communicate(timeout=600)
+        assert proc.returncode == 0, stderr[-2000:]
+        summary = json.loads(stdout[stdout.index("{\n"):])
+        assert {k: b["status"] for k, b in summary["backtest"].items()} == dict.fromkeys(
+            ("best sinusoid", "β = 0", "β = 0.5", "β = 1"), "back-tested")
+        with ResultsFile(tmp_path / f"threads_{threads}" / "results.h5") as rf:
+            results[threads] = read_result(rf, "optimisation/sqp/beta_1.00")
+    one, two = results[1], results[2]
+    assert float(one.motion.period) == pytest.approx(float(two.motion.period), rel=1e-6)
+    assert one.objective == pytest.approx(two.objective, rel=1e-6)
+    a, b = one.motion.trajectory(), two.motion.trajectory()
+    for signal in ("pitch_angle", "heave_position"):
+        assert np.max(np.abs(a[signal] - b[signal])) < 2e-3 * np.ptp(a[signal]), signal
+    for r in (one, two):
+        assert abs(pitch_phase_rad(r.motion)) < 1e-8
