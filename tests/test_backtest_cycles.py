@@ -212,6 +212,25 @@ def test_cfd_cycles_command_gives_each_runs_cycles_and_settled_mean(tmp_path):
     assert "cycle 3 alone: no cycle-to-cycle scatter" in one.stdout
 
 
+def test_the_cycles_figure_names_each_run_by_its_file_in_a_colour_of_its_own():
+    """Records of one motion share a name (the ten-period run and the medium-mesh run of
+    round 2's beta = 0 optimum): the figure names them by file, each in its own colour."""
+    from mfflap.backtest.cycles import cycle_means, cycles_figure, record_period
+
+    paths = sorted(fixture_dir("cfd_repeatability").glob("*_cycles.h5"))
+    assert len(paths) > 10
+    runs = []
+    for path in paths:
+        rec = read_record(path)
+        every = cycle_means(rec, record_period(rec))
+        runs.append((every, every.after(1)))
+    assert len({every.record for every, _ in runs}) < len(runs)  # names shared
+    fig = cycles_figure(runs, [p.stem for p in paths])
+    handles, labels = fig.axes[1].get_legend_handles_labels()
+    assert labels == [p.stem for p in paths]
+    assert len({tuple(h.get_color()) for h in handles}) == len(paths)
+
+
 def test_cfd_cycles_refuses_pitch_ramp_runs_and_cycles_skipped_past_the_end():
     ramp = sorted(fixture_dir("table1_coarse").glob("*.h5"))[0]
     res = CliRunner().invoke(cli, ["cfd", "cycles", str(ramp)])

@@ -190,20 +190,26 @@ def record_period(record: CfdRecord) -> float:
                       f"({sorted(params)})", key="period")
 
 
-def cycles_figure(runs: list[tuple[CycleMeans, CycleMeans]]):
+def cycles_figure(runs: list[tuple[CycleMeans, CycleMeans]],
+                  labels: list[str] | None = None):
     """Mean thrust and power per cycle of each run, with the mean over its settled cycles
-    and its standard error as a band; ``runs``: (every cycle, the settled ones) per run."""
+    and its standard error as a band; ``runs``: (every cycle, the settled ones) per run,
+    each in a colour of its own (up to 20), named by ``labels`` (default: the records'
+    names) in a legend beside the axes."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, 2, figsize=(11, 3.8))
-    for every, settled in runs:
+    labels = labels or [every.record for every, _ in runs]
+    colours = plt.get_cmap("tab20" if len(runs) > 10 else "tab10").colors
+    fig, axes = plt.subplots(1, 2, figsize=(14, 4.2))
+    for k, ((every, settled), label) in enumerate(zip(runs, labels, strict=True)):
         for ax, values, mean, error in (
                 (axes[0], every.thrust, settled.mean_thrust, settled.thrust_standard_error),
                 (axes[1], every.power, settled.mean_power, settled.power_standard_error)):
-            line = ax.plot(every.numbers, values, "o-", ms=4, lw=1, label=every.record)[0]
+            line = ax.plot(every.numbers, values, "o-", ms=4, lw=1, label=label,
+                           color=colours[k % len(colours)])[0]
             span = (settled.numbers[0] - 0.3, settled.numbers[-1] + 0.3)
             ax.hlines(mean, *span, color=line.get_color(), lw=1, ls="--")
             if not np.isnan(error):
@@ -214,7 +220,7 @@ def cycles_figure(runs: list[tuple[CycleMeans, CycleMeans]]):
     for ax in axes:
         ax.set_xlabel("cycle (1: with the start-up ramp)")
         ax.xaxis.get_major_locator().set_params(integer=True)
-    axes[0].legend(fontsize=7)
+    axes[1].legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0))
     fig.suptitle("dashed: mean over the settled cycles; band: its standard error", fontsize=9)
     fig.tight_layout()
     return fig

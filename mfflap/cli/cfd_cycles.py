@@ -52,7 +52,8 @@ def cycles(records: tuple[Path, ...], skip_cycles: int, figure: Path | None,
     if figure is not None:
         from mfflap.plots import save_figure
 
-        save_figure(cycles_figure([(e, s) for _, e, s in found]), figure)
+        save_figure(cycles_figure([(e, s) for _, e, s in found],  # named by file: records
+                                  [path.stem for path, _, _ in found]), figure)  # may share one
         click.echo(f"wrote {figure}", err=True)
     if as_json:
         echo_json({"skip_cycles": skip_cycles, "runs": {
