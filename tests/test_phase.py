@@ -163,3 +163,61 @@ def test_a_fixed_phase_puts_beta_1s_optimum_in_one_place_and_finds_the_shipped_c
         assert np.max(np.abs(a[signal] - b[signal])) < 2e-3 * np.ptp(a[signal]), signal
     for r in (one, two):
         assert abs(pitch_phase_rad(r.motion)) < 1e-8
+
+
+def _cpu_has(flag: str) -> bool:
+    try:
+        with open("/proc/cpuinfo", encoding="ascii", errors="replace") as cpuinfo:
+            return any(line.startswith("flags") and flag in line.split() for line in cpuinfo)
+    except OSError:
+        return False
+
+
+@pytest.mark.slow
+def test_the_trust_series_with_a_fixed_phase_takes_the_shipped_steps_on_other_kernels(
+        tmp_path):
+    """The trust series (`--rounds 6 --correct-outputs --no-refit --trust-region 0.25`) with
+    --fix-phase, run where the shipped series' arithmetic is not replayed: OpenBLAS's
+    Haswell kernels (where the CPU has AVX2) on one thread, not the SkylakeX kernels the
+    tests pin (tests/conftest.py). It takes the shipped series' steps round by round
+    (tests/test_rounds.py: all of round 2 confirmed, beta = 0's J decrease with a ratio of
+    1.00; beta = 0 and 0.5 refused in round 3; beta = 0.5 confirmed in round 4; beta = 0's
+    region collapsed in round 5) on the same CFD records through round 4, each found
+    shifted in time where its phase moved (README, "The phase of periodic optima")."""
+    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_CORETYPE"}
+    env["OPENBLAS_NUM_THREADS"] = "1"
+    if _cpu_has("avx2"):
+        env["OPENBLAS_CORETYPE"] = "Haswell"
+    out = tmp_path / "loop"
+    proc = subprocess.run(
+        [sys.executable, "-c", "from mfflap.cli.main import cli; cli()", "run", str(CASE),
+         "--out", str(out), "--rounds", "6", "--coefficients", "identified:uniform",
+         "--within-data", "--correct-outputs", "--no-refit", "--trust-region", "0.25",
+         "--no-ipopt", "--no-gain-table", "--fix-phase", "--json"],
+        env=env, capture_output=True, text=True, timeout=1800)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    loop = json.loads(proc.stdout[proc.stdout.index("{"):])["rounds"]
+    rounds = loop["rounds"]
+    assert [r["round"] for r in rounds] == [1, 2, 3, 4, 5]
+    assert loop["stopped_because"].startswith("round 5: the trust region of beta 0 collapsed")
+    assert loop["answers"]["0"].startswith("round 2's beta = 0 (back-test")
+    assert loop["answers"]["0.5"].startswith("round 4's beta = 0.5 (back-test")
+    accepted = [{beta: step["accepted"] for beta, step in r["trust_steps"].items()}
+                for r in rounds[1:]]
+    assert accepted == [{"0": True, "0.5": True, "1": True},
+                        {"0": False, "0.5": False, "1": True},
+                        {"0": False, "0.5": True, "1": True},
+                        {"0": False, "0.5": False, "1": True}]
+    assert float(rounds[1]["trust_steps"]["0"]["ratio"]) == pytest.approx(1.0, abs=0.01)
+    assert rounds[2]["trust_steps"]["1"]["step_fraction"] < 1e-3  # beta = 1 kept its centre
+    # the CFD of the shipped series (its records' names: the free optima's keys)
+    shipped = [("598a5388e592df63", "c91660e722b01742", "fb22156550965a86"),
+               ("f85edc06d9cf46a0", "34cd2b07c53664ae", "1a923f3083e54ac4"),
+               ("cefb13df28de6b66", "29118260a8ff72d9", "1a923f3083e54ac4"),
+               ("cefb13df28de6b66", "ad6c009b1a6e0634", "1a923f3083e54ac4")]
+    for r, keys in zip(rounds[:4], shipped, strict=True):
+        assert [r["checks"][f"β = {b}"]["cfd_record"] for b in ("0", "0.5", "1")] == [
+            f"backtest_{k}" for k in keys]
+    # found shifted in time: beta = 1's optimum of round 1 lies 4.1 s along its cycle from
+    # the free one the shipped series ran
+    assert "shifted in time by +4.1" in proc.stderr
