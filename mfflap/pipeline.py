@@ -438,7 +438,8 @@ def write_outputs(config: CaseConfig, outcome: RunOutcome, h5_path: Path, html_p
         from mfflap.reports.optimisation import add_optimisation_sections
 
         add_optimisation_sections(rep, outcome.study, outcome.model, config.optimisation.scheme,
-                                  config.optimisation.max_power, outcome.gain)
+                                  config.optimisation.max_power, outcome.gain,
+                                  config.optimisation.phase)
     if outcome.coverage:
         from mfflap.reports.coverage import add_coverage_section
 

@@ -123,8 +123,14 @@ def test_optimise_fix_phase_stores_the_setting_and_optimises_in_phase(tmp_path):
     with ResultsFile(out) as rf:
         assert loads_case(rf.config_toml).optimisation.phase == "fixed"
         assert rf.h5["optimisation/sqp/beta_1.00"].attrs["setting_phase"] == "fixed"
-        assert abs(pitch_phase_rad(read_result(rf, "optimisation/sqp/beta_1.00").motion)
-                   ) < 1e-8
+        result = read_result(rf, "optimisation/sqp/beta_1.00")
+        assert abs(pitch_phase_rad(result.motion)) < 1e-8
+    report = out.with_suffix(".html").read_text()
+    assert "Phase fixed" in report and "in phase with sin(2πt/T) (β = 1: " in report
+    from mfflap.reports.optimisation import phase_text
+
+    free = phase_text("free", {1.0: result})
+    assert free.startswith("Phase free (the paper's problem)") and "β = 1: " in free
 
 
 @pytest.mark.slow

@@ -102,5 +102,5 @@ def _write(case, study, gain, model, output: Path, report_path: Path | None) -> 
         write_study(rf, case, study, gain, model)
     rep = Report(f"Optimisation study: {case.study.name}", case.study.description)
     add_optimisation_sections(rep, study, model, case.optimisation.scheme,
-                              case.optimisation.max_power, gain)
+                              case.optimisation.max_power, gain, case.optimisation.phase)
     return rep.write(report_path or output.with_suffix(".html"))

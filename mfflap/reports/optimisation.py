@@ -108,9 +108,27 @@ RESULT_HEADER = ["motion", "method", "mean thrust [N]", "mean power [W]", "η", 
                  "period [s]", "max power [W]", "max power at 10N [W]", "converged", "flags"]
 
 
+def phase_text(phase: str, results: Mapping[float, OptimisationResult]) -> str:
+    """What the report says of the optimised motions' phase (``optimisation.phase``) and
+    each one's pitch phase against sin(2 pi t / T) (:mod:`mfflap.optimisation.phase`)."""
+    from mfflap.optimisation.phase import pitch_phase_rad
+
+    measured = ", ".join(f"β = {b:g}: {pitch_phase_rad(r.motion):+.3f} rad"
+                         for b, r in results.items())
+    if phase == "fixed":
+        return ("Phase fixed (optimisation.phase = \"fixed\"): each motion's pitch first "
+                f"harmonic is in phase with sin(2πt/T) ({measured}).")
+    return ("Phase free (the paper's problem): a motion shifted in time is the same motion, "
+            "so nothing fixes the optima's phase, and where J is flat (β = 1) round-off "
+            "decides it; optimisation.phase = \"fixed\" (--fix-phase) fixes it. Pitch first "
+            f"harmonic's phase against sin(2πt/T): {measured}.")
+
+
 def add_optimisation_sections(rep: Report, study, model, scheme: str, max_power: float,
-                              gain: Mapping[str, np.ndarray] | None = None) -> None:
-    """Sections of the optimisation study (sweep, beta sweep, IPOPT, gain table)."""
+                              gain: Mapping[str, np.ndarray] | None = None,
+                              phase: str = "free") -> None:
+    """Sections of the optimisation study (sweep, beta sweep, IPOPT, gain table);
+    ``phase``: the case's ``optimisation.phase``, said beside the optimised motions."""
     sw, best = study.sweep, study.best_sinusoid
     s = rep.section("Sinusoidal sweep and constrained Pareto front")
     s.blocks.append(text_html(
@@ -126,6 +144,8 @@ def add_optimisation_sections(rep: Report, study, model, scheme: str, max_power:
     rows = [result_rows(f"β = {b:g}", r) for b, r in study.sqp.items()]
     rows += [result_rows(f"β = {b:g}", r) for b, r in study.ipopt.items()]
     s.blocks.append(table_html(RESULT_HEADER, rows))
+    if study.sqp:
+        s.blocks.append(text_html(phase_text(phase, study.sqp)))
     for b, corr in study.corrections.items():
         if b in study.sqp:
             m = study.sqp[b].summary
