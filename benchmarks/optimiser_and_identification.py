@@ -1,4 +1,5 @@
 """One beta optimisation from the best sinusoid to convergence (target < 0.5 s at N = 50),
+free and with the phase fixed (optimisation.phase = "fixed"),
 and identification over the whole 125-case grid (target < 2 s), also with the residual
 scaling chosen by the errors ("auto").
 
@@ -46,13 +47,21 @@ def optimiser() -> None:
             problem.gradient(start)
         eval_time = (time.perf_counter() - t0) / 20
         if beta == o.betas[0]:
+            for fixed in (False, True):
+                t0 = time.perf_counter()
+                optimise_ipopt(problem, start, min_period=o.min_period,
+                               max_period=o.max_period, fix_phase=fixed)
+                print(f"      (IPOPT NLP build with CasADi's exact Hessian, once per N and "
+                      f"model{', phase fixed' if fixed else ''}: "
+                      f"{time.perf_counter() - t0:.2f} s including the first solve)")
+        # the phase fixed (optimisation.phase = "fixed"): one linear equality more
+        for name, fn, fixed in (("SQP (adjoint)", optimise_sqp, False),
+                                ("SQP, phase fixed", optimise_sqp, True),
+                                ("IPOPT (cached)", optimise_ipopt, False),
+                                ("IPOPT, ph. fixed", optimise_ipopt, True)):
             t0 = time.perf_counter()
-            optimise_ipopt(problem, start, min_period=o.min_period, max_period=o.max_period)
-            print(f"      (IPOPT NLP build with CasADi's exact Hessian, once per N and model: "
-                  f"{time.perf_counter() - t0:.2f} s including the first solve)")
-        for name, fn in (("SQP (adjoint)", optimise_sqp), ("IPOPT (cached)", optimise_ipopt)):
-            t0 = time.perf_counter()
-            r = fn(problem, start, min_period=o.min_period, max_period=o.max_period)
+            r = fn(problem, start, min_period=o.min_period, max_period=o.max_period,
+                   fix_phase=fixed)
             dt = time.perf_counter() - t0
             print(f"{beta:4.2f}  {name:16s}  {r.n_iterations:10d}  {dt:8.3f}  "
                   f"{dt / eval_time:10.0f}              {'yes' if dt < 0.5 else 'NO'}")
