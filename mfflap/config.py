@@ -183,6 +183,12 @@ class OptimisationSettings:
                 key="optimisation.min_period",
             )
 
+    @property
+    def fix_phase(self) -> bool:
+        """Whether the optimisers keep the optimised motions' phase (``phase = "fixed"``,
+        :mod:`mfflap.optimisation.phase`)."""
+        return self.phase == "fixed"
+
     def pitch_envelope(self) -> dict[str, float]:
         """The FlappingProblem keywords of the pitch envelope's limits (rad, rad/s,
         rad/s^2; inf where no limit is given)."""

@@ -154,7 +154,7 @@ def coefficient_sensitivity(config: CaseConfig, identification: dict, sweep,
         start = sinusoid_motion(sweep, sweep.best_feasible(), o.n_steps)
         r = optimise_sqp(problem_for(config, 0.0, model), start, min_period=o.min_period,
                          max_period=o.max_period, start_label="best sinusoid",
-                         fix_phase=o.phase == "fixed")
+                         fix_phase=o.fix_phase)
         out[label] = (model, r)
         progress(f"sensitivity {label}: thrust {float(r.summary.mean_thrust):.3g} N, "
                  f"period {float(r.motion.period):.3g} s")

@@ -27,8 +27,6 @@ import numpy as np
 from mfflap.errors import ConfigError
 from mfflap.kinematics.discrete import DiscreteMotion, integrate
 
-#: the settings of ``optimisation.phase``: "free" (as the paper), or "fixed" (the condition)
-PHASES: tuple[str, ...] = ("free", "fixed")
 #: a start whose pitch first harmonic is below this share of its pitch range has no phase
 MIN_HARMONIC_SHARE = 1e-6
 
@@ -89,5 +87,5 @@ def check_phase_can_be_fixed(start: DiscreteMotion, label: str = "the start") ->
             f"range of {spread:.3g} rad): use phase = 'free'", key="optimisation.phase")
 
 
-__all__ = ["MIN_HARMONIC_SHARE", "PHASES", "check_phase_can_be_fixed", "first_harmonic",
+__all__ = ["MIN_HARMONIC_SHARE", "check_phase_can_be_fixed", "first_harmonic",
            "harmonic_weights", "phase_condition_row", "pitch_phase_rad"]

@@ -266,14 +266,14 @@ def beta_study(config: CaseConfig, betas: Sequence[float] | None = None, n_start
         try:
             found, found_all = multistart(
                 problem, own_starts, min_period=o.min_period, max_period=o.max_period,
-                progress=progress, trust_region=region, fix_phase=o.phase == "fixed",
+                progress=progress, trust_region=region, fix_phase=o.fix_phase,
                 label=f"beta {beta:g}" + (
                     " (outputs corrected; J over c)" if beta in corrections else "")
                 + ("" if region is None else f" (trust region {region.radius:.3g})"))
             found_ipopt = optimise_ipopt(problem, own_starts[0][1], min_period=o.min_period,
                                          max_period=o.max_period,
                                          start_label=own_starts[0][0], trust_region=region,
-                                         fix_phase=o.phase == "fixed") if with_ipopt else None
+                                         fix_phase=o.fix_phase) if with_ipopt else None
             if beta in corrections:  # the case's beta, the corrected J (not J / c)
                 corr = corrections[beta]
                 found, found_ipopt = (_corrected(r, beta, corr, problem)
@@ -344,7 +344,7 @@ def gain_table(config: CaseConfig, n_steps: Sequence[int] = (25, 50, 100),
                                smoothing_heave=o.smoothing_heave * fac)
             problem = problem_for(config, 0.0, model, settings)
             r = optimise_sqp(problem, start, min_period=o.min_period, max_period=o.max_period,
-                             fix_phase=o.phase == "fixed")
+                             fix_phase=o.fix_phase)
             out["thrust"][i, j] = float(r.summary.mean_thrust)
             gain = thrust_gain(out["thrust"][i, j], base)
             out["gain"][i, j] = np.nan if gain is None else gain
