@@ -1,4 +1,4 @@
-"""Shared fixtures; OpenBLAS's kernels pinned before numpy loads (below)."""
+"""Shared fixtures; OpenBLAS's kernels and thread count pinned before numpy loads (below)."""
 
 import os
 
@@ -31,7 +31,21 @@ def _pin_openblas_kernels() -> None:
         os.environ["OPENBLAS_CORETYPE"] = "SkylakeX"
 
 
+def _pin_openblas_threads() -> None:
+    """Have OpenBLAS use two threads, as it did on the two-core machines the shipped series of
+    rounds were computed on: one thread instead of two moves beta = 1's least-power optimum
+    as far as other kernels do (README, "The phase of periodic optima"), and OpenBLAS would
+    otherwise take one thread per core of whatever machine runs the tests. Set before numpy
+    loads, over a value the environment gives (kept in
+    MFFLAP_TESTS_OPENBLAS_NUM_THREADS_WAS); OpenBLAS itself caps it at the cores there are.
+    Tests that start processes on other thread counts set OPENBLAS_NUM_THREADS for them."""
+    os.environ.setdefault("MFFLAP_TESTS_OPENBLAS_NUM_THREADS_WAS",
+                          os.environ.get("OPENBLAS_NUM_THREADS", ""))
+    os.environ["OPENBLAS_NUM_THREADS"] = "2"
+
+
 _pin_openblas_kernels()
+_pin_openblas_threads()
 
 import importlib.util
 import subprocess
