@@ -165,6 +165,28 @@ def test_a_motion_checked_on_a_neighbours_cfd_says_so():
     assert not MotionCheck("x", "k", 1, 1, 1, 1, 0, 0, True, False).cfd_of_neighbour
 
 
+def test_the_first_order_slopes_take_a_neighbours_cfd_once_per_beta():
+    """A motion checked on its own CFD always gives the secants a point; one checked on a
+    neighbour's (as every optimum made with the phase fixed is on the shipped free series'
+    records, found shifted in time) gives one only where that record has not given the beta
+    a point before: a trust region's short step that reuses an earlier run adds no second
+    point with the same CFD."""
+    from mfflap.rounds.steps import secant_points
+
+    def check(key: str, record: str) -> MotionCheck:
+        return MotionCheck("β = 0", key, 30.0, 25.0, 50.0, 45.0, -0.2, -0.1, True, False,
+                           cfd_record=f"backtest_{record}")
+
+    used: dict[float, set[str]] = {}
+    rounds = [("a", "a"), ("b", "a"), ("c", "c"), ("c", "c"), ("d", "e"), ("f", "e")]
+    kept = [bool(secant_points({0.0: f"point {k}"}, {"β = 0": check(k, r)}, used))
+            for k, r in rounds]
+    # own CFD: kept, even a repeat (round 3's motion again); a neighbour's: kept once
+    assert kept == [True, False, True, True, True, False]
+    assert used == {0.0: {"backtest_a", "backtest_c", "backtest_e"}}
+    assert secant_points({0.0: "p"}, {"β = 0": check("g", "g")}, used) == {0.0: "p"}
+
+
 def test_a_corrected_motion_is_checked_by_its_corrected_prediction():
     """Optimised with thrust x 1.25 and power x 1.1, the beta = 0 motion's prediction is the
     model's means times those: 24 N x 1.25 = 30 N is CFD's (0 %), 55 W x 1.1 against 50 W

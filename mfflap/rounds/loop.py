@@ -16,6 +16,7 @@ from mfflap.rounds.steps import (
     backtest_record_of,
     correction_points,
     mixed_set_up_notes,
+    secant_points,
     trust_steps,
 )
 from mfflap.rounds.summary import LoopResult, RoundSummary, describe_round
@@ -63,7 +64,9 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
     corrected objective gets a slope that makes it CFD's at the earlier back-tested motions
     of the beta (:meth:`~mfflap.optimisation.output_correction.OutputCorrection.with_slopes`)
     within :data:`~mfflap.optimisation.output_correction.SECANT_REACH` radii of the centre;
-    a motion whose CFD is a neighbour's (found within the look-up's tolerance) is left out.
+    a motion whose CFD is a neighbour's (found within the look-up's tolerance or shifted in
+    time) counts only where that record gave the beta no point before
+    (:func:`~mfflap.rounds.steps.secant_points`).
     ``cfd_repeatability`` (with ``trust_radius``): the share by which two CFD runs of one
     motion differ; the trust regions' ratios are relaxed by the noise it makes in J, and a
     step predicted to gain less than that noise counts as settled.
@@ -98,7 +101,8 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
     radii: dict[float, float] = {}  # beta -> the trust region's radius
     centre_runs: dict = {}  # beta -> the centre's CFD record (how it ran: as_run_differences)
     centre_mixed: dict = {}  # beta -> what mixes two set-ups in the centre's compared cycles
-    visited: dict = {}  # beta -> every back-tested optimum with its own CFD (first_order)
+    visited: dict = {}  # beta -> every back-tested optimum with CFD of its own (first_order)
+    records_used: dict = {}  # beta -> the CFD records its visited optima were measured on
     converged, why = False, f"ran the {n_rounds} round(s) asked for"
     for k in range(1, n_rounds + 1):
         round_dir = out_dir / f"round_{k}"
@@ -138,9 +142,8 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
             {lbl: o.source for lbl, o in outcome.backtests.items() if o.comparison is None},
             {b: c.as_dict() for b, c in outcome.corrections.items()})
         points = correction_points(outcome, summary.checks, k)
-        for beta, point in points.items():
-            if not summary.checks[beta_label(beta)].cfd_of_neighbour:
-                visited.setdefault(beta, []).append(point)
+        for beta, point in secant_points(points, summary.checks, records_used).items():
+            visited.setdefault(beta, []).append(point)
         if trust_radius is not None:
             summary.trust_steps = trust_steps(outcome, summary.checks, regions, centres,
                                               config, cfd_repeatability)

@@ -26,6 +26,27 @@ def correction_points(outcome, checks: dict[str, MotionCheck], index: int) -> di
     return points
 
 
+def secant_points(points: dict, checks: dict[str, MotionCheck],
+                  records_used: dict[float, set[str]]) -> dict:
+    """beta -> the point of ``points`` (:func:`correction_points`) the first-order slopes may
+    take: a motion checked on its own CFD, or on a neighbour's (a record the back-test
+    look-up found within its tolerance, or the same periodic motion shifted in time, as
+    every optimum made with the phase fixed finds the shipped free series' records) that
+    has not yet given that beta a point. A trust region's short step that reuses an earlier
+    run adds no second point with that run's CFD. ``records_used`` (beta -> the record
+    names its points were measured on) is brought up to date."""
+    from mfflap.optimisation.store import beta_label
+
+    kept = {}
+    for beta, point in points.items():
+        check = checks[beta_label(beta)]
+        used = records_used.setdefault(beta, set())
+        if not check.cfd_of_neighbour or check.cfd_record not in used:
+            kept[beta] = point
+        used.add(check.cfd_record)
+    return kept
+
+
 def trust_steps(outcome, checks: dict[str, MotionCheck], regions: dict, centres: dict,
                 config: CaseConfig, repeatability: float | None = None) -> dict:
     """beta -> :class:`~mfflap.optimisation.trust_region.TrustStep`: each back-tested
