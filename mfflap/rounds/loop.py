@@ -101,7 +101,7 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
     radii: dict[float, float] = {}  # beta -> the trust region's radius
     centre_runs: dict = {}  # beta -> the centre's CFD record (how it ran: as_run_differences)
     centre_mixed: dict = {}  # beta -> what mixes two set-ups in the centre's compared cycles
-    visited: dict = {}  # beta -> every back-tested optimum with CFD of its own (first_order)
+    visited: dict = {}  # beta -> the back-tested optima the secants take (first_order)
     records_used: dict = {}  # beta -> the CFD records its visited optima were measured on
     converged, why = False, f"ran the {n_rounds} round(s) asked for"
     for k in range(1, n_rounds + 1):
