@@ -326,6 +326,47 @@ def test_collapsed_time_step_is_retried_with_a_lower_courant_limit(tmp_path):
 
 
 @pytest.mark.openfoam
+def test_a_run_whose_force_log_times_repeat_is_retried_from_before_them(tmp_path, monkeypatch):
+    """A time step that collapses below the written precision too briefly for the runner to
+    see leaves a finished run whose force log repeats a time (a 2026-11-29 back-test on the
+    coarse mesh: t = 4.3245473 s twice, its forces near 1e9 N, then on to its end). The
+    first real run here is given such a time just before 0.035 s: it is retried from the last
+    time written before it (0.03 s) with the next remedy, and the record is the rerun's."""
+    from mfflap.campaign import openfoam_run
+
+    real = openfoam_run.run_case
+    calls, repeated = [], []
+
+    def repeats_a_time_once(case_dir, **kwargs):
+        real(case_dir, **kwargs)
+        calls.append(case_dir)
+        if len(calls) == 1:
+            for stem in ("force", "moment"):
+                path = case_dir / "postProcessing" / "forces" / "0" / f"{stem}.dat"
+                lines = path.read_text().splitlines(keepends=True)
+                i = next(k for k, line in enumerate(lines)
+                         if not line.startswith("#") and float(line.split()[0]) > 0.035)
+                path.write_text("".join([*lines[:i], lines[i - 1], *lines[i:]]))
+                repeated.append(lines[i - 1].split()[0])
+
+    monkeypatch.setattr(openfoam_run, "run_case", repeats_a_time_once)
+    case_dir = tmp_path / "c"
+    told = []
+    rec = run_motion(case_dir, SHORT.motion(), "c", {}, 0.04, ramp_time=0.02,
+                     bound_watch_every_s=1e6, progress=told.append)
+    assert len(calls) == 2
+    [retry] = [m for m in told if m.startswith("retry ")]
+    assert 0.034 < float(repeated[0]) < 0.035  # the row before the first after 0.035 s
+    assert retry == (f"retry 1 of 3: time step collapsed at t = {float(repeated[0])!r} s (the "
+                     "force log's times repeat there); resumed from t = 0.03 s with the "
+                     "inletOutlet far field")
+    assert rec.provenance["retries"] == retry.removeprefix("retry 1 of 3: ")
+    assert rec.provenance["as_run_far_field"] == "inletOutlet"
+    assert np.all(np.diff(rec.time) > 0) and rec.time[-1] == pytest.approx(0.04, abs=1e-3)
+    assert (case_dir / "log.pimpleFoam").read_text().count("Starting time loop") == 2
+
+
+@pytest.mark.openfoam
 def test_forces_beyond_the_bound_are_retried_from_the_written_time_before_them(tmp_path):
     """Every attempt 'loses its numerics' after the ramp (the bound is scaled down a
     millionfold): each retry rewinds to the last time written before the breach (0.03 s;

@@ -36,7 +36,7 @@ from mfflap.cfd.openfoam.writer import (
     write_case,
     written_wall_treatment,
 )
-from mfflap.errors import CfdRunError, ConfigError, MfflapError
+from mfflap.errors import CfdRunError, ConfigError, MfflapError, ParseError
 from mfflap.kinematics.continuous import Motion
 from mfflap.parameters import Fluid, FreeStream, Plate
 from mfflap.toml_io import read_toml
@@ -270,6 +270,13 @@ RETRY_LOG = "mfflap_retries.txt"
 _COLLAPSED_AT = re.compile(r"time step collapsed to \S+ s at t = (\S+) s")
 
 
+#: how :func:`mfflap.cfd.openfoam.forces.read_forces` says a force log's times stop
+#: increasing: the time step collapsed below the written precision for a while (a moment too
+#: short for the runner's watch to see) and the run went on to its end time, its forces
+#: there in the 1e9 N (:func:`run_motion`)
+_TIMES_REPEAT = re.compile(r"time does not increase after t = ([0-9.eE+-]+)")
+
+
 #: the line :func:`request_rerun` adds to :data:`RETRY_LOG`: the retries before it no longer
 #: count against ``max_retries``
 RERUN_REQUESTED = "rerun requested: a new budget of retries from here"
@@ -413,7 +420,10 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
     (:mod:`mfflap.cfd.force_envelope`: it lost its numerics gradually) is retried the same
     way from its last written time before that (:func:`rewind_case`); its forces are
     checked every ``bound_watch_every_s`` seconds while it runs, so that such a run stops
-    there instead of computing its lost stretch to the end. A run that leaves the bound at
+    there instead of computing its lost stretch to the end. A run whose force log's times
+    repeat (its time step collapsed below the written precision too briefly for the runner
+    to see, and it ran on to its end time) is retried the same way from its last written
+    time before that. A run that leaves the bound at
     the same flow time (within :data:`SAME_BREACH_FRACTION` of c / U) after its Courant
     limit was lowered is rerun once from t = 0 with the settings it has then (the flow at
     its last written time may have been spoiled already: f = 1 Hz, h = 0.5 m,
@@ -490,7 +500,23 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
                                f"{latest_solution_time(case_dir) or 0} s with {retries[-1]}",
                                progress, len(retries), max_retries)
                     continue
-            record = record_from_case(case_dir, motion, name, parameters, plate)
+            try:
+                record = record_from_case(case_dir, motion, name, parameters, plate)
+            except ParseError as exc:
+                stalled = _TIMES_REPEAT.search(str(exc))
+                if stalled is None:
+                    raise
+                at = (f"time step collapsed at t = {stalled[1]} s (the force log's times "
+                      "repeat there)")
+                if len(retries) >= max_retries:
+                    tried = _retries_tried(case_dir)
+                    raise CfdRunError(f"{at}{f'; {tried}' if tried else ''}",
+                                      case=str(case_dir)) from exc
+                resume = rewind_case(case_dir, 0.0 if retries_from_start else float(stalled[1]))
+                retries.append(_apply_next_remedy(case_dir, len(retries), max_retries))
+                _log_retry(case_dir, f"{at}; resumed from t = {resume} s with {retries[-1]}",
+                           progress, len(retries), max_retries)
+                continue
             breach = _forces_beyond_bound(record, ramp_time, plate, fluid, stream,
                                           force_bound_factor)
             if breach is None:
