@@ -117,6 +117,29 @@ def test_fixture_lookup_by_key_then_by_tolerance_and_missing_is_reported(tmp_pat
     assert missing.comparison is None
 
 
+def test_a_live_backtest_goes_on_with_its_record_as_saved(tmp_path, monkeypatch):
+    """A live back-test saved in single precision is compared as saved, so a rerun that
+    finds the saved record (a series of rounds resumed after it stopped) has the same
+    numbers to the last bit: on 2026-11-29 a resumed series' next optimum came out 6e-6
+    away from the one whose case the stopped run had written, and that case was refused."""
+    from mfflap.backtest import run as backtest_run
+
+    monkeypatch.setattr(backtest_run, "run_backtest_case",
+                        lambda motion, label, name, **kwargs: model_record(motion, name=name))
+    live = backtest_motion(MOTION, "β = 0", MorisonModel(), 50.0, live=True,
+                           work_dir=tmp_path / "w", save_to=tmp_path / "fx")
+    assert live.source == "live OpenFOAM"
+    again = backtest_motion(MOTION, "β = 0", MorisonModel(), 50.0,
+                            fixture_folders=[tmp_path / "fx"])
+    assert again.source.startswith("fixture backtest_")
+    exact = model_record(MOTION).loads.normal_force
+    assert not np.array_equal(live.record.loads.normal_force, exact)  # single precision
+    np.testing.assert_array_equal(live.record.loads.normal_force,
+                                  again.record.loads.normal_force)
+    assert live.comparison.cfd_mean_thrust == again.comparison.cfd_mean_thrust
+    assert live.comparison.cfd_mean_power == again.comparison.cfd_mean_power
+
+
 @pytest.mark.openfoam
 def test_live_backtest_runs_openfoam_and_saves_a_fixture(tmp_path):
     assert openfoam_available()

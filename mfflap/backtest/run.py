@@ -334,8 +334,12 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
                                            retries_from_start=retries_from_start,
                                            n_procs=n_procs)
                 source = "live OpenFOAM"
-                if save_to is not None:
-                    write_record(Path(save_to) / f"{name}.h5", record, single_precision=True)
+                if save_to is not None:  # go on with the record as saved (single precision),
+                    # as a resumed or repeated run that finds it there will: the rounds'
+                    # later optima are then the same motions, and so are their cases
+                    saved = Path(save_to) / f"{name}.h5"
+                    write_record(saved, record, single_precision=True)
+                    record = read_record(saved)
             except CaseBusyError as exc:  # busy, not failed: nothing to record
                 source = f"live OpenFOAM run not started: {str(exc).splitlines()[0]}"
             except MfflapError as exc:
