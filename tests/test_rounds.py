@@ -972,6 +972,41 @@ def test_first_order_rounds_predict_gains_on_the_boxs_faces_that_cfd_refuses(tmp
 
 
 @pytest.mark.slow
+def test_first_order_rounds_with_the_phase_fixed_take_slopes_through_shifted_records(tmp_path):
+    """The first-order series with `--fix-phase` on the shipped fixtures: rounds 1-2 find the
+    free series' records shifted in time, and the secants take each once per beta
+    (mfflap.rounds.steps.secant_points), so from round 3 on its optima leave the free
+    series' and are back-tested on their own runs (real OpenFOAM, 2026-11-29,
+    backtest_first_order_fixed_phase). CFD refuses rounds 3 and 4's steps of beta = 0 and
+    0.5 and confirms round 5's, at a quarter of the first radius; beta = 1 keeps its
+    centre from round 3 on (README, "The phase of periodic optima")."""
+    out = tmp_path / "loop"
+    _, summary = _series(out, 5, "--correct-outputs", "--no-refit", "--trust-region", "0.25",
+                         "--first-order", "--fix-phase")
+    loop = summary["rounds"]
+    rounds = loop["rounds"]
+    assert [r["round"] for r in rounds] == [1, 2, 3, 4, 5]
+    assert loop["stopped_because"] == "ran the 5 round(s) asked for"
+    for r in rounds[:2]:  # the free series' runs, found shifted
+        assert all(c["cfd_of_neighbour"] for c in r["checks"].values()
+                   if c["label"] != "best sinusoid")
+    own = {"backtest_5329c3324f32e161", "backtest_5e9d900e669b668f",
+           "backtest_ac4de2b2334065d7", "backtest_548f9c5cc3aa25be",
+           "backtest_ec8f26d2a076fb37", "backtest_1bbea7efd9e4e35b"}
+    seen = {r["checks"][label]["cfd_record"] for r in rounds[2:] for label in ("β = 0",
+                                                                               "β = 0.5")}
+    assert seen == own
+    third, fourth, fifth = rounds[2:]
+    for beta in ("0", "0.5"):
+        assert third["corrections"][beta]["slopes"]["sources"]  # slopes through round 1-2
+        assert not third["trust_steps"][beta]["accepted"]
+        assert not fourth["trust_steps"][beta]["accepted"]
+        assert fifth["trust_steps"][beta]["accepted"]
+        assert fifth["trust_steps"][beta]["radius"] == pytest.approx(0.0625)
+    assert all(r["trust_steps"]["1"]["step_fraction"] < 1e-3 for r in rounds[2:])
+
+
+@pytest.mark.slow
 def test_trust_region_rounds_that_know_cfds_noise_converge_in_round_3(tmp_path):
     """The trust series with `--cfd-repeatability 0.03` (two runs of one motion differ by
     2.8 % of the mean thrust, tests/test_cfd_repeatability.py): round 3's steps, which CFD

@@ -238,10 +238,12 @@ def fixture_dir(name: str = "table1_coarse") -> Path:
 #: The shipped back-test fixture folders: the optimised motions of the shipped case, those
 #: of ``mfflap run --within-data``, those of the later rounds of ``mfflap run --rounds`` and
 #: of ``mfflap run --rounds --correct-outputs`` (filtered, with round 1's model kept, in a
-#: trust region, in a trust region with slopes; each record named by its motion's key).
+#: trust region, in a trust region with slopes, the same with the phase fixed; each record
+#: named by its motion's key).
 BACKTEST_FIXTURES = ("backtest", "backtest_within_data", "backtest_rounds",
                      "backtest_corrected", "backtest_filtered", "backtest_fixed_model",
-                     "backtest_trust_region", "backtest_first_order")
+                     "backtest_trust_region", "backtest_first_order",
+                     "backtest_first_order_fixed_phase")
 
 
 def backtest_fixture_dirs() -> list[Path]:
