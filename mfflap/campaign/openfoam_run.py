@@ -310,6 +310,19 @@ def _log_retry(case_dir: Path, line: str, progress: Callable[[str], None] | None
         progress(f"retry {n_retries} of {max_retries}: {line}")
 
 
+def _retry(case_dir: Path, retries: list[str], what: str, rewind_before_s: float | None,
+           progress: Callable[[str], None] | None, max_retries: int) -> None:
+    """Ready a case for its next retry and keep it: rewound to its last written time before
+    ``rewind_before_s`` (None: it resumes from its last written time as it is), changed by
+    the next remedy (:func:`_apply_next_remedy`, added to ``retries``) and logged as
+    ``what`` with where it resumes (:func:`_log_retry`)."""
+    resume = (rewind_case(case_dir, rewind_before_s) if rewind_before_s is not None
+              else latest_solution_time(case_dir) or 0)
+    retries.append(_apply_next_remedy(case_dir, len(retries), max_retries))
+    _log_retry(case_dir, f"{what}; resumed from t = {resume} s with {retries[-1]}", progress,
+               len(retries), max_retries)
+
+
 def _earlier_retries(case_dir: Path) -> list[str]:
     """The retries that earlier calls spent on this case since the last
     :data:`RERUN_REQUESTED`: a run resumed after its process was killed continues with what
@@ -490,15 +503,11 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
                         raise
                     raise CfdRunError(f"{getattr(exc, '_message', exc)}; {tried}", case=exc.case,
                                       log_tail=exc.log_tail) from exc
-                else:
-                    if retries_from_start:  # before the remedy: it rewrites the kept fields
-                        rewind_case(case_dir, 0.0)
-                    retries.append(_apply_next_remedy(case_dir, len(retries), max_retries))
+                else:  # rewound before the remedy: it rewrites the kept fields
                     where = _COLLAPSED_AT.search(str(exc))
-                    _log_retry(case_dir, f"time step collapsed"
-                               f"{f' at t = {where[1]} s' if where else ''}; resumed from t = "
-                               f"{latest_solution_time(case_dir) or 0} s with {retries[-1]}",
-                               progress, len(retries), max_retries)
+                    _retry(case_dir, retries, "time step collapsed"
+                           f"{f' at t = {where[1]} s' if where else ''}",
+                           0.0 if retries_from_start else None, progress, max_retries)
                     continue
             try:
                 record = record_from_case(case_dir, motion, name, parameters, plate)
@@ -512,10 +521,8 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
                     tried = _retries_tried(case_dir)
                     raise CfdRunError(f"{at}{f'; {tried}' if tried else ''}",
                                       case=str(case_dir)) from exc
-                resume = rewind_case(case_dir, 0.0 if retries_from_start else float(stalled[1]))
-                retries.append(_apply_next_remedy(case_dir, len(retries), max_retries))
-                _log_retry(case_dir, f"{at}; resumed from t = {resume} s with {retries[-1]}",
-                           progress, len(retries), max_retries)
+                _retry(case_dir, retries, at, 0.0 if retries_from_start else float(stalled[1]),
+                       progress, max_retries)
                 continue
             breach = _forces_beyond_bound(record, ramp_time, plate, fluid, stream,
                                           force_bound_factor)
@@ -555,11 +562,9 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
                     f"turbulence model does not hold this motion; {_retries_tried(case_dir)}",
                     case=str(case_dir))
             last_breach = (breach.start_s, max_co)
-            resume = rewind_case(case_dir, 0.0 if retries_from_start else breach.start_s)
-            retries.append(_apply_next_remedy(case_dir, len(retries), max_retries))
-            _log_retry(case_dir, f"forces beyond what the motion can drive from t = "
-                       f"{breach.start_s:.6g} s at max Co {max_co:g}; resumed from t = {resume} s"
-                       f" with {retries[-1]}", progress, len(retries), max_retries)
+            _retry(case_dir, retries, f"forces beyond what the motion can drive from t = "
+                   f"{breach.start_s:.6g} s at max Co {max_co:g}",
+                   0.0 if retries_from_start else breach.start_s, progress, max_retries)
         if (case_dir / RETRY_LOG).is_file():
             record.provenance["retries"] = "; ".join(
                 (case_dir / RETRY_LOG).read_text().splitlines())
