@@ -367,6 +367,52 @@ def test_a_run_whose_force_log_times_repeat_is_retried_from_before_them(tmp_path
 
 
 @pytest.mark.openfoam
+def test_a_brief_collapse_seen_after_later_writes_is_retried_from_the_write_before_it(
+        tmp_path, monkeypatch):
+    """A time step that collapses for a moment is seen after it (at the runner's next look,
+    or once the solver has exited), possibly after the solver wrote fields past it, which
+    are spoiled. The first real run here is judged as the runner judges a finished run, with
+    its first time step after 0.035 s made 1.5e-8 s (as a real coarse-mesh back-test's was
+    for a moment): it is retried from 0.03 s, the last write before the collapse, not from
+    its end time 0.04 s, where it would have had nothing left to run."""
+    from mfflap.campaign import openfoam_run
+    from mfflap.cfd.openfoam import runner
+    from mfflap.cfd.openfoam.time_step_watch import TimeStepWatch
+
+    real = openfoam_run.run_case
+    calls, collapsed_at = [], []
+
+    def collapses_once_after_its_writes(case_dir, **kwargs):
+        log = case_dir / "log.pimpleFoam"
+        start = log.stat().st_size if log.is_file() else 0
+        real(case_dir, **kwargs)
+        calls.append(case_dir)
+        if len(calls) == 1:
+            text = log.read_text()
+            step = next(m for m in re.finditer(r"^deltaT = (\S+)\nTime = (\S+)$", text, re.M)
+                        if m.start() >= start and float(m[2]) > 0.035)
+            log.write_text(f"{text[:step.start(1)]}1.5e-08{text[step.end(1):]}")
+            collapsed_at.append(step[2])
+            watch = TimeStepWatch(log, kwargs["min_time_step"], start_byte=start)
+            if watch.read(to_end=True) is not None:
+                raise runner._collapsed("pimpleFoam", watch, case_dir, log)
+
+    monkeypatch.setattr(openfoam_run, "run_case", collapses_once_after_its_writes)
+    case_dir = tmp_path / "c"
+    told = []
+    rec = run_motion(case_dir, SHORT.motion(), "c", {}, 0.04, ramp_time=0.02,
+                     bound_watch_every_s=1e6, progress=told.append)
+    assert len(calls) == 2
+    [retry] = [m for m in told if m.startswith("retry ")]
+    assert 0.035 < float(collapsed_at[0]) < 0.04
+    assert retry == (f"retry 1 of 3: time step collapsed at t = {collapsed_at[0]} s; resumed "
+                     "from t = 0.03 s with the inletOutlet far field")
+    assert rec.provenance["as_run_far_field"] == "inletOutlet"
+    assert np.all(np.diff(rec.time) > 0) and rec.time[-1] == pytest.approx(0.04, abs=1e-3)
+    assert (case_dir / "log.pimpleFoam").read_text().count("Starting time loop") == 2
+
+
+@pytest.mark.openfoam
 def test_forces_beyond_the_bound_are_retried_from_the_written_time_before_them(tmp_path):
     """Every attempt 'loses its numerics' after the ramp (the bound is scaled down a
     millionfold): each retry rewinds to the last time written before the breach (0.03 s;

@@ -621,12 +621,11 @@ def test_convergence_command_on_three_meshes_and_two_courant_limits(tmp_path):
 def test_collapsed_time_step_is_recognised_from_a_real_log_excerpt():
     """The tail of a real v1912 run whose k-epsilon blew up: dt went to 1e-26 s while the
     Courant number stayed below 6, so the run would never have ended."""
-    from mfflap.cfd.openfoam.runner import collapsed_time_step
+    from mfflap.cfd.openfoam.time_step_watch import TimeStepWatch
 
-    text = (DATA / "collapsed_dt.log").read_text()
-    dt, t = collapsed_time_step(text, 1e-9)
-    assert dt == pytest.approx(7.3073054e-26) and t == pytest.approx(1.3821858)
-    assert collapsed_time_step(text, 1e-30) is None
+    dt, t = TimeStepWatch(DATA / "collapsed_dt.log", 1e-9).read(to_end=True)
+    assert dt == pytest.approx(7.3628536e-26) and t == pytest.approx(1.3821858)
+    assert TimeStepWatch(DATA / "collapsed_dt.log", 1e-30).read(to_end=True) is None
 
 
 @pytest.mark.openfoam
@@ -636,6 +635,43 @@ def test_runner_stops_a_run_whose_time_step_collapses(tmp_path):
     with pytest.raises(CfdRunError, match="time step collapsed") as info:
         run_case(case, timeout_s=120, min_time_step=1.0)
     assert "run" in str(info.value)
+
+
+def _steps_s(log: Path) -> list[float]:
+    return [float(s) for s in re.findall(r"^deltaT = (\S+)$", log.read_text(), re.M)]
+
+
+@pytest.mark.openfoam
+def test_a_time_step_below_the_limit_for_one_step_only_stops_the_run(tmp_path):
+    """The first time step of a real run (1.2 times the case's 1e-4 s) is below a limit of
+    1.3e-4 s and every later one above it: a moment long over when the runner first looks,
+    2 s after the start. The runner reads every step and stops the run all the same."""
+    from mfflap.cfd.openfoam.runner import run_application
+
+    case = write_case(tmp_path / "brief", MOTION, end_time=0.3, mesh="coarse")
+    run_application(case, "blockMesh", timeout_s=120)
+    with pytest.raises(CfdRunError, match=r"time step collapsed to 0.00012 s at "
+                                          r"t = 0.00012\d* s") as info:
+        run_application(case, "pimpleFoam", timeout_s=300, min_time_step=1.3e-4)
+    steps = _steps_s(case / "log.pimpleFoam")
+    assert steps[0] < 1.3e-4 and all(step >= 1.3e-4 for step in steps[1:])
+    assert "brief" in str(info.value)
+    assert not re.search(r"^End$", (case / "log.pimpleFoam").read_text(), re.M)  # stopped
+
+
+@pytest.mark.openfoam
+def test_a_collapse_in_the_seconds_before_the_solver_exits_fails_the_run(tmp_path):
+    """A real run short enough to end before the runner's first look (its poll made longer
+    than the run) is judged on every step after it exits: the finished run fails."""
+    from mfflap.cfd.openfoam.runner import run_application
+
+    case = write_case(tmp_path / "short", MOTION, end_time=0.01, mesh="coarse")
+    run_application(case, "blockMesh", timeout_s=120)
+    with pytest.raises(CfdRunError, match=r"collapsed to 0.00012 s at t = 0.00012\d* s"):
+        run_application(case, "pimpleFoam", timeout_s=300, min_time_step=1.3e-4, poll_s=600)
+    assert re.search(r"^End$", (case / "log.pimpleFoam").read_text(), re.M)  # ran to its end
+    assert len(_steps_s(case / "log.pimpleFoam")) > 5
+    run_application(case, "pimpleFoam", timeout_s=300, poll_s=600)  # the default limit: no error
 
 
 @pytest.mark.openfoam

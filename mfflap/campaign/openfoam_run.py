@@ -271,9 +271,9 @@ _COLLAPSED_AT = re.compile(r"time step collapsed to \S+ s at t = (\S+) s")
 
 
 #: how :func:`mfflap.cfd.openfoam.forces.read_forces` says a force log's times stop
-#: increasing: the time step collapsed below the written precision for a while (a moment too
-#: short for the runner's watch to see) and the run went on to its end time, its forces
-#: there in the 1e9 N (:func:`run_motion`)
+#: increasing: the time step fell below the written precision for a while (at t >= 10 s,
+#: 1e-6 s with 8 digits: not below the runner's ``min_time_step``) and the run went on to
+#: its end time, its forces there possibly in the 1e9 N (:func:`run_motion`)
 _TIMES_REPEAT = re.compile(r"time does not increase after t = ([0-9.eE+-]+)")
 
 
@@ -433,20 +433,22 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
     (:mod:`mfflap.cfd.force_envelope`: it lost its numerics gradually) is retried the same
     way from its last written time before that (:func:`rewind_case`); its forces are
     checked every ``bound_watch_every_s`` seconds while it runs, so that such a run stops
-    there instead of computing its lost stretch to the end. A run whose force log's times
-    repeat (its time step collapsed below the written precision too briefly for the runner
-    to see, and it ran on to its end time) is retried the same way from its last written
-    time before that. A run that leaves the bound at
-    the same flow time (within :data:`SAME_BREACH_FRACTION` of c / U) after its Courant
-    limit was lowered is rerun once from t = 0 with the settings it has then (the flow at
-    its last written time may have been spoiled already: f = 1 Hz, h = 0.5 m,
+    there instead of computing its lost stretch to the end. A time step that collapsed for
+    a moment only and recovered stops the run too (:func:`run_case` reads every step), and
+    its retry resumes from the last written time before the collapse, so that no field
+    written after it is kept. A run whose force log's times repeat (its time step fell below
+    the written precision, not below ``min_time_step``, and it ran on to its end time) is
+    retried the same way from its last written time before that. A run that leaves the
+    bound at the same flow time (within :data:`SAME_BREACH_FRACTION` of c / U) after its
+    Courant limit was lowered is rerun once from t = 0 with the settings it has then (the
+    flow at its last written time may have been spoiled already: f = 1 Hz, h = 0.5 m,
     phi = 135 deg lost at max Co 4 failed that way from t = 0.75 s at max Co 2 and 1, and
     ran through at max Co 2 from the start). It is not retried further if it leaves the
     bound there again, or if its last retry already ran from t = 0: no smaller time step
-    cures a loss that does not move with the time step. The retries are
-    recorded in the case (:data:`RETRY_LOG`) and in the record's provenance, those of
-    earlier calls that resumed the same case included: the case's settings changed there,
-    not in mfflap_case.toml. They also count against ``max_retries``, and an earlier call's
+    cures a loss that does not move with the time step. The retries are recorded in the
+    case (:data:`RETRY_LOG`) and in the record's provenance, those of earlier calls that
+    resumed the same case included: the case's settings changed there, not in
+    mfflap_case.toml. They also count against ``max_retries``, and an earlier call's
     breach against the same-flow-time rule: a run resumed after its process was killed has
     what is left of its budget, unless :func:`request_rerun` gave it a new one.
     ``progress``, if given, is told every ``progress_every_s`` seconds how far the solver
@@ -505,9 +507,11 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
                                       log_tail=exc.log_tail) from exc
                 else:  # rewound before the remedy: it rewrites the kept fields
                     where = _COLLAPSED_AT.search(str(exc))
+                    # a brief collapse is seen after it: fields written since are spoiled
+                    before_s = float(where[1]) if where else None
                     _retry(case_dir, retries, "time step collapsed"
                            f"{f' at t = {where[1]} s' if where else ''}",
-                           0.0 if retries_from_start else None, progress, max_retries)
+                           0.0 if retries_from_start else before_s, progress, max_retries)
                     continue
             try:
                 record = record_from_case(case_dir, motion, name, parameters, plate)

@@ -21,6 +21,7 @@ from mfflap.cfd.openfoam.case_lock import case_lock, held_descriptor
 from mfflap.cfd.openfoam.case_path import check_case_path
 from mfflap.cfd.openfoam.release import require_supported_release
 from mfflap.cfd.openfoam.solver_log import DIVERGED, failure_reason
+from mfflap.cfd.openfoam.time_step_watch import TimeStepWatch
 from mfflap.errors import CfdRunError, ConfigError
 
 _COURANT = re.compile(r"Courant Number mean: \S+ max: ([-+0-9.eE]+)\s")
@@ -185,15 +186,6 @@ def read_tail(path: Path, n_bytes: int = 20_000, start: int = 0) -> str:
         return fh.read().decode(errors="replace")
 
 
-def collapsed_time_step(log_text: str, min_time_step: float) -> tuple[float, float] | None:
-    """(deltaT, time) if the last written time step is below ``min_time_step``, else None."""
-    steps = _DELTA_T.findall(log_text)
-    if not steps or float(steps[-1]) >= min_time_step:
-        return None
-    times = _TIME.findall(log_text)
-    return float(steps[-1]), float(times[-1]) if times else float("nan")
-
-
 def solver_progress(case_dir: str | Path, log_name: str = "log.pimpleFoam"
                     ) -> tuple[float, float] | None:
     """(time, deltaT) of the last time step the solver's log reports, in s; None if the
@@ -206,6 +198,15 @@ def solver_progress(case_dir: str | Path, log_name: str = "log.pimpleFoam"
     if not times:
         return None
     return float(times[-1]), float(steps[-1]) if steps else float("nan")
+
+
+def _collapsed(application: str, time_steps: TimeStepWatch, case_dir: Path,
+               log: Path) -> CfdRunError:
+    """The error of a run whose time step collapsed (:attr:`TimeStepWatch.collapse`)."""
+    time_step_s, time_s = time_steps.collapse
+    return CfdRunError(f"{application} diverged: the time step collapsed to {time_step_s:.3g} s "
+                       f"at t = {time_s:.10g} s (an instability held at the Courant limit)",
+                       case=str(case_dir), log_tail=_tail(log))
 
 
 def _check_time_limit(timeout_s: float, application: str) -> None:
@@ -226,7 +227,10 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
 
     The log is watched while the solver runs: a time step that collapses below
     ``min_time_step`` (an instability that the adaptive time step hides: the Courant number
-    stays bounded while dt goes to zero and the run never ends) stops the run at once.
+    stays bounded while dt goes to zero and the run never ends) stops the run at once, and
+    so does one that collapsed for a moment only and recovered (its forces there are
+    spoiled): every line the run writes is read (:class:`TimeStepWatch`). A collapse in the
+    seconds before the solver exited fails the run after it.
     ``watch``, called every ``watch_every_s`` seconds while it runs, stops it too when it
     returns a reason (e.g. forces beyond what the motion can drive:
     :func:`mfflap.campaign.openfoam_run.run_motion`). ``progress`` is called every
@@ -278,6 +282,7 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
     started = time.monotonic()
     watched = reported = started
     own_start = log.stat().st_size if log.is_file() else 0  # where this run's lines begin
+    time_steps = TimeStepWatch(log, min_time_step, start_byte=own_start)
     # a solver that writes on a stop shares the case's lock: killed, its caller leaves the
     # case locked until the solver has written the step it reached and stopped
     lock_fd = held_descriptor(case_dir) if write_on_stop else None
@@ -305,13 +310,8 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
                     raise CfdRunError(f"{application} timed out after {timeout_s} s{kept}",
                                       case=str(case_dir), log_tail=_tail(log))
                 fh.flush()
-                collapsed = collapsed_time_step(read_tail(log, start=own_start),
-                                                min_time_step)
-                if collapsed is not None:
-                    raise CfdRunError(
-                        f"{application} diverged: the time step collapsed to "
-                        f"{collapsed[0]:.3g} s at t = {collapsed[1]:.6g} s (an instability "
-                        "held at the Courant limit)", case=str(case_dir), log_tail=_tail(log))
+                if time_steps.read() is not None:
+                    raise _collapsed(application, time_steps, case_dir, log)
                 if progress is not None and time.monotonic() - reported >= progress_every_s:
                     reported = time.monotonic()
                     progress()
@@ -342,6 +342,8 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
         raise CfdRunError(f"{application} failed (exit code {proc.returncode}): "
                           f"{failure_reason(own_tail[-50_000:], proc.returncode)}",
                           case=str(case_dir), log_tail=_tail(log))
+    if time_steps.read(to_end=True) is not None:  # in its last poll's seconds
+        raise _collapsed(application, time_steps, case_dir, log)
     if courants > max_courant_abort:
         raise CfdRunError(f"Courant number exploded to {courants:g}", case=str(case_dir),
                           log_tail=_tail(log))
