@@ -395,7 +395,7 @@ def test_a_brief_collapse_seen_after_later_writes_is_retried_from_the_write_befo
             collapsed_at.append(step[2])
             watch = TimeStepWatch(log, kwargs["min_time_step"], start_byte=start)
             if watch.read(to_end=True) is not None:
-                raise runner._collapsed("pimpleFoam", watch, case_dir, log)
+                raise runner._collapsed("pimpleFoam", watch, case_dir, log, exited=True)
 
     monkeypatch.setattr(openfoam_run, "run_case", collapses_once_after_its_writes)
     case_dir = tmp_path / "c"

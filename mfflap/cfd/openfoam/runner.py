@@ -200,13 +200,16 @@ def solver_progress(case_dir: str | Path, log_name: str = "log.pimpleFoam"
     return float(times[-1]), float(steps[-1]) if steps else float("nan")
 
 
-def _collapsed(application: str, time_steps: TimeStepWatch, case_dir: Path,
-               log: Path) -> CfdRunError:
-    """The error of a run whose time step collapsed (:attr:`TimeStepWatch.collapse`)."""
+def _collapsed(application: str, time_steps: TimeStepWatch, case_dir: Path, log: Path,
+               exited: bool = False) -> CfdRunError:
+    """The error of a run whose time step collapsed (:attr:`TimeStepWatch.collapse`);
+    ``exited``: read after the solver exited, which ran on past it."""
     time_step_s, time_s = time_steps.collapse
+    after = ("; the solver ran on past it to its end, so what it wrote after that time is not "
+             "to be trusted: rerun it from a time written before" if exited else "")
     return CfdRunError(f"{application} diverged: the time step collapsed to {time_step_s:.3g} s "
-                       f"at t = {time_s:.10g} s (an instability held at the Courant limit)",
-                       case=str(case_dir), log_tail=_tail(log))
+                       f"at t = {time_s:.10g} s (an instability held at the Courant limit)"
+                       f"{after}", case=str(case_dir), log_tail=_tail(log))
 
 
 def _check_time_limit(timeout_s: float, application: str) -> None:
@@ -343,7 +346,7 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
                           f"{failure_reason(own_tail[-50_000:], proc.returncode)}",
                           case=str(case_dir), log_tail=_tail(log))
     if time_steps.read(to_end=True) is not None:  # in its last poll's seconds
-        raise _collapsed(application, time_steps, case_dir, log)
+        raise _collapsed(application, time_steps, case_dir, log, exited=True)
     if courants > max_courant_abort:
         raise CfdRunError(f"Courant number exploded to {courants:g}", case=str(case_dir),
                           log_tail=_tail(log))
