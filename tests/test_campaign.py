@@ -325,6 +325,24 @@ def test_collapsed_time_step_is_retried_with_a_lower_courant_limit(tmp_path):
         "the inletOutlet far field", "maxCo 2", "maxCo 1 and first-order upwind k and epsilon"]
 
 
+def _short_run_retried_once(tmp_path, monkeypatch, run_case_instead, calls):
+    """run_motion of SHORT to 0.04 s in ``tmp_path / "c"``, with ``run_case_instead`` (which
+    appends each case it runs to ``calls``) as its run_case, retried once and then finished
+    with the inletOutlet far field: (the retry's progress line, the record)."""
+    from mfflap.campaign import openfoam_run
+
+    monkeypatch.setattr(openfoam_run, "run_case", run_case_instead)
+    told = []
+    rec = run_motion(tmp_path / "c", SHORT.motion(), "c", {}, 0.04, ramp_time=0.02,
+                     bound_watch_every_s=1e6, progress=told.append)
+    assert len(calls) == 2
+    [retry] = [m for m in told if m.startswith("retry ")]
+    assert rec.provenance["as_run_far_field"] == "inletOutlet"
+    assert np.all(np.diff(rec.time) > 0) and rec.time[-1] == pytest.approx(0.04, abs=1e-3)
+    assert (tmp_path / "c" / "log.pimpleFoam").read_text().count("Starting time loop") == 2
+    return retry, rec
+
+
 @pytest.mark.openfoam
 def test_a_run_whose_force_log_times_repeat_is_retried_from_before_them(tmp_path, monkeypatch):
     """A time step that collapses below the written precision too briefly for the runner to
@@ -349,21 +367,12 @@ def test_a_run_whose_force_log_times_repeat_is_retried_from_before_them(tmp_path
                 path.write_text("".join([*lines[:i], lines[i - 1], *lines[i:]]))
                 repeated.append(lines[i - 1].split()[0])
 
-    monkeypatch.setattr(openfoam_run, "run_case", repeats_a_time_once)
-    case_dir = tmp_path / "c"
-    told = []
-    rec = run_motion(case_dir, SHORT.motion(), "c", {}, 0.04, ramp_time=0.02,
-                     bound_watch_every_s=1e6, progress=told.append)
-    assert len(calls) == 2
-    [retry] = [m for m in told if m.startswith("retry ")]
+    retry, rec = _short_run_retried_once(tmp_path, monkeypatch, repeats_a_time_once, calls)
     assert 0.034 < float(repeated[0]) < 0.035  # the row before the first after 0.035 s
     assert retry == (f"retry 1 of 3: time step collapsed at t = {float(repeated[0])!r} s (the "
                      "force log's times repeat there); resumed from t = 0.03 s with the "
                      "inletOutlet far field")
     assert rec.provenance["retries"] == retry.removeprefix("retry 1 of 3: ")
-    assert rec.provenance["as_run_far_field"] == "inletOutlet"
-    assert np.all(np.diff(rec.time) > 0) and rec.time[-1] == pytest.approx(0.04, abs=1e-3)
-    assert (case_dir / "log.pimpleFoam").read_text().count("Starting time loop") == 2
 
 
 @pytest.mark.openfoam
@@ -397,19 +406,11 @@ def test_a_brief_collapse_seen_after_later_writes_is_retried_from_the_write_befo
             if watch.read(to_end=True) is not None:
                 raise runner._collapsed("pimpleFoam", watch, case_dir, log, exited=True)
 
-    monkeypatch.setattr(openfoam_run, "run_case", collapses_once_after_its_writes)
-    case_dir = tmp_path / "c"
-    told = []
-    rec = run_motion(case_dir, SHORT.motion(), "c", {}, 0.04, ramp_time=0.02,
-                     bound_watch_every_s=1e6, progress=told.append)
-    assert len(calls) == 2
-    [retry] = [m for m in told if m.startswith("retry ")]
+    retry, _ = _short_run_retried_once(tmp_path, monkeypatch, collapses_once_after_its_writes,
+                                       calls)
     assert 0.035 < float(collapsed_at[0]) < 0.04
     assert retry == (f"retry 1 of 3: time step collapsed at t = {collapsed_at[0]} s; resumed "
                      "from t = 0.03 s with the inletOutlet far field")
-    assert rec.provenance["as_run_far_field"] == "inletOutlet"
-    assert np.all(np.diff(rec.time) > 0) and rec.time[-1] == pytest.approx(0.04, abs=1e-3)
-    assert (case_dir / "log.pimpleFoam").read_text().count("Starting time loop") == 2
 
 
 @pytest.mark.openfoam
