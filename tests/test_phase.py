@@ -179,6 +179,26 @@ def _cpu_has(flag: str) -> bool:
         return False
 
 
+def _fixed_phase_series_on_other_kernels(out: Path, n_rounds: int, *flags: str
+                                         ) -> tuple[dict, str]:
+    """`mfflap run` of the shipped case in ``n_rounds`` rounds with --fix-phase,
+    ``--correct-outputs --no-refit`` and ``flags``, where the shipped series' arithmetic is
+    not replayed: OpenBLAS's Haswell kernels (where the CPU has AVX2) on one thread, not the
+    SkylakeX kernels the tests pin (tests/conftest.py). Its rounds summary and its stderr."""
+    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_CORETYPE"}
+    env["OPENBLAS_NUM_THREADS"] = "1"
+    if _cpu_has("avx2"):
+        env["OPENBLAS_CORETYPE"] = "Haswell"
+    proc = subprocess.run(
+        [sys.executable, "-c", "from mfflap.cli.main import cli; cli()", "run", str(CASE),
+         "--out", str(out), "--rounds", str(n_rounds), "--coefficients",
+         "identified:uniform", "--within-data", "--correct-outputs", "--no-refit", *flags,
+         "--no-ipopt", "--no-gain-table", "--fix-phase", "--json"],
+        env=env, capture_output=True, text=True, timeout=1800)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    return json.loads(proc.stdout[proc.stdout.index("{"):])["rounds"], proc.stderr
+
+
 @pytest.mark.slow
 def test_the_trust_series_with_a_fixed_phase_takes_the_shipped_steps_on_other_kernels(
         tmp_path):
@@ -190,19 +210,8 @@ def test_the_trust_series_with_a_fixed_phase_takes_the_shipped_steps_on_other_ke
     1.00; beta = 0 and 0.5 refused in round 3; beta = 0.5 confirmed in round 4; beta = 0's
     region collapsed in round 5) on the same CFD records through round 4, each found
     shifted in time where its phase moved (README, "The phase of periodic optima")."""
-    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_CORETYPE"}
-    env["OPENBLAS_NUM_THREADS"] = "1"
-    if _cpu_has("avx2"):
-        env["OPENBLAS_CORETYPE"] = "Haswell"
-    out = tmp_path / "loop"
-    proc = subprocess.run(
-        [sys.executable, "-c", "from mfflap.cli.main import cli; cli()", "run", str(CASE),
-         "--out", str(out), "--rounds", "6", "--coefficients", "identified:uniform",
-         "--within-data", "--correct-outputs", "--no-refit", "--trust-region", "0.25",
-         "--no-ipopt", "--no-gain-table", "--fix-phase", "--json"],
-        env=env, capture_output=True, text=True, timeout=1800)
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    loop = json.loads(proc.stdout[proc.stdout.index("{"):])["rounds"]
+    loop, told = _fixed_phase_series_on_other_kernels(tmp_path / "loop", 6, "--trust-region",
+                                                       "0.25")
     rounds = loop["rounds"]
     assert [r["round"] for r in rounds] == [1, 2, 3, 4, 5]
     assert loop["stopped_because"].startswith("round 5: the trust region of beta 0 collapsed")
@@ -226,4 +235,31 @@ def test_the_trust_series_with_a_fixed_phase_takes_the_shipped_steps_on_other_ke
             f"backtest_{k}" for k in keys]
     # found shifted in time: beta = 1's optimum of round 1 lies 4.1 s along its cycle from
     # the free one the shipped series ran
-    assert "shifted in time by +4.1" in proc.stderr
+    assert "shifted in time by +4.1" in told
+
+
+@pytest.mark.slow
+def test_the_first_order_series_with_a_fixed_phase_asks_for_the_same_cfd_on_other_kernels(
+        tmp_path):
+    """The first-order series (`--trust-region 0.25 --first-order`) with --fix-phase on
+    Haswell's kernels and one thread: every motion of its five rounds finds the record it
+    finds on the tests' SkylakeX kernels (tests/test_rounds.py: the free series' records
+    shifted in rounds 1-2, for beta = 0 and 0.5 its own runs of
+    backtest_first_order_fixed_phase in rounds 3-5), and CFD refuses and confirms the same
+    steps. Its secants run through those records, so the CFD it needs does not turn on the
+    CPU it runs on."""
+    loop, _ = _fixed_phase_series_on_other_kernels(
+        tmp_path / "loop", 5, "--trust-region", "0.25", "--first-order")
+    rounds = loop["rounds"]
+    assert loop["stopped_because"] == "ran the 5 round(s) asked for"
+    shipped = [("598a5388e592df63", "c91660e722b01742", "fb22156550965a86"),
+               ("f85edc06d9cf46a0", "34cd2b07c53664ae", "1a923f3083e54ac4"),
+               ("5329c3324f32e161", "5e9d900e669b668f", "1a923f3083e54ac4"),
+               ("ac4de2b2334065d7", "548f9c5cc3aa25be", "1a923f3083e54ac4"),
+               ("ec8f26d2a076fb37", "1bbea7efd9e4e35b", "1a923f3083e54ac4")]
+    assert [tuple(r["checks"][f"β = {b}"]["cfd_record"].removeprefix("backtest_")
+                  for b in ("0", "0.5", "1")) for r in rounds] == shipped
+    accepted = [{beta: step["accepted"] for beta, step in r["trust_steps"].items()
+                 if beta != "1"} for r in rounds[2:]]
+    assert accepted == [{"0": False, "0.5": False}, {"0": False, "0.5": False},
+                        {"0": True, "0.5": True}]
