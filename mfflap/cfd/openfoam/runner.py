@@ -205,8 +205,15 @@ def _collapsed(application: str, time_steps: TimeStepWatch, case_dir: Path, log:
     """The error of a run whose time step collapsed (:attr:`TimeStepWatch.collapse`);
     ``exited``: read after the solver exited, which ran on past it."""
     time_step_s, time_s = time_steps.collapse
-    after = ("; the solver ran on past it to its end, so what it wrote after that time is not "
-             "to be trusted: rerun it from a time written before" if exited else "")
+    after = ""
+    if exited:
+        roots = [case_dir, *processor_folders(case_dir)[:1]]
+        later = sorted({p.name for root in roots for p in root.iterdir()
+                        if p.is_dir() and is_time_folder(p.name) and float(p.name) >= time_s},
+                       key=float)
+        after = ("; the solver ran on past it to its end, so what it wrote after that time is "
+                 f"not to be trusted (its time folders {', '.join(later)}): rerun it from a time "
+                 "written before" if later else "; the solver ran on past it to its end")
     return CfdRunError(f"{application} diverged: the time step collapsed to {time_step_s:.3g} s "
                        f"at t = {time_s:.10g} s (an instability held at the Courant limit)"
                        f"{after}", case=str(case_dir), log_tail=_tail(log))
