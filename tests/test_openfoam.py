@@ -668,11 +668,41 @@ def test_a_collapse_in_the_seconds_before_the_solver_exits_fails_the_run(tmp_pat
     case = write_case(tmp_path / "short", MOTION, end_time=0.01, mesh="coarse")
     run_application(case, "blockMesh", timeout_s=120)
     with pytest.raises(CfdRunError, match=r"collapsed to 0.00012 s at t = 0.00012\d* s .*; the "
-                       r"solver ran on past it to its end, .* \(its time folders 0.01\)"):
+                       r"solver ran on past it to its end, .* \(its time folders 0.01\): "
+                       r".*`mfflap cfd run --rewind-before 0.00012\d*`"):
         run_application(case, "pimpleFoam", timeout_s=300, min_time_step=1.3e-4, poll_s=600)
     assert re.search(r"^End$", (case / "log.pimpleFoam").read_text(), re.M)  # ran to its end
     assert len(_steps_s(case / "log.pimpleFoam")) > 5
     run_application(case, "pimpleFoam", timeout_s=300, poll_s=600)  # the default limit: no error
+
+
+@pytest.mark.openfoam
+def test_cfd_run_rewinds_a_finished_case_to_before_a_time_and_reruns_it(tmp_path):
+    """`mfflap cfd run --rewind-before T` (what a collapse read after the solver exited tells
+    the user to run): the case goes back to its last write before T, drops the later fields
+    and force output, and pimpleFoam runs from there to the end again."""
+    from click.testing import CliRunner
+
+    from mfflap.cfd.openfoam.writer import SolverSettings
+    from mfflap.cli.main import cli
+
+    case = write_case(tmp_path / "c", MOTION, end_time=0.04, mesh="coarse",
+                      solver=SolverSettings(write_interval=0.01))
+    run_case(case, timeout_s=300)
+    first = read_forces(case)
+    res = CliRunner().invoke(cli, ["cfd", "run", str(case), "--rewind-before", "0.035",
+                                   "--progress-every", "0"])
+    assert res.exit_code == 0, res.output
+    assert "rewound to t = 0.03 s, the last time written before 0.035 s" in res.stderr
+    log = (case / "log.pimpleFoam").read_text()
+    assert log.count("Starting time loop") == 2
+    assert re.search(r"^Time = 0.03\d*$", log.split("Starting time loop")[2], re.M)
+    again = read_forces(case)
+    assert np.all(np.diff(again.time) > 0) and again.time[-1] == pytest.approx(0.04)
+    # the rerun's forces are the first run's: the same case from the same written fields
+    np.testing.assert_allclose(again.force, first.force, rtol=1e-5, atol=1e-6)
+    res = CliRunner().invoke(cli, ["cfd", "run", str(case), "--rewind-before", "-1"])
+    assert res.exit_code != 0 and "--rewind-before" in res.output
 
 
 @pytest.mark.openfoam

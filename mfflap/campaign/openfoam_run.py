@@ -22,6 +22,7 @@ from mfflap.cfd.openfoam.case_lock import case_lock
 from mfflap.cfd.openfoam.case_path import check_case_path, empty_case_folder
 from mfflap.cfd.openfoam.forces import read_forces
 from mfflap.cfd.openfoam.loads import imposed_state, to_loads
+from mfflap.cfd.openfoam.rewind import rewind_case
 from mfflap.cfd.openfoam.runner import (
     RunStopped,
     is_time_folder,
@@ -160,57 +161,6 @@ def record_from_case(case_dir: str | Path, motion: Motion, name: str,
     if plate is not None:
         prov["chord_m"] = plate.chord
     return CfdRecord(name, state, loads, parameters, prov, history.force, history.moment)
-
-
-def rewind_case(case_dir: str | Path, before_s: float) -> str:
-    """Make a case resume from its last written time before ``before_s``; return that time.
-
-    Later solution folders (the case's and its processor folders') go, and so does the
-    function-object output that began after it (``postProcessing/*/<time>/`` folders and
-    ``<stem>_<time>.dat`` restart files), so that the rerun's output is the only one from
-    there on (:func:`mfflap.cfd.openfoam.forces.merge_restart_segments`). mfflap's cases
-    keep their last two writes (``purgeWrite 2``), so a breach before those resumes from 0.
-
-    Raises
-    ------
-    CfdRunError
-        If no complete solution folder is older than ``before_s`` (not even ``0/``).
-    """
-    case = Path(case_dir)
-    roots = [case, *sorted(case.glob("processor*"))]
-
-    def times(root: Path) -> list[Path]:
-        return [p for p in root.iterdir() if p.is_dir() and is_time_folder(p.name)]
-
-    while (latest := latest_solution_time(case)) is not None and float(latest) >= before_s:
-        if float(latest) == 0.0:
-            break
-        for root in roots:
-            for folder in times(root):
-                if float(folder.name) >= float(latest):
-                    shutil.rmtree(folder)
-    if latest is None or (float(latest) >= before_s and float(latest) != 0.0):
-        raise CfdRunError(f"no written time before t = {before_s:g} s to resume from",
-                          case=str(case))
-    resume = float(latest)
-    for root in roots:  # partial or newer folders (e.g. yPlus output) after the resume time
-        for folder in times(root):
-            if float(folder.name) > resume:
-                shutil.rmtree(folder)
-    for output in (case / "postProcessing").glob("*"):
-        if not output.is_dir():
-            continue
-        for folder in times(output):
-            if float(folder.name) > resume:
-                shutil.rmtree(folder)
-                continue
-            for restart in folder.glob("*_*.dat"):
-                try:
-                    if float(restart.stem.rsplit("_", 1)[1]) > resume:
-                        restart.unlink()
-                except ValueError:
-                    continue
-    return latest
 
 
 def _forces_beyond_bound(record: CfdRecord, ramp_time: float, plate: Plate | None,

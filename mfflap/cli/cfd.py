@@ -138,10 +138,15 @@ def _run_state(source: Path) -> str:
 @click.option("--progress-every", default=10.0, show_default=True, type=NON_NEGATIVE,
               help="Seconds between progress lines on stderr (simulated time of the end "
               "time, time step, time left); 0: none.")
+@click.option("--rewind-before", "rewind_before_s", type=POSITIVE, default=None,
+              help="First go back to the last time written before this many s: the later "
+              "time folders and the function-object output begun after it go, and the run "
+              "resumes there (a run whose time step collapsed, or whose forces went wrong, "
+              "at that time).")
 @click.option("--json", "as_json", is_flag=True,
               help="Print the run's summary (build, CPU, time steps, clipping) as JSON.")
 def run(case_dir: Path, timeout: float, procs: int, progress_every: float,
-        as_json: bool) -> None:
+        rewind_before_s: float | None, as_json: bool) -> None:
     """Mesh (once), check and run CASE_DIR with pimpleFoam; restarts from the latest time.
 
     Prints the CPU time, the number of time steps, how many k and epsilon solves OpenFOAM
@@ -164,6 +169,14 @@ def run(case_dir: Path, timeout: float, procs: int, progress_every: float,
 
     progress = (None if progress_every <= 0 else
                 lambda message: click.echo(f"[cfd run] {message}", err=True))
+    if rewind_before_s is not None:
+        from mfflap.cfd.openfoam.case_lock import case_lock
+        from mfflap.cfd.openfoam.rewind import rewind_case
+
+        with case_lock(case_dir):  # not under a solver that is running it
+            resume = rewind_case(case_dir, rewind_before_s)
+        click.echo(f"[cfd run] rewound to t = {resume} s, the last time written before "
+                   f"{rewind_before_s:g} s", err=True)
     try:
         run_case(case_dir, timeout_s=timeout, n_procs=procs, progress=progress,
                  progress_every_s=progress_every)

@@ -213,7 +213,8 @@ def _collapsed(application: str, time_steps: TimeStepWatch, case_dir: Path, log:
                        key=float)
         after = ("; the solver ran on past it to its end, so what it wrote after that time is "
                  f"not to be trusted (its time folders {', '.join(later)}): rerun it from a time "
-                 "written before" if later else "; the solver ran on past it to its end")
+                 f"written before (`mfflap cfd run --rewind-before {time_s:.10g}`)" if later
+                 else "; the solver ran on past it to its end")
     return CfdRunError(f"{application} diverged: the time step collapsed to {time_step_s:.3g} s "
                        f"at t = {time_s:.10g} s (an instability held at the Courant limit)"
                        f"{after}", case=str(case_dir), log_tail=_tail(log))
