@@ -508,15 +508,49 @@ def test_a_mesh_checkmesh_fails_starts_no_solver_however_it_was_made(tmp_path):
     assert mesh_checked(case) and (case / "log.pimpleFoam").is_file()
 
 
-def test_courant_numbers_with_exponents_are_read():
+def test_courant_numbers_with_exponents_are_read(tmp_path):
     """Regression: values like 1.2e+02 (an exploding run) were dropped by the old filter."""
-    from mfflap.cfd.openfoam.runner import max_courant
+    from mfflap.cfd.openfoam.time_step_watch import TimeStepWatch
 
-    log = ("Courant Number mean: 0.01 max: 3.9\n"
-           "Courant Number mean: 0.5 max: 1.2e+02\n"
-           "Courant Number mean: 0.02 max: 4.5e-01\n")
-    assert max_courant(log) == 120.0
-    assert max_courant("no courant lines") == 0.0
+    log = tmp_path / "log.pimpleFoam"
+    log.write_text("Time = 0.1\nCourant Number mean: 0.01 max: 3.9\n"
+                   "Time = 0.2\nCourant Number mean: 0.5 max: 1.2e+02\n"
+                   "Time = 0.3\nCourant Number mean: 0.02 max: 4.5e-01\n")
+    watch = TimeStepWatch(log, 1e-7)
+    watch.read()
+    assert watch.largest_courant == (120.0, 0.2)
+    log.write_text("no courant lines\n")
+    watch = TimeStepWatch(log, 1e-7)
+    watch.read()
+    assert watch.largest_courant[0] == 0.0
+
+
+@pytest.mark.openfoam
+def test_a_courant_number_beyond_the_limit_stops_the_run_at_the_next_look(tmp_path):
+    """A real run whose Courant number passes a limit of 2 (it climbs to its maxCo of 4 in
+    the first tenth of a second) is stopped while it runs, the message giving the first
+    Courant number beyond the limit in the log and the time its step began at."""
+    from mfflap.cfd.openfoam.runner import run_application
+
+    case = write_case(tmp_path / "co", MOTION, end_time=1.0, mesh="coarse")
+    run_application(case, "blockMesh", timeout_s=120)
+    with pytest.raises(CfdRunError, match="Courant number exploded to") as info:
+        run_application(case, "pimpleFoam", timeout_s=300, max_courant_abort=2.0)
+    text = (case / "log.pimpleFoam").read_text()
+    assert not re.search(r"^End$", text, re.M)  # stopped before its end
+    steps, began = [], None  # (the time a step began at, its Courant number), in log order
+    for time_s, courant in re.findall(r"^Time = (\S+)$|^Courant Number mean: \S+ max: (\S+)$",
+                                      text, re.M):
+        if time_s:
+            began = float(time_s)
+        else:
+            steps.append((began, float(courant)))
+    found = re.search(r"exploded to (\S+) in the step from t = (\S+) s", str(info.value))
+    reported = (float(found[2]), float(found[1]))
+    first = next(step for step in steps if step[1] > 2.0)
+    assert reported in [(pytest.approx(t, rel=1e-6), pytest.approx(c, rel=1e-5))
+                        for t, c in steps[steps.index(first):]]
+    assert reported[1] >= first[1] > 2.0 and first[0] < 0.1
 
 
 @pytest.mark.openfoam

@@ -45,6 +45,8 @@ def test_a_brief_real_collapse_is_seen_wherever_the_polls_fall(cuts):
         seen = _grown(log, BRIEF, cuts, watch)
     assert seen[-1] == (6.1374284e-08, 4.3245473)
     assert watch.smallest_time_step_s == 3.1697011e-08
+    # the Courant number stayed bounded (the adaptive time step held it): 10.7 at most
+    assert watch.largest_courant == (10.720501, 4.3245465)
     # once seen, a collapse stays: a later poll does not clear it
     first = next(i for i, found in enumerate(seen) if found is not None)
     assert all(found == seen[-1] for found in seen[first:])

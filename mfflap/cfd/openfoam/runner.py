@@ -24,8 +24,6 @@ from mfflap.cfd.openfoam.solver_log import DIVERGED, failure_reason
 from mfflap.cfd.openfoam.time_step_watch import TimeStepWatch
 from mfflap.errors import CfdRunError, ConfigError
 
-_COURANT = re.compile(r"Courant Number mean: \S+ max: ([-+0-9.eE]+)\s")
-
 
 def openfoam_available() -> bool:
     """True if the OpenFOAM solvers are on PATH."""
@@ -161,11 +159,6 @@ def stop_running_solvers(grace_s: float = 60.0) -> int:
     return len(running)
 
 
-def max_courant(log_text: str) -> float:
-    """Largest maximum Courant number reported in a pimpleFoam log (0 if none)."""
-    return max((float(c) for c in _COURANT.findall(log_text)), default=0.0)
-
-
 def _tail(path: Path, n: int = 20) -> str:
     if not path.exists():
         return ""
@@ -220,6 +213,16 @@ def _collapsed(application: str, time_steps: TimeStepWatch, case_dir: Path, log:
                        f"{after}", case=str(case_dir), log_tail=_tail(log))
 
 
+def _exploded(application: str, time_steps: TimeStepWatch, case_dir: Path,
+              log: Path) -> CfdRunError:
+    """The error of a run whose Courant number exploded
+    (:attr:`TimeStepWatch.largest_courant`)."""
+    courant, time_s = time_steps.largest_courant
+    return CfdRunError(f"{application} diverged: the Courant number exploded to {courant:g} "
+                       f"in the step from t = {time_s:.10g} s", case=str(case_dir),
+                       log_tail=_tail(log))
+
+
 def _check_time_limit(timeout_s: float, application: str) -> None:
     """Refuse a time limit that is not a finite time > 0 s (ConfigError, key timeout_s)."""
     if not (math.isfinite(timeout_s) and timeout_s > 0):
@@ -240,8 +243,9 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
     ``min_time_step`` (an instability that the adaptive time step hides: the Courant number
     stays bounded while dt goes to zero and the run never ends) stops the run at once, and
     so does one that collapsed for a moment only and recovered (its forces there are
-    spoiled): every line the run writes is read (:class:`TimeStepWatch`). A collapse in the
-    seconds before the solver exited fails the run after it.
+    spoiled): every line the run writes is read (:class:`TimeStepWatch`). So does a maximum
+    Courant number above ``max_courant_abort`` anywhere in the run. A collapse or a Courant
+    number beyond the limit in the seconds before the solver exited fails the run after it.
     ``watch``, called every ``watch_every_s`` seconds while it runs, stops it too when it
     returns a reason (e.g. forces beyond what the motion can drive:
     :func:`mfflap.campaign.openfoam_run.run_motion`). ``progress`` is called every
@@ -323,6 +327,8 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
                 fh.flush()
                 if time_steps.read() is not None:
                     raise _collapsed(application, time_steps, case_dir, log)
+                if time_steps.largest_courant[0] > max_courant_abort:
+                    raise _exploded(application, time_steps, case_dir, log)
                 if progress is not None and time.monotonic() - reported >= progress_every_s:
                     reported = time.monotonic()
                     progress()
@@ -348,16 +354,14 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
                          f"written whole is {latest_solution_time(case_dir)} s, where a rerun "
                          "resumes", case=str(case_dir), log_tail=_tail(log))
     own_tail = read_tail(log, 200_000, start=own_start)
-    courants = max_courant(own_tail)
     if proc.returncode != 0 or DIVERGED.search(own_tail[-50_000:]):
         raise CfdRunError(f"{application} failed (exit code {proc.returncode}): "
                           f"{failure_reason(own_tail[-50_000:], proc.returncode)}",
                           case=str(case_dir), log_tail=_tail(log))
     if time_steps.read(to_end=True) is not None:  # in its last poll's seconds
         raise _collapsed(application, time_steps, case_dir, log, exited=True)
-    if courants > max_courant_abort:
-        raise CfdRunError(f"Courant number exploded to {courants:g}", case=str(case_dir),
-                          log_tail=_tail(log))
+    if time_steps.largest_courant[0] > max_courant_abort:
+        raise _exploded(application, time_steps, case_dir, log)
     return log
 
 

@@ -6,7 +6,9 @@ collapse can also be brief. On the coarse mesh a back-test's time step fell belo
 33 of its steps around t = 4.32 s (to 1.5e-8 s) and recovered within a second of wall time,
 with forces near 1e9 N there; a watch that read only the last time step of the log every
 2 s did not see it, and the run went on to its end. :class:`TimeStepWatch` reads every line
-the run writes, as the log grows, so no step escapes it, however short the collapse.
+the run writes, as the log grows, so no step escapes it, however short the collapse. It
+keeps the largest Courant number of the run too (an explosion of the Courant number, with
+a fixed or a lagging time step, is the other way a run diverges).
 """
 
 from __future__ import annotations
@@ -16,8 +18,10 @@ import re
 from pathlib import Path
 
 # the time step and the time lines alone (tabulatedAccelerationSource also starts lines
-# with "Time = "), in log order: pimpleFoam prints a step's deltaT, then the time it reaches
-_STEP_OR_TIME = re.compile(rb"^(deltaT|Time) = ([-+0-9.eE]+)[ \t\r]*$", re.M)
+# with "Time = "), in log order: pimpleFoam prints a step's Courant numbers and deltaT, then
+# the time it reaches
+_STEP_OR_TIME = re.compile(rb"^(?:(deltaT|Time) = |Courant Number mean: \S+ max: )"
+                           rb"([-+0-9.eE]+)[ \t\r]*$", re.M)
 
 
 class TimeStepWatch:
@@ -41,6 +45,9 @@ class TimeStepWatch:
         written; nan if the log has no time line yet); None while there is none.
     smallest_time_step_s
         The smallest time step read so far, s (inf before the first).
+    largest_courant
+        (largest maximum Courant number read so far, the flow time its step began at); (0,
+        nan) before the first.
     """
 
     def __init__(self, log_path: str | Path, min_time_step_s: float, start_byte: int = 0):
@@ -48,6 +55,7 @@ class TimeStepWatch:
         self.min_time_step_s = min_time_step_s
         self.collapse: tuple[float, float] | None = None
         self.smallest_time_step_s = math.inf
+        self.largest_courant = (0.0, math.nan)
         self._next_byte = start_byte
         self._last_time_s = math.nan
         self._awaiting_time = False  # the collapse's step has no time line yet
@@ -74,6 +82,10 @@ class TimeStepWatch:
             try:
                 value = float(found[2])
             except ValueError:  # a garbled number: no step to judge
+                continue
+            if found[1] is None:  # a Courant number line
+                if value > self.largest_courant[0]:
+                    self.largest_courant = (value, self._last_time_s)
                 continue
             if found[1] == b"Time":
                 self._last_time_s = value
