@@ -375,42 +375,65 @@ def test_a_run_whose_force_log_times_repeat_is_retried_from_before_them(tmp_path
     assert rec.provenance["retries"] == retry.removeprefix("retry 1 of 3: ")
 
 
+def _first_step_after(text: str, start: int, after_s: float, what: str
+                      ) -> tuple[tuple[int, int], str]:
+    """The first time step of the log ``text`` (from byte ``start`` on) taken after
+    ``after_s``: where its ``what`` ("deltaT" or "Courant") value stands in ``text``, and
+    the time the runner reports for it (for a time step the time it reached, for a Courant
+    number the time its step began at)."""
+    began = None
+    for m in re.finditer(r"^deltaT = (\S+)\nTime = (\S+)$|^Time = (\S+)$|"
+                         r"^Courant Number mean: \S+ max: (\S+)$", text, re.M):
+        if m.start() < start:
+            continue
+        if what == "deltaT" and m[1] and float(m[2]) > after_s:
+            return m.span(1), m[2]
+        began = m[2] or m[3] or began
+        if what == "Courant" and m[4] and began is not None and float(began) > after_s:
+            return m.span(4), began
+    raise AssertionError(f"no {what} after t = {after_s} s in the log")
+
+
 @pytest.mark.openfoam
-def test_a_brief_collapse_seen_after_later_writes_is_retried_from_the_write_before_it(
-        tmp_path, monkeypatch):
-    """A time step that collapses for a moment is seen after it (at the runner's next look,
-    or once the solver has exited), possibly after the solver wrote fields past it, which
-    are spoiled. The first real run here is judged as the runner judges a finished run, with
-    its first time step after 0.035 s made 1.5e-8 s (as a real coarse-mesh back-test's was
-    for a moment): it is retried from 0.03 s, the last write before the collapse, not from
+@pytest.mark.parametrize("what, value, error", [("deltaT", "1.5e-08", "time step collapsed"),
+                                                ("Courant", "250", "Courant number exploded")])
+def test_a_brief_divergence_seen_after_later_writes_is_retried_from_the_write_before_it(
+        tmp_path, monkeypatch, what, value, error):
+    """A time step that collapses for a moment, or a Courant number that explodes, is seen
+    after it (at the runner's next look, or once the solver has exited), possibly after the
+    solver wrote fields past it, which are spoiled. The first real run here is judged as the
+    runner judges a finished run, with its first step after 0.035 s given a time step of
+    1.5e-8 s (as a real coarse-mesh back-test's was for a moment) or a Courant number of
+    250: it is retried from 0.03 s, the last write before it, with the next remedy, not from
     its end time 0.04 s, where it would have had nothing left to run."""
     from mfflap.campaign import openfoam_run
     from mfflap.cfd.openfoam import runner
     from mfflap.cfd.openfoam.time_step_watch import TimeStepWatch
 
     real = openfoam_run.run_case
-    calls, collapsed_at = [], []
+    calls, reported_at = [], []
 
-    def collapses_once_after_its_writes(case_dir, **kwargs):
+    def diverges_once_after_its_writes(case_dir, **kwargs):
         log = case_dir / "log.pimpleFoam"
         start = log.stat().st_size if log.is_file() else 0
         real(case_dir, **kwargs)
         calls.append(case_dir)
         if len(calls) == 1:
             text = log.read_text()
-            step = next(m for m in re.finditer(r"^deltaT = (\S+)\nTime = (\S+)$", text, re.M)
-                        if m.start() >= start and float(m[2]) > 0.035)
-            log.write_text(f"{text[:step.start(1)]}1.5e-08{text[step.end(1):]}")
-            collapsed_at.append(step[2])
+            (first, last), at = _first_step_after(text, start, 0.035, what)
+            log.write_text(f"{text[:first]}{value}{text[last:]}")
+            reported_at.append(at)
             watch = TimeStepWatch(log, kwargs["min_time_step"], start_byte=start)
             if watch.read(to_end=True) is not None:
                 raise runner._collapsed("pimpleFoam", watch, case_dir, log, exited=True)
+            if watch.largest_courant[0] > 100:
+                raise runner._exploded("pimpleFoam", watch, case_dir, log)
 
-    retry, _ = _short_run_retried_once(tmp_path, monkeypatch, collapses_once_after_its_writes,
+    retry, _ = _short_run_retried_once(tmp_path, monkeypatch, diverges_once_after_its_writes,
                                        calls)
-    assert 0.035 < float(collapsed_at[0]) < 0.04
-    assert retry == (f"retry 1 of 3: time step collapsed at t = {collapsed_at[0]} s; resumed "
-                     "from t = 0.03 s with the inletOutlet far field")
+    assert 0.035 < float(reported_at[0]) < 0.04
+    assert retry == (f"retry 1 of 3: {error} at t = {reported_at[0]} s; resumed from t = "
+                     "0.03 s with the inletOutlet far field")
 
 
 @pytest.mark.openfoam

@@ -216,8 +216,11 @@ def _apply_next_remedy(case_dir: Path, n_done: int, max_retries: int) -> str:
 
 #: every retry of a case, one line each, across the calls that ran it
 RETRY_LOG = "mfflap_retries.txt"
-#: the flow time in :func:`mfflap.cfd.openfoam.runner.run_case`'s collapsed-time-step error
-_COLLAPSED_AT = re.compile(r"time step collapsed to \S+ s at t = (\S+) s")
+#: what diverged and the flow time, in :func:`mfflap.cfd.openfoam.runner.run_case`'s error
+#: of a collapsed time step or an exploded Courant number (an instability either way, which
+#: the same remedies cure)
+_DIVERGED_AT = re.compile(r"(time step collapsed) to \S+ s at t = (\S+) s|"
+                          r"(Courant number exploded) to \S+ in the step from t = (\S+) s")
 
 
 #: how :func:`mfflap.cfd.openfoam.forces.read_forces` says a force log's times stop
@@ -375,10 +378,11 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
 
     Fields are written four times per run so that a killed run resumes from its last
     written time instead of from zero. A run whose time step collapses (an instability held
-    at the Courant limit) is resumed from its last written time, up to ``max_retries``
-    times: first with the inletOutlet far field (:func:`use_inlet_outlet_far_field`) if it
-    had the freestream one, then with half the Courant limit, the last time also with
-    first-order upwind convection of k and epsilon. A run that finishes with forces after
+    at the Courant limit), or whose Courant number explodes, is resumed from its last
+    written time before that, up to ``max_retries`` times: first with the inletOutlet far
+    field (:func:`use_inlet_outlet_far_field`) if it had the freestream one, then with half
+    the Courant limit, the last time also with first-order upwind convection of k and
+    epsilon. A run that finishes with forces after
     its ramp beyond ``force_bound_factor`` times what the motion can drive
     (:mod:`mfflap.cfd.force_envelope`: it lost its numerics gradually) is retried the same
     way from its last written time before that (:func:`rewind_case`); its forces are
@@ -449,19 +453,18 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
             except CfdRunError as exc:
                 if _BOUND_STOP in str(exc) and len(retries) < max_retries:
                     pass  # stopped early by the bound: rewound and retried below
-                elif "time step collapsed" not in str(exc) or len(retries) >= max_retries:
+                elif ((where := _DIVERGED_AT.search(str(exc))) is None
+                      or len(retries) >= max_retries):
                     tried = _retries_tried(case_dir)
                     if not tried:
                         raise
                     raise CfdRunError(f"{getattr(exc, '_message', exc)}; {tried}", case=exc.case,
                                       log_tail=exc.log_tail) from exc
                 else:  # rewound before the remedy: it rewrites the kept fields
-                    where = _COLLAPSED_AT.search(str(exc))
-                    # a brief collapse is seen after it: fields written since are spoiled
-                    before_s = float(where[1]) if where else None
-                    _retry(case_dir, retries, "time step collapsed"
-                           f"{f' at t = {where[1]} s' if where else ''}",
-                           0.0 if retries_from_start else before_s, progress, max_retries)
+                    what, at = (where[1], where[2]) if where[1] else (where[3], where[4])
+                    # a brief one is seen after it: fields written since are spoiled
+                    _retry(case_dir, retries, f"{what} at t = {at} s",
+                           0.0 if retries_from_start else float(at), progress, max_retries)
                     continue
             try:
                 record = record_from_case(case_dir, motion, name, parameters, plate)
