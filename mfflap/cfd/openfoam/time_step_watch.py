@@ -17,15 +17,16 @@ import math
 import re
 from pathlib import Path
 
-# the time step and the time lines alone (tabulatedAccelerationSource also starts lines
-# with "Time = "), in log order: pimpleFoam prints a step's Courant numbers and deltaT, then
-# the time it reaches
+# a step's Courant number, time step and time lines, each alone on its line
+# (tabulatedAccelerationSource also starts lines with "Time = "), in log order: pimpleFoam
+# prints a step's Courant numbers and deltaT, then the time it reaches
 _STEP_OR_TIME = re.compile(rb"^(?:(deltaT|Time) = |Courant Number mean: \S+ max: )"
                            rb"([-+0-9.eE]+)[ \t\r]*$", re.M)
 
 
 class TimeStepWatch:
-    """The time steps of one run of a solver, read from its log as the log grows.
+    """The time steps and Courant numbers of one run of a solver, read from its log as the
+    log grows.
 
     Parameters
     ----------
