@@ -711,6 +711,38 @@ def test_a_collapse_in_the_seconds_before_the_solver_exits_fails_the_run(tmp_pat
 
 
 @pytest.mark.openfoam
+def test_a_finished_run_that_diverged_is_not_taken_as_done_on_a_rerun(tmp_path):
+    """A real run that reached its end time with a time step below the limit in its log (as
+    one judged by the old runner, or whose caller was killed as it ended, would have) is not
+    'run to its end already' on the next call: the call fails as the run would have, naming
+    the time folders written past it. Rewound to before it (`--rewind-before`), the case
+    runs again, and then it has run to its end."""
+    from click.testing import CliRunner
+
+    from mfflap.cfd.openfoam.writer import SolverSettings
+    from mfflap.cli.main import cli
+
+    case = write_case(tmp_path / "c", MOTION, end_time=0.04, mesh="coarse",
+                      solver=SolverSettings(write_interval=0.01))
+    run_case(case, timeout_s=300)
+    log = case / "log.pimpleFoam"
+    text = log.read_text()
+    step = next(m for m in re.finditer(r"^deltaT = (\S+)\nTime = (\S+)$", text, re.M)
+                if float(m[2]) > 0.035)
+    log.write_text(f"{text[:step.start(1)]}1e-09{text[step.end(1):]}")
+    with pytest.raises(CfdRunError, match=rf"collapsed to 1e-09 s at t = {step[2]} s .*its time "
+                       r"folders 0.04\): .*--rewind-before"):
+        run_case(case, timeout_s=300)
+    res = CliRunner().invoke(cli, ["cfd", "run", str(case), "--rewind-before", step[2],
+                                   "--progress-every", "0"])
+    assert res.exit_code == 0, res.output
+    assert "rewound to t = 0.03 s" in res.stderr
+    told = []
+    run_case(case, timeout_s=300, progress=told.append)
+    assert any("has run to its end time (0.04 s) already" in m for m in told)
+
+
+@pytest.mark.openfoam
 def test_cfd_run_rewinds_a_finished_case_to_before_a_time_and_reruns_it(tmp_path):
     """`mfflap cfd run --rewind-before T` (what a collapse read after the solver exited tells
     the user to run): the case goes back to its last write before T, drops the later fields

@@ -223,6 +223,26 @@ def _exploded(application: str, time_steps: TimeStepWatch, case_dir: Path,
                        log_tail=_tail(log))
 
 
+#: the largest Courant number a run may reach before it counts as diverged
+MAX_COURANT_ABORT = 100.0
+
+
+def _last_run_diverged(case_dir: Path, min_time_step: float) -> CfdRunError | None:
+    """The error of the case's last pimpleFoam run (its log from the last "Starting time
+    loop" on) if its time step collapsed below ``min_time_step`` or its Courant number
+    passed :data:`MAX_COURANT_ABORT` anywhere, else None: a run that reached its end time
+    is judged whole, however its judging was cut short (its caller killed as it ended, or a
+    runner that read only the last time step)."""
+    log = case_dir / "log.pimpleFoam"
+    start = log.read_bytes().rfind(b"Starting time loop") if log.is_file() else -1
+    steps = TimeStepWatch(log, min_time_step, start_byte=max(start, 0))
+    if steps.read(to_end=True) is not None:
+        return _collapsed("pimpleFoam", steps, case_dir, log, exited=True)
+    if steps.largest_courant[0] > MAX_COURANT_ABORT:
+        return _exploded("pimpleFoam", steps, case_dir, log)
+    return None
+
+
 def _check_time_limit(timeout_s: float, application: str) -> None:
     """Refuse a time limit that is not a finite time > 0 s (ConfigError, key timeout_s)."""
     if not (math.isfinite(timeout_s) and timeout_s > 0):
@@ -231,7 +251,7 @@ def _check_time_limit(timeout_s: float, application: str) -> None:
 
 
 def run_application(case_dir: str | Path, application: str, timeout_s: float = 3600.0,
-                    max_courant_abort: float = 100.0, n_procs: int = 1,
+                    max_courant_abort: float = MAX_COURANT_ABORT, n_procs: int = 1,
                     extra_args: tuple[str, ...] = (), min_time_step: float = 1e-7,
                     poll_s: float = 2.0, watch: Callable[[], str | None] | None = None,
                     watch_every_s: float = 60.0, progress: Callable[[], None] | None = None,
@@ -633,7 +653,8 @@ def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
              watch_every_s: float = 60.0, progress: Callable[[str], None] | None = None,
              progress_every_s: float = 10.0) -> None:
     """blockMesh (once), checkMesh (once), then pimpleFoam from the latest written time
-    (none if the case has run to its end time).
+    (none if the case has run to its end time; unless that run diverged somewhere, which
+    fails the call as it failed the run: :func:`run_application`).
 
     The latest written time is the latest folder holding every field
     (:func:`latest_solution_time`), not merely the latest folder: controlDict is set to start
@@ -698,6 +719,8 @@ def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
         final = end_time(case_dir)
         if (final is not None and float(start) >= final - 1e-9 * abs(final)
                 and ran_to_end(case_dir)):
+            if (diverged := _last_run_diverged(case_dir, min_time_step)) is not None:
+                raise diverged
             if progress is not None:
                 progress(f"{case_dir} has run to its end time ({final:g} s) already: nothing to "
                          "run")
