@@ -424,10 +424,10 @@ def test_a_brief_divergence_seen_after_later_writes_is_retried_from_the_write_be
             log.write_text(f"{text[:first]}{value}{text[last:]}")
             reported_at.append(at)
             watch = TimeStepWatch(log, kwargs["min_time_step"], start_byte=start)
-            if watch.read(to_end=True) is not None:
-                raise runner._collapsed("pimpleFoam", watch, case_dir, log, exited=True)
-            if watch.largest_courant[0] > 100:
-                raise runner._exploded("pimpleFoam", watch, case_dir, log)
+            watch.read(to_end=True)
+            if (diverged := runner._diverged("pimpleFoam", watch, case_dir, log,
+                                             runner.MAX_COURANT_ABORT, exited=True)) is not None:
+                raise diverged
 
     retry, _ = _short_run_retried_once(tmp_path, monkeypatch, diverges_once_after_its_writes,
                                        calls)

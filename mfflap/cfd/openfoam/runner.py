@@ -227,6 +227,18 @@ def _exploded(application: str, time_steps: TimeStepWatch, case_dir: Path,
 MAX_COURANT_ABORT = 100.0
 
 
+def _diverged(application: str, time_steps: TimeStepWatch, case_dir: Path, log: Path,
+              max_courant_abort: float, exited: bool = False) -> CfdRunError | None:
+    """The error of a run whose steps read so far (``time_steps``) hold a collapsed time
+    step or a Courant number above ``max_courant_abort``, else None; ``exited``: read after
+    the solver exited."""
+    if time_steps.collapse is not None:
+        return _collapsed(application, time_steps, case_dir, log, exited)
+    if time_steps.largest_courant[0] > max_courant_abort:
+        return _exploded(application, time_steps, case_dir, log)
+    return None
+
+
 def _last_run_diverged(case_dir: Path, min_time_step: float) -> CfdRunError | None:
     """The error of the case's last pimpleFoam run (its log from the last "Starting time
     loop" on) if its time step collapsed below ``min_time_step`` or its Courant number
@@ -236,11 +248,8 @@ def _last_run_diverged(case_dir: Path, min_time_step: float) -> CfdRunError | No
     log = case_dir / "log.pimpleFoam"
     start = log.read_bytes().rfind(b"Starting time loop") if log.is_file() else -1
     steps = TimeStepWatch(log, min_time_step, start_byte=max(start, 0))
-    if steps.read(to_end=True) is not None:
-        return _collapsed("pimpleFoam", steps, case_dir, log, exited=True)
-    if steps.largest_courant[0] > MAX_COURANT_ABORT:
-        return _exploded("pimpleFoam", steps, case_dir, log)
-    return None
+    steps.read(to_end=True)
+    return _diverged("pimpleFoam", steps, case_dir, log, MAX_COURANT_ABORT, exited=True)
 
 
 def _check_time_limit(timeout_s: float, application: str) -> None:
@@ -345,10 +354,10 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
                     raise CfdRunError(f"{application} timed out after {timeout_s} s{kept}",
                                       case=str(case_dir), log_tail=_tail(log))
                 fh.flush()
-                if time_steps.read() is not None:
-                    raise _collapsed(application, time_steps, case_dir, log)
-                if time_steps.largest_courant[0] > max_courant_abort:
-                    raise _exploded(application, time_steps, case_dir, log)
+                time_steps.read()
+                if (diverged := _diverged(application, time_steps, case_dir, log,
+                                          max_courant_abort)) is not None:
+                    raise diverged
                 if progress is not None and time.monotonic() - reported >= progress_every_s:
                     reported = time.monotonic()
                     progress()
@@ -378,10 +387,10 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
         raise CfdRunError(f"{application} failed (exit code {proc.returncode}): "
                           f"{failure_reason(own_tail[-50_000:], proc.returncode)}",
                           case=str(case_dir), log_tail=_tail(log))
-    if time_steps.read(to_end=True) is not None:  # in its last poll's seconds
-        raise _collapsed(application, time_steps, case_dir, log, exited=True)
-    if time_steps.largest_courant[0] > max_courant_abort:
-        raise _exploded(application, time_steps, case_dir, log)
+    time_steps.read(to_end=True)  # what it wrote in its last poll's seconds
+    if (diverged := _diverged(application, time_steps, case_dir, log, max_courant_abort,
+                              exited=True)) is not None:
+        raise diverged
     return log
 
 
