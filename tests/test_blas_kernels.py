@@ -1,58 +1,28 @@
 """The tests run on the OpenBLAS kernels and thread count the shipped series of rounds were
 computed with."""
 
-import ctypes
 import os
+import subprocess
+import sys
 from pathlib import Path
 
-import numpy as np
-
-
-def _has_avx512() -> bool:
-    try:
-        text = Path("/proc/cpuinfo").read_text(errors="replace")
-    except OSError:
-        return False
-    flags = next((line.split(":", 1)[1].split() for line in text.splitlines()
-                  if line.startswith("flags")), [])
-    return {"avx512f", "avx512cd", "avx512bw", "avx512dq", "avx512vl"} <= set(flags)
-
-
-def _openblas_answers(query: str, restype=ctypes.c_int) -> dict[str, object]:
-    """What each OpenBLAS that numpy and scipy bundle answers to ``query`` (``get_corename``:
-    the kernels it loaded; ``get_num_threads``), by library."""
-    import scipy
-
-    answers = {}
-    for package in (np, scipy):
-        libs = Path(package.__file__).parent.parent / f"{package.__name__}.libs"
-        for lib in sorted(libs.glob("*openblas*.so*")):
-            handle = ctypes.CDLL(str(lib))
-            for symbol in (f"scipy_openblas_{query}64_", f"scipy_openblas_{query}",
-                           f"openblas_{query}64_", f"openblas_{query}"):
-                get = getattr(handle, symbol, None)
-                if get is not None:
-                    get.restype = restype
-                    answers[lib.name] = get()
-                    break
-    return answers
-
-
-def _openblas_corenames() -> dict[str, str]:
-    """The kernels each bundled OpenBLAS has loaded, by library."""
-    return {lib: name.decode()
-            for lib, name in _openblas_answers("get_corename", ctypes.c_char_p).items()}
+from openblas_kernels import (
+    has_avx512,
+    openblas_answers,
+    openblas_corenames,
+    unlike_the_shipped_series,
+)
 
 
 def test_openblas_runs_its_skylakex_kernels_where_the_cpu_has_avx512():
     """tests/conftest.py pins OPENBLAS_CORETYPE before numpy loads, in this process too:
     a plugin that loaded numpy first would leave the pin unread, and the rounds' series
     would take other steps (README, Known limits)."""
-    if not _has_avx512():  # the kernels would not run: the environment's choice is kept
+    if not has_avx512():  # the kernels would not run: the environment's choice is kept
         assert "MFFLAP_TESTS_OPENBLAS_CORETYPE_WAS" not in os.environ
         return
     assert os.environ["OPENBLAS_CORETYPE"] == "SkylakeX"
-    names = _openblas_corenames()
+    names = openblas_corenames()
     assert names, "no bundled OpenBLAS found beside numpy or scipy"
     assert set(names.values()) == {"SkylakeX"}, names
 
@@ -62,6 +32,27 @@ def test_openblas_runs_two_threads_where_there_are_two_cores_or_more():
     instead of two moves beta = 1's least-power optimum of the shipped series elsewhere in
     its cycle, and OpenBLAS would otherwise take one thread per core."""
     assert os.environ["OPENBLAS_NUM_THREADS"] == "2"
-    threads = _openblas_answers("get_num_threads")
+    threads = openblas_answers("get_num_threads")
     assert threads, "no bundled OpenBLAS found beside numpy or scipy"
     assert set(threads.values()) == {min(2, len(os.sched_getaffinity(0)))}, threads
+
+
+def test_tests_that_replay_the_shipped_series_say_why_they_cannot_on_other_kernels():
+    """The tests marked ``shipped_kernels`` run here (SkylakeX kernels where the CPU has
+    AVX-512, two threads) and are skipped, with the kernels and threads named, where
+    OpenBLAS runs others: Haswell's kernels, one thread."""
+    from openblas_kernels import SHIPPED_KERNELS, SHIPPED_THREADS
+
+    if has_avx512() and len(os.sched_getaffinity(0)) >= SHIPPED_THREADS:
+        assert unlike_the_shipped_series() is None
+    here = str(Path(__file__).parent)
+    ask = "import openblas_kernels as k; print(k.unlike_the_shipped_series())"
+    for kernels, threads, said in (("Haswell", "2", "runs Haswell with 2 thread(s)"),
+                                   (SHIPPED_KERNELS, "1", f"runs {SHIPPED_KERNELS} with 1")):
+        if kernels == SHIPPED_KERNELS and not has_avx512():
+            continue  # those kernels would not load
+        env = {**os.environ, "OPENBLAS_CORETYPE": kernels, "OPENBLAS_NUM_THREADS": threads,
+               "PYTHONPATH": here}
+        out = subprocess.run([sys.executable, "-c", ask], env=env, capture_output=True,
+                             text=True, check=True).stdout
+        assert said in out and "README, Known limits" in out, out
