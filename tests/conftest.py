@@ -66,7 +66,7 @@ def pytest_runtest_setup(item: pytest.Item) -> None:
     """Skip a test marked ``shipped_kernels`` where OpenBLAS runs other kernels or another
     thread count than the shipped series of rounds were computed with (on a CPU without
     AVX-512, or with one core), saying which: there the series take other steps from round
-    2 on, as README's Known limits say, and the test would ask for CFD never run."""
+    2 on, as README's Known limits say, and the test's assertions are those steps."""
     if item.get_closest_marker("shipped_kernels") is not None:
         why = unlike_the_shipped_series()
         if why is not None:

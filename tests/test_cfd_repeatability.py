@@ -119,3 +119,96 @@ def test_repeat_needs_live_runs_and_two_copies(tmp_path, optimisation_file):
                                    "1", "--work", str(tmp_path / "w")])
     assert res.exit_code == 2 and "must be 2 or more runs" in res.output
     assert not (tmp_path / "w").exists()
+
+
+def _write_copies(folder, key: str, motion, copies: int, shift_share: float = 0.0) -> None:
+    """Copies 0 .. copies-1 of ``motion``'s run saved as ``backtest_<key>_copy<k>.h5``, each
+    at its copy's Courant limit, their cycle begun ``shift_share`` of a period into the
+    motion's, with loads that differ a little from copy to copy."""
+    from dataclasses import replace
+
+    from mfflap.backtest.repeat import copy_settings
+    from mfflap.backtest.run import cfd_motion
+    from mfflap.campaign.records import CfdRecord, write_record
+    from mfflap.hydro.loads import Loads
+
+    spline = cfd_motion(motion)
+    t = np.linspace(0.0, 3 * spline.period, 1201)
+    state = spline.sample(t + shift_share * spline.period)
+    state = replace(state, time=t, heave_position=state.heave_position
+                    - state.heave_position[0])
+    folder.mkdir(exist_ok=True)
+    for k in range(copies):
+        loads = Loads(t, (10.0 + 0.1 * k) * np.sin(2 * np.pi * t / spline.period) + 2.0,
+                      -1.0 - 0.01 * k + 0 * t, 0.5 * np.cos(2 * np.pi * t / spline.period))
+        write_record(folder / f"backtest_{key}_copy{k}.h5", CfdRecord(
+            f"backtest_{key}_copy{k}", state, loads,
+            {"kind": "table", "period": spline.period, "ramp_time": 0.0, "motion_key": key,
+             "n_cycles": 3.0, "copy": k},
+            {"solver_max_courant": copy_settings(None, k).max_courant}))
+
+
+def test_repeat_takes_the_copies_saved_for_the_same_motion_found_with_other_round_off(
+        tmp_path, monkeypatch):
+    """``--repeat`` looks saved copies up as the back-test looks records up: a motion with
+    none of its own key takes a whole set of another key's whose motion lies within the
+    look-up's tolerance of it, or is the same periodic motion shifted in time, and says so
+    (on OpenBLAS's Haswell kernels the trust series' round 2 beta = 0.5 optimum came out as
+    51f7bd629f61b45e, within the tolerance of 34cd2b07c53664ae, whose copies ship, and ran
+    them again for twenty minutes). A set that lacks a copy asked for, or of a motion
+    further off, is not taken: the copies run, under the motion's own key."""
+    import mfflap.backtest.run as run_module
+    from mfflap.backtest.repeat import repeat_runs
+    from mfflap.backtest.run import motion_key
+    from mfflap.kinematics.convert import harmonic_to_discrete
+    from mfflap.kinematics.discrete import DiscreteMotion
+
+    ran = []
+
+    def run_backtest_case(motion, label, name, **kwargs):
+        ran.append(name)
+        raise RuntimeError(f"would run {name} in OpenFOAM")
+
+    monkeypatch.setattr(run_module, "run_backtest_case", run_backtest_case)
+    motion = harmonic_to_discrete(0.8, 0.3, 0.5, 1.5, 40)
+
+    def scaled(factor: float) -> DiscreteMotion:
+        return DiscreteMotion(factor * motion.pitch_acceleration, motion.heave_acceleration,
+                              motion.time_step)
+
+    near, far = scaled(1.001), scaled(1.01)
+    saved = tmp_path / "saved"
+    _write_copies(saved, "before", motion, 2)
+
+    def repeat(m, copies=2, folder=saved):
+        said = []
+        found = repeat_runs(m, "β = 0.5", MorisonModel(), 50.0, copies=copies,
+                            work_dir=tmp_path / "w", save_to=folder, progress=said.append)
+        return found, said
+
+    found, said = repeat(near)
+    assert ran == [] and found.key == "before" and found.sources == (
+        "backtest_before_copy0", "backtest_before_copy1")
+    assert said == [f"copy {k} of 2: taken from {saved / f'backtest_before_copy{k}.h5'} "
+                    "(saved for before: a motion within the look-up's tolerance of this one)"
+                    for k in range(2)]
+    np.testing.assert_allclose(found.mean_thrust, repeat(motion)[0].mean_thrust, rtol=0)
+    # the same periodic motion, its saved cycle begun a quarter period later
+    shifted = tmp_path / "shifted"
+    _write_copies(shifted, "later", motion, 2, shift_share=0.25)
+    found, said = repeat(near, folder=shifted)
+    assert found.key == "later" and "(saved for later: the same periodic motion shifted in " \
+        "time by" in said[0] and ran == []
+    # three copies asked for, two saved: all three run, as the motion's own
+    with pytest.raises(RuntimeError, match="would run"):
+        repeat(near, copies=3)
+    assert ran == [f"backtest_{motion_key(near)}_copy0"]
+    # a motion 1 % off is another motion
+    with pytest.raises(RuntimeError, match="would run"):
+        repeat(far)
+    assert ran[-1] == f"backtest_{motion_key(far)}_copy0"
+    # a copy of the motion's own key comes first: the rest of its set then runs
+    _write_copies(saved, motion_key(near), near, 1)
+    with pytest.raises(RuntimeError, match="would run"):
+        repeat(near)
+    assert ran[-1] == f"backtest_{motion_key(near)}_copy1"

@@ -1008,7 +1008,6 @@ def test_first_order_rounds_with_the_phase_fixed_take_slopes_through_shifted_rec
 
 
 @pytest.mark.slow
-@pytest.mark.shipped_kernels
 def test_trust_region_rounds_that_know_cfds_noise_converge_in_round_3(tmp_path):
     """The trust series with `--cfd-repeatability 0.03` (two runs of one motion differ by
     2.8 % of the mean thrust, tests/test_cfd_repeatability.py): round 3's steps, which CFD
@@ -1043,10 +1042,12 @@ def test_trust_region_rounds_that_know_cfds_noise_converge_in_round_3(tmp_path):
 
     from mfflap.campaign.records import fixture_dir
 
-    # the optima whose shipped copies the repeats take: checked first, so that other optima
-    # fail here instead of running their copies in OpenFOAM (--live) for twenty minutes
-    assert second["checks"]["β = 0"]["key"] == "f85edc06d9cf46a0"
-    assert second["checks"]["β = 0.5"]["key"] == "34cd2b07c53664ae"
+    # the optima whose shipped copies the repeats take (on other OpenBLAS kernels beta =
+    # 0.5's comes out within the look-up's tolerance of it, and its copies are taken as its
+    # back-test was): checked first, so that other optima fail here instead of running their
+    # copies in OpenFOAM (--live) for twenty minutes
+    assert second["checks"]["β = 0"]["cfd_record"].startswith("backtest_f85edc06d9cf46a0")
+    assert second["checks"]["β = 0.5"]["cfd_record"].startswith("backtest_34cd2b07c53664ae")
     saved = tmp_path / "copies"
     shutil.copytree(fixture_dir("cfd_repeatability"), saved)
     rep = CliRunner().invoke(cli, ["backtest", str(out / "round_2" / "results.h5"), "--live",

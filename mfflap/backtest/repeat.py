@@ -158,7 +158,11 @@ def repeat_runs(motion, label: str, model, max_power: float, *, copies: int,
     ``work_dir/backtest_<key>_copy<k>`` (with ``_<n>cycles`` after it for other than 3
     periods; a killed run resumes there) and, with ``save_to``, a record
     ``backtest_<key>_copy<k>.h5`` there, which a later call for as many periods takes
-    instead of running the copy again.
+    instead of running the copy again. Where ``save_to`` holds none of this key's copies,
+    a whole set of another key's is taken when that motion lies within the back-test
+    look-up's tolerance of this one or is the same periodic motion shifted in time
+    (:func:`~mfflap.backtest.run.matching_fixture`: the same optimum found with other
+    round-off), and the progress says whose they are.
 
     Raises
     ------
@@ -167,42 +171,89 @@ def repeat_runs(motion, label: str, model, max_power: float, *, copies: int,
     MfflapError
         A copy's run failed (the copies before it are kept).
     """
-    from mfflap.backtest.as_run import as_run_since_s
     from mfflap.backtest.run import cfd_motion, motion_key, run_backtest_case
-    from mfflap.campaign.records import read_record, write_record
+    from mfflap.campaign.records import write_record
 
     if not (isinstance(copies, int) and copies >= 2):
         raise ConfigError(f"--repeat must be 2 or more runs, got {copies!r}", key="repeat")
     key = motion_key(motion)
     period = cfd_motion(motion).period
+    limits = [copy_settings(solver, k).max_courant for k in range(copies)]
+    saved_key, note = key, ""
+    if save_to is not None:
+        saved_key, note = _saved_copies_key(motion, key, Path(save_to), limits, n_cycles,
+                                            retries_from_start)
     records = []
     for k in range(copies):
         name = f"backtest_{key}_copy{k}"
-        saved = None if save_to is None else Path(save_to) / f"{name}.h5"
-        limit = copy_settings(solver, k).max_courant
-        if saved is not None and saved.is_file():
-            record = read_record(saved)
-            had = float(record.provenance.get("solver_max_courant", float("nan")))
-            cycles = float(record.parameters.get("n_cycles", 3.0))
-            part_way = retries_from_start and as_run_since_s(record) > 0.0
-            if (np.isclose(had, limit, rtol=1e-12, atol=0) and np.isclose(cycles, n_cycles)
-                    and not part_way):
-                if progress is not None:
-                    progress(f"copy {k} of {copies}: taken from {saved}")
-                records.append(record)
-                continue
+        saved = None if save_to is None else Path(save_to) / f"backtest_{saved_key}_copy{k}.h5"
+        record = None if saved is None else _usable_copy(saved, limits[k], n_cycles,
+                                                          retries_from_start)
+        if record is not None:
+            if progress is not None:
+                progress(f"copy {k} of {copies}: taken from {saved}{note}")
+            records.append(record)
+            continue
         if progress is not None:
-            progress(f"copy {k} of {copies}: Courant limit {limit!r}")
+            progress(f"copy {k} of {copies}: Courant limit {limits[k]!r}")
         record = run_backtest_case(motion, label, name, work_dir=work_dir, n_cycles=n_cycles,
                                    mesh=mesh, solver=copy_settings(solver, k), plate=plate,
                                    fluid=fluid, stream=stream, progress=progress,
                                    parameters={"copy": k},
                                    retries_from_start=retries_from_start, n_procs=n_procs)
         if saved is not None:
-            write_record(saved, record, single_precision=True)
+            write_record(Path(save_to) / f"{name}.h5", record, single_precision=True)
         records.append(record)
     return repeatability_of(records, label, model, period, max_power,
                             average_cycles=average_cycles)
+
+
+def _usable_copy(path: Path, limit: float, n_cycles: float, retries_from_start: bool):
+    """The saved copy at ``path`` (a :class:`~mfflap.campaign.records.CfdRecord`) when it
+    ran at the Courant ``limit`` for ``n_cycles`` periods (and, with ``retries_from_start``,
+    no retry resumed it part-way), else None."""
+    from mfflap.backtest.as_run import as_run_since_s
+    from mfflap.campaign.records import read_record
+
+    if not path.is_file():
+        return None
+    record = read_record(path)
+    had = float(record.provenance.get("solver_max_courant", float("nan")))
+    cycles = float(record.parameters.get("n_cycles", 3.0))
+    part_way = retries_from_start and as_run_since_s(record) > 0.0
+    if np.isclose(had, limit, rtol=1e-12, atol=0) and np.isclose(cycles, n_cycles) \
+            and not part_way:
+        return record
+    return None
+
+
+def _saved_copies_key(motion, key: str, save_to: Path, limits: Sequence[float],
+                      n_cycles: float, retries_from_start: bool) -> tuple[str, str]:
+    """The key under which ``save_to`` holds the copies to take for ``motion`` (key ``key``),
+    and a note saying whose they are ("" for its own).
+
+    Its own copies first, any of them (the missing ones then run). Else, as the back-test's
+    look-up takes another key's record (:func:`~mfflap.backtest.run.matching_fixture`), the
+    copies of a motion within the look-up's tolerance of this one, or of the same periodic
+    motion shifted in time: the same optimum found with other round-off. Those are taken only
+    when every copy asked for is there and usable: copies run now would be of another key,
+    and copies of two motions are no repeatability.
+    """
+    from mfflap.backtest.run import matching_fixture
+
+    if any((save_to / f"backtest_{key}_copy{k}.h5").is_file() for k in range(len(limits))):
+        return key, ""
+    if not save_to.is_dir():
+        return key, ""
+    match = matching_fixture(key, motion, [save_to], suffix="_copy0")
+    if match is None:
+        return key, ""
+    other = match.path.name.removeprefix("backtest_").removesuffix("_copy0.h5")
+    if any(_usable_copy(save_to / f"backtest_{other}_copy{k}.h5", limit, n_cycles,
+                        retries_from_start) is None for k, limit in enumerate(limits)):
+        return key, ""
+    whose = match.shift_note() or "a motion within the look-up's tolerance of this one"
+    return other, f" (saved for {other}: {whose})"
 
 
 __all__ = ["REPEAT_PERTURBATION", "Repeatability", "copy_settings", "repeat_runs",

@@ -156,19 +156,20 @@ def closest_cycle_shift(rec: CfdRecord, spline: PeriodicSplineMotion,
 
 
 def matching_fixture(key: str, motion: DiscreteMotion, folders: Sequence[Path],
-                     tolerance: float = 2e-3) -> FixtureMatch | None:
+                     tolerance: float = 2e-3, suffix: str = "") -> FixtureMatch | None:
     """The record of ``motion``'s CFD in ``folders``: one of its key; else one whose imposed
     kinematics after the start-up ramp lie within ``tolerance`` of its own; else one of the
     same periodic motion shifted in time, the closest if several (:func:`cycle_shift`);
-    else None."""
+    else None. Records are named ``backtest_<key><suffix>.h5`` (``suffix`` "_copy0": the
+    first copies of :func:`mfflap.backtest.repeat.repeat_runs`)."""
     for folder in folders:
-        exact = folder / f"backtest_{key}.h5"
+        exact = folder / f"backtest_{key}{suffix}.h5"
         if exact.exists():
             return FixtureMatch(exact)
     spline = cfd_motion(motion)
     candidates = []
     for folder in folders:
-        for path in sorted(folder.glob("backtest_*.h5")):
+        for path in sorted(folder.glob(f"backtest_*{suffix}.h5")):
             period = float(read_record_parameters(path).get("period", -1))
             if abs(period - spline.period) > tolerance * spline.period:
                 continue  # not read whole: most records of a folder are other motions'
