@@ -140,7 +140,7 @@ def _write_copies(folder, key: str, motion, copies: int, shift_share: float = 0.
     folder.mkdir(exist_ok=True)
     for k in range(copies):
         loads = Loads(t, (10.0 + 0.1 * k) * np.sin(2 * np.pi * t / spline.period) + 2.0,
-                      -1.0 - 0.01 * k + 0 * t, 0.5 * np.cos(2 * np.pi * t / spline.period))
+                      np.full_like(t, -1.0 - 0.01 * k), 0.5 * np.cos(2 * np.pi * t / spline.period))
         write_record(folder / f"backtest_{key}_copy{k}.h5", CfdRecord(
             f"backtest_{key}_copy{k}", state, loads,
             {"kind": "table", "period": spline.period, "ramp_time": 0.0, "motion_key": key,
