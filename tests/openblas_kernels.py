@@ -1,4 +1,4 @@
-"""What OpenBLAS runs in this process: the CPU's AVX-512 flags, and the kernels and thread
+"""What OpenBLAS runs in this process: the CPU's feature flags, and the kernels and thread
 count each OpenBLAS that numpy and scipy bundle has loaded. numpy is imported only when
 OpenBLAS is asked, so tests/conftest.py can read the CPU's flags before numpy loads."""
 
@@ -10,15 +10,19 @@ SHIPPED_KERNELS = "SkylakeX"
 SHIPPED_THREADS = 2
 
 
-def has_avx512() -> bool:
-    """Whether the CPU has the AVX-512 instructions OpenBLAS's SkylakeX kernels use."""
+def cpu_flags() -> set[str]:
+    """The CPU's feature flags as /proc/cpuinfo lists them (none where it cannot be read)."""
     try:
         text = Path("/proc/cpuinfo").read_text(encoding="ascii", errors="replace")
     except OSError:
-        return False
-    flags = next((line.split(":", 1)[1].split() for line in text.splitlines()
-                  if line.startswith("flags")), [])
-    return {"avx512f", "avx512cd", "avx512bw", "avx512dq", "avx512vl"} <= set(flags)
+        return set()
+    return set(next((line.split(":", 1)[1].split() for line in text.splitlines()
+                     if line.startswith("flags")), []))
+
+
+def has_avx512() -> bool:
+    """Whether the CPU has the AVX-512 instructions OpenBLAS's SkylakeX kernels use."""
+    return {"avx512f", "avx512cd", "avx512bw", "avx512dq", "avx512vl"} <= cpu_flags()
 
 
 def openblas_answers(query: str, restype=ctypes.c_int) -> dict[str, object]:

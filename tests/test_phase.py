@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from openblas_kernels import cpu_flags
 
 from mfflap.cli.main import cli
 from mfflap.config import load_case, loads_case
@@ -171,14 +172,6 @@ def test_a_fixed_phase_puts_beta_1s_optimum_in_one_place_and_finds_the_shipped_c
         assert abs(pitch_phase_rad(r.motion)) < 1e-8
 
 
-def _cpu_has(flag: str) -> bool:
-    try:
-        with open("/proc/cpuinfo", encoding="ascii", errors="replace") as cpuinfo:
-            return any(line.startswith("flags") and flag in line.split() for line in cpuinfo)
-    except OSError:
-        return False
-
-
 def _fixed_phase_series_on_other_kernels(out: Path, n_rounds: int, *flags: str
                                          ) -> tuple[dict, str]:
     """`mfflap run` of the shipped case in ``n_rounds`` rounds with --fix-phase,
@@ -187,7 +180,7 @@ def _fixed_phase_series_on_other_kernels(out: Path, n_rounds: int, *flags: str
     SkylakeX kernels the tests pin (tests/conftest.py). Its rounds summary and its stderr."""
     env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_CORETYPE"}
     env["OPENBLAS_NUM_THREADS"] = "1"
-    if _cpu_has("avx2"):
+    if "avx2" in cpu_flags():
         env["OPENBLAS_CORETYPE"] = "Haswell"
     proc = subprocess.run(
         [sys.executable, "-c", "from mfflap.cli.main import cli; cli()", "run", str(CASE),
