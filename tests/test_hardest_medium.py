@@ -36,17 +36,20 @@ def test_a_finished_run_of_a_hardest_motion_is_done_and_fit_for_identification(p
     """What campaign status and identification judge: no numerical burst after the ramp,
     not lost (inside the force bound), so identification takes it as it is. Only the run of
     f = 0.5 Hz on the medium mesh, resumed at max Co 2 from t = 4.5 s, is noted as fitted
-    across two set-ups."""
+    across two set-ups, and campaign status says so (and nothing else)."""
     from mfflap.identification.data import SET_UP_NOTE
 
     rec = read_record(path)
     assert rec.provenance["mesh"] == ("medium" if path.parent == MEDIUM else "coarse")
     status = {s.case_id: s for s in campaign_status(path.parent)}[path.stem]
-    assert (status.state, status.message) == ("done", "")
     case = prepare_case(rec)
     mixed = [n for n in case.notes if n.startswith(SET_UP_NOTE)]
     assert [n for n in case.notes if n not in mixed] == []  # nothing bridged or despiked
-    assert len(mixed) == (path.parent == MEDIUM and path.stem == "f0p500_h0p500_phi135p0")
+    is_mixed = path.parent == MEDIUM and path.stem == "f0p500_h0p500_phi135p0"
+    assert len(mixed) == is_mixed
+    assert status.state == "done" and status.mixed_since_s == (4.5 if is_mixed else None)
+    assert status.message.startswith("a retry resumed it from t = 4.5 s") == is_mixed
+    assert (status.message == "") == (not is_mixed)
     assert case.state.time[-1] == pytest.approx(rec.time[-1], rel=1e-6)
 
 

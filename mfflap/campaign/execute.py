@@ -5,6 +5,8 @@ State lives in the output folder only:
 - ``campaign.toml``: the setup and the list of cases (written once; a rerun must match);
 - ``<case_id>.h5``: a finished case (written atomically; never rerun);
 - ``<case_id>.failed.toml``: why a case failed (retried only on request);
+- ``<case_id>.lost.h5``, ``.mixed.h5``, ``.unreadable.h5``: a record kept aside when its
+  case was run again (lost numerics, two set-ups in the identified window, cut short);
 - ``cases/<case_id>/``: the OpenFOAM case while it runs (resumed from its last written time;
   :func:`campaign_status` reports how far its solver got).
 
@@ -31,8 +33,10 @@ from typing import Any
 from distributed import WorkerPlugin
 
 from mfflap.campaign.cases import CampaignCase
+from mfflap.campaign.mixed_set_up import DEFAULT_DISCARD_TIME_S, describe_mixed, mixed_since_s
 from mfflap.campaign.records import (
     LOST_SUFFIX,
+    MIXED_SUFFIX,
     RECORD_SUFFIX,
     UNREADABLE_SUFFIX,
     CfdRecord,
@@ -90,6 +94,9 @@ class CaseStatus:
     message: str = ""
     #: a started case: the share of its end time its solver has simulated (0-1)
     fraction_simulated: float | None = None
+    #: a done case whose identified window mixes two set-ups: the flow time, s, from which a
+    #: retry resumed its run with other settings (:mod:`mfflap.campaign.mixed_set_up`)
+    mixed_since_s: float | None = None
 
 
 def _failed_path(out: Path, case_id: str) -> Path:
@@ -286,10 +293,13 @@ def read_finished_record(path: Path) -> tuple[CfdRecord | None, str | None]:
         return None, str(err).splitlines()[0]
 
 
-def campaign_status(out_dir: str | Path) -> list[CaseStatus]:
+def campaign_status(out_dir: str | Path,
+                    discard_time_s: float = DEFAULT_DISCARD_TIME_S) -> list[CaseStatus]:
     """Status of every case listed in ``out_dir/campaign.toml``.
 
-    A finished case's message names its numerical bursts (:mod:`mfflap.cfd.bursts`), if any;
+    A finished case's message names its numerical bursts (:mod:`mfflap.cfd.bursts`), if any,
+    and a retry that resumed its run with other settings after ``discard_time_s`` (the
+    identification's start-up; its ``mixed_since_s``: :mod:`mfflap.campaign.mixed_set_up`);
     a finished case whose forces leave what the motion can drive is "lost"
     (:func:`lost_numerics`).
     A record that cannot be read (cut short by a copy or a full disk) is "unreadable": its
@@ -322,9 +332,11 @@ def campaign_status(out_dir: str | Path) -> list[CaseStatus]:
                 statuses.append(CaseStatus(case_id, "lost", lost))
                 continue
             bursts = find_load_bursts(rec.loads)
-            statuses.append(CaseStatus(case_id, "done", "" if not bursts else
-                                       f"{len(bursts)} numerical burst(s), bridged when "
-                                       f"identified; first {bursts[0].describe()}"))
+            said = [f"{len(bursts)} numerical burst(s), bridged when identified; first "
+                    f"{bursts[0].describe()}"] if bursts else []
+            said += [m for m in (describe_mixed(rec, discard_time_s),) if m]
+            statuses.append(CaseStatus(case_id, "done", "; ".join(said),
+                                       mixed_since_s=mixed_since_s(rec, discard_time_s)))
         elif (holder := lock_holder(out / "cases" / case_id)) is not None:
             progress = _started(out / "cases" / case_id)
             statuses.append(CaseStatus(
@@ -468,7 +480,8 @@ def _check_scheduler_address(address: str) -> None:
 def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
                  setup: CampaignSetup | None = None, *, n_workers: int = 1,
                  scheduler_address: str | None = None, retry_failed: bool = False,
-                 progress: bool = True,
+                 rerun_mixed: bool = False,
+                 discard_time_s: float = DEFAULT_DISCARD_TIME_S, progress: bool = True,
                  on_result: Callable[[CaseStatus], None] | None = None,
                  poll_s: float = 10.0) -> list[CaseStatus]:
     """Run the cases that are not finished yet on a dask cluster; return every case's status.
@@ -485,6 +498,13 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
         Rerun cases that failed before (otherwise they stay failed and are reported), and
         cases whose finished run lost its numerics (:func:`lost_numerics`; the record is
         kept as ``<case_id>.lost.h5``).
+    rerun_mixed
+        Rerun from t = 0 s the finished cases whose run a retry resumed with other settings
+        after ``discard_time_s`` (the identification's start-up: two set-ups in the
+        identified window, :mod:`mfflap.campaign.mixed_set_up`), their records kept as
+        ``<case_id>.mixed.h5`` and any case folder kept (``keep_case_dirs``) written anew.
+        Needs ``setup.retries_from_start``: retried part-way again, the rerun would mix the
+        same two set-ups.
     on_result
         Called with each case's status as it finishes (e.g. to commit results).
     progress
@@ -496,8 +516,8 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
     ------
     ConfigError
         Before the folder is made: no case, a case listed twice, no worker, a time limit
-        that is not a finite time > 0 s, a scheduler address dask cannot parse, or a folder
-        path OpenFOAM cannot read.
+        that is not a finite time > 0 s, a scheduler address dask cannot parse, a folder
+        path OpenFOAM cannot read, or ``rerun_mixed`` without ``setup.retries_from_start``.
     MfflapError
         If the scheduler at ``scheduler_address`` cannot be reached.
     """
@@ -514,6 +534,11 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
                           f"{setup.timeout_s!r}", key="timeout_s")
     if scheduler_address is not None:
         _check_scheduler_address(scheduler_address)
+    if rerun_mixed and not setup.retries_from_start:
+        raise ConfigError("rerunning the runs that mix two set-ups needs retries from the start "
+                          "(retries_from_start; the CLI's --rerun-mixed sets it): a rerun "
+                          "retried part-way would mix the same two set-ups again",
+                          key="rerun_mixed")
     ids = [c.case_id for c in cases]
     if not ids:
         raise ConfigError("the campaign has no cases", key="cases")
@@ -536,6 +561,11 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
                 record.replace(out / f"{c.case_id}{UNREADABLE_SUFFIX}")  # the case reruns
             elif retry_failed and lost_numerics(rec, *bound) is not None:
                 record.replace(out / f"{c.case_id}{LOST_SUFFIX}")
+            elif (rerun_mixed and mixed_since_s(rec, discard_time_s) is not None
+                  and lock_holder(out / "cases" / c.case_id) is None):
+                # a kept case folder holds the finished run: it would be taken again
+                shutil.rmtree(out / "cases" / c.case_id, ignore_errors=True)
+                record.replace(out / f"{c.case_id}{MIXED_SUFFIX}")
         if record.exists():
             results[c.case_id] = CaseStatus(c.case_id, "done", "already finished")
         elif _failed_path(out, c.case_id).exists() and not retry_failed:

@@ -38,6 +38,10 @@ LOST_SUFFIX = ".lost.h5"
 #: a record that cannot be read (cut short by a copy, a full disk), kept aside when its case
 #: is run again (:func:`mfflap.campaign.execute.run_campaign`); not a record of the folder
 UNREADABLE_SUFFIX = ".unreadable.h5"
+#: a record whose run a retry resumed part-way within the identified window (two set-ups
+#: fitted as one), kept aside when its case is rerun as one set-up
+#: (:mod:`mfflap.campaign.mixed_set_up`); not a record of the folder
+MIXED_SUFFIX = ".mixed.h5"
 _STATE_KEYS = tuple(KINEMATIC_UNITS)
 
 
@@ -227,7 +231,7 @@ def record_paths(folder: str | Path) -> list[Path]:
     """The record files of ``folder``, sorted by name (see :func:`read_records`)."""
     return [p for p in sorted(Path(folder).glob(f"*{RECORD_SUFFIX}"))
             if not p.name.startswith(".")
-            and not p.name.endswith((LOST_SUFFIX, UNREADABLE_SUFFIX))]
+            and not p.name.endswith((LOST_SUFFIX, UNREADABLE_SUFFIX, MIXED_SUFFIX))]
 
 
 def fixture_dir(name: str = "table1_coarse") -> Path:

@@ -61,6 +61,11 @@ def campaign() -> None:
 @click.option("--retry-failed", is_flag=True, help="Rerun cases that failed before, and "
               "finished cases whose forces leave what the motion can drive (status 'lost'; "
               "their records kept as <case>.lost.h5).")
+@click.option("--rerun-mixed", is_flag=True, help="Rerun from t = 0 s, as one set-up "
+              "(--retries-from-start, set by this), finished cases whose run a retry resumed "
+              "with other settings after the identification's start-up (the case file's "
+              "[identification] discard_time): two set-ups in the fitted window (`campaign "
+              "status` names them); their records kept as <case>.mixed.h5.")
 @click.option("--keep-cases", is_flag=True, help="Keep the OpenFOAM case folders.")
 @retries_from_start_option("A run")
 @click.option("--single-precision", is_flag=True,
@@ -73,7 +78,7 @@ def campaign() -> None:
 def run_cmd(case_file: Path, out_dir: Path, frequencies: list[float] | None,
             heave_amplitudes: list[float] | None, phases: list[float] | None, mesh: str | None,
             setup_name: str | None, wall_treatment: str | None, workers: int,
-            scheduler: str | None, retry_failed: bool, keep_cases: bool,
+            scheduler: str | None, retry_failed: bool, rerun_mixed: bool, keep_cases: bool,
             retries_from_start: bool, single_precision: bool, timeout: float,
             dry_run: bool) -> None:
     """Run the identification grid of CASE_FILE in OpenFOAM.
@@ -103,19 +108,25 @@ def run_cmd(case_file: Path, out_dir: Path, frequencies: list[float] | None,
                                    fluid=case.fluid, stream=case.flow, timeout_s=timeout,
                                    keep_case_dirs=keep_cases,
                                    single_precision=single_precision,
-                                   retries_from_start=retries_from_start)
+                                   retries_from_start=retries_from_start or rerun_mixed)
+    discard_s = case.identification.discard_time
     if dry_run:  # what the run would do: refused as it would be, or each case's state
         check_same_setup(out_dir, campaign_setup)
         check_same_cases(out_dir, cases)
-        states = ({s.case_id: s.state for s in campaign_status(out_dir)}
-                  if (out_dir / "campaign.toml").is_file() else {})
+        found = ({s.case_id: s for s in campaign_status(out_dir, discard_s)}
+                 if (out_dir / "campaign.toml").is_file() else {})
         for c in cases:
+            state = found[c.case_id].state if c.case_id in found else "pending"
+            if c.case_id in found and found[c.case_id].mixed_since_s is not None:
+                state += (f" (two set-ups from t = {found[c.case_id].mixed_since_s:.4g} s"
+                          + ("; to be rerun)" if rerun_mixed else "; --rerun-mixed reruns it)"))
             click.echo(f"{c.case_id}  duration {c.duration:g} s  ramp {c.ramp_time:g} s"
-                       f"  {states.get(c.case_id, 'pending')}")
+                       f"  {state}")
         return
     with aborted_with_resume_message(out_dir):
         statuses = run_campaign(cases, out_dir, campaign_setup, n_workers=workers,
-                                scheduler_address=scheduler, retry_failed=retry_failed)
+                                scheduler_address=scheduler, retry_failed=retry_failed,
+                                rerun_mixed=rerun_mixed, discard_time_s=discard_s)
     done = sum(s.state == "done" for s in statuses)
     click.echo(f"{done}/{len(statuses)} cases done in {out_dir}")
     for s in statuses:
@@ -134,15 +145,22 @@ def run_cmd(case_file: Path, out_dir: Path, frequencies: list[float] | None,
 
 @campaign.command("status")
 @click.argument("out_dir", type=click.Path(file_okay=False, exists=True, path_type=Path))
+@click.option("--discard-time", "discard_time_s", type=NON_NEGATIVE, default=None,
+              help="The identification's start-up, s (the case file's [identification] "
+                   "discard_time; default 0.75): a done run resumed with other settings "
+                   "after it mixes two set-ups in the fitted window.")
 @click.option("--json", "as_json", is_flag=True, help="Print the statuses as JSON.")
-def status_cmd(out_dir: Path, as_json: bool) -> None:
-    """Per-case status of the campaign in OUT_DIR (done, lost: finished with forces beyond
-    what the motion can drive, failed with why, running: by the process named, started:
-    stopped with how far its solver got, pending, unreadable: a record cut short, which the
-    next `campaign run` keeps aside and reruns)."""
+def status_cmd(out_dir: Path, discard_time_s: float | None, as_json: bool) -> None:
+    """Per-case status of the campaign in OUT_DIR (done, with the numerical bursts and a
+    retry that resumed it with other settings within the fitted window, if any; lost:
+    finished with forces beyond what the motion can drive, failed with why, running: by the
+    process named, started: stopped with how far its solver got, pending, unreadable: a
+    record cut short, which the next `campaign run` keeps aside and reruns)."""
     from mfflap.campaign.execute import campaign_status
+    from mfflap.campaign.mixed_set_up import DEFAULT_DISCARD_TIME_S
 
-    statuses = campaign_status(out_dir)
+    statuses = campaign_status(out_dir, DEFAULT_DISCARD_TIME_S if discard_time_s is None
+                               else discard_time_s)
     if as_json:
         echo_json([vars(s) for s in statuses])
         return
@@ -151,7 +169,10 @@ def status_cmd(out_dir: Path, as_json: bool) -> None:
     counts = {k: sum(s.state == k for s in statuses)
               for k in ("done", "lost", "failed", "running", "started", "pending",
                         "unreadable")}
-    click.echo(", ".join(f"{v} {k}" for k, v in counts.items()))
+    mixed = sum(s.mixed_since_s is not None for s in statuses)
+    click.echo(", ".join(f"{v} {k}" for k, v in counts.items())
+               + (f"; {mixed} done mixing two set-ups in the fitted window (`campaign run "
+                  "--rerun-mixed` reruns them as one set-up)" if mixed else ""))
 
 
 def _setups_line(differences: list[tuple[str, Any, Any]] | None) -> str:

@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.ndimage import median_filter
 
-from mfflap.backtest.as_run import as_run_since_s
+from mfflap.campaign.mixed_set_up import mixed_since_s
 from mfflap.campaign.records import CfdRecord
 from mfflap.cfd.bursts import bridge_bursts, bridge_load_bursts
 from mfflap.cfd.force_envelope import find_envelope_breaches
@@ -141,7 +141,8 @@ def prepare_case(record: CfdRecord, discard_time: float = 0.75, n_samples: int =
     driven (:mod:`mfflap.cfd.force_envelope`: a run that lost its numerics gradually); then
     isolated spikes are replaced by the running median (:func:`despike`). All are listed in
     the case's notes, and so is a retry that resumed the run with other settings after the
-    start (:func:`~mfflap.backtest.as_run.as_run_since_s`): the fit then mixes two set-ups.
+    start (:func:`~mfflap.campaign.mixed_set_up.mixed_since_s`): the fit then mixes two
+    set-ups.
 
     Parameters
     ----------
@@ -202,11 +203,10 @@ def prepare_case(record: CfdRecord, discard_time: float = 0.75, n_samples: int =
                                     for k in COMPONENTS), source=loads.source)
         notes.append(f"{len(breaches)} {ENVELOPE_NOTE}: "
                      + "; ".join(b.describe() for b in breaches))
-    since = as_run_since_s(record)
-    if since > start:
+    if (since := mixed_since_s(record, discard_time)) is not None:
         notes.append(f"{SET_UP_NOTE}: at t = {since:.4g} s, after the start at {start:.4g} s "
-                     f"({record.provenance.get('retries')}); rerun the case with "
-                     "--retries-from-start for one set-up")
+                     f"({record.provenance.get('retries')}); `mfflap campaign run "
+                     "--rerun-mixed` reruns the case as one set-up")
     for k in COMPONENTS:
         values, mask = despike(getattr(loads, k)[kept])
         if mask.any():
