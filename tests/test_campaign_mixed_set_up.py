@@ -147,3 +147,21 @@ def test_campaign_run_rerun_mixed_reads_the_start_up_from_the_case_file(tmp_path
     record = read_record(path)
     assert record.provenance["retries_from_start"] is True
     assert mixed_since_s(record, 0.15) is None
+
+
+def test_a_record_kept_aside_twice_keeps_both(tmp_path):
+    """A case lost, mixed or cut short a second time keeps its earlier record kept aside:
+    the next goes to <case>.2<suffix>, then .3, and none of them is a record of the folder."""
+    from mfflap.campaign.execute import keep_aside
+    from mfflap.campaign.records import LOST_SUFFIX, record_paths
+
+    path = tmp_path / f"{MIXED_CO2}.h5"
+    kept = []
+    for n in range(3):
+        path.write_bytes(f"run {n}".encode())
+        kept.append(keep_aside(path, LOST_SUFFIX))
+        assert not path.exists()
+    assert [p.name for p in kept] == [f"{MIXED_CO2}{LOST_SUFFIX}", f"{MIXED_CO2}.2{LOST_SUFFIX}",
+                                      f"{MIXED_CO2}.3{LOST_SUFFIX}"]
+    assert [p.read_bytes() for p in kept] == [b"run 0", b"run 1", b"run 2"]
+    assert record_paths(tmp_path) == []

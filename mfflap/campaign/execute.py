@@ -6,7 +6,8 @@ State lives in the output folder only:
 - ``<case_id>.h5``: a finished case (written atomically; never rerun);
 - ``<case_id>.failed.toml``: why a case failed (retried only on request);
 - ``<case_id>.lost.h5``, ``.mixed.h5``, ``.unreadable.h5``: a record kept aside when its
-  case was run again (lost numerics, two set-ups in the identified window, cut short);
+  case was run again (lost numerics, two set-ups in the identified window, cut short;
+  ``<case_id>.2.lost.h5`` and on for a second one: :func:`keep_aside`);
 - ``cases/<case_id>/``: the OpenFOAM case while it runs (resumed from its last written time;
   :func:`campaign_status` reports how far its solver got).
 
@@ -285,6 +286,20 @@ def read_toml_text(text: str) -> dict[str, Any]:
     return tomllib.loads(text)
 
 
+def keep_aside(record_path: Path, suffix: str) -> Path:
+    """Move a case's record out of the folder's records (its case is to run again) to
+    ``<case_id><suffix>``, or ``<case_id>.<n><suffix>`` with the first free n >= 2 if an
+    earlier one was kept aside so (a case lost twice keeps both); where it went."""
+    case_id = record_path.name.removesuffix(RECORD_SUFFIX)
+    target = record_path.with_name(f"{case_id}{suffix}")
+    n = 2
+    while target.exists():
+        target = record_path.with_name(f"{case_id}.{n}{suffix}")
+        n += 1
+    record_path.replace(target)
+    return target
+
+
 def read_finished_record(path: Path) -> tuple[CfdRecord | None, str | None]:
     """The record at ``path``, or None and why it cannot be read (the error's first line)."""
     try:
@@ -558,14 +573,14 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
         if record.exists():  # read once: unreadable, or lost and asked to rerun, is kept aside
             rec, _ = read_finished_record(record)
             if rec is None:
-                record.replace(out / f"{c.case_id}{UNREADABLE_SUFFIX}")  # the case reruns
+                keep_aside(record, UNREADABLE_SUFFIX)  # the case reruns
             elif retry_failed and lost_numerics(rec, *bound) is not None:
-                record.replace(out / f"{c.case_id}{LOST_SUFFIX}")
+                keep_aside(record, LOST_SUFFIX)
             elif (rerun_mixed and mixed_since_s(rec, discard_time_s) is not None
                   and lock_holder(out / "cases" / c.case_id) is None):
                 # a kept case folder holds the finished run: it would be taken again
                 shutil.rmtree(out / "cases" / c.case_id, ignore_errors=True)
-                record.replace(out / f"{c.case_id}{MIXED_SUFFIX}")
+                keep_aside(record, MIXED_SUFFIX)
         if record.exists():
             results[c.case_id] = CaseStatus(c.case_id, "done", "already finished")
         elif _failed_path(out, c.case_id).exists() and not retry_failed:
