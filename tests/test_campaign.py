@@ -176,6 +176,30 @@ def test_campaign_on_local_cluster_resumes_and_reports_failures(tmp_path, capfd)
     # depends on it): a case that timed out is rerun with a longer one
 
 
+def test_the_progress_bar_says_which_run_in_flight_was_retried_and_how(tmp_path):
+    """A run retried from t = 0 s takes its simulated share back to nothing, so the bar
+    steps back (a case of campaigns/table1_coarse_co2_from_start went from 97 % to 4 %);
+    its postfix says why: the last case in flight retried, with its retry count and how it
+    went on (rerun requests do not count)."""
+    from mfflap.campaign.execute import retries_in_flight
+    from mfflap.campaign.openfoam_run import FROM_ZERO, RERUN_REQUESTED, RETRY_LOG
+
+    for case_id, lines in (("a", []), ("b", [
+            "time step collapsed at t = 1.69 s; resumed from t = 0 s with the inletOutlet "
+            "far field", RERUN_REQUESTED]),
+            ("c", ["forces beyond what the motion can drive from t = 1.4 s at max Co 4; "
+                   "resumed from t = 1.125 s with maxCo 2",
+                   f"{FROM_ZERO} with max Co 2: the forces left what the motion can drive "
+                   "from t = 1.4 s again, as at max Co 4; so the flow written before may be "
+                   "spoiled"])):
+        (tmp_path / "cases" / case_id).mkdir(parents=True)
+        if lines:
+            (tmp_path / "cases" / case_id / RETRY_LOG).write_text("\n".join(lines) + "\n")
+    assert retries_in_flight(tmp_path, ["a", "missing"]) == ""
+    assert retries_in_flight(tmp_path, ["a", "b"]) == (
+        "b: retry 1, resumed from t = 0 s with the inletOutlet far field")
+    assert retries_in_flight(tmp_path, ["b", "c"]) == "c: retry 2, rerun from t = 0 s with max Co 2"
+
 @pytest.mark.openfoam
 def test_a_finished_run_that_lost_its_numerics_is_lost_and_rerun_on_request(tmp_path):
     """A real record whose F_n after the ramp is made 10,000 times larger (what a run that

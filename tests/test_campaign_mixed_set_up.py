@@ -165,3 +165,4 @@ def test_a_record_kept_aside_twice_keeps_both(tmp_path):
                                       f"{MIXED_CO2}.3{LOST_SUFFIX}"]
     assert [p.read_bytes() for p in kept] == [b"run 0", b"run 1", b"run 2"]
     assert record_paths(tmp_path) == []
+

@@ -394,10 +394,35 @@ def fraction_simulated(out_dir: str | Path, case_ids: Sequence[str]) -> dict[str
     return shares
 
 
+def _retries(case_dir: Path) -> list[str]:
+    """The retries a case's runs made so far (its retry log, without rerun requests)."""
+    from mfflap.campaign.openfoam_run import RERUN_REQUESTED, RETRY_LOG
+
+    log = case_dir / RETRY_LOG
+    lines = log.read_text().splitlines() if log.is_file() else []
+    return [line.strip() for line in lines if line.strip() not in ("", RERUN_REQUESTED)]
+
+
+def retries_in_flight(out_dir: str | Path, case_ids: Sequence[str]) -> str:
+    """What the progress bar says of the runs in flight that were retried: ``<case>: retry
+    <n>, <how it goes on>`` for the last one retried (a rerun from t = 0 s takes its share
+    simulated back to nothing, so the bar steps back), '' if none was."""
+    from mfflap.campaign.openfoam_run import FROM_ZERO
+
+    said = ""
+    for case_id in case_ids:
+        retries = _retries(Path(out_dir) / "cases" / case_id)
+        if retries:
+            last = retries[-1]
+            restart = (last.split(":", 1)[0] if last.startswith(FROM_ZERO)
+                       else last.rsplit("; ", 1)[-1])
+            said = f"{case_id}: retry {len(retries)}, {restart}"
+    return said
+
+
 def _started(case_dir: Path) -> tuple[str, float] | None:
     """How far a case's OpenFOAM run got (a message and the simulated share), or None if its
     solver has not begun."""
-    from mfflap.campaign.openfoam_run import RERUN_REQUESTED, RETRY_LOG
     from mfflap.cfd.openfoam.runner import latest_solution_time
 
     reached = _simulated(case_dir)
@@ -405,8 +430,7 @@ def _started(case_dir: Path) -> tuple[str, float] | None:
         return None
     time_s, step_s, end_s = reached
     resume = latest_solution_time(case_dir)
-    retries = sum(line.strip() not in ("", RERUN_REQUESTED) for line in (
-        case_dir / RETRY_LOG).read_text().splitlines()) if (case_dir / RETRY_LOG).is_file() else 0
+    retries = len(_retries(case_dir))
     share = _share(time_s, end_s)
     return (f"t = {time_s:.4g} of {end_s:.4g} s simulated ({share:.0%}), time step "
             f"{step_s:.2g} s; a rerun resumes from t = {resume or 0} s"
@@ -632,7 +656,8 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
                         polled = time.monotonic()
                         running = [c.case_id for c in todo if c.case_id not in finished]
                         bar.n = len(finished) + sum(fraction_simulated(out, running).values())
-                        bar.refresh()
+                        retried = retries_in_flight(out, running)
+                        bar.set_postfix_str("; ".join(filter(None, (last, retried)))[:100])
                     time.sleep(0.1)
                     continue
                 for fut in pending.next_batch(block=False):
