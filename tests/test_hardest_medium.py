@@ -1,6 +1,7 @@
-"""The grid's hardest motions on the medium mesh (campaigns/hardest_medium) and on the coarse
-mesh at max Co 1 from the start (campaigns/hardest_coarse_co1), committed as their runs
-finish: whether a finer mesh or a smaller time step from t = 0 holds what the coarse mesh
+"""The grid's hardest motions on the medium mesh (campaigns/hardest_medium, its f = 0.5 Hz
+run again as one set-up in campaigns/hardest_medium_from_start) and on the coarse mesh at
+max Co 1 from the start (campaigns/hardest_coarse_co1), committed as their runs finish:
+whether a finer mesh or a smaller time step from t = 0 holds what the coarse mesh
 lost from its last writes, and how far the coarse mesh is from the medium one where both
 hold."""
 
@@ -8,6 +9,7 @@ from pathlib import Path
 
 import pytest
 
+from mfflap.backtest.as_run import as_run_since_s
 from mfflap.campaign.compare import compare_records
 from mfflap.campaign.execute import campaign_status
 from mfflap.campaign.records import fixture_dir, read_record, record_paths
@@ -258,3 +260,54 @@ def test_the_medium_mesh_carries_f2_and_the_coarse_one_follows_only_its_first_pe
     assert early.nrmse_normal_force < 0.1 < whole.nrmse_normal_force < 0.3
     assert whole.pearson_normal_force > 0.7
     assert abs(whole.thrust_difference) < 0.1
+
+
+FROM_START = CAMPAIGNS / "hardest_medium_from_start"
+
+
+def test_the_medium_run_of_f05_rerun_as_one_set_up_ran_max_co_2_throughout():
+    """`campaign run --retries-from-start` of f = 0.5 Hz on the medium mesh: its time step
+    collapsed where the campaign's run's did (t = 1.69299 s, freestream: one deterministic
+    run up to there), again at t = 1.788 s with the inletOutlet far field from t = 0 s
+    (where the resumed run went on to 5.25 s), and from t = 0 s at max Co 2 it ran
+    through, inside the force bound, for 4055 s of CPU against 2370 s."""
+    mixed, rerun = (read_record(d / "f0p500_h0p500_phi135p0.h5") for d in (MEDIUM, FROM_START))
+    assert [p.stem for p in record_paths(FROM_START)] == ["f0p500_h0p500_phi135p0"]
+    assert read_toml(FROM_START / "campaign.toml")["setup"] == {
+        **read_toml(MEDIUM / "campaign.toml")["setup"],
+        "solver": {**read_toml(MEDIUM / "campaign.toml")["setup"]["solver"],
+                   "wall_treatment": "log_law"}}
+    assert rerun.parameters == mixed.parameters
+    assert as_run_since_s(mixed) == 4.5 and as_run_since_s(rerun) == 0.0
+    assert rerun.provenance["retries"] == (
+        "time step collapsed at t = 1.6929851 s; resumed from t = 0 s with the inletOutlet "
+        "far field; time step collapsed at t = 1.7883628 s; resumed from t = 0 s with maxCo 2")
+    assert mixed.provenance["retries"].startswith("time step collapsed at t = 1.69299 s;")
+    assert rerun.provenance["as_run_max_courant"] == 2.0
+    assert rerun.provenance["as_run_far_field"] == "inletOutlet"
+    assert rerun.time[-1] == pytest.approx(6.0, abs=1e-3)
+    assert rerun.provenance["cpu_time_s"] > 1.5 * mixed.provenance["cpu_time_s"]
+    (status,) = campaign_status(FROM_START)
+    assert (status.state, status.message, status.mixed_since_s) == ("done", "", None)
+
+
+def test_at_f05_the_medium_mesh_is_not_converged_in_time_step_the_coarse_one_holds_means():
+    """The campaign's medium run (max Co 4 to t = 4.5 s) is 13.5 % NRMSE (F_n) from the one
+    at max Co 2 throughout, 11.5 % already in the half second after the ramp, before any
+    retry: at this motion the medium mesh is not converged in time step. Its mean thrust
+    is 4 % lower. The coarse mesh at max Co 1 (inletOutlet from t = 0 s, as the rerun) is
+    11.2 % from the rerun, with mean thrust and power within 1 % (3.4 and 5.9 % from the
+    mixed run)."""
+    name = "f0p500_h0p500_phi135p0.h5"
+    mixed, rerun, coarse = (read_record(d / name) for d in (MEDIUM, FROM_START, CO1))
+    whole = compare_records(mixed, rerun)
+    assert 0.12 < whole.nrmse_normal_force < 0.15 and 0.13 < whole.nrmse_moment < 0.16
+    assert -0.05 < whole.thrust_difference < -0.03
+    first = compare_records(mixed, rerun, end_s=1.0)
+    assert 0.10 < first.nrmse_normal_force < 0.13
+    against_rerun, against_mixed = compare_records(coarse, rerun), compare_records(coarse, mixed)
+    assert 0.10 < against_rerun.nrmse_normal_force < against_mixed.nrmse_normal_force < 0.13
+    assert abs(against_rerun.thrust_difference) < 0.01
+    assert abs(against_rerun.power_difference) < 0.01
+    assert abs(against_mixed.thrust_difference) > 0.03
+    assert abs(against_mixed.power_difference) > 0.05
