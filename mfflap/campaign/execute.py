@@ -349,7 +349,8 @@ def campaign_status(out_dir: str | Path,
             bursts = find_load_bursts(rec.loads)
             said = [f"{len(bursts)} numerical burst(s), bridged when identified; first "
                     f"{bursts[0].describe()}"] if bursts else []
-            said += [m for m in (describe_mixed(rec, discard_time_s),) if m]
+            if mixed := describe_mixed(rec, discard_time_s):
+                said.append(mixed)
             statuses.append(CaseStatus(case_id, "done", "; ".join(said),
                                        mixed_since_s=mixed_since_s(rec, discard_time_s)))
         elif (holder := lock_holder(out / "cases" / case_id)) is not None:
@@ -405,8 +406,8 @@ def _retries(case_dir: Path) -> list[str]:
 
 def retries_in_flight(out_dir: str | Path, case_ids: Sequence[str]) -> str:
     """What the progress bar says of the runs in flight that were retried: ``<case>: retry
-    <n>, <how it goes on>`` for the last one retried (a rerun from t = 0 s takes its share
-    simulated back to nothing, so the bar steps back), '' if none was."""
+    <n>, <how it goes on>`` for the last of ``case_ids`` that was (a rerun from t = 0 s
+    takes its share simulated back to nothing, so the bar steps back), '' if none was."""
     from mfflap.campaign.openfoam_run import FROM_ZERO
 
     said = ""
