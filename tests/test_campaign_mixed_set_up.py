@@ -3,6 +3,7 @@ other settings after the identification's start-up): `campaign status` names the
 `campaign run --rerun-mixed` keeps each aside and reruns its case from t = 0 s as one
 set-up (real dask LocalCluster, real OpenFOAM)."""
 
+import json
 import shutil
 from dataclasses import replace
 from pathlib import Path
@@ -166,3 +167,21 @@ def test_a_record_kept_aside_twice_keeps_both(tmp_path):
     assert [p.read_bytes() for p in kept] == [b"run 0", b"run 1", b"run 2"]
     assert record_paths(tmp_path) == []
 
+
+
+def test_identify_names_the_cases_it_fitted_across_two_set_ups(tmp_path):
+    """`mfflap identify` on the max Co 2 campaign says on the terminal, and in its JSON,
+    which case it fitted across two set-ups and how to rerun it; on the shipped fixtures
+    (none retried part-way) it names none."""
+    case = str(ROOT / "cases" / "paper2026.toml")
+    args = ["identify", case, "--strategy", "uniform", "--bootstrap", "0",
+            "--output", str(tmp_path / "identification.h5")]
+    res = CliRunner().invoke(cli, [*args, "--fixtures", str(CO2)])
+    assert res.exit_code == 0, res.output
+    assert (f"1 case(s) fitted across two set-ups (a retry resumed the run with other settings "
+            f"within its fitted window): {MIXED_CO2}; `mfflap campaign run --rerun-mixed` "
+            "reruns them as one set-up") in res.output
+    as_json = CliRunner().invoke(cli, [*args, "--fixtures", str(CO2), "--json"])
+    assert json.loads(as_json.stdout)["uniform"]["mixed_set_up"] == [MIXED_CO2]
+    shipped = CliRunner().invoke(cli, [*args, "--json"])
+    assert json.loads(shipped.stdout)["uniform"]["mixed_set_up"] == []

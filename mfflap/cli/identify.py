@@ -77,6 +77,7 @@ def identify(case_file: Path, folders: tuple[Path, ...], left_out: tuple[str, ..
     from mfflap.campaign.records import fixture_dir
     from mfflap.config import load_case
     from mfflap.errors import MfflapError
+    from mfflap.identification.data import SET_UP_NOTE
     from mfflap.identification.error_growth import scaling_advice
     from mfflap.identification.fit import HELD_AT_ZERO, most_influential, scalings_said
     from mfflap.identification.workflow import (
@@ -102,6 +103,8 @@ def identify(case_file: Path, folders: tuple[Path, ...], left_out: tuple[str, ..
                                   components, n_bootstrap, residual_scaling)
     save_identification(output, case, results, source_text(folders))
     influence = {label: most_influential(r) for label, r in results.items()}
+    # fitted across two set-ups: a retry resumed the run with other settings in its window
+    mixed = [c.name for c in cases if any(n.startswith(SET_UP_NOTE) for n in c.notes)]
     summary = {
         label: {"coefficients": r.coefficients, "standard_error": r.standard_error,
                 "median_nrmse_normal_force": float(
@@ -115,7 +118,8 @@ def identify(case_file: Path, folders: tuple[Path, ...], left_out: tuple[str, ..
                     i.term: {"case": i.case, "value_without": i.value_without,
                              "relative_change": i.relative_change,
                              "change_in_standard_errors": i.in_standard_errors}
-                    for i in influence[label]}}
+                    for i in influence[label]},
+                "mixed_set_up": mixed}
         for label, r in results.items()
     }
     if as_json:
@@ -135,6 +139,10 @@ def identify(case_file: Path, folders: tuple[Path, ...], left_out: tuple[str, ..
                        + "; ".join(map(str, influence[label])))
     if any(r.at_lower_bound for r in results.values()):
         click.echo(f"held at 0: {HELD_AT_ZERO}")
+    if mixed:
+        click.echo(f"{len(mixed)} case(s) fitted across two set-ups (a retry resumed the run "
+                   f"with other settings within its fitted window): {', '.join(mixed)}; "
+                   "`mfflap campaign run --rerun-mixed` reruns them as one set-up")
     click.echo(f"{scaling_advice(first.error_growth, first.residual_scaling)} "
                f"({first.strategy} weighting)")
     click.echo(f"wrote {output}")
