@@ -200,6 +200,7 @@ def test_the_progress_bar_says_which_run_in_flight_was_retried_and_how(tmp_path)
         "b: retry 1, resumed from t = 0 s with the inletOutlet far field")
     assert retries_in_flight(tmp_path, ["b", "c"]) == "c: retry 2, rerun from t = 0 s with max Co 2"
 
+
 @pytest.mark.openfoam
 def test_a_finished_run_that_lost_its_numerics_is_lost_and_rerun_on_request(tmp_path):
     """A real record whose F_n after the ramp is made 10,000 times larger (what a run that
