@@ -466,7 +466,7 @@ def test_a_live_back_test_on_two_processes_runs_the_serial_runs_flow(tmp_path,
     forces follow the shipped serial run of the same motion and set-up (backtest/) within
     1 % NRMSE over that time: the decomposition changes round-off, not the flow, before
     the wake's chaos parts the two runs (README, 'How long a back-test runs')."""
-    from mfflap.cfd.openfoam.runner import processor_folders
+    from mfflap.cfd.openfoam.time_folders import processor_folders
     from mfflap.metrics import nrmse
 
     work, saved = tmp_path / "work", tmp_path / "saved"

@@ -959,7 +959,8 @@ def test_a_solver_dies_with_the_process_that_runs_it(tmp_path, n_procs):
     a dask nanny kills a worker), takes its pimpleFoam with it, serial or mpirun and its
     ranks: no orphan goes on writing into the case that a rerun resumes. The solver first
     writes the time step it reached (every rank), so the rerun loses nothing."""
-    from mfflap.cfd.openfoam.runner import latest_solution_time, solver_progress
+    from mfflap.cfd.openfoam.runner import solver_progress
+    from mfflap.cfd.openfoam.time_folders import latest_solution_time
 
     case_dir = tmp_path / "c"
     script = ("import sys\n"
@@ -1006,7 +1007,8 @@ def test_a_decomposed_run_stopped_for_its_timeout_leaves_no_rank_running(tmp_pat
     _solvers_left(case_dir, wait_s=0.0)
     assert not running
     # both ranks wrote the time step they had reached, where a rerun resumes: nothing lost
-    from mfflap.cfd.openfoam.runner import latest_solution_time, solver_progress
+    from mfflap.cfd.openfoam.runner import solver_progress
+    from mfflap.cfd.openfoam.time_folders import latest_solution_time
 
     written = latest_solution_time(case_dir)
     reached, time_step = solver_progress(case_dir)
@@ -1191,7 +1193,7 @@ def test_an_interrupted_campaign_stops_its_solvers_and_says_how_to_resume(tmp_pa
     assert solvers_left(f"pimpleFoam -case {case_dirs}") == ""
     assert [s.state for s in campaign_status(out)] == ["started"]
     # the solver in flight wrote the step it had reached: the rerun loses nothing
-    from mfflap.cfd.openfoam.runner import latest_solution_time
+    from mfflap.cfd.openfoam.time_folders import latest_solution_time
 
     (case_dir,) = [d for d in case_dirs.iterdir() if d.is_dir()]
     reached, time_step = solver_progress(case_dir)
@@ -1305,7 +1307,8 @@ def test_an_interrupted_campaign_on_an_external_cluster_has_its_solvers_write(tm
     it frees (it would run to its end unattended)."""
     from mfflap.campaign.execute import campaign_status
     from mfflap.cfd.openfoam.case_lock import lock_holder
-    from mfflap.cfd.openfoam.runner import latest_solution_time, solver_progress
+    from mfflap.cfd.openfoam.runner import solver_progress
+    from mfflap.cfd.openfoam.time_folders import latest_solution_time
 
     case_file = Path(__file__).parents[1] / "cases" / "paper2026.toml"
     out = tmp_path / "camp"

@@ -340,7 +340,7 @@ def test_a_run_does_not_switch_layout_part_way(tmp_path):
     run serial to t > 0 is not decomposed (the parallel run began again at t = 0), and one
     run on 2 processes is not continued serial (the solver stopped on a missing field) or
     on 3; each is refused naming how to continue, before anything runs."""
-    from mfflap.cfd.openfoam.runner import latest_solution_time
+    from mfflap.cfd.openfoam.time_folders import latest_solution_time
 
     serial = write_case(tmp_path / "serial", MOTION, end_time=1.0)
     _written_time(serial, serial / "0", "0.25")
@@ -1268,7 +1268,7 @@ def test_restart_skips_time_folders_that_hold_only_the_y_plus_field(tmp_path):
     from the last folder with every field, not from the y+ folder (where pimpleFoam stopped
     at once: cannot find p); forces and y+ of the restart replace the killed run's from the
     restart time on."""
-    from mfflap.cfd.openfoam.runner import latest_solution_time
+    from mfflap.cfd.openfoam.time_folders import latest_solution_time
     from mfflap.cfd.openfoam.writer import MeshSpec, SolverSettings
     from mfflap.cfd.openfoam.yplus import read_y_plus
 
@@ -1333,7 +1333,7 @@ def test_a_restart_from_a_folder_named_past_the_time_precision_starts_there(tmp_
 
 
 def test_the_start_time_carries_the_time_precision_that_names_it(tmp_path):
-    from mfflap.cfd.openfoam.runner import set_start_time, significant_digits
+    from mfflap.cfd.openfoam.control_dict import set_start_time, significant_digits
 
     assert [significant_digits(n) for n in ("2.20850674", "0.015", "1e-05", "10", "0",
                                             "0.0001230", "3.5E+2")] == [9, 2, 1, 2, 1, 4, 2]
@@ -1362,8 +1362,8 @@ def test_a_run_killed_while_writing_resumes_from_the_last_folder_written_whole(t
     """A run killed while it wrote its last time folder (here: its pressure field and mesh
     points cut short) resumes from the folder before, where pimpleFoam would stop at once on
     the field it cannot read; the merged forces match an uninterrupted run."""
-    from mfflap.cfd.openfoam.runner import latest_solution_time
     from mfflap.cfd.openfoam.solver_log import solver_provenance
+    from mfflap.cfd.openfoam.time_folders import latest_solution_time
     from mfflap.cfd.openfoam.writer import MeshSpec, SolverSettings
 
     spec = MeshSpec("tiny", n_chord=20, n_edge=4, n_radial=20, radial_expansion=100.0,
@@ -1392,7 +1392,8 @@ def test_latest_solution_time_needs_every_initial_field_written_whole(tmp_path):
     divider (compressed or not; 0/ is mfflap's and has none), in every processor folder."""
     import gzip
 
-    from mfflap.cfd.openfoam.runner import latest_solution_time, set_start_time
+    from mfflap.cfd.openfoam.control_dict import set_start_time
+    from mfflap.cfd.openfoam.time_folders import latest_solution_time
 
     whole = b"FoamFile {}\n(1 2 3)\n\n// " + b"*" * 73 + b" //\n"
     assert latest_solution_time(tmp_path) is None
@@ -1493,7 +1494,7 @@ def test_a_run_resumed_between_writes_still_writes_at_its_end(tmp_path):
     grid, the interval shrinks to the largest one that divides the time left (so the run
     writes at its end); from the case's own grid (even one that misses the end), or writing
     by time step, nothing changes; the function objects' own intervals are never touched."""
-    from mfflap.cfd.openfoam.runner import align_writes_to_end
+    from mfflap.cfd.openfoam.control_dict import align_writes_to_end
     from mfflap.cfd.openfoam.writer import SolverSettings
 
     write_case(tmp_path, MOTION, 1.0, solver=SolverSettings(write_interval=0.25))

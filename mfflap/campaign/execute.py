@@ -424,7 +424,7 @@ def retries_in_flight(out_dir: str | Path, case_ids: Sequence[str]) -> str:
 def _started(case_dir: Path) -> tuple[str, float] | None:
     """How far a case's OpenFOAM run got (a message and the simulated share), or None if its
     solver has not begun."""
-    from mfflap.cfd.openfoam.runner import latest_solution_time
+    from mfflap.cfd.openfoam.time_folders import latest_solution_time
 
     reached = _simulated(case_dir)
     if reached is None:

@@ -23,13 +23,9 @@ from mfflap.cfd.openfoam.case_path import check_case_path, empty_case_folder
 from mfflap.cfd.openfoam.forces import read_forces
 from mfflap.cfd.openfoam.loads import imposed_state, to_loads
 from mfflap.cfd.openfoam.rewind import rewind_case
-from mfflap.cfd.openfoam.runner import (
-    RunStopped,
-    is_time_folder,
-    latest_solution_time,
-    run_case,
-)
+from mfflap.cfd.openfoam.runner import RunStopped, run_case
 from mfflap.cfd.openfoam.solver_log import solver_provenance
+from mfflap.cfd.openfoam.time_folders import is_time_folder, latest_solution_time
 from mfflap.cfd.openfoam.writer import (
     TURBULENCE_CONVECTION_SCHEMES,
     AnyMeshSpec,

@@ -7,7 +7,7 @@ from __future__ import annotations
 import shutil
 from pathlib import Path
 
-from mfflap.cfd.openfoam.runner import is_time_folder, latest_solution_time
+from mfflap.cfd.openfoam.time_folders import is_time_folder, latest_solution_time
 from mfflap.errors import CfdRunError
 
 

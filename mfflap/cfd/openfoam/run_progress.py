@@ -8,7 +8,8 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
-from mfflap.cfd.openfoam.runner import end_time, solver_progress
+from mfflap.cfd.openfoam.control_dict import end_time
+from mfflap.cfd.openfoam.runner import solver_progress
 
 __all__ = ["RunProgress", "describe_progress", "end_time"]
 

@@ -3,7 +3,6 @@ detection. Logs are kept in the case folder (log.<application>)."""
 
 from __future__ import annotations
 
-import gzip
 import math
 import os
 import re
@@ -12,15 +11,20 @@ import signal
 import subprocess
 import threading
 import time
-import zlib
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
 from mfflap.cfd.openfoam.case_lock import case_lock, held_descriptor
 from mfflap.cfd.openfoam.case_path import check_case_path
+from mfflap.cfd.openfoam.control_dict import align_writes_to_end, end_time, set_start_time
 from mfflap.cfd.openfoam.release import require_supported_release
-from mfflap.cfd.openfoam.solver_log import DIVERGED, failure_reason
+from mfflap.cfd.openfoam.solver_log import DIVERGED, failure_reason, read_tail
+from mfflap.cfd.openfoam.time_folders import (
+    is_time_folder,
+    latest_solution_time,
+    processor_folders,
+)
 from mfflap.cfd.openfoam.time_step_watch import TimeStepWatch
 from mfflap.errors import CfdRunError, ConfigError
 
@@ -167,16 +171,6 @@ def _tail(path: Path, n: int = 20) -> str:
 
 _DELTA_T = re.compile(r"^deltaT = ([0-9.eE+-]+)\s*$", re.M)
 _TIME = re.compile(r"^Time = ([0-9.eE+-]+)\s*$", re.M)
-
-
-def read_tail(path: Path, n_bytes: int = 20_000, start: int = 0) -> str:
-    """The last ``n_bytes`` of a file (a solver log), none of them before byte ``start``:
-    what a watcher reads of a log that may be tens of MB."""
-    with open(path, "rb") as fh:
-        fh.seek(0, os.SEEK_END)
-        size = fh.tell()
-        fh.seek(max(size - n_bytes, start, 0))
-        return fh.read().decode(errors="replace")
 
 
 def solver_progress(case_dir: str | Path, log_name: str = "log.pimpleFoam"
@@ -412,184 +406,6 @@ def mesh_checked(case_dir: str | Path) -> bool:
     return last is not None and "Mesh OK" in last
 
 
-def is_time_folder(name: str) -> bool:
-    """True if ``name`` is a number, as OpenFOAM names its time folders."""
-    try:
-        float(name)
-    except ValueError:
-        return False
-    return True
-
-
-#: the line OpenFOAM ends every file it writes with, ASCII or binary
-_END_DIVIDER = re.compile(r"// \*{20,} //\s*$")
-
-
-def written_whole(path: Path) -> bool:
-    """True if an OpenFOAM output file ends with its end divider, as every file it writes
-    does (ASCII or binary, compressed or not); a write cut short by a kill does not."""
-    if path.name.endswith(".gz"):
-        try:
-            tail = gzip.decompress(path.read_bytes())[-200:].decode(errors="replace")
-        except (OSError, EOFError, zlib.error):
-            return False
-    else:
-        tail = read_tail(path, 200)
-    return _END_DIVIDER.search(tail) is not None
-
-
-def processor_folders(case_dir: str | Path) -> list[Path]:
-    """The ``processor<N>`` folders of a decomposed case, in rank order (none if serial)."""
-    folders = [p for p in Path(case_dir).glob("processor*") if p.is_dir()
-               and p.name.removeprefix("processor").isdigit()]
-    return sorted(folders, key=lambda p: int(p.name.removeprefix("processor")))
-
-
-def latest_solution_time(case_dir: str | Path, layout: str = "latest") -> str | None:
-    """Name of the latest time folder written whole that holds every field of ``0/``.
-
-    A time folder can hold less: the yPlus function object writes its field into a folder of
-    its own every few steps, and a run killed while writing leaves a partial one, or one
-    whose last file is cut short (every file OpenFOAM writes ends with its end divider).
-    OpenFOAM's ``startFrom latestTime`` would restart from such a folder and stop at once
-    for want of p, or on a field it cannot read. A decomposed case needs the folder whole
-    in every ``processor*`` folder. None if no folder qualifies (``0/`` missing or empty).
-
-    Parameters
-    ----------
-    layout
-        ``"serial"``: the case folder's own times; ``"decomposed"``: the times every
-        ``processor*`` folder holds; ``"latest"``: the later of the two, where
-        :func:`run_case` resumes (in the layout that holds it: :func:`_check_layout`).
-    """
-    case = Path(case_dir)
-    if layout == "latest":
-        times = [t for t in (latest_solution_time(case, "serial"),
-                             latest_solution_time(case, "decomposed")) if t is not None]
-        return max(times, key=float) if times else None
-    if layout not in ("serial", "decomposed"):
-        raise ValueError(f"layout must be 'serial', 'decomposed' or 'latest', got {layout!r}")
-    roots = processor_folders(case) if layout == "decomposed" else [case]
-    if not roots:
-        return None
-
-    def fields(folder: Path) -> set[str]:
-        return {p.name.removesuffix(".gz") for p in folder.iterdir() if p.is_file()}
-
-    initial = roots[0] / "0"
-    needed = fields(initial) if initial.is_dir() else set()
-    if not needed:
-        return None
-
-    def whole(root: Path, name: str) -> bool:
-        folder = root / name
-        if not folder.is_dir() or not needed <= fields(folder):
-            return False
-        return name == "0" or all(written_whole(f) for f in folder.rglob("*") if f.is_file())
-
-    names = sorted((p.name for p in roots[0].iterdir() if p.is_dir() and is_time_folder(p.name)),
-                   key=float, reverse=True)
-    return next((name for name in names if all(whole(root, name) for root in roots)), None)
-
-
-def set_start_time(case_dir: str | Path, time_name: str) -> None:
-    """Make pimpleFoam start from the time folder ``time_name`` (``startFrom startTime``).
-
-    OpenFOAM names the start time with the case's ``timePrecision`` significant digits. A
-    folder written where the time steps had collapsed can carry more (OpenFOAM raises the
-    precision while it runs to tell two times apart, and does not write that down), and at
-    the case's precision the name may be that of another folder, one the yPlus function
-    object wrote a step earlier: the run then starts from that folder and stops for want of
-    p. So ``timePrecision`` is raised to the digits of ``time_name`` (never lowered).
-
-    Raises
-    ------
-    CfdRunError
-        If system/controlDict has no ``startFrom`` or ``startTime`` entry.
-    """
-    path = Path(case_dir) / "system" / "controlDict"
-    text = path.read_text()
-    new, n_from = re.subn(r"^startFrom\s+[^;]*;", "startFrom       startTime;", text, flags=re.M)
-    new, n_time = re.subn(r"^startTime\s+[^;]*;", f"startTime       {time_name};", new,
-                          flags=re.M)
-    if not (n_from and n_time):
-        raise CfdRunError(f"{path} has no startFrom or startTime entry at the start of a line",
-                          case=str(case_dir))
-    digits = significant_digits(time_name)
-    found = _TIME_PRECISION.search(new)
-    if found is None and digits > OPENFOAM_TIME_PRECISION:  # OpenFOAM's default
-        new = re.sub(r"^(startTime\s+[^;]*;)", rf"\1\ntimePrecision   {digits};", new,
-                     flags=re.M)
-    elif found is not None and int(found.group(1)) < digits:
-        new = _TIME_PRECISION.sub(f"timePrecision   {digits};", new)
-    if new != text:
-        path.write_text(new)
-
-
-_TIME_PRECISION = re.compile(r"^timePrecision\s+(\d+)\s*;", re.M)
-
-#: OpenFOAM's timePrecision where controlDict gives none
-OPENFOAM_TIME_PRECISION = 6
-
-
-def significant_digits(time_name: str) -> int:
-    """The significant digits of a time folder's name (``2.20850674``: 9; ``0.015``: 2;
-    ``1e-05``: 1), the ``timePrecision`` that names it."""
-    mantissa = re.split(r"[eE]", time_name.strip().lstrip("+-"))[0]
-    return max(len(mantissa.replace(".", "").lstrip("0")), 1)
-
-
-_END_TIME = re.compile(r"^endTime\s+([^;\s]+)\s*;", re.M)
-
-
-def end_time(case_dir: str | Path) -> float | None:
-    """The ``endTime`` of a case's system/controlDict, s; None if it has none that is a
-    number."""
-    path = Path(case_dir) / "system" / "controlDict"
-    match = _END_TIME.search(path.read_text()) if path.is_file() else None
-    try:
-        return float(match.group(1)) if match else None
-    except ValueError:
-        return None
-
-
-_WRITE_CONTROL = re.compile(r"^writeControl\s+(\w+);", re.M)
-_WRITE_INTERVAL = re.compile(r"^(writeInterval\s+)([^;\s]+)(;)", re.M)
-
-
-def align_writes_to_end(case_dir: str | Path, start_s: float) -> float | None:
-    """Make a run from ``start_s`` write at its end time; return the new write interval, s,
-    or None if it already does (or writes by time step).
-
-    OpenFOAM counts a run's write times (``adjustableRunTime``) from the time it starts and
-    runs while t < endTime - deltaT / 2. A run resumed between two writes (one stopped by
-    :data:`WRITE_AND_STOP_SIGNAL`) would write on a shifted grid, its last write before the
-    end, and stop short of it unwritten; a rerun would then recompute that stretch. The
-    interval becomes the largest one not above the case's that divides the time left. A
-    run that starts on the grid of the case's own interval (from 0, or from one of its
-    writes) keeps the interval it was given.
-    """
-    path = Path(case_dir) / "system" / "controlDict"
-    text = path.read_text()
-    control, interval = _WRITE_CONTROL.search(text), _WRITE_INTERVAL.search(text)
-    final = end_time(case_dir)
-    if (control is None or control.group(1) not in ("adjustableRunTime", "runTime")
-            or interval is None or final is None or final <= start_s):
-        return None
-    step = float(interval.group(2))
-    n_writes, n_before = (final - start_s) / step, start_s / step
-
-    def whole(count: float) -> bool:
-        return abs(count - round(count)) <= 1e-6 * max(count, 1.0)
-
-    if whole(n_writes) or whole(n_before):  # ends on the grid, or starts on the case's own
-        return None
-    aligned = (final - start_s) / math.ceil(n_writes)
-    path.write_text(_WRITE_INTERVAL.sub(lambda m: f"{m.group(1)}{aligned:.12g}{m.group(3)}",
-                                        text, count=1))
-    return aligned
-
-
 def ran_to_end(case_dir: str | Path) -> bool:
     """True if the case's last pimpleFoam run ended normally at its end time: its log's last
     time step within one step of endTime (OpenFOAM runs while t < endTime - deltaT / 2),
@@ -666,13 +482,13 @@ def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
     fails the call as it failed the run: :func:`run_application`).
 
     The latest written time is the latest folder holding every field
-    (:func:`latest_solution_time`), not merely the latest folder: controlDict is set to start
-    there. With ``n_procs`` > 1 the case is decomposed once (``method simple``: scotch and
-    metis are stubs in Debian's package) and pimpleFoam runs under mpirun; a restart
-    continues from the processor folders' latest time. The forces function object writes
-    from the master. ``progress``, if given, is told what is being done and, every
-    ``progress_every_s`` seconds while pimpleFoam runs, how far it has got
-    (:class:`mfflap.cfd.openfoam.run_progress.RunProgress`).
+    (:func:`~mfflap.cfd.openfoam.time_folders.latest_solution_time`), not merely the latest
+    folder: controlDict is set to start there. With ``n_procs`` > 1 the case is decomposed
+    once (``method simple``: scotch and metis are stubs in Debian's package) and pimpleFoam
+    runs under mpirun; a restart continues from the processor folders' latest time. The
+    forces function object writes from the master. ``progress``, if given, is told what is
+    being done and, every ``progress_every_s`` seconds while pimpleFoam runs, how far it has
+    got (:class:`mfflap.cfd.openfoam.run_progress.RunProgress`).
 
     Raises
     ------

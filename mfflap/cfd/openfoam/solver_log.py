@@ -4,6 +4,7 @@ time steps, and how often the turbulence fields had to be clipped."""
 from __future__ import annotations
 
 import math
+import os
 import re
 import signal
 from pathlib import Path
@@ -18,6 +19,16 @@ _EXEC = re.compile(rf"ExecutionTime = {_NUMBER} s\s+ClockTime = {_NUMBER} s")
 # the lines that give a step's size, its time and the CPU time after it, in log order
 _STEP_LINES = re.compile(rf"^deltaT = {_NUMBER}\s*$|^Time = {_NUMBER}\s*$|"
                          rf"ExecutionTime = {_NUMBER} s", re.M)
+
+
+def read_tail(path: Path, n_bytes: int = 20_000, start: int = 0) -> str:
+    """The last ``n_bytes`` of a file (a solver log), none of them before byte ``start``:
+    what a watcher reads of a log that may be tens of MB."""
+    with open(path, "rb") as fh:
+        fh.seek(0, os.SEEK_END)
+        size = fh.tell()
+        fh.seek(max(size - n_bytes, start, 0))
+        return fh.read().decode(errors="replace")
 
 
 def solver_provenance(case_dir: str | Path) -> dict[str, Any]:
