@@ -573,8 +573,9 @@ def test_the_main_job_kept_within_the_identification_data(tmp_path, coefficients
         else:
             bound = 0.05 if label == "best sinusoid" else 0.2
             assert all(abs(e) < bound for e in errors), (label, errors)
-    # two of these runs were resumed by a retry a quarter into their last cycle (README,
-    # "Retries and one set-up"): said in the JSON and the report for those alone
+    # two of these runs were resumed by a retry a quarter into their last cycle
+    # (docs/optimised_motions.md, "Retries and one set-up"): said in the JSON and the report for
+    # those alone
     mixed = {"fixture backtest_598a5388e592df63.h5", "fixture backtest_de1ba4adb3e991be.h5"}
     assert {label for label, b in bt.items() if b["compared_cycles_mixed_set_up"]} == {
         label for label, b in bt.items() if b["source"] in mixed}

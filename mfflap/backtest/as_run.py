@@ -6,7 +6,8 @@ half the Courant limit or upwind k and epsilon; the record keeps what it ran wit
 (``as_run_*`` provenance, else the ``solver_*`` it was written with). Two back-tests
 compared, as a trust-region step compares its centre's CFD with its trial's, measure the
 motion's change only if they ran alike: at the trust series' beta = 0.5 optimum, max Co 2
-instead of 4 moves the settled mean thrust by 7 % (README, "How long a back-test runs").
+instead of 4 moves the settled mean thrust by 7 % (docs/optimised_motions.md, "How long a back-test
+runs").
 """
 
 from __future__ import annotations

@@ -41,9 +41,9 @@ from mfflap.cli.options import mesh_and_setup_options, refuse_given, retries_fro
 @click.option("--average-cycles", type=int, default=1, show_default=True,
               help="Compare the CFD's and the model's mean thrust and power over the last "
                    "this many whole cycles, with the CFD's standard errors from its cycle "
-                   "means (one cycle's mean can lie 10 % or more from the run's: README, "
-                   "'How long a back-test runs'); curves, NRMSE and maximum power stay the "
-                   "last cycle's.")
+                   "means (one cycle's mean can lie 10 % or more from the run's: "
+                   "docs/optimised_motions.md, 'How long a back-test runs'); curves, NRMSE "
+                   "and maximum power stay the last cycle's.")
 @retries_from_start_option()
 @click.option("--procs", type=click.IntRange(min=1), default=None,
               help="With --live: MPI ranks of each run: above 1 the case is decomposed "
@@ -185,8 +185,8 @@ def _repeat(case, motions: dict, model, copies: int, work_dir: Path, save_to: Pa
     alike = [r for r in found.values() if r.alike]
     if not alike:  # a spread of runs made otherwise is no measure of CFD's noise
         click.echo("CFD's repeatability: not measured: no motion's runs ran alike (a retry "
-                   "changed the far field or the Courant limit of some; README, 'Retries and "
-                   "one set-up')")
+                   "changed the far field or the Courant limit of some; "
+                   "docs/optimised_motions.md, 'Retries and one set-up')")
         return
     worst = max(alike, key=lambda r: r.share)
     click.echo(f"CFD's repeatability: {worst.share:.2%} ({worst.label}"

@@ -224,8 +224,8 @@ def retries_from_start_option(runs: str = "With --live: a run") -> Callable:
              "motion can drive) reruns from t = 0 s with the inletOutlet far field or a "
              "lower Courant limit, instead of resuming from a written time, so that all its "
              "cycles ran one set-up (resumed, a back-test's last cycle can straddle the "
-             "change: README, 'Retries and one set-up'). It costs the flow time run before "
-             "the retry again.")
+             "change: docs/optimised_motions.md, 'Retries and one set-up'). It costs the "
+             "flow time run before the retry again.")
 
 
 def fix_phase_option() -> Callable:

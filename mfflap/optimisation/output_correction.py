@@ -36,8 +36,8 @@ taken either); otherwise it is 1 and :attr:`OutputCorrection.notes` says why.
 
 Filter. Applied round after round, the measured scales alone can make the optima oscillate:
 each optimum moves to where the ratio of CFD to model differs, the next scale overshoots
-the other way (README, "Output correction"). The usual cure in modifier adaptation is a
-first-order filter of the modifiers (Marchetti, Chachuat and Bonvin 2009),
+the other way (docs/optimised_motions.md, "Output correction"). The usual cure in modifier
+adaptation is a first-order filter of the modifiers (Marchetti, Chachuat and Bonvin 2009),
 
     kappa_k = (1 - K) kappa_(k-1) + K kappa_measured,     0 < K <= 1,
 
@@ -47,9 +47,9 @@ K = 1 takes the measured scale as it is.
 
 First-order correction (a slope of J). The scales make the corrected model exact at the
 motion they were measured on, with the model's own slope there; in the trust-region rounds
-CFD then refuses steps whose direction that slope gets wrong (README, "Trust region"). CFD
-gradients of 2N + 1 controls are out of reach (one CFD run per control), but every earlier
-back-tested motion u_i of the same beta is a secant from the centre c. As in modifier
+CFD then refuses steps whose direction that slope gets wrong (docs/optimised_motions.md, "Trust
+region"). CFD gradients of 2N + 1 controls are out of reach (one CFD run per control), but every
+earlier back-tested motion u_i of the same beta is a secant from the centre c. As in modifier
 adaptation, the first-order modifier goes on the objective: with J_CFD(u) the objective with
 the model's outputs scaled to u's own CFD means (what a trust region judges steps by,
 :func:`cfd_objective`) and J_0(u) the objective corrected by the centre's scales,
@@ -68,8 +68,8 @@ take the earlier motions within :data:`SECANT_REACH` radii of the centre
 :class:`~mfflap.optimisation.problem.LinearModifier`; the predicted means stay the scaled
 ones. Unbounded it would lead the optimiser off along a secant: it belongs in a trust region.
 
-In the shipped series (README, "First-order corrections") CFD refused every step taken
-with a slope: each optimum went to a face of the box, the slope's term made the whole
+In the shipped series (docs/optimised_motions.md, "First-order corrections") CFD refused every step
+taken with a slope: each optimum went to a face of the box, the slope's term made the whole
 predicted decrease, and the scales' part alone foretold what CFD found. A first version put
 the slopes on the mean thrust and power instead. It was inconsistent: the power penalty
 still saw the centre's scale, while CFD's objective sees each motion's own, so a round of
