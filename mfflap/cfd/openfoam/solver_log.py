@@ -22,8 +22,9 @@ _STEP_LINES = re.compile(rf"^deltaT = {_NUMBER}\s*$|^Time = {_NUMBER}\s*$|"
 
 
 def read_tail(path: Path, n_bytes: int = 20_000, start: int = 0) -> str:
-    """The last ``n_bytes`` of a file (a solver log), none of them before byte ``start``:
-    what a watcher reads of a log that may be tens of MB."""
+    """The last ``n_bytes`` of a file, none of them before byte ``start``: what a watcher
+    reads of a solver log that may be tens of MB, or what tells whether an output file was
+    written whole (:func:`mfflap.cfd.openfoam.time_folders.written_whole`)."""
     with open(path, "rb") as fh:
         fh.seek(0, os.SEEK_END)
         size = fh.tell()
