@@ -9,7 +9,8 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from mfflap.cfd.openfoam.run_progress import RunProgress, describe_progress, end_time
+from mfflap.cfd.openfoam.control_dict import end_time
+from mfflap.cfd.openfoam.run_progress import RunProgress, describe_progress
 
 DATA = Path(__file__).parent / "data" / "openfoam_v1912"
 CASE = Path(__file__).resolve().parents[1] / "cases" / "paper2026.toml"

@@ -1,13 +1,12 @@
 """Whether two CFD runs ran alike: the settings each held over its last stretch.
 
-A run whose time step collapses, or whose forces leave what the motion can drive, is
-retried by :func:`~mfflap.campaign.openfoam_run.run_motion` with the inletOutlet far field,
-half the Courant limit or upwind k and epsilon; the record keeps what it ran with last
-(``as_run_*`` provenance, else the ``solver_*`` it was written with). Two back-tests
-compared, as a trust-region step compares its centre's CFD with its trial's, measure the
-motion's change only if they ran alike: at the trust series' beta = 0.5 optimum, max Co 2
-instead of 4 moves the settled mean thrust by 7 % (docs/optimised_motions.md, "How long a back-test
-runs").
+A run whose time step collapses, or whose forces leave what the motion can drive, is retried
+by :func:`~mfflap.campaign.openfoam_run.run_motion` with the inletOutlet far field, half the
+Courant limit or upwind k and epsilon; the record keeps what it ran with last (``as_run_*``
+provenance, else the ``solver_*`` it was written with). Two back-tests compared, as a
+trust-region step compares its centre's CFD with its trial's, measure the motion's change
+only if they ran alike: at the trust series' beta = 0.5 optimum, max Co 2 instead of 4 moves
+the settled mean thrust by 7 % (docs/optimised_motions.md, "How long a back-test runs").
 """
 
 from __future__ import annotations

@@ -3,15 +3,16 @@
 A back-test compares the model with CFD's mean thrust and power over the last simulated
 cycle. Past its start-up, a flapping plate meets the vortices it shed before, and at large
 heave amplitudes that meeting is not the same from one cycle to the next: a ten-cycle coarse
-mesh run of the trust series' beta = 0 optimum (docs/optimised_motions.md, "How long a back-test
-runs") has cycle means of 24.7-32.6 N after its third cycle, a scatter of 9 % of their mean, where
-two copies of its three-cycle run agree within 0.7 % (:mod:`mfflap.backtest.repeat`: the copies
-part only after their third cycle). One cycle's mean is then one draw of that scatter, and
-the mean over several cycles is what the motion makes: two ten-period copies' eight-cycle
-means agree within 0.05 %. The standard error assumes independent cycles, and it covers
-only the run's own settings: a run whose time step collapsed and was retried at half the
-Courant limit (:func:`~mfflap.campaign.openfoam_run.run_motion`; the record's ``retries``)
-settles elsewhere (7 % at the beta = 0.5 optimum).
+mesh run of the trust series' beta = 0 optimum (docs/optimised_motions.md, "How long a
+back-test runs") has cycle means of 24.7-32.6 N after its third cycle, a scatter of 9 % of
+their mean, where two copies of its three-cycle run agree within 0.7 %
+(:mod:`mfflap.backtest.repeat`: the copies part only after their third cycle). One cycle's
+mean is then one draw of that scatter, and the mean over several cycles is what the motion
+makes: two ten-period copies' eight-cycle means agree within 0.05 %. The standard error
+assumes independent cycles, and it covers only the run's own settings: a run whose time step
+collapsed and was retried at half the Courant limit
+(:func:`~mfflap.campaign.openfoam_run.run_motion`; the record's ``retries``) settles
+elsewhere (7 % at the beta = 0.5 optimum).
 
 :func:`cycle_means` takes each whole cycle of a record, counted back from its end as
 :func:`~mfflap.backtest.compare.compare_last_cycle` counts its last cycle, after the start-up

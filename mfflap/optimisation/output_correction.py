@@ -68,13 +68,13 @@ take the earlier motions within :data:`SECANT_REACH` radii of the centre
 :class:`~mfflap.optimisation.problem.LinearModifier`; the predicted means stay the scaled
 ones. Unbounded it would lead the optimiser off along a secant: it belongs in a trust region.
 
-In the shipped series (docs/optimised_motions.md, "First-order corrections") CFD refused every step
-taken with a slope: each optimum went to a face of the box, the slope's term made the whole
-predicted decrease, and the scales' part alone foretold what CFD found. A first version put
-the slopes on the mean thrust and power instead. It was inconsistent: the power penalty
-still saw the centre's scale, while CFD's objective sees each motion's own, so a round of
-its series chose a step whose CFD power peaks, scaled so, raised J by 35 where 0.6 of
-decrease was predicted.
+In the shipped series (docs/optimised_motions.md, "First-order corrections") CFD refused
+every step taken with a slope: each optimum went to a face of the box, the slope's term made
+the whole predicted decrease, and the scales' part alone foretold what CFD found. A first
+version put the slopes on the mean thrust and power instead. It was inconsistent: the power
+penalty still saw the centre's scale, while CFD's objective sees each motion's own, so a
+round of its series chose a step whose CFD power peaks, scaled so, raised J by 35 where 0.6
+of decrease was predicted.
 """
 
 from __future__ import annotations

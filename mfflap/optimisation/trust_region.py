@@ -1,11 +1,12 @@
 """Trust region of the rounds: each optimum kept near the last motion CFD confirmed.
 
 The output correction is measured at one motion (a zeroth-order modifier,
-:mod:`mfflap.optimisation.output_correction`): the corrected model is exact there and its error
-grows with the distance from it. Unbounded, each round's optimum moves to where the ratio of
-CFD to model differs and the rounds do not converge (docs/optimised_motions.md, "Filtered output
-correction"). A trust region bounds the step instead (trust-region modifier adaptation; Conn, Gould
-and Toint 2000 for the radius update, del Rio Chanona et al. 2021 for its use with modifiers).
+:mod:`mfflap.optimisation.output_correction`): the corrected model is exact there and its
+error grows with the distance from it. Unbounded, each round's optimum moves to where the
+ratio of CFD to model differs and the rounds do not converge (docs/optimised_motions.md,
+"Filtered output correction"). A trust region bounds the step instead (trust-region modifier
+adaptation; Conn, Gould and Toint 2000 for the radius update, del Rio Chanona et al. 2021
+for its use with modifiers).
 
 The region is a box about the centre motion c in the optimiser's own scaled variables:
 

@@ -11,8 +11,6 @@ from pathlib import Path
 from mfflap.cfd.openfoam.control_dict import end_time
 from mfflap.cfd.openfoam.runner import solver_progress
 
-__all__ = ["RunProgress", "describe_progress", "end_time"]
-
 
 def _duration(seconds: float) -> str:
     seconds = round(seconds)
