@@ -220,8 +220,14 @@ class IdentificationGrid:
     pitch_ramp_rate_deg: float = bounded(10.0, low=0.0, high=1000.0, unit="deg/s",
                                          doc="theta_kamp")
     n_cycles: float = bounded(3.0, low=0.5, high=1000.0, unit="1", doc="cycles simulated")
-    max_duration: float = bounded(6.0, low=0.1, high=1.0e5, unit="s",
-                                  doc="cap on simulated time per case (keeps theta_kamp t bounded)")
+    max_duration: float = bounded(30.0, low=0.1, high=1.0e5, unit="s",
+                                  doc="cap on simulated time per case (n_cycles periods at "
+                                      "0.1 Hz by default)")
+    max_ramp_pitch_deg: float = bounded(
+        60.0, low=0.0, low_open=True, high=89.0, unit="deg",
+        doc="largest pitch amplitude theta_kamp t reaches at the end of a case: a case that "
+            "runs longer than max_ramp_pitch_deg / theta_kamp ramps at that rate instead, so "
+            "that every frequency runs its n_cycles periods over the same range of pitch")
     discard_time: float = bounded(0.75, low=0.0, high=1.0e5, unit="s",
                                   doc="start-up transient left out of the fit")
     frequency_weights: tuple[float, ...] | None = bounded(None, low=0.0, unit="1",
@@ -235,7 +241,6 @@ class IdentificationGrid:
     def __post_init__(self) -> None:
         check_fields(self, prefix="identification.")
         self._check_case_ids()
-        self._check_ramp_upright()
         short = [f for f in self.frequencies if self.case_duration(f) <= self.case_ramp_time(f)]
         if short:
             f = short[0]
@@ -258,6 +263,20 @@ class IdentificationGrid:
         at max_duration."""
         return min(self.n_cycles / frequency, self.max_duration)
 
+    def case_pitch_ramp_rate_deg(self, frequency: float) -> float:
+        """theta_kamp of the grid's case at ``frequency``, deg/s: ``pitch_ramp_rate_deg``,
+        or the slower rate at which the ramp reaches ``max_ramp_pitch_deg`` at the end of
+        the case.
+
+        Examples
+        --------
+        >>> grid = IdentificationGrid()
+        >>> grid.case_pitch_ramp_rate_deg(1.0), grid.case_pitch_ramp_rate_deg(0.1)
+        (10.0, 2.0)
+        """
+        return min(self.pitch_ramp_rate_deg,
+                   self.max_ramp_pitch_deg / self.case_duration(frequency))
+
     @staticmethod
     def case_ramp_time(frequency: float) -> float:
         """C^2 start-up ramp of the grid's case at ``frequency``, s: a quarter period, at
@@ -279,27 +298,6 @@ class IdentificationGrid:
                         f"campaign case's id keeps them ({text}): their cases would share an "
                         "id and a record; give values that differ there",
                         key=f"identification.{key}[{j}]")
-
-    def _check_ramp_upright(self) -> None:
-        """Refuse a ramp that pitches some case's plate to 90 deg or past it (across the
-        stream and beyond), naming the cases and the rate that keeps them under it."""
-        rate = math.radians(self.pitch_ramp_rate_deg)
-        if rate == 0.0:
-            return
-        peaks = [(abs(RampHarmonicMotion(f, 0.0, rate).largest_pitch(self.case_duration(f))[0]),
-                  f) for f in self.frequencies]
-        peak, frequency = max(peaks)
-        if peak >= UPRIGHT_PITCH:
-            duration = self.case_duration(frequency)
-            allowed = _rate_under_upright(self.pitch_ramp_rate_deg, peak)
-            raise ConfigError(
-                f"value {self.pitch_ramp_rate_deg} deg/s turns the plate past "
-                f"{math.degrees(UPRIGHT_PITCH):g} deg: theta_kamp t sin(2 pi f t) reaches "
-                f"{math.degrees(peak):.4g} deg in the f = {frequency:g} Hz cases, which run "
-                f"{duration:g} s (n_cycles / f capped at max_duration); below {allowed:g} "
-                "deg/s, or a shorter n_cycles or max_duration, keeps every case under it",
-                key="identification.pitch_ramp_rate_deg",
-            )
 
 
 @dataclass(frozen=True)

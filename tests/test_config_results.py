@@ -1,4 +1,3 @@
-import re
 from pathlib import Path
 
 import numpy as np
@@ -95,9 +94,9 @@ def test_case_toml_round_trip():
         ("[model]\ndrag_area_normal = 'x'\n", "model.drag_area_normal", "not a number"),
         ("[model]\nadded_mass_volume_tangential = -1.0\n",
          "model.added_mass_volume_tangential", "[0, inf) m^3"),
-        # a pitch ramp that turns some case's plate across the stream
-        ("[identification]\npitch_ramp_rate_deg = 16\n", "identification.pitch_ramp_rate_deg",
-         "f = 0.2 Hz cases, which run 6 s"),
+        # a ramp whose end would stand the plate across the stream
+        ("[identification]\nmax_ramp_pitch_deg = 90\n", "identification.max_ramp_pitch_deg",
+         "89"),
         # cases that would end inside their start-up ramp
         ("[identification]\nmax_duration = 0.4\n", "identification.max_duration",
          "leaves the f = 0.1 Hz cases no time after their 0.5 s start-up ramp"),
@@ -319,26 +318,24 @@ def test_largest_pitch_of_a_ramp_is_its_last_peak():
     assert time == pytest.approx(1.2) and pitch == pytest.approx(k * 1.2 * np.sin(2.4 * np.pi))
 
 
-def test_the_grid_ramp_limit_is_where_the_plate_stands_across_the_stream(tmp_path):
-    """The rate the error names is the largest that keeps every case under 90 deg: just
-    below it loads, at the named rate's next step up it is refused."""
+def test_every_grid_case_runs_its_cycles_and_ramps_no_further_than_the_cap(tmp_path):
+    """Each case runs n_cycles periods (up to max_duration) and its pitch ramp never exceeds
+    max_ramp_pitch_deg: the cases that would go further ramp slower, the others keep
+    theta_kamp, whatever rate the case file asks for."""
     path = tmp_path / "ramp.toml"
-    path.write_text("[identification]\npitch_ramp_rate_deg = 100\n")
-    with pytest.raises(ConfigError, match=r"below ([0-9.]+) deg/s") as info:
-        load_case(path)
-    allowed = float(re.search(r"below ([0-9.]+) deg/s", str(info.value)).group(1))
-    path.write_text(f"[identification]\npitch_ramp_rate_deg = {allowed}\n")
-    grid = load_case(path).identification
-    peak = max(abs(RampHarmonicMotion(f, 0.0, np.radians(allowed))
-                   .largest_pitch(grid.case_duration(f))[0]) for f in grid.frequencies)
-    assert np.radians(89.99) < peak < np.pi / 2
-    path.write_text(f"[identification]\npitch_ramp_rate_deg = {allowed + 0.002}\n")
-    with pytest.raises(ConfigError, match="pitch_ramp_rate_deg"):
-        load_case(path)
-    # a shorter cap on the cases' time lets the same rate through
-    path.write_text("[identification]\npitch_ramp_rate_deg = 100\nmax_duration = 0.5\n"
-                    "frequencies = [1.0, 2.0]\n")
-    assert load_case(path).identification.pitch_ramp_rate_deg == 100
+    for rate in (1.0, 10.0, 100.0):
+        path.write_text(f"[identification]\npitch_ramp_rate_deg = {rate}\n"
+                        "max_ramp_pitch_deg = 45\n")
+        grid = load_case(path).identification
+        for f in grid.frequencies:
+            duration = grid.case_duration(f)
+            assert duration == pytest.approx(min(3.0 / f, grid.max_duration))
+            k = grid.case_pitch_ramp_rate_deg(f)
+            assert k <= rate
+            assert k * duration <= 45.0 + 1e-9
+            assert k == rate or k * duration == pytest.approx(45.0)
+            peak = abs(RampHarmonicMotion(f, 0.0, np.radians(k)).largest_pitch(duration)[0])
+            assert peak <= np.radians(45.0) + 1e-12
 
 
 def test_a_ramp_motion_past_90_deg_is_refused_for_its_run(tmp_path):

@@ -135,11 +135,13 @@ class HarmonicCase:
 
 def case_for(grid: IdentificationGrid, frequency: float, heave_amplitude: float,
              phase_deg: float) -> CfdCase:
-    """The case of ``grid`` at one (f, h_amp, phi): n_cycles periods capped at max_duration."""
+    """The case of ``grid`` at one (f, h_amp, phi): n_cycles periods capped at max_duration,
+    its pitch ramp no faster than reaches ``max_ramp_pitch_deg`` at the end."""
     duration = grid.case_duration(frequency)
     ramp_time = grid.case_ramp_time(frequency)
     return CfdCase(float(frequency), float(heave_amplitude), float(phase_deg),
-                   float(grid.pitch_ramp_rate_deg), float(duration), float(ramp_time))
+                   float(grid.case_pitch_ramp_rate_deg(frequency)), float(duration),
+                   float(ramp_time))
 
 
 def _pick(values: Sequence[float], subset: Iterable[float] | None, name: str) -> list[float]:
