@@ -35,10 +35,33 @@ from mfflap.validation import bounded, check_fields, from_mapping
 
 @dataclass(frozen=True)
 class StudyInfo:
-    """Name and description of a study."""
+    """Name and description of a study.
+
+    The name becomes file and folder names (``<name>_run``), so it is one plain name: at
+    most 100 printable characters, no path separator, not beginning with a dot.
+
+    Examples
+    --------
+    >>> StudyInfo("paper2026").name
+    'paper2026'
+    >>> StudyInfo("../x")  # doctest: +IGNORE_EXCEPTION_DETAIL
+    Traceback (most recent call last):
+    mfflap.errors.ConfigError: study.name: value '../x' cannot name a file
+    """
 
     name: str = "study"
     description: str = ""
+
+    def __post_init__(self) -> None:
+        name = self.name
+        if not isinstance(name, str):
+            raise ConfigError(f"value {str(name)[:60]!r} is not text", key="study.name")
+        if (not name or len(name) > 100 or not name.isprintable() or name.startswith(".")
+                or any(sep in name for sep in ("/", "\\"))):
+            raise ConfigError(
+                f"value {name[:60]!r}{'...' if len(name) > 60 else ''} cannot name a file: "
+                "give 1-100 printable characters without / or \\, not beginning with a dot",
+                key="study.name")
 
 
 @dataclass(frozen=True)
@@ -79,7 +102,7 @@ class MotionSpec:
     """A continuous motion given in engineering units (degrees)."""
 
     kind: str = bounded("harmonic", choices=("harmonic", "ramp_harmonic"), unit="")
-    frequency: float = bounded(1.0, low=0.0, low_open=True, high=100.0, unit="Hz")
+    frequency: float = bounded(1.0, low=1.0e-3, high=100.0, unit="Hz")
     heave_amplitude: float = bounded(0.3, low=0.0, high=10.0, unit="m")
     pitch_amplitude_deg: float = bounded(20.0, low=0.0, high=90.0, high_open=True, unit="deg")
     pitch_ramp_rate_deg: float = bounded(10.0, low=0.0, high=1000.0, unit="deg/s",

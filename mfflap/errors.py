@@ -100,3 +100,25 @@ class CfdRunError(MfflapError, RuntimeError):
         if log_tail:
             text += "\n--- last log lines ---\n" + log_tail
         super().__init__(text)
+
+
+class UnreadableRecordError(MfflapError, OSError):
+    """A results or record file whose bytes cannot be read back (cut short by a copy or a
+    full disk, or a compressed chunk damaged on disk).
+
+    Parameters
+    ----------
+    message
+        What could not be read.
+    path
+        The file.
+    dataset
+        The HDF5 dataset or group whose read failed, if known.
+    """
+
+    def __init__(self, message: str, *, path: str, dataset: str | None = None):
+        self._keep(message, path=path, dataset=dataset)
+        self.path = path
+        self.dataset = dataset
+        where = f"{path}" + (f", {dataset}" if dataset else "")
+        super().__init__(f"{where}: {message}")

@@ -1,7 +1,9 @@
 """Physical parameters: fluid, plate, free stream and Morison coefficients (SI units).
 
 All are frozen dataclasses whose fields carry their unit and allowed range; constructing one
-with an impossible value raises :class:`mfflap.errors.ConfigError` naming the field.
+with an impossible value raises :class:`mfflap.errors.ConfigError` naming the field. The
+upper bounds lie far beyond any flapping foil (a 100 m chord, a 1000 m/s stream, water
+100 times denser) but below where the model's arithmetic overflows.
 Defaults are the paper's set-up (Yin et al. 2026, Biomimetics 11, 393).
 """
 
@@ -16,8 +18,10 @@ from mfflap.validation import bounded, check_fields
 class Fluid:
     """Incompressible fluid."""
 
-    density: float = bounded(1000.0, low=0.0, low_open=True, unit="kg/m^3", doc="rho")
-    kinematic_viscosity: float = bounded(1.0e-6, low=0.0, low_open=True, unit="m^2/s", doc="nu")
+    density: float = bounded(1000.0, low=0.0, low_open=True, high=1.0e5, unit="kg/m^3",
+                             doc="rho")
+    kinematic_viscosity: float = bounded(1.0e-6, low=0.0, low_open=True, high=1.0,
+                                         unit="m^2/s", doc="nu")
 
     def __post_init__(self) -> None:
         check_fields(self, prefix="fluid.")
@@ -27,9 +31,11 @@ class Fluid:
 class Plate:
     """Rigid flat plate pitching about its leading edge."""
 
-    chord: float = bounded(0.16, low=0.0, low_open=True, unit="m", doc="chord length l")
-    span: float = bounded(0.18, low=0.0, low_open=True, unit="m", doc="span s")
-    thickness: float = bounded(0.003, low=0.0, low_open=True, unit="m", doc="thickness d")
+    chord: float = bounded(0.16, low=0.0, low_open=True, high=100.0, unit="m",
+                           doc="chord length l")
+    span: float = bounded(0.18, low=0.0, low_open=True, high=1000.0, unit="m", doc="span s")
+    thickness: float = bounded(0.003, low=0.0, low_open=True, high=10.0, unit="m",
+                               doc="thickness d")
 
     def __post_init__(self) -> None:
         check_fields(self, prefix="plate.")
@@ -46,7 +52,7 @@ class Plate:
 class FreeStream:
     """Uniform stream along +Y0 relative to the foil's mean position."""
 
-    velocity: float = bounded(0.3, low=0.0, unit="m/s", doc="free-stream speed U")
+    velocity: float = bounded(0.3, low=0.0, high=1000.0, unit="m/s", doc="free-stream speed U")
 
     def __post_init__(self) -> None:
         check_fields(self, prefix="flow.")
@@ -56,10 +62,10 @@ class FreeStream:
 class MorisonCoefficients:
     """The four Morison coefficients (dimensionless). Paper's identified values by default."""
 
-    drag_normal: float = bounded(2.49, low=0.0, unit="1", doc="C_Dn")
-    drag_tangential: float = bounded(3.12, low=0.0, unit="1", doc="C_Dt")
-    added_mass_normal: float = bounded(1.02, low=0.0, unit="1", doc="C_an")
-    added_mass_tangential: float = bounded(0.87, low=0.0, unit="1", doc="C_at")
+    drag_normal: float = bounded(2.49, low=0.0, high=1000.0, unit="1", doc="C_Dn")
+    drag_tangential: float = bounded(3.12, low=0.0, high=1000.0, unit="1", doc="C_Dt")
+    added_mass_normal: float = bounded(1.02, low=0.0, high=1000.0, unit="1", doc="C_an")
+    added_mass_tangential: float = bounded(0.87, low=0.0, high=1000.0, unit="1", doc="C_at")
 
     def __post_init__(self) -> None:
         check_fields(self, prefix="coefficients.")

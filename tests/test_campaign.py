@@ -259,6 +259,46 @@ def test_a_record_cut_short_is_unreadable_then_kept_aside_and_its_case_rerun(tmp
     assert [s.state for s in campaign_status(out)] == ["done", "done"]
 
 
+def _flip_chunk_bytes(path: Path, dataset: str) -> None:
+    """Flip bytes in the middle of the first compressed chunk of ``dataset``: the file
+    opens and lists its datasets, but reading that one fails inside its filter."""
+    with h5py.File(path) as f:
+        info = f[dataset].id.get_chunk_info(0)
+    data = bytearray(path.read_bytes())
+    middle = info.byte_offset + info.size // 2
+    data[middle:middle + 64] = bytes(b ^ 0xFF for b in data[middle:middle + 64])
+    path.write_bytes(bytes(data))
+
+
+def test_a_record_with_a_damaged_compressed_chunk_is_unreadable_not_a_crash(tmp_path):
+    """A record that opens but whose gzip chunk of loads/normal_force is damaged is
+    "unreadable" to `campaign status` (kept aside by the next run, like a record cut short),
+    an UnreadableRecordError naming the file to the library, and exit status 2 naming the
+    file to `mfflap identify`."""
+    from click.testing import CliRunner
+
+    from mfflap.cli.main import cli
+    from mfflap.errors import UnreadableRecordError
+
+    shipped = Path(__file__).parents[1] / "campaigns" / "table1_coarse_all_y_plus"
+    out = tmp_path / "camp"
+    out.mkdir()
+    shutil.copy(shipped / "campaign.toml", out)
+    name = "f1p000_h0p300_phi090p0.h5"
+    shutil.copy(shipped / name, out)
+    _flip_chunk_bytes(out / name, "loads/normal_force")
+    with pytest.raises(UnreadableRecordError) as info:
+        read_record(out / name)
+    assert info.value.path == str(out / name)
+    states = {s.case_id: s for s in campaign_status(out)}
+    assert states["f1p000_h0p300_phi090p0"].state == "unreadable"
+    assert str(out / name) in states["f1p000_h0p300_phi090p0"].message
+    case_file = Path(__file__).parents[1] / "cases" / "paper2026.toml"
+    res = CliRunner().invoke(cli, ["identify", str(case_file), "--fixtures", str(out)])
+    assert res.exit_code == 2, res.output
+    assert str(out / name) in res.output and "Traceback" not in res.output
+
+
 def test_status_tells_how_far_a_started_run_got(tmp_path):
     """A case folder with a solver log and no record is "started"; the message reads the
     real pimpleFoam log's last time step, the folder a rerun resumes from, the retries."""

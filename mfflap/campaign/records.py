@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from mfflap.errors import MfflapError
+from mfflap.errors import MfflapError, UnreadableRecordError
 from mfflap.hydro.loads import Loads
 from mfflap.kinematics.state import KINEMATIC_UNITS, KinematicState
 from mfflap.results import ResultsFile
@@ -162,6 +162,8 @@ def read_record(path: str | Path) -> CfdRecord:
     MfflapError
         If the file is not a CFD record, or its loads are not finite or not on the
         kinematics' time base (the message names the file).
+    UnreadableRecordError
+        If a dataset's bytes cannot be read (a damaged compressed chunk, a file cut short).
     """
     path = Path(path)
     with ResultsFile(path, "r", kinds=("cfd_record",)) as rf:
@@ -169,6 +171,9 @@ def read_record(path: str | Path) -> CfdRecord:
             return _read_record(rf, path)
         except (KeyError, TypeError) as err:  # a group, dataset or field missing
             raise MfflapError(f"{path}: not a complete CFD record ({err})") from err
+        except OSError as err:  # h5py opened the file, but a chunk will not decompress
+            raise UnreadableRecordError(f"its data cannot be read ({err})",
+                                        path=str(path)) from err
 
 
 def read_record_parameters(path: str | Path) -> dict[str, Any]:
@@ -185,7 +190,11 @@ def read_record_parameters(path: str | Path) -> dict[str, Any]:
     with ResultsFile(path, "r", kinds=("cfd_record",)) as rf:
         if "parameters" not in rf.h5:
             raise MfflapError(f"{path}: not a complete CFD record (no parameters)")
-        return {k: _attr(v) for k, v in rf.h5["parameters"].attrs.items()}
+        try:
+            return {k: _attr(v) for k, v in rf.h5["parameters"].attrs.items()}
+        except OSError as err:
+            raise UnreadableRecordError(f"its parameters cannot be read ({err})",
+                                        path=str(path), dataset="parameters") from err
 
 
 def _read_record(rf: ResultsFile, path: Path) -> CfdRecord:
