@@ -4,11 +4,14 @@
 Lines that are empty or start with ``#`` are skipped; the first other line is the header.
 Values are separated by commas, or by semicolons or tabs when the header is (as spreadsheets
 in many locales save CSV); the decimal mark is ``.``. A UTF-8 byte-order mark (Excel's "CSV
-UTF-8") is skipped. Every error names the file and the line.
+UTF-8") is skipped. Numbers are plain ASCII decimals (``-1.5``, ``2e-3``): Python's
+``float`` would also take ``1_000`` and digits of other scripts, which no solver writes and
+which are more likely a mistake than a value. Every error names the file and the line.
 """
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -16,6 +19,21 @@ from pathlib import Path
 import numpy as np
 
 from mfflap.errors import ParseError
+
+#: a plain ASCII decimal number, with an optional sign, fraction and exponent
+_PLAIN_NUMBER = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?",
+                           re.ASCII)
+
+
+def _number(text: str) -> float:
+    """``text`` as a float when it is a plain ASCII decimal (``nan`` and ``inf`` too, which
+    the caller refuses as not finite), else ValueError."""
+    value = text.strip()
+    if _PLAIN_NUMBER.fullmatch(value) or value.lower().lstrip("+-") in ("nan", "inf",
+                                                                        "infinity"):
+        return float(value)
+    shown = value if len(value) <= 40 else value[:40] + "..."
+    raise ValueError(f"{shown!r} is not a plain decimal number")
 
 
 @dataclass(frozen=True)
@@ -90,7 +108,7 @@ def read_csv_columns(path: str | Path, required: Sequence[str],
                              f"(separated by {separator!r}, as the header is)",
                              path=str(path), line=i)
         try:
-            values = [float(p) for p in parts]
+            values = [_number(p) for p in parts]
         except ValueError as exc:
             comma = " (the decimal mark is '.', not ',')" if any(
                 "," in p for p in parts) else ""

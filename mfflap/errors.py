@@ -4,6 +4,24 @@ from __future__ import annotations
 
 from typing import Any
 
+#: the most characters of a value an error message repeats
+SHOWN_CHARS = 60
+
+
+def shown(value: Any) -> str:
+    """``repr(value)``, cut to :data:`SHOWN_CHARS` characters with ``...`` so that an error
+    about a huge value stays one readable line.
+
+    Examples
+    --------
+    >>> shown(1.5)
+    '1.5'
+    >>> len(shown("x" * 100_000)) <= SHOWN_CHARS + 3
+    True
+    """
+    text = repr(value)
+    return text if len(text) <= SHOWN_CHARS else text[:SHOWN_CHARS] + "..."
+
 
 class MfflapError(Exception):
     """Base class of every error mfflap raises on purpose.

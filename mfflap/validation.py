@@ -13,7 +13,7 @@ import math
 from collections.abc import Mapping
 from typing import Any, TypeVar
 
-from mfflap.errors import ConfigError
+from mfflap.errors import ConfigError, shown
 
 T = TypeVar("T")
 
@@ -86,7 +86,7 @@ def _check_value(name: str, value: Any, meta: Mapping[str, Any], where: str | No
     if meta.get("choices") is not None:
         if value not in meta["choices"]:
             raise ConfigError(
-                f"value {value!r} is not allowed; allowed: {describe_range(meta)}",
+                f"value {shown(value)} is not allowed; allowed: {describe_range(meta)}",
                 source=where,
                 key=name,
             )
@@ -100,7 +100,7 @@ def _check_value(name: str, value: Any, meta: Mapping[str, Any], where: str | No
             _check_value(f"{name}[{i}]", item, meta, where)
             if meta.get("unique") and item in value[:i]:
                 raise ConfigError(
-                    f"value {item!r} is given twice ({name}[{list(value).index(item)}] and "
+                    f"value {shown(item)} is given twice ({name}[{list(value).index(item)}] and "
                     f"[{i}]); give each value once",
                     source=where,
                     key=f"{name}[{i}]",
@@ -110,7 +110,8 @@ def _check_value(name: str, value: Any, meta: Mapping[str, Any], where: str | No
                 math.remainder(float(item) - float(earlier), period), 0.0, abs_tol=1e-9)), None)
             if same is not None:
                 raise ConfigError(
-                    f"value {item!r} is the same as {value[same]!r} ({name}[{same}]): they lie "
+                    f"value {shown(item)} is the same as {shown(value[same])} "
+                    f"({name}[{same}]): they lie "
                     f"{abs(float(item) - float(value[same])):g} {meta.get('unit', '')} apart, a "
                     f"whole number of periods ({period:g}); give each value once",
                     source=where,
@@ -119,7 +120,7 @@ def _check_value(name: str, value: Any, meta: Mapping[str, Any], where: str | No
         return
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise ConfigError(
-            f"value {value!r} is not a number; allowed: {describe_range(meta)}",
+            f"value {shown(value)} is not a number; allowed: {describe_range(meta)}",
             source=where,
             key=name,
         )
@@ -132,7 +133,7 @@ def _check_value(name: str, value: Any, meta: Mapping[str, Any], where: str | No
         bad |= v >= high if meta.get("high_open") else v > high
     if bad:
         raise ConfigError(
-            f"value {value!r} is out of range; allowed: {describe_range(meta)}",
+            f"value {shown(value)} is out of range; allowed: {describe_range(meta)}",
             source=where,
             key=name,
         )
@@ -155,10 +156,10 @@ def _check_shape(name: str, value: Any, f: dataclasses.Field, where: str | None)
     """Refuse one value for a list setting, and a list for a one-value setting."""
     wants_list = str(f.type).startswith("tuple")
     if wants_list and not isinstance(value, list | tuple):
-        raise ConfigError(f"value {value!r} must be a list, e.g. [{value!r}]", source=where,
-                          key=name)
+        raise ConfigError(f"value {shown(value)} must be a list, e.g. [{shown(value)}]",
+                          source=where, key=name)
     if not wants_list and isinstance(value, list | tuple):
-        raise ConfigError(f"value {value!r} is a list; give one value", source=where,
+        raise ConfigError(f"value {shown(value)} is a list; give one value", source=where,
                           key=name)
 
 
@@ -208,12 +209,12 @@ def from_mapping(cls: type[T], mapping: Mapping[str, Any], *, source: str | None
     for k, v in mapping.items():
         f = fields[k]
         if f.type in ("int", int) and (isinstance(v, bool) or not isinstance(v, int)):
-            raise ConfigError(f"value {v!r} must be a whole number; allowed: "
+            raise ConfigError(f"value {shown(v)} must be a whole number; allowed: "
                               f"{describe_range(f.metadata)}", source=source, key=prefix + k)
         if f.type in ("str", str) and not isinstance(v, str):
             allowed = (describe_range(f.metadata) if f.metadata.get("choices")
                        else "any text in quotes")
-            raise ConfigError(f"value {v!r} must be a string; allowed: {allowed}",
+            raise ConfigError(f"value {shown(v)} must be a string; allowed: {allowed}",
                               source=source, key=prefix + k)
         if isinstance(v, list):
             v = tuple(v)

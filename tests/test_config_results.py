@@ -382,3 +382,20 @@ def test_cli_help_everywhere():
     for args in (["--help"], ["evaluate", "--help"]):
         res = runner.invoke(cli, args)
         assert res.exit_code == 0 and "Usage" in res.output
+
+
+@pytest.mark.parametrize("text", [
+    '[model]\nscheme = "{long}"\n',
+    '[study]\nname = "{long}"\n',
+    '[identification]\nfrequencies = ["{long}"]\n',
+])
+def test_a_huge_value_is_named_cut_short_in_one_line(tmp_path, text):
+    """A 100,000-character value is refused with its key and the first characters of the
+    value, in a message of a few hundred characters, not echoed whole."""
+    path = tmp_path / "huge.toml"
+    path.write_text(text.replace("{long}", "x" * 100_000))
+    with pytest.raises(ConfigError) as info:
+        load_case(path)
+    message = str(info.value)
+    assert "xxxxxxxxxx" in message and "..." in message
+    assert len(message) < 500 and "\n" not in message

@@ -67,6 +67,16 @@ def test_a_table_in_degrees_or_radians_is_the_same_smooth_motion(tmp_path):
      "4 values for 4 columns|unreadable", None),
     (lambda ls: [*ls[:10], "0.1,0.2,oops,0", *ls[10:]], "unreadable number", 11),
     (lambda ls: [*ls[:10], "0.1,0.2,nan,0", *ls[10:]], "pitch_angle_deg is not finite", 11),
+    # numbers float() takes but no solver writes
+    (lambda ls: [*ls[:10], "1_000," + ls[10].split(",", 1)[1], *ls[11:]],
+     "'1_000' is not a plain decimal", 11),
+    (lambda ls: [*ls[:10], "\u0661\u0662," + ls[10].split(",", 1)[1], *ls[11:]],
+     "is not a plain decimal", 11),
+    # values beyond any flapping motion
+    (lambda ls: [*ls[:10], "1e6," + ls[10].split(",", 1)[1], *ls[11:]],
+     "heave_position 1e\\+06 is beyond 100 m", 11),
+    (lambda ls: [*ls[:10], ",".join([*ls[10].split(",")[:2], "-1e308", "0"]), *ls[11:]],
+     "pitch_angle_deg -1e\\+308 is beyond 180 deg", 11),
     (lambda ls: [*ls[:12], ls[11], *ls[12:]], "does not increase", 13),
     (lambda ls: [*ls[:2], *ls[3:]], "must start at t = 0 s", 3),
     (lambda ls: ls[:5], "a motion table needs at least 4", 5),
@@ -194,28 +204,34 @@ def test_cfd_write_and_fluent_from_a_table(tmp_path):
         1e-2 * np.abs(exact.pitch_rate).max())
 
 
-def test_degrees_in_the_radian_column_are_flagged_with_the_file_and_the_time(tmp_path):
-    """A table whose pitch reaches 90 deg (here degrees written under ``pitch_angle``, which
-    is in rad: up to 16 rad) is still written, with a warning naming the file, the pitch
-    and its time; the same numbers under ``pitch_angle_deg`` give none."""
+def test_degrees_in_the_radian_column_are_refused_naming_the_line(tmp_path):
+    """Degrees written under ``pitch_angle`` (which is in rad, so up to 16 rad here) are
+    refused at the first row beyond pi rad, with the line and the column to use; the same
+    numbers under ``pitch_angle_deg`` are a motion, written without a warning."""
     degrees = write_table(tmp_path / "deg.csv")
     wrong = tmp_path / "wrong.csv"
     wrong.write_text(degrees.read_text().replace("pitch_angle_deg", "pitch_angle"))
-    pitch, time = largest_pitch(read_motion_table(wrong), 2.0)
-    assert pitch == pytest.approx(16.0) and time == pytest.approx(1.0)
-    # up to an end time, only the rows up to it count
-    pitch, time = largest_pitch(read_motion_table(wrong), 0.5)
-    assert pitch == pytest.approx(8.0) and time == pytest.approx(0.5)
+    with pytest.raises(ParseError) as info:
+        read_motion_table(wrong)
+    first = next(i for i, line in enumerate(wrong.read_text().splitlines(), start=1)
+                 if line[:1].isdigit() and abs(float(line.split(",")[2])) > np.pi)
+    assert info.value.path == str(wrong) and info.value.line == first
+    assert "pitch_angle_deg" in str(info.value)
     assert largest_pitch(read_motion_table(degrees), 2.0)[0] == pytest.approx(np.radians(16))
     runner = CliRunner()
     res = runner.invoke(cli, ["cfd", "write", str(CASE), str(tmp_path / "w"),
                               "--motion-table", str(wrong)])
-    assert res.exit_code == 0, res.output
-    assert f"warning: {wrong}: the pitch reaches 916.7 deg at t = 1 s" in res.stderr
-    assert "pitch_angle_deg in degrees" in res.stderr
+    assert res.exit_code == 2 and f"{wrong}, line {first}" in res.output
     res = runner.invoke(cli, ["cfd", "write", str(CASE), str(tmp_path / "d"),
                               "--motion-table", str(degrees)])
     assert res.exit_code == 0 and "warning" not in res.stderr
+
+
+def test_a_pitch_past_upright_is_written_with_a_warning(tmp_path):
+    """A pitch of -90 deg or less is written, with a warning naming the file, the pitch and
+    its time; the Fluent UDF's writer warns the same way."""
+    degrees = write_table(tmp_path / "deg.csv")
+    runner = CliRunner()
     # a pitch of -90 deg or less counts as well; the Fluent UDF's writer warns the same way
     upright = tmp_path / "upright.csv"
     rows = [line.split(",") for line in degrees.read_text().splitlines()]

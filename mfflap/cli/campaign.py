@@ -13,6 +13,7 @@ from mfflap.cli.json_output import echo_json
 from mfflap.cli.options import (
     NON_NEGATIVE,
     POSITIVE,
+    TIMEOUT,
     FigureFile,
     FloatList,
     ResultsOutput,
@@ -70,7 +71,7 @@ def campaign() -> None:
 @retries_from_start_option("A run")
 @click.option("--single-precision", is_flag=True,
               help="Store the records in float32, like the shipped fixtures (half the size).")
-@click.option("--timeout", default=6 * 3600.0, show_default=True, type=POSITIVE,
+@click.option("--timeout", default=6 * 3600.0, show_default=True, type=TIMEOUT,
               help="Seconds per case.")
 @click.option("--dry-run", is_flag=True,
               help="List the cases with their state in --out (done, failed, pending, ...) "

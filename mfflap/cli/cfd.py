@@ -10,8 +10,12 @@ import click
 from mfflap.cli.cfd_motion import motion_and_end_time, motion_table_options
 from mfflap.cli.json_output import echo_json
 from mfflap.cli.options import (
+    COURANT,
+    CYCLES,
     NON_NEGATIVE,
     POSITIVE,
+    TIMEOUT,
+    WRITES,
     FigureFile,
     ResultsOutput,
     mesh_and_setup_options,
@@ -29,7 +33,7 @@ def cfd() -> None:
 @click.argument("case_file", type=click.Path(dir_okay=False, path_type=Path))
 @click.argument("case_dir", type=click.Path(file_okay=False, path_type=Path))
 @mesh_and_setup_options()
-@click.option("--cycles", default=3.0, show_default=True, type=POSITIVE,
+@click.option("--cycles", default=3.0, show_default=True, type=CYCLES,
               help="Carrier periods to simulate.")
 @click.option("--ramp-time", default=0.0, show_default=True, type=NON_NEGATIVE,
               help="Smooth start-up ramp, s.")
@@ -43,14 +47,14 @@ def cfd() -> None:
 @click.option("--turbulence-convection", type=click.Choice(["limitedLinear", "upwind"]),
               default=None, help="Convection of k and epsilon (upwind: no clipping of "
                                  "negative epsilon); default limitedLinear (or the set-up's).")
-@click.option("--max-courant", type=POSITIVE, default=None,
+@click.option("--max-courant", type=COURANT, default=None,
               help="Courant limit of the adaptive time step; default 4 (or the set-up's).")
 @click.option("--outer-correctors", type=click.IntRange(min=1), default=None,
               help="PIMPLE outer iterations per time step (1: PISO); default 2 (or the "
               "set-up's).")
 @click.option("--correctors", type=click.IntRange(min=1), default=None,
               help="Pressure correctors per outer iteration; default 1 (or the set-up's).")
-@click.option("--writes", default=4, show_default=True, type=click.IntRange(min=1),
+@click.option("--writes", default=4, show_default=True, type=WRITES,
               help="Times the fields are written over the run; `cfd run` restarts a killed "
                    "run from the last one.")
 @click.option("--frame", type=click.Choice(["inertial", "plate"]), default=None,
@@ -130,7 +134,7 @@ def _run_state(source: Path) -> str:
 
 @cfd.command()
 @click.argument("case_dir", type=click.Path(file_okay=False, exists=True, path_type=Path))
-@click.option("--timeout", default=3600.0, show_default=True, type=POSITIVE,
+@click.option("--timeout", default=3600.0, show_default=True, type=TIMEOUT,
               help="Seconds for pimpleFoam.")
 @click.option("--procs", default=1, show_default=True, type=click.IntRange(min=1),
               help="MPI ranks: above 1 the case is decomposed once (method simple) and "
@@ -339,7 +343,7 @@ def _shown(key: str, value) -> str:
 @cfd.command()
 @click.argument("case_file", type=click.Path(dir_okay=False, exists=True, path_type=Path))
 @click.argument("out_dir", type=click.Path(file_okay=False, path_type=Path))
-@click.option("--cycles", default=3.0, show_default=True, type=POSITIVE,
+@click.option("--cycles", default=3.0, show_default=True, type=CYCLES,
               help="Carrier periods to simulate.")
 @click.option("--ramp-time", default=0.0, show_default=True, type=NON_NEGATIVE,
               help="Smooth start-up ramp, s.")

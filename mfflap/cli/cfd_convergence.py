@@ -10,8 +10,8 @@ import click
 from mfflap.cli.cfd_motion import motion_and_end_time, motion_table_options
 from mfflap.cli.json_output import echo_json
 from mfflap.cli.options import (
+    CYCLES,
     NON_NEGATIVE,
-    POSITIVE,
     WALL_TREATMENT_NAMES,
     FloatList,
     refuse_given,
@@ -28,7 +28,7 @@ from mfflap.cli.options import (
                    "one.")
 @click.option("--time-step-mesh", default=None,
               help="The mesh repeated at the further Courant limits (default the first).")
-@click.option("--cycles", default=1.0, show_default=True, type=POSITIVE,
+@click.option("--cycles", default=1.0, show_default=True, type=CYCLES,
               help="Carrier periods simulated.")
 @click.option("--ramp-time", default=None, type=NON_NEGATIVE,
               help="Start-up ramp, s (default: a quarter period).")

@@ -8,7 +8,7 @@ import click
 
 from mfflap.cli.json_output import echo_json
 from mfflap.cli.options import (
-    POSITIVE,
+    TIMEOUT,
     mesh_and_setup_options,
     velocity_convection_option,
 )
@@ -26,7 +26,7 @@ from mfflap.cli.options import (
 @click.option("--list", "list_only", is_flag=True, help="List the motions and exit.")
 @click.option("--workers", default=1, show_default=True, type=click.IntRange(min=1),
               help="LocalCluster worker processes.")
-@click.option("--timeout", default=3600.0, show_default=True, type=POSITIVE,
+@click.option("--timeout", default=3600.0, show_default=True, type=TIMEOUT,
               help="Seconds per case.")
 @click.option("--single-precision", is_flag=True, help="Store the records in float32.")
 @click.option("--retry-failed", is_flag=True,

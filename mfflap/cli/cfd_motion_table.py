@@ -9,7 +9,7 @@ import click
 import numpy as np
 
 from mfflap.cli.options import (
-    POSITIVE,
+    CYCLES,
 )
 
 
@@ -20,7 +20,7 @@ from mfflap.cli.options import (
               help="The optimised motion of this β (from `mfflap optimise` or `mfflap run`).")
 @click.option("--best-sinusoid", is_flag=True,
               help="The best sinusoid of the sweep instead of an optimised motion.")
-@click.option("--cycles", default=3.0, show_default=True, type=POSITIVE,
+@click.option("--cycles", default=3.0, show_default=True, type=CYCLES,
               help="Periods in the table.")
 @click.option("--rows-per-period", default=400, show_default=True,
               type=click.IntRange(min=8), help="Table rows per period.")

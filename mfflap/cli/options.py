@@ -7,6 +7,8 @@ from pathlib import Path
 import click
 from click.core import ParameterSource
 
+from mfflap.errors import shown
+
 MESH_NAMES = ("coarse | lean | medium | medium_r20 | fine | graded | medium_edge10 | "
               "medium_edge9 | medium_edge6 | medium_edge4 | openfoam_md | "
               "openfoam_md_medium | openfoam_md_fine | coarse_r20")  # meshes.toml's order
@@ -18,8 +20,9 @@ WALL_TREATMENT_NAMES = ("log_law", "all_y_plus")
 
 
 class FiniteFloat(click.ParamType):
-    """A finite number above a bound (a time, a number of periods), refused with the option's
-    name otherwise: ``inf`` and ``nan`` pass click's own FloatRange.
+    """A finite number above a bound and at most a ceiling (a time, a number of periods),
+    refused with the option's name otherwise: ``inf`` and ``nan`` pass click's own
+    FloatRange.
 
     Parameters
     ----------
@@ -27,23 +30,28 @@ class FiniteFloat(click.ParamType):
         The bound.
     inclusive
         Whether the bound itself is allowed.
+    maximum
+        The largest value allowed: beyond it the work would not fit this machine or any
+        flapping motion (a billion periods, a Courant number of a billion).
     """
 
     name = "float"
 
-    def __init__(self, minimum: float = 0.0, inclusive: bool = False) -> None:
-        self.minimum, self.inclusive = minimum, inclusive
+    def __init__(self, minimum: float = 0.0, inclusive: bool = False,
+                 maximum: float = math.inf) -> None:
+        self.minimum, self.inclusive, self.maximum = minimum, inclusive, maximum
 
     def convert(self, value, param, ctx) -> float:
         try:
             number = float(value)
         except (TypeError, ValueError):
-            self.fail(f"{value!r} is not a number", param, ctx)
+            self.fail(f"{shown(value)} is not a number", param, ctx)
         above = number >= self.minimum if self.inclusive else number > self.minimum
-        if not (math.isfinite(number) and above):
+        if not (math.isfinite(number) and above and number <= self.maximum):
             relation = ">=" if self.inclusive else ">"
-            self.fail(f"must be a finite number {relation} {self.minimum:g}, got {value}",
-                      param, ctx)
+            top = f" and <= {self.maximum:g}" if math.isfinite(self.maximum) else ""
+            self.fail(f"must be a finite number {relation} {self.minimum:g}{top}, got "
+                      f"{shown(value)}", param, ctx)
         return number
 
 
@@ -69,11 +77,11 @@ class FloatList(click.ParamType):
         try:
             numbers = [float(v) for v in parts if v]
         except ValueError:
-            self.fail(f"{value!r}: expected comma-separated numbers", param, ctx)
+            self.fail(f"{shown(value)}: expected comma-separated numbers", param, ctx)
         if not numbers:
-            self.fail(f"{value!r}: no numbers", param, ctx)
+            self.fail(f"{shown(value)}: no numbers", param, ctx)
         if not all(math.isfinite(n) for n in numbers):
-            self.fail(f"{value!r}: every number must be finite", param, ctx)
+            self.fail(f"{shown(value)}: every number must be finite", param, ctx)
         if self.unique and len(set(numbers)) != len(numbers):
             twice = sorted({n for n in numbers if numbers.count(n) > 1})
             self.fail(f"{value!r}: {', '.join(f'{n:g}' for n in twice)} given twice",
@@ -157,6 +165,15 @@ FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
 POSITIVE = FiniteFloat()
 #: a finite number >= 0: a start-up ramp, a time discarded
 NON_NEGATIVE = FiniteFloat(inclusive=True)
+#: a number of periods a CFD run simulates: 1,000 periods of the finest case keep its
+#: samples in tens of MB
+CYCLES = FiniteFloat(maximum=1000.0)
+#: a Courant limit: beyond 100 PIMPLE's time step is limited by nothing but max_time_step
+COURANT = FiniteFloat(maximum=100.0)
+#: a wall-clock limit, s: at most 30 days
+TIMEOUT = FiniteFloat(maximum=30 * 86400.0)
+#: how many times a run writes its fields
+WRITES = click.IntRange(min=1, max=100_000)
 
 #: ``--velocity-convection``: a set-up's convection scheme of U swapped
 velocity_convection_option = click.option(

@@ -10,6 +10,10 @@ The file has a header line naming its columns, in any order:
   the commands that write a case from a table warn when it does not
   (:func:`largest_pitch`).
 
+Values beyond any flapping motion are refused, naming the line: a ``pitch_angle`` above
+pi rad in magnitude (degrees in the radians column), a heave beyond
+:data:`MAX_HEAVE_M`, a time beyond :data:`MAX_TIME_S`.
+
 Other columns are ignored; lines starting with ``#`` are comments. Between rows the motion
 is a cubic spline (continuous rates and accelerations); past the last row it is held at
 rest, which only the solver's padding rows past the end of a run see.
@@ -27,6 +31,20 @@ from mfflap.kinematics.continuous import Motion, TabulatedMotion
 
 #: the fewest rows a cubic spline through the table needs
 MIN_ROWS = 4
+#: the largest heave a table may give, m (a mistake in the units beyond it)
+MAX_HEAVE_M = 100.0
+#: the latest time a table may give, s (about 12 days)
+MAX_TIME_S = 1.0e6
+
+
+def _check_range(path: Path, lines: np.ndarray, values: np.ndarray, limit: float,
+                 what: str, hint: str) -> None:
+    """Refuse the first row whose ``values`` exceed ``limit`` in magnitude."""
+    beyond = np.flatnonzero(np.abs(values) > limit)
+    if beyond.size:
+        i = int(beyond[0])
+        raise ParseError(f"{what} {values[i]:.6g} is beyond {limit:g}{hint}", path=str(path),
+                         line=int(lines[i]))
 
 
 def read_motion_table(path: str | Path) -> TabulatedMotion:
@@ -36,7 +54,8 @@ def read_motion_table(path: str | Path) -> TabulatedMotion:
     ------
     ParseError
         Naming the file and the line: a missing column, an unreadable or non-finite value,
-        a time that does not increase, a first time other than 0, too few rows.
+        a time that does not increase, a first time other than 0, too few rows, a value
+        beyond any flapping motion.
     """
     path = Path(path)
     col = read_csv_columns(path, ("time", "heave_position"),
@@ -53,7 +72,17 @@ def read_motion_table(path: str | Path) -> TabulatedMotion:
     if len(t) < MIN_ROWS:
         raise ParseError(f"{len(t)} data rows; a motion table needs at least {MIN_ROWS}",
                          path=str(path), line=int(lines[-1]))
-    pitch = col["pitch_angle"] if "pitch_angle" in col else np.radians(col["pitch_angle_deg"])
+    _check_range(path, lines, t, MAX_TIME_S, "time", " s")
+    _check_range(path, lines, col["heave_position"], MAX_HEAVE_M, "heave_position",
+                 " m in magnitude")
+    if "pitch_angle" in col:
+        _check_range(path, lines, col["pitch_angle"], np.pi, "pitch_angle",
+                     " rad in magnitude: is it in degrees? Name the column pitch_angle_deg")
+        pitch = col["pitch_angle"]
+    else:
+        _check_range(path, lines, col["pitch_angle_deg"], 180.0, "pitch_angle_deg",
+                     " deg in magnitude")
+        pitch = np.radians(col["pitch_angle_deg"])
     try:
         return TabulatedMotion(t, pitch, col["heave_position"], hold_after_end=True)
     except MotionError as exc:  # what the reader has not caught already
