@@ -393,3 +393,67 @@ def test_a_new_udf_is_not_written_beside_the_report_of_an_earlier_run(tmp_path):
     assert not (folder / REPORT_FILE).exists()
     assert (folder / "plate.cas.h5").read_text() == "the user's Fluent case"
     assert read_toml(folder / "mfflap_fluent.toml")["end_time"] == 1.0
+
+
+def _pitched_table(path: Path) -> Path:
+    """A user's CSV motion that starts pitched (25 deg) and moving, heave offset 0.3 m."""
+    t = np.linspace(0.0, 2.0, 201)
+    pitch = 25.0 + 20.0 * np.sin(2 * np.pi * t)
+    heave = 0.1 + 0.2 * np.cos(2 * np.pi * t)
+    path.write_text("time,heave_position,pitch_angle_deg\n" + "".join(
+        f"{a!r},{b!r},{c!r}\n" for a, b, c in zip(t.tolist(), heave.tolist(), pitch.tolist(),
+                                                   strict=True)))
+    return path
+
+
+def test_the_fluent_udf_and_the_openfoam_table_of_one_csv_impose_one_absolute_motion(
+        tmp_path):
+    """The table UDF's rates, compiled and integrated from the mesh (as Fluent does), give
+    the positions of OpenFOAM's tabulated6DoFMotion table at every row of it: one absolute
+    motion, ramped from the mesh at rest, though the CSV starts pitched at 25 deg."""
+    from mfflap.cfd.openfoam.writer import motion_table
+    from mfflap.kinematics.table_file import read_motion_table
+
+    motion = read_motion_table(_pitched_table(tmp_path / "pitched.csv"))
+    ramp, end = 0.3, 2.0
+    rows = motion_table(motion, end, ramp_time=ramp)
+    rows = rows[rows[:, 0] <= end]
+    times = np.linspace(0.0, end, 8001)
+    out = run_udf(table_udf(motion, end, ramp_time=ramp), tmp_path, times)
+    dt = np.diff(times)
+    pitch_deg = np.degrees(np.concatenate([[0.0], np.cumsum(0.5 * dt * (out[1:, 2]
+                                                                         + out[:-1, 2]))]))
+    heave = np.concatenate([[0.0], np.cumsum(0.5 * dt * (out[1:, 1] + out[:-1, 1]))])
+    integrated_pitch = np.interp(rows[:, 0], times, pitch_deg)
+    integrated_heave = np.interp(rows[:, 0], times, heave)
+    # OpenFOAM's rotation about z and displacement along y, in the case's axes
+    np.testing.assert_allclose(integrated_pitch, rows[:, 6], atol=0.05)
+    np.testing.assert_allclose(integrated_heave, rows[:, 2], atol=2e-4)
+    # past the ramp both follow the CSV's absolute pitch, not the pitch less its first value
+    from mfflap.cfd.frames import case_rotation_deg
+
+    after = rows[:, 0] > ramp
+    expected = case_rotation_deg(motion.sample(rows[after, 0]).pitch_angle)[:, 2]
+    np.testing.assert_allclose(rows[after, 6], expected, atol=1e-6)
+    assert np.abs(rows[after, 6]).max() > 40.0  # 25 + 20 deg: the first pitch is kept
+
+
+def test_a_motion_that_starts_pitched_without_a_ramp_is_refused_by_both_writers(tmp_path):
+    """Without a start-up ramp OpenFOAM would jump to the first pitch and Fluent would pitch
+    that much less throughout: both writers refuse it, naming the pitch, before writing."""
+    from mfflap.cfd.openfoam.writer import write_case
+    from mfflap.errors import MotionError
+    from mfflap.kinematics.table_file import read_motion_table
+
+    motion = read_motion_table(_pitched_table(tmp_path / "pitched.csv"))
+    with pytest.raises(MotionError, match="starts pitched at 25 deg"):
+        write_fluent_case(tmp_path / "fluent", motion, 2.0)
+    with pytest.raises(MotionError, match="starts pitched at 25 deg"):
+        write_case(tmp_path / "openfoam", motion, 2.0)
+    assert not (tmp_path / "fluent").exists() and not (tmp_path / "openfoam").exists()
+    from mfflap.cli.main import cli
+
+    case = Path(__file__).parents[1] / "cases" / "paper2026.toml"
+    res = CliRunner().invoke(cli, ["cfd", "fluent", str(case), str(tmp_path / "f"),
+                                   "--motion-table", str(tmp_path / "pitched.csv")])
+    assert res.exit_code == 2 and "--ramp-time" in res.output

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from mfflap.cli.cfd_motion import motion_and_end_time, motion_table_options
+from mfflap.cli.cfd_motion import motion_and_end_time, motion_table_options, warn_not_at_rest
 from mfflap.cli.json_output import echo_json
 from mfflap.cli.options import (
     COURANT,
@@ -103,6 +103,7 @@ def write(case_file: Path, case_dir: Path, mesh: str | None, setup_name: str | N
     write_case(case_dir, motion, end_time, mesh=spec, plate=case.plate,
                fluid=case.fluid, stream=case.flow, ramp_time=ramp_time, y_plus=y_plus,
                solver=solver, overwrite=overwrite)
+    warn_not_at_rest(motion, ramp_time, end_time)
     if motion_table is not None:
         attach_motion_table(case_dir, motion_table)
     loop = (f"{'PISO' if solver.n_outer_correctors == 1 else 'PIMPLE'} "
@@ -368,6 +369,7 @@ def fluent(case_file: Path, out_dir: Path, cycles: float, ramp_time: float, time
     write_fluent_case(out_dir, motion, end_time, ramp_time=ramp_time,
                       time_step=time_step, velocity=case.flow.velocity, table=table,
                       plate=case.plate, fluid=case.fluid, overwrite=overwrite)
+    warn_not_at_rest(motion, ramp_time, end_time)
     per_period = 1.0 / (case.motion.frequency * time_step)
     if motion_table is None and per_period < FEW_STEPS_PER_PERIOD:
         click.echo(f"warning: --time-step {time_step:g} s gives {per_period:.3g} steps per "

@@ -72,4 +72,20 @@ def warn_pitch_past_upright(motion: TabulatedMotion, motion_table: Path,
                    "pitch_angle_deg in degrees)", err=True)
 
 
-__all__ = ["motion_and_end_time", "motion_table_options", "warn_pitch_past_upright"]
+def warn_not_at_rest(motion, ramp_time: float, end_time: float) -> None:
+    """Warn on stderr when the imposed motion starts with a rate (an impulsive start, the
+    same in every solver but a start-up transient in the forces), naming the rates and the
+    remedy."""
+    from mfflap.cfd.openfoam.loads import not_at_rest
+
+    moving = not_at_rest(motion, ramp_time, end_time)
+    if moving:
+        click.echo("warning: the motion does not start at rest ("
+                   + ", ".join(f"{name} {value:.3g} {unit}"
+                               for name, (value, unit) in moving.items())
+                   + "): every solver starts it impulsively; --ramp-time starts it at rest",
+                   err=True)
+
+
+__all__ = ["motion_and_end_time", "motion_table_options", "warn_not_at_rest",
+           "warn_pitch_past_upright"]

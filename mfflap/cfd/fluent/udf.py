@@ -12,7 +12,12 @@ import numpy as np
 from mfflap.cfd import templates
 from mfflap.cfd.case_inputs import recorded_inputs
 from mfflap.cfd.frames import case_displacement, case_rotation_deg
-from mfflap.cfd.openfoam.loads import check_end_time, check_ramp_time, imposed_state
+from mfflap.cfd.openfoam.loads import (
+    check_end_time,
+    check_ramp_time,
+    check_start_at_mesh,
+    imposed_state,
+)
 from mfflap.errors import ConfigError, MotionError
 from mfflap.kinematics.continuous import HarmonicMotion, Motion, RampHarmonicMotion
 from mfflap.parameters import Fluid, FreeStream, Plate
@@ -180,6 +185,7 @@ def write_fluent_case(folder: str | Path, motion: Motion, end_time: float, *,
     plate, fluid = plate or Plate(), fluid or Fluid()
     end_time = check_end_time(end_time)
     check_ramp_time(ramp_time, end_time)
+    check_start_at_mesh(motion, ramp_time)
     if not (math.isfinite(time_step) and time_step > 0):
         raise ConfigError(f"time_step must be a finite time > 0 s, got {time_step!r}",
                           key="time_step")

@@ -94,6 +94,74 @@ def imposed_state(motion: Motion, times: np.ndarray, ramp_time: float = 0.0) -> 
     )
 
 
+#: a pitch at t = 0 within this of zero, rad, is the mesh's own (round-off of a table)
+START_PITCH_TOLERANCE = 1.0e-9
+#: rates at t = 0 within these of zero are a start at rest (rad/s, m/s)
+START_RATE_TOLERANCE = 1.0e-9
+
+
+def check_start_at_mesh(motion: Motion, ramp_time: float) -> None:
+    """Refuse a motion that every solver cannot impose the same way from its first step.
+
+    Meshes are drawn with the plate at zero pitch. OpenFOAM's table imposes positions, so a
+    motion that starts pitched would jump there in the first step; Fluent's UDF imposes
+    rates, which it integrates from the mesh, so it would pitch by that much less
+    throughout. With a start-up ramp (``ramp_time`` > 0) both start at the mesh and at rest
+    and impose one motion; without one, the pitch at t = 0 must be zero. A heave offset is
+    no problem: the heave is imposed from zero in both.
+
+    Raises
+    ------
+    MotionError
+        Naming the pitch at t = 0 and the remedy.
+
+    Examples
+    --------
+    >>> from mfflap.kinematics.continuous import HarmonicMotion
+    >>> check_start_at_mesh(HarmonicMotion(1.0, 0.3, 0.3, 1.5), 0.0)  # theta(0) = 0
+    >>> check_start_at_mesh(HarmonicMotion(1.0, 0.3, 0.3, 1.5), 0.25)  # any motion, ramped
+    """
+    if ramp_time > 0:
+        return
+    pitch = float(motion.sample(np.array([0.0])).pitch_angle[0])
+    if abs(pitch) > START_PITCH_TOLERANCE:
+        raise MotionError(
+            f"the motion starts pitched at {np.degrees(pitch):.6g} deg, where the mesh is "
+            "drawn at 0 deg: OpenFOAM would jump there in its first step and Fluent (which "
+            "imposes rates) would pitch that much less throughout. Give a start-up ramp "
+            "(ramp_time > 0, --ramp-time), which starts both at the mesh and at rest")
+
+
+#: a rate at t = 0 below this share of its largest magnitude over the run is a start at rest
+#: (a table's spline leaves a trace of a rate at its ends)
+START_RATE_SHARE = 0.01
+
+
+def not_at_rest(motion: Motion, ramp_time: float, end_time: float) -> dict[str, tuple[float, str]]:
+    """The rates of the imposed motion at t = 0 that are not zero (an impulsive start),
+    by name with their value and unit; empty with a start-up ramp or a start at rest.
+
+    A rate counts when it is above :data:`START_RATE_SHARE` of its largest magnitude over
+    ``[0, end_time]``.
+
+    Examples
+    --------
+    >>> from mfflap.kinematics.continuous import HarmonicMotion
+    >>> sorted(not_at_rest(HarmonicMotion(1.0, 0.3, 0.3, 0.0), 0.0, 1.0))
+    ['heave velocity', 'pitch rate']
+    >>> not_at_rest(HarmonicMotion(1.0, 0.3, 0.3, 0.0), 0.25, 1.0)
+    {}
+    """
+    s = imposed_state(motion, np.linspace(0.0, end_time, 2001), ramp_time)
+    said = {}
+    for name, rate, unit, scale in (("pitch rate", s.pitch_rate, "deg/s", np.degrees(1.0)),
+                                    ("heave velocity", s.heave_velocity, "m/s", 1.0)):
+        peak = float(np.max(np.abs(rate)))
+        if abs(rate[0]) > max(START_RATE_SHARE * peak, START_RATE_TOLERANCE):
+            said[name] = (float(rate[0] * scale), unit)
+    return said
+
+
 def to_loads(history: ForceHistory, state: KinematicState, span: float, depth: float,
              source: str, frame: str = "inertial") -> Loads:
     """Body-frame loads on the whole span from a force history on the state's time base.

@@ -30,7 +30,12 @@ from mfflap.cfd.frames import FRAMES, case_displacement, case_rotation_deg
 from mfflap.cfd.openfoam.case_path import prepare_case_folder
 from mfflap.cfd.openfoam.cell_counts import check_cell_counts
 from mfflap.cfd.openfoam.h_grid import HGridSpec
-from mfflap.cfd.openfoam.loads import check_end_time, check_ramp_time, imposed_state
+from mfflap.cfd.openfoam.loads import (
+    check_end_time,
+    check_ramp_time,
+    check_start_at_mesh,
+    imposed_state,
+)
 from mfflap.cfd.openfoam.plate_frame import (
     format_acceleration_table,
     format_function1_table,
@@ -304,6 +309,7 @@ def write_case(case_dir: str | Path, motion: Motion, end_time: float,
         raise ConfigError(f"the mesh depth must be > 0 m, got {depth!r}", key="depth")
     u = stream.velocity
     check_ramp_time(ramp_time, check_end_time(end_time))
+    check_start_at_mesh(motion, ramp_time)
     # the motion's tables first: they check the end time, the ramp and the motion
     if solver.frame == "plate":
         tables = plate_frame_tables(motion, table_times(end_time), u, ramp_time=ramp_time)
