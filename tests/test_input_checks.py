@@ -64,10 +64,9 @@ REFUSED = [
     (["campaign", "run", str(CASE), "--out", "OUT", "--timeout", "-5"], "--timeout",
      "finite number > 0"),
     (["optimise", str(CASE), "--starts", "0", "--output", "OUT/o.h5"], "--starts", "x>=1"),
-    (["gradcheck", str(CASE), "--n-steps", "1", "--figure", "OUT/g.png"], "--n-steps", "x>=2"),
+    (["gradcheck", str(CASE), "--n-steps", "1", "--out", "OUT"], "--n-steps", "x>=2"),
     # a figure format matplotlib cannot write: refused before the work, not after it
     (["evaluate", str(CASE), "--figure", "OUT/f.txt"], "--figure", "written as .png, .pdf"),
-    (["gradcheck", str(CASE), "--figure", "OUT/g.jpg"], "--figure", "written as .png, .pdf"),
     (["campaign", "compare", "OUT", "OUT", "--figure", "OUT/c.gif"], "--figure",
      "written as .png, .pdf"),
     (["run", str(CASE), "--out", "OUT", "--starts", "0"], "--starts", "x>=1"),
@@ -305,7 +304,8 @@ def test_evaluate_and_gradcheck_put_their_figures_in_the_working_folder(tmp_path
     monkeypatch.chdir(work)
     runner = CliRunner()
     for args, name in ((["evaluate", str(case)], "study.cycle.png"),
-                       (["gradcheck", str(case), "--n-steps", "12"], "study.gradcheck.png")):
+                       (["gradcheck", str(case), "--n-steps", "12"],
+                        "study_gradcheck/gradcheck.png")):
         res = runner.invoke(cli, args)
         assert res.exit_code == 0, res.output
         assert f"figure: {name}" in res.output

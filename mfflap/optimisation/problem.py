@@ -18,6 +18,7 @@ u and dt that equations.md warns about.
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 
 import numpy as np
@@ -184,6 +185,14 @@ class FlappingProblem:
         self.penalty_pitch = float(penalty_pitch)
         self.linear_modifier = linear_modifier
         self._kernel_args: tuple | bool | None = False  # False: not looked up yet
+
+    def without_penalties(self) -> FlappingProblem:
+        """The same problem with the power, heave and pitch penalties set to zero (what J
+        is made of besides them: thrust, power and smoothness)."""
+        free = copy.copy(self)
+        free.penalty_power = free.penalty_heave = free.penalty_pitch = 0.0
+        free._kernel_args = False  # the compiled kernel's constants hold the penalties
+        return free
 
     def _kernel(self, motion: DiscreteMotion) -> tuple | None:
         """The compiled kernel's constants if it can evaluate ``motion``, else None."""
