@@ -3,6 +3,9 @@ free and with the phase fixed (optimisation.phase = "fixed"),
 and identification over the whole 125-case grid (target < 2 s), also with the residual
 scaling chosen by the errors ("auto").
 
+It also times one SQP optimisation beside a busy core on one BLAS thread (the optimisers'
+own limit) and on the BLAS library's own thread count.
+
 Run: python benchmarks/optimiser_and_identification.py
 Each time is also printed as a ratio against a baseline measured in the same process (one
 objective + adjoint gradient evaluation; one model evaluation of the grid), so the numbers
@@ -67,6 +70,45 @@ def optimiser() -> None:
                   f"{dt / eval_time:10.0f}              {'yes' if dt < 0.5 else 'NO'}")
 
 
+def optimiser_beside_a_busy_core() -> None:
+    """One SQP optimisation while another process keeps a core busy (as a CFD run does),
+    on one BLAS thread (what the optimisers limit themselves to) and on the library's own
+    count; the ratio says what the limit saves."""
+    import statistics
+    import subprocess
+    import sys
+
+    from threadpoolctl import threadpool_info
+
+    from mfflap.optimisation import blas_threads
+
+    case = load_case(CASE)
+    o = case.optimisation
+    start = harmonic_to_discrete(2.1, 0.05, np.deg2rad(50), np.deg2rad(112.5), o.n_steps)
+    problem = problem_for(case, 0.0)
+    optimise_sqp(problem, start, min_period=o.min_period, max_period=o.max_period)  # warm
+    own = max((lib["num_threads"] for lib in threadpool_info()
+               if lib["user_api"] == "blas"), default=1)
+    busy = subprocess.Popen([sys.executable, "-c", "while True: pass"])
+    times: dict[str, list[float]] = {"one BLAS thread": [], f"{own} BLAS threads": []}
+    try:
+        for _ in range(5):
+            for label, threads in (("one BLAS thread", 1), (f"{own} BLAS threads", None)):
+                blas_threads.OPTIMISER_BLAS_THREADS = threads
+                t0 = time.perf_counter()
+                optimise_sqp(problem, start, min_period=o.min_period,
+                             max_period=o.max_period)
+                times[label].append(time.perf_counter() - t0)
+    finally:
+        blas_threads.OPTIMISER_BLAS_THREADS = 1
+        busy.kill()
+        busy.wait()
+    one, lib = (statistics.median(v) for v in times.values())
+    print(f"\none SQP optimisation (beta = 0) beside a busy core, median of 5: one BLAS "
+          f"thread {one:.3f} s, the library's {own} thread(s) {lib:.3f} s; "
+          f"ratio {lib / one:.2f}")
+
+
 def identification() -> None:
     rng = np.random.default_rng(0)
     case = load_case(CASE)
@@ -104,4 +146,5 @@ def identification() -> None:
 
 if __name__ == "__main__":
     optimiser()
+    optimiser_beside_a_busy_core()
     identification()

@@ -19,6 +19,7 @@ from scipy.optimize import minimize
 from mfflap.errors import ConfigError
 from mfflap.kinematics.convert import resample
 from mfflap.kinematics.discrete import DiscreteMotion
+from mfflap.optimisation.blas_threads import optimiser_blas_threads
 from mfflap.optimisation.interrupts import interrupts_kept
 from mfflap.optimisation.phase import check_phase_can_be_fixed, phase_condition_row
 from mfflap.optimisation.problem import FlappingProblem
@@ -172,7 +173,7 @@ def optimise_sqp(problem: FlappingProblem, start: DiscreteMotion, *, min_period:
             if callback is not None:
                 callback(len(history), history[-1])
 
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), optimiser_blas_threads():
             warnings.simplefilter("ignore", RuntimeWarning)
             res = minimize(fun, x, jac=True, method="SLSQP", bounds=bounds, callback=record,
                            constraints=constraints,
@@ -315,7 +316,8 @@ def optimise_ipopt(problem: FlappingProblem, start: DiscreteMotion, *, min_perio
                               f"{problem.max_pitch_acceleration:g} rad/s^2",
                               key="trust_region")
     x0 = np.clip(_pack(start) / scale, lbx, ubx)
-    with interrupts_kept():  # a Ctrl-C stops the solve and the caller, not only IPOPT
+    # a Ctrl-C stops the solve and the caller, not only IPOPT
+    with interrupts_kept(), optimiser_blas_threads():
         sol = solver(x0=x0, p=par, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
     stats = solver.stats()
     motion = _unpack(np.asarray(sol["x"]).ravel() * scale, n)
