@@ -77,6 +77,103 @@ def test_three_dialects_give_the_same_totals(tmp_path):
     np.testing.assert_allclose(got.moment, ref.moment, rtol=1e-6, atol=1e-8)
 
 
+POROUS_FORCE = np.array([0.25, -0.5, 0.0])
+POROUS_MOMENT = np.array([0.0, 0.0, 0.125])
+
+
+def to_foundation_porous(force_text: str, moment_text: str) -> str:
+    """Foundation rows with a third (porous) triple in the force and the moment."""
+    f, _ = parse_table(force_text)
+    m, _ = parse_table(moment_text)
+    rows = ["# Time forces(pressure viscous porous) moment(pressure viscous porous)"]
+    pf, pm = (" ".join(f"{v:.10g}" for v in x) for x in (POROUS_FORCE, POROUS_MOMENT))
+    for a, b in zip(f, m, strict=True):
+        rows.append(f"{a[0]:.10g} (({a[4]:.10g} {a[5]:.10g} {a[6]:.10g}) ({a[7]:.10g} "
+                    f"{a[8]:.10g} {a[9]:.10g}) ({pf})) (({b[4]:.10g} {b[5]:.10g} "
+                    f"{b[6]:.10g}) ({b[7]:.10g} {b[8]:.10g} {b[9]:.10g}) ({pm}))")
+    return "\n".join(rows) + "\n"
+
+
+def layout_files(layout: str) -> list[str]:
+    """The texts a forces function object writes in ``layout``: one file holding forces
+    and moments (Foundation), or a force file then a moment file (openfoam.com)."""
+    force, moment = ((DATA / name).read_text() for name in ("force.dat", "moment.dat"))
+    if layout == "v1912":
+        return [force, moment]
+    if layout == "com-bare":
+        return [to_bare(force), to_bare(moment)]
+    if layout == "foundation":
+        return [to_foundation(force, moment)]
+    if layout == "foundation-bare":
+        return [to_bare(to_foundation(force, moment))]
+    return [to_foundation_porous(force, moment)]
+
+
+@pytest.mark.parametrize("layout", ["v1912", "com-bare", "foundation", "foundation-bare",
+                                    "foundation-porous"])
+@pytest.mark.parametrize("names", [("force.dat", "moment.dat"), ("forces.dat", "moments.dat"),
+                                   ("a.dat", "b.dat")])
+def test_every_layout_under_every_file_name_gives_the_totals(tmp_path, layout, names):
+    """The layout is read from the rows and the quantity from the header, whatever the files
+    are called: openfoam.com rows in forces.dat and Foundation rows (pressure and viscous,
+    and porous) in force.dat give the real run's totals."""
+    ref = read_forces(copy_real_case(tmp_path))
+    folder = tmp_path / "user" / "postProcessing" / "forces" / "0"
+    folder.mkdir(parents=True)
+    for name, text in zip(names, layout_files(layout), strict=False):
+        (folder / name).write_text(text)
+    got = read_forces(tmp_path / "user")
+    porous = layout == "foundation-porous"
+    np.testing.assert_allclose(got.force, ref.force + (POROUS_FORCE if porous else 0.0),
+                               rtol=1e-6, atol=1e-8)
+    np.testing.assert_allclose(got.moment, ref.moment + (POROUS_MOMENT if porous else 0.0),
+                               rtol=1e-6, atol=1e-8)
+    assert got.dialect == layout.replace("-bare", "") if layout != "com-bare" else "com-bare"
+
+
+def test_an_empty_force_file_is_named_by_its_path(tmp_path):
+    folder = tmp_path / "case" / "postProcessing" / "forces" / "0"
+    folder.mkdir(parents=True)
+    (folder / "force.dat").write_text("")
+    with pytest.raises(ParseError) as info:
+        read_forces(tmp_path / "case")
+    assert info.value.path == str(folder / "force.dat") and "empty" in str(info.value)
+
+
+def test_a_row_of_no_known_layout_is_refused_naming_the_line(tmp_path):
+    folder = tmp_path / "case" / "postProcessing" / "forces" / "0"
+    folder.mkdir(parents=True)
+    (folder / "force.dat").write_text("# Force\n0.1 (1 2 3) (4 5 6)\n")
+    with pytest.raises(ParseError, match="a row of 6 numbers") as info:
+        read_forces(tmp_path / "case")
+    assert info.value.line == 2
+
+
+def test_moments_about_the_header_s_cofr_give_the_loads_about_the_leading_edge(tmp_path):
+    """A user's forces function object with its CofR at (0.05, 0.02, 0) m: the moments it
+    writes are about that point; read with their header, they give the loads that the same
+    run's moments about the origin give."""
+    ref = read_forces(copy_real_case(tmp_path))
+    centre = np.array([0.05, 0.02, 0.0])
+    about_c = ref.moment - np.cross(centre, ref.force)
+    folder = tmp_path / "user" / "postProcessing" / "forces" / "0"
+    folder.mkdir(parents=True)
+    cofr = f"# CofR          : ({centre[0]} {centre[1]} {centre[2]})"
+    (folder / "force.dat").write_text((DATA / "force.dat").read_text().replace(
+        "# CofR          : (0.00000000e+00 0.00000000e+00 0.00000000e+00)", cofr))
+    moment = ["# Moment", cofr, "#", "# Time (total_x total_y total_z)"]
+    moment += [f"{t!r} ({m[0]!r} {m[1]!r} {m[2]!r}) ({m[0]!r} {m[1]!r} {m[2]!r}) (0 0 0)"
+               for t, m in zip(ref.time.tolist(), about_c.tolist(), strict=True)]
+    (folder / "moment.dat").write_text("\n".join(moment) + "\n")
+    got = read_forces(tmp_path / "user")
+    np.testing.assert_array_equal(got.centre_of_rotation, centre)
+    state = imposed_state(HarmonicMotion(1.0, 0.3, 0.3, np.pi / 2), ref.time, 0.25)
+    expected = to_loads(ref, state, 0.18, 0.18, "ref")
+    loads = to_loads(got, state, 0.18, 0.18, "user")
+    np.testing.assert_allclose(loads.moment, expected.moment, rtol=1e-9,
+                               atol=1e-9 * np.abs(expected.moment).max())
+
+
 def test_restart_folders_are_merged(tmp_path):
     case = copy_real_case(tmp_path, "0")
     full = read_forces(case)
@@ -101,18 +198,16 @@ def test_truncated_last_line_of_killed_run_is_dropped(tmp_path):
     assert len(arr) == len(full) - 1
 
 
-@settings(max_examples=200, deadline=None)
-@given(dialect=st.sampled_from(["v1912", "com-bare", "foundation"]),
+@settings(max_examples=300, deadline=None)
+@given(dialect=st.sampled_from(["v1912", "com-bare", "foundation", "foundation-bare",
+                                "foundation-porous"]),
+       name=st.sampled_from(["force.dat", "forces.dat", "moment.dat", "data.dat"]),
        keep=st.floats(0.0, 1.0))
-def test_a_cut_file_gives_a_prefix_of_the_whole_files_rows(dialect, keep):
-    """Wherever a killed run cuts a file, every row read is a row of the whole file: a last
-    row cut inside a number is dropped, not read as another number."""
-    text = (DATA / "force.dat").read_text()
-    if dialect == "com-bare":
-        text = to_bare(text)
-    elif dialect == "foundation":
-        text = to_foundation(text, (DATA / "moment.dat").read_text())
-    name = "forces.dat" if dialect == "foundation" else "force.dat"
+def test_a_cut_file_gives_a_prefix_of_the_whole_files_rows(dialect, name, keep):
+    """Wherever a killed run cuts a file, in any layout and under any name, every row read
+    is a row of the whole file: a last row cut inside a number is dropped, not read as
+    another number."""
+    text = layout_files(dialect)[0]
     whole, _ = parse_table(text, name)
     cut = text[:int(keep * len(text))]
     try:

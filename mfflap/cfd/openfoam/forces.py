@@ -1,18 +1,26 @@
 """Parse OpenFOAM ``forces`` function-object logs and turn them into body-frame Loads.
 
-Three dialects are recognised from the header and the rows:
+The layout of a file is read from its rows, whatever the file is called:
 
-- ``v1912``: ``force.dat``/``moment.dat``, rows ``t (tx ty tz) (px py pz) (vx vy vz)``;
-- ``com-bare``: later openfoam.com releases, the same nine columns without parentheses;
+- ``v1912``: openfoam.com's ``force.dat``/``moment.dat``, rows
+  ``t (tx ty tz) (px py pz) (vx vy vz)``: total, pressure, viscous;
+- ``com-bare``: later openfoam.com releases, the same nine numbers without parentheses;
 - ``foundation``: the Foundation line's ``forces.dat``, rows ``t ((px py pz) (vx vy vz))
-  ((mpx ...) (mvx ...))`` whose first triple is pressure, not total.
+  ((mpx ...) (mvx ...))``: force and moment, each as pressure and viscous (no total);
+- ``foundation-porous``: the same with a third, porous, triple in each
+  (``forces(pressure viscous porous)``).
+
+The Foundation layouts are also read without their parentheses (12 or 18 numbers after
+the time). Whether a file of the openfoam.com layouts holds forces or moments is read from
+its header (``# Force`` or ``# Moment``), else from its name. The centre of rotation of
+the moments is read from the header's ``# CofR : (x y z)`` line.
 
 Several time folders (restarts) are merged, later folders winning on overlap. A last line
 cut short by a killed run is dropped; any other malformed line is an error naming the file
 and the line. OpenFOAM ends every row with a newline, so a last line without one is a row
-cut short unless it shows it is whole: its parentheses close (v1912, Foundation). A bare
-row (com-bare) cut inside its last number still holds nine numbers, one of them wrong, so a
-bare last line without a newline is always dropped.
+cut short unless it shows it is whole: its parentheses close. A bare row cut inside its
+last number still holds all its numbers, one of them wrong, so a bare last line without a
+newline is always dropped.
 """
 
 from __future__ import annotations
@@ -32,12 +40,23 @@ _NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|[-+]?(?:nan|inf
 @dataclass(frozen=True)
 class ForceHistory:
     """Total force (and optionally moment) in the case frame, N and N*m, per unit of mesh depth
-    as OpenFOAM wrote it (i.e. for the mesh's depth)."""
+    as OpenFOAM wrote it (i.e. for the mesh's depth).
+
+    Attributes
+    ----------
+    time : (n,) s
+    force : (n, 3) N, total force
+    moment : (n, 3) N*m about ``centre_of_rotation``, or None
+    dialect : the row layout it was read from
+    centre_of_rotation : (3,) m, the point the moments are taken about as the file's header
+        gives it, or None where no header gives one (the origin)
+    """
 
     time: np.ndarray
-    force: np.ndarray  # (n, 3) total force
-    moment: np.ndarray | None  # (n, 3) about CofR, or None
+    force: np.ndarray
+    moment: np.ndarray | None
     dialect: str
+    centre_of_rotation: np.ndarray | None = None
 
 
 def _numbers(line: str, path: str, lineno: int) -> list[float]:
@@ -55,36 +74,116 @@ def _numbers(line: str, path: str, lineno: int) -> list[float]:
     return out
 
 
-def detect_dialect(text: str, name: str = "") -> str:
-    """``"v1912"``, ``"com-bare"`` or ``"foundation"`` from a file's text and name."""
+#: numbers after the time in a row of each layout
+LAYOUT_NUMBERS = {"v1912": 9, "com-bare": 9, "foundation": 12, "foundation-porous": 18}
+#: layouts whose rows hold forces and moments together
+BOTH_LAYOUTS = ("foundation", "foundation-porous")
+
+
+def _first_row(text: str) -> tuple[int, str] | None:
+    for i, line in enumerate(text.splitlines(), start=1):
+        s = line.strip()
+        if s and not s.startswith("#"):
+            return i, s
+    return None
+
+
+def detect_dialect(text: str, path: str = "<text>") -> str:
+    """``"v1912"``, ``"com-bare"``, ``"foundation"`` or ``"foundation-porous"`` from the
+    shape of a file's first row (nesting of parentheses, count of numbers).
+
+    Raises
+    ------
+    ParseError
+        Naming the file (and the line): no data rows, or a row of none of these shapes.
+
+    Examples
+    --------
+    >>> detect_dialect("0.1 (1 2 3) (1 2 3) (0 0 0)\n")
+    'v1912'
+    >>> detect_dialect("0.1 ((1 2 3) (0 0 0)) ((4 5 6) (0 0 0))\n")
+    'foundation'
+    """
+    first = _first_row(text)
+    if first is None:
+        raise ParseError("no data rows (an empty file)", path=path)
+    lineno, row = first
+    count = len(row.replace("(", " ").replace(")", " ").split()) - 1
+    if "((" in row.replace(" ", ""):
+        found = {12: "foundation", 18: "foundation-porous"}.get(count)
+    elif "(" in row:
+        found = "v1912" if count == 9 else None
+    else:
+        found = {9: "com-bare", 12: "foundation", 18: "foundation-porous"}.get(count)
+    if found is None:
+        raise ParseError(
+            f"a row of {count} numbers after the time is no forces layout: openfoam.com's "
+            "force.dat/moment.dat hold 9 (total, pressure, viscous), the Foundation's "
+            "forces.dat 12 (force and moment, pressure and viscous) or 18 (with porous)",
+            path=path, line=lineno)
+    return found
+
+
+def header_quantity(text: str) -> str | None:
+    """``"force"`` or ``"moment"`` as the header's first line says (``# Force``,
+    ``# Moment``), else None."""
     for line in text.splitlines():
         s = line.strip()
-        if not s or s.startswith("#"):
+        if not s:
             continue
-        if "((" in s:
-            return "foundation"
-        return "v1912" if "(" in s else "com-bare"
-    if name == "forces.dat":
-        return "foundation"
-    raise ParseError("no data rows", path=name or None)
+        if not s.startswith("#"):
+            return None
+        word = s.lstrip("#").strip().lower()
+        return "force" if word.startswith("force") else (
+            "moment" if word.startswith("moment") else None)
+    return None
+
+
+def header_centre_of_rotation(text: str, path: str = "<text>") -> np.ndarray | None:
+    """The ``# CofR : (x y z)`` of a file's header, m, or None without one."""
+    for i, line in enumerate(text.splitlines(), start=1):
+        s = line.strip()
+        if s and not s.startswith("#"):
+            return None
+        body = s.lstrip("#").strip()
+        if body.lower().startswith("cofr"):
+            values = body.split(":", 1)[-1].replace("(", " ").replace(")", " ").split()
+            try:
+                point = np.array([float(v) for v in values])
+            except ValueError:
+                point = np.array([])
+            if point.shape != (3,) or not np.all(np.isfinite(point)):
+                raise ParseError(f"the CofR line does not give three numbers: {body[:80]!r}",
+                                 path=path, line=i)
+            return point
+    return None
 
 
 def _whole_row(row: str, dialect: str) -> bool:
     """Whether a row without a final newline shows that it was written whole."""
-    return dialect != "com-bare" and row.endswith(")") and row.count("(") == row.count(")")
+    return "(" in row and row.endswith(")") and row.count("(") == row.count(")")
 
 
 def parse_table(text: str, path: str = "<text>", columns: int = 9,
                 check_increasing: bool = True) -> tuple[np.ndarray, str]:
-    """Rows of a force or moment file as an array (n, 1 + columns) and the dialect.
+    """Rows of a force or moment file as an array (n, 1 + numbers) and the dialect.
 
+    ``columns`` is the count of numbers after the time that a one-quantity layout holds.
     ``check_increasing`` False leaves the time check to the caller (a segment that a restart
     supersedes may end in a collapsed run whose times repeat at the written precision).
     """
-    dialect = detect_dialect(text, Path(path).name)
-    ncol = 1 + (12 if dialect == "foundation" else columns)
     lines = text.splitlines()
     complete_last = text.endswith(("\n", "\r"))
+    try:
+        dialect = detect_dialect(text, path)
+    except ParseError as exc:
+        first = _first_row(text)
+        if first is not None and first[0] == len(lines) and not complete_last:
+            # the only row is the last, cut short by a killed run
+            raise ParseError("no complete data rows", path=path) from exc
+        raise
+    ncol = 1 + (LAYOUT_NUMBERS[dialect] if dialect in BOTH_LAYOUTS else columns)
+    nested = "(" in _first_row(text)[1]  # type: ignore[index]
     rows = []
     for i, line in enumerate(lines, start=1):
         s = line.strip()
@@ -98,7 +197,7 @@ def parse_table(text: str, path: str = "<text>", columns: int = 9,
             if i == len(lines) and not complete_last:
                 break  # truncated last line of a killed run
             raise
-        if dialect != "foundation" and ("(" in s) != (dialect == "v1912"):
+        if ("(" in s) != nested:
             raise ParseError("row format differs from the file's first row", path=path, line=i)
         if len(vals) != ncol:
             if i == len(lines) and not complete_last:
@@ -172,25 +271,40 @@ def read_forces(case_dir: str | Path, function_name: str = "forces") -> ForceHis
     if not folders:
         raise ParseError("no time folders", path=str(base))
     f_parts, m_parts, dialect = [], [], ""
+    centre: np.ndarray | None = None
+    centre_from = ""
     for folder in folders:
-        forces = restart_segments(folder, "force")
-        if forces:
-            moments = restart_segments(folder, "moment")
-            for k, path in enumerate(forces):
-                arr, dialect = parse_table(path.read_text(), str(path), check_increasing=False)
-                f_parts.append(arr[:, :4])
-                if k < len(moments):
-                    marr, _ = parse_table(moments[k].read_text(), str(moments[k]),
-                                          check_increasing=False)
-                    m_parts.append(marr[:, :4])
-        elif restart_segments(folder, "forces"):
-            for path in restart_segments(folder, "forces"):
-                arr, dialect = parse_table(path.read_text(), str(path), check_increasing=False)
-                # pressure + viscous = total; moments likewise
-                f_parts.append(np.column_stack([arr[:, 0], arr[:, 1:4] + arr[:, 4:7]]))
-                m_parts.append(np.column_stack([arr[:, 0], arr[:, 7:10] + arr[:, 10:13]]))
-        else:
-            raise ParseError("neither force.dat nor forces.dat", path=str(folder))
+        stems = _stems(folder)
+        if not stems:
+            raise ParseError("no force or moment files (*.dat)", path=str(folder))
+        forces_here, moments_here = [], []
+        for stem in stems:
+            for path in restart_segments(folder, stem):
+                text = path.read_text()
+                arr, dialect = parse_table(text, str(path), check_increasing=False)
+                point = header_centre_of_rotation(text, str(path))
+                if point is not None:
+                    if centre is not None and not np.allclose(point, centre):
+                        raise ParseError(f"CofR {tuple(point)} differs from {tuple(centre)} "
+                                         f"in {centre_from}: moments about two points",
+                                         path=str(path))
+                    centre, centre_from = point, str(path)
+                if dialect in BOTH_LAYOUTS:
+                    k = 3 if dialect == "foundation-porous" else 2
+                    triples = arr[:, 1:].reshape(len(arr), 2, k, 3).sum(axis=2)
+                    forces_here.append(np.column_stack([arr[:, 0], triples[:, 0]]))
+                    moments_here.append(np.column_stack([arr[:, 0], triples[:, 1]]))
+                    continue
+                quantity = header_quantity(text) or _quantity_by_name(stem)
+                if quantity is None:
+                    raise ParseError(
+                        "neither its header (# Force, # Moment) nor its name says whether it "
+                        "holds forces or moments", path=str(path))
+                (forces_here if quantity == "force" else moments_here).append(arr[:, :4])
+        if not forces_here:
+            raise ParseError("moments but no forces", path=str(folder))
+        f_parts += forces_here
+        m_parts += moments_here
     force = merge_restart_segments(f_parts)
     _check_increasing(force, str(base))
     moment = merge_restart_segments(m_parts) if len(m_parts) == len(f_parts) else None
@@ -200,4 +314,24 @@ def read_forces(case_dir: str | Path, function_name: str = "forces") -> ForceHis
         if not np.allclose(force[:, 0], moment[:, 0], rtol=0, atol=1e-9):
             raise ParseError("force and moment files have different time bases", path=str(base))
     return ForceHistory(force[:, 0], force[:, 1:4], None if moment is None else moment[:, 1:4],
-                        dialect)
+                        dialect, centre)
+
+
+def _stems(folder: Path) -> list[str]:
+    """The files of a time folder by stem, a restart's ``<stem>_<time>.dat`` under its
+    ``<stem>``: ``force``, ``moment``, ``forces``, or whatever a user's case calls them."""
+    stems = set()
+    for p in folder.glob("*.dat"):
+        stem, _, suffix = p.stem.rpartition("_")
+        try:
+            float(suffix)
+            restart = bool(stem)
+        except ValueError:
+            restart = False
+        stems.add(stem if restart else p.stem)
+    return sorted(stems, key=lambda name: (not name.startswith("force"), name))
+
+
+def _quantity_by_name(stem: str) -> str | None:
+    name = stem.lower()
+    return "moment" if "moment" in name else ("force" if "force" in name else None)

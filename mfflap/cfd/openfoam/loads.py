@@ -171,7 +171,9 @@ def to_loads(history: ForceHistory, state: KinematicState, span: float, depth: f
     moves; forces along the case axes, moment about the origin, taken here about the
     *moving* leading edge: M_LE = M_CofR - r_LE x F with r_LE = (0, h, 0)) or "plate"
     (static mesh in the plate's frame; forces along the plate's axes, moment about the
-    leading edge at the origin).
+    leading edge at the origin). Moments taken about another point than the origin (the
+    forces function object's CofR, :attr:`ForceHistory.centre_of_rotation`) are first
+    moved to the origin: M_O = M_C + r_C x F.
     """
     if history.moment is None:
         raise ParseError("the force history has no moments; need moment.dat or forces.dat")
@@ -180,6 +182,9 @@ def to_loads(history: ForceHistory, state: KinematicState, span: float, depth: f
     scale = span / depth
     fx, fy = history.force[:, 0] * scale, history.force[:, 1] * scale
     mz = history.moment[:, 2] * scale
+    if history.centre_of_rotation is not None:
+        xc, yc = float(history.centre_of_rotation[0]), float(history.centre_of_rotation[1])
+        mz = mz + xc * fy - yc * fx  # about the origin: M_O = M_C + r_C x F
     if frame not in FRAMES:
         raise ConfigError(f"unknown frame {frame!r}; allowed: {', '.join(FRAMES)}", key="frame")
     if frame == "plate":
