@@ -30,8 +30,8 @@ runs again in the same --work-dir; the steps it then takes again are left out of
 (solver_log.redone_work), though its forces carry the restart's round-off.
 
 CPU seconds depend on the machine (the reference took 318-340 s per cycle on earlier machines
-of this kind and 155 s on a later one). Issue 4's 90 s per cycle was set against the set-up of
-shared/design/openfoam.md, which needed about 4.4 min per cycle on that file's machine. That
+of this kind and 155 s on a later one). The cost target's 90 s per cycle was set against a
+reference OpenFOAM set-up, which needed about 4.4 min per cycle on its own machine. That
 set-up (the "openfoam_md" set-up: its H-type mesh, PIMPLE 2x1, PCG, max Co 2) runs here too, as
 the baseline, and every CPU per cycle is printed two more ways: as a ratio to the baseline's on
 the same motion and machine (the target as a ratio: 90 s / 4.4 min = 0.34), and at the speed of
@@ -52,7 +52,7 @@ the medium mesh's runs), the reading of a validation standard such as ASME V&V 2
 difference below the yardstick's own numerical uncertainty cannot be told apart from none.
 --yardstick SETUP[@MESH][-coX] measures every NRMSE against that run instead of the medium
 mesh: openfoam_md@openfoam_md_medium is the medium H-type mesh of openfoam.md's cost table
-(32,452 cells there), which issue 4's "the medium mesh" may mean as well as mfflap's O-grid.
+(32,452 cells there), which the cost target's "the medium mesh" may mean as well as mfflap's O-grid.
 --yardstick-floor also reruns each of the yardstick's runs other than the reference with the
 other pressure solver and prints how far it moves: the yardstick's own round-off floor (the
 reference's, reference-PCG, always runs). --window 0.25:0.55 also compares every run over
@@ -71,8 +71,8 @@ Run: python benchmarks/cfd_cost.py [setup ...] [--meshes coarse,lean] [--cycles 
      part-way are resumed, and a folder
      whose runs had another motion, cycle count, far field, k-epsilon convection
      (--turbulence-convection) or wall treatment (--wall-treatment) is refused; the mesh study
-     of the README: affordable --meshes fine --far-field inletOutlet --cycles 1; the
-     plate's frame: affordable --plate-frame --far-field inletOutlet --cycles 1)
+     of docs/findings/known_limits.md: affordable --meshes fine --far-field inletOutlet
+     --cycles 1; the plate's frame: affordable --plate-frame --far-field inletOutlet --cycles 1)
 """
 
 from __future__ import annotations
@@ -122,7 +122,7 @@ OPENFOAM_MD_STEPS_PER_CYCLE = 2_850
 #: its CPU per cell and time step there (16,442 cells), µs: the baseline's here, against this,
 #: is the speed of this machine against that one
 OPENFOAM_MD_US_PER_CELL_STEP = OPENFOAM_MD_CPU_PER_CYCLE_S / (16_442 * 2_850) * 1e6
-#: issue 4's target: CPU per cycle, s, and as a ratio to the set-up of openfoam.md
+#: the cost target: CPU per cycle, s, and as a ratio to the set-up of openfoam.md
 TARGET_CPU_PER_CYCLE_S = 90.0
 TARGET_RATIO = TARGET_CPU_PER_CYCLE_S / OPENFOAM_MD_CPU_PER_CYCLE_S
 #: and its accuracy: F_n and M NRMSE against the medium mesh in the first cycle, %
@@ -373,7 +373,7 @@ def compare(run: SetupRun, ref: SetupRun, cycles: float,
 def verdict(run: SetupRun, yardstick: SetupRun, baseline: SetupRun | None,
             speed_factor: float, cycles: float, band: tuple[float, float] | None = None,
             twin: SetupRun | None = None, window: tuple[float, float] | None = None) -> str:
-    """Which readings of issue 4's target ``run`` meets, in its first cycle.
+    """Which readings of the cost target ``run`` meets, in its first cycle.
 
     The accuracy half: F_n and M within 2 % NRMSE of the yardstick in cycle 1, and, given the
     ``band`` (the F_n and M NRMSE % of the furthest of the runs the yardstick is the mean of),
@@ -487,7 +487,7 @@ def cost_accuracy_figure(study: Study, path: str | Path, title: str = ""
                          ) -> dict[str, tuple[float, float]]:
     """Cost against accuracy: every finished run's CPU per cycle (as a ratio to
     openfoam.md's set-up) against the larger of its F_n and M NRMSE from the yardstick in
-    cycle 1, issue 4's target as a shaded box, the medium mesh's time-step band as a line,
+    cycle 1, the cost target as a shaded box, the medium mesh's time-step band as a line,
     and each named set-up joined to its rerun with the other pressure solver (the length of
     that line is its round-off floor seen from the yardstick). Returns the points drawn,
     (cost ratio, NRMSE %) by label."""

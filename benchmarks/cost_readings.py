@@ -1,4 +1,4 @@
-"""Issue 4's cost target under every reading measured, from the studies of cfd_cost.py.
+"""The cost target under every reading measured, from the studies of cfd_cost.py.
 
 Each study that ``benchmarks/cfd_cost.py --output F.h5`` wrote measures every run against
 one yardstick on one motion, and is named ``cost_accuracy_pitch<P>[<suffix>].h5`` after the
@@ -282,7 +282,7 @@ def readings_figure(readings: list[Reading], path: str | Path):
                       [textwrap.fill(YARDSTICKS[y], 24) for y in rows], fontsize=8)
         ax.tick_params(length=0, pad=8)
         ax.set_title(WINDOWS[window], fontsize=10)
-    fig.suptitle("Issue 4: the nearest set-up within the cost (≤ 0.34 of openfoam.md's "
+    fig.suptitle("The cost target: the nearest set-up within the cost (≤ 0.34 of openfoam.md's "
                  "set-up) and its larger F_n / M NRMSE\nagainst each yardstick "
                  "(the worse of its two pressure solvers; green: within 2 %)", fontsize=10)
     fig.tight_layout()

@@ -98,7 +98,7 @@ class MorisonCoefficients:
 class StripSettings:
     """How the plate is cut into strips and which volumes and areas each strip carries.
 
-    ``None`` for a volume or area selects the default of shared/design/equations.md:
+    ``None`` for a volume or area selects the default of docs/theory.md:
     V_n = pi (l/2)^2 s (flat-plate added mass), V_t = l s d, S_n = l s, S_t = d s;
     each shared equally between the strips.
     """

@@ -92,7 +92,7 @@ class CycleSummary:
     max_power : W
         Largest instantaneous input power over the samples.
     energy_residual : W
-        P - U F - D (zero for an exact, energy-consistent model; see equations.md).
+        P - U F - D (zero for an exact, energy-consistent model; see docs/theory.md).
     frequency : Hz
     trailing_edge_amplitude : m
     """

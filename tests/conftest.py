@@ -20,7 +20,7 @@ def _pin_openblas_kernels() -> None:
     find it up to half a second elsewhere in its 10 s cycle (J alike to 1e-8). Its
     back-test is found shifted in time (mfflap.backtest.run.matching_fixture), but each
     later round then optimises about another centre, and the series take other steps
-    from round 2 on (README, Known limits). Set before numpy loads, here and in every
+    from round 2 on (docs/findings/known_limits.md). Set before numpy loads, here and in every
     process the tests start (xdist's workers, the CLI's subprocesses), over a value the
     environment gives (machines here have come with OPENBLAS_CORETYPE=Haswell set); the
     value found is kept in MFFLAP_TESTS_OPENBLAS_CORETYPE_WAS. Left alone on a CPU without
@@ -35,7 +35,7 @@ def _pin_openblas_kernels() -> None:
 def _pin_openblas_threads() -> None:
     """Have OpenBLAS use two threads, as it did on the two-core machines the shipped series of
     rounds were computed on: one thread instead of two moves beta = 1's least-power optimum
-    as far as other kernels do (README, "The phase of periodic optima"), and OpenBLAS would
+    as far as other kernels do (docs/findings/phase_of_optima.md), and OpenBLAS would
     otherwise take one thread per core of whatever machine runs the tests. Set before numpy
     loads, over a value the environment gives (kept in
     MFFLAP_TESTS_OPENBLAS_NUM_THREADS_WAS); OpenBLAS itself caps it at the cores there are.
@@ -62,11 +62,35 @@ import pytest
 from mfflap.hydro import MorisonModel
 
 
+def pytest_addoption(parser: pytest.Parser) -> None:
+    parser.addoption("--full", action="store_true",
+                     help="the full tier: also the tests marked openfoam (real OpenFOAM runs) "
+                          "and slow; without it, the fast tier runs")
+
+
+#: the markers of the tests only the full tier runs
+FULL_TIER_MARKERS = ("openfoam", "slow")
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """The fast tier (the default) deselects the tests marked openfoam or slow; ``--full``
+    runs them all. A ``-m`` expression given on the command line chooses instead."""
+    if config.getoption("--full") or config.getoption("-m"):
+        return
+    kept, dropped = [], []
+    for item in items:
+        full = any(item.get_closest_marker(m) is not None for m in FULL_TIER_MARKERS)
+        (dropped if full else kept).append(item)
+    if dropped:
+        config.hook.pytest_deselected(items=dropped)
+        items[:] = kept
+
+
 def pytest_runtest_setup(item: pytest.Item) -> None:
     """Skip a test marked ``shipped_kernels`` where OpenBLAS runs other kernels or another
     thread count than the shipped series of rounds were computed with (on a CPU without
     AVX-512, or with one core), saying which: there the series take other steps from round
-    2 on, as README's Known limits say, and the test's assertions are those steps."""
+    2 on, as docs/findings/known_limits.md say, and the test's assertions are those steps."""
     if item.get_closest_marker("shipped_kernels") is not None:
         why = unlike_the_shipped_series()
         if why is not None:

@@ -61,7 +61,7 @@ def unlike_the_shipped_series() -> str | None:
     if kernels == [SHIPPED_KERNELS] and threads == [SHIPPED_THREADS]:
         return None
     return (f"replays the steps of a shipped series of rounds, which round-off steers "
-            f"(README, Known limits): they were computed on OpenBLAS's {SHIPPED_KERNELS} "
+            f"(docs/findings/known_limits.md): they were computed on OpenBLAS's {SHIPPED_KERNELS} "
             f"kernels with {SHIPPED_THREADS} threads, and OpenBLAS runs "
             f"{', '.join(kernels) or 'no kernels found'} with "
             f"{', '.join(map(str, threads)) or 'no'} thread(s) here")

@@ -1,7 +1,7 @@
 """Back-tests over several cycles: real coarse-mesh pimpleFoam runs of the trust series'
 round 2 optima run for 10 (beta = 0, key f85edc06d9cf46a0) and 8 periods (beta = 0.5, key
 34cd2b07c53664ae), shipped in ``cfd_repeatability`` beside the three-period copies of the
-beta = 0 one (docs/optimised_motions.md, "How long a back-test runs")."""
+beta = 0 one (docs/findings/optimised_motions.md, "How long a back-test runs")."""
 
 from __future__ import annotations
 
@@ -355,7 +355,7 @@ def test_the_beta_0_optimum_with_a_retrys_set_up_from_the_start_is_not_resolved_
     4-5 % (power) below the freestream copies' 28.66-28.67 N, 1.3 combined standard errors:
     not resolved from the noise, and still climbing (cycles 6-8: 29.2 N). So a retry's
     set-up moves this optimum by less than 5 %, where it moved beta = 0.5 by 7 %
-    (docs/optimised_motions.md, "How long a back-test runs")."""
+    (docs/findings/optimised_motions.md, "How long a back-test runs")."""
     other, period = _record(f"{BETA0}_inlet_outlet_8_cycles")
     assert other.parameters["motion_key"] == BETA0.removeprefix("backtest_")
     assert other.provenance["solver_far_field"] == "inletOutlet"
@@ -385,7 +385,8 @@ def test_the_beta_0_optimum_on_the_medium_mesh_reads_the_coarse_meshs_means_over
     (25.48 N / 39.25 W), a quarter of their combined standard error; cycle by cycle the two
     meshes lie up to 12 % apart, within the coarse mesh's 9 % cycle scatter, and the medium
     mesh scatters less (3.7 %). So the coarse back-tests' means hold on the medium mesh for
-    this optimum, as far as three cycles tell (docs/optimised_motions.md, "How long a back-test
+    this optimum, as far as three cycles tell (docs/findings/optimised_motions.md, "How long a
+    back-test
     runs")."""
     medium, period = _record(f"{BETA0}_medium_5_cycles")
     coarse, _ = _record(f"{BETA0}_inlet_outlet_8_cycles")
@@ -420,7 +421,7 @@ def test_the_beta_0_optimum_on_the_medium_mesh_reads_the_coarse_meshs_means_over
     eight-period run, 0.4 of their combined standard error. Its cycles 3-5 lie 14 % from
     the five-period medium run's, which differs only in its write times: copies part on
     the medium mesh too. The coarse run's late rise (cycles 6-8) does not come on it
-    (docs/optimised_motions.md, "How long a back-test runs")."""
+    (docs/findings/optimised_motions.md, "How long a back-test runs")."""
     medium, period = _record(f"{BETA0}_medium_8_cycles")
     five, _ = _record(f"{BETA0}_medium_5_cycles")
     coarse, _ = _record(f"{BETA0}_inlet_outlet_8_cycles")
@@ -466,7 +467,8 @@ def test_a_live_back_test_on_two_processes_runs_the_serial_runs_flow(tmp_path,
     beta = 0.5 optimum for 1.5 periods. Its record says it ran on two processes, and its
     forces follow the shipped serial run of the same motion and set-up (backtest/) within
     1 % NRMSE over that time: the decomposition changes round-off, not the flow, before
-    the wake's chaos parts the two runs (docs/optimised_motions.md, 'How long a back-test runs')."""
+    the wake's chaos parts the two runs (docs/findings/optimised_motions.md, 'How long a back-test
+    runs')."""
     from mfflap.cfd.openfoam.time_folders import processor_folders
     from mfflap.metrics import nrmse
 

@@ -120,7 +120,7 @@ def test_fixture_lookup_by_key_then_by_tolerance_and_missing_is_reported(tmp_pat
 def test_a_live_backtest_goes_on_with_its_record_as_saved(tmp_path, monkeypatch):
     """A live back-test saved in single precision is compared as saved, so a rerun that
     finds the saved record (a series of rounds resumed after it stopped) has the same
-    numbers to the last bit: on 2026-11-29 a resumed series' next optimum came out 6e-6
+    numbers to the last bit: once a resumed series' next optimum came out 6e-6
     away from the one whose case the stopped run had written, and that case was refused."""
     from mfflap.backtest import run as backtest_run
 
@@ -187,6 +187,11 @@ def test_vtk_time_series_reads_back_in_pyvista(tmp_path):
     # the trailing edge sits at chord x (cos, sin) of the pitch from the leading edge
     xmax = mesh.points[:, 0].max()
     assert xmax == pytest.approx(0.16 * np.cos(pitch[k]), rel=1e-5)
+    # each file names the frame its coordinates are in: the CFD case's, heave along y
+    frame = str(np.asarray(pv.read(tmp_path / "m_0005.vtp").field_data["frame"])[0])
+    assert frame.startswith("CFD case") and "y heave" in frame
+    assert mesh.points[:, 1].min() == pytest.approx(heave[k] + min(
+        0.0, 0.16 * np.sin(pitch[k])), abs=1e-6)
 
 
 @pytest.mark.slow
@@ -562,7 +567,8 @@ def test_the_main_job_kept_within_the_identification_data(tmp_path, coefficients
                for b in summary["backtest"].values()}
     assert len(sources) == 4 and sources <= shipped
     assert "the 4 held-out motion(s)" in summary["gap_transfer"]["verdict"]
-    # what README says of these back-tests: with the paper's coefficients the model gives
+    # what docs/findings/optimised_motions.md says of these back-tests: with the paper's
+    # coefficients the model gives
     # about half of CFD's mean thrust and power; identified from this CFD, within 5 % on
     # the best sinusoid and 20 % on the beta = 0 optimum
     bt = summary["backtest"]
@@ -574,7 +580,8 @@ def test_the_main_job_kept_within_the_identification_data(tmp_path, coefficients
             bound = 0.05 if label == "best sinusoid" else 0.2
             assert all(abs(e) < bound for e in errors), (label, errors)
     # two of these runs were resumed by a retry a quarter into their last cycle
-    # (docs/optimised_motions.md, "Retries and one set-up"): said in the JSON and the report for
+    # (docs/findings/optimised_motions.md, "Retries and one set-up"): said in the JSON and the
+    # report for
     # those alone
     mixed = {"fixture backtest_598a5388e592df63.h5", "fixture backtest_de1ba4adb3e991be.h5"}
     assert {label for label, b in bt.items() if b["compared_cycles_mixed_set_up"]} == {

@@ -17,7 +17,7 @@ from openblas_kernels import (
 def test_openblas_runs_its_skylakex_kernels_where_the_cpu_has_avx512():
     """tests/conftest.py pins OPENBLAS_CORETYPE before numpy loads, in this process too:
     a plugin that loaded numpy first would leave the pin unread, and the rounds' series
-    would take other steps (README, Known limits)."""
+    would take other steps (docs/findings/known_limits.md)."""
     if not has_avx512():  # the kernels would not run: the environment's choice is kept
         assert "MFFLAP_TESTS_OPENBLAS_CORETYPE_WAS" not in os.environ
         return
@@ -55,4 +55,4 @@ def test_tests_that_replay_the_shipped_series_say_why_they_cannot_on_other_kerne
                "PYTHONPATH": here}
         out = subprocess.run([sys.executable, "-c", ask], env=env, capture_output=True,
                              text=True, check=True).stdout
-        assert said in out and "README, Known limits" in out, out
+        assert said in out and "docs/findings/known_limits.md" in out, out

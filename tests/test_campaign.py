@@ -411,7 +411,7 @@ def _short_run_retried_once(tmp_path, monkeypatch, run_case_instead, calls):
 @pytest.mark.openfoam
 def test_a_run_whose_force_log_times_repeat_is_retried_from_before_them(tmp_path, monkeypatch):
     """A time step that collapses below the written precision too briefly for the runner to
-    see leaves a finished run whose force log repeats a time (a 2026-11-29 back-test on the
+    see leaves a finished run whose force log repeats a time (a back-test on the
     coarse mesh: t = 4.3245473 s twice, its forces near 1e9 N, then on to its end). The
     first real run here is given such a time just before 0.035 s: it is retried from the last
     time written before it (0.03 s) with the next remedy, and the record is the rerun's."""

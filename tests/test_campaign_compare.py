@@ -40,7 +40,8 @@ def test_two_set_ups_of_the_small_motions():
     for c in result.cases:
         parameters = read_record(COARSE / f"{c.case_id}.h5").parameters
         f = parameters["frequency"]
-        fast = f >= 1  # k >= 1.7; the slow motions shed small vortices (README)
+        fast = f >= 1  # k >= 1.7; the slow motions shed small vortices
+                       # (docs/findings/known_limits.md)
         assert c.nrmse_normal_force < (0.025 if fast else 0.07), c
         assert c.pearson_normal_force > (0.995 if fast else 0.97), c
         assert c.pearson_moment > (0.99 if fast else 0.75), c  # slow heave: 0.82
@@ -57,7 +58,7 @@ def test_two_set_ups_of_the_small_motions():
     (AFFORDABLE, (0.08, 0.18)),  # measured +10 to +16 %: less drag
 ])
 def test_small_motions_against_the_medium_mesh(folder, thrust_range):
-    """The medium mesh is the yardstick of issue 4. On the small motions (attached flow) the
+    """The medium mesh is the yardstick of the cost target. On the small motions (attached flow) the
     coarse mesh and affordable are both within 3 % F_n NRMSE of it where f >= 1 Hz
     (measured 0.5-1.7 % and 1.2-2.7 %) and within 7 % below; their mean drags differ from it
     in opposite directions."""
@@ -87,7 +88,7 @@ def test_small_motions_against_the_medium_mesh(folder, thrust_range):
 def test_what_moves_affordables_small_motion_drag(variant, setup_name, mesh, convection,
                                                   fast_f_n_limit, thrust_range):
     """affordable's three changes from the reference taken apart on the small motions
-    (README, Validation against linear theory): each run set is what its cfd linear-check
+    (docs/findings/linear_theory.md): each run set is what its cfd linear-check
     options make, and the 10-16 % lower drag comes with LUST on the graded mesh only."""
     from mfflap.campaign.execute import manifest_setup
     from mfflap.cfd.openfoam.setups import mesh_and_solver

@@ -565,7 +565,7 @@ def _in_target(group, attrs, window: int = 0) -> bool:
 
 @pytest.mark.parametrize("pitch", [5, 10, 20])
 def test_the_shipped_cost_studies_say_what_readme_says_of_them(pitch):
-    """README (Known limits) reads the three studies behind docs/figures: no set-up has both
+    """docs/findings/known_limits.md reads the three studies behind docs/figures: no set-up has both
     of its runs (GAMG and PCG) in the target box; at 5 deg medium_piso@graded is in it with
     GAMG only; at 10 deg medium_piso with PCG is outside the time-step band on M."""
     import h5py
@@ -607,7 +607,7 @@ def test_the_force_histories_show_the_yardstick_the_medium_mesh_and_the_named_se
 
 @pytest.mark.parametrize("pitch", [5, 10, 20])
 def test_the_shipped_studies_against_openfoam_md_s_medium_mesh_say_what_readme_says(pitch):
-    """README (Known limits) reads the studies against openfoam.md's own medium mesh: no run
+    """docs/findings/known_limits.md reads the studies against openfoam.md's own medium mesh: no run
     within the cost is within 2 % of it, openfoam.md's own set-up is not either (that file
     found 1-2 %), and medium_piso@openfoam_md meets the cost with both pressure solvers. The
     same holds over the first stroke alone (t = 0.25-0.55 s, before the shed vortex passes
@@ -634,7 +634,7 @@ def test_the_shipped_studies_against_openfoam_md_s_medium_mesh_say_what_readme_s
 
 @pytest.mark.parametrize("pitch", [5, 10, 20])
 def test_the_shipped_studies_against_openfoam_md_s_fine_mesh_say_what_readme_says(pitch):
-    """README (Known limits) reads the studies against openfoam.md's fine H-type mesh: a run
+    """docs/findings/known_limits.md reads the studies against openfoam.md's fine H-type mesh: a run
     of the H-type medium mesh (max Co 2 at 5°, 1 at 10°) is nearer it than any other mesh,
     the O-grid medium mesh is further, and no run within the cost is within 2 % of it, in
     cycle 1 or over the first stroke. At 5° the fine mesh itself at max Co 1 lies within 2 %

@@ -7,7 +7,8 @@ version of the rounds that found the same optimum), each case written from the o
 output: their motion tables are identical, their controlDicts differ only in the 13th digit
 of endTime and writeInterval (the period as recomputed from the same optimum). With an
 adjustable time step that lands on the write times, the time steps differ, and the flow
-separates the difference into the forces (docs/optimised_motions.md, "First-order corrections").
+separates the difference into the forces (docs/findings/optimised_motions.md, "First-order
+corrections").
 """
 
 import numpy as np

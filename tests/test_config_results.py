@@ -305,7 +305,7 @@ def test_cli_evaluate_text_json_and_figure(tmp_path):
 def test_cli_ramp_motion(tmp_path):
     path = tmp_path / "ramp.toml"
     path.write_text("[study]\nname='r'\n[motion]\nkind='ramp_harmonic'\nfrequency=0.5\n"
-                    "heave_amplitude=0.2\npitch_ramp_rate_deg=10\n")
+                    "heave_amplitude=0.2\npitch_ramp_rate_deg=10\nphase_deg=90\n")
     res = CliRunner().invoke(cli, ["evaluate", str(path), "--figure", str(tmp_path / "r.png")])
     assert res.exit_code == 0, res.output
     assert "scheme continuous" in res.output
@@ -353,7 +353,7 @@ def test_a_ramp_motion_past_90_deg_is_refused_for_its_run(tmp_path):
     --cycles periods; each refuses a ramp that turns the plate across the stream."""
     path = tmp_path / "ramp.toml"
     path.write_text("[motion]\nkind='ramp_harmonic'\nfrequency=1.0\nheave_amplitude=0.2\n"
-                    "pitch_ramp_rate_deg=35\n")
+                    "pitch_ramp_rate_deg=35\nphase_deg=90\n")
     runner = CliRunner()
     res = runner.invoke(cli, ["evaluate", str(path), "--figure", str(tmp_path / "r.png")])
     assert res.exit_code == 2 and "Traceback" not in res.output
@@ -399,3 +399,29 @@ def test_a_huge_value_is_named_cut_short_in_one_line(tmp_path, text):
     message = str(info.value)
     assert "xxxxxxxxxx" in message and "..." in message
     assert len(message) < 500 and "\n" not in message
+
+
+def test_a_motion_table_without_a_key_its_kind_needs_is_refused_naming_it(tmp_path):
+    """A [motion] without heave_amplitude used to run with the default 0.3 m."""
+    path = tmp_path / "m.toml"
+    path.write_text("[motion]\nkind = 'harmonic'\nfrequency = 1.0\npitch_amplitude_deg = 20\n"
+                    "phase_deg = 90\n")
+    with pytest.raises(ConfigError) as info:
+        load_case(path)
+    assert info.value.key == "motion.heave_amplitude" and info.value.source == str(path)
+    res = CliRunner().invoke(cli, ["evaluate", str(path), "--figure", str(tmp_path / "f.png")])
+    assert res.exit_code == 2 and "heave_amplitude missing" in res.output
+
+
+def test_a_motion_key_the_kind_does_not_read_is_warned_by_name(tmp_path):
+    from mfflap.config import ConfigWarning
+
+    path = tmp_path / "m.toml"
+    path.write_text("[motion]\nkind = 'harmonic'\nfrequency = 1.0\nheave_amplitude = 0.2\n"
+                    "pitch_amplitude_deg = 20\nphase_deg = 90\npitch_ramp_rate_deg = 10\n")
+    with pytest.warns(ConfigWarning, match="motion.pitch_ramp_rate_deg is not read"):
+        assert load_case(path).motion.heave_amplitude == 0.2
+    res = CliRunner().invoke(cli, ["evaluate", str(path), "--figure", str(tmp_path / "f.png")])
+    assert res.exit_code == 0
+    assert (f"warning: {path}: motion.pitch_ramp_rate_deg is not read by a harmonic motion"
+            in res.stderr)

@@ -1,8 +1,8 @@
-"""benchmarks/cost_readings.py: issue 4's target under every reading, from the cost studies.
+"""benchmarks/cost_readings.py: the cost target under every reading, from the cost studies.
 
 The studies are written by cfd_cost.py's own writer from synthetic force histories whose NRMSE
 follow by hand (a unit sine, range 2, offset by 0.02 is 1 % off); the shipped studies are read
-as README reads them.
+as docs/findings/known_limits.md reads them.
 """
 
 from __future__ import annotations
@@ -183,7 +183,7 @@ def test_a_file_that_is_not_a_study_is_refused_by_name(bench, readings, tmp_path
 
 def test_the_shipped_studies_meet_the_target_only_at_20_deg_against_the_o_grid_mean(readings,
                                                                               tmp_path):
-    """README's verdict, read from the shipped studies: the readings met are against the
+    """The findings' verdict, read from the shipped studies: the readings met are against the
     mean of the O-grid medium mesh's time steps at 20 deg (medium_piso, with both pressure
     solvers, in cycle 1 and over the first stroke; with the all_y_plus wall treatment in
     every run, over the first stroke only at 20 deg and not at all at 5 or 10 deg); against that
@@ -221,7 +221,7 @@ def test_the_shipped_studies_meet_the_target_only_at_20_deg_against_the_o_grid_m
         low = [r for r in every
                if (r.yardstick, r.pitch_deg) == ("o_grid_mean_all_y_plus", pitch)]
         assert len(low) == 2 and all(r.nrmse_percent > 3.0 for r in low), pitch
-    readme = " ".join((ROOT / "README.md").read_text().split())
+    readme = " ".join((ROOT / "docs" / "findings" / "known_limits.md").read_text().split())
     assert f"{len(met)} of {len(every)} are met" in readme
     assert readings.readings_figure(every, tmp_path / "r.png") is not None
     import matplotlib.image

@@ -129,7 +129,8 @@ def test_on_the_shipped_fixtures_the_errors_grow_in_proportion_and_the_tools_say
     """The Table 1 fixtures: the model errs by about the same share of every run's loads
     (b = 0.9-1.0 over three decades of load), so identify and gap diagnose say that
     "case" weighs the runs as their errors say, on screen, in JSON and in the reports. With
-    it, the gap diagnosis claims the Wagner wake lag (README); on the grid's scale it
+    it, the gap diagnosis claims the Wagner wake lag (docs/findings/known_limits.md); on the
+    grid's scale it
     claims nothing."""
     from mfflap.cli.main import cli
 
@@ -196,7 +197,8 @@ def test_auto_fits_with_the_scaling_the_errors_ask_for(noise, chosen, tmp_path):
 
 def test_auto_on_real_cfd_claims_the_known_missing_circulation_in_both_datasets(tmp_path):
     """The Table 1 fixtures' errors ask for case scaling, the small motions' for the grid's
-    (README); with "auto" the diagnosis claims the wake-lagged circulation, which the
+    (docs/findings/known_limits.md); with "auto" the diagnosis claims the wake-lagged circulation,
+    which the
     Morison model lacks, on both: on the grid's scale it misses it on Table 1, on the
     cases' scales it misses it on the small motions. The case file's key takes "auto"."""
     from mfflap.cli.main import cli

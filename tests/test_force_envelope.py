@@ -159,7 +159,7 @@ def test_identification_leaves_a_lost_run_out_and_bridges_a_short_stretch():
                        r"the motion can drive .* first t = 0\.7"):
         prepare_case(rec)
     # the slower aftermath of the burst at t = 3.09 s of f = 0.5 Hz, h = 0.3 m, phi = 90 deg
-    # (README, Known limits): 0.04 s beyond the bound, bridged and listed
+    # (docs/findings/known_limits.md): 0.04 s beyond the bound, bridged and listed
     rec = read_record(fixture_dir("table1_coarse") / f"{AFTERMATH}.h5")
     case = prepare_case(rec)
     note = next(n for n in case.notes if ENVELOPE_NOTE in n)

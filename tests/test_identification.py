@@ -463,7 +463,8 @@ def test_case_scaling_fits_the_mean_square_nrmse_and_every_run_weighs_alike():
     step of a coefficient off it (within its bound) raises it, and the grid-scaled fit's
     coefficients give more. On the shipped fixtures no run then moves the normal drag by
     more than 4 % (f = 2 Hz, h = 0.5 m, phi = 135 deg moves it by 9.5 % with grid scaling),
-    the bootstrap spreads narrow and the tangential drag is determined (README)."""
+    the bootstrap spreads narrow and the tangential drag is determined
+    (docs/findings/known_limits.md)."""
     from mfflap.identification.fit import most_influential
 
     case, cases, _ = _shipped_cases()

@@ -36,7 +36,7 @@ def test_plate_at_rest_at_incidence_hand_value(model):
 
 
 def test_standard_heave_pitch_sinusoid_gives_thrust_and_takes_power(model):
-    """Catches the literal signs of the paper's text (equations.md): phi = 90 deg must give
+    """Catches the literal signs of the paper's text (docs/theory.md): phi = 90 deg must give
     positive thrust and positive mean power."""
     d = harmonic_to_discrete(1.0, 0.3, np.deg2rad(20), np.pi / 2, 50)
     s = evaluate_discrete(model, d).summary
@@ -96,7 +96,7 @@ def test_energy_residual_equals_discrete_added_mass_work(model, rng):
 
 
 def test_energy_consistent_variant_is_second_order(model):
-    # equations.md's case: f = 1 Hz, h = 0.3 m, theta = 20 deg, phi = 90 deg
+    # docs/theory.md's case: f = 1 Hz, h = 0.3 m, theta = 20 deg, phi = 90 deg
     res = {}
     for n in (50, 100, 200):
         d = harmonic_to_discrete(1.0, 0.3, np.deg2rad(20), np.pi / 2, n)
@@ -122,7 +122,7 @@ def test_added_mass_leading_order_estimate(model):
     estimate = -1 / (2 * 50 * dt) * (1.02 * 1000 * g.volume_normal / g.n_strips
                                      * (dt * an) ** 2).sum()
     r = evaluate_discrete(model, d).summary.energy_residual
-    assert abs(r - estimate) < 0.2 * abs(r)  # equations.md: within about 20 % at N = 50
+    assert abs(r - estimate) < 0.2 * abs(r)  # docs/theory.md: within about 20 % at N = 50
 
 
 def test_thrust_power_projection_consistency(model, rng):

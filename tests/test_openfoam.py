@@ -1162,7 +1162,8 @@ def test_mean_cycles_of_a_motion_that_is_not_periodic_are_refused_before_any_run
 
     text = (Path(__file__).parents[1] / "cases" / "paper2026.toml").read_text()
     case = tmp_path / "ramp.toml"
-    case.write_text(text.replace('kind = "harmonic"', 'kind = "ramp_harmonic"'))
+    case.write_text(text.replace('kind = "harmonic"', 'kind = "ramp_harmonic"').replace(
+        "pitch_amplitude_deg = 20.0", "pitch_ramp_rate_deg = 10.0"))
     res = CliRunner().invoke(cli, ["cfd", "convergence", str(case), str(tmp_path / "c"),
                                    "--meshes", "coarse", "--phase-from", "1"])
     assert res.exit_code != 0

@@ -30,7 +30,7 @@ def problem(beta, **kw):
 
 
 def corrected_objective(p: FlappingProblem, d: DiscreteMotion, k_t: float, k_p: float):
-    """The corrected J written out from equations.md's stage cost, term by term."""
+    """The corrected J written out from docs/theory.md's stage cost, term by term."""
     state = d.states(p.scheme)
     thrust, power = thrust_and_power(p.model.loads(state), state)
     thrust, power = k_t * thrust, k_p * power

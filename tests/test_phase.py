@@ -202,7 +202,7 @@ def test_the_trust_series_with_a_fixed_phase_takes_the_shipped_steps_on_other_ke
     (tests/test_rounds.py: all of round 2 confirmed, beta = 0's J decrease with a ratio of
     1.00; beta = 0 and 0.5 refused in round 3; beta = 0.5 confirmed in round 4; beta = 0's
     region collapsed in round 5) on the same CFD records through round 4, each found
-    shifted in time where its phase moved (README, "The phase of periodic optima")."""
+    shifted in time where its phase moved (docs/findings/phase_of_optima.md)."""
     loop, told = _fixed_phase_series_on_other_kernels(tmp_path / "loop", 6, "--trust-region",
                                                        "0.25")
     rounds = loop["rounds"]

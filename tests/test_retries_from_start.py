@@ -236,7 +236,8 @@ def test_backtest_output_warns_of_a_last_cycle_that_mixes_two_set_ups(capsys):
 
 
 def test_the_beta_05_optimum_at_max_co_2_from_the_start_settles_where_the_resumed_run_did():
-    """Round 2's beta = 0.5 optimum run 8 periods with --retries-from-start (README, "Retries
+    """Round 2's beta = 0.5 optimum run 8 periods with --retries-from-start
+    (docs/findings/optimised_motions.md, "Retries
     and one set-up"): its time step collapsed where run A's did (3.04 s, then 6.23 s with
     the inletOutlet far field), and its rerun from t = 0 s at max Co 2 settles at run A's
     mean (resumed at max Co 2 from 6.08 s, before its settled cycles), 2 or more combined
@@ -319,7 +320,8 @@ def test_one_cycle_cannot_tell_what_a_far_field_switch_inside_it_did():
     the same cycle: 38 % apart. But eight periods of the same one set-up scatter by 12 %
     from cycle to cycle (25.9-36.2 N; mean 29.3 ± 1.5 N), and the switched cycle lies
     within one cycle's scatter of that mean, the three-period rerun within two: single
-    cycles do not show what the switch did (docs/optimised_motions.md, "Retries and one set-up")."""
+    cycles do not show what the switch did (docs/findings/optimised_motions.md, "Retries and one
+    set-up")."""
     from mfflap.backtest.cycles import cycle_means
 
     model = MorisonModel()
@@ -390,7 +392,7 @@ def test_a_mixed_last_cycle_reads_high_against_eight_periods_of_one_set_up(key):
     cycle lies 5-17 % (thrust) and 10-19 % (power) above that mean, within two of its
     cycles' scatter each, but above it in all four. Against those means the predictions
     the rounds counted as 11-16 % low are 2-4 % off (round 1's model alone, 10-12 %)
-    (docs/optimised_motions.md, "Retries and one set-up")."""
+    (docs/findings/optimised_motions.md, "Retries and one set-up")."""
     from mfflap.backtest.cycles import cycle_means
 
     folder, predicted, counted = MIXED_BETA_0[key]
@@ -442,7 +444,7 @@ def test_the_best_sinusoids_mixed_cycle_reads_low_against_eight_periods_of_one_s
     quarter into it) lies 2.4 % (thrust) and 10.2 % (power) below the one set-up's
     cycles 3-8, within one cycle's scatter: the quarter before the switch above the same
     phase of the one set-up's cycles, the three after it below. The case's model is about
-    half of either (docs/optimised_motions.md, "Retries and one set-up")."""
+    half of either (docs/findings/optimised_motions.md, "Retries and one set-up")."""
     from mfflap.backtest.cycles import cycle_means
     from mfflap.config import load_case
 

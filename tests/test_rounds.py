@@ -303,7 +303,8 @@ def test_rounds_refit_on_their_back_tests_and_stop_when_a_motion_has_no_cfd(tmp_
     pooled in (their records kept in loop_records) and optimise other motions, back-tested
     in real OpenFOAM (backtest_rounds); their errors are measured on motions their fits have
     not seen. Round 4's motions have no CFD here, so the rounds stop there and say why. What
-    README says of it: the refit moves the coefficients but not the model's error on its
+    docs/findings/optimised_motions.md says of it: the refit moves the coefficients but not the
+    model's error on its
     new optima (beta = 0 about -18 % thrust, -20 % power in every round)."""
     import json
 
@@ -395,7 +396,8 @@ def test_corrected_rounds_predict_their_new_optima_far_better(tmp_path):
     come within 1.4-13.3 % where the model alone was 16-49 % off (round 2 within the default
     tolerance of 10 %: 6.1 %), and beta = 0 then holds a mean power below P_max in CFD,
     which round 1's optimum did not; rounds 4 and 5 widen again, beta = 0 predicted low,
-    then high (docs/optimised_motions.md, "Output correction"). Round 6's motions have no CFD here,
+    then high (docs/findings/optimised_motions.md, "Output correction"). Round 6's motions have no
+    CFD here,
     so the rounds stop there."""
     import json
 
@@ -450,7 +452,8 @@ def test_corrected_rounds_predict_their_new_optima_far_better(tmp_path):
     assert rounds[4]["checks"]["β = 0"]["thrust_error"] > 0.05
     # round 1's and round 4's beta = 0 back-tests compare a cycle that mixes two set-ups:
     # over eight periods of one set-up round 1's model is 10-12 % low, not 16-18 %, and
-    # round 4's correction within 3 %, not 14 % (docs/optimised_motions.md, "Retries and one
+    # round 4's correction within 3 %, not 14 % (docs/findings/optimised_motions.md, "Retries and
+    # one
     # set-up")
     assert all(-0.12 < e < -0.10 for e in _against_one_set_up(first["checks"]["β = 0"]))
     assert all(abs(e) < 0.03 for e in _against_one_set_up(rounds[3]["checks"]["β = 0"]))
@@ -498,7 +501,7 @@ def test_rounds_without_a_refit_keep_round_ones_model_and_filter_its_correction(
     model mean (1 / (1 + error)), the filter taking half of the way from 1 to it. The errors
     keep their sign and shrink for three rounds as the scales climb; in round 5 the beta = 0
     optimum moves (its corrected power limit tighter) to a motion where the ratio of CFD to
-    the model is another, and is 15-17 % high (docs/optimised_motions.md, "Filtered output
+    the model is another, and is 15-17 % high (docs/findings/optimised_motions.md, "Filtered output
     correction"). Round 6's motions have no CFD here."""
     import itertools
 
@@ -577,7 +580,8 @@ def test_filtered_corrected_rounds_close_in_then_part_again_with_the_refit(tmp_p
     largest counted error falls round by round to 12.9 % in round 5, with beta = 0 within
     3.5 % in rounds 4 and 5 (the undamped rounds: 6-27 %, signs alternating); then the
     refit, its tangential added mass driven to zero, moves round 6's optima where the
-    corrected model is 15-25 % high (docs/optimised_motions.md, "Filtered output correction")."""
+    corrected model is 15-25 % high (docs/findings/optimised_motions.md, "Filtered output
+    correction")."""
     import itertools
 
     out = tmp_path / "loop"
@@ -830,7 +834,8 @@ def test_rounds_in_a_trust_region_take_the_steps_cfd_confirms_until_one_collapse
     steps of beta = 0 and 0.5 although every prediction is within 10 %, so the rounds go on
     about the same centres with the radius cut to half the step; beta = 1's optimum stays at
     its centre (no step), predicted within 1 %; in round 5 beta = 0's radius collapses:
-    CFD confirms no step of the corrected model about round 2's optimum (docs/optimised_motions.md,
+    CFD confirms no step of the corrected model about round 2's optimum
+    (docs/findings/optimised_motions.md,
     "Trust region")."""
 
     import h5py
@@ -858,11 +863,13 @@ def test_rounds_in_a_trust_region_take_the_steps_cfd_confirms_until_one_collapse
     assert float(second["trust_steps"]["0"]["ratio"]) == pytest.approx(1.0, abs=0.01)
     assert second["trust_steps"]["1"]["on_boundary"]
     assert second["trust_steps"]["1"]["next_radius"] == 0.5  # doubled
-    # the runs round 2 compares were retried differently (docs/optimised_motions.md, "How long a
+    # the runs round 2 compares were retried differently (docs/findings/optimised_motions.md, "How
+    # long a
     # back-test runs"): the centres' with the inletOutlet far field (beta = 0) and at max Co 4
     # (beta = 0.5), the optima's with the freestream one and at max Co 2; round 3's alike.
     # beta = 0's centre was resumed with the inletOutlet far field a quarter into its last
-    # cycle (docs/optimised_motions.md, "Retries and one set-up"): that cycle mixes two set-ups
+    # cycle (docs/findings/optimised_motions.md, "Retries and one set-up"): that cycle mixes two
+    # set-ups
     assert second["trust_steps"]["0"]["ran_otherwise"] == [
         "far field inletOutlet against freestream",
         "the centre's compared cycles mix two set-ups (its settings changed at t = 3.896 s, "
@@ -915,7 +922,7 @@ def test_first_order_rounds_predict_gains_on_the_boxs_faces_that_cfd_refuses(tmp
     earlier motions near the centre, but each optimum goes to a face of the box where the
     slope's share makes most of the predicted decrease, and CFD refuses every step of
     beta = 0 and 0.5 while predicting their means within 10 % in rounds 3-4
-    (docs/optimised_motions.md, "First-order corrections")."""
+    (docs/findings/optimised_motions.md, "First-order corrections")."""
     import json
 
     import h5py
@@ -978,10 +985,10 @@ def test_first_order_rounds_with_the_phase_fixed_take_slopes_through_shifted_rec
     """The first-order series with `--fix-phase` on the shipped fixtures: rounds 1-2 find the
     free series' records shifted in time, and the secants take each once per beta
     (mfflap.rounds.steps.secant_points), so from round 3 on its optima leave the free
-    series' and are back-tested on their own runs (real OpenFOAM, 2026-11-29,
+    series' and are back-tested on their own runs (real OpenFOAM,
     backtest_first_order_fixed_phase). CFD refuses rounds 3 and 4's steps of beta = 0 and
     0.5 and confirms round 5's, at a quarter of the first radius; beta = 1 keeps its
-    centre from round 3 on (README, "The phase of periodic optima")."""
+    centre from round 3 on (docs/findings/phase_of_optima.md)."""
     out = tmp_path / "loop"
     _, summary = _series(out, 5, "--correct-outputs", "--no-refit", "--trust-region", "0.25",
                          "--first-order", "--fix-phase")
@@ -1014,7 +1021,7 @@ def test_trust_region_rounds_that_know_cfds_noise_converge_in_round_3(tmp_path):
     2.8 % of the mean thrust, tests/test_cfd_repeatability.py): round 3's steps, which CFD
     refused without it, were predicted to gain less than CFD's noise (beta = 0: 0.31 of J
     against 0.84), so they settle nothing and refuse nothing, and the rounds converge with
-    every prediction within 10 % (docs/optimised_motions.md, "First-order corrections")."""
+    every prediction within 10 % (docs/findings/optimised_motions.md, "First-order corrections")."""
     import h5py
 
     out = tmp_path / "loop"
@@ -1064,7 +1071,8 @@ def test_trust_region_rounds_that_know_cfds_noise_converge_in_round_3(tmp_path):
     assert 0.005 < found["thrust_spread"] < 0.01 and 0.005 < found["power_spread"] < 0.012
     assert found["alike"] is True and found["ran_otherwise"] == []
     # beta = 0.5's two eight-period runs as copies 0 and 1: a retry left copy 0 at max Co 2,
-    # so their 7 % is no repeatability, and none is suggested (docs/optimised_motions.md, "Retries
+    # so their 7 % is no repeatability, and none is suggested (docs/findings/optimised_motions.md,
+    # "Retries
     # and one set-up")
     for k, name in enumerate(("backtest_34cd2b07c53664ae_8_cycles",
                               "backtest_34cd2b07c53664ae_copy1_8_cycles")):

@@ -1,6 +1,6 @@
 """The all_y_plus campaign with its runs that a retry resumed part-way within the fitted
 window rerun from the start (campaigns/table1_coarse_all_y_plus_from_start, real OpenFOAM,
-2026-11-29, `mfflap campaign run --retries-from-start`): how far fitting a run that mixes
+`mfflap campaign run --retries-from-start`): how far fitting a run that mixes
 two set-ups moves the identification (campaigns/README.md)."""
 
 from pathlib import Path

@@ -1,6 +1,6 @@
 """The one run of the max Co 2 campaign whose retry resumed it part-way within the fitted
 window, rerun from the start (campaigns/table1_coarse_co2_from_start, real OpenFOAM,
-2026-11-29, `mfflap campaign run --retries-from-start`): how far that run and the
+`mfflap campaign run --retries-from-start`): how far that run and the
 identification move when it runs one set-up throughout (campaigns/README.md)."""
 
 from pathlib import Path

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from mfflap.cfd.openfoam.time_step_watch import TimeStepWatch
 
 DATA = Path(__file__).parent / "data" / "openfoam_v1912"
-#: 634 lines of a real coarse-mesh back-test (2026-11-29, the fixed-phase first-order series,
+#: 634 lines of a real coarse-mesh back-test (the fixed-phase first-order series,
 #: round 4, beta = 0, after its first retry): the time step falls from 2.3e-6 s to 3.2e-8 s
 #: at t = 4.3245 s and recovers to 2.1e-7 s within 0.8 s of CPU time (ExecutionTime 14.26 to
 #: 15.03 s). A watch that read only the log's last time step every 2 s missed it; the run

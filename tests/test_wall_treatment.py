@@ -4,7 +4,7 @@
 the paper used is).
 
 The shipped meshes put the plate's first cells at y+ of about 5-15, below the 30-300 that
-the log-law wall functions assume (README, Known limits); `--wall-treatment all_y_plus`
+the log-law wall functions assume (docs/findings/known_limits.md); `--wall-treatment all_y_plus`
 gives a case whose wall conditions hold there.
 """
 

@@ -6,7 +6,7 @@ Courant limit or upwind k and epsilon; the record keeps what it ran with last (`
 provenance, else the ``solver_*`` it was written with). Two back-tests compared, as a
 trust-region step compares its centre's CFD with its trial's, measure the motion's change
 only if they ran alike: at the trust series' beta = 0.5 optimum, max Co 2 instead of 4 moves
-the settled mean thrust by 7 % (docs/optimised_motions.md, "How long a back-test runs").
+the settled mean thrust by 7 % (docs/findings/optimised_motions.md, "How long a back-test runs").
 """
 
 from __future__ import annotations

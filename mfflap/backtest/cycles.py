@@ -3,7 +3,7 @@
 A back-test compares the model with CFD's mean thrust and power over the last simulated
 cycle. Past its start-up, a flapping plate meets the vortices it shed before, and at large
 heave amplitudes that meeting is not the same from one cycle to the next: a ten-cycle coarse
-mesh run of the trust series' beta = 0 optimum (docs/optimised_motions.md, "How long a
+mesh run of the trust series' beta = 0 optimum (docs/findings/optimised_motions.md, "How long a
 back-test runs") has cycle means of 24.7-32.6 N after its third cycle, a scatter of 9 % of
 their mean, where two copies of its three-cycle run agree within 0.7 %
 (:mod:`mfflap.backtest.repeat`: the copies part only after their third cycle). One cycle's

@@ -2,7 +2,7 @@
 
 Two OpenFOAM runs of one optimised motion whose controlDicts differed only in the 13th digit
 of endTime and writeInterval took different time steps and parted in the flow's vortex
-shedding: the last cycle's mean thrust 2.8 % apart (docs/optimised_motions.md, "First-order
+shedding: the last cycle's mean thrust 2.8 % apart (docs/findings/optimised_motions.md, "First-order
 corrections"; ``tests/test_cfd_repeatability.py``). That spread is the noise under every
 back-test's comparison and every trust-region step the rounds judge (``mfflap run
 --cfd-repeatability``).

@@ -6,7 +6,7 @@ model of a case file. Forces of another plate (chord, span), fluid or stream rea
 case file's would fit wrong coefficients, or judge the model wrongly, without any sign of
 it. A record says what it was run for in its provenance (``chord_m`` and ``span_m`` since
 the first records; the plate's thickness, the fluid and the stream with the keys of
-mfflap_case.toml, :data:`mfflap.cfd.case_inputs.PHYSICAL_KEYS`, since 2026-11-27) and in
+mfflap_case.toml, :data:`mfflap.cfd.case_inputs.PHYSICAL_KEYS`, in newer records) and in
 the ``campaign.toml`` of the folder it was run into; what neither says cannot be checked
 and is not refused.
 """

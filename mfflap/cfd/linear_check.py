@@ -6,7 +6,7 @@ reduced frequency k = omega c / 2U from 0.4 to 3.4) are run as a resumable campa
 :mod:`mfflap.hydro.thin_aerofoil`, which is exact for such motions of a thin plate in inviscid
 attached flow, and with the strip model, which has no circulation. A set-up whose frames,
 scaling or moment reference were wrong fails here by tens of percent; a sound one lies a few
-percent from the theory (README, Validation against linear theory).
+percent from the theory (docs/findings/linear_theory.md).
 """
 
 from __future__ import annotations

@@ -2,7 +2,8 @@
 
 Beyond the first cycle, a flapping plate meets the vortices it shed before, and where those
 arrive is sensitive to round-off: two runs that differ only in the linear solver can drift
-several percent apart point by point (docs/cfd_cost_study.md). Comparing the mean cycle of each
+several percent apart point by point (docs/findings/cfd_cost_study.md). Comparing the mean cycle
+of each
 run over several periods, and reading that comparison against how much one run's own cycles
 scatter, separates a real difference between meshes or set-ups from that sensitivity.
 """

@@ -42,7 +42,8 @@ from mfflap.cli.options import mesh_and_setup_options, refuse_given, retries_fro
               help="Compare the CFD's and the model's mean thrust and power over the last "
                    "this many whole cycles, with the CFD's standard errors from its cycle "
                    "means (one cycle's mean can lie 10 % or more from the run's: "
-                   "docs/optimised_motions.md, 'How long a back-test runs'); curves, NRMSE "
+                   "docs/findings/optimised_motions.md, 'How long a back-test runs'); curves, "
+                   "NRMSE "
                    "and maximum power stay the last cycle's.")
 @retries_from_start_option()
 @click.option("--procs", type=click.IntRange(min=1), default=None,
@@ -186,7 +187,7 @@ def _repeat(case, motions: dict, model, copies: int, work_dir: Path, save_to: Pa
     if not alike:  # a spread of runs made otherwise is no measure of CFD's noise
         click.echo("CFD's repeatability: not measured: no motion's runs ran alike (a retry "
                    "changed the far field or the Courant limit of some; "
-                   "docs/optimised_motions.md, 'Retries and one set-up')")
+                   "docs/findings/optimised_motions.md, 'Retries and one set-up')")
         return
     worst = max(alike, key=lambda r: r.share)
     click.echo(f"CFD's repeatability: {worst.share:.2%} ({worst.label}"

@@ -16,7 +16,8 @@ from mfflap.cli.options import FigureFile
 @click.option("--skip-cycles", type=int, default=1, show_default=True,
               help="Whole cycles after the start-up ramp left out as start-up before the "
                    "settled cycles' mean (a back-test's second cycle can lie 30 % below the "
-                   "ones after it: docs/optimised_motions.md, 'How long a back-test runs').")
+                   "ones after it: docs/findings/optimised_motions.md, 'How long a back-test "
+                   "runs').")
 @click.option("--figure", type=FigureFile(), default=None,
               help="Draw each run's cycle means with its settled mean and standard error.")
 @click.option("--json", "as_json", is_flag=True, help="Print results as JSON.")

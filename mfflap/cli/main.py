@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 import sys
 from pathlib import Path
@@ -14,6 +15,29 @@ from mfflap.cli.options import FigureFile, ResultsOutput
 from mfflap.errors import MfflapError
 
 
+@contextlib.contextmanager
+def _config_warnings_as_lines():
+    """Show a case file's warnings (:class:`mfflap.config.ConfigWarning`) as one line each,
+    ``warning: FILE: KEY ...``, instead of Python's file-and-line form."""
+    import warnings
+
+    from mfflap.config import ConfigWarning
+
+    shown = warnings.showwarning
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        if issubclass(category, ConfigWarning):
+            click.echo(f"warning: {message}", err=True)
+        else:
+            shown(message, category, filename, lineno, file, line)
+
+    warnings.showwarning = show
+    try:
+        yield
+    finally:
+        warnings.showwarning = shown
+
+
 class MfflapGroup(click.Group):
     """A click group that turns mfflap's own errors into one clear line and exit code 2, and
     SIGTERM and SIGUSR1 into a Ctrl-C (:mod:`mfflap.cli.stop_signals`)."""
@@ -22,7 +46,7 @@ class MfflapGroup(click.Group):
         from mfflap.cli.stop_signals import stop_signals_as_interrupt
 
         try:
-            with stop_signals_as_interrupt():
+            with stop_signals_as_interrupt(), _config_warnings_as_lines():
                 return super().invoke(ctx)
         except MfflapError as exc:
             click.echo(f"mfflap: error: {exc}", err=True)
@@ -39,6 +63,7 @@ def cli() -> None:
 def _register_subgroups() -> None:
     from mfflap.cli.backtest import backtest
     from mfflap.cli.campaign import campaign
+    from mfflap.cli.case import case, init
     from mfflap.cli.cfd import cfd
     from mfflap.cli.cfd_convergence import convergence
     from mfflap.cli.cfd_cycles import cycles
@@ -51,6 +76,8 @@ def _register_subgroups() -> None:
 
     for command in (convergence, cycles, linear_check, motion_table_cmd):
         cfd.add_command(command)
+    cli.add_command(init)
+    cli.add_command(case)
     cli.add_command(cfd)
     cli.add_command(campaign)
     cli.add_command(identify)

@@ -241,7 +241,7 @@ def retries_from_start_option(runs: str = "With --live: a run") -> Callable:
              "motion can drive) reruns from t = 0 s with the inletOutlet far field or a "
              "lower Courant limit, instead of resuming from a written time, so that all its "
              "cycles ran one set-up (resumed, a back-test's last cycle can straddle the "
-             "change: docs/optimised_motions.md, 'Retries and one set-up'). It costs the "
+             "change: docs/findings/optimised_motions.md, 'Retries and one set-up'). It costs the "
              "flow time run before the retry again.")
 
 
@@ -254,8 +254,8 @@ def fix_phase_option() -> Callable:
              "with sin(2 pi t / T), as the sinusoids they start from (the case key "
              "optimisation.phase = 'fixed'). A periodic motion shifted in time is the same "
              "motion, so the phase is otherwise free, and where J is flat along it too "
-             "(beta = 1) round-off decides where the optimum lands: README, 'The phase of "
-             "periodic optima'.")
+             "(beta = 1) round-off decides where the optimum lands: docs/findings/"
+             "phase_of_optima.md.")
 
 
 def with_phase_fixed(case, fix_phase: bool):

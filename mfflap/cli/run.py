@@ -75,8 +75,9 @@ from mfflap.cli.options import fix_phase_option, retries_from_start_option, with
 @click.option("--cfd-repeatability", "cfd_repeatability", default=None, type=float,
               help="With --trust-region: the share by which two CFD runs of one motion differ "
                    "in their mean thrust and power (e.g. 0.03, the copies' spread in their "
-                   "third cycle, docs/optimised_motions.md 'First-order corrections'; one "
-                   "cycle's scatter in longer runs is 0.02-0.09, docs/optimised_motions.md "
+                   "third cycle, docs/findings/optimised_motions.md 'First-order corrections'; one "
+                   "cycle's scatter in longer runs is 0.02-0.09, "
+                   "docs/findings/optimised_motions.md "
                    "'How long a back-test runs', which mfflap backtest --average-cycles "
                    "prints). Each step's ratio is relaxed by the noise it makes in the "
                    "objective, and a step predicted to gain less than that noise counts as "

@@ -2,7 +2,9 @@
 
 One PolyData surface (chord x span quad, split in strips) per time step with point data
 (pitch angle, heave, thrust, input power), and a ``.pvd`` collection that ParaView opens as
-a time series. Coordinates are the CFD case frame (x along the stream, y heave, z span).
+a time series. Coordinates are the CFD case frame (x along the stream, y heave, z span),
+not the model's (X0 heave, Y0 stream), so that a motion opens on top of a CFD result; each
+file names its frame in its field data (``frame``, :data:`FRAME`).
 """
 
 from __future__ import annotations
@@ -15,6 +17,9 @@ import pyvista as pv
 from mfflap.cfd.frames import case_displacement
 from mfflap.kinematics.discrete import DiscreteMotion
 from mfflap.performance import evaluate_discrete
+
+#: the frame of the exported coordinates, as each file's field data names it
+FRAME = "CFD case: x along the stream, y heave, z span (m)"
 
 
 def plate_surface(chord: float, span: float, pitch_angle: float, heave: float,
@@ -54,6 +59,7 @@ def export_motion(folder: str | Path, motion: DiscreteMotion, model, scheme: str
         for key, value in (("pitch_angle_rad", pitch[i]), ("heave_m", heave[i]),
                            ("thrust_N", thrust[i]), ("input_power_W", power[i])):
             surf.point_data[key] = np.full(surf.n_points, float(np.real(value)))
+        surf.field_data["frame"] = [FRAME]
         fname = f"{name}_{k:04d}.vtp"
         surf.save(folder / fname)
         entries.append(f'    <DataSet timestep="{float(t[i]):.9g}" file="{fname}"/>')

@@ -1,4 +1,4 @@
-"""The Morison strip model of the paper, with the signs of shared/design/equations.md.
+"""The Morison strip model of the paper, with the signs of docs/theory.md.
 
 Relative velocities of strip k (centre l_k = l (2k - 1) / (2n)):
     v_nk = hdot cos(theta) + U sin(theta) + thetadot l_k
@@ -256,7 +256,7 @@ class MorisonModel(ForceModel):
         """Rate of added-mass work sum_k C_a rho V v dv/dt (normal and tangential), W.
 
         Over a period of the continuous motion it averages to zero; for the discrete
-        scheme its cycle mean is the energy residual (shared/design/equations.md).
+        scheme its cycle mean is the energy residual (docs/theory.md).
         """
         flow = RelativeFlow.of(state, self.stream.velocity)
         g, rho, c = self.geometry, self.fluid.density, self.coefficients

@@ -1,4 +1,4 @@
-"""The discrete half-cycle scheme of the paper (shared/design/equations.md).
+"""The discrete half-cycle scheme of the paper (docs/theory.md).
 
 Controls u_j = [pitch_acceleration_j, heave_acceleration_j], j = 1..N, and the time step
 dt define the whole periodic, half-cycle antisymmetric motion:
@@ -129,7 +129,7 @@ class DiscreteMotion:
         ----------
         scheme
             ``"paper"`` uses the step's rate x_j; ``"midpoint"`` uses
-            rate_j + dt acc_j / 2 (the energy-consistent variant of equations.md).
+            rate_j + dt acc_j / 2 (the energy-consistent variant of docs/theory.md).
         trajectory
             :meth:`trajectory` if the caller has it already (saves integrating twice).
         """

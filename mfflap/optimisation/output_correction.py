@@ -1,10 +1,10 @@
 """Output correction of the model from CFD (multiplicative output space mapping).
 
 The back-tests of the optimised motions find the model's mean thrust and power off by a
-factor that stays nearly the same from one optimum to the next (README, "The model on the
-optimised motions": 15-20 % low at beta = 0 in every round), even after a refit on those
-very back-tests. A correction scales the model's outputs by what CFD measured at the last
-motion of the same beta:
+factor that stays nearly the same from one optimum to the next
+(docs/findings/optimised_motions.md: 15-20 % low at beta = 0 in every round), even after
+a refit on those very back-tests. A correction scales the model's outputs by what CFD
+measured at the last motion of the same beta:
 
     F_thrust,j -> kappa_T F_thrust,j,   P_in,j -> kappa_P P_in,j,
     kappa_T = F_bar_CFD / F_bar_model,  kappa_P = P_bar_CFD / P_bar_model   (at that motion),
@@ -36,7 +36,7 @@ taken either); otherwise it is 1 and :attr:`OutputCorrection.notes` says why.
 
 Filter. Applied round after round, the measured scales alone can make the optima oscillate:
 each optimum moves to where the ratio of CFD to model differs, the next scale overshoots
-the other way (docs/optimised_motions.md, "Output correction"). The usual cure in modifier
+the other way (docs/findings/optimised_motions.md, "Output correction"). The usual cure in modifier
 adaptation is a first-order filter of the modifiers (Marchetti, Chachuat and Bonvin 2009),
 
     kappa_k = (1 - K) kappa_(k-1) + K kappa_measured,     0 < K <= 1,
@@ -47,7 +47,8 @@ K = 1 takes the measured scale as it is.
 
 First-order correction (a slope of J). The scales make the corrected model exact at the
 motion they were measured on, with the model's own slope there; in the trust-region rounds
-CFD then refuses steps whose direction that slope gets wrong (docs/optimised_motions.md, "Trust
+CFD then refuses steps whose direction that slope gets wrong (docs/findings/optimised_motions.md,
+"Trust
 region"). CFD gradients of 2N + 1 controls are out of reach (one CFD run per control), but every
 earlier back-tested motion u_i of the same beta is a secant from the centre c. As in modifier
 adaptation, the first-order modifier goes on the objective: with J_CFD(u) the objective with
@@ -68,7 +69,7 @@ take the earlier motions within :data:`SECANT_REACH` radii of the centre
 :class:`~mfflap.optimisation.problem.LinearModifier`; the predicted means stay the scaled
 ones. Unbounded it would lead the optimiser off along a secant: it belongs in a trust region.
 
-In the shipped series (docs/optimised_motions.md, "First-order corrections") CFD refused
+In the shipped series (docs/findings/optimised_motions.md, "First-order corrections") CFD refused
 every step taken with a slope: each optimum went to a face of the box, the slope's term made
 the whole predicted decrease, and the scales' part alone foretold what CFD found. A first
 version put the slopes on the mean thrust and power instead. It was inconsistent: the power

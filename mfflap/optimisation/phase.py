@@ -2,7 +2,7 @@
 
 A periodic motion shifted in time is the same motion to the flow: its cycle means, and so J,
 do not change (on the discrete grid, to the scheme's error only). Nothing in the
-problem of shared/design/equations.md fixes the phase, so a flat direction runs through
+problem of docs/theory.md fixes the phase, so a flat direction runs through
 every optimum. Where the objective is flat along other directions too (beta = 1's least
 power), round-off steers the optimum along it: a start changed in its 12th digit, or
 OpenBLAS's kernels of another CPU, moved beta = 1's optimum up to 1.4 s along its 10 s

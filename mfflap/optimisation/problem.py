@@ -1,4 +1,4 @@
-"""The penalised objective J(u, dt) of shared/design/equations.md and its exact gradient.
+"""The penalised objective J(u, dt) of docs/theory.md and its exact gradient.
 
 J = (1/N) sum_j L_j + J_s with
 L_j = -(1 - beta) F_thrust,j + beta P_in,j + 1/2 sigma_P max(0, P_in,j - P_max)^2
@@ -13,7 +13,7 @@ Gradient (discrete adjoint, O(N)): a backward sweep of the semi-implicit Euler s
 lambda_{N+1} = 0 gives dJ/dx_1 and the partial gradients at fixed x_1; the closed-form linear
 map x_1(u, dt) of the antisymmetric closure is then chained in. This is algebraically the same
 gradient as the paper's closure lambda_{N+1} = -lambda_1 and includes the dependence of x_1 on
-u and dt that equations.md warns about.
+u and dt that docs/theory.md warns about.
 """
 
 from __future__ import annotations
@@ -137,8 +137,8 @@ class FlappingProblem:
 
     def __init__(self, model: MorisonModel, beta: float = 0.0, max_power: float = 50.0,
                  max_heave: float = 0.5, penalty_power: float = 10.0,
-                 penalty_heave: float = 1.0e4, smoothing_pitch: float = 1e-6,
-                 smoothing_heave: float = 1e-4, scheme: str = "paper", compiled: bool = True,
+                 penalty_heave: float = 1.0e4, smoothing_pitch: float = 1e-4,
+                 smoothing_heave: float = 1e-2, scheme: str = "paper", compiled: bool = True,
                  max_pitch: float = np.inf, max_pitch_rate: float = np.inf,
                  max_pitch_acceleration: float = np.inf, penalty_pitch: float = 1.0e4,
                  linear_modifier: LinearModifier | None = None):

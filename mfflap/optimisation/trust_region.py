@@ -3,7 +3,7 @@
 The output correction is measured at one motion (a zeroth-order modifier,
 :mod:`mfflap.optimisation.output_correction`): the corrected model is exact there and its
 error grows with the distance from it. Unbounded, each round's optimum moves to where the
-ratio of CFD to model differs and the rounds do not converge (docs/optimised_motions.md,
+ratio of CFD to model differs and the rounds do not converge (docs/findings/optimised_motions.md,
 "Filtered output correction"). A trust region bounds the step instead (trust-region modifier
 adaptation; Conn, Gould and Toint 2000 for the radius update, del Rio Chanona et al. 2021
 for its use with modifiers).
@@ -37,7 +37,8 @@ again); rho > :data:`GROW_RATIO` with u on the boundary: it doubles (at most
 the centre (within :data:`NO_STEP_SHARE` of the radius) made no step: nothing to judge, the
 centre and the radius stay.
 
-CFD's noise. Two runs of one motion differ (docs/optimised_motions.md, "First-order corrections":
+CFD's noise. Two runs of one motion differ (docs/findings/optimised_motions.md, "First-order
+corrections":
 2.8 % of the last cycle's mean thrust). Where that repeatability is known, as a share e of the
 means, the noise of J at the centre is
 

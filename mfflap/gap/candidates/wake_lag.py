@@ -15,7 +15,7 @@ class WakeLag(CandidateEffect):
 
     The normal velocity is taken at three quarters of the chord, Theodorsen's downwash
     point, as in :mod:`mfflap.hydro.thin_aerofoil`: small-motion CFD follows that theory
-    (README, Validation against linear theory), and a point at the leading edge leaves out
+    (docs/findings/linear_theory.md), and a point at the leading edge leaves out
     the pitch rate's share of the circulation.
     """
 

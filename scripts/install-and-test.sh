@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# Set up a fresh Debian machine for mfflap's tests and run them: OpenFOAM (the solvers the
+# full tier runs) and gcc (it compiles the generated Fluent UDFs) from Debian, mfflap with
+# its test and documentation tools from PyPI; then ruff, the fast tier and the full tier.
+#
+#   scripts/install-and-test.sh           set up, then run both tiers
+#   scripts/install-and-test.sh --fast    set up, then run the fast tier only
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+if ! command -v pimpleFoam >/dev/null 2>&1 || ! command -v gcc >/dev/null 2>&1 \
+    || ! command -v setpriv >/dev/null 2>&1; then
+  sudo=""
+  if [ "$(id -u)" -ne 0 ]; then sudo="sudo"; fi
+  export DEBIAN_FRONTEND=noninteractive
+  $sudo apt-get update -qq
+  # util-linux's setpriv (essential on Debian, named in case an image left it out) ties
+  # each solver to the process that started it
+  $sudo apt-get install -y -qq openfoam gcc libc6-dev util-linux >/dev/null
+fi
+
+python -m pip install -q --upgrade pip
+python -m pip install -q -e '.[test]'
+ruff check .
+python -m pytest -q                 # the fast tier: no OpenFOAM, no slow tests
+if [ "${1:-}" != "--fast" ]; then
+  python -m pytest -q --full        # the full tier: everything, real OpenFOAM included
+fi
