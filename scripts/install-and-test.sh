@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Set up a fresh Debian machine for mfflap's tests and run them: OpenFOAM (the solvers the
-# full tier runs) and gcc (it compiles the generated Fluent UDFs) from Debian, mfflap with
-# its test and documentation tools from PyPI; then ruff, the fast tier and the full tier.
+# full tier runs) and gcc (it compiles the generated Fluent UDFs) from Debian, mfflap, its
+# CFD records (./data) and its test and documentation tools; then ruff, the fast tier and
+# the full tier.
 #
 #   scripts/install-and-test.sh           set up, then run both tiers
 #   scripts/install-and-test.sh --fast    set up, then run the fast tier only
@@ -20,7 +21,7 @@ if ! command -v pimpleFoam >/dev/null 2>&1 || ! command -v gcc >/dev/null 2>&1 \
 fi
 
 python -m pip install -q --upgrade pip
-python -m pip install -q -e '.[test]'
+python -m pip install -q -e '.[test]' -e ./data
 ruff check .
 python -m pytest -q                 # the fast tier: no OpenFOAM, no slow tests
 if [ "${1:-}" != "--fast" ]; then

@@ -265,7 +265,7 @@ def test_a_cut_or_incomplete_cfd_record_is_refused_naming_its_file(tmp_path):
 
     from mfflap.campaign.records import read_record
 
-    shipped = sorted((Path(__file__).parents[1] / "mfflap" / "data" / "fixtures"
+    shipped = sorted((Path(__file__).parents[1] / "data" / "mfflap_data" / "fixtures"
                       / "small_motion_coarse").glob("*.h5"))[0]
     whole = read_record(shipped)
     cut = tmp_path / "cut.h5"

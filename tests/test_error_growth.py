@@ -204,7 +204,7 @@ def test_auto_on_real_cfd_claims_the_known_missing_circulation_in_both_datasets(
     from mfflap.cli.main import cli
     from mfflap.config import load_case
 
-    small = Path(__file__).parents[1] / "mfflap" / "data" / "fixtures" / "small_motion_coarse"
+    small = Path(__file__).parents[1] / "data" / "mfflap_data" / "fixtures" / "small_motion_coarse"
     runner = CliRunner()
     said = {}
     for name, extra in (("table1", []), ("small", ["--fixtures", str(small), "--discard",

@@ -69,7 +69,7 @@ def test_every_real_run_that_kept_its_numerics_stays_inside_the_bound():
     """All shipped fixtures and real test records, bursts bridged, but those above (the
     shipped fixtures are reruns of the lost ones); the optimised motions' back-tests apart
     from the runs of prescribed motions."""
-    folders = [p for p in (ROOT / "mfflap" / "data" / "fixtures").iterdir() if p.is_dir()]
+    folders = [p for p in (ROOT / "data" / "mfflap_data" / "fixtures").iterdir() if p.is_dir()]
     optimised = [r for f in folders if f.name.startswith(("backtest", "cfd_repeatability"))
                  for r in read_records(f)]
     prescribed = [r for f in folders if not f.name.startswith(("backtest", "cfd_repeatability"))

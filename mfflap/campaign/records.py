@@ -243,9 +243,32 @@ def record_paths(folder: str | Path) -> list[Path]:
             and not p.name.endswith((LOST_SUFFIX, UNREADABLE_SUFFIX, MIXED_SUFFIX))]
 
 
+def fixtures_root() -> Path:
+    """The folder of the shipped record sets: the installed ``mfflap-data`` distribution's,
+    else the one beside the package in a clone of the repository
+    (``data/mfflap_data/fixtures``).
+
+    Raises
+    ------
+    MfflapError
+        If neither is there, saying how to install the records.
+    """
+    try:
+        import mfflap_data  # the records' own distribution, a separate install
+
+        return mfflap_data.fixtures_root()
+    except ImportError:
+        pass
+    beside = Path(__file__).resolve().parents[2] / "data" / "mfflap_data" / "fixtures"
+    if beside.is_dir():
+        return beside
+    raise MfflapError("the shipped CFD records are not installed: they are the mfflap-data "
+                      "distribution (pip install ./data from a clone of mfflap)")
+
+
 def fixture_dir(name: str = "table1_coarse") -> Path:
-    """A fixture folder shipped with the package (``mfflap/data/fixtures/<name>``)."""
-    return Path(__file__).resolve().parent.parent / "data" / "fixtures" / name
+    """A shipped record set (``<fixtures_root>/<name>``, :func:`fixtures_root`)."""
+    return fixtures_root() / name
 
 
 #: The shipped back-test fixture folders: the optimised motions of the shipped case, those

@@ -56,7 +56,7 @@ def test_the_readme_is_short_and_opens_with_its_two_commands():
     text = (ROOT / "README.md").read_text()
     assert len(text.splitlines()) <= 150
     blocks = re.findall(r"```bash\n(.*?)```", text, re.S)
-    assert blocks[0].startswith("pip install . && mfflap run")
+    assert blocks[0].startswith("pip install . ./data && mfflap run")
     assert blocks[1].strip() == "scripts/install-and-test.sh"
 
 
