@@ -140,3 +140,68 @@ class UnreadableRecordError(MfflapError, OSError):
         self.dataset = dataset
         where = f"{path}" + (f", {dataset}" if dataset else "")
         super().__init__(f"{where}: {message}")
+
+
+class SolverDiverged(CfdRunError):
+    """A CFD run whose numerics broke down: its time step collapsed below the runner's
+    floor, or its Courant number exploded.
+
+    Parameters
+    ----------
+    message, case, log_tail
+        As :class:`CfdRunError`.
+    kind
+        :data:`TIME_STEP_COLLAPSED` or :data:`COURANT_EXPLODED`.
+    time_s
+        The flow time at which it happened, s.
+    """
+
+    def __init__(self, message: str, *, case: str, log_tail: str = "", kind: str,
+                 time_s: float):
+        super().__init__(message, case=case, log_tail=log_tail)
+        self._keep(message, case=case, log_tail=log_tail, kind=kind, time_s=time_s)
+        self.kind = kind
+        self.time_s = time_s
+
+
+#: :attr:`SolverDiverged.kind` of a time step that fell below the floor
+TIME_STEP_COLLAPSED = "time step collapsed"
+#: :attr:`SolverDiverged.kind` of a Courant number beyond the abort limit
+COURANT_EXPLODED = "Courant number exploded"
+
+
+class RunStoppedByWatch(CfdRunError):
+    """A CFD run stopped while running by a check of its output (a run's ``watch``).
+
+    Parameters
+    ----------
+    message, case, log_tail
+        As :class:`CfdRunError`.
+    reason
+        What the check found, as it gave it (for the force bound, an
+        :class:`~mfflap.cfd.force_envelope.EnvelopeBreach`).
+    """
+
+    def __init__(self, message: str, *, case: str, log_tail: str = "", reason: Any = None):
+        super().__init__(message, case=case, log_tail=log_tail)
+        self._keep(message, case=case, log_tail=log_tail, reason=reason)
+        self.reason = reason
+
+
+class RepeatedTimes(ParseError):
+    """A force log whose times stop increasing (the time step fell below the precision the
+    times are written with).
+
+    Parameters
+    ----------
+    message, path, line
+        As :class:`ParseError`.
+    time_s
+        The last time before they repeat, s.
+    """
+
+    def __init__(self, message: str, *, path: str | None = None, line: int | None = None,
+                 time_s: float):
+        super().__init__(message, path=path, line=line)
+        self._keep(message, path=path, line=line, time_s=time_s)
+        self.time_s = time_s

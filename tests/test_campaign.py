@@ -605,15 +605,18 @@ def test_a_loss_that_moves_with_the_time_step_keeps_being_retried(tmp_path, monk
 def test_a_run_leaving_the_bound_is_stopped_while_it_runs(tmp_path):
     """The forces are checked while pimpleFoam runs: a run beyond the (scaled-down) bound
     stops long before its end time instead of computing the lost stretch."""
+    from mfflap.campaign.openfoam_run import ForcesBeyondBound
     from mfflap.cfd.openfoam.forces import read_forces
-    from mfflap.errors import CfdRunError
+    from mfflap.errors import RunStoppedByWatch
 
     case_dir = tmp_path / "c"
-    with pytest.raises(CfdRunError, match=re.escape("pimpleFoam stopped: the forces leave what the "
-                                 "motion can drive, t = 0.0")):
+    with pytest.raises(RunStoppedByWatch, match=re.escape(
+            "pimpleFoam stopped: the forces leave what the motion can drive, t = 0.0")) as info:
         run_motion(case_dir, SHORT.motion(), "c", {}, 0.5, ramp_time=0.02,
                    force_bound_factor=1e-6, bound_watch_every_s=0.5, max_retries=0)
-    assert read_forces(case_dir).time[-1] < 0.25
+    assert isinstance(info.value.reason, ForcesBeyondBound)
+    stopped_at = read_forces(case_dir).time[-1]
+    assert stopped_at < 0.25 and 0.0 <= info.value.reason.breach.start_s <= stopped_at
 
 
 @pytest.mark.openfoam

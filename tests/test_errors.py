@@ -5,9 +5,25 @@ from concurrent.futures import ProcessPoolExecutor
 
 import pytest
 
-from mfflap.errors import CfdRunError, ConfigError, MotionError, ParseError
+from mfflap.errors import (
+    TIME_STEP_COLLAPSED,
+    CfdRunError,
+    ConfigError,
+    MotionError,
+    ParseError,
+    RepeatedTimes,
+    RunStoppedByWatch,
+    SolverDiverged,
+    UnreadableRecordError,
+)
 
 ERRORS = [
+    SolverDiverged("pimpleFoam diverged", case="/runs/f1", log_tail="deltaT = 6e-11",
+                   kind=TIME_STEP_COLLAPSED, time_s=0.75),
+    RunStoppedByWatch("pimpleFoam stopped: beyond the bound", case="/runs/f1",
+                      reason="beyond the bound"),
+    RepeatedTimes("time does not increase after t = 10.5", path="force.dat", time_s=10.5),
+    UnreadableRecordError("its data cannot be read", path="r.h5", dataset="loads"),
     CfdRunError("time step collapsed to 6.2e-11 s", case="/runs/f1", log_tail="deltaT = 6e-11"),
     ConfigError("must be > 0, got 0.0", source="setups.toml", key="a.max_courant"),
     ParseError("3 columns, expected 10", path="force.dat", line=17),
@@ -32,6 +48,8 @@ def test_error_raised_in_a_worker_process_arrives_whole():
     with ProcessPoolExecutor(max_workers=1) as pool:
         with pytest.raises(CfdRunError) as caught:
             pool.submit(_raise, error).result()
+    assert type(caught.value) is SolverDiverged
     assert caught.value.case == "/runs/f1"
-    assert "time step collapsed" in str(caught.value)
+    assert caught.value.kind == TIME_STEP_COLLAPSED and caught.value.time_s == 0.75
+    assert "pimpleFoam diverged" in str(caught.value)
     assert caught.value.log_tail == "deltaT = 6e-11"

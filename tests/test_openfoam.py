@@ -629,8 +629,11 @@ def test_a_courant_number_beyond_the_limit_stops_the_run_at_the_next_look(tmp_pa
 
     case = write_case(tmp_path / "co", MOTION, end_time=1.0, mesh="coarse")
     run_application(case, "blockMesh", timeout_s=120)
-    with pytest.raises(CfdRunError, match="Courant number exploded to") as info:
+    from mfflap.errors import COURANT_EXPLODED, SolverDiverged
+
+    with pytest.raises(SolverDiverged, match="Courant number exploded to") as info:
         run_application(case, "pimpleFoam", timeout_s=300, max_courant_abort=2.0)
+    assert info.value.kind == COURANT_EXPLODED and 0.0 <= info.value.time_s < 1.0
     text = (case / "log.pimpleFoam").read_text()
     assert not re.search(r"^End$", text, re.M)  # stopped before its end
     steps, began = [], None  # (the time a step began at, its Courant number), in log order
@@ -779,9 +782,13 @@ def test_a_time_step_below_the_limit_for_one_step_only_stops_the_run(tmp_path):
 
     case = write_case(tmp_path / "brief", MOTION, end_time=0.3, mesh="coarse")
     run_application(case, "blockMesh", timeout_s=120)
-    with pytest.raises(CfdRunError, match=r"time step collapsed to 0.00012 s at "
-                                          r"t = 0.00012\d* s") as info:
+    from mfflap.errors import TIME_STEP_COLLAPSED, SolverDiverged
+
+    with pytest.raises(SolverDiverged, match=r"time step collapsed to 0.00012 s at "
+                                             r"t = 0.00012\d* s") as info:
         run_application(case, "pimpleFoam", timeout_s=300, min_time_step=1.3e-4)
+    assert info.value.kind == TIME_STEP_COLLAPSED
+    assert info.value.time_s == pytest.approx(1.2e-4, rel=0.1)
     steps = _steps_s(case / "log.pimpleFoam")
     assert steps[0] < 1.3e-4 and all(step >= 1.3e-4 for step in steps[1:])
     assert "brief" in str(info.value)

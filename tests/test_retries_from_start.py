@@ -159,7 +159,7 @@ def test_a_collapsed_run_retried_from_the_start_reruns_from_zero(tmp_path, monke
     """The first (real) run is reported collapsed at its end: retried from the start, the
     second runs the whole 0.04 s again with the inletOutlet far field."""
     from mfflap.campaign import openfoam_run
-    from mfflap.errors import CfdRunError
+    from mfflap.errors import TIME_STEP_COLLAPSED, SolverDiverged
 
     real = openfoam_run.run_case
     calls = []
@@ -168,7 +168,8 @@ def test_a_collapsed_run_retried_from_the_start_reruns_from_zero(tmp_path, monke
         real(case_dir, **kwargs)
         calls.append(case_dir)
         if len(calls) == 1:
-            raise CfdRunError("time step collapsed to 1e-09 s at t = 0.04 s", case=str(case_dir))
+            raise SolverDiverged("time step collapsed to 1e-09 s at t = 0.04 s",
+                                 case=str(case_dir), kind=TIME_STEP_COLLAPSED, time_s=0.04)
 
     monkeypatch.setattr(openfoam_run, "run_case", collapses_once)
     case_dir = tmp_path / "c"

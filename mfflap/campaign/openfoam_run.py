@@ -6,6 +6,7 @@ import re
 import shutil
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -33,7 +34,14 @@ from mfflap.cfd.openfoam.writer import (
     write_case,
     written_wall_treatment,
 )
-from mfflap.errors import CfdRunError, ConfigError, MfflapError, ParseError
+from mfflap.errors import (
+    CfdRunError,
+    ConfigError,
+    MfflapError,
+    RepeatedTimes,
+    RunStoppedByWatch,
+    SolverDiverged,
+)
 from mfflap.kinematics.continuous import Motion
 from mfflap.parameters import Fluid, FreeStream, Plate
 from mfflap.toml_io import read_toml
@@ -174,16 +182,13 @@ def _forces_beyond_bound(record: CfdRecord, ramp_time: float, plate: Plate | Non
 #: time c / U, are the same loss (:func:`run_motion`)
 SAME_BREACH_FRACTION = 0.02
 
-#: how a run stopped by the force bound while running says so (:func:`run_motion`)
-_BOUND_STOP = "the forces leave what the motion can drive"
-
-
 def _bound_watch(case_dir: Path, motion: Motion, ramp_time: float, plate: Plate | None,
                  fluid: Fluid | None, stream: FreeStream | None, factor: float
-                 ) -> Callable[[], str | None]:
+                 ) -> Callable[[], ForcesBeyondBound | None]:
     """A check of a running case's forces so far against the bound, for
-    :func:`mfflap.cfd.openfoam.runner.run_case`'s ``watch``: the reason to stop, or None."""
-    def watch() -> str | None:
+    :func:`mfflap.cfd.openfoam.runner.run_case`'s ``watch``: the breach to stop for, or
+    None."""
+    def watch() -> ForcesBeyondBound | None:
         try:
             meta = read_toml(case_dir / "mfflap_case.toml")
             history = read_forces(case_dir)
@@ -194,8 +199,20 @@ def _bound_watch(case_dir: Path, motion: Motion, ramp_time: float, plate: Plate 
             return None
         record = CfdRecord("watch", state, loads, {})
         breach = _forces_beyond_bound(record, ramp_time, plate, fluid, stream, factor)
-        return None if breach is None else f"{_BOUND_STOP}, {breach.describe()}"
+        return None if breach is None else ForcesBeyondBound(breach)
     return watch
+
+
+@dataclass(frozen=True)
+class ForcesBeyondBound:
+    """Why the force-bound watch stopped a run: the first stretch of its forces beyond what
+    the motion can drive (what a :class:`~mfflap.errors.RunStoppedByWatch` carries as its
+    reason, on which a retry is decided)."""
+
+    breach: EnvelopeBreach
+
+    def __str__(self) -> str:
+        return f"the forces leave what the motion can drive, {self.breach.describe()}"
 
 
 def _apply_next_remedy(case_dir: Path, n_done: int, max_retries: int) -> str:
@@ -212,18 +229,6 @@ def _apply_next_remedy(case_dir: Path, n_done: int, max_retries: int) -> str:
 
 #: every retry of a case, one line each, across the calls that ran it
 RETRY_LOG = "mfflap_retries.txt"
-#: what diverged and the flow time, in :func:`mfflap.cfd.openfoam.runner.run_case`'s error
-#: of a collapsed time step or an exploded Courant number (an instability either way, which
-#: the same remedies cure)
-_DIVERGED_AT = re.compile(r"(time step collapsed) to \S+ s at t = (\S+) s|"
-                          r"(Courant number exploded) to \S+ in the step from t = (\S+) s")
-
-
-#: how :func:`mfflap.cfd.openfoam.forces.read_forces` says a force log's times stop
-#: increasing: the time step fell below the written precision for a while (at t >= 10 s,
-#: 1e-6 s with 8 digits: not below the runner's ``min_time_step``) and the run went on to
-#: its end time, its forces there possibly in the 1e9 N (:func:`run_motion`)
-_TIMES_REPEAT = re.compile(r"time does not increase after t = ([0-9.eE+-]+)")
 
 
 #: the line :func:`request_rerun` adds to :data:`RETRY_LOG`: the retries before it no longer
@@ -447,34 +452,35 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
             except RunStopped:  # asked to write and stop (a campaign's Ctrl-C): no retry
                 raise
             except CfdRunError as exc:
-                if _BOUND_STOP in str(exc) and len(retries) < max_retries:
+                bound_stop = (isinstance(exc, RunStoppedByWatch)
+                              and isinstance(exc.reason, ForcesBeyondBound))
+                if bound_stop and len(retries) < max_retries:
                     pass  # stopped early by the bound: rewound and retried below
-                elif ((where := _DIVERGED_AT.search(str(exc))) is None
-                      or len(retries) >= max_retries):
+                elif not isinstance(exc, SolverDiverged) or len(retries) >= max_retries:
                     tried = _retries_tried(case_dir)
                     if not tried:
                         raise
                     raise CfdRunError(f"{getattr(exc, '_message', exc)}; {tried}", case=exc.case,
                                       log_tail=exc.log_tail) from exc
                 else:  # rewound before the remedy: it rewrites the kept fields
-                    what, at = (where[1], where[2]) if where[1] else (where[3], where[4])
-                    # a brief one is seen after it: fields written since are spoiled
-                    _retry(case_dir, retries, f"{what} at t = {at} s",
-                           0.0 if retries_from_start else float(at), progress, max_retries)
+                    # (an instability either way, which the same remedies cure; a brief one
+                    # is seen after it: fields written since are spoiled)
+                    _retry(case_dir, retries, f"{exc.kind} at t = {exc.time_s:.10g} s",
+                           0.0 if retries_from_start else exc.time_s, progress, max_retries)
                     continue
             try:
                 record = record_from_case(case_dir, motion, name, parameters, plate)
-            except ParseError as exc:
-                stalled = _TIMES_REPEAT.search(str(exc))
-                if stalled is None:
-                    raise
-                at = (f"time step collapsed at t = {stalled[1]} s (the force log's times "
+            except RepeatedTimes as exc:
+                # the time step fell below the written precision for a while (at t >= 10 s,
+                # 1e-6 s with 8 digits: not below the runner's min_time_step) and the run went
+                # on to its end time, its forces there possibly in the 1e9 N
+                at = (f"time step collapsed at t = {exc.time_s!r} s (the force log's times "
                       "repeat there)")
                 if len(retries) >= max_retries:
                     tried = _retries_tried(case_dir)
                     raise CfdRunError(f"{at}{f'; {tried}' if tried else ''}",
                                       case=str(case_dir)) from exc
-                _retry(case_dir, retries, at, 0.0 if retries_from_start else float(stalled[1]),
+                _retry(case_dir, retries, at, 0.0 if retries_from_start else exc.time_s,
                        progress, max_retries)
                 continue
             breach = _forces_beyond_bound(record, ramp_time, plate, fluid, stream,

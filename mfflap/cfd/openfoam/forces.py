@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mfflap.errors import ParseError
+from mfflap.errors import ParseError, RepeatedTimes
 
 _NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|[-+]?(?:nan|inf)", re.I)
 
@@ -215,7 +215,8 @@ def parse_table(text: str, path: str = "<text>", columns: int = 9,
 def _check_increasing(arr: np.ndarray, path: str) -> None:
     if np.any(np.diff(arr[:, 0]) <= 0):
         i = int(np.argmax(np.diff(arr[:, 0]) <= 0))
-        raise ParseError(f"time does not increase after t = {float(arr[i, 0])!r}", path=path)
+        raise RepeatedTimes(f"time does not increase after t = {float(arr[i, 0])!r}",
+                            path=path, time_s=float(arr[i, 0]))
 
 
 def restart_segments(folder: Path, stem: str) -> list[Path]:

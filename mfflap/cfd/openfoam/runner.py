@@ -26,7 +26,14 @@ from mfflap.cfd.openfoam.time_folders import (
     processor_folders,
 )
 from mfflap.cfd.openfoam.time_step_watch import TimeStepWatch
-from mfflap.errors import CfdRunError, ConfigError
+from mfflap.errors import (
+    COURANT_EXPLODED,
+    TIME_STEP_COLLAPSED,
+    CfdRunError,
+    ConfigError,
+    RunStoppedByWatch,
+    SolverDiverged,
+)
 
 
 def openfoam_available() -> bool:
@@ -188,7 +195,7 @@ def solver_progress(case_dir: str | Path, log_name: str = "log.pimpleFoam"
 
 
 def _collapsed(application: str, time_steps: TimeStepWatch, case_dir: Path, log: Path,
-               exited: bool = False) -> CfdRunError:
+               exited: bool = False) -> SolverDiverged:
     """The error of a run whose time step collapsed (:attr:`TimeStepWatch.collapse`);
     ``exited``: read after the solver exited, which ran on past it."""
     time_step_s, time_s = time_steps.collapse
@@ -202,19 +209,21 @@ def _collapsed(application: str, time_steps: TimeStepWatch, case_dir: Path, log:
                  f"not to be trusted (its time folders {', '.join(later)}): rerun it from a time "
                  f"written before (`mfflap cfd run --rewind-before {time_s:.10g}`)" if later
                  else "; the solver ran on past it to its end")
-    return CfdRunError(f"{application} diverged: the time step collapsed to {time_step_s:.3g} s "
-                       f"at t = {time_s:.10g} s (an instability held at the Courant limit)"
-                       f"{after}", case=str(case_dir), log_tail=_tail(log))
+    return SolverDiverged(f"{application} diverged: the time step collapsed to "
+                          f"{time_step_s:.3g} s at t = {time_s:.10g} s (an instability held "
+                          f"at the Courant limit){after}", case=str(case_dir),
+                          log_tail=_tail(log), kind=TIME_STEP_COLLAPSED, time_s=float(time_s))
 
 
 def _exploded(application: str, time_steps: TimeStepWatch, case_dir: Path,
-              log: Path) -> CfdRunError:
+              log: Path) -> SolverDiverged:
     """The error of a run whose Courant number exploded
     (:attr:`TimeStepWatch.largest_courant`)."""
     courant, time_s = time_steps.largest_courant
-    return CfdRunError(f"{application} diverged: the Courant number exploded to {courant:g} "
-                       f"in the step from t = {time_s:.10g} s", case=str(case_dir),
-                       log_tail=_tail(log))
+    return SolverDiverged(f"{application} diverged: the Courant number exploded to "
+                          f"{courant:g} in the step from t = {time_s:.10g} s",
+                          case=str(case_dir), log_tail=_tail(log), kind=COURANT_EXPLODED,
+                          time_s=float(time_s))
 
 
 #: the largest Courant number a run may reach before it counts as diverged
@@ -256,7 +265,7 @@ def _check_time_limit(timeout_s: float, application: str) -> None:
 def run_application(case_dir: str | Path, application: str, timeout_s: float = 3600.0,
                     max_courant_abort: float = MAX_COURANT_ABORT, n_procs: int = 1,
                     extra_args: tuple[str, ...] = (), min_time_step: float = 1e-7,
-                    poll_s: float = 2.0, watch: Callable[[], str | None] | None = None,
+                    poll_s: float = 2.0, watch: Callable[[], object | None] | None = None,
                     watch_every_s: float = 60.0, progress: Callable[[], None] | None = None,
                     progress_every_s: float = 10.0, write_on_stop: bool = False,
                     write_grace_s: float = 120.0) -> Path:
@@ -359,8 +368,9 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
                     watched = time.monotonic()
                     reason = watch()
                     if reason is not None:
-                        raise CfdRunError(f"{application} stopped: {reason}",
-                                          case=str(case_dir), log_tail=_tail(log))
+                        raise RunStoppedByWatch(f"{application} stopped: {reason}",
+                                                case=str(case_dir), log_tail=_tail(log),
+                                                reason=reason)
         except KeyboardInterrupt:
             if write_on_stop and proc.poll() is None:
                 write_and_stop(proc, write_grace_s)  # a second Ctrl-C: stopped below
@@ -474,7 +484,7 @@ def _check_layout(case_dir: Path, n_procs: int) -> None:
 
 
 def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
-             min_time_step: float = 1e-7, watch: Callable[[], str | None] | None = None,
+             min_time_step: float = 1e-7, watch: Callable[[], object | None] | None = None,
              watch_every_s: float = 60.0, progress: Callable[[str], None] | None = None,
              progress_every_s: float = 10.0) -> None:
     """blockMesh (once), checkMesh (once), then pimpleFoam from the latest written time
