@@ -20,6 +20,7 @@ import distributed  # noqa: F401 (its defaults in dask.config before a test over
 import h5py
 import numpy as np
 import pytest
+from foamlib import FoamFile
 
 from mfflap.campaign.cases import CfdCase, grid_cases
 from mfflap.campaign.execute import (
@@ -376,12 +377,10 @@ def test_collapsed_time_step_is_retried_with_a_lower_courant_limit(tmp_path):
     case_dir = tmp_path / "c"
     with pytest.raises(CfdRunError, match="time step collapsed"):
         run_motion(case_dir, SHORT.motion(), "c", {}, 1.0, ramp_time=0.02, min_time_step=1.0)
-    control = (case_dir / "system" / "controlDict").read_text()
-    assert "maxCo           1;" in control
-    schemes = (case_dir / "system" / "fvSchemes").read_text()
-    assert "div(phi,k)      Gauss upwind;" in schemes
-    assert "div(phi,epsilon) Gauss upwind;" in schemes
-    assert "div(phi,U)      Gauss linearUpwind grad(U);" in schemes  # momentum untouched
+    assert FoamFile(case_dir / "system" / "controlDict")["maxCo"] == 1
+    schemes = FoamFile(case_dir / "system" / "fvSchemes")["divSchemes"]
+    assert schemes["div(phi,k)"] == schemes["div(phi,epsilon)"] == ("Gauss", "upwind")
+    assert schemes["div(phi,U)"] == ("Gauss", "linearUpwind", "grad(U)")  # momentum untouched
     assert (case_dir / "log.pimpleFoam").read_text().count("Starting time loop") == 4
     assert "type inletOutlet;" in (case_dir / "0" / "U").read_text()
     assert "type fixedValue;" in (case_dir / "0" / "p").read_text()
@@ -561,7 +560,7 @@ def test_a_loss_at_the_same_flow_time_is_rerun_from_the_start_once(tmp_path, mon
     assert rec.provenance["retries"].split("; ")[-1].startswith(
         "rerun from t = 0 s with max Co 2: the forces left what the motion can drive from "
         "t = 0.0362 s again, as at max Co 4")
-    assert "maxCo           2;" in (case_dir / "system" / "controlDict").read_text()
+    assert FoamFile(case_dir / "system" / "controlDict")["maxCo"] == 2
     assert (rec.provenance["solver_max_courant"], rec.provenance["as_run_max_courant"]) == (
         4.0, 2.0)
     assert (rec.provenance["solver_far_field"], rec.provenance["as_run_far_field"]) == (
@@ -674,7 +673,7 @@ def test_a_resumed_run_has_what_is_left_of_its_retries_until_a_rerun_is_requeste
     assert log.read_text().count("Starting time loop") == 6
     notes = (case_dir / "mfflap_retries.txt").read_text().splitlines()
     assert notes[2] == RERUN_REQUESTED and len(notes) == 4
-    assert "maxCo           1;" in (case_dir / "system" / "controlDict").read_text()
+    assert FoamFile(case_dir / "system" / "controlDict")["maxCo"] == 1
 
 
 @pytest.mark.openfoam
@@ -706,7 +705,7 @@ def test_an_earlier_calls_breach_counts_for_the_same_flow_time_rule(tmp_path, mo
     assert later[:2] == notes and len(later) == 3
     assert later[2].startswith("rerun from t = 0 s with max Co 2: ")
     assert "as at max Co 4" in later[2]
-    assert "maxCo           2;" in (case_dir / "system" / "controlDict").read_text()
+    assert FoamFile(case_dir / "system" / "controlDict")["maxCo"] == 2
     # three runs in the first call; in the second, none for the run that had reached its
     # end time (its forces are judged as they are), then the rerun from t = 0
     assert (case_dir / "log.pimpleFoam").read_text().count("Starting time loop") == 4
@@ -808,7 +807,7 @@ def test_far_field_switch_rewrites_binary_time_folders_and_the_run_resumes(tmp_p
     text of U and p in every time folder, and pimpleFoam resumes from them."""
     from dataclasses import replace
 
-    from mfflap.campaign.openfoam_run import use_inlet_outlet_far_field
+    from mfflap.cfd.openfoam.retry_edits import use_inlet_outlet_far_field
     from mfflap.cfd.openfoam.runner import run_case
     from mfflap.cfd.openfoam.writer import SolverSettings, write_case
 

@@ -406,8 +406,8 @@ def test_outputs_asked_for_in_new_folders_are_written_there(tmp_path):
           str(new / "a" / "i.h5")], new / "a" / "i.h5"),
         (["evaluate", str(CASE), "--output", str(new / "b" / "e.h5"), "--figure",
           str(new / "c" / "f.png")], new / "c" / "f.png"),
-        (["gradcheck", str(CASE), "--n-steps", "8", "--figure", str(new / "d" / "g.png")],
-         new / "d" / "g.png"),
+        (["gradcheck", str(CASE), "--n-steps", "8", "--out", str(new / "d" / "g")],
+         new / "d" / "g" / "gradcheck.png"),
     ]
     for args, made in commands:
         res = runner.invoke(cli, args)

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from foamlib import FoamFile
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -1418,16 +1419,14 @@ def test_a_restart_from_a_folder_named_past_the_time_precision_starts_there(tmp_
     case = write_case(tmp_path / "restarted", MOTION, end_time=0.03, mesh=spec,
                       solver=settings)
     control = case / "system" / "controlDict"
-    control.write_text(re.sub(r"^timePrecision\s+\d+;", "timePrecision   1;",
-                              control.read_text(), flags=re.M))
+    FoamFile(control)["timePrecision"] = 1
     run_case(case, timeout_s=300)
     assert (case / "0.015" / "p").is_file()  # written with the precision raised to 2
     shutil.rmtree(case / "0.03")
     (case / "0.01").mkdir()
     (case / "0.01" / "yPlus").write_bytes((case / "0.015" / "p").read_bytes())
     run_case(case, timeout_s=300)
-    text = control.read_text()
-    assert "startTime       0.015;" in text and "timePrecision   2;" in text
+    assert (FoamFile(control)["startTime"], FoamFile(control)["timePrecision"]) == (0.015, 2)
     log = (case / "log.pimpleFoam").read_text()
     assert "Create time" in log and log.rstrip().endswith("End")
     assert "cannot find file" not in log
@@ -1443,21 +1442,24 @@ def test_the_start_time_carries_the_time_precision_that_names_it(tmp_path):
     case = write_case(tmp_path / "case", MOTION, end_time=0.1)
     control = case / "system" / "controlDict"
     original = control.read_text()
-    precision = int(re.search(r"^timePrecision\s+(\d+);", original, re.M).group(1))
+    precision = FoamFile(control)["timePrecision"]
     set_start_time(case, "0.05")  # fewer digits: the precision stays
-    assert control.read_text().count(f"timePrecision   {precision};") == 1
+    entries = FoamFile(control)
+    assert (entries["startFrom"], entries["startTime"]) == ("startTime", 0.05)
+    assert entries["timePrecision"] == precision
     set_start_time(case, "2.20850674123")
-    text = control.read_text()
-    assert "timePrecision   12;" in text and "startTime       2.20850674123;" in text
-    assert text.count("timePrecision") == 1
+    entries = FoamFile(control)
+    assert (entries["timePrecision"], entries["startTime"]) == (12, 2.20850674123)
+    assert control.read_text().count("timePrecision") == 1
     set_start_time(case, "0.05")  # never lowered
-    assert "timePrecision   12;" in control.read_text()
+    assert FoamFile(control)["timePrecision"] == 12
     # a controlDict without the entry (OpenFOAM's default 6) gets one where 6 would not do
-    control.write_text(re.sub(r"^timePrecision.*\n", "", original, flags=re.M))
+    control.write_text(original)
+    del FoamFile(control)["timePrecision"]
     set_start_time(case, "0.123456")
-    assert "timePrecision" not in control.read_text()
+    assert "timePrecision" not in FoamFile(control)
     set_start_time(case, "0.1234567")
-    assert control.read_text().count("timePrecision   7;") == 1
+    assert FoamFile(control)["timePrecision"] == 7
 
 
 @pytest.mark.openfoam
@@ -1527,16 +1529,15 @@ def test_latest_solution_time_needs_every_initial_field_written_whole(tmp_path):
     assert latest_solution_time(tmp_path / "serial") == "0"
     case = write_case(tmp_path / "case", MOTION, end_time=0.1)
     set_start_time(case, "0.05")
-    text = (case / "system" / "controlDict").read_text()
-    assert "startFrom       startTime;" in text and "startTime       0.05;" in text
-    assert "latestTime" not in text
-    (case / "system" / "controlDict").write_text(text.replace("startTime       0.05;", ""))
+    control = FoamFile(case / "system" / "controlDict")
+    assert (control["startFrom"], control["startTime"]) == ("startTime", 0.05)
+    del control["startTime"]
     with pytest.raises(CfdRunError, match="controlDict has no startFrom or startTime"):
         set_start_time(case, "0")
 
 
 def test_far_field_switch_reaches_the_processor_folders(tmp_path):
-    from mfflap.campaign.openfoam_run import use_inlet_outlet_far_field
+    from mfflap.cfd.openfoam.retry_edits import use_inlet_outlet_far_field
 
     case = write_case(tmp_path / "case", MOTION, end_time=0.1)
     for proc in ("processor0", "processor1"):
@@ -1605,12 +1606,12 @@ def test_a_run_resumed_between_writes_still_writes_at_its_end(tmp_path):
     original = control.read_text()
     assert align_writes_to_end(tmp_path, 0.5) is None and control.read_text() == original
     assert align_writes_to_end(tmp_path, 1.0) is None  # nothing left to run
+    before = FoamFile(control).as_dict()
     aligned = align_writes_to_end(tmp_path, 0.3)  # 0.7 left: 3 writes of 0.2333
     assert aligned == pytest.approx(0.7 / 3)
-    text = control.read_text()
-    assert f"writeInterval   {aligned:.12g};" in text
-    assert text.count("writeInterval") == original.count("writeInterval")
-    assert text.replace(f"{aligned:.12g}", "0.25", 1) == original  # only that entry
+    after = FoamFile(control).as_dict()
+    assert after["writeInterval"] == aligned
+    assert {**after, "writeInterval": 0.25} == before  # only that entry, not the functions'
     assert align_writes_to_end(tmp_path, 0.3) is None  # aligned now: stays
     control.write_text(original.replace("writeInterval   0.25;", "writeInterval   0.3;"))
     assert align_writes_to_end(tmp_path, 0.0) is None  # the user's own grid, from the start

@@ -171,8 +171,9 @@ def test_cfd_write_sets_the_courant_limit_and_the_correctors(tmp_path):
                                    "--correctors", "2"])
     assert res.exit_code == 0, res.output
     case = tmp_path / "c"
-    assert res.output.strip() == (f"wrote {case} (mesh graded, inertial frame, PIMPLE 3x2, "
+    assert res.stdout.strip() == (f"wrote {case} (mesh graded, inertial frame, PIMPLE 3x2, "
                                   "max Co 2.5, GAMG, log_law wall treatment, end time 0.1 s)")
+    assert "does not start at rest" in res.stderr  # no --ramp-time
     assert re.search(r"^maxCo\s+2.5;", (case / "system" / "controlDict").read_text(), re.M)
     solution = (case / "system" / "fvSolution").read_text()
     assert "nOuterCorrectors 3;" in solution and "nCorrectors     2;" in solution

@@ -23,12 +23,19 @@ from mfflap.cfd.openfoam.case_lock import case_lock
 from mfflap.cfd.openfoam.case_path import check_case_path, empty_case_folder
 from mfflap.cfd.openfoam.forces import read_forces
 from mfflap.cfd.openfoam.loads import imposed_state, to_loads
+from mfflap.cfd.openfoam.retry_edits import (
+    courant_limit,
+    far_field,
+    lower_courant_limit,
+    turbulence_convection,
+    use_inlet_outlet_far_field,
+    use_upwind_turbulence,
+)
 from mfflap.cfd.openfoam.rewind import rewind_case
 from mfflap.cfd.openfoam.runner import RunStopped, run_case
 from mfflap.cfd.openfoam.solver_log import solver_provenance
-from mfflap.cfd.openfoam.time_folders import is_time_folder, latest_solution_time
+from mfflap.cfd.openfoam.time_folders import latest_solution_time
 from mfflap.cfd.openfoam.writer import (
-    TURBULENCE_CONVECTION_SCHEMES,
     AnyMeshSpec,
     SolverSettings,
     write_case,
@@ -45,28 +52,6 @@ from mfflap.errors import (
 from mfflap.kinematics.continuous import Motion
 from mfflap.parameters import Fluid, FreeStream, Plate
 from mfflap.toml_io import read_toml
-
-_MAX_CO = re.compile(r"^(maxCo\s+)([0-9.eE+-]+)(;)", re.M)
-
-
-def lower_courant_limit(case_dir: str | Path, factor: float = 0.5) -> float:
-    """Halve ``maxCo`` in the case's controlDict; return the new limit."""
-    path = Path(case_dir) / "system" / "controlDict"
-    text = path.read_text()
-    match = _MAX_CO.search(text)
-    if match is None:
-        raise CfdRunError("no maxCo entry in system/controlDict", case=str(case_dir))
-    value = float(match.group(2)) * factor
-    path.write_text(_MAX_CO.sub(lambda m: f"{m.group(1)}{value:g}{m.group(3)}", text, count=1))
-    return value
-
-
-def courant_limit(case_dir: str | Path) -> float:
-    """The case's ``maxCo`` (system/controlDict)."""
-    match = _MAX_CO.search((Path(case_dir) / "system" / "controlDict").read_text())
-    if match is None:
-        raise CfdRunError("no maxCo entry in system/controlDict", case=str(case_dir))
-    return float(match.group(2))
 
 
 def as_run_settings(case_dir: str | Path) -> dict[str, Any]:
@@ -87,64 +72,9 @@ def as_run_settings(case_dir: str | Path) -> dict[str, Any]:
         ``SolverSettings.wall_treatment`` name, or "other").
     """
     case = Path(case_dir)
-    velocity = (case / "0" / "U").read_bytes() if (case / "0" / "U").is_file() else b""
-    far_field = ("inletOutlet" if b"inletOutlet" in velocity
-                 else "freestream" if b"freestreamVelocity" in velocity else "other")
-    schemes = case / "system" / "fvSchemes"
-    match = _TURBULENCE_DIV.search(schemes.read_text()) if schemes.is_file() else None
-    return {"as_run_max_courant": courant_limit(case), "as_run_far_field": far_field,
-            "as_run_turbulence_convection": _SCHEME_NAMES.get(
-                match.group(2).strip() if match else "", "other"),
+    return {"as_run_max_courant": courant_limit(case), "as_run_far_field": far_field(case),
+            "as_run_turbulence_convection": turbulence_convection(case),
             "as_run_wall_treatment": written_wall_treatment(case)}
-
-
-#: SolverSettings.turbulence_convection by the fvSchemes text it writes
-_SCHEME_NAMES = {text: name for name, text in TURBULENCE_CONVECTION_SCHEMES.items()}
-#: the convection scheme of k or epsilon in fvSchemes (group 2: the scheme after Gauss)
-_TURBULENCE_DIV = re.compile(r"^(\s*div\(phi,(?:k|epsilon)\)\s+)Gauss ([^;]+);", re.M)
-
-
-def use_upwind_turbulence(case_dir: str | Path) -> bool:
-    """Switch k and epsilon convection to bounded first-order upwind (the most robust choice
-    for a k-epsilon blow-up); True if the schemes changed."""
-    path = Path(case_dir) / "system" / "fvSchemes"
-    text = path.read_text()
-    new = _TURBULENCE_DIV.sub(lambda m: f"{m.group(1)}Gauss upwind;", text)
-    if new == text:
-        return False
-    path.write_text(new)
-    return True
-
-
-_FREESTREAM_U = re.compile(
-    rb"type\s+freestreamVelocity;\s*freestreamValue(\s+uniform\s+\([^)]*\));")
-_FREESTREAM_P = re.compile(rb"type\s+freestreamPressure;\s*freestreamValue\s+uniform\s+[^;]+;")
-
-
-def use_inlet_outlet_far_field(case_dir: str | Path) -> bool:
-    """Switch the far field from freestreamVelocity/freestreamPressure to inletOutlet
-    velocity and a fixed pressure, in 0/ and in every written time folder, those of a
-    decomposed case's processor folders too (ASCII or binary fields: only the dictionary text
-    of the patch changes); True if anything changed.
-
-    Where the whole mesh heaves several times faster than the stream (h = 0.5 m at
-    f = 0.5 Hz, U = 0.3 m/s) the freestream pair let the velocity grow without bound in the
-    outer cells along the heave path; restarted from the same fields with this far field
-    the run went on with a normal time step.
-    """
-    changed = False
-    case = Path(case_dir)
-    for field, pattern, repl in (("U", _FREESTREAM_U, rb"type inletOutlet;\n        inletValue\1;"),
-                                 ("p", _FREESTREAM_P, rb"type fixedValue;")):
-        for path in [*case.glob(f"*/{field}"), *case.glob(f"processor*/*/{field}")]:
-            if not is_time_folder(path.parent.name):
-                continue
-            data = path.read_bytes()
-            new = pattern.sub(repl, data)
-            if new != data:
-                path.write_bytes(new)
-                changed = True
-    return changed
 
 
 def record_from_case(case_dir: str | Path, motion: Motion, name: str,

@@ -1,5 +1,9 @@
 """Edits of a case's system/controlDict for a resumed run: its start time (at a precision
-that names the folder), its end time, and write times that fall on the end."""
+that names the folder), its end time, and write times that fall on the end.
+
+The dictionary is read and written through foamlib's parser (:class:`foamlib.FoamFile`),
+so an edit changes the entry it means, wherever and however it is written.
+"""
 
 from __future__ import annotations
 
@@ -7,9 +11,8 @@ import math
 import re
 from pathlib import Path
 
+from mfflap.cfd.openfoam.foam_files import decode_error, foam_file
 from mfflap.errors import CfdRunError
-
-_TIME_PRECISION = re.compile(r"^timePrecision\s+(\d+)\s*;", re.M)
 
 #: OpenFOAM's timePrecision where controlDict gives none
 OPENFOAM_TIME_PRECISION = 6
@@ -31,22 +34,16 @@ def set_start_time(case_dir: str | Path, time_name: str) -> None:
         If system/controlDict has no ``startFrom`` or ``startTime`` entry.
     """
     path = Path(case_dir) / "system" / "controlDict"
-    text = path.read_text()
-    new, n_from = re.subn(r"^startFrom\s+[^;]*;", "startFrom       startTime;", text, flags=re.M)
-    new, n_time = re.subn(r"^startTime\s+[^;]*;", f"startTime       {time_name};", new,
-                          flags=re.M)
-    if not (n_from and n_time):
-        raise CfdRunError(f"{path} has no startFrom or startTime entry at the start of a line",
-                          case=str(case_dir))
+    control = foam_file(path)
+    if "startFrom" not in control or "startTime" not in control:
+        raise CfdRunError(f"{path} has no startFrom or startTime entry", case=str(case_dir))
     digits = significant_digits(time_name)
-    found = _TIME_PRECISION.search(new)
-    if found is None and digits > OPENFOAM_TIME_PRECISION:  # OpenFOAM's default
-        new = re.sub(r"^(startTime\s+[^;]*;)", rf"\1\ntimePrecision   {digits};", new,
-                     flags=re.M)
-    elif found is not None and int(found.group(1)) < digits:
-        new = _TIME_PRECISION.sub(f"timePrecision   {digits};", new)
-    if new != text:
-        path.write_text(new)
+    precision = control.get("timePrecision", OPENFOAM_TIME_PRECISION)
+    with control:  # one write of every change
+        control["startFrom"] = "startTime"
+        control["startTime"] = float(time_name)
+        if int(precision) < digits:
+            control["timePrecision"] = digits
 
 
 def significant_digits(time_name: str) -> int:
@@ -56,22 +53,17 @@ def significant_digits(time_name: str) -> int:
     return max(len(mantissa.replace(".", "").lstrip("0")), 1)
 
 
-_END_TIME = re.compile(r"^endTime\s+([^;\s]+)\s*;", re.M)
-
-
 def end_time(case_dir: str | Path) -> float | None:
     """The ``endTime`` of a case's system/controlDict, s; None if it has none that is a
     number."""
     path = Path(case_dir) / "system" / "controlDict"
-    match = _END_TIME.search(path.read_text()) if path.is_file() else None
-    try:
-        return float(match.group(1)) if match else None
-    except ValueError:
+    if not path.is_file():
         return None
-
-
-_WRITE_CONTROL = re.compile(r"^writeControl\s+(\w+);", re.M)
-_WRITE_INTERVAL = re.compile(r"^(writeInterval\s+)([^;\s]+)(;)", re.M)
+    try:
+        value = foam_file(path).get("endTime")
+    except decode_error():  # a controlDict foamlib cannot parse has no endTime to give
+        return None
+    return float(value) if isinstance(value, int | float) else None
 
 
 def align_writes_to_end(case_dir: str | Path, start_s: float) -> float | None:
@@ -87,13 +79,13 @@ def align_writes_to_end(case_dir: str | Path, start_s: float) -> float | None:
     or from one of its writes) keeps the interval it was given.
     """
     path = Path(case_dir) / "system" / "controlDict"
-    text = path.read_text()
-    control, interval = _WRITE_CONTROL.search(text), _WRITE_INTERVAL.search(text)
+    control_dict = foam_file(path)
+    control, interval = control_dict.get("writeControl"), control_dict.get("writeInterval")
     final = end_time(case_dir)
-    if (control is None or control.group(1) not in ("adjustableRunTime", "runTime")
-            or interval is None or final is None or final <= start_s):
+    if (control not in ("adjustableRunTime", "runTime") or not isinstance(interval, int | float)
+            or final is None or final <= start_s):
         return None
-    step = float(interval.group(2))
+    step = float(interval)
     n_writes, n_before = (final - start_s) / step, start_s / step
 
     def whole(count: float) -> bool:
@@ -101,7 +93,6 @@ def align_writes_to_end(case_dir: str | Path, start_s: float) -> float | None:
 
     if whole(n_writes) or whole(n_before):  # ends on the grid, or starts on the case's own
         return None
-    aligned = (final - start_s) / math.ceil(n_writes)
-    path.write_text(_WRITE_INTERVAL.sub(lambda m: f"{m.group(1)}{aligned:.12g}{m.group(3)}",
-                                        text, count=1))
+    aligned = float(f"{(final - start_s) / math.ceil(n_writes):.12g}")
+    control_dict["writeInterval"] = aligned
     return aligned

@@ -18,6 +18,7 @@ from pathlib import Path
 from mfflap.cfd.openfoam.case_lock import case_lock, held_descriptor
 from mfflap.cfd.openfoam.case_path import check_case_path
 from mfflap.cfd.openfoam.control_dict import align_writes_to_end, end_time, set_start_time
+from mfflap.cfd.openfoam.foam_files import foam_file
 from mfflap.cfd.openfoam.release import require_supported_release
 from mfflap.cfd.openfoam.solver_log import DIVERGED, failure_reason, read_tail
 from mfflap.cfd.openfoam.time_folders import (
@@ -543,11 +544,12 @@ def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
                     + "; pimpleFoam is not started on this mesh (a rerun checks it again)",
                     case=str(case_dir), log_tail=_tail(log))
         if n_procs > 1:
-            dict_path = case_dir / "system" / "decomposeParDict"
-            text = dict_path.read_text()
-            text = re.sub(r"numberOfSubdomains\s+\d+;", f"numberOfSubdomains {n_procs};", text)
-            text = re.sub(r"n\s+\(\d+ 1 1\);", f"n           ({n_procs} 1 1);", text)
-            dict_path.write_text(text)
+            decomposition = foam_file(case_dir / "system" / "decomposeParDict")
+            with decomposition:  # n_procs slabs along x, by the simple method
+                decomposition["numberOfSubdomains"] = n_procs
+                for coeffs in ("coeffs", "simpleCoeffs"):
+                    if coeffs in decomposition:
+                        decomposition[coeffs]["n"] = [n_procs, 1, 1]
             if len(processor_folders(case_dir)) != n_procs:  # none, or only t = 0 of another
                 run_application(case_dir, "decomposePar", timeout_s=300, extra_args=("-force",))
         start = latest_solution_time(case_dir, "decomposed" if n_procs > 1 else "serial") or "0"

@@ -16,7 +16,6 @@ resolutions in ``cfd_templates/openfoam/meshes.toml``. Two formulations
 from __future__ import annotations
 
 import math
-import re
 import shutil
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -29,6 +28,7 @@ from mfflap.cfd.case_inputs import recorded_inputs
 from mfflap.cfd.frames import FRAMES, case_displacement, case_rotation_deg
 from mfflap.cfd.openfoam.case_path import prepare_case_folder
 from mfflap.cfd.openfoam.cell_counts import check_cell_counts
+from mfflap.cfd.openfoam.foam_files import decode_error, foam_file
 from mfflap.cfd.openfoam.h_grid import HGridSpec
 from mfflap.cfd.openfoam.loads import (
     check_end_time,
@@ -150,17 +150,17 @@ PLATE_FRAME_TEMPLATES = "plate_frame"
 H_GRID_TEMPLATES = "h_grid"
 
 
-#: the plate's entry of 0/nut (group 1: its type)
-_PLATE_NUT = re.compile(r"\bplate\s*\{\s*type\s+(\w+)\s*;")
-
-
 def written_wall_treatment(case_dir: str | Path) -> str:
     """The :data:`WALL_TREATMENTS` name of the plate's wall condition of nut in a case's
-    0/nut (as written, or as changed by hand since), or "other"."""
+    0/nut (as written, or as changed by hand since, read with foamlib), or "other"."""
     path = Path(case_dir) / "0" / "nut"
-    match = _PLATE_NUT.search(path.read_text(errors="replace")) if path.is_file() else None
-    return next((name for name, wall in WALL_TREATMENTS.items()
-                 if match and match.group(1) == wall["nut"]), "other")
+    try:
+        nut = foam_file(path) if path.is_file() else None
+        written = nut["boundaryField"]["plate"]["type"] if nut is not None else None
+    except (decode_error(), KeyError, TypeError):  # no plate patch, or no type
+        written = None
+    return next((name for name, wall in WALL_TREATMENTS.items() if written == wall["nut"]),
+                "other")
 
 
 @dataclass(frozen=True)
