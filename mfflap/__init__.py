@@ -12,6 +12,18 @@ from mfflap.kinematics import (
 
 __version__ = "0.1.0"
 
+
+def __getattr__(name: str):
+    """``mfflap.Study`` is imported on first use: the facade brings in every layer below it
+    (identification, optimisation, CFD, the gap diagnosis), which ``import mfflap`` alone
+    does not need."""
+    if name == "Study":
+        from mfflap.api import Study
+
+        return Study
+    raise AttributeError(f"module 'mfflap' has no attribute {name!r}")
+
+
 __all__ = [
     "ConfigError",
     "DiscreteMotion",
@@ -22,5 +34,6 @@ __all__ = [
     "ParseError",
     "PeriodicSplineMotion",
     "RampHarmonicMotion",
+    "Study",
     "__version__",
 ]

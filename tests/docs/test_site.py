@@ -60,6 +60,7 @@ def test_the_readme_is_short_and_opens_with_its_two_commands():
     assert blocks[1].strip() == "scripts/install-and-test.sh"
 
 
+@pytest.mark.slow
 def test_the_readme_s_python_example_runs(tmp_path):
     """The README's study in Python, as printed there, from the repository's root."""
     code = re.search(r"```python\n(.*?)```", (ROOT / "README.md").read_text(), re.S).group(1)
@@ -67,4 +68,5 @@ def test_the_readme_s_python_example_runs(tmp_path):
     done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True,
                           text=True, timeout=600)
     assert done.returncode == 0, done.stderr
-    assert re.fullmatch(r"\d+\.\d N at \d\.\d\d Hz\n", done.stdout), done.stdout
+    assert re.search(r"^\d+\.\d N at \d\.\d\d Hz$", done.stdout, re.M), done.stdout
+    assert "normal_drag" in done.stdout

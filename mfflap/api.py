@@ -1,0 +1,142 @@
+"""The study facade: one case file's identify, optimise, back-test and diagnose steps, each
+a method returning the typed result the rest of mfflap uses.
+
+A :class:`Study` keeps the model it optimises with: the case file's coefficients until
+:meth:`Study.identify` replaces them with those identified from CFD. Every step is also a
+command (``mfflap identify``, ``optimise``, ``backtest``, ``gap diagnose``); the facade is
+for notebooks and scripts.
+
+Examples
+--------
+>>> import mfflap
+>>> study = mfflap.Study.from_toml("cases/paper2026.toml")  # doctest: +SKIP
+>>> fit = study.identify()                                  # doctest: +SKIP
+>>> optimum = study.optimise(beta=0.0)                      # doctest: +SKIP
+>>> outcome = study.backtest(optimum)                       # doctest: +SKIP
+>>> verdict = study.diagnose([outcome])                     # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from mfflap.backtest.run import BacktestOutcome
+from mfflap.backtest.workflow import backtest_all
+from mfflap.campaign.records import backtest_fixture_dirs
+from mfflap.config import CaseConfig, load_case
+from mfflap.errors import ConfigError
+from mfflap.gap.diagnose import Diagnosis
+from mfflap.identification.fit import IdentificationResult
+from mfflap.identification.workflow import identify_strategies, load_cases
+from mfflap.kinematics import DiscreteMotion, to_discrete
+from mfflap.optimisation.optimise import OptimisationResult
+from mfflap.optimisation.study import beta_study
+from mfflap.performance import Evaluation, evaluate_discrete
+from mfflap.pipeline import gap_diagnosis
+
+#: the frequency weightings :meth:`Study.identify` takes
+WEIGHTINGS = ("uniform", "low", "high")
+
+
+@dataclass
+class Study:
+    """A study of one case file.
+
+    Parameters
+    ----------
+    config
+        The case (:func:`mfflap.config.load_case`).
+
+    Attributes
+    ----------
+    model
+        The Morison model the study optimises and back-tests with: the case file's
+        coefficients, or those :meth:`identify` found.
+    identification
+        The last identification, or None.
+    """
+
+    config: CaseConfig
+    model: Any = None
+    identification: IdentificationResult | None = None
+    _cases: list | None = field(default=None, repr=False)
+
+    def __post_init__(self) -> None:
+        if self.model is None:
+            self.model = self.config.morison_model()
+
+    @classmethod
+    def from_toml(cls, path: str | Path) -> Study:
+        """The study of a case file.
+
+        Examples
+        --------
+        >>> Study.from_toml("cases/paper2026.toml").config.study.name  # doctest: +SKIP
+        'paper2026'
+        """
+        return cls(load_case(path))
+
+    def evaluate(self, motion: DiscreteMotion | None = None) -> Evaluation:
+        """The model's loads, thrust and power over one cycle of ``motion`` (default: the
+        case file's [motion], with its N steps per half cycle)."""
+        if motion is None:
+            spec = self.config.motion
+            motion = to_discrete(spec.build(), 1.0 / spec.frequency,
+                                 self.config.discretisation.n_steps)
+        return evaluate_discrete(self.model, motion, self.config.optimisation.scheme)
+
+    def identify(self, records: str | Path | Sequence[str | Path] | None = None,
+                 weighting: str = "uniform", bootstrap: int = 200) -> IdentificationResult:
+        """Fit the coefficients to CFD records (default: the shipped Table 1 runs) with one
+        of :data:`WEIGHTINGS`; the study then optimises with them.
+
+        Raises
+        ------
+        ConfigError
+            For a weighting that is not one of :data:`WEIGHTINGS`.
+        """
+        if weighting not in WEIGHTINGS:
+            raise ConfigError(f"value {weighting!r}; allowed: {', '.join(WEIGHTINGS)}",
+                              key="weighting")
+        cases, excluded = load_cases(self.config, records)
+        result = identify_strategies(self.config, cases, excluded, [weighting],
+                                     n_bootstrap=bootstrap)[weighting]
+        self._cases, self.identification = cases, result
+        self.model = result.model(self.config.morison_model())
+        return result
+
+    def optimise(self, beta: float, starts: int = 1) -> OptimisationResult:
+        """The optimised motion for the weight ``beta`` (0: most thrust, 1: least power),
+        from the best sinusoid of a sweep and ``starts`` - 1 more starts, with the study's
+        model."""
+        study = beta_study(self.config, [beta], n_starts=starts, with_ipopt=False,
+                           model=self.model, progress=lambda _: None)
+        return study.sqp[beta]
+
+    def backtest(self, optimum: OptimisationResult | DiscreteMotion, live: bool = False,
+                 work_dir: str | Path | None = None) -> BacktestOutcome:
+        """The optimum against CFD: a shipped record of the same motion, or with ``live`` a
+        real OpenFOAM run (three periods after a start-up ramp). Without either, the
+        outcome's status is "not back-tested" and its source says why."""
+        motion = optimum.motion if isinstance(optimum, OptimisationResult) else optimum
+        label = (f"β = {optimum.beta:g}" if isinstance(optimum, OptimisationResult)
+                 else "motion")
+        outcomes = backtest_all(self.config, {label: motion}, self.model,
+                                fixture_folders=backtest_fixture_dirs(), live=live,
+                                work_dir=work_dir)
+        return outcomes[label]
+
+    def diagnose(self, backtests: Sequence[BacktestOutcome] = ()) -> Diagnosis:
+        """Where the model departs from the identification CFD and which unmodelled
+        effect explains it, checked on the back-tests' runs (which no fit saw)."""
+        if self._cases is None:
+            self._cases, _ = load_cases(self.config, None)
+        diagnosis, _ = gap_diagnosis(self.config, self._cases,
+                                     {o.label: o for o in backtests})
+        return diagnosis
+
+
+__all__ = ["WEIGHTINGS", "Study"]
