@@ -23,7 +23,8 @@ fi
 python -m pip install -q --upgrade pip
 python -m pip install -q -e '.[test]' -e ./data
 ruff check .
-python -m pytest -q                 # the fast tier: no OpenFOAM, no slow tests
+python -m pytest -q                         # the fast tier: no OpenFOAM, no slow tests
 if [ "${1:-}" != "--fast" ]; then
-  python -m pytest -q --full        # the full tier: everything, real OpenFOAM included
+  # the rest of the full tier (the two runs together are `pytest --full`)
+  python -m pytest -q -m "openfoam or slow"
 fi

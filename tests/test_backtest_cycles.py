@@ -110,6 +110,7 @@ def test_a_shorter_run_is_not_the_cfd_a_longer_live_run_asks_for():
     assert _other_set_up(rec, "coarse", None, 10) == "for 3 periods, not 10 as asked"
 
 
+@pytest.mark.slow
 def test_backtest_command_averages_cycles_and_refuses_what_a_run_cannot_hold(
         optimisation_file):
     """On the shipped three-period fixtures: two cycles averaged (each a whole cycle after

@@ -521,6 +521,7 @@ def test_the_gain_in_cfd_is_not_a_ratio_to_a_drag():
 
 
 @pytest.mark.parametrize("coefficients", ["case", "identified:uniform"])
+@pytest.mark.slow
 def test_the_main_job_kept_within_the_identification_data(tmp_path, coefficients):
     """`mfflap run --within-data`: the pitch envelope, period bounds and heave limit are
     what the identification cases reach, the optimised motions keep to them (within the
@@ -606,6 +607,7 @@ def test_the_main_job_kept_within_the_identification_data(tmp_path, coefficients
     assert ref.ranges["peak |pitch rate|"][1] == pytest.approx(limits["max_pitch_rate"])
 
 
+@pytest.mark.slow
 def test_within_data_without_identification_cases_says_so_and_optimises_unlimited(tmp_path):
     from mfflap.config import load_case
     from mfflap.pipeline import RunOptions, run_study

@@ -711,6 +711,7 @@ def test_an_earlier_calls_breach_counts_for_the_same_flow_time_rule(tmp_path, mo
     assert (case_dir / "log.pimpleFoam").read_text().count("Starting time loop") == 4
 
 
+@pytest.mark.slow
 def test_retry_failed_gives_a_failed_case_a_new_budget_of_retries(tmp_path):
     """A failed case's folder is kept; a plain rerun of the campaign leaves it as it is,
     --retry-failed marks a new budget of retries in its retry log before running it again
@@ -802,6 +803,7 @@ def test_manifest_written_before_the_pressure_solver_setting_still_resumes(tmp_p
             _write_manifest(tmp_path, cases, other)
 
 
+@pytest.mark.slow
 def test_far_field_switch_rewrites_binary_time_folders_and_the_run_resumes(tmp_path):
     """A real run writes binary fields; the far-field switch edits only the patch dictionary
     text of U and p in every time folder, and pimpleFoam resumes from them."""
@@ -1249,6 +1251,7 @@ _LOCK_HOLDER = ("import sys, time\nfrom mfflap.cfd.openfoam.case_lock import cas
                 "    time.sleep(600)\n")
 
 
+@pytest.mark.slow
 def test_a_case_another_process_runs_is_left_to_it_not_failed(tmp_path):
     """A campaign meeting a case whose run lock another process holds (a second campaign on
     the same folder, a `cfd run` of the case) leaves it to that process: status "busy"
@@ -1423,6 +1426,7 @@ def test_a_stopped_campaign_case_starts_no_application_afterwards(tmp_path):
     assert (case_dir / "constant" / "polyMesh" / "points").is_file()
 
 
+@pytest.mark.slow
 def test_a_stopped_campaign_waits_for_its_workers_to_let_go_of_their_cases(tmp_path,
                                                                            monkeypatch):
     """A worker that outlives the campaign lets go of its case a moment after its solver

@@ -85,6 +85,7 @@ def test_small_motions_against_the_medium_mesh(folder, thrust_range):
     # 1.0-3.0 %, -9.5 to -2.8 %: PISO alone on the medium mesh, more drag
     ("medium_piso", "medium_piso", None, None, 0.035, (-0.12, 0.0)),
 ])
+@pytest.mark.slow
 def test_what_moves_affordables_small_motion_drag(variant, setup_name, mesh, convection,
                                                   fast_f_n_limit, thrust_range):
     """affordable's three changes from the reference taken apart on the small motions
@@ -357,6 +358,7 @@ def test_history_figures_refuse_a_case_not_run_by_both(tmp_path):
     assert res.exit_code == 2 and "give --histories DIR" in res.output
 
 
+@pytest.mark.slow
 def test_the_comparison_says_what_separates_the_two_set_ups(tmp_path):
     """From the two campaign.toml: the settings that differ, both values, in text and JSON;
     a setting neither manifest names (both written before the wall treatment was kept) is

@@ -169,6 +169,7 @@ def test_a_record_kept_aside_twice_keeps_both(tmp_path):
 
 
 
+@pytest.mark.slow
 def test_identify_names_the_cases_it_fitted_across_two_set_ups(tmp_path):
     """`mfflap identify` on the max Co 2 campaign says on the terminal, and in its JSON,
     which case it fitted across two set-ups and how to rerun it; on the shipped fixtures

@@ -177,6 +177,7 @@ def _sharing_holder(case: Path, child_s: float) -> tuple[subprocess.Popen, int]:
     return proc, int(proc.stdout.readline())
 
 
+@pytest.mark.slow
 def test_a_lock_shared_with_a_solver_outlives_its_killed_holder_until_the_solver_ends(
         tmp_path):
     """A holder killed outright while the process it shares the lock with (a solver writing
@@ -206,6 +207,7 @@ def _running(pid: int) -> bool:
     return stat.rsplit(")", 1)[1].split()[0] != "Z"
 
 
+@pytest.mark.slow
 def test_a_solver_left_running_by_its_killed_holder_is_named_after_the_wait(tmp_path,
                                                                             monkeypatch):
     """One that does not end within ORPHAN_WAIT_S: the run is refused, the message says the

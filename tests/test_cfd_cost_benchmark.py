@@ -320,6 +320,7 @@ def test_two_yardsticks_are_a_usage_error():
     assert "--yardstick and --yardstick-courant" in done.stderr
 
 
+@pytest.mark.slow
 def test_a_window_past_the_simulated_time_or_malformed_is_a_usage_error():
     done = _script("--cycles", "1", "--window", "0.25:1.5")
     assert done.returncode == 2

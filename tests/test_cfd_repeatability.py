@@ -109,6 +109,7 @@ def test_each_copy_differs_in_its_courant_limit_alone():
         SolverSettings().max_courant * (1 + REPEAT_PERTURBATION), rel=1e-15)
 
 
+@pytest.mark.slow
 def test_repeat_needs_live_runs_and_two_copies(tmp_path, optimisation_file):
     from click.testing import CliRunner
 

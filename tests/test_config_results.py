@@ -283,6 +283,7 @@ def test_a_cut_or_incomplete_cfd_record_is_refused_naming_its_file(tmp_path):
     assert read_record(shipped).name == whole.name  # the shipped file is untouched
 
 
+@pytest.mark.slow
 def test_cli_evaluate_text_json_and_figure(tmp_path):
     import json
 

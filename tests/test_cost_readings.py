@@ -181,6 +181,7 @@ def test_a_file_that_is_not_a_study_is_refused_by_name(bench, readings, tmp_path
         assert done.returncode == 1 and said in done.stderr
 
 
+@pytest.mark.slow
 def test_the_shipped_studies_meet_the_target_only_at_20_deg_against_the_o_grid_mean(readings,
                                                                               tmp_path):
     """The findings' verdict, read from the shipped studies: the readings met are against the

@@ -125,6 +125,7 @@ def test_kept_in_hdf5_and_an_older_file_reads_without_it(tmp_path):
         assert read_identification(rf, group).error_growth == {}
 
 
+@pytest.mark.slow
 def test_on_the_shipped_fixtures_the_errors_grow_in_proportion_and_the_tools_say_so(tmp_path):
     """The Table 1 fixtures: the model errs by about the same share of every run's loads
     (b = 0.9-1.0 over three decades of load), so identify and gap diagnose say that
@@ -195,6 +196,7 @@ def test_auto_fits_with_the_scaling_the_errors_ask_for(noise, chosen, tmp_path):
     assert diag.base_sse == pytest.approx(fixed.base_sse, rel=1e-12)
 
 
+@pytest.mark.slow
 def test_auto_on_real_cfd_claims_the_known_missing_circulation_in_both_datasets(tmp_path):
     """The Table 1 fixtures' errors ask for case scaling, the small motions' for the grid's
     (docs/findings/known_limits.md); with "auto" the diagnosis claims the wake-lagged circulation,

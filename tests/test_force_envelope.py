@@ -65,6 +65,7 @@ def test_a_heaving_plate_is_bounded_by_added_mass_and_drag_over_the_convective_t
     assert np.all(bound >= local)
 
 
+@pytest.mark.slow
 def test_every_real_run_that_kept_its_numerics_stays_inside_the_bound():
     """All shipped fixtures and real test records, bursts bridged, but those above (the
     shipped fixtures are reruns of the lost ones); the optimised motions' back-tests apart

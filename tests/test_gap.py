@@ -100,6 +100,7 @@ def test_null_dataset_claims_nothing_and_says_so():
     assert lofo["claimed"] is False and lofo["candidate"] == diag.scores[0].label
 
 
+@pytest.mark.slow
 def test_blind_benchmark_meets_its_targets_at_snr_3():
     """The issue's target: right effect first in >= 90 % of trials, no claim in >= 90 % of
     null trials (30 trials here; the benchmark script runs more)."""
@@ -116,6 +117,7 @@ def test_blind_benchmark_meets_its_targets_at_snr_3():
     assert "no claim on null datasets : " in res.summary() and "nan" not in res.summary()
 
 
+@pytest.mark.slow
 def test_the_residual_scaling_that_wins_the_blind_benchmark_is_the_noise_model_s():
     """Weighted least squares is best with weights matching the noise: at SNR 1, noise of
     one size in every case is attributed far better with grid scaling, noise in proportion
@@ -145,6 +147,7 @@ def test_the_residual_scaling_that_wins_the_blind_benchmark_is_the_noise_model_s
     assert err.value.key == "noise"
 
 
+@pytest.mark.slow
 def test_a_blind_benchmark_without_null_trials_says_so_instead_of_nan():
     res = blind_test(n_trials=3, snr=3.0, seed=0)
     assert NULL not in res.truth and np.isnan(res.null_correct)
@@ -323,6 +326,7 @@ def test_external_csv_case_and_its_errors(tmp_path):
         in res.output and "--fixtures DIR" in res.output
 
 
+@pytest.mark.slow
 def test_gap_cli_on_a_record_folder(tmp_path):
     from mfflap.cli.main import cli
 
@@ -440,6 +444,7 @@ def test_vorticity_at_the_largest_residual_from_real_openfoam_fields(tmp_path):
                                   "nearest: f1p000_h0p300_phi090p0,"),
     ("f1p000_h0p300_phi090p0=TMP/missing", "TMP/missing is not a folder"),
 ])
+@pytest.mark.slow
 def test_a_flow_folder_that_cannot_be_shown_is_refused_before_the_diagnosis(tmp_path, flow,
                                                                            said):
     """--flow is checked before the diagnosis runs (it was checked after it, and a case id

@@ -130,6 +130,7 @@ def test_a_back_test_failure_file_is_named_by_its_case_and_drops_out_when_it_was
     assert "backtest_3a6d9eea8fc019d2" in {r.name for r in records} and failed == {}
 
 
+@pytest.mark.slow
 def test_gap_cli_checks_the_claim_on_the_shipped_back_tests(tmp_path):
     """On the shipped CFD the wake lag is claimed with case scaling, and does not carry over
     to the four back-tested motions (real OpenFOAM runs the fits never saw)."""

@@ -130,6 +130,7 @@ LOST_BY_CO2 = ("f0p500_h0p500_phi135p0", "f2p000_h0p500_phi135p0")
 POOLED = [CAMPAIGNS / "table1_coarse_co2", *(CO1 / f"{n}.h5" for n in LOST_BY_CO2)]
 
 
+@pytest.mark.slow
 def test_the_two_campaigns_pooled_hold_the_whole_table_1_grid():
     """Max Co 2's 43 records and the max Co 1 runs of the two motions it lost: identification
     from both takes all 45 Table 1 motions and leaves none out. The max Co 1 folder as a
@@ -149,6 +150,7 @@ def test_the_two_campaigns_pooled_hold_the_whole_table_1_grid():
     assert excluded == {}
 
 
+@pytest.mark.slow
 def test_the_pooled_identification_report_names_each_records_set_up(tmp_path):
     """`identify` from both folders, then its report: every Table 1 motion is listed with
     the set-up its record came from (max Co 1 and inletOutlet for the two the max Co 2

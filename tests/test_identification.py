@@ -55,6 +55,7 @@ def test_strategy_weights():
 
 @pytest.mark.parametrize("residual_scaling", ["grid", "case"])
 @pytest.mark.parametrize("strategy", ["uniform", "low", "high"])
+@pytest.mark.slow
 def test_recovers_known_coefficients_within_stated_uncertainty(strategy, residual_scaling):
     """Synthetic CFD from the model itself, 5 % noise, uneven adaptive-like time steps."""
     rng = np.random.default_rng(7)
@@ -94,6 +95,7 @@ def test_unidentifiable_term_is_refused():
                  fixed={"normal_drag": 2.0, "normal_added_mass": 1.2})
 
 
+@pytest.mark.slow
 def test_a_coefficient_the_data_make_negative_is_held_at_zero_and_said_so(tmp_path):
     """Forces made with C_Dt = -1: the bounded fit holds C_Dt at 0 (the unconstrained fit
     is negative), the others stay near their values, and the CLI and report say it."""
@@ -212,6 +214,7 @@ def test_adaptive_time_step_is_not_a_gap_but_a_missing_stretch_is():
         prepare_case(_retimed(rec, time, cut))
 
 
+@pytest.mark.slow
 def test_identify_cli_report_and_hdf5_round_trip(tmp_path):
     """CLI on a folder of real HDF5 records (synthetic forces), a failed case named."""
     from click.testing import CliRunner
@@ -269,6 +272,7 @@ def test_one_step_cfd_glitch_is_removed_and_reported():
                                atol=2e-2 * np.ptp(clean.cfd.normal_force))
 
 
+@pytest.mark.slow
 def test_several_record_folders_pool_and_fill_failed_cases(tmp_path):
     """Two folders pool their records; a case failed in one and done in the other is used,
     one failed everywhere stays out, and one recorded twice is refused naming both files."""
@@ -340,6 +344,7 @@ def _shipped_cases():
 
 
 @pytest.mark.parametrize("strategy", ["uniform", "low", [1.0, 2.0, 3.0, 0.5, 1.0]])
+@pytest.mark.slow
 def test_each_cases_refit_without_it_is_identify_run_without_it(strategy):
     """The leave-one-out rows are the fits `identify` makes of the other cases (the
     shipped CFD fixtures; the case of the largest forces, and the first and last)."""
@@ -399,6 +404,7 @@ def test_a_frequency_of_one_case_drops_out_of_its_refit_and_one_case_has_none():
     assert np.all(np.isnan(single.leave_one_out)) and most_influential(single) == []
 
 
+@pytest.mark.slow
 def test_the_refits_are_stored_reported_and_printed(tmp_path):
     """`mfflap identify` prints the case that moves each coefficient most and keeps the
     refits in its HDF5 file; the report tabulates and draws them; a file written before
@@ -487,6 +493,7 @@ def test_case_scaling_fits_the_mean_square_nrmse_and_every_run_weighs_alike():
     assert abs(drag.relative_change) < 0.04
 
 
+@pytest.mark.slow
 def test_the_residual_scaling_comes_from_the_case_file_or_the_command_line(tmp_path):
     """[identification] residual_scaling is checked by key; the CLI option overrides it;
     the HDF5 file keeps it (an older file without it reads as grid) and the report says
@@ -534,6 +541,7 @@ def test_the_residual_scaling_comes_from_the_case_file_or_the_command_line(tmp_p
         assert read_identification(rf, "identification/uniform").residual_scaling == "grid"
 
 
+@pytest.mark.slow
 def test_a_case_can_be_left_out_by_name_and_its_fit_is_the_refit_without_it(tmp_path):
     """`identify --exclude CASE` fits without that case (the jackknife's row for it), lists
     it among the cases left out with the reason; a name that is none of the cases is

@@ -196,6 +196,7 @@ def test_without_bootstrap_the_spread_is_not_estimated_rather_than_zero():
     assert err.value.key == "n_bootstrap"
 
 
+@pytest.mark.slow
 def test_identify_without_bootstrap_prints_strict_json_and_no_false_zero(tmp_path):
     out = tmp_path / "i.h5"
     runner = CliRunner()
@@ -345,6 +346,7 @@ def test_a_results_file_of_another_kind_is_refused_by_its_kind(tmp_path):
         assert f.attrs["kind"] == "optimisation"
 
 
+@pytest.mark.slow
 def test_a_scheduler_that_cannot_be_parsed_or_reached_is_a_clear_error(tmp_path):
     """Before: dask's ValueError or OSError as a traceback."""
     import socket
@@ -393,6 +395,7 @@ def test_still_water_gives_an_infinite_strouhal_number_printed_as_null(tmp_path)
     assert "RuntimeWarning" not in res.stderr
 
 
+@pytest.mark.slow
 def test_outputs_asked_for_in_new_folders_are_written_there(tmp_path):
     """Before: optimise did its minutes of work and then failed to create its file, and
     evaluate / gradcheck / motion-table failed with a traceback, when the folder named in
@@ -527,6 +530,7 @@ def test_a_far_field_the_plate_frame_cannot_take_is_refused_by_the_option(tmp_pa
     assert "far_field" not in res.output and not out.exists()
 
 
+@pytest.mark.slow
 def test_identify_weights_not_one_per_frequency_of_the_records_name_the_option(tmp_path):
     """The count is known once the records are read: the refusal names --weights and the
     records' frequencies (it used to name only the case file's identification key)."""

@@ -44,6 +44,7 @@ def test_harmonic_case_names_its_motion_and_parameters():
 
 @pytest.mark.parametrize("fixtures", ["small_motion_coarse", "small_motion_affordable",
                                       "small_motion_medium"])
+@pytest.mark.slow
 def test_shipped_small_motion_runs_follow_linear_theory(fixtures):
     """Measured over the three set-ups: F_n 0.6-3.8 % NRMSE from the theory and M 1.0-4.0 %
     where k >= 1.68; at k = 0.84 F_n 1.6-4.7 % and M 3.3-8.4 % (the medium mesh's heave is
@@ -170,6 +171,7 @@ def test_command_runs_a_small_motion_in_openfoam(tmp_path):
     assert record.provenance["solver_velocity_convection"] == "LUST"
 
 
+@pytest.mark.slow
 def test_a_motion_another_process_runs_is_reported_busy_not_failed(tmp_path):
     """A case whose run lock another process holds (a second linear-check on the same
     folder): left to it, listed under "busy" with the holder, exit status 1, nothing

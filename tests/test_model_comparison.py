@@ -105,6 +105,7 @@ def test_the_figure_draws_both_series_on_the_compared_samples_scale(tmp_path):
     assert f"NRMSE {nrmse:.1f} %" in axes[2].get_title(loc="right")
 
 
+@pytest.mark.slow
 def test_cfd_parse_writes_the_figure_and_the_hdf5_file(tmp_path):
     import matplotlib.image
     from click.testing import CliRunner

@@ -48,6 +48,7 @@ def test_sqp_and_ipopt_reach_the_same_optimum():
     assert np.linalg.norm(g[:-1]) < 1e-2 * np.linalg.norm(g0[:-1])
 
 
+@pytest.mark.slow
 def test_beta0_optimum_beats_the_starting_sinusoid_under_the_power_limit():
     p = problem(0.0)
     r = optimise_sqp(p, START, min_period=0.2, max_period=20.0)
@@ -138,6 +139,7 @@ def test_thrust_gain_is_not_a_ratio_to_a_drag():
         assert thrust_gain(-0.01, baseline) is None
 
 
+@pytest.mark.slow
 def test_no_gain_is_given_when_the_best_sinusoid_makes_drag(tmp_path):
     """With P_max = 1 mW every feasible sinusoid makes drag: the ratio of beta = 0's thrust
     to it (-85 % for a drag cut from 0.075 N to 0.011 N) is no gain and is not given."""
@@ -167,6 +169,7 @@ def test_no_gain_is_given_when_the_best_sinusoid_makes_drag(tmp_path):
             "sinusoid makes no thrust") in html
 
 
+@pytest.mark.slow
 def test_a_gain_from_a_flagged_beta_0_optimum_says_so(tmp_path):
     """N = 2 steps per half cycle: the beta = 0 optimum is flagged (the scheme's energy
     error, peaks between the steps); its gain is still given, with the doubt beside it in
@@ -356,6 +359,7 @@ def test_casadi_swallows_a_ctrl_c_in_ipopt_and_interrupts_kept_raises_it_again(c
         solver(x0=x0)
 
 
+@pytest.mark.slow
 def test_ctrl_c_during_optimise_ipopt_stops_it(capfd, ctrl_c_raises):
     """A SIGINT while IPOPT iterates in optimise_ipopt (its NLP built beforehand, so the
     signal lands in the solve: CasADi's warning says so) raises KeyboardInterrupt instead of
@@ -381,6 +385,7 @@ def test_ctrl_c_during_optimise_ipopt_stops_it(capfd, ctrl_c_raises):
     assert "KeyboardInterruptException" in capfd.readouterr().err
 
 
+@pytest.mark.slow
 def test_a_stop_signal_between_betas_keeps_the_betas_optimised_before_it():
     """A SIGTERM (SLURM's stop; a Ctrl-C alike) while beta = 0.75 is optimised: the study
     raises StudyInterrupted, a KeyboardInterrupt, holding beta = 0.5 and the sweep; the

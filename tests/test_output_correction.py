@@ -193,6 +193,7 @@ def _small_sweep(config, model):
                           max_power=o.max_power)
 
 
+@pytest.mark.slow
 def test_a_beta_study_with_a_correction_optimises_the_corrected_outputs(tmp_path):
     """beta = 0 with the power scaled by 1.3: the optimum keeps the model's own power at
     P_max / 1.3 (the penalty's limit moves), is labelled beta = 0 with the corrected J, and

@@ -88,6 +88,7 @@ def test_the_case_key_takes_free_or_fixed_and_nothing_else():
         loads_case(text.replace("[optimisation]", '[optimisation]\nphase = "locked"'))
 
 
+@pytest.mark.slow
 def test_a_fixed_phase_keeps_the_optimum_in_phase_with_its_start_sqp_and_ipopt():
     """beta = 1 on the paper's case: free, SQP's optimum drifts a quarter radian from its
     start's phase; fixed, SQP and IPOPT end in phase with sin(2 pi t / T), at a J within
@@ -113,6 +114,7 @@ def test_a_fixed_phase_keeps_the_optimum_in_phase_with_its_start_sqp_and_ipopt()
     assert abs(pitch_phase_rad(ipopt.motion)) < 1e-6
 
 
+@pytest.mark.slow
 def test_optimise_fix_phase_stores_the_setting_and_optimises_in_phase(tmp_path):
     from mfflap.optimisation.store import read_result
     from mfflap.results import ResultsFile

@@ -55,6 +55,7 @@ def test_no_log_yet_reports_nothing(tmp_path):
     assert lines == [] and end_time(tmp_path) is None
 
 
+@pytest.mark.openfoam
 def test_cfd_run_prints_progress_on_stderr_while_openfoam_runs(tmp_path):
     """A real run of a fifth of a cycle on the coarse mesh: meshing, start and at least one
     progress line go to stderr; stdout keeps the summary."""
@@ -72,6 +73,7 @@ def test_cfd_run_prints_progress_on_stderr_while_openfoam_runs(tmp_path):
     assert "[cfd run]" not in res.stdout and res.stdout.startswith(f"finished {case}")
 
 
+@pytest.mark.openfoam
 def test_cfd_run_decomposed_on_two_ranks(tmp_path):
     """`cfd run --procs 2`: decomposed once, run under mpirun, forces from the master."""
     import json
@@ -94,6 +96,7 @@ def test_cfd_run_decomposed_on_two_ranks(tmp_path):
 
 @pytest.mark.parametrize("stop", ["SIGINT to the group", "SIGTERM", "SIGUSR1",
                                   "SIGUSR1 to every process"])
+@pytest.mark.openfoam
 def test_an_interrupted_cfd_run_stops_its_solver_and_says_where_it_resumes(tmp_path, stop):
     """Ctrl-C (SIGINT to the job's process group, as a terminal sends it), SIGTERM (kill,
     scancel) or SIGUSR1 (SLURM's --signal before a time limit; under srun it reaches the
@@ -148,6 +151,7 @@ def test_an_interrupted_cfd_run_stops_its_solver_and_says_where_it_resumes(tmp_p
     assert (case / "log.pimpleFoam").read_text().count("Starting time loop") == 2
 
 
+@pytest.mark.openfoam
 def test_an_interrupted_mesh_study_keeps_its_finished_runs_and_says_so(tmp_path):
     """Ctrl-C (SIGINT) on `mfflap cfd convergence` after its first run: that run's record is
     kept and named, the solver in flight is stopped, and the rerun does not redo the first."""
@@ -177,6 +181,7 @@ def test_an_interrupted_mesh_study_keeps_its_finished_runs_and_says_so(tmp_path)
     assert not (out / "medium_co4.h5").exists()
 
 
+@pytest.mark.openfoam
 def test_a_solver_stopped_by_a_signal_of_its_own_is_not_a_finished_run(tmp_path):
     """SIGUSR1 sent to pimpleFoam alone (not to mfflap): it writes and ends without an
     error before its end time; `cfd run` says so with exit status 2 instead of

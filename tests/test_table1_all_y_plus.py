@@ -49,6 +49,7 @@ def test_each_run_held_the_all_y_plus_wall_conditions(path):
     assert shipped.parameters == record.parameters
 
 
+@pytest.mark.slow
 def test_the_wall_treatment_moves_the_separated_runs_not_the_attached_ones(comparison):
     """At h = 0.1 m (attached flow, small effective incidence) the two treatments agree
     within 4 % NRMSE in F_n; the large heaves, whose separation the wall treatment shapes,
@@ -91,6 +92,7 @@ def test_the_identified_coefficients_move_within_their_spread_but_normal_drag():
     assert 0 < spalding["tangential_drag"] < spread["tangential_drag"]
 
 
+@pytest.mark.slow
 def test_the_identification_report_says_the_wall_treatment_each_case_ran_with(tmp_path):
     """The report's table of CFD cases has the column; for a shipped record, which keeps
     solver settings but not this one, it reads log_law."""

@@ -76,6 +76,7 @@ def test_one_set_up_moves_each_runs_forces_about_as_much_as_the_wall_treatment(c
 
 
 @pytest.mark.parametrize("residual_scaling", ["grid", "case"])
+@pytest.mark.slow
 def test_fitting_runs_that_mix_two_set_ups_barely_moves_the_identification(
         comparison, residual_scaling):
     """Uniform weighting on the 43 cases, the ten mixed runs as run against their one-set-up

@@ -47,6 +47,7 @@ def test_the_one_mixed_run_of_the_campaign_was_rerun_as_one_set_up():
     (None, RESUMED_FROM_S, (0.01, 0.02), (0.015, 0.025), (0.01, 0.03)),
     (RESUMED_FROM_S, None, (0.055, 0.075), (0.055, 0.075), (0.06, 0.08)),
 ])
+@pytest.mark.slow
 def test_the_resumed_run_reads_a_few_per_cent_above_one_set_up(start_s, end_s, normal,
                                                                  moment, thrust):
     """Over the fitted window (0.75-1.5 s) the campaign's run is 2.6 % NRMSE (F_n) from the
@@ -63,6 +64,7 @@ def test_the_resumed_run_reads_a_few_per_cent_above_one_set_up(start_s, end_s, n
 
 
 @pytest.mark.parametrize("residual_scaling", ["grid", "case"])
+@pytest.mark.slow
 def test_the_one_set_up_run_leaves_the_identification_where_it_was(residual_scaling):
     """Uniform weighting on the campaign's 43 cases, as run against with the one-set-up
     rerun in its place: every coefficient moves by under a tenth of its bootstrap spread,

@@ -186,6 +186,7 @@ def test_ipopt_keeps_its_optimum_in_the_box(config, centre):
     assert region.on_boundary(found.motion)
 
 
+@pytest.mark.slow
 def test_a_beta_study_starts_a_trust_region_from_its_centre_alone(config, centre, tmp_path):
     from mfflap.optimisation.workflow import write_study
     from mfflap.reports.html import Report
