@@ -20,13 +20,13 @@ from pathlib import Path
 import numpy as np
 
 from mfflap.campaign.cases import grid_cases
-from mfflap.campaign.records import CfdRecord
 from mfflap.config import IdentificationGrid, load_case
 from mfflap.hydro.loads import Loads
 from mfflap.identification import identify, prepare_cases
 from mfflap.kinematics.convert import harmonic_to_discrete
 from mfflap.optimisation.optimise import optimise_ipopt, optimise_sqp
 from mfflap.optimisation.study import problem_for
+from mfflap.records.record import CfdRecord
 
 CASE = Path(__file__).parents[1] / "cases" / "paper2026.toml"
 

@@ -9,8 +9,7 @@ from mfflap.kinematics import (
     PeriodicSplineMotion,
     RampHarmonicMotion,
 )
-
-__version__ = "0.1.0"
+from mfflap.version import __version__
 
 
 def __getattr__(name: str):

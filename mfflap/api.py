@@ -25,7 +25,6 @@ from typing import Any
 
 from mfflap.backtest.run import BacktestOutcome
 from mfflap.backtest.workflow import backtest_all
-from mfflap.campaign.records import backtest_fixture_dirs
 from mfflap.config import CaseConfig, load_case
 from mfflap.errors import ConfigError
 from mfflap.gap.diagnose import Diagnosis
@@ -36,6 +35,7 @@ from mfflap.optimisation.optimise import OptimisationResult
 from mfflap.optimisation.study import beta_study
 from mfflap.performance import Evaluation, evaluate_discrete
 from mfflap.pipeline import gap_diagnosis
+from mfflap.records.record import backtest_fixture_dirs
 
 #: the frequency weightings :meth:`Study.identify` takes
 WEIGHTINGS = ("uniform", "low", "high")

@@ -179,7 +179,7 @@ class RunStoppedByWatch(CfdRunError):
         As :class:`CfdRunError`.
     reason
         What the check found, as it gave it (for the force bound, an
-        :class:`~mfflap.cfd.force_envelope.EnvelopeBreach`).
+        :class:`~mfflap.records.force_envelope.EnvelopeBreach`).
     """
 
     def __init__(self, message: str, *, case: str, log_tail: str = "", reason: Any = None):

@@ -18,6 +18,7 @@ from pathlib import Path
 
 from mfflap.config import CaseConfig
 from mfflap.errors import ConfigError, MfflapError
+from mfflap.gap.store import write_diagnosis
 
 Progress = Callable[[str], None]
 
@@ -252,7 +253,6 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
                 outcome: RunOutcome) -> None:
     """The stages of :func:`run_study`, filling ``outcome``."""
     from mfflap.backtest.workflow import backtest_all
-    from mfflap.campaign.records import backtest_fixture_dirs, fixture_dir
     from mfflap.identification.error_growth import scaling_advice
     from mfflap.identification.workflow import identify_strategies, load_cases
     from mfflap.optimisation.store import beta_label
@@ -262,6 +262,7 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
         gain_table,
         sinusoid_motion,
     )
+    from mfflap.records.record import backtest_fixture_dirs, fixture_dir
 
     folders = options.fixtures or (fixture_dir(),)
 
@@ -390,15 +391,13 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
             _stage(outcome, "VTK export", progress, vtk)
 
 
-def write_outputs(config: CaseConfig, outcome: RunOutcome, h5_path: Path, html_path: Path,
-                  source: str) -> None:
-    """One HDF5 file with every number and the inputs; one self-contained HTML report."""
+def write_results(config: CaseConfig, outcome: RunOutcome, h5_path: Path) -> None:
+    """One HDF5 file with every number of the run and its inputs (the report beside it:
+    :func:`mfflap.reports.run.write_run_outputs`)."""
     from mfflap.backtest.store import safe_label, write_backtests
     from mfflap.identification.store import write_identification
     from mfflap.optimisation.store import beta_key, write_result
     from mfflap.optimisation.workflow import write_study
-    from mfflap.reports.html import Report, text_html
-    from mfflap.reports.run import add_backtest_sections, add_sensitivity_section
     from mfflap.results import ResultsFile
 
     with ResultsFile(h5_path, "w", kind="run", config_toml=config.to_toml()) as rf:
@@ -413,45 +412,10 @@ def write_outputs(config: CaseConfig, outcome: RunOutcome, h5_path: Path, html_p
         for label, (_, r) in outcome.sensitivity.items():
             write_result(rf, f"sensitivity/{label}/{beta_key(0.0)}", r)
         if outcome.gap is not None:
-            from mfflap.gap.report import write_diagnosis
-
             write_diagnosis(rf, *outcome.gap)
         rf.h5.attrs["problems"] = "\n".join(outcome.problems)
         rf.h5.attrs["stage_times_s"] = str(outcome.timings)
         rf.h5.attrs["interrupted_stage"] = outcome.interrupted or ""  # "": ran to the end
-    rep = Report(f"mfflap run: {config.study.name}", config.study.description)
-    s = rep.section("Summary")
-    if outcome.problems:
-        s.blocks.append(text_html("What is missing and why:", warn=True))
-        for p in outcome.problems:
-            s.blocks.append(text_html(p, warn=True))
-    else:
-        s.blocks.append(text_html("Every stage ran."))
-    s.blocks.append(text_html("Stage times: " + ", ".join(f"{k} {v:.1f} s" for k, v in
-                                                          outcome.timings.items())))
-    if outcome.identification:
-        from mfflap.reports.identification import add_identification_sections
-
-        add_identification_sections(rep, outcome.identification, outcome.cases,
-                                    config.morison_model(), config.flow.velocity, source)
-    if outcome.study is not None:
-        from mfflap.reports.optimisation import add_optimisation_sections
-
-        add_optimisation_sections(rep, outcome.study, outcome.model, config.optimisation.scheme,
-                                  config.optimisation.max_power, outcome.gain,
-                                  config.optimisation.phase)
-    if outcome.coverage:
-        from mfflap.reports.coverage import add_coverage_section
-
-        add_coverage_section(rep, outcome.coverage, len(outcome.cases))
-    add_backtest_sections(rep, outcome.backtests, config.optimisation.max_power)
-    if outcome.gap is not None:
-        from mfflap.gap.report import add_gap_sections
-
-        add_gap_sections(rep, *outcome.gap)
-    if outcome.sensitivity:
-        add_sensitivity_section(rep, outcome.sensitivity, config.optimisation.scheme)
-    rep.write(html_path)
 
 
-__all__ = ["RunOptions", "RunOutcome", "run_study", "write_outputs"]
+__all__ = ["RunOptions", "RunOutcome", "run_study", "write_results"]

@@ -25,6 +25,7 @@ from mfflap.errors import MfflapError
 from mfflap.hydro.loads import LOAD_UNITS, Loads
 from mfflap.kinematics.discrete import DiscreteMotion
 from mfflap.kinematics.state import KINEMATIC_UNITS, KinematicState
+from mfflap.version import __version__
 
 SCHEMA_VERSION = 1
 
@@ -83,7 +84,6 @@ class ResultsFile:
 
     def __init__(self, path: str | Path, mode: str = "r", *, kind: str = "results",
                  config_toml: str | None = None, kinds: tuple[str, ...] | None = None):
-        from mfflap import __version__
 
         self.path = Path(path)
         if mode == "r" and not self.path.exists():

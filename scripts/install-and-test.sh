@@ -23,6 +23,7 @@ fi
 python -m pip install -q --upgrade pip
 python -m pip install -q -e '.[test]' -e ./data
 ruff check .
+lint-imports                                # the layers (.importlinter)
 python -m pytest -q                         # the fast tier: no OpenFOAM, no slow tests
 if [ "${1:-}" != "--fast" ]; then
   # the rest of the full tier (the two runs together are `pytest --full`)

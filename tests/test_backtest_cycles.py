@@ -14,10 +14,10 @@ from click.testing import CliRunner
 
 from mfflap.backtest.compare import compare_last_cycle
 from mfflap.backtest.cycles import cycle_means
-from mfflap.campaign.records import fixture_dir, read_record
 from mfflap.cli.main import cli
 from mfflap.errors import ConfigError
 from mfflap.hydro.morison import MorisonModel
+from mfflap.records.record import fixture_dir, read_record
 
 BETA0 = "backtest_f85edc06d9cf46a0"
 BETA05 = "backtest_34cd2b07c53664ae"
@@ -164,7 +164,7 @@ def test_a_live_back_test_runs_the_cycles_asked_and_averages_them(tmp_path,
     """Real pimpleFoam, coarse mesh: the beta = 0.5 optimum (period 0.46 s) for 2.5 periods,
     its two whole cycles after the ramp averaged; the case is named for its periods, the
     record says how many it ran, and the same command takes the saved record."""
-    from mfflap.campaign.records import read_record_parameters
+    from mfflap.records.record import read_record_parameters
 
     work, saved = tmp_path / "work", tmp_path / "saved"
     args = ["backtest", str(optimisation_file), "--live", "--motion", "0.5", "--cycles",
@@ -246,7 +246,7 @@ def test_run_and_its_rounds_judge_the_means_over_the_cycles_asked(tmp_path):
     """`mfflap run --rounds 2 --average-cycles 2` on the shipped three-period fixtures: round
     1's back-tests (the main job's) and the rounds' checks take the means of the last two
     cycles, not the last cycle's; --backtest-cycles needs --live."""
-    from mfflap.campaign.records import backtest_fixture_dirs
+    from mfflap.records.record import backtest_fixture_dirs
 
     case = Path(__file__).parents[1] / "cases" / "paper2026.toml"
     out = tmp_path / "loop"
@@ -333,7 +333,7 @@ def test_cycles_are_numbered_by_the_period_they_start_in():
 
 
 def test_as_run_differences_name_what_a_retry_changed():
-    from mfflap.backtest.as_run import as_run_differences
+    from mfflap.records.as_run import as_run_differences
 
     run_a, _ = _record(f"{BETA05}_8_cycles")  # inletOutlet, max Co 2 after its retries
     run_b, _ = _record(f"{BETA05}_copy1_8_cycles")  # inletOutlet, max Co 4.000004

@@ -8,14 +8,14 @@ from click.testing import CliRunner
 
 from mfflap.backtest.compare import compare_last_cycle
 from mfflap.backtest.run import backtest_motion, cfd_motion, motion_key
-from mfflap.campaign.records import CfdRecord, read_record, write_record
-from mfflap.cfd.openfoam.loads import imposed_state
+from mfflap.cfd.imposed_motion import imposed_state
 from mfflap.cfd.openfoam.runner import openfoam_available
 from mfflap.errors import MfflapError
 from mfflap.hydro import MorisonModel
 from mfflap.kinematics.convert import harmonic_to_discrete
 from mfflap.kinematics.discrete import DiscreteMotion
 from mfflap.performance import thrust_and_power
+from mfflap.records.record import CfdRecord, read_record, write_record
 
 CASE = Path(__file__).parents[1] / "cases" / "paper2026.toml"
 MOTION = harmonic_to_discrete(1.5, 0.2, np.deg2rad(30), np.deg2rad(90), 40)
@@ -559,7 +559,7 @@ def test_the_main_job_kept_within_the_identification_data(tmp_path, coefficients
     # every motion back-tested from the shipped fixtures of these motions (real OpenFOAM)
     assert {k: b["status"] for k, b in summary["backtest"].items()} == dict.fromkeys(
         cov, "back-tested")
-    from mfflap.campaign.records import fixture_dir
+    from mfflap.records.record import fixture_dir
 
     shipped = {f"fixture {p.name}" for p in fixture_dir("backtest_within_data").glob("*.h5")}
     # (a record of beta = 1's least-power cycle may be matched shifted in time: its phase is
@@ -596,9 +596,9 @@ def test_the_main_job_kept_within_the_identification_data(tmp_path, coefficients
     with ResultsFile(out / "results.h5") as rf:
         assert f"max_pitch_rate = {limits['max_pitch_rate']!r}" in rf.config_toml
     # the limits are the data's: the same reference gives them
-    from mfflap.campaign.records import read_records
     from mfflap.config import load_case
     from mfflap.identification.data import prepare_cases
+    from mfflap.records.record import read_records
 
     case = load_case(CASE)
     cases, _ = prepare_cases(read_records(fixture_dir()), case.identification.discard_time,
@@ -648,8 +648,8 @@ def test_a_live_backtest_takes_a_motion_saved_before_on_the_same_set_up(optimisa
     on another mesh is."""
     import shutil
 
-    from mfflap.campaign.records import fixture_dir
     from mfflap.cli.main import cli
+    from mfflap.records.record import fixture_dir
 
     saved = tmp_path / "saved"
     saved.mkdir()

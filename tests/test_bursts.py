@@ -9,10 +9,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mfflap.campaign.records import fixture_dir, read_record
-from mfflap.cfd.bursts import bridge_bursts, burst_mask, find_numerical_bursts
 from mfflap.errors import MfflapError
 from mfflap.identification.data import prepare_case
+from mfflap.records.bursts import bridge_bursts, burst_mask, find_numerical_bursts
+from mfflap.records.record import fixture_dir, read_record
 
 COMPONENTS = ("normal_force", "tangential_force", "moment")
 
@@ -138,7 +138,7 @@ def test_an_impulsive_start_is_not_a_burst_but_the_same_jump_later_is():
 
 
 def test_a_mesh_study_lists_each_runs_bursts_beside_it():
-    from mfflap.cfd.convergence import ConvergenceRun, ConvergenceStudy
+    from mfflap.campaign.convergence import ConvergenceRun, ConvergenceStudy
 
     bursty, _, _ = _real("f1p000_h0p500_phi090p0")
     clean, _, _ = _real("f1p000_h0p300_phi090p0")
@@ -155,7 +155,7 @@ def test_campaign_status_names_a_finished_cases_bursts(tmp_path):
     import shutil
 
     from mfflap.campaign.execute import campaign_status
-    from mfflap.campaign.records import RECORD_SUFFIX
+    from mfflap.records.record import RECORD_SUFFIX
 
     names = ("f1p000_h0p500_phi090p0", "f1p000_h0p300_phi090p0")
     (tmp_path / "campaign.toml").write_text("".join(f"[cases.{n}]\nfrequency = 1.0\n"

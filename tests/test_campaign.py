@@ -30,7 +30,6 @@ from mfflap.campaign.execute import (
     run_campaign,
 )
 from mfflap.campaign.openfoam_run import run_motion
-from mfflap.campaign.records import CfdRecord, read_record, read_records, write_record
 from mfflap.cfd.openfoam.runner import dies_with_caller, openfoam_available, run_case
 from mfflap.cfd.openfoam.writer import SolverSettings, write_case
 from mfflap.config import IdentificationGrid
@@ -38,6 +37,7 @@ from mfflap.errors import CfdRunError, ConfigError, MfflapError
 from mfflap.hydro import MorisonModel
 from mfflap.kinematics import RampHarmonicMotion
 from mfflap.metrics import pearson
+from mfflap.records.record import CfdRecord, read_record, read_records, write_record
 from mfflap.toml_io import read_toml
 
 SHORT = CfdCase(1.0, 0.3, 90.0, 10.0, duration=0.04, ramp_time=0.02)
@@ -207,7 +207,7 @@ def test_a_finished_run_that_lost_its_numerics_is_lost_and_rerun_on_request(tmp_
     """A real record whose F_n after the ramp is made 10,000 times larger (what a run that
     lost its numerics leaves): status "lost" with where; a plain rerun keeps it; with
     retry_failed it is kept aside as .lost.h5 and the case runs again, to "done"."""
-    from mfflap.campaign.records import LOST_SUFFIX
+    from mfflap.records.record import LOST_SUFFIX
 
     out = tmp_path / "camp"
     setup = CampaignSetup(timeout_s=900.0)
@@ -236,7 +236,7 @@ def test_a_record_cut_short_is_unreadable_then_kept_aside_and_its_case_rerun(tmp
     """A record cut short (a copy interrupted, a full disk) used to stop `campaign status`
     with the h5py error of that one file, and a resumed campaign counted it as done for
     ever; now status calls it "unreadable" and the next run keeps it aside and reruns it."""
-    from mfflap.campaign.records import UNREADABLE_SUFFIX
+    from mfflap.records.record import UNREADABLE_SUFFIX
 
     out = tmp_path / "camp"
     setup = CampaignSetup(timeout_s=900.0)
@@ -545,7 +545,7 @@ def test_a_loss_at_the_same_flow_time_is_rerun_from_the_start_once(tmp_path, mon
     f = 1 Hz, h = 0.5 m, phi = 135 deg did. The record says so; every field written before
     the rerun went, so its forces are the rerun's alone."""
     from mfflap.campaign import openfoam_run
-    from mfflap.cfd.force_envelope import EnvelopeBreach
+    from mfflap.records.force_envelope import EnvelopeBreach
 
     verdicts = iter([0.036, 0.0361, 0.0362, None])
 
@@ -577,8 +577,8 @@ def test_a_loss_that_moves_with_the_time_step_keeps_being_retried(tmp_path, monk
     than SAME_BREACH_FRACTION of c / U after the Courant limit was halved is retried on to
     the last remedy (max Co 1, upwind k-epsilon), unlike one that stays put."""
     from mfflap.campaign import openfoam_run
-    from mfflap.cfd.force_envelope import EnvelopeBreach
     from mfflap.errors import CfdRunError
+    from mfflap.records.force_envelope import EnvelopeBreach
 
     starts = iter([0.036, 0.037, 0.012, 0.039])  # the third moved by 25 ms > 0.02 c / U
 
@@ -684,8 +684,8 @@ def test_an_earlier_calls_breach_counts_for_the_same_flow_time_rule(tmp_path, mo
     call at max Co 4 (read from the case's retry log) being the same flow time, spends its
     last retry on a rerun from t = 0, not on max Co 1; the loss there ends it."""
     from mfflap.campaign import openfoam_run
-    from mfflap.cfd.force_envelope import EnvelopeBreach
     from mfflap.errors import CfdRunError
+    from mfflap.records.force_envelope import EnvelopeBreach
 
     def scripted(*args, **kwargs):
         return EnvelopeBreach(0.036, 0.037, 3, 0.036, 5.0)
@@ -1208,7 +1208,7 @@ def test_an_interrupted_campaign_stops_its_solvers_and_says_how_to_resume(tmp_pa
     the message counts the cases, and `campaign status` lists the one stopped part-way."""
     assert openfoam_available()
     from mfflap.campaign.execute import campaign_status
-    from mfflap.cfd.linear_check import SMALL_MOTIONS
+    from mfflap.campaign.linear_check import SMALL_MOTIONS
     from mfflap.cfd.openfoam.runner import solver_progress
 
     case_file = Path(__file__).parents[1] / "cases" / "paper2026.toml"

@@ -13,12 +13,12 @@ import pytest
 from click.testing import CliRunner
 
 from mfflap.campaign.compare import OutsideWindow, compare_campaigns, compare_records
-from mfflap.campaign.records import fixture_dir, read_record, read_records, write_record
-from mfflap.cfd.bursts import bridge_load_bursts
 from mfflap.cli.main import cli
 from mfflap.errors import ConfigError, MfflapError
 from mfflap.metrics import nrmse, time_mean
 from mfflap.performance import thrust_and_power
+from mfflap.records.bursts import bridge_load_bursts
+from mfflap.records.record import fixture_dir, read_record, read_records, write_record
 
 AFFORDABLE = fixture_dir("small_motion_affordable")
 COARSE = fixture_dir("small_motion_coarse")
@@ -265,7 +265,7 @@ def test_cases_that_end_before_the_window_are_listed_not_fatal(tmp_path):
 
 def test_a_run_that_lost_its_numerics_is_timed_and_left_out_of_the_medians():
     """The first shipped f = 1 Hz, h = 0.5 m, phi = 135 deg run lost its numerics from t = 0.79 s
-    to its end (mfflap.cfd.force_envelope): compared with itself, both sides carry the lost
+    to its end (mfflap.records.force_envelope): compared with itself, both sides carry the lost
     time, and a campaign comparison's medians are those of the other cases."""
     from mfflap.campaign.compare import CampaignComparison
 

@@ -11,13 +11,13 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from mfflap.backtest.as_run import as_run_since_s
 from mfflap.campaign.cases import CfdCase
 from mfflap.campaign.execute import CampaignSetup, campaign_status, run_campaign
-from mfflap.campaign.mixed_set_up import describe_mixed, fitted_from_s, mixed_since_s
-from mfflap.campaign.records import MIXED_SUFFIX, read_record, read_records, write_record
 from mfflap.cli.main import cli
 from mfflap.errors import ConfigError
+from mfflap.records.as_run import as_run_since_s
+from mfflap.records.mixed_set_up import describe_mixed, fitted_from_s, mixed_since_s
+from mfflap.records.record import MIXED_SUFFIX, read_record, read_records, write_record
 
 ROOT = Path(__file__).parents[1]
 CO2 = ROOT / "campaigns" / "table1_coarse_co2"
@@ -154,7 +154,7 @@ def test_a_record_kept_aside_twice_keeps_both(tmp_path):
     """A case lost, mixed or cut short a second time keeps its earlier record kept aside:
     the next goes to <case>.2<suffix>, then .3, and none of them is a record of the folder."""
     from mfflap.campaign.execute import keep_aside
-    from mfflap.campaign.records import LOST_SUFFIX, record_paths
+    from mfflap.records.record import LOST_SUFFIX, record_paths
 
     path = tmp_path / f"{MIXED_CO2}.h5"
     kept = []

@@ -12,7 +12,7 @@ import pytest
 from click.testing import CliRunner
 
 from mfflap.cfd.case_inputs import check_case_inputs, motion_sample_times
-from mfflap.cfd.openfoam.loads import imposed_state
+from mfflap.cfd.imposed_motion import imposed_state
 from mfflap.cfd.openfoam.writer import SolverSettings, write_case
 from mfflap.cli.main import cli
 from mfflap.config import load_case

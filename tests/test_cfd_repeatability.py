@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 
 from mfflap.backtest.compare import compare_last_cycle
-from mfflap.campaign.records import fixture_dir, read_record
 from mfflap.errors import ConfigError
 from mfflap.hydro import MorisonModel
+from mfflap.records.record import fixture_dir, read_record
 
 
 def _runs():
@@ -82,7 +82,7 @@ def test_the_repeatability_of_the_two_runs_is_their_spread_of_last_cycle_means()
 
 def test_a_repeatability_needs_two_runs_of_one_motion():
     from mfflap.backtest.repeat import repeatability_of
-    from mfflap.campaign.records import backtest_fixture_dirs, record_paths
+    from mfflap.records.record import backtest_fixture_dirs, record_paths
 
     a, _ = _runs()
     with pytest.raises(ConfigError, match="two runs or more") as err:
@@ -131,8 +131,8 @@ def _write_copies(folder, key: str, motion, copies: int, shift_share: float = 0.
 
     from mfflap.backtest.repeat import copy_settings
     from mfflap.backtest.run import cfd_motion
-    from mfflap.campaign.records import CfdRecord, write_record
     from mfflap.hydro.loads import Loads
+    from mfflap.records.record import CfdRecord, write_record
 
     spline = cfd_motion(motion)
     t = np.linspace(0.0, 3 * spline.period, 1201)

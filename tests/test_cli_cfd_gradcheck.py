@@ -116,8 +116,8 @@ def test_a_one_percent_error_in_one_control_shows_although_dt_dwarfs_the_control
     """|dJ/d(dt)| is orders of magnitude above the controls' components, so a ratio over the
     whole vector would put this error near 1e-6; the controls' own ratio shows it whole."""
     from mfflap.config import load_case
-    from mfflap.gradcheck import check_gradient
     from mfflap.kinematics import to_discrete
+    from mfflap.optimisation.gradcheck import check_gradient
 
     case = load_case(CASE)
     motion = to_discrete(case.motion.build(), 1 / case.motion.frequency, 10)
@@ -133,8 +133,8 @@ def test_the_check_point_is_scaled_until_the_penalties_make_a_tenth_of_j():
     """A motion far past P_max, where the power penalty makes nearly all of J, is scaled
     down until it makes at most a tenth for every beta."""
     from mfflap.config import load_case
-    from mfflap.gradcheck import check_point, penalty_share
     from mfflap.kinematics import HarmonicMotion, to_discrete
+    from mfflap.optimisation.gradcheck import check_point, penalty_share
 
     case = load_case(CASE)
     violent = to_discrete(HarmonicMotion(2.0, 0.5, 0.8, np.pi / 2), 0.5, 12)
@@ -148,9 +148,9 @@ def test_the_check_point_is_scaled_until_the_penalties_make_a_tenth_of_j():
 def test_gradcheck_reports_each_component_as_it_goes():
     """The check's work grows as N^2: it says how far it is, once per component."""
     from mfflap.config import load_case
-    from mfflap.gradcheck import check_gradient
     from mfflap.kinematics import to_discrete
     from mfflap.optimisation import FlappingProblem
+    from mfflap.optimisation.gradcheck import check_gradient
 
     case = load_case(CASE)
     motion = to_discrete(case.motion.build(), 1 / case.motion.frequency, 10)

@@ -263,7 +263,7 @@ def test_a_cut_or_incomplete_cfd_record_is_refused_naming_its_file(tmp_path):
 
     import h5py
 
-    from mfflap.campaign.records import read_record
+    from mfflap.records.record import read_record
 
     shipped = sorted((Path(__file__).parents[1] / "data" / "mfflap_data" / "fixtures"
                       / "small_motion_coarse").glob("*.h5"))[0]

@@ -22,8 +22,9 @@ from mfflap.cfd.fluent.udf import (
     velocity_table,
     write_fluent_case,
 )
+from mfflap.cfd.force_history import to_loads
+from mfflap.cfd.imposed_motion import imposed_state
 from mfflap.cfd.openfoam.forces import read_forces
-from mfflap.cfd.openfoam.loads import imposed_state, to_loads
 from mfflap.errors import ConfigError, ParseError
 from mfflap.kinematics import HarmonicMotion, RampHarmonicMotion
 from mfflap.kinematics.convert import harmonic_to_discrete, to_spline

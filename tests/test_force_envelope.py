@@ -6,9 +6,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mfflap.campaign.records import fixture_dir, read_record, read_records
-from mfflap.cfd.bursts import bridge_load_bursts, find_load_bursts
-from mfflap.cfd.force_envelope import (
+from mfflap.errors import MfflapError
+from mfflap.hydro.loads import Loads
+from mfflap.identification.data import ENVELOPE_NOTE, prepare_case
+from mfflap.kinematics.state import KinematicState
+from mfflap.parameters import Fluid, FreeStream, Plate
+from mfflap.records.bursts import bridge_load_bursts, find_load_bursts
+from mfflap.records.force_envelope import (
     BREACH_FACTOR,
     FLOW_START_STEPS,
     MAX_NORMAL_FORCE_COEFFICIENT,
@@ -16,11 +20,7 @@ from mfflap.cfd.force_envelope import (
     find_envelope_breaches,
     normal_force_bound_n,
 )
-from mfflap.errors import MfflapError
-from mfflap.hydro.loads import Loads
-from mfflap.identification.data import ENVELOPE_NOTE, prepare_case
-from mfflap.kinematics.state import KinematicState
-from mfflap.parameters import Fluid, FreeStream, Plate
+from mfflap.records.record import fixture_dir, read_record, read_records
 
 ROOT = Path(__file__).parents[1]
 #: Table 1 runs (max Co 4) that lost their numerics, as first shipped, kept as test data;

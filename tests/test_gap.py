@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from mfflap.campaign.records import CfdRecord, write_record
 from mfflap.errors import ConfigError, ParseError
 from mfflap.gap.blindtest import NULL, blind_test, synthesize, trial_cases
 from mfflap.gap.candidates import CandidateEffect, load_all, register
@@ -20,6 +19,7 @@ from mfflap.gap.system import GapSystem, group_folds
 from mfflap.gap.where import correlation_ratio, decompose
 from mfflap.hydro import MorisonModel
 from mfflap.hydro.thin_aerofoil import JONES_WAGNER, wagner_filter
+from mfflap.records.record import CfdRecord, write_record
 
 CASE = Path(__file__).parents[1] / "cases" / "paper2026.toml"
 
@@ -464,10 +464,10 @@ def test_a_flow_folder_of_another_plate_is_refused(tmp_path):
     """The run of the record's motion, but written for another chord: its vorticity is not
     this case's flow. Refused by --flow before the diagnosis (only the motion was checked)."""
     from mfflap.campaign.cases import CfdCase
-    from mfflap.campaign.records import fixture_dir, read_record
     from mfflap.cfd.openfoam.writer import write_case
     from mfflap.cli.main import cli
     from mfflap.parameters import Plate
+    from mfflap.records.record import fixture_dir, read_record
 
     name = "f1p000_h0p300_phi090p0"
     p = read_record(fixture_dir() / f"{name}.h5").parameters

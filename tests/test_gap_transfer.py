@@ -7,7 +7,6 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from mfflap.campaign.records import CfdRecord, fixture_dir, write_record
 from mfflap.errors import MfflapError
 from mfflap.gap.blindtest import trial_cases
 from mfflap.gap.diagnose import default_candidates
@@ -17,6 +16,7 @@ from mfflap.hydro.loads import Loads
 from mfflap.identification.data import CaseData
 from mfflap.identification.workflow import failed_cases, pooled_records
 from mfflap.kinematics.state import KinematicState
+from mfflap.records.record import CfdRecord, fixture_dir, write_record
 
 CASE = "cases/paper2026.toml"
 CANDIDATES = default_candidates()
@@ -170,7 +170,7 @@ def test_gap_cli_checks_the_claim_on_the_shipped_back_tests(tmp_path):
 
 def test_records_written_and_read_back_are_checked_alike(tmp_path):
     """The check reads held-out runs from record files as the CLI does."""
-    from mfflap.campaign.records import read_records
+    from mfflap.records.record import read_records
 
     for rec in _held_out_records(True):
         write_record(tmp_path / f"{rec.name}.h5", rec)

@@ -142,9 +142,9 @@ def test_power_laws_of_any_order_and_ratio(order, r21, r32, phi_exact, c):
 
 
 def _record(time, normal, tangential, moment, pitch_deg, heave_velocity, n_cells):
-    from mfflap.campaign.records import CfdRecord
     from mfflap.hydro.loads import Loads
     from mfflap.kinematics.state import KinematicState
+    from mfflap.records.record import CfdRecord
 
     zero = np.zeros_like(time)
     state = KinematicState(time=time, pitch_angle=np.full_like(time, np.deg2rad(pitch_deg)),
@@ -157,7 +157,7 @@ def _record(time, normal, tangential, moment, pitch_deg, heave_velocity, n_cells
 
 
 def test_mesh_study_quantities_by_hand():
-    from mfflap.cfd.convergence import integral_quantities
+    from mfflap.campaign.convergence import integral_quantities
 
     t = np.linspace(0.0, 2.0, 4001)
     # theta = 30 deg, F_n = 10 N, F_t = 2 N, hdot = 0.5 m/s, M = 3 sin(2 pi t) N m
@@ -173,7 +173,7 @@ def test_mesh_study_quantities_by_hand():
 
 
 def test_mesh_gci_reads_cells_from_the_records():
-    from mfflap.cfd.convergence import mesh_gci
+    from mfflap.campaign.convergence import mesh_gci
 
     t = np.linspace(0.0, 1.0, 201)
     cells = (27200, 12880, 5800)

@@ -9,11 +9,11 @@ from pathlib import Path
 
 import pytest
 
-from mfflap.backtest.as_run import as_run_since_s
 from mfflap.campaign.compare import compare_records
 from mfflap.campaign.execute import campaign_status
-from mfflap.campaign.records import fixture_dir, read_record, record_paths
 from mfflap.identification.data import prepare_case
+from mfflap.records.as_run import as_run_since_s
+from mfflap.records.record import fixture_dir, read_record, record_paths
 from mfflap.toml_io import read_toml
 
 CAMPAIGNS = Path(__file__).parents[1] / "campaigns"

@@ -7,13 +7,13 @@ import numpy as np
 import pytest
 
 from mfflap.campaign.cases import grid_cases
-from mfflap.campaign.records import CfdRecord
 from mfflap.config import IdentificationGrid
 from mfflap.errors import ConfigError, MfflapError
 from mfflap.hydro import MorisonModel
 from mfflap.hydro.loads import Loads
 from mfflap.identification import frequency_weights, identify, prepare_cases
 from mfflap.identification.data import prepare_case
+from mfflap.records.record import CfdRecord
 
 TRUE = {"normal_drag": 2.0, "tangential_drag": 4.0, "normal_added_mass": 1.2,
         "tangential_added_mass": 0.5}
@@ -101,8 +101,8 @@ def test_a_coefficient_the_data_make_negative_is_held_at_zero_and_said_so(tmp_pa
     is negative), the others stay near their values, and the CLI and report say it."""
     from click.testing import CliRunner
 
-    from mfflap.campaign.records import write_record
     from mfflap.cli.main import cli
+    from mfflap.records.record import write_record
 
     rng = np.random.default_rng(5)
     negative = {**TRUE, "tangential_drag": -1.0}
@@ -219,9 +219,9 @@ def test_identify_cli_report_and_hdf5_round_trip(tmp_path):
     """CLI on a folder of real HDF5 records (synthetic forces), a failed case named."""
     from click.testing import CliRunner
 
-    from mfflap.campaign.records import write_record
     from mfflap.cli.main import cli
     from mfflap.identification.store import read_identification
+    from mfflap.records.record import write_record
     from mfflap.results import ResultsFile
 
     rng = np.random.default_rng(11)
@@ -278,9 +278,9 @@ def test_several_record_folders_pool_and_fill_failed_cases(tmp_path):
     one failed everywhere stays out, and one recorded twice is refused naming both files."""
     from click.testing import CliRunner
 
-    from mfflap.campaign.records import write_record
     from mfflap.cli.main import cli
     from mfflap.identification.workflow import load_cases
+    from mfflap.records.record import write_record
     from mfflap.results import ResultsFile
 
     rng = np.random.default_rng(5)
@@ -579,7 +579,7 @@ def test_a_pooled_back_test_weighs_as_its_own_frequency_and_a_case_of_none_is_re
     own, 1 / period; before, its frequency was NaN and it took the lowest frequency's share
     (with only such records the fit divided by zero). A record of neither is refused."""
     from mfflap.backtest.run import cfd_motion
-    from mfflap.cfd.openfoam.loads import imposed_state
+    from mfflap.cfd.imposed_motion import imposed_state
     from mfflap.identification.data import CaseData
     from mfflap.kinematics.convert import harmonic_to_discrete
 

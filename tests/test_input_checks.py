@@ -16,9 +16,8 @@ from click.testing import CliRunner
 
 from mfflap.campaign.cases import grid_cases
 from mfflap.campaign.execute import CampaignSetup, run_campaign
-from mfflap.campaign.records import CfdRecord
 from mfflap.cfd.fluent.udf import write_fluent_case
-from mfflap.cfd.openfoam.loads import check_end_time
+from mfflap.cfd.imposed_motion import check_end_time
 from mfflap.cfd.openfoam.runner import run_application
 from mfflap.cfd.openfoam.writer import table_times
 from mfflap.cli.json_output import strict_json_value
@@ -32,6 +31,7 @@ from mfflap.hydro.loads import Loads
 from mfflap.identification import identify, prepare_cases
 from mfflap.kinematics.continuous import HarmonicMotion
 from mfflap.optimisation.study import beta_study
+from mfflap.records.record import CfdRecord
 
 CASE = Path(__file__).parents[1] / "cases" / "paper2026.toml"
 
@@ -217,7 +217,7 @@ def test_identify_without_bootstrap_prints_strict_json_and_no_false_zero(tmp_pat
     assert "uncertainty is not estimated" in page and ">nan<" not in page
     # with records other than the ones it was fitted to, the report would draw their maps
     # beside these coefficients' metrics
-    from mfflap.campaign.records import fixture_dir
+    from mfflap.records.record import fixture_dir
 
     other = runner.invoke(cli, ["report", "identification", str(out), "--fixtures",
                                 str(fixture_dir("small_motion_coarse")), "--out",
@@ -318,8 +318,8 @@ def test_a_results_file_of_another_kind_is_refused_by_its_kind(tmp_path):
     """Each reader says which kind of file it was given; before, `report identification` of
     an optimisation file ended in h5py's KeyError and a CFD record's inputs were read as a
     study's ('unknown table [parameters]')."""
-    from mfflap.campaign.records import fixture_dir, read_record
     from mfflap.cfd.model_comparison import read_model_comparison
+    from mfflap.records.record import fixture_dir, read_record
     from mfflap.results import ResultsFile
 
     optimisation = tmp_path / "o.h5"

@@ -12,8 +12,7 @@ import pytest
 from click.testing import CliRunner
 
 from mfflap.campaign.cases import HarmonicCase
-from mfflap.campaign.records import fixture_dir, read_record, read_records
-from mfflap.cfd.linear_check import SMALL_MOTIONS, case_of_record, check_record
+from mfflap.campaign.linear_check import SMALL_MOTIONS, case_of_record, check_record
 from mfflap.cli.main import cli
 from mfflap.config import CaseConfig
 from mfflap.errors import MfflapError
@@ -21,6 +20,7 @@ from mfflap.gap.candidates import FlowContext
 from mfflap.gap.diagnose import default_candidates, diagnose
 from mfflap.identification.data import prepare_cases
 from mfflap.kinematics.continuous import HarmonicMotion
+from mfflap.records.record import fixture_dir, read_record, read_records
 
 FIXTURES = fixture_dir("small_motion_coarse")
 

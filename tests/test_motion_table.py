@@ -10,7 +10,7 @@ from click.testing import CliRunner
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from mfflap.cfd.openfoam.loads import imposed_state
+from mfflap.cfd.imposed_motion import imposed_state
 from mfflap.cfd.openfoam.runner import openfoam_available
 from mfflap.cfd.openfoam.writer import MOTION_TABLE_FILE
 from mfflap.cli.main import cli

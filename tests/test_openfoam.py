@@ -11,8 +11,9 @@ from foamlib import FoamFile
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from mfflap.cfd.force_history import to_loads
+from mfflap.cfd.imposed_motion import imposed_state
 from mfflap.cfd.openfoam.forces import parse_table, read_forces
-from mfflap.cfd.openfoam.loads import imposed_state, to_loads
 from mfflap.cfd.openfoam.runner import openfoam_available, run_case
 from mfflap.cfd.openfoam.writer import format_motion_table, motion_table, write_case
 from mfflap.errors import CfdRunError, ParseError
@@ -507,7 +508,7 @@ def test_a_start_up_ramp_as_long_as_the_run_is_refused(tmp_path):
         assert err.value.key == "ramp_time" and not (tmp_path / "c").exists()
     assert write_case(tmp_path / "c", MOTION, end_time=1.0, ramp_time=0.99).is_dir()
     # a mesh study refuses it before its first run, not after it started
-    from mfflap.cfd.convergence import run_convergence
+    from mfflap.campaign.convergence import run_convergence
 
     with pytest.raises(ConfigError, match="lasts the whole run"):
         run_convergence(tmp_path / "study", MOTION, 0.2, meshes=["coarse"], ramp_time=0.25)
@@ -703,8 +704,8 @@ def test_convergence_command_on_three_meshes_and_two_courant_limits(tmp_path):
     assert (out / "convergence.html").read_text().count("log-law range (30-300)") == 4
     assert "steps with epsilon clipped" in (out / "convergence.html").read_text()
     # the grid convergence index is computed from the three meshes' own records
-    from mfflap.campaign.records import read_record
-    from mfflap.cfd.convergence import mesh_gci
+    from mfflap.campaign.convergence import mesh_gci
+    from mfflap.records.record import read_record
     assert data["gci_meshes"] == ["coarse_co4", "medium_co4", "fine_co4"]
     gci = mesh_gci([read_record(out / f"{m}.h5") for m in data["gci_meshes"]], 0.005)
     assert set(data["gci"]) == set(gci) == {"mean_thrust_N", "mean_input_power_W",
@@ -1166,7 +1167,7 @@ def test_convergence_floor_reruns_the_reference_with_the_other_pressure_solver(t
 def test_mean_cycles_of_a_motion_that_is_not_periodic_are_refused_before_any_run(tmp_path):
     from click.testing import CliRunner
 
-    from mfflap.cfd.convergence import run_convergence
+    from mfflap.campaign.convergence import run_convergence
     from mfflap.cli.main import cli
     from mfflap.errors import ConfigError
 
@@ -1199,9 +1200,9 @@ def test_convergence_compares_mean_cycles_of_a_periodic_motion(tmp_path):
 
     from click.testing import CliRunner
 
-    from mfflap.campaign.records import read_record
     from mfflap.cli.main import cli
     from mfflap.metrics import nrmse
+    from mfflap.records.record import read_record
 
     text = (Path(__file__).parents[1] / "cases" / "paper2026.toml").read_text()
     period_s = 0.025
@@ -1586,7 +1587,7 @@ def test_convergence_checks_every_run_before_the_first_starts(tmp_path, meshes, 
                                                               key, said):
     """A typo in the last mesh or Courant limit used to surface after the first runs had
     taken their CPU; now nothing is written or run."""
-    from mfflap.cfd.convergence import run_convergence
+    from mfflap.campaign.convergence import run_convergence
     from mfflap.errors import ConfigError
 
     with pytest.raises(ConfigError, match=said) as err:

@@ -1,18 +1,23 @@
 """Mean cycles of periodic runs (mfflap.cfd.phase_average) and their use in the convergence
-study (mfflap.cfd.convergence.compare_mean_cycles)."""
+study (mfflap.campaign.convergence.compare_mean_cycles)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from mfflap.campaign.records import CfdRecord
-from mfflap.cfd.convergence import ConvergenceRun, ConvergenceStudy, compare, compare_mean_cycles
+from mfflap.campaign.convergence import (
+    ConvergenceRun,
+    ConvergenceStudy,
+    compare,
+    compare_mean_cycles,
+)
 from mfflap.cfd.phase_average import phase_average, whole_periods
 from mfflap.errors import ConfigError, MfflapError
 from mfflap.hydro.loads import Loads
 from mfflap.kinematics import HarmonicMotion
 from mfflap.metrics import nrmse
+from mfflap.records.record import CfdRecord
 
 PERIOD_S = 0.8
 

@@ -6,12 +6,13 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from mfflap.cfd.force_history import ForceHistory, to_loads
 from mfflap.cfd.frames import (
     plate_frame_acceleration,
     plate_frame_inflow,
 )
-from mfflap.cfd.openfoam.forces import ForceHistory, read_forces
-from mfflap.cfd.openfoam.loads import imposed_state, to_loads
+from mfflap.cfd.imposed_motion import imposed_state
+from mfflap.cfd.openfoam.forces import read_forces
 from mfflap.cfd.openfoam.plate_frame import plate_frame_tables
 from mfflap.cfd.openfoam.runner import openfoam_available, run_case
 from mfflap.cfd.openfoam.solver_log import solver_provenance
@@ -182,7 +183,7 @@ def test_cfd_write_frame_plate_takes_the_inlet_outlet_far_field(tmp_path):
 
 
 def test_convergence_refuses_a_plate_frame_set_up_in_a_freestream_study(tmp_path):
-    from mfflap.cfd.convergence import run_convergence
+    from mfflap.campaign.convergence import run_convergence
     from mfflap.cfd.openfoam.setups import setup
 
     plate = setup("affordable")

@@ -14,11 +14,11 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from mfflap.campaign.record_inputs import check_records_inputs, input_mismatches, run_for
-from mfflap.campaign.records import fixture_dir, read_record, write_record
 from mfflap.cli.main import cli
 from mfflap.errors import ConfigError
 from mfflap.parameters import Fluid, FreeStream, Plate
+from mfflap.records.inputs import check_records_inputs, input_mismatches, run_for
+from mfflap.records.record import fixture_dir, read_record, write_record
 
 CASE_TEXT = (Path(__file__).parents[1] / "cases" / "paper2026.toml").read_text()
 TABLE1 = fixture_dir("table1_coarse")
@@ -34,7 +34,7 @@ def _case_file(tmp_path: Path, old: str, new: str) -> Path:
 def test_a_record_says_what_it_was_run_for_from_its_provenance_and_its_folder():
     record = read_record(next(iter(sorted(TABLE1.glob("f*.h5")))))
     assert set(run_for(record)) == {"plate.chord", "plate.span"}  # the shipped provenance
-    from mfflap.campaign.record_inputs import folder_setup
+    from mfflap.records.inputs import folder_setup
 
     found = run_for(record, folder_setup(TABLE1))
     assert found["flow.velocity"] == (0.3, "the folder's campaign.toml")
@@ -131,8 +131,8 @@ def test_a_back_test_fixture_of_the_same_motion_but_another_plate_is_not_used(
 
 
 def test_a_records_parameters_are_read_without_its_histories(tmp_path):
-    from mfflap.campaign.records import read_record_parameters
     from mfflap.errors import MfflapError
+    from mfflap.records.record import read_record_parameters
 
     for path in sorted(fixture_dir("backtest_filtered").glob("backtest_*.h5"))[:3]:
         assert read_record_parameters(path) == read_record(path).parameters

@@ -11,16 +11,16 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from mfflap.backtest.as_run import as_run_since_s
 from mfflap.backtest.compare import compare_last_cycle
 from mfflap.backtest.repeat import copy_settings
 from mfflap.backtest.run import _other_set_up
 from mfflap.campaign.cases import CfdCase
 from mfflap.campaign.openfoam_run import run_motion
-from mfflap.campaign.records import fixture_dir, read_record
 from mfflap.cfd.openfoam.writer import SolverSettings
 from mfflap.cli.main import cli
 from mfflap.hydro import MorisonModel
+from mfflap.records.as_run import as_run_since_s
+from mfflap.records.record import fixture_dir, read_record
 
 SHORT = CfdCase(1.0, 0.3, 90.0, 10.0, duration=0.04, ramp_time=0.02)
 FIXTURES = fixture_dir().parent
@@ -128,7 +128,7 @@ def test_a_retry_from_the_start_reruns_the_case_from_zero(tmp_path, monkeypatch)
     retried from t = 0 s with the inletOutlet far field (resumed, it would have gone on from
     the write at 0.03 s): the record's forces are the rerun's alone, one set-up."""
     from mfflap.campaign import openfoam_run
-    from mfflap.cfd.force_envelope import EnvelopeBreach
+    from mfflap.records.force_envelope import EnvelopeBreach
 
     verdicts = iter([0.036, None])
 
@@ -195,7 +195,7 @@ def test_a_campaign_case_is_retried_from_the_start_when_asked(tmp_path, monkeypa
     the campaign folder says so."""
     from mfflap.campaign import openfoam_run
     from mfflap.campaign.execute import CampaignSetup, run_one
-    from mfflap.cfd.force_envelope import EnvelopeBreach
+    from mfflap.records.force_envelope import EnvelopeBreach
 
     verdicts = iter([0.036, None])
 
@@ -370,9 +370,9 @@ MIXED_BETA_0 = {
 def _phase_thrust(record, period: float, starts: list[float], switch: float) -> np.ndarray:
     """Mean thrust (N) of each cycle starting at ``starts`` (in periods) before and after
     the fraction ``switch`` of it: one row per cycle, bursts bridged."""
-    from mfflap.cfd.bursts import bridge_load_bursts
     from mfflap.metrics import time_mean
     from mfflap.performance import thrust_and_power
+    from mfflap.records.bursts import bridge_load_bursts
 
     t = record.time
     loads, _ = bridge_load_bursts(record.loads, t > 0.5 * period)

@@ -40,7 +40,7 @@ def _against_one_set_up(check: dict) -> tuple[float, float]:
     eight periods of one set-up of that motion (cycles 3-8; shipped in cfd_repeatability for
     the four beta = 0 optima whose compared cycle mixes two set-ups)."""
     from mfflap.backtest.cycles import cycle_means
-    from mfflap.campaign.records import fixture_dir, read_record
+    from mfflap.records.record import fixture_dir, read_record
 
     eight = read_record(fixture_dir("cfd_repeatability")
                         / f"backtest_{check['key']}_from_start_8_cycles.h5")
@@ -800,7 +800,8 @@ def test_the_rounds_files_keep_the_trust_regions_steps(tmp_path):
     import h5py
 
     from mfflap.config import load_case
-    from mfflap.rounds import LoopResult, write_rounds
+    from mfflap.reports.rounds import write_rounds
+    from mfflap.rounds import LoopResult
 
     first, second = _round(1, 0.3), _round(2, 0.12)
     second.trust_steps = {0.0: _step(0.0, True)}
@@ -1048,7 +1049,7 @@ def test_trust_region_rounds_that_know_cfds_noise_converge_in_round_3(tmp_path):
     import json
     import shutil
 
-    from mfflap.campaign.records import fixture_dir
+    from mfflap.records.record import fixture_dir
 
     # the optima whose shipped copies the repeats take (on other OpenBLAS kernels beta =
     # 0.5's comes out within the look-up's tolerance of it, and its copies are taken as its

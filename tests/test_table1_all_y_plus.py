@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from mfflap.campaign.execute import manifest_setup, setting_differences
-from mfflap.campaign.records import fixture_dir, read_record, record_paths
+from mfflap.records.record import fixture_dir, read_record, record_paths
 from mfflap.toml_io import read_toml
 
 ALL_Y_PLUS = Path(__file__).parents[1] / "campaigns" / "table1_coarse_all_y_plus"

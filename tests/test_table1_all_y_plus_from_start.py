@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mfflap.backtest.as_run import as_run_since_s
-from mfflap.campaign.records import read_record, record_paths
+from mfflap.records.as_run import as_run_since_s
+from mfflap.records.record import read_record, record_paths
 
 ROOT = Path(__file__).parents[1]
 RESUMED = ROOT / "campaigns" / "table1_coarse_all_y_plus"

@@ -7,13 +7,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mfflap.campaign.records import LOST_SUFFIX, fixture_dir, read_record, record_paths
-from mfflap.cfd.bursts import find_numerical_bursts
-from mfflap.cfd.force_envelope import find_envelope_breaches
 from mfflap.cfd.openfoam.setups import setup
 from mfflap.errors import MfflapError
 from mfflap.identification.data import prepare_case
 from mfflap.parameters import Fluid, FreeStream, Plate
+from mfflap.records.bursts import find_numerical_bursts
+from mfflap.records.force_envelope import find_envelope_breaches
+from mfflap.records.record import LOST_SUFFIX, fixture_dir, read_record, record_paths
 from mfflap.toml_io import read_toml
 
 CO2 = Path(__file__).parents[1] / "campaigns" / "table1_coarse_co2"

@@ -7,9 +7,9 @@ from pathlib import Path
 
 import pytest
 
-from mfflap.backtest.as_run import as_run_since_s
 from mfflap.campaign.compare import compare_campaigns
-from mfflap.campaign.records import read_record, record_paths
+from mfflap.records.as_run import as_run_since_s
+from mfflap.records.record import read_record, record_paths
 
 ROOT = Path(__file__).parents[1]
 CO2 = ROOT / "campaigns" / "table1_coarse_co2"

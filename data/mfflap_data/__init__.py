@@ -2,7 +2,7 @@
 optimised motions' back-tests and of small motions for the check against linear theory,
 one HDF5 record per run (``fixtures/<set>/<case>.h5``).
 
-mfflap finds them through :func:`fixtures_root` (:func:`mfflap.campaign.records.fixture_dir`).
+mfflap finds them through :func:`fixtures_root` (:func:`mfflap.records.record.fixture_dir`).
 """
 
 from pathlib import Path

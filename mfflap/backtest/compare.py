@@ -6,13 +6,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from mfflap.campaign.records import CfdRecord
-from mfflap.cfd.bursts import bridge_load_bursts
-from mfflap.cfd.force_envelope import find_envelope_breaches
 from mfflap.errors import MfflapError
 from mfflap.metrics import nrmse, pearson, time_mean
 from mfflap.parameters import Fluid, FreeStream, Plate
 from mfflap.performance import thrust_and_power
+from mfflap.records.bursts import bridge_load_bursts
+from mfflap.records.force_envelope import find_envelope_breaches
+from mfflap.records.record import CfdRecord
 
 
 @dataclass
@@ -27,14 +27,14 @@ class BacktestComparison:
     cfd_max_power : W; max_power_ok : bool (CFD's instantaneous power <= P_max)
     cycle_to_cycle_thrust_change : fraction between the last two cycles (periodicity check)
     numerical_bursts : the CFD's numerical bursts in the last two cycles
-        (:mod:`mfflap.cfd.bursts`), bridged before any of the numbers above
+        (:mod:`mfflap.records.bursts`), bridged before any of the numbers above
     cycles_averaged : the whole cycles the CFD means are taken over (1: the last cycle);
         the curves, NRMSE, Pearson and maximum power are the last cycle's
     cfd_thrust_standard_error : N; cfd_power_standard_error : W; of the CFD means over
         ``cycles_averaged`` cycles (:class:`~mfflap.backtest.cycles.CycleMeans`; NaN with one)
     compared_from_s : s, where the cycles the CFD means are taken over start
     cfd_settings_since_s : s, since when the CFD ran the settings it ended with
-        (:func:`~mfflap.backtest.as_run.as_run_since_s`: 0 unless a retry resumed it
+        (:func:`~mfflap.records.as_run.as_run_since_s`: 0 unless a retry resumed it
         part-way with another far field or Courant limit)
     """
 
@@ -135,14 +135,14 @@ def compare_last_cycle(record: CfdRecord, model, period: float,
     ------
     MfflapError
         If the CFD forces of the last two periods leave what the motion can drive
-        (:mod:`mfflap.cfd.force_envelope`): the run lost its numerics and says nothing about
+        (:mod:`mfflap.records.force_envelope`): the run lost its numerics and says nothing about
         the model.
     ConfigError
         ``average_cycles`` more than the whole cycles the record holds after its start-up
         (key ``average_cycles``).
     """
-    from mfflap.backtest.as_run import as_run_since_s
     from mfflap.backtest.cycles import cycle_means
+    from mfflap.records.as_run import as_run_since_s
 
     averaged = (None if average_cycles == 1
                 else cycle_means(record, period).last(average_cycles))

@@ -16,7 +16,7 @@ elsewhere (7 % at the beta = 0.5 optimum).
 
 :func:`cycle_means` takes each whole cycle of a record, counted back from its end as
 :func:`~mfflap.backtest.compare.compare_last_cycle` counts its last cycle, after the start-up
-ramp, with the CFD's numerical bursts bridged first (:mod:`mfflap.cfd.bursts`).
+ramp, with the CFD's numerical bursts bridged first (:mod:`mfflap.records.bursts`).
 """
 
 from __future__ import annotations
@@ -25,11 +25,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mfflap.campaign.records import CfdRecord
-from mfflap.cfd.bursts import bridge_load_bursts
 from mfflap.errors import ConfigError
 from mfflap.metrics import time_mean
 from mfflap.performance import thrust_and_power
+from mfflap.records.bursts import bridge_load_bursts
+from mfflap.records.record import CfdRecord
 
 #: fraction of a period a cycle may start before the earliest start asked for
 _START_SLACK = 1e-4

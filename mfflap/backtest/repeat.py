@@ -42,7 +42,7 @@ class Repeatability:
     mean_power : W, one per run
     sources : where each run comes from (a record's name and how it was had)
     ran_otherwise : how a run did not run as the first did (a retry's far field or Courant
-        limit, :func:`~mfflap.backtest.as_run.as_run_differences`), or mixed two set-ups in
+        limit, :func:`~mfflap.records.as_run.as_run_differences`), or mixed two set-ups in
         the cycles compared (a retry resumed it within them); empty: the runs ran alike, and
         their spread is CFD's repeatability
     """
@@ -101,7 +101,7 @@ class Repeatability:
 
 def repeatability_of(records: Sequence, label: str, model, period: float,
                      max_power: float, *, average_cycles: int = 1) -> Repeatability:
-    """Compare the last cycles of ``records`` (:class:`~mfflap.campaign.records.CfdRecord`
+    """Compare the last cycles of ``records`` (:class:`~mfflap.records.record.CfdRecord`
     of one motion) as the back-test does (:func:`~mfflap.backtest.compare.compare_last_cycle`),
     or the means over their last ``average_cycles`` cycles. Runs that a retry left with
     another far field or Courant limit than the first, or whose compared cycles it split
@@ -112,8 +112,8 @@ def repeatability_of(records: Sequence, label: str, model, period: float,
     ConfigError
         Fewer than two records, or records of different motions (key ``repeat``).
     """
-    from mfflap.backtest.as_run import as_run_differences
     from mfflap.backtest.compare import compare_last_cycle
+    from mfflap.records.as_run import as_run_differences
 
     if len(records) < 2:
         raise ConfigError(f"a repeatability needs two runs or more, got {len(records)}",
@@ -172,7 +172,7 @@ def repeat_runs(motion, label: str, model, max_power: float, *, copies: int,
         A copy's run failed (the copies before it are kept).
     """
     from mfflap.backtest.run import cfd_motion, motion_key, run_backtest_case
-    from mfflap.campaign.records import write_record
+    from mfflap.records.record import write_record
 
     if not (isinstance(copies, int) and copies >= 2):
         raise ConfigError(f"--repeat must be 2 or more runs, got {copies!r}", key="repeat")
@@ -209,11 +209,11 @@ def repeat_runs(motion, label: str, model, max_power: float, *, copies: int,
 
 
 def _usable_copy(path: Path, limit: float, n_cycles: float, retries_from_start: bool):
-    """The saved copy at ``path`` (a :class:`~mfflap.campaign.records.CfdRecord`) when it
+    """The saved copy at ``path`` (a :class:`~mfflap.records.record.CfdRecord`) when it
     ran at the Courant ``limit`` for ``n_cycles`` periods (and, with ``retries_from_start``,
     no retry resumed it part-way), else None."""
-    from mfflap.backtest.as_run import as_run_since_s
-    from mfflap.campaign.records import read_record
+    from mfflap.records.as_run import as_run_since_s
+    from mfflap.records.record import read_record
 
     if not path.is_file():
         return None

@@ -16,14 +16,14 @@ from pathlib import Path
 import numpy as np
 
 from mfflap.backtest.compare import BacktestComparison, compare_last_cycle
-from mfflap.campaign.record_inputs import folder_setup, input_mismatches
-from mfflap.campaign.records import CfdRecord, read_record, read_record_parameters, write_record
 from mfflap.cfd.case_inputs import kept_differences, solver_keys
 from mfflap.cfd.openfoam.writer import AnyMeshSpec, SolverSettings
 from mfflap.errors import MfflapError
 from mfflap.kinematics.continuous import PeriodicSplineMotion
 from mfflap.kinematics.convert import to_spline
 from mfflap.kinematics.discrete import DiscreteMotion
+from mfflap.records.inputs import folder_setup, input_mismatches
+from mfflap.records.record import CfdRecord, read_record, read_record_parameters, write_record
 from mfflap.toml_io import dumps, read_toml
 
 
@@ -193,7 +193,7 @@ def _other_set_up(record: CfdRecord, mesh: str | AnyMeshSpec,
     its provenance gives, fewer periods, with ``retries_from_start`` a retry part-way), or
     None: then it is the CFD that run would have been (a longer run holds the shorter one's
     cycles after its own start-up too)."""
-    from mfflap.backtest.as_run import as_run_since_s
+    from mfflap.records.as_run import as_run_since_s
 
     had_cycles = float(record.parameters.get("n_cycles", 3.0))
     if had_cycles < n_cycles - 1e-9:

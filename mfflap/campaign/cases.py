@@ -33,7 +33,7 @@ def _check_run_times(case_id: str, duration: float, ramp_time: float) -> None:
     """Refuse, when a case is made, a run of no or endless length or a start-up ramp that
     lasts it all (the case would be refused only when it came to run, after its campaign
     had started), naming the case."""
-    from mfflap.cfd.openfoam.loads import check_end_time, check_ramp_time
+    from mfflap.cfd.imposed_motion import check_end_time, check_ramp_time
     from mfflap.errors import MotionError
 
     try:

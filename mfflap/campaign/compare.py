@@ -4,10 +4,10 @@ another's.
 For each case both campaigns finished, the loads of campaign A are compared with those of
 campaign B (the reference) on B's time base after the start-up: NRMSE and Pearson of F_n,
 F_t and M, and the relative difference of mean thrust and mean input power. Numerical bursts
-(:mod:`mfflap.cfd.bursts`) are bridged in both before comparing, as identification does, and
+(:mod:`mfflap.records.bursts`) are bridged in both before comparing, as identification does, and
 counted, so a comparison of, say, the fixtures at max Co 2 against max Co 4 separates the
 bursts from the time-step error; so are stretches whose forces the motion cannot have driven
-(:mod:`mfflap.cfd.force_envelope`), timed, and the summary leaves out the cases with them.
+(:mod:`mfflap.records.force_envelope`), timed, and the summary leaves out the cases with them.
 The CPU time of each run is kept beside.
 """
 
@@ -22,15 +22,15 @@ from typing import Any
 import numpy as np
 
 from mfflap.campaign.execute import _bound_setup, manifest_setup, setting_differences
-from mfflap.campaign.record_inputs import folder_setup, run_for, run_for_differences
-from mfflap.campaign.records import CfdRecord, read_records
-from mfflap.cfd.bursts import bridge_bursts, bridge_load_bursts
-from mfflap.cfd.force_envelope import find_envelope_breaches
 from mfflap.errors import ConfigError, MfflapError
 from mfflap.hydro.loads import LOAD_COMPONENTS, Loads
 from mfflap.metrics import nrmse, pearson, time_mean
 from mfflap.parameters import Fluid, FreeStream, Plate
 from mfflap.performance import thrust_and_power
+from mfflap.records.bursts import bridge_bursts, bridge_load_bursts
+from mfflap.records.force_envelope import find_envelope_breaches
+from mfflap.records.inputs import folder_setup, run_for, run_for_differences
+from mfflap.records.record import CfdRecord, read_records
 from mfflap.toml_io import read_toml
 
 COMPONENTS = LOAD_COMPONENTS
@@ -58,7 +58,7 @@ class CaseComparison:
     n_bursts_a: int
     n_bursts_b: int
     #: seconds after the start whose forces the motion cannot have driven (a run that lost
-    #: its numerics, :mod:`mfflap.cfd.force_envelope`; bridged like bursts before comparing)
+    #: its numerics, :mod:`mfflap.records.force_envelope`; bridged like bursts before comparing)
     lost_a_s: float
     lost_b_s: float
     cpu_time_a_s: float
@@ -214,7 +214,7 @@ def compare_campaigns(folder_a: str | Path, folder_b: str | Path,
     ConfigError
         If ``end_s`` is not after ``start_s``, or two records of a case are of different
         motions, or were run for another plate, fluid or stream
-        (:mod:`mfflap.campaign.record_inputs`).
+        (:mod:`mfflap.records.inputs`).
     """
     if start_s is not None and end_s is not None and float(end_s) <= float(start_s):
         raise ConfigError(f"the comparison ends (t = {end_s:g} s) before it starts "
@@ -289,8 +289,8 @@ def plot_comparison(path: str | Path, comparison: CampaignComparison,
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from mfflap.campaign.records import read_record
     from mfflap.plots import save_figure
+    from mfflap.records.record import read_record
 
     folder_b = Path(comparison.folder_b)
     params = {c.case_id: read_record(folder_b / f"{c.case_id}.h5").parameters

@@ -34,8 +34,16 @@ from typing import Any
 from distributed import WorkerPlugin
 
 from mfflap.campaign.cases import CampaignCase
-from mfflap.campaign.mixed_set_up import DEFAULT_DISCARD_TIME_S, describe_mixed, mixed_since_s
-from mfflap.campaign.records import (
+from mfflap.cfd.case_inputs import ADDED_SOLVER_SETTINGS
+from mfflap.cfd.openfoam.case_lock import CaseBusyError, lock_holder
+from mfflap.cfd.openfoam.case_path import check_case_path
+from mfflap.cfd.openfoam.runner import RunStopped, stop_running_solvers, stoppable
+from mfflap.cfd.openfoam.writer import SolverSettings
+from mfflap.errors import ConfigError, MfflapError
+from mfflap.parameters import Fluid, FreeStream, Plate
+from mfflap.records.bursts import find_load_bursts
+from mfflap.records.mixed_set_up import DEFAULT_DISCARD_TIME_S, describe_mixed, mixed_since_s
+from mfflap.records.record import (
     LOST_SUFFIX,
     MIXED_SUFFIX,
     RECORD_SUFFIX,
@@ -44,14 +52,6 @@ from mfflap.campaign.records import (
     read_record,
     write_record,
 )
-from mfflap.cfd.bursts import find_load_bursts
-from mfflap.cfd.case_inputs import ADDED_SOLVER_SETTINGS
-from mfflap.cfd.openfoam.case_lock import CaseBusyError, lock_holder
-from mfflap.cfd.openfoam.case_path import check_case_path
-from mfflap.cfd.openfoam.runner import RunStopped, stop_running_solvers, stoppable
-from mfflap.cfd.openfoam.writer import SolverSettings
-from mfflap.errors import ConfigError, MfflapError
-from mfflap.parameters import Fluid, FreeStream, Plate
 from mfflap.toml_io import dumps, read_toml
 
 
@@ -96,7 +96,7 @@ class CaseStatus:
     #: a started case: the share of its end time its solver has simulated (0-1)
     fraction_simulated: float | None = None
     #: a done case whose identified window mixes two set-ups: the flow time, s, from which a
-    #: retry resumed its run with other settings (:mod:`mfflap.campaign.mixed_set_up`)
+    #: retry resumed its run with other settings (:mod:`mfflap.records.mixed_set_up`)
     mixed_since_s: float | None = None
 
 
@@ -116,12 +116,12 @@ def lost_numerics(rec: CfdRecord, plate: Plate, fluid: Fluid, stream: FreeStream
     """Why a finished record's run counts as lost, or None.
 
     A run is lost where its forces leave what the motion can drive
-    (:mod:`mfflap.cfd.force_envelope`) and those stretches with its numerical bursts cover
+    (:mod:`mfflap.records.force_envelope`) and those stretches with its numerical bursts cover
     more than ``max_lost_share`` of the time after its ramp: what identification leaves out
     (:func:`mfflap.identification.data.prepare_case`; shorter stretches it bridges).
     """
-    from mfflap.cfd.bursts import bridge_load_bursts
-    from mfflap.cfd.force_envelope import find_envelope_breaches
+    from mfflap.records.bursts import bridge_load_bursts
+    from mfflap.records.force_envelope import find_envelope_breaches
 
     after_ramp = rec.time >= float(rec.parameters.get("ramp_time", 0.0))
     loads, bursts = bridge_load_bursts(rec.loads, after_ramp)
@@ -312,9 +312,9 @@ def campaign_status(out_dir: str | Path,
                     discard_time_s: float = DEFAULT_DISCARD_TIME_S) -> list[CaseStatus]:
     """Status of every case listed in ``out_dir/campaign.toml``.
 
-    A finished case's message names its numerical bursts (:mod:`mfflap.cfd.bursts`), if any,
+    A finished case's message names its numerical bursts (:mod:`mfflap.records.bursts`), if any,
     and a retry that resumed its run with other settings after ``discard_time_s`` (the
-    identification's start-up; its ``mixed_since_s``: :mod:`mfflap.campaign.mixed_set_up`);
+    identification's start-up; its ``mixed_since_s``: :mod:`mfflap.records.mixed_set_up`);
     a finished case whose forces leave what the motion can drive is "lost"
     (:func:`lost_numerics`).
     A record that cannot be read (cut short by a copy or a full disk) is "unreadable": its
@@ -541,7 +541,7 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
     rerun_mixed
         Rerun from t = 0 s the finished cases whose run a retry resumed with other settings
         after ``discard_time_s`` (the identification's start-up: two set-ups in the
-        identified window, :mod:`mfflap.campaign.mixed_set_up`), their records kept as
+        identified window, :mod:`mfflap.records.mixed_set_up`), their records kept as
         ``<case_id>.mixed.h5`` and any case folder kept (``keep_case_dirs``) written anew.
         Needs ``setup.retries_from_start``: retried part-way again, the rerun would mix the
         same two set-ups.

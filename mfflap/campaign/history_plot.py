@@ -17,10 +17,10 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from mfflap.campaign.compare import CampaignComparison, CaseComparison
-from mfflap.campaign.records import CfdRecord, read_record
 from mfflap.errors import MfflapError
 from mfflap.performance import thrust_and_power
 from mfflap.plots import save_figure
+from mfflap.records.record import CfdRecord, read_record
 
 #: (record attribute or "thrust", axis label) per panel, top to bottom
 PANELS = (("normal_force", "F_n [N]"), ("tangential_force", "F_t [N]"),

@@ -10,19 +10,17 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from mfflap.campaign.records import CfdRecord
-from mfflap.cfd.bursts import bridge_load_bursts
 from mfflap.cfd.case_inputs import (
     PHYSICAL_KEYS,
     check_case_inputs,
     kept_differences,
     solver_keys,
 )
-from mfflap.cfd.force_envelope import BREACH_FACTOR, EnvelopeBreach, find_envelope_breaches
+from mfflap.cfd.force_history import to_loads
+from mfflap.cfd.imposed_motion import imposed_state
 from mfflap.cfd.openfoam.case_lock import case_lock
 from mfflap.cfd.openfoam.case_path import check_case_path, empty_case_folder
 from mfflap.cfd.openfoam.forces import read_forces
-from mfflap.cfd.openfoam.loads import imposed_state, to_loads
 from mfflap.cfd.openfoam.retry_edits import (
     courant_limit,
     far_field,
@@ -51,6 +49,9 @@ from mfflap.errors import (
 )
 from mfflap.kinematics.continuous import Motion
 from mfflap.parameters import Fluid, FreeStream, Plate
+from mfflap.records.bursts import bridge_load_bursts
+from mfflap.records.force_envelope import BREACH_FACTOR, EnvelopeBreach, find_envelope_breaches
+from mfflap.records.record import CfdRecord
 from mfflap.toml_io import read_toml
 
 
@@ -315,7 +316,7 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
     the Courant limit, the last time also with first-order upwind convection of k and
     epsilon. A run that finishes with forces after
     its ramp beyond ``force_bound_factor`` times what the motion can drive
-    (:mod:`mfflap.cfd.force_envelope`: it lost its numerics gradually) is retried the same
+    (:mod:`mfflap.records.force_envelope`: it lost its numerics gradually) is retried the same
     way from its last written time before that (:func:`rewind_case`); its forces are
     checked every ``bound_watch_every_s`` seconds while it runs, so that such a run stops
     there instead of computing its lost stretch to the end. A time step that collapsed for
@@ -341,7 +342,7 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
 
     ``retries_from_start``: every retry reruns the case from t = 0 s with its changed
     settings instead of resuming from a written time, so that the record ran one set-up
-    throughout (a back-test compared with another one's, :mod:`mfflap.backtest.as_run`):
+    throughout (a back-test compared with another one's, :mod:`mfflap.records.as_run`):
     resumed part-way, the cycles before the retry ran with the settings before it (on the
     coarse mesh, max Co 2 instead of 4 moved a settled mean thrust by 7 %). It costs the
     flow time run before the retry again. A loss of the bound at the same flow time after

@@ -3,7 +3,7 @@ Fluent UDF's mfflap_fluent.toml), and the check that a case file read with it de
 same run.
 
 Forces are turned into F_n, F_t and M with the imposed motion, the plate's span and chord and
-the stream (:func:`mfflap.cfd.openfoam.loads.to_loads`). Parsing a case against a case file
+the stream (:func:`mfflap.cfd.force_history.to_loads`). Parsing a case against a case file
 other than the one it was written from (another pitch amplitude, span or stream velocity)
 would give wrong numbers without any sign of it, so :func:`~mfflap.cfd.openfoam.writer.
 write_case` and :func:`~mfflap.cfd.fluent.udf.write_fluent_case` keep the plate, fluid and
@@ -20,22 +20,13 @@ from typing import Any
 
 import numpy as np
 
-from mfflap.cfd.openfoam.loads import imposed_state
+from mfflap.cfd.imposed_motion import imposed_state
 from mfflap.errors import ConfigError
 from mfflap.kinematics.continuous import Motion
 from mfflap.parameters import Fluid, FreeStream, Plate
+from mfflap.records.inputs import PHYSICAL_KEYS, RELATIVE_TOLERANCE
 from mfflap.toml_io import read_toml
 
-#: mfflap_case.toml key -> (case-file key, where the value lives)
-PHYSICAL_KEYS = {
-    "span": ("plate.span", lambda p, f, s: p.span),
-    "plate_chord_m": ("plate.chord", lambda p, f, s: p.chord),
-    "plate_thickness_m": ("plate.thickness", lambda p, f, s: p.thickness),
-    "fluid_density_kg_per_m3": ("fluid.density", lambda p, f, s: f.density),
-    "fluid_kinematic_viscosity_m2_per_s": ("fluid.kinematic_viscosity",
-                                           lambda p, f, s: f.kinematic_viscosity),
-    "flow_velocity_m_per_s": ("flow.velocity", lambda p, f, s: s.velocity),
-}
 #: Solver settings added after cases, records and campaigns first kept theirs, at the values
 #: those runs used: what keeps solver settings without one of these ran with this value
 ADDED_SOLVER_SETTINGS = {"pressure_solver": "PCG", "pressure_tolerance": 1e-7,
@@ -45,8 +36,6 @@ ADDED_SOLVER_SETTINGS = {"pressure_solver": "PCG", "pressure_tolerance": 1e-7,
                          "wall_treatment": "log_law"}
 #: samples of the imposed motion kept with a case
 N_MOTION_SAMPLES = 64
-#: relative tolerance of the comparisons (the kept values are exact float reprs)
-RELATIVE_TOLERANCE = 1e-6
 
 
 def motion_sample_times(end_time: float) -> np.ndarray:

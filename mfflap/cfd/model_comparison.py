@@ -5,8 +5,8 @@ The run is an OpenFOAM case folder written by mfflap or a Fluent report file (.o
 forces become F_n, F_t and M about the moving leading edge, and thrust and input power, with
 the motion, ramp and plate the case was written for (:mod:`mfflap.cfd.case_inputs` refuses
 a case file that describes another run). Numerical bursts after the discarded start are
-bridged before the comparison and listed (:mod:`mfflap.cfd.bursts`), stretches whose forces
-the motion cannot have driven are listed (:mod:`mfflap.cfd.force_envelope`), and means are
+bridged before the comparison and listed (:mod:`mfflap.records.bursts`), stretches whose forces
+the motion cannot have driven are listed (:mod:`mfflap.records.force_envelope`), and means are
 time averages over the solver's steps. :func:`write_model_comparison` stores both time
 series, the summary and the inputs in HDF5; :func:`mfflap.plots.model_comparison_figure`
 draws them.
@@ -22,19 +22,21 @@ from typing import Any
 
 import numpy as np
 
-from mfflap.cfd.bursts import bridge_load_bursts
 from mfflap.cfd.case_inputs import check_case_inputs
 from mfflap.cfd.fluent.report import report_forces
 from mfflap.cfd.fluent.udf import FLUENT_KEPT_FILE
-from mfflap.cfd.force_envelope import find_envelope_breaches
+from mfflap.cfd.force_history import to_loads
+from mfflap.cfd.imposed_motion import imposed_state
+from mfflap.cfd.linear_theory import compare_with_theory
 from mfflap.cfd.openfoam.forces import read_forces
-from mfflap.cfd.openfoam.loads import imposed_state, to_loads
 from mfflap.config import load_case
 from mfflap.errors import ConfigError
 from mfflap.hydro.loads import Loads
 from mfflap.kinematics.table_file import read_motion_table
 from mfflap.metrics import nrmse, pearson, time_mean
 from mfflap.performance import thrust_and_power
+from mfflap.records.bursts import bridge_load_bursts
+from mfflap.records.force_envelope import find_envelope_breaches
 from mfflap.toml_io import read_toml
 
 #: Fluent report columns of the x force, the y force and the z moment about the origin
@@ -102,7 +104,7 @@ def model_comparison(source: str | Path, case_file: str | Path, *, discard_s: fl
         A Fluent report's force and moment columns, and the depth its 2D forces are for.
     thin_aerofoil
         Also compare with linear unsteady thin-aerofoil theory
-        (:func:`mfflap.cfd.linear_check.compare_with_theory`).
+        (:func:`mfflap.cfd.linear_theory.compare_with_theory`).
 
     Returns
     -------
@@ -191,8 +193,6 @@ def model_comparison(source: str | Path, case_file: str | Path, *, discard_s: fl
         out[f"nrmse_{name}"] = float(nrmse(a, b))
         out[f"pearson_{name}"] = float(pearson(a, b))
     if thin_aerofoil:
-        from mfflap.cfd.linear_check import compare_with_theory
-
         out["thin_aerofoil"], _ = compare_with_theory(motion, ramp_time_s, state, cfd_loads,
                                                       keep, case.plate, case.fluid, case.flow)
     return ModelComparison(out, cfd_loads, model_loads,

@@ -63,11 +63,11 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
     status is 1 when a motion could not be back-tested (each is listed with why).
     """
     from mfflap.backtest.workflow import backtest_all
-    from mfflap.campaign.records import backtest_fixture_dirs
     from mfflap.cfd.openfoam.setups import mesh_and_solver
     from mfflap.config import loads_case
     from mfflap.optimisation.store import beta_label, read_result, read_sweep
     from mfflap.optimisation.study import sinusoid_motion
+    from mfflap.records.record import backtest_fixture_dirs
     from mfflap.results import ResultsFile
 
     if not live:  # the fixtures' runs are read as they were made
@@ -248,8 +248,8 @@ def _show(outcomes: dict, as_json: bool, scales: dict | None = None,
     the scales times ``optimised`` (label -> the optimiser's own mean thrust and power, the
     means the scales were measured with; else the back-test's model means), is shown beside
     the model's own."""
-    from mfflap.backtest.as_run import describe_as_run
     from mfflap.backtest.workflow import gain_in_cfd, no_gain_in_cfd_reason
+    from mfflap.records.as_run import describe_as_run
 
     data = {label: {"status": o.status, "source": o.source, "motion_key": o.key,
                     **({"cfd_as_run": describe_as_run(o.record)} if o.record else {}),

@@ -158,7 +158,7 @@ def status_cmd(out_dir: Path, discard_time_s: float | None, as_json: bool) -> No
     process named, started: stopped with how far its solver got, pending, unreadable: a
     record cut short, which the next `campaign run` keeps aside and reruns)."""
     from mfflap.campaign.execute import campaign_status
-    from mfflap.campaign.mixed_set_up import DEFAULT_DISCARD_TIME_S
+    from mfflap.records.mixed_set_up import DEFAULT_DISCARD_TIME_S
 
     statuses = campaign_status(out_dir, DEFAULT_DISCARD_TIME_S if discard_time_s is None
                                else discard_time_s)

@@ -156,17 +156,17 @@ def run(case_dir: Path, timeout: float, procs: int, progress_every: float,
 
     Prints the CPU time, the number of time steps, how many k and epsilon solves OpenFOAM
     had to clip ("bounding epsilon") from the log, the numerical bursts of the force
-    history (a few time steps where the run lost its pressure coupling, mfflap.cfd.bursts)
+    history (a few time steps where the run lost its pressure coupling, mfflap.records.bursts)
     and, for a case written with --y-plus, the plate's y+ against the wall functions'
     log-law range.
     """
-    from mfflap.cfd.bursts import find_numerical_bursts
     from mfflap.cfd.openfoam.forces import read_forces
     from mfflap.cfd.openfoam.runner import run_case, solver_progress, written_where_stopped
     from mfflap.cfd.openfoam.solver_log import solver_provenance
     from mfflap.cfd.openfoam.time_folders import latest_solution_time
     from mfflap.cfd.openfoam.writer import written_wall_treatment
     from mfflap.cfd.openfoam.yplus import read_y_plus, wall_function_note, y_plus_summary
+    from mfflap.records.bursts import find_numerical_bursts
 
     progress = (None if progress_every <= 0 else
                 lambda message: click.echo(f"[cfd run] {message}", err=True))
@@ -269,9 +269,9 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
 
     SOURCE is an OpenFOAM case folder written by mfflap, or a Fluent report file (.out) with
     force and moment columns and the flow time. Numerical bursts after --discard (a few
-    time steps where the solver lost its pressure coupling, mfflap.cfd.bursts) are bridged
+    time steps where the solver lost its pressure coupling, mfflap.records.bursts) are bridged
     before the comparison and listed, and so are stretches whose forces the motion cannot
-    have driven (a run that lost its numerics, mfflap.cfd.force_envelope: listed, not
+    have driven (a run that lost its numerics, mfflap.records.force_envelope: listed, not
     bridged); means are time averages over the solver's steps. A case file other than the
     one the case was written from is refused (mfflap.cfd.model_comparison); a Fluent report
     with no mfflap_fluent.toml beside it cannot be checked, and a warning says so.

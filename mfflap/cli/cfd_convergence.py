@@ -74,7 +74,7 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: list[floa
     finest meshes, and the plate's y+ over time (HDF5 records, HTML report, resumable). A
     harmonic motion run over two or more periods after the first is also compared by mean
     cycles, beside each run's cycle-to-cycle scatter."""
-    from mfflap.cfd.convergence import convergence_figure, run_convergence
+    from mfflap.campaign.convergence import convergence_figure, run_convergence
     from mfflap.cfd.openfoam.setups import setup
     from mfflap.cfd.openfoam.writer import SolverSettings
     from mfflap.config import load_case

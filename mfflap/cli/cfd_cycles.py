@@ -35,9 +35,9 @@ def cycles(records: tuple[Path, ...], skip_cycles: int, figure: Path | None,
     of the identification's pitch-ramp sinusoids, whose cycles are not meant to repeat, is
     refused.
     """
-    from mfflap.backtest.as_run import as_run_since_s
     from mfflap.backtest.cycles import cycle_means, cycles_figure, record_period
-    from mfflap.campaign.records import read_record
+    from mfflap.records.as_run import as_run_since_s
+    from mfflap.records.record import read_record
 
     found, retries, since, before = [], {}, {}, {}
     for path in records:

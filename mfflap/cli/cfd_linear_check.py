@@ -49,8 +49,7 @@ def linear_check(out_dir: Path, case_file: Path | None, mesh: str | None,
     from dataclasses import asdict, replace
 
     from mfflap.campaign.execute import CampaignSetup, run_campaign
-    from mfflap.campaign.records import read_record
-    from mfflap.cfd.linear_check import (
+    from mfflap.campaign.linear_check import (
         SMALL_MOTIONS,
         check_record,
         plot_checks,
@@ -60,6 +59,7 @@ def linear_check(out_dir: Path, case_file: Path | None, mesh: str | None,
     from mfflap.cfd.openfoam.setups import mesh_and_solver
     from mfflap.cli.campaign import aborted_with_resume_message
     from mfflap.config import CaseConfig, load_case
+    from mfflap.records.record import read_record
     from mfflap.toml_io import dumps
 
     motions = list(SMALL_MOTIONS)

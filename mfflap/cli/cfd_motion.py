@@ -76,7 +76,7 @@ def warn_not_at_rest(motion, ramp_time: float, end_time: float) -> None:
     """Warn on stderr when the imposed motion starts with a rate (an impulsive start, the
     same in every solver but a start-up transient in the forces), naming the rates and the
     remedy."""
-    from mfflap.cfd.openfoam.loads import not_at_rest
+    from mfflap.cfd.imposed_motion import not_at_rest
 
     moving = not_at_rest(motion, ramp_time, end_time)
     if moving:

@@ -62,16 +62,17 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
                  min_gain: float, residual_scaling: str | None, output: Path,
                  report_path: Path | None, as_json: bool) -> None:
     """Where the model of CASE_FILE departs from CFD, and which effect explains it."""
-    from mfflap.campaign.records import fixture_dir
     from mfflap.config import load_case
     from mfflap.gap.external import read_csv_case
-    from mfflap.gap.report import gap_report, write_diagnosis
+    from mfflap.gap.store import write_diagnosis
     from mfflap.gap.system import MIN_CASES
     from mfflap.gap.workflow import diagnose_cases
     from mfflap.identification.data import prepare_cases
     from mfflap.identification.error_growth import scaling_advice
     from mfflap.identification.fit import scaling_said
     from mfflap.identification.workflow import pooled_records
+    from mfflap.records.record import fixture_dir
+    from mfflap.reports.gap import gap_report
     from mfflap.results import ResultsFile
 
     case = load_case(case_file)

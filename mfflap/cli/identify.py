@@ -74,7 +74,6 @@ def identify(case_file: Path, folders: tuple[Path, ...], left_out: tuple[str, ..
              components: list[str] | None, residual_scaling: str | None, n_bootstrap: int,
              output: Path, as_json: bool) -> None:
     """Fit the Morison coefficients of CASE_FILE's model to CFD records."""
-    from mfflap.campaign.records import fixture_dir
     from mfflap.config import load_case
     from mfflap.errors import MfflapError
     from mfflap.identification.data import SET_UP_NOTE
@@ -88,6 +87,7 @@ def identify(case_file: Path, folders: tuple[Path, ...], left_out: tuple[str, ..
         source_text,
         sources_shown,
     )
+    from mfflap.records.record import fixture_dir
 
     case = load_case(case_file)
     folders = folders or (fixture_dir(),)

@@ -144,9 +144,9 @@ def gradcheck(case_file: Path, n_steps: int, as_json: bool, out_dir: Path | None
     from tqdm import tqdm
 
     from mfflap.config import load_case
-    from mfflap.gradcheck import FD_NOTE, check_gradient, check_point, scatter_figure
     from mfflap.kinematics import DiscreteMotion, to_discrete
     from mfflap.optimisation import FlappingProblem
+    from mfflap.optimisation.gradcheck import FD_NOTE, check_gradient, check_point, scatter_figure
     from mfflap.plots import save_figure
 
     case = load_case(case_file)

@@ -112,7 +112,8 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
     from mfflap.config import load_case
     from mfflap.identification.workflow import sources_shown
     from mfflap.optimisation.output_correction import check_gain
-    from mfflap.pipeline import RunOptions, run_study, write_outputs
+    from mfflap.pipeline import RunOptions, run_study
+    from mfflap.reports.run import write_run_outputs
     from mfflap.rounds import check_rounds
 
     if rounds == 1:
@@ -147,7 +148,7 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
                     first_order, cfd_repeatability)
         return
     outcome = run_study(case, options, progress=lambda m: click.echo(m, err=True))
-    write_outputs(outcome.config or case, outcome, out_dir / "results.h5",
+    write_run_outputs(outcome.config or case, outcome, out_dir / "results.h5",
                   out_dir / "report.html",
                   sources_shown(fixtures))
     if outcome.interrupted is not None:
@@ -173,6 +174,8 @@ def _run_rounds(case, options, rounds: int, tolerance: float, out_dir: Path, sou
                 trust_radius: float | None = None, first_order: bool = False,
                 cfd_repeatability: float | None = None) -> None:
     """``--rounds`` > 1: :func:`mfflap.rounds.run_rounds` and what it wrote."""
+    from mfflap.reports.rounds import write_rounds
+    from mfflap.reports.run import write_round_outputs
     from mfflap.rounds import run_rounds
 
     result, outcome = run_rounds(case, options, rounds, tolerance, out_dir,
@@ -180,7 +183,8 @@ def _run_rounds(case, options, rounds: int, tolerance: float, out_dir: Path, sou
                                  correct_outputs=correct_outputs,
                                  correction_gain=correction_gain, refit=refit,
                                  trust_radius=trust_radius, first_order=first_order,
-                                 cfd_repeatability=cfd_repeatability)
+                                 cfd_repeatability=cfd_repeatability,
+                                 write_round=write_round_outputs, write_summary=write_rounds)
     if outcome is not None and outcome.interrupted is not None:
         click.echo(f"interrupted in round {len(result.rounds)} ({outcome.interrupted}): "
                    f"{out_dir / 'rounds.html'} holds the rounds so far; the same command runs "

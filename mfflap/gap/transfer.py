@@ -20,7 +20,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from mfflap.campaign.records import CfdRecord
 from mfflap.errors import MfflapError
 from mfflap.gap.system import GapSystem
 from mfflap.hydro.base import ForceModel, ForceTerm
@@ -30,6 +29,7 @@ from mfflap.kinematics.state import KinematicState
 from mfflap.metrics import nrmse, time_mean
 from mfflap.parameters import Fluid, FreeStream, Plate
 from mfflap.performance import thrust_and_power
+from mfflap.records.record import CfdRecord
 
 #: Label of the base model's predictions.
 BASE = "base"

@@ -9,16 +9,16 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.ndimage import median_filter
 
-from mfflap.campaign.mixed_set_up import mixed_since_s
-from mfflap.campaign.records import CfdRecord
-from mfflap.cfd.bursts import bridge_bursts, bridge_load_bursts
-from mfflap.cfd.force_envelope import find_envelope_breaches
 from mfflap.errors import MfflapError
 from mfflap.hydro.base import ForceModel
 from mfflap.hydro.loads import LOAD_UNITS, Loads
 from mfflap.kinematics.state import KINEMATIC_UNITS, KinematicState
 from mfflap.parameters import Fluid, FreeStream, Plate
 from mfflap.performance import thrust_and_power
+from mfflap.records.bursts import bridge_bursts, bridge_load_bursts
+from mfflap.records.force_envelope import find_envelope_breaches
+from mfflap.records.mixed_set_up import mixed_since_s
+from mfflap.records.record import CfdRecord
 
 #: Load components a fit can use, with their units.
 COMPONENTS = LOAD_UNITS
@@ -136,12 +136,12 @@ def prepare_case(record: CfdRecord, discard_time: float = 0.75, n_samples: int =
 
     Adaptive CFD time steps crowd samples where the flow is fast; a uniform base keeps them
     from weighting the fit. The start is the later of ``discard_time`` and the record's own
-    start-up ramp. Numerical bursts after the start (:mod:`mfflap.cfd.bursts`) are bridged
+    start-up ramp. Numerical bursts after the start (:mod:`mfflap.records.bursts`) are bridged
     by linear interpolation, and so are stretches whose forces the motion cannot have
-    driven (:mod:`mfflap.cfd.force_envelope`: a run that lost its numerics gradually); then
+    driven (:mod:`mfflap.records.force_envelope`: a run that lost its numerics gradually); then
     isolated spikes are replaced by the running median (:func:`despike`). All are listed in
     the case's notes, and so is a retry that resumed the run with other settings after the
-    start (:func:`~mfflap.campaign.mixed_set_up.mixed_since_s`): the fit then mixes two
+    start (:func:`~mfflap.records.mixed_set_up.mixed_since_s`): the fit then mixes two
     set-ups.
 
     Parameters

@@ -5,13 +5,13 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
-from mfflap.campaign.record_inputs import check_records_inputs
-from mfflap.campaign.records import CfdRecord, fixture_dir, read_record, read_records
 from mfflap.config import CaseConfig
 from mfflap.errors import MfflapError
 from mfflap.identification.data import CaseData, prepare_cases
 from mfflap.identification.fit import IdentificationResult, identify
 from mfflap.identification.store import write_identification
+from mfflap.records.inputs import check_records_inputs
+from mfflap.records.record import CfdRecord, fixture_dir, read_record, read_records
 from mfflap.results import ResultsFile
 from mfflap.toml_io import read_toml
 
@@ -61,7 +61,7 @@ def pooled_records(folders: str | Path | Sequence[str | Path] | None = None,
     adds that record alone, so that a few cases can be taken from a folder that also holds
     others. A string holding several paths one per line (a result's ``source``,
     :func:`source_text`) is read as those paths. Given ``config``, the records must have
-    been run for its plate, fluid and stream (:mod:`mfflap.campaign.record_inputs`); ``use``
+    been run for its plate, fluid and stream (:mod:`mfflap.records.inputs`); ``use``
     says what for, in the refusal.
 
     Raises

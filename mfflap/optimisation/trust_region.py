@@ -229,7 +229,7 @@ class TrustStep:
     next_radius : the radius of the next round
     noise : eps_J, CFD's noise of J at the centre (0: not known; module docstring)
     ran_otherwise : how the optimum's CFD ran otherwise than the centre's (a retry's far
-        field or Courant limit, :func:`~mfflap.backtest.as_run.as_run_differences`), and
+        field or Courant limit, :func:`~mfflap.records.as_run.as_run_differences`), and
         either run's compared cycles mixing two set-ups (a retry resumed it within them);
         empty: alike, so that ``cfd_decrease`` holds the motion's change alone
     """

@@ -16,6 +16,8 @@ import jinja2
 import numpy as np
 from matplotlib.figure import Figure
 
+from mfflap.version import __version__
+
 _TEMPLATE = jinja2.Template("""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>{{ title }}</title>
 <style>
@@ -121,7 +123,6 @@ class Report:
 
     def write(self, path: str | Path) -> Path:
         """Write the HTML file."""
-        from mfflap import __version__
 
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)

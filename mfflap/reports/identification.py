@@ -50,7 +50,7 @@ def map_figure(result: IdentificationResult, signal: str = "normal_force",
     """Heat maps of a metric over (f, h_amp), one panel per phase.
 
     A value marked * is of a case whose CFD had numerical bursts bridged
-    (:mod:`mfflap.cfd.bursts`). Cases without a heave amplitude and phase (back-tests of
+    (:mod:`mfflap.records.bursts`). Cases without a heave amplitude and phase (back-tests of
     optimised motions pooled in) are not on the grid and not drawn.
     """
     f, h, p = (_param(result, k) for k in ("frequency", "heave_amplitude", "phase_deg"))

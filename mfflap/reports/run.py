@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
+from pathlib import Path
 
 import matplotlib
 
@@ -12,7 +13,13 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from mfflap.backtest.run import BacktestOutcome
+from mfflap.config import CaseConfig
+from mfflap.pipeline import RunOutcome, write_results
+from mfflap.reports.coverage import add_coverage_section
+from mfflap.reports.gap import add_gap_sections
 from mfflap.reports.html import Report, figure_html, table_html, text_html
+from mfflap.reports.identification import add_identification_sections
+from mfflap.reports.optimisation import add_optimisation_sections
 
 
 def backtest_figure(outcomes: Mapping[str, BacktestOutcome], max_power: float) -> Figure:
@@ -47,7 +54,7 @@ def add_backtest_sections(rep: Report, outcomes: Mapping[str, BacktestOutcome],
     if not outcomes:
         s.blocks.append(text_html("No back-test was run.", warn=True))
         return
-    from mfflap.backtest.as_run import describe_as_run
+    from mfflap.records.as_run import describe_as_run
 
     rows = []
     for label, o in outcomes.items():
@@ -126,3 +133,49 @@ def add_sensitivity_section(rep: Report, sensitivity: Mapping[str, tuple], schem
                                      "(Fig. 5)"))
     s.blocks.append(table_html(["coefficients from", "mean thrust [N]", "max power [W]",
                                 "period [s]", "St"], rows))
+
+
+def write_run_report(config: CaseConfig, outcome: RunOutcome, html_path: Path,
+                     source: str) -> None:
+    """The run's self-contained HTML report (``source``: where its CFD records came from)."""
+    rep = Report(f"mfflap run: {config.study.name}", config.study.description)
+    s = rep.section("Summary")
+    if outcome.problems:
+        s.blocks.append(text_html("What is missing and why:", warn=True))
+        for p in outcome.problems:
+            s.blocks.append(text_html(p, warn=True))
+    else:
+        s.blocks.append(text_html("Every stage ran."))
+    s.blocks.append(text_html("Stage times: " + ", ".join(f"{k} {v:.1f} s" for k, v in
+                                                          outcome.timings.items())))
+    if outcome.identification:
+        add_identification_sections(rep, outcome.identification, outcome.cases,
+                                    config.morison_model(), config.flow.velocity, source)
+    if outcome.study is not None:
+        add_optimisation_sections(rep, outcome.study, outcome.model, config.optimisation.scheme,
+                                  config.optimisation.max_power, outcome.gain,
+                                  config.optimisation.phase)
+    if outcome.coverage:
+        add_coverage_section(rep, outcome.coverage, len(outcome.cases))
+    add_backtest_sections(rep, outcome.backtests, config.optimisation.max_power)
+    if outcome.gap is not None:
+        add_gap_sections(rep, *outcome.gap)
+    if outcome.sensitivity:
+        add_sensitivity_section(rep, outcome.sensitivity, config.optimisation.scheme)
+    rep.write(html_path)
+
+
+def write_run_outputs(config: CaseConfig, outcome: RunOutcome, h5_path: Path, html_path: Path,
+                      source: str) -> None:
+    """One HDF5 file with every number and the inputs
+    (:func:`mfflap.pipeline.write_results`); one self-contained HTML report beside it."""
+    write_results(config, outcome, h5_path)
+    write_run_report(config, outcome, html_path, source)
+
+
+def write_round_outputs(config: CaseConfig, outcome: RunOutcome, round_dir: Path,
+                        source: str) -> None:
+    """A round's ``results.h5`` and ``report.html`` in its folder (the rounds'
+    ``write_round``, :func:`mfflap.rounds.run_rounds`)."""
+    write_run_outputs(config, outcome, round_dir / "results.h5", round_dir / "report.html",
+                      source)

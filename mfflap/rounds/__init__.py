@@ -62,12 +62,13 @@ The package's modules: :mod:`~mfflap.rounds.checks` (the model against CFD per m
 :mod:`~mfflap.rounds.refusals` (rounds that cannot learn), :mod:`~mfflap.rounds.steps`
 (what a round hands the next: correction points, trust steps),
 :mod:`~mfflap.rounds.loop` (the rounds and why they stop) and
-:mod:`~mfflap.rounds.output` (``rounds.h5``, ``rounds.png``, ``rounds.html``).
+:mod:`~mfflap.rounds.output` (``rounds.h5``; its report, ``rounds.png`` and ``rounds.html``,
+is :mod:`mfflap.reports.rounds`'s).
 """
 
 from mfflap.rounds.checks import THRUST_FLOOR, MotionCheck, motion_checks, optimised_means
 from mfflap.rounds.loop import RECORDS_FOLDER, run_rounds, stop_reason
-from mfflap.rounds.output import rounds_figure, write_rounds
+from mfflap.rounds.output import write_rounds_results
 from mfflap.rounds.refusals import check_rounds
 from mfflap.rounds.steps import correction_points, trust_steps
 from mfflap.rounds.summary import LoopResult, RoundSummary, describe_round
@@ -83,9 +84,8 @@ __all__ = [
     "describe_round",
     "motion_checks",
     "optimised_means",
-    "rounds_figure",
     "run_rounds",
     "stop_reason",
     "trust_steps",
-    "write_rounds",
+    "write_rounds_results",
 ]

@@ -9,8 +9,9 @@ from pathlib import Path
 
 from mfflap.config import CaseConfig
 from mfflap.optimisation.trust_region import MIN_RADIUS
+from mfflap.pipeline import RunOutcome, run_study, write_results
 from mfflap.rounds.checks import motion_checks, optimised_means
-from mfflap.rounds.output import write_rounds
+from mfflap.rounds.output import write_rounds_results
 from mfflap.rounds.refusals import check_rounds
 from mfflap.rounds.steps import (
     backtest_record_of,
@@ -22,6 +23,17 @@ from mfflap.rounds.steps import (
 from mfflap.rounds.summary import LoopResult, RoundSummary, describe_round
 
 Progress = Callable[[str], None]
+#: writes a round's outputs into its folder: (the case as run, its outcome, the folder,
+#: where its CFD came from)
+WriteRound = Callable[[CaseConfig, RunOutcome, Path, str], None]
+#: writes the rounds' own outputs into the output folder
+WriteSummary = Callable[[LoopResult, CaseConfig, Path], None]
+
+
+def write_round_results(config: CaseConfig, outcome: RunOutcome, round_dir: Path,
+                        source: str) -> None:
+    """A round's ``results.h5`` (:func:`mfflap.pipeline.write_results`), no report."""
+    write_results(config, outcome, round_dir / "results.h5")
 
 
 #: the folder (inside the output folder) holding the back-test records the rounds pool
@@ -32,7 +44,7 @@ RECORDS_FOLDER = "loop_records"
 def _keep_records(backtests: dict, folder: Path) -> None:
     """Write each back-tested motion's CFD record into ``folder`` under its own name (a
     fixture found within the look-up's tolerance keeps the name of the motion it ran)."""
-    from mfflap.campaign.records import write_record
+    from mfflap.records.record import write_record
 
     folder.mkdir(parents=True, exist_ok=True)
     for o in backtests.values():
@@ -50,8 +62,15 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
                progress: Progress = print, source: str = "", correct_outputs: bool = False,
                correction_gain: float = 1.0, refit: bool = True,
                trust_radius: float | None = None, first_order: bool = False,
-               cfd_repeatability: float | None = None):
+               cfd_repeatability: float | None = None,
+               write_round: WriteRound = write_round_results,
+               write_summary: WriteSummary = write_rounds_results):
     """Run the main job in rounds (:mod:`mfflap.rounds`) into ``out_dir/round_<k>``.
+
+    ``write_round`` writes each round's outputs into its folder (by default its
+    ``results.h5``; :func:`mfflap.reports.run.write_round_outputs` adds its report), and
+    ``write_summary`` the rounds' own (by default ``rounds.h5``;
+    :func:`mfflap.reports.rounds.write_rounds` adds ``rounds.png`` and ``rounds.html``).
 
     ``correct_outputs``: from round 2 on, each beta is optimised with the model's thrust and
     power scaled to predict the CFD means of the previous round's optimum of that beta
@@ -80,12 +99,11 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
     (LoopResult, RunOutcome)
         The rounds and the last round's outcome.
     """
-    from mfflap.backtest.as_run import as_run_differences
-    from mfflap.campaign.records import backtest_fixture_dirs, fixture_dir
     from mfflap.optimisation.output_correction import SECANT_REACH, secants_within
     from mfflap.optimisation.store import beta_label
     from mfflap.optimisation.trust_region import TrustRegion
-    from mfflap.pipeline import run_study, write_outputs
+    from mfflap.records.as_run import as_run_differences
+    from mfflap.records.record import backtest_fixture_dirs, fixture_dir
 
     check_rounds(n_rounds, tolerance, options.coefficients, correct_outputs, refit,
                  trust_radius, first_order, correction_gain, cfd_repeatability)
@@ -130,8 +148,7 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
 
         outcome = run_study(config, opts, progress=told)
         round_dir.mkdir(parents=True, exist_ok=True)
-        write_outputs(outcome.config or config, outcome, round_dir / "results.h5",
-                      round_dir / "report.html", source)
+        write_round(outcome.config or config, outcome, round_dir, source)
         in_fit = {c.name for c in outcome.cases}
         scales = {beta_label(b): (c.thrust_scale, c.power_scale)
                   for b, c in outcome.corrections.items()}
@@ -182,7 +199,7 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
     progress(f"rounds: {why}")
     for beta, answer in answers.items():
         progress(f"rounds: beta {beta:g}'s last motion CFD confirmed: {answer}")
-    write_rounds(result, config, out_dir)
+    write_summary(result, config, out_dir)
     return result, outcome
 
 

@@ -9,10 +9,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mfflap.backtest.as_run import as_run_since_s
 from mfflap.campaign.cases import grid_cases
-from mfflap.campaign.records import read_record, record_paths
 from mfflap.config import load_case
+from mfflap.records.as_run import as_run_since_s
+from mfflap.records.record import read_record, record_paths
 from mfflap.toml_io import read_toml
 
 ROOT = Path(__file__).parents[2]

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mfflap.cfd.openfoam.forces import ForceHistory
+from mfflap.cfd.force_history import ForceHistory
 from mfflap.errors import ParseError
 
 _TOKEN = re.compile(r'"([^"]*)"')
@@ -125,7 +125,7 @@ def report_forces(path: str | Path, force_x: str = "fx-plate", force_y: str = "f
                   moment_z: str | None = "mz-plate") -> ForceHistory:
     """The case-frame force (and moment about the CofR) of a report file as a
     :class:`~mfflap.cfd.openfoam.forces.ForceHistory`, the object the OpenFOAM side produces,
-    so :func:`~mfflap.cfd.openfoam.loads.to_loads` turns both into the same loads."""
+    so :func:`~mfflap.cfd.force_history.to_loads` turns both into the same loads."""
     rep = read_report(path)
     wanted = [c for c in (force_x, force_y, moment_z) if c]
     missing = [c for c in wanted if c not in rep.columns]

@@ -12,7 +12,7 @@ import numpy as np
 from mfflap.cfd import templates
 from mfflap.cfd.case_inputs import recorded_inputs
 from mfflap.cfd.frames import case_displacement, case_rotation_deg
-from mfflap.cfd.openfoam.loads import (
+from mfflap.cfd.imposed_motion import (
     check_end_time,
     check_ramp_time,
     check_start_at_mesh,
@@ -21,6 +21,7 @@ from mfflap.cfd.openfoam.loads import (
 from mfflap.errors import ConfigError, MotionError
 from mfflap.kinematics.continuous import HarmonicMotion, Motion, RampHarmonicMotion
 from mfflap.parameters import Fluid, FreeStream, Plate
+from mfflap.version import __version__
 
 
 def template_dir() -> Path:
@@ -67,7 +68,6 @@ def analytic_udf(motion: HarmonicMotion | RampHarmonicMotion, ramp_time: float =
                  udf_name: str = "mfflap_motion") -> str:
     """C source of an analytic DEFINE_CG_MOTION for a sinusoid (with or without the
     theta_kamp t pitch ramp) and the C^2 start-up ramp."""
-    from mfflap import __version__
 
     _check_name(udf_name)
     ramp = isinstance(motion, RampHarmonicMotion)
@@ -104,7 +104,6 @@ def table_udf(motion: Motion, end_time: float, ramp_time: float = 0.0,
     ``end_time`` is then not used. Otherwise the table covers the run and its end values
     are held past it.
     """
-    from mfflap import __version__
 
     _check_name(udf_name)
     ramp_time = check_ramp_time(ramp_time)
@@ -147,7 +146,6 @@ def journal(udf_file: str, report_file: str = REPORT_FILE, case_file: str = "pla
     """Batch journal: read the case, compile and load the UDF, make the fluid zone a rigid
     body driven by it, add force/moment report definitions and a report file with the flow
     time, and run ``n_steps`` time steps."""
-    from mfflap import __version__
 
     _check_name(udf_name)
     if n_steps < 1 or time_step <= 0 or max_iterations < 1:

@@ -27,36 +27,14 @@ from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from mfflap.cfd.force_history import ForceHistory
 from mfflap.errors import ParseError, RepeatedTimes
 
 _NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|[-+]?(?:nan|inf)", re.I)
-
-
-@dataclass(frozen=True)
-class ForceHistory:
-    """Total force (and optionally moment) in the case frame, N and N*m, per unit of mesh depth
-    as OpenFOAM wrote it (i.e. for the mesh's depth).
-
-    Attributes
-    ----------
-    time : (n,) s
-    force : (n, 3) N, total force
-    moment : (n, 3) N*m about ``centre_of_rotation``, or None
-    dialect : the row layout it was read from
-    centre_of_rotation : (3,) m, the point the moments are taken about as the file's header
-        gives it, or None where no header gives one (the origin)
-    """
-
-    time: np.ndarray
-    force: np.ndarray
-    moment: np.ndarray | None
-    dialect: str
-    centre_of_rotation: np.ndarray | None = None
 
 
 def _numbers(line: str, path: str, lineno: int) -> list[float]:

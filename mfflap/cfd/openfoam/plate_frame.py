@@ -13,14 +13,14 @@ from __future__ import annotations
 import numpy as np
 
 from mfflap.cfd.frames import plate_frame_acceleration, plate_frame_inflow
-from mfflap.cfd.openfoam.loads import imposed_state
+from mfflap.cfd.imposed_motion import imposed_state
 from mfflap.kinematics.continuous import Motion
 
 
 def plate_frame_tables(motion: Motion, times: np.ndarray, stream_velocity: float,
                        ramp_time: float = 0.0) -> dict[str, np.ndarray]:
     """The plate's frame's tables at ``times`` (s) for the kinematics the case imposes
-    (:func:`~mfflap.cfd.openfoam.loads.imposed_state`).
+    (:func:`~mfflap.cfd.imposed_motion.imposed_state`).
 
     Returns
     -------

@@ -26,16 +26,16 @@ import numpy as np
 from mfflap.cfd import templates
 from mfflap.cfd.case_inputs import recorded_inputs
 from mfflap.cfd.frames import FRAMES, case_displacement, case_rotation_deg
-from mfflap.cfd.openfoam.case_path import prepare_case_folder
-from mfflap.cfd.openfoam.cell_counts import check_cell_counts
-from mfflap.cfd.openfoam.foam_files import decode_error, foam_file
-from mfflap.cfd.openfoam.h_grid import HGridSpec
-from mfflap.cfd.openfoam.loads import (
+from mfflap.cfd.imposed_motion import (
     check_end_time,
     check_ramp_time,
     check_start_at_mesh,
     imposed_state,
 )
+from mfflap.cfd.openfoam.case_path import prepare_case_folder
+from mfflap.cfd.openfoam.cell_counts import check_cell_counts
+from mfflap.cfd.openfoam.foam_files import decode_error, foam_file
+from mfflap.cfd.openfoam.h_grid import HGridSpec
 from mfflap.cfd.openfoam.plate_frame import (
     format_acceleration_table,
     format_function1_table,
@@ -256,7 +256,7 @@ def motion_table(motion: Motion, end_time: float, rows_per_second: float = 400.0
                  ramp_time: float = 0.0) -> np.ndarray:
     """Rows (t, dx, dy, dz, rx, ry, rz) of the tabulated6DoFMotion table.
 
-    The kinematics are :func:`~mfflap.cfd.openfoam.loads.imposed_state` (heave from zero,
+    The kinematics are :func:`~mfflap.cfd.imposed_motion.imposed_state` (heave from zero,
     optional C^2 start-up ramp over ``ramp_time`` s), the same the force conversion uses; the
     table runs 10 % past ``end_time`` (:func:`table_times`).
     """

@@ -1,0 +1,88 @@
+"""A gap diagnosis in a results file: the candidates' scores, the residual's decomposition,
+the gap before and after, the verdict, and the check on the held-out motions."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+
+from mfflap.gap.diagnose import Diagnosis
+from mfflap.gap.transfer import BASE, TransferCheck
+from mfflap.identification.error_growth import growth_to_json
+from mfflap.results import ResultsFile
+
+
+def write_diagnosis(rf: ResultsFile, diag: Diagnosis, where: dict, group: str = "gap") -> None:
+    """Store the scores, the decomposition, the gap before/after and the verdict."""
+    rf.write_group(f"{group}/scores", {
+        "heldout_gain": np.array([s.gain for s in diag.scores]),
+        "p_value": np.array([s.p_value for s in diag.scores]),
+        "significant": np.array([s.significant for s in diag.scores]),
+        "base_heldout_sse": diag.base_sse},
+        {"heldout_gain": "1", "p_value": "1", "significant": "1", "base_heldout_sse": "1"},
+        {"labels": json.dumps([s.label for s in diag.scores]),
+         "coefficients": json.dumps([s.coefficients for s in diag.scores]),
+         "held_coefficients": json.dumps([s.held_coefficients for s in diag.scores]),
+         "variance_inflation": json.dumps([s.variance_inflation for s in diag.scores]),
+         "confounded_with": json.dumps([s.confounded_with for s in diag.scores])})
+    for phase, metrics in diag.gap.items():
+        arrays, units = {}, {}
+        for sig, val in metrics.items():
+            if isinstance(val, dict):
+                for m, arr in val.items():
+                    arrays[f"{m}_{sig}"] = arr
+                    units[f"{m}_{sig}"] = "1"
+            else:
+                arrays[sig] = val
+                units[sig] = "1"
+        rf.write_group(f"{group}/gap_{phase}", arrays, units)
+    rf.write_group(f"{group}/where", {
+        "phase_bin_centres": where["by_phase"]["bin_centres_deg"],
+        "phase_squared_share": where["by_phase"]["squared_share"],
+        "phase_lag": where["phase_lag_deg"], "case_sse": where["case_sse"]},
+        {"phase_bin_centres": "deg", "phase_squared_share": "1", "phase_lag": "deg",
+         "case_sse": "1"},
+        {"ranking": json.dumps(where["ranking"]),
+         "by_component": json.dumps(where["by_component"]),
+         "by_state": json.dumps(where["by_state"]), "by_regime": json.dumps(where["by_regime"]),
+         "by_harmonic": json.dumps(where["by_harmonic"])})
+    g = rf.h5[group]
+    g.attrs["verdict"] = diag.verdict
+    g.attrs["chosen"] = diag.chosen.label if diag.chosen else ""
+    g.attrs["case_names"] = json.dumps(diag.case_names)
+    g.attrs["validation"] = json.dumps(diag.validation)
+    g.attrs["residual_scaling"] = diag.residual_scaling
+    g.attrs["error_growth"] = growth_to_json(diag.error_growth)
+    g.attrs["residual_scaling_asked"] = diag.scaling_asked
+    g.attrs["descriptions"] = json.dumps(diag.descriptions)
+    if diag.transfer is not None:
+        write_transfer(rf, diag.transfer, f"{group}/transfer")
+
+
+def write_transfer(rf: ResultsFile, check: TransferCheck, group: str = "gap/transfer") -> None:
+    """Per held-out motion each set's error and the checked effect's NRMSE and means; the
+    verdict, gains, coefficients and excluded runs as attributes."""
+    ms = check.motions
+    arrays: dict[str, np.ndarray] = {}
+    units: dict[str, str] = {}
+    for label in check.coefficients:
+        arrays[f"error/{label}"] = np.array([m.error[label] for m in ms])
+        units[f"error/{label}"] = "1"
+    for which, label in (("base", BASE), ("effect", check.label)):
+        for comp in (ms[0].nrmse[BASE] if ms else ()):
+            arrays[f"nrmse_{comp}_{which}"] = np.array([m.nrmse[label][comp] for m in ms])
+            units[f"nrmse_{comp}_{which}"] = "1"
+    for key, unit in (("mean_thrust", "N"), ("mean_power", "W")):
+        for which, label in (("cfd", "cfd"), ("base", BASE), ("effect", check.label)):
+            arrays[f"{key}_{which}"] = np.array([getattr(m, key)[label] for m in ms])
+            units[f"{key}_{which}"] = unit
+    rf.write_group(group, arrays, units, {
+        "verdict": check.verdict, "effect": json.dumps(list(check.effect)),
+        "claimed": check.claimed, "carries_over": check.carries_over,
+        "residual_scaling": check.residual_scaling, "gains": json.dumps(check.gains),
+        "n_better": json.dumps(check.n_better),
+        "coefficients": json.dumps(check.coefficients),
+        "excluded": json.dumps(check.excluded),
+        "motion_names": json.dumps([m.name for m in ms]),
+        "motion_labels": json.dumps([m.label for m in ms])})
