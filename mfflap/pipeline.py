@@ -46,7 +46,7 @@ class RunOptions:
     #: whole cycles the back-test's CFD and model means are taken over (1: the last)
     average_cycles: int = 1
     #: a live back-test's retries rerun it from t = 0 s: one set-up throughout
-    #: (:func:`~mfflap.campaign.openfoam_run.run_motion`)
+    #: (:func:`~mfflap.cfd.openfoam.run_motion.run_motion`)
     retries_from_start: bool = False
     #: keep the optimisation within what the identification cases reach
     #: (:func:`within_data_config`)

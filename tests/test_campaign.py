@@ -29,7 +29,14 @@ from mfflap.campaign.execute import (
     fraction_simulated,
     run_campaign,
 )
-from mfflap.campaign.openfoam_run import run_motion
+from mfflap.cfd.openfoam.retry_log import (
+    LEGACY_RETRY_LOG,
+    RETRY_LOG,
+    append_retry,
+    budget_retries,
+    read_retry_log,
+)
+from mfflap.cfd.openfoam.run_motion import run_motion
 from mfflap.cfd.openfoam.runner import dies_with_caller, openfoam_available, run_case
 from mfflap.cfd.openfoam.writer import SolverSettings, write_case
 from mfflap.config import IdentificationGrid
@@ -38,6 +45,13 @@ from mfflap.hydro import MorisonModel
 from mfflap.kinematics import RampHarmonicMotion
 from mfflap.metrics import pearson
 from mfflap.records.record import CfdRecord, read_record, read_records, write_record
+from mfflap.records.retries import (
+    FORCES_BEYOND_BOUND,
+    RERUN_REQUESTED,
+    SAME_LOSS_AGAIN,
+    TIME_STEP_COLLAPSED,
+    Retry,
+)
 from mfflap.toml_io import read_toml
 
 SHORT = CfdCase(1.0, 0.3, 90.0, 10.0, duration=0.04, ramp_time=0.02)
@@ -183,19 +197,14 @@ def test_the_progress_bar_says_which_run_in_flight_was_retried_and_how(tmp_path)
     its postfix says why: the last case in flight retried, with its retry count and how it
     went on (rerun requests do not count)."""
     from mfflap.campaign.execute import retries_in_flight
-    from mfflap.campaign.openfoam_run import FROM_ZERO, RERUN_REQUESTED, RETRY_LOG
-
-    for case_id, lines in (("a", []), ("b", [
-            "time step collapsed at t = 1.69 s; resumed from t = 0 s with the inletOutlet "
-            "far field", RERUN_REQUESTED]),
-            ("c", ["forces beyond what the motion can drive from t = 1.4 s at max Co 4; "
-                   "resumed from t = 1.125 s with maxCo 2",
-                   f"{FROM_ZERO} with max Co 2: the forces left what the motion can drive "
-                   "from t = 1.4 s again, as at max Co 4; so the flow written before may be "
-                   "spoiled"])):
+    for case_id, retries in (("a", []), ("b", [
+            Retry(TIME_STEP_COLLAPSED, 1.69, 0.0, "the inletOutlet far field"),
+            Retry(RERUN_REQUESTED, None, None, "")]),
+            ("c", [Retry(FORCES_BEYOND_BOUND, 1.4, 1.125, "maxCo 2", 4.0),
+                   Retry(SAME_LOSS_AGAIN, 1.4, 0.0, "max Co 2", 2.0, 4.0)])):
         (tmp_path / "cases" / case_id).mkdir(parents=True)
-        if lines:
-            (tmp_path / "cases" / case_id / RETRY_LOG).write_text("\n".join(lines) + "\n")
+        for retry in retries:
+            append_retry(tmp_path / "cases" / case_id, retry)
     assert retries_in_flight(tmp_path, ["a", "missing"]) == ""
     assert retries_in_flight(tmp_path, ["a", "b"]) == (
         "b: retry 1, resumed from t = 0 s with the inletOutlet far field")
@@ -303,7 +312,6 @@ def test_a_record_with_a_damaged_compressed_chunk_is_unreadable_not_a_crash(tmp_
 def test_status_tells_how_far_a_started_run_got(tmp_path):
     """A case folder with a solver log and no record is "started"; the message reads the
     real pimpleFoam log's last time step, the folder a rerun resumes from, the retries."""
-    from mfflap.campaign.openfoam_run import RETRY_LOG
     from mfflap.cfd.openfoam.runner import solver_progress
 
     out = tmp_path / "camp"
@@ -322,8 +330,9 @@ def test_status_tells_how_far_a_started_run_got(tmp_path):
     assert campaign_status(out)[0].state == "pending"  # no solver log yet: not begun
     log = (Path(__file__).parent / "data" / "openfoam_v1912" / "collapsed_dt.log").read_text()
     (case_dir / "log.pimpleFoam").write_text(log)
-    (case_dir / RETRY_LOG).write_text("time step collapsed; resumed from the last written "
-                                      "time with the inletOutlet far field\n")
+    # the text log of a case written before the log was JSON counts as well
+    (case_dir / LEGACY_RETRY_LOG).write_text("time step collapsed; resumed from the last "
+                                             "written time with the inletOutlet far field\n")
     assert solver_progress(case_dir) == (pytest.approx(1.3821858), pytest.approx(7.3073054e-26))
     started, other = campaign_status(out)
     assert (started.state, other.state) == ("started", "pending")
@@ -384,8 +393,8 @@ def test_collapsed_time_step_is_retried_with_a_lower_courant_limit(tmp_path):
     assert (case_dir / "log.pimpleFoam").read_text().count("Starting time loop") == 4
     assert "type inletOutlet;" in (case_dir / "0" / "U").read_text()
     assert "type fixedValue;" in (case_dir / "0" / "p").read_text()
-    notes = (case_dir / "mfflap_retries.txt").read_text().splitlines()
-    assert [n.split(" with ")[-1] for n in notes] == [
+    retries, _ = read_retry_log(case_dir)
+    assert [r.remedy for r in retries] == [
         "the inletOutlet far field", "maxCo 2", "maxCo 1 and first-order upwind k and epsilon"]
 
 
@@ -393,7 +402,7 @@ def _short_run_retried_once(tmp_path, monkeypatch, run_case_instead, calls):
     """run_motion of SHORT to 0.04 s in ``tmp_path / "c"``, with ``run_case_instead`` (which
     appends each case it runs to ``calls``) as its run_case, retried once and then finished
     with the inletOutlet far field: (the retry's progress line, the record)."""
-    from mfflap.campaign import openfoam_run
+    from mfflap.cfd.openfoam import run_motion as openfoam_run
 
     monkeypatch.setattr(openfoam_run, "run_case", run_case_instead)
     told = []
@@ -414,7 +423,7 @@ def test_a_run_whose_force_log_times_repeat_is_retried_from_before_them(tmp_path
     coarse mesh: t = 4.3245473 s twice, its forces near 1e9 N, then on to its end). The
     first real run here is given such a time just before 0.035 s: it is retried from the last
     time written before it (0.03 s) with the next remedy, and the record is the rerun's."""
-    from mfflap.campaign import openfoam_run
+    from mfflap.cfd.openfoam import run_motion as openfoam_run
 
     real = openfoam_run.run_case
     calls, repeated = [], []
@@ -470,7 +479,7 @@ def test_a_brief_divergence_seen_after_later_writes_is_retried_from_the_write_be
     1.5e-8 s (as a real coarse-mesh back-test's was for a moment) or a Courant number of
     250: it is retried from 0.03 s, the last write before it, with the next remedy, not from
     its end time 0.04 s, where it would have had nothing left to run."""
-    from mfflap.campaign import openfoam_run
+    from mfflap.cfd.openfoam import run_motion as openfoam_run
     from mfflap.cfd.openfoam import runner
     from mfflap.cfd.openfoam.time_step_watch import TimeStepWatch
 
@@ -521,14 +530,14 @@ def test_forces_beyond_the_bound_are_retried_from_the_written_time_before_them(t
                        r"rerun from t = 0 s with max Co 2"):
         run_motion(case_dir, SHORT.motion(), "c", {}, 0.04, ramp_time=0.035,
                    force_bound_factor=1e-6)
-    notes = (case_dir / "mfflap_retries.txt").read_text().splitlines()
-    assert len(notes) == 3
-    assert all(n.startswith("forces beyond what the motion can drive from t = 0.03")
-               and " resumed from t = 0.03 s with " in n for n in notes[:2])
-    assert [n.split(" with ")[-1] for n in notes[:2]] == ["the inletOutlet far field",
-                                                          "maxCo 2"]
-    assert notes[2].startswith("rerun from t = 0 s with max Co 2: the forces left what the "
-                               "motion can drive from t = 0.03")
+    retries, _ = read_retry_log(case_dir)
+    assert len(retries) == 3
+    assert all(r.cause == FORCES_BEYOND_BOUND and r.failed_at_s == pytest.approx(0.03, abs=5e-3)
+               and r.resumed_from_s == pytest.approx(0.03) for r in retries[:2])
+    assert [r.remedy for r in retries[:2]] == ["the inletOutlet far field", "maxCo 2"]
+    assert (retries[2].cause, retries[2].resumed_from_s, retries[2].max_courant) == (
+        SAME_LOSS_AGAIN, 0.0, 2.0)
+    assert retries[2].failed_at_s == pytest.approx(0.03, abs=5e-3)
     log = (case_dir / "log.pimpleFoam").read_text()
     assert log.count("Starting time loop") == 4
     assert log.count("Time = 0.01\n") == 2  # the first 0.03 s ran twice: at max Co 4 and 2
@@ -544,7 +553,7 @@ def test_a_loss_at_the_same_flow_time_is_rerun_from_the_start_once(tmp_path, mon
     put at max Co 4 (inletOutlet) and 2; the rerun from t = 0 at max Co 2 holds, as
     f = 1 Hz, h = 0.5 m, phi = 135 deg did. The record says so; every field written before
     the rerun went, so its forces are the rerun's alone."""
-    from mfflap.campaign import openfoam_run
+    from mfflap.cfd.openfoam import run_motion as openfoam_run
     from mfflap.records.force_envelope import EnvelopeBreach
 
     verdicts = iter([0.036, 0.0361, 0.0362, None])
@@ -576,7 +585,7 @@ def test_a_loss_that_moves_with_the_time_step_keeps_being_retried(tmp_path, monk
     """Real pimpleFoam reruns with a scripted bound judgement: a breach that moves by more
     than SAME_BREACH_FRACTION of c / U after the Courant limit was halved is retried on to
     the last remedy (max Co 1, upwind k-epsilon), unlike one that stays put."""
-    from mfflap.campaign import openfoam_run
+    from mfflap.cfd.openfoam import run_motion as openfoam_run
     from mfflap.errors import CfdRunError
     from mfflap.records.force_envelope import EnvelopeBreach
 
@@ -593,10 +602,12 @@ def test_a_loss_that_moves_with_the_time_step_keeps_being_retried(tmp_path, monk
     with pytest.raises(CfdRunError, match="3 retries did not cure it"):
         run_motion(case_dir, SHORT.motion(), "c", {}, 0.04, ramp_time=0.035,
                    bound_watch_every_s=1e6)
-    notes = (case_dir / "mfflap_retries.txt").read_text().splitlines()
-    assert [n.split(" with ")[-1] for n in notes] == [
+    retries, _ = read_retry_log(case_dir)
+    assert [r.remedy for r in retries] == [
         "the inletOutlet far field", "maxCo 2", "maxCo 1 and first-order upwind k and epsilon"]
-    assert "from t = 0.012 s at max Co 2; resumed from t = 0 s" in notes[2]  # before any kept write
+    # before any kept write
+    assert (retries[2].failed_at_s, retries[2].max_courant) == (pytest.approx(0.012), 2.0)
+    assert retries[2].resumed_from_s == 0.0
     assert (case_dir / "log.pimpleFoam").read_text().count("Starting time loop") == 4
 
 
@@ -604,8 +615,8 @@ def test_a_loss_that_moves_with_the_time_step_keeps_being_retried(tmp_path, monk
 def test_a_run_leaving_the_bound_is_stopped_while_it_runs(tmp_path):
     """The forces are checked while pimpleFoam runs: a run beyond the (scaled-down) bound
     stops long before its end time instead of computing the lost stretch."""
-    from mfflap.campaign.openfoam_run import ForcesBeyondBound
     from mfflap.cfd.openfoam.forces import read_forces
+    from mfflap.cfd.openfoam.run_motion import ForcesBeyondBound
     from mfflap.errors import RunStoppedByWatch
 
     case_dir = tmp_path / "c"
@@ -653,7 +664,7 @@ def test_a_resumed_run_has_what_is_left_of_its_retries_until_a_rerun_is_requeste
     campaign resumed) allowed two in all has one left, not two; after request_rerun (what
     --retry-failed does) a third call has a new budget, its remedy following on from the
     case's settings (max Co 2 -> 1)."""
-    from mfflap.campaign.openfoam_run import RERUN_REQUESTED, request_rerun
+    from mfflap.cfd.openfoam.retry_log import request_rerun
     from mfflap.errors import CfdRunError
 
     case_dir = tmp_path / "c"
@@ -671,8 +682,8 @@ def test_a_resumed_run_has_what_is_left_of_its_retries_until_a_rerun_is_requeste
         run_motion(case_dir, SHORT.motion(), "c", {}, 1.0, ramp_time=0.02, min_time_step=1.0,
                    max_retries=1)
     assert log.read_text().count("Starting time loop") == 6
-    notes = (case_dir / "mfflap_retries.txt").read_text().splitlines()
-    assert notes[2] == RERUN_REQUESTED and len(notes) == 4
+    retries, _ = read_retry_log(case_dir)
+    assert retries[2].cause == RERUN_REQUESTED and len(retries) == 4
     assert FoamFile(case_dir / "system" / "controlDict")["maxCo"] == 1
 
 
@@ -683,7 +694,7 @@ def test_an_earlier_calls_breach_counts_for_the_same_flow_time_rule(tmp_path, mo
     a second call allowed three finds it again at max Co 2 and, the breach of the earlier
     call at max Co 4 (read from the case's retry log) being the same flow time, spends its
     last retry on a rerun from t = 0, not on max Co 1; the loss there ends it."""
-    from mfflap.campaign import openfoam_run
+    from mfflap.cfd.openfoam import run_motion as openfoam_run
     from mfflap.errors import CfdRunError
     from mfflap.records.force_envelope import EnvelopeBreach
 
@@ -695,16 +706,17 @@ def test_an_earlier_calls_breach_counts_for_the_same_flow_time_rule(tmp_path, mo
     with pytest.raises(CfdRunError, match="2 retries did not cure it"):
         run_motion(case_dir, SHORT.motion(), "c", {}, 0.04, ramp_time=0.035,
                    bound_watch_every_s=1e6, max_retries=2)
-    notes = (case_dir / "mfflap_retries.txt").read_text().splitlines()
-    assert [n.split("; resumed")[0][-20:] for n in notes] == ["t = 0.036 s at max Co 4"[-20:]] * 2
+    notes, _ = read_retry_log(case_dir)
+    assert [(r.cause, r.failed_at_s, r.max_courant) for r in notes] == [
+        (FORCES_BEYOND_BOUND, 0.036, 4.0)] * 2
     with pytest.raises(CfdRunError, match=r"where they left it before the run was rerun from "
                        r"t = 0 s \(t = 0\.036 s\): .* at max Co 2; after 3 retries"):
         run_motion(case_dir, SHORT.motion(), "c", {}, 0.04, ramp_time=0.035,
                    bound_watch_every_s=1e6, max_retries=3)
-    later = (case_dir / "mfflap_retries.txt").read_text().splitlines()
+    later, _ = read_retry_log(case_dir)
     assert later[:2] == notes and len(later) == 3
-    assert later[2].startswith("rerun from t = 0 s with max Co 2: ")
-    assert "as at max Co 4" in later[2]
+    assert (later[2].cause, later[2].resumed_from_s) == (SAME_LOSS_AGAIN, 0.0)
+    assert (later[2].max_courant, later[2].earlier_max_courant) == (2.0, 4.0)
     assert FoamFile(case_dir / "system" / "controlDict")["maxCo"] == 2
     # three runs in the first call; in the second, none for the run that had reached its
     # end time (its forces are judged as they are), then the rerun from t = 0
@@ -716,8 +728,6 @@ def test_retry_failed_gives_a_failed_case_a_new_budget_of_retries(tmp_path):
     """A failed case's folder is kept; a plain rerun of the campaign leaves it as it is,
     --retry-failed marks a new budget of retries in its retry log before running it again
     (on a real LocalCluster; the case fails again at once, its motion being refused)."""
-    from mfflap.campaign.openfoam_run import RERUN_REQUESTED, RETRY_LOG
-
     out = tmp_path / "camp"
     failing = CfdCase(0.0, 0.2, 90.0, 10.0, duration=1.0, ramp_time=0.5)  # f = 0: refused
     setup = CampaignSetup(timeout_s=60.0)
@@ -725,24 +735,20 @@ def test_retry_failed_gives_a_failed_case_a_new_budget_of_retries(tmp_path):
     assert status.state == "failed"
     retry_log = out / "cases" / failing.case_id / RETRY_LOG
     retry_log.parent.mkdir(parents=True)
-    retry_log.write_text("time step collapsed; resumed with maxCo 1\n")
+    collapsed = Retry(TIME_STEP_COLLAPSED, 0.5, 0.25, "maxCo 1")
+    append_retry(retry_log.parent, collapsed)
     assert run_campaign([failing], out, setup, n_workers=1, progress=False)[0].state == "failed"
-    assert retry_log.read_text().splitlines() == ["time step collapsed; resumed with maxCo 1"]
+    assert read_retry_log(retry_log.parent) == ([collapsed], [])
     (again,) = run_campaign([failing], out, setup, n_workers=1, progress=False,
                             retry_failed=True)
     assert again.state == "failed" and "frequency must be finite" in again.message
-    assert retry_log.read_text().splitlines() == ["time step collapsed; resumed with maxCo 1",
-                                                  RERUN_REQUESTED]
+    assert [r.cause for r in read_retry_log(retry_log.parent)[0]] == [TIME_STEP_COLLAPSED,
+                                                                      RERUN_REQUESTED]
 
 def test_status_counts_retries_not_rerun_requests(tmp_path):
     """The retry log's rerun requests are not retries, in a started case's status nor in
     the budget of its next call."""
-    from mfflap.campaign.openfoam_run import (
-        RERUN_REQUESTED,
-        RETRY_LOG,
-        _earlier_breach,
-        _earlier_retries,
-    )
+    from mfflap.cfd.openfoam.run_motion import _earlier_breach
 
     out = tmp_path / "camp"
     case_dir = out / "cases" / SHORT.case_id
@@ -752,19 +758,17 @@ def test_status_counts_retries_not_rerun_requests(tmp_path):
     (case_dir / "mfflap_case.toml").write_text("end_time = 3.0\n")
     (case_dir / "log.pimpleFoam").write_text(
         (Path(__file__).parent / "data" / "openfoam_v1912" / "collapsed_dt.log").read_text())
-    breach = ("forces beyond what the motion can drive from t = 1.2 s at max Co 2; resumed "
-              "from t = 1 s with maxCo 1")
-    (case_dir / RETRY_LOG).write_text(
-        f"time step collapsed; resumed with the inletOutlet far field\n{breach}\n"
-        f"{RERUN_REQUESTED}\n")
+    breach = Retry(FORCES_BEYOND_BOUND, 1.2, 1.0, "maxCo 1", 2.0)
+    collapsed = Retry(TIME_STEP_COLLAPSED, 0.7, 0.5, "the inletOutlet far field")
+    for retry in (collapsed, breach, Retry(RERUN_REQUESTED, None, None, "")):
+        append_retry(case_dir, retry)
     assert campaign_status(out)[0].message.endswith("; 2 retries")
-    assert _earlier_retries(case_dir) == []
-    with open(case_dir / RETRY_LOG, "a") as fh:
-        fh.write(breach + "\n")
+    assert budget_retries(case_dir) == ([], 0)
+    append_retry(case_dir, breach)
     assert campaign_status(out)[0].message.endswith("; 3 retries")
-    assert _earlier_retries(case_dir) == [breach]
+    assert budget_retries(case_dir) == ([breach], 0)
     assert _earlier_breach([breach]) == (1.2, 2.0)
-    assert _earlier_breach(["time step collapsed; resumed with maxCo 1"]) is None
+    assert _earlier_breach([collapsed]) is None
 
 def test_manifest_written_before_the_pressure_solver_setting_still_resumes(tmp_path):
     """campaign.toml files written before pressure_solver/pressure_tolerance, far_field,
@@ -848,7 +852,7 @@ def test_solver_setting_selects_the_far_field_and_refuses_unknown_ones(tmp_path)
 def test_the_settings_as_run_follow_every_remedy_a_retry_applies(tmp_path):
     """A written case's settings as run are its set-up's; after the three remedies of
     run_motion's retries (inletOutlet, half maxCo, upwind k-epsilon) they are the new ones."""
-    from mfflap.campaign.openfoam_run import (
+    from mfflap.cfd.openfoam.run_motion import (
         as_run_settings,
         lower_courant_limit,
         use_inlet_outlet_far_field,
@@ -1009,7 +1013,7 @@ def test_a_solver_dies_with_the_process_that_runs_it(tmp_path, n_procs):
     case_dir = tmp_path / "c"
     script = ("import sys\n"
               "from mfflap.campaign.cases import CfdCase\n"
-              "from mfflap.campaign.openfoam_run import run_motion\n"
+              "from mfflap.cfd.openfoam.run_motion import run_motion\n"
               "case = CfdCase(1.0, 0.3, 90.0, 10.0, duration=2.0, ramp_time=0.5)\n"
               "run_motion(sys.argv[1], case.motion(), 'c', {}, end_time=2.0, ramp_time=0.5,\n"
               "           n_procs=int(sys.argv[2]))\n")
@@ -1297,8 +1301,8 @@ def test_a_case_is_written_whole_under_its_lock(tmp_path):
     """run_motion writes a new case only while it holds the case's lock: refused, it leaves
     the folder as it was; a folder a killed write left half-done (files but no
     mfflap_case.toml, a stale .writing sibling) is replaced by a whole case."""
-    from mfflap.campaign.openfoam_run import _write_case_whole
     from mfflap.cfd.openfoam.case_lock import LOCK_FILE, CaseBusyError, case_lock
+    from mfflap.cfd.openfoam.run_motion import _write_case_whole
 
     motion = SHORT.motion()
     case_dir = tmp_path / "cases" / "c"
@@ -1366,10 +1370,15 @@ def test_an_interrupted_campaign_on_an_external_cluster_has_its_solvers_write(tm
                                 text=True, process_group=0,
                                 preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
         deadline = time.monotonic() + 300
-        while time.monotonic() < deadline and not any(
-                solver_progress(d) for d in out.glob("cases/*") if d.is_dir()):
-            time.sleep(0.5)
-        time.sleep(1.0)  # past its first steps: a stop without a write would lose them
+
+        def reached_s() -> float:
+            return max([(solver_progress(d) or (0.0,))[0] for d in out.glob("cases/*")
+                        if d.is_dir()], default=0.0)
+
+        # past its first steps (a stop without a write would lose them), however busy the
+        # machine is
+        while time.monotonic() < deadline and reached_s() <= 0.01:
+            time.sleep(0.2)
         assert proc.poll() is None, proc.communicate()
         os.killpg(proc.pid, signal.SIGINT)
         _, err = proc.communicate(timeout=180)

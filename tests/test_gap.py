@@ -404,7 +404,7 @@ def test_gap_cli_on_a_record_folder(tmp_path):
 @pytest.mark.openfoam
 def test_vorticity_at_the_largest_residual_from_real_openfoam_fields(tmp_path):
     """A real run that writes fields; the diagnosis report shows the flow at the residual peak."""
-    from mfflap.campaign.openfoam_run import run_motion
+    from mfflap.cfd.openfoam.run_motion import run_motion
     from mfflap.cfd.openfoam.writer import SolverSettings
     from mfflap.cli.main import cli
     from mfflap.gap.flowfield import vorticity_field

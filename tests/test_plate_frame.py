@@ -217,7 +217,7 @@ def test_decomposed_plate_frame_run_matches_the_serial_run(tmp_path):
 def test_campaign_record_of_a_plate_frame_run_carries_its_frame(tmp_path):
     """run_motion writes, runs and parses a plate-frame case: the record's loads are the
     plate-axes conversion and its provenance names the frame."""
-    from mfflap.campaign.openfoam_run import run_motion
+    from mfflap.cfd.openfoam.run_motion import run_motion
 
     record = run_motion(tmp_path / "case", MOTION, "plate", {}, 0.03, mesh="coarse",
                         solver=replace(PLATE, write_interval=0.03))

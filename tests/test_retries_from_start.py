@@ -15,7 +15,7 @@ from mfflap.backtest.compare import compare_last_cycle
 from mfflap.backtest.repeat import copy_settings
 from mfflap.backtest.run import _other_set_up
 from mfflap.campaign.cases import CfdCase
-from mfflap.campaign.openfoam_run import run_motion
+from mfflap.cfd.openfoam.run_motion import run_motion
 from mfflap.cfd.openfoam.writer import SolverSettings
 from mfflap.cli.main import cli
 from mfflap.hydro import MorisonModel
@@ -127,8 +127,10 @@ def test_a_retry_from_the_start_reruns_the_case_from_zero(tmp_path, monkeypatch)
     """Real pimpleFoam reruns with a scripted bound judgement: the loss at t = 0.036 s is
     retried from t = 0 s with the inletOutlet far field (resumed, it would have gone on from
     the write at 0.03 s): the record's forces are the rerun's alone, one set-up."""
-    from mfflap.campaign import openfoam_run
+    from mfflap.cfd.openfoam import run_motion as openfoam_run
+    from mfflap.cfd.openfoam.retry_log import read_retry_log
     from mfflap.records.force_envelope import EnvelopeBreach
+    from mfflap.records.retries import FORCES_BEYOND_BOUND, Retry, retries_from_json
 
     verdicts = iter([0.036, None])
 
@@ -141,10 +143,10 @@ def test_a_retry_from_the_start_reruns_the_case_from_zero(tmp_path, monkeypatch)
     told = []
     rec = run_motion(case_dir, SHORT.motion(), "c", {}, 0.04, ramp_time=0.035,
                      bound_watch_every_s=1e6, retries_from_start=True, progress=told.append)
-    notes = (case_dir / "mfflap_retries.txt").read_text().splitlines()
-    assert notes == ["forces beyond what the motion can drive from t = 0.036 s at max Co 4; "
-                     "resumed from t = 0 s with the inletOutlet far field"]
-    assert f"retry 1 of 3: {notes[0]}" in told  # the user is told as it happens
+    (retry,), _ = read_retry_log(case_dir)
+    assert retry == Retry(FORCES_BEYOND_BOUND, 0.036, 0.0, "the inletOutlet far field", 4.0)
+    assert f"retry 1 of 3: {retry.describe()}" in told  # the user is told as it happens
+    assert retries_from_json(rec.provenance["retry_log"]) == [retry]
     log = (case_dir / "log.pimpleFoam").read_text()
     assert log.count("Starting time loop") == 2 and log.count("Time = 0.01\n") == 2
     assert rec.provenance["retries_from_start"] is True
@@ -158,8 +160,10 @@ def test_a_retry_from_the_start_reruns_the_case_from_zero(tmp_path, monkeypatch)
 def test_a_collapsed_run_retried_from_the_start_reruns_from_zero(tmp_path, monkeypatch):
     """The first (real) run is reported collapsed at its end: retried from the start, the
     second runs the whole 0.04 s again with the inletOutlet far field."""
-    from mfflap.campaign import openfoam_run
+    from mfflap.cfd.openfoam import run_motion as openfoam_run
+    from mfflap.cfd.openfoam.retry_log import read_retry_log
     from mfflap.errors import TIME_STEP_COLLAPSED, SolverDiverged
+    from mfflap.records.retries import Retry
 
     real = openfoam_run.run_case
     calls = []
@@ -180,9 +184,8 @@ def test_a_collapsed_run_retried_from_the_start_reruns_from_zero(tmp_path, monke
     assert [m for m in told if m.startswith("retry ")] == [
         "retry 1 of 3: time step collapsed at t = 0.04 s; resumed from t = 0 s with the "
         "inletOutlet far field"]
-    assert (case_dir / "mfflap_retries.txt").read_text().splitlines() == [
-        "time step collapsed at t = 0.04 s; resumed from t = 0 s with the inletOutlet far "
-        "field"]
+    assert read_retry_log(case_dir) == (
+        [Retry(TIME_STEP_COLLAPSED, 0.04, 0.0, "the inletOutlet far field")], [])
     assert (case_dir / "log.pimpleFoam").read_text().count("Time = 0.01\n") == 2
     assert as_run_since_s(rec) == 0.0 and rec.provenance["as_run_far_field"] == "inletOutlet"
     assert rec.time[0] < 0.005 and np.all(np.diff(rec.time) > 0)
@@ -193,8 +196,8 @@ def test_a_campaign_case_is_retried_from_the_start_when_asked(tmp_path, monkeypa
     """``mfflap campaign run --retries-from-start``'s setting reaches the run: the scripted
     loss at t = 0.036 s reruns the identification case from t = 0 s, and the record kept in
     the campaign folder says so."""
-    from mfflap.campaign import openfoam_run
     from mfflap.campaign.execute import CampaignSetup, run_one
+    from mfflap.cfd.openfoam import run_motion as openfoam_run
     from mfflap.records.force_envelope import EnvelopeBreach
 
     verdicts = iter([0.036, None])

@@ -124,7 +124,7 @@ def test_a_case_that_does_not_say_its_wall_treatment_ran_the_log_law_one():
 
 def test_a_case_of_the_other_wall_treatment_is_not_resumed(tmp_path):
     """Nor one written before the setting (no solver_wall_treatment) for an all_y_plus run."""
-    from mfflap.campaign.openfoam_run import check_written_for
+    from mfflap.cfd.openfoam.run_motion import check_written_for
 
     solver = SolverSettings(write_interval=0.05)
     case = write_case(tmp_path / "c", MOTION, 0.2, solver=solver)

@@ -11,7 +11,7 @@ from dataclasses import replace
 
 import pytest
 
-from mfflap.campaign.openfoam_run import check_written_for, run_motion
+from mfflap.cfd.openfoam.run_motion import check_written_for, run_motion
 from mfflap.cfd.openfoam.writer import SolverSettings, write_case
 from mfflap.errors import ConfigError
 from mfflap.kinematics import HarmonicMotion

@@ -11,7 +11,7 @@ mean is then one draw of that scatter, and the mean over several cycles is what 
 makes: two ten-period copies' eight-cycle means agree within 0.05 %. The standard error
 assumes independent cycles, and it covers only the run's own settings: a run whose time step
 collapsed and was retried at half the Courant limit
-(:func:`~mfflap.campaign.openfoam_run.run_motion`; the record's ``retries``) settles
+(:func:`~mfflap.cfd.openfoam.run_motion.run_motion`; the record's ``retries``) settles
 elsewhere (7 % at the beta = 0.5 optimum).
 
 :func:`cycle_means` takes each whole cycle of a record, counted back from its end as

@@ -243,15 +243,15 @@ def run_backtest_case(motion: DiscreteMotion, label: str, name: str, *,
     is ``work_dir/name``, with ``_<n>cycles`` after it for other than 3 periods (so that a
     work folder holds both). The record's parameters say so, with ``parameters`` added.
     ``retries_from_start``: a retry reruns the case from t = 0 s, so that the record ran one
-    set-up throughout (:func:`~mfflap.campaign.openfoam_run.run_motion`). ``n_procs`` > 1
+    set-up throughout (:func:`~mfflap.cfd.openfoam.run_motion.run_motion`). ``n_procs`` > 1
     runs it decomposed on that many processes under mpirun; its provenance says so.
 
     Raises
     ------
     MfflapError
-        The run failed (:func:`~mfflap.campaign.openfoam_run.run_motion`).
+        The run failed (:func:`~mfflap.cfd.openfoam.run_motion.run_motion`).
     """
-    from mfflap.campaign.openfoam_run import run_motion
+    from mfflap.cfd.openfoam.run_motion import run_motion
 
     spline = cfd_motion(motion)
     period = spline.period
@@ -288,7 +288,7 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
         run for fewer periods is not taken for a live run.
     retries_from_start
         A live run's retries rerun it from t = 0 s, so that it runs one set-up throughout
-        (:func:`~mfflap.campaign.openfoam_run.run_motion`); a record of this motion retried
+        (:func:`~mfflap.cfd.openfoam.run_motion.run_motion`); a record of this motion retried
         part-way is then not taken for it.
     n_procs
         Processes a live run is decomposed on (1: serial). A record run on another count

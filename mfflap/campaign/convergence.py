@@ -249,7 +249,7 @@ def run_convergence(out_dir: str | Path, motion: Motion, end_time: float, *,
         the first cycle and the start of the comparison, so that the start-up cycle is left
         out; a three-period run then gives two cycles).
     """
-    from mfflap.campaign.openfoam_run import run_motion
+    from mfflap.cfd.openfoam.run_motion import run_motion
 
     base = solver or SolverSettings()
     out = Path(out_dir)

@@ -37,6 +37,7 @@ from mfflap.campaign.cases import CampaignCase
 from mfflap.cfd.case_inputs import ADDED_SOLVER_SETTINGS
 from mfflap.cfd.openfoam.case_lock import CaseBusyError, lock_holder
 from mfflap.cfd.openfoam.case_path import check_case_path
+from mfflap.cfd.openfoam.retry_log import read_retry_log, request_rerun
 from mfflap.cfd.openfoam.runner import RunStopped, stop_running_solvers, stoppable
 from mfflap.cfd.openfoam.writer import SolverSettings
 from mfflap.errors import ConfigError, MfflapError
@@ -52,6 +53,7 @@ from mfflap.records.record import (
     read_record,
     write_record,
 )
+from mfflap.records.retries import RERUN_REQUESTED
 from mfflap.toml_io import dumps, read_toml
 
 
@@ -70,7 +72,7 @@ class CampaignSetup:
     #: campaign commits each record once instead of at full precision and again compacted
     single_precision: bool = False
     #: a retried run reruns from t = 0 s, one set-up throughout
-    #: (:func:`~mfflap.campaign.openfoam_run.run_motion`); how a run is retried, not what it
+    #: (:func:`~mfflap.cfd.openfoam.run_motion.run_motion`); how a run is retried, not what it
     #: computes: not in campaign.toml, and a campaign may go on with it changed
     retries_from_start: bool = False
 
@@ -140,7 +142,7 @@ def run_one(case: CampaignCase, out_dir: str, setup: CampaignSetup) -> CaseStatu
 
     Never raises for a CFD failure: the failure is written beside the records and returned.
     """
-    from mfflap.campaign.openfoam_run import run_motion
+    from mfflap.cfd.openfoam.run_motion import run_motion
 
     out = Path(out_dir)
     record_path = out / f"{case.case_id}{RECORD_SUFFIX}"
@@ -395,29 +397,19 @@ def fraction_simulated(out_dir: str | Path, case_ids: Sequence[str]) -> dict[str
     return shares
 
 
-def _retries(case_dir: Path) -> list[str]:
-    """The retries a case's runs made so far (its retry log, without rerun requests)."""
-    from mfflap.campaign.openfoam_run import RERUN_REQUESTED, RETRY_LOG
-
-    log = case_dir / RETRY_LOG
-    lines = log.read_text().splitlines() if log.is_file() else []
-    return [line.strip() for line in lines if line.strip() not in ("", RERUN_REQUESTED)]
-
-
 def retries_in_flight(out_dir: str | Path, case_ids: Sequence[str]) -> str:
     """What the progress bar says of the runs in flight that were retried: ``<case>: retry
     <n>, <how it goes on>`` for the last of ``case_ids`` that was (a rerun from t = 0 s
     takes its share simulated back to nothing, so the bar steps back), '' if none was."""
-    from mfflap.campaign.openfoam_run import FROM_ZERO
-
     said = ""
     for case_id in case_ids:
-        retries = _retries(Path(out_dir) / "cases" / case_id)
+        retries, earlier = read_retry_log(Path(out_dir) / "cases" / case_id)
+        retries = [r for r in retries if r.cause != RERUN_REQUESTED]
         if retries:
-            last = retries[-1]
-            restart = (last.split(":", 1)[0] if last.startswith(FROM_ZERO)
-                       else last.rsplit("; ", 1)[-1])
-            said = f"{case_id}: retry {len(retries)}, {restart}"
+            said = (f"{case_id}: retry {len(earlier) + len(retries)}, "
+                    f"{retries[-1].restart()}")
+        elif earlier:
+            said = f"{case_id}: retry {len(earlier)}, {earlier[-1].rsplit('; ', 1)[-1]}"
     return said
 
 
@@ -431,7 +423,8 @@ def _started(case_dir: Path) -> tuple[str, float] | None:
         return None
     time_s, step_s, end_s = reached
     resume = latest_solution_time(case_dir)
-    retries = len(_retries(case_dir))
+    logged, earlier = read_retry_log(case_dir)
+    retries = len(earlier) + sum(r.cause != RERUN_REQUESTED for r in logged)
     share = _share(time_s, end_s)
     return (f"t = {time_s:.4g} of {end_s:.4g} s simulated ({share:.0%}), time step "
             f"{step_s:.2g} s; a rerun resumes from t = {resume or 0} s"
@@ -563,7 +556,6 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
     """
     from dask.distributed import Client, LocalCluster, as_completed
 
-    from mfflap.campaign.openfoam_run import request_rerun
 
     setup = setup or CampaignSetup()
     if scheduler_address is None and n_workers < 1:

@@ -233,7 +233,7 @@ def mesh_and_setup_options(runs: str = "") -> Callable:
 
 
 def retries_from_start_option(runs: str = "With --live: a run") -> Callable:
-    """``--retries-from-start`` (:func:`mfflap.campaign.openfoam_run.run_motion`'s
+    """``--retries-from-start`` (:func:`mfflap.cfd.openfoam.run_motion.run_motion`'s
     ``retries_from_start``); ``runs`` opens its help, saying which runs it applies to."""
     return click.option(
         "--retries-from-start", is_flag=True,

@@ -1,7 +1,7 @@
 """Whether two CFD runs ran alike: the settings each held over its last stretch.
 
 A run whose time step collapses, or whose forces leave what the motion can drive, is retried
-by :func:`~mfflap.campaign.openfoam_run.run_motion` with the inletOutlet far field, half the
+by :func:`~mfflap.cfd.openfoam.run_motion.run_motion` with the inletOutlet far field, half the
 Courant limit or upwind k and epsilon; the record keeps what it ran with last (``as_run_*``
 provenance, else the ``solver_*`` it was written with). Two back-tests compared, as a
 trust-region step compares its centre's CFD with its trial's, measure the motion's change
@@ -11,9 +11,8 @@ the settled mean thrust by 7 % (docs/findings/optimised_motions.md, "How long a 
 
 from __future__ import annotations
 
-import re
-
 from mfflap.records.record import CfdRecord
+from mfflap.records.retries import RERUN_REQUESTED, legacy_restart_s, retries_from_json
 
 #: (what it is called, the as-run provenance key, the written one it falls back to)
 COMPARED = (("mesh", "mesh", "mesh"),
@@ -47,22 +46,21 @@ def as_run_differences(first: CfdRecord, second: CfdRecord) -> list[str]:
     return out
 
 
-#: where a retry in a record's ``retries`` provenance (the lines of
-#: :data:`~mfflap.campaign.openfoam_run.RETRY_LOG`) restarted the run from: group 1 a
-#: resume's written time, else a rerun from the start
-_RESTART = re.compile(r"resumed from t = ([0-9.eE+-]+) s with |rerun from t = 0(?: s)? with ")
-
-
 def as_run_since_s(record: CfdRecord) -> float:
     """The flow time since which ``record`` ran the settings it ran last with (its
     ``as_run_*`` provenance), s: 0 when it ran one set-up throughout (no retry, or every
     retry reran it from t = 0 s, as ``run_motion(..., retries_from_start=True)`` does), else
     the written time its last retry resumed from. Its cycles before then ran with the
-    settings before that retry."""
-    found = list(_RESTART.finditer(str(record.provenance.get("retries") or "")))
-    if not found or found[-1].group(1) is None:
-        return 0.0
-    return float(found[-1].group(1))
+    settings before that retry.
+
+    The retries are read from the record's ``retry_log`` (:mod:`mfflap.records.retries`);
+    a record written before that was kept is read from its text (``retries``)."""
+    logged = record.provenance.get("retry_log")
+    if logged is None:
+        return legacy_restart_s(str(record.provenance.get("retries") or ""))
+    retries = [r for r in retries_from_json(str(logged), f"{record.name}: retry_log")
+               if r.cause != RERUN_REQUESTED]
+    return float(retries[-1].resumed_from_s) if retries else 0.0
 
 
 def describe_as_run(record: CfdRecord) -> str:

@@ -1,6 +1,6 @@
 """Campaign records whose identified window mixes two set-ups.
 
-:func:`~mfflap.campaign.openfoam_run.run_motion` retries a run whose time step collapses, or
+:func:`~mfflap.cfd.openfoam.run_motion.run_motion` retries a run whose time step collapses, or
 whose forces leave what the motion can drive, from its last written time with the
 inletOutlet far field or a lower Courant limit, unless asked to rerun it from t = 0 s
 (``retries_from_start``). Resumed after the identification's start-up (the case file's

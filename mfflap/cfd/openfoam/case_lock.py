@@ -8,7 +8,7 @@ while a case is written to, and refuses a second holder with the first one's pro
 start time. The kernel drops the lock when its process dies, however it dies, so a killed run
 never leaves a stale lock behind (the file stays, unlocked). On a file system without
 flock(2) runs go unguarded, as they did before the lock. The lock is re-entrant within a
-thread, so :func:`mfflap.campaign.openfoam_run.run_motion` can hold it around writing the
+thread, so :func:`mfflap.cfd.openfoam.run_motion.run_motion` can hold it around writing the
 case and its retries while :func:`mfflap.cfd.openfoam.runner.run_case` takes it again. A
 refusal is a :class:`CaseBusyError`, so that a campaign tells a case another process is
 running from one that failed; :func:`lock_holder` says who runs a case without taking it.

@@ -281,7 +281,7 @@ def run_application(case_dir: str | Path, application: str, timeout_s: float = 3
     number beyond the limit in the seconds before the solver exited fails the run after it.
     ``watch``, called every ``watch_every_s`` seconds while it runs, stops it too when it
     returns a reason (e.g. forces beyond what the motion can drive:
-    :func:`mfflap.campaign.openfoam_run.run_motion`). ``progress`` is called every
+    :func:`mfflap.cfd.openfoam.run_motion.run_motion`). ``progress`` is called every
     ``progress_every_s`` seconds while it runs (e.g.
     :class:`mfflap.cfd.openfoam.run_progress.RunProgress`).
 

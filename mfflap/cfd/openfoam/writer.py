@@ -180,7 +180,7 @@ class SolverSettings:
     pressure_tolerance: float = 1e-7
     #: "freestream": freestreamVelocity/freestreamPressure on the far field;
     #: "inletOutlet": inletOutlet velocity and a fixed pressure (stable where the whole mesh
-    #: heaves much faster than the stream; see :func:`mfflap.campaign.openfoam_run.run_motion`)
+    #: heaves much faster than the stream; see :func:`mfflap.cfd.openfoam.run_motion.run_motion`)
     far_field: str = "freestream"
     #: convection scheme of U: "linearUpwind" (second-order upwind) or "LUST" (75 % linear,
     #: 25 % linearUpwind: less numerical diffusion of the shed vortices on a coarse mesh)

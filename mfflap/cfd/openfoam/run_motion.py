@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import re
 import shutil
 import time
 from collections.abc import Callable
@@ -29,6 +28,12 @@ from mfflap.cfd.openfoam.retry_edits import (
     use_inlet_outlet_far_field,
     use_upwind_turbulence,
 )
+from mfflap.cfd.openfoam.retry_log import (
+    append_retry,
+    budget_retries,
+    describe_retries,
+    read_retry_log,
+)
 from mfflap.cfd.openfoam.rewind import rewind_case
 from mfflap.cfd.openfoam.runner import RunStopped, run_case
 from mfflap.cfd.openfoam.solver_log import solver_provenance
@@ -52,6 +57,14 @@ from mfflap.parameters import Fluid, FreeStream, Plate
 from mfflap.records.bursts import bridge_load_bursts
 from mfflap.records.force_envelope import BREACH_FACTOR, EnvelopeBreach, find_envelope_breaches
 from mfflap.records.record import CfdRecord
+from mfflap.records.retries import (
+    FORCES_BEYOND_BOUND,
+    RERUN_REQUESTED,
+    SAME_LOSS_AGAIN,
+    TIMES_REPEAT,
+    Retry,
+    retries_to_json,
+)
 from mfflap.toml_io import read_toml
 
 
@@ -158,93 +171,55 @@ def _apply_next_remedy(case_dir: Path, n_done: int, max_retries: int) -> str:
     return note
 
 
-#: every retry of a case, one line each, across the calls that ran it
-RETRY_LOG = "mfflap_retries.txt"
-
-
-#: the line :func:`request_rerun` adds to :data:`RETRY_LOG`: the retries before it no longer
-#: count against ``max_retries``
-RERUN_REQUESTED = "rerun requested: a new budget of retries from here"
-
-#: how :data:`RETRY_LOG` says a case was rerun from the start (:func:`run_motion`)
-FROM_ZERO = "rerun from t = 0 s"
-
-_LOGGED_RESUME = re.compile(r"; resumed from t = ([0-9.eE+-]+) s with ")
-
-_LOGGED_BREACH = re.compile(r"^forces beyond what the motion can drive from t = ([0-9.eE+-]+) s"
-                            r" at max Co ([0-9.eE+-]+);")
-
-
-def request_rerun(case_dir: str | Path) -> None:
-    """Give a case that failed after its retries a new budget of retries for its next run
-    (a campaign's ``--retry-failed``). Its earlier retries stay in :data:`RETRY_LOG` and in
-    the record's provenance; its settings keep every remedy they had."""
-    case_dir = Path(case_dir)
-    if case_dir.is_dir():
-        with open(case_dir / RETRY_LOG, "a") as fh:
-            fh.write(RERUN_REQUESTED + "\n")
-
-
-def _log_retry(case_dir: Path, line: str, progress: Callable[[str], None] | None,
-               n_retries: int, max_retries: int) -> None:
-    """Keep one retry in the case's :data:`RETRY_LOG` (so that a run resumed by a later
-    call still records it) and tell ``progress`` of it."""
-    with open(case_dir / RETRY_LOG, "a") as fh:
-        fh.write(line + "\n")
-    if progress is not None:
-        progress(f"retry {n_retries} of {max_retries}: {line}")
-
-
-def _retry(case_dir: Path, retries: list[str], what: str, rewind_before_s: float | None,
-           progress: Callable[[str], None] | None, max_retries: int) -> None:
+def _retry(case_dir: Path, retries: list[Retry], n_earlier: int, cause: str,
+           failed_at_s: float, rewind_before_s: float | None,
+           progress: Callable[[str], None] | None, max_retries: int,
+           max_courant: float | None = None) -> None:
     """Ready a case for its next retry and keep it: rewound to its last written time before
     ``rewind_before_s`` (None: it resumes from its last written time as it is), changed by
-    the next remedy (:func:`_apply_next_remedy`, added to ``retries``) and logged as
-    ``what`` with where it resumes (:func:`_log_retry`)."""
+    the next remedy (:func:`_apply_next_remedy`) and logged (:func:`_keep_retry`) with where
+    it resumes."""
     resume = (rewind_case(case_dir, rewind_before_s) if rewind_before_s is not None
               else latest_solution_time(case_dir) or 0)
-    retries.append(_apply_next_remedy(case_dir, len(retries), max_retries))
-    _log_retry(case_dir, f"{what}; resumed from t = {resume} s with {retries[-1]}", progress,
-               len(retries), max_retries)
+    remedy = _apply_next_remedy(case_dir, n_earlier + len(retries), max_retries)
+    _keep_retry(case_dir, retries, n_earlier, Retry(cause, failed_at_s, float(resume), remedy,
+                                                    max_courant), progress, max_retries)
 
 
-def _earlier_retries(case_dir: Path) -> list[str]:
-    """The retries that earlier calls spent on this case since the last
-    :data:`RERUN_REQUESTED`: a run resumed after its process was killed continues with what
-    is left of its budget, not with a new one."""
-    log = case_dir / RETRY_LOG
-    lines = log.read_text().splitlines() if log.is_file() else []
-    if RERUN_REQUESTED in lines:
-        lines = lines[len(lines) - lines[::-1].index(RERUN_REQUESTED):]
-    return [line for line in lines if line.strip()]
+def _keep_retry(case_dir: Path, retries: list[Retry], n_earlier: int, retry: Retry,
+                progress: Callable[[str], None] | None, max_retries: int) -> None:
+    """Keep one retry in ``retries`` and the case's log (so that a run resumed by a later call
+    still records it) and tell ``progress`` of it."""
+    retries.append(retry)
+    append_retry(case_dir, retry)
+    if progress is not None:
+        progress(f"retry {n_earlier + len(retries)} of {max_retries}: {retry.describe()}")
 
 
-def _earlier_breach(retries: list[str]) -> tuple[float, float] | None:
-    """(flow time s, Courant limit) of the last breach of the bound in ``retries``, or None."""
-    for line in reversed(retries):
-        found = _LOGGED_BREACH.match(line)
-        if found:
-            return float(found.group(1)), float(found.group(2))
+def _earlier_breach(retries: list[Retry]) -> tuple[float, float] | None:
+    """(flow time s, Courant limit) of the last loss of the bound in ``retries``, or None."""
+    for r in reversed(retries):
+        if r.cause in (FORCES_BEYOND_BOUND, SAME_LOSS_AGAIN):
+            return float(r.failed_at_s), float(r.max_courant)
     return None
 
 
-def _last_resume_s(retries: list[str]) -> float:
-    """The written time the last retry of the bound in ``retries`` (lines of
-    :data:`RETRY_LOG`) resumed from, s (0 if none or from the start)."""
-    for line in reversed(retries):
-        if line.startswith(FROM_ZERO):
+def _last_resume_s(retries: list[Retry]) -> float:
+    """The written time the last retry of the bound in ``retries`` resumed from, s (0 if none
+    or from the start)."""
+    for r in reversed(retries):
+        if r.cause == SAME_LOSS_AGAIN:
             return 0.0
-        found = _LOGGED_RESUME.search(line)
-        if found and _LOGGED_BREACH.match(line):
-            return float(found.group(1))
+        if r.cause == FORCES_BEYOND_BOUND:
+            return float(r.resumed_from_s)
     return 0.0
 
 
 def _retries_tried(case_dir: Path) -> str:
-    """The case's retries so far (:data:`RETRY_LOG`, across calls) in one line, or ''."""
-    log = case_dir / RETRY_LOG
-    lines = log.read_text().splitlines() if log.is_file() else []
-    n_retries = sum(line != RERUN_REQUESTED for line in lines)
+    """The case's retries so far (its retry log, across calls) in one line, or ''."""
+    lines = describe_retries(case_dir)
+    retries, earlier = read_retry_log(case_dir)
+    n_retries = len(earlier) + sum(r.cause != RERUN_REQUESTED for r in retries)
     if not n_retries:
         return ""
     return f"after {n_retries} retr{'y' if n_retries == 1 else 'ies'}: " + "; ".join(lines)
@@ -332,8 +307,8 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
     ran through at max Co 2 from the start). It is not retried further if it leaves the
     bound there again, or if its last retry already ran from t = 0: no smaller time step
     cures a loss that does not move with the time step. The retries are recorded in the
-    case (:data:`RETRY_LOG`) and in the record's provenance, those of earlier calls that
-    resumed the same case included: the case's settings changed there, not in
+    case (:mod:`~mfflap.cfd.openfoam.retry_log`) and in the record's provenance, those of
+    earlier calls that resumed the same case included: the case's settings changed there, not in
     mfflap_case.toml. They also count against ``max_retries``, and an earlier call's
     breach against the same-flow-time rule: a run resumed after its process was killed has
     what is left of its budget, unless :func:`request_rerun` gave it a new one.
@@ -369,7 +344,9 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
                 tmp, motion, end_time, mesh=mesh, plate=plate, fluid=fluid, stream=stream,
                 solver=solver, ramp_time=ramp_time, y_plus=y_plus))
         started = time.perf_counter()
-        retries = _earlier_retries(case_dir)
+        # what earlier calls spent of the budget: a run resumed after its process was
+        # killed goes on with what is left of it
+        retries, n_earlier = budget_retries(case_dir)
         same_breach_s = (SAME_BREACH_FRACTION * (plate or Plate()).chord
                          / abs((stream or FreeStream()).velocity))
         last_breach = _earlier_breach(retries)  # (flow time s, the Courant limit then)
@@ -385,9 +362,9 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
             except CfdRunError as exc:
                 bound_stop = (isinstance(exc, RunStoppedByWatch)
                               and isinstance(exc.reason, ForcesBeyondBound))
-                if bound_stop and len(retries) < max_retries:
+                if bound_stop and n_earlier + len(retries) < max_retries:
                     pass  # stopped early by the bound: rewound and retried below
-                elif not isinstance(exc, SolverDiverged) or len(retries) >= max_retries:
+                elif not isinstance(exc, SolverDiverged) or n_earlier + len(retries) >= max_retries:
                     tried = _retries_tried(case_dir)
                     if not tried:
                         raise
@@ -396,7 +373,7 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
                 else:  # rewound before the remedy: it rewrites the kept fields
                     # (an instability either way, which the same remedies cure; a brief one
                     # is seen after it: fields written since are spoiled)
-                    _retry(case_dir, retries, f"{exc.kind} at t = {exc.time_s:.10g} s",
+                    _retry(case_dir, retries, n_earlier, exc.kind, exc.time_s,
                            0.0 if retries_from_start else exc.time_s, progress, max_retries)
                     continue
             try:
@@ -407,12 +384,12 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
                 # on to its end time, its forces there possibly in the 1e9 N
                 at = (f"time step collapsed at t = {exc.time_s!r} s (the force log's times "
                       "repeat there)")
-                if len(retries) >= max_retries:
+                if n_earlier + len(retries) >= max_retries:
                     tried = _retries_tried(case_dir)
                     raise CfdRunError(f"{at}{f'; {tried}' if tried else ''}",
                                       case=str(case_dir)) from exc
-                _retry(case_dir, retries, at, 0.0 if retries_from_start else exc.time_s,
-                       progress, max_retries)
+                _retry(case_dir, retries, n_earlier, TIMES_REPEAT, exc.time_s,
+                       0.0 if retries_from_start else exc.time_s, progress, max_retries)
                 continue
             breach = _forces_beyond_bound(record, ramp_time, plate, fluid, stream,
                                           force_bound_factor)
@@ -421,26 +398,23 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
             max_co = courant_limit(case_dir)
             same_time = (last_breach is not None
                          and abs(breach.start_s - last_breach[0]) <= same_breach_s)
-            logged = _earlier_retries(case_dir)  # this call's retries too, as logged
-            if same_time and any(line.startswith(FROM_ZERO) for line in logged):
+            if same_time and any(r.cause == SAME_LOSS_AGAIN for r in retries):
                 raise CfdRunError(
                     f"the forces leave what the motion can drive, {breach.describe()}, where they "
                     f"left it before the run was rerun from t = 0 s (t = {last_breach[0]:.6g} s):"
                     f" the mesh, the far field or the turbulence model does not hold this motion "
                     f"at max Co {max_co:g}; {_retries_tried(case_dir)}", case=str(case_dir))
-            if len(retries) >= max_retries:
+            if n_earlier + len(retries) >= max_retries:
                 raise CfdRunError(f"the forces leave what the motion can drive, {breach.describe()}"
                                   f": the run lost its numerics, and {len(retries)} retries did "
                                   f"not cure it; {_retries_tried(case_dir)}", case=str(case_dir))
-            if same_time and max_co < last_breach[1] and _last_resume_s(logged) > 0.0:
+            if same_time and max_co < last_breach[1] and _last_resume_s(retries) > 0.0:
                 # the same loss from the last written time whatever the time step: that flow may
                 # have been spoiled already; one rerun from the start with the settings it has now
                 rewind_case(case_dir, 0.0)
-                retries.append(f"{FROM_ZERO} with max Co {max_co:g}")
-                _log_retry(case_dir, f"{FROM_ZERO} with max Co {max_co:g}: the forces left what "
-                           f"the motion can drive from t = {breach.start_s:.6g} s again, as at "
-                           f"max Co {last_breach[1]:g}, so the flow written before may be "
-                           "spoiled", progress, len(retries), max_retries)
+                _keep_retry(case_dir, retries, n_earlier,
+                            Retry(SAME_LOSS_AGAIN, breach.start_s, 0.0, f"max Co {max_co:g}",
+                                  max_co, last_breach[1]), progress, max_retries)
                 last_breach = (breach.start_s, max_co)
                 continue
             if same_time and max_co < last_breach[1]:  # and the last retry ran from t = 0
@@ -452,12 +426,14 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
                     f"turbulence model does not hold this motion; {_retries_tried(case_dir)}",
                     case=str(case_dir))
             last_breach = (breach.start_s, max_co)
-            _retry(case_dir, retries, f"forces beyond what the motion can drive from t = "
-                   f"{breach.start_s:.6g} s at max Co {max_co:g}",
-                   0.0 if retries_from_start else breach.start_s, progress, max_retries)
-        if (case_dir / RETRY_LOG).is_file():
-            record.provenance["retries"] = "; ".join(
-                (case_dir / RETRY_LOG).read_text().splitlines())
+            _retry(case_dir, retries, n_earlier, FORCES_BEYOND_BOUND, breach.start_s,
+                   0.0 if retries_from_start else breach.start_s, progress, max_retries,
+                   max_courant=max_co)
+        logged, earlier = read_retry_log(case_dir)
+        if logged or earlier:
+            record.provenance["retries"] = "; ".join(describe_retries(case_dir))
+        if logged:
+            record.provenance["retry_log"] = retries_to_json(logged)
         if record.time[-1] < 0.98 * end_time:
             raise CfdRunError(f"the run stopped at t = {record.time[-1]:.4g} s before endTime "
                               f"{end_time:.4g} s", case=str(case_dir))
