@@ -42,6 +42,8 @@ class CsvColumns:
 
     columns: dict[str, np.ndarray]
     line_numbers: np.ndarray
+    #: the file's line number of the header
+    header_line: int = 1
 
     def __getitem__(self, name: str) -> np.ndarray:
         return self.columns[name]
@@ -122,4 +124,5 @@ def read_csv_columns(path: str | Path, required: Sequence[str],
     if not rows:
         raise ParseError("a header but no data rows", path=str(path), line=header_line)
     data = np.array(rows, dtype=float)
-    return CsvColumns({h: data[:, j] for j, h in enumerate(header)}, np.array(numbers))
+    return CsvColumns({h: data[:, j] for j, h in enumerate(header)}, np.array(numbers),
+                      header_line)

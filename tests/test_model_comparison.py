@@ -127,21 +127,22 @@ def test_cfd_parse_writes_the_figure_and_the_hdf5_file(tmp_path):
 
 
 def test_the_fluent_report_options_are_refused_for_an_openfoam_case(tmp_path):
-    """--fx / --fy / --mz / --depth read a Fluent report; given with an OpenFOAM case they
-    used to be ignored without a word."""
+    """--fx / --fy / --mz name a Fluent report's columns, and a case mfflap wrote keeps its
+    depth: given with such a case they are refused, not ignored."""
     from click.testing import CliRunner
 
     from mfflap.cli.main import cli
 
     case = tmp_path / "case"
     assert CliRunner().invoke(cli, ["cfd", "write", str(CASE), str(case)]).exit_code == 0
-    for extra, said in ((["--depth", "2"], "--depth applies"),
-                        (["--fx", "a", "--mz", "b"], "--fx, --mz apply")):
-        res = CliRunner().invoke(cli, ["cfd", "parse", str(case), "--case-file", str(CASE),
-                                       *extra])
-        assert res.exit_code == 2
-        assert f"{said} only to a Fluent report; {case} is an OpenFOAM case folder" in (
-            res.output)
+    res = CliRunner().invoke(cli, ["cfd", "parse", str(case), "--case-file", str(CASE),
+                                   "--fx", "a", "--mz", "b"])
+    assert res.exit_code == 2
+    assert f"--fx, --mz apply only to a Fluent report; {case} is an OpenFOAM case folder" in (
+        res.output)
+    res = CliRunner().invoke(cli, ["cfd", "parse", str(case), "--case-file", str(CASE),
+                                   "--depth", "2"])
+    assert res.exit_code == 2 and "keeps its depth (mfflap_case.toml)" in res.output
 
 
 @pytest.mark.parametrize(("times", "end", "reached"), [

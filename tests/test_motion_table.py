@@ -60,7 +60,8 @@ def test_a_table_in_degrees_or_radians_is_the_same_smooth_motion(tmp_path):
 
 
 @pytest.mark.parametrize(("edit", "message", "line"), [
-    (lambda ls: [ls[0], "time,heave_position,note", *ls[2:]], "exactly one of the columns", 2),
+    (lambda ls: [ls[0], "time,heave_position,note,x", *ls[2:]],
+     r"missing column\(s\) for pitch_angle \(as theta or pitch or pitch_angle\)", 2),
     (lambda ls: [ls[0], "time,pitch_angle_deg,note,x", *ls[2:]], r"missing column.*"
                                                                   "heave_position", 2),
     (lambda ls: [*ls[:2], "time,pitch_angle,pitch_angle_deg,heave_position", *ls[3:]],
@@ -216,7 +217,7 @@ def test_degrees_in_the_radian_column_are_refused_naming_the_line(tmp_path):
     first = next(i for i, line in enumerate(wrong.read_text().splitlines(), start=1)
                  if line[:1].isdigit() and abs(float(line.split(",")[2])) > np.pi)
     assert info.value.path == str(wrong) and info.value.line == first
-    assert "pitch_angle_deg" in str(info.value)
+    assert "'pitch_angle [deg]'" in str(info.value)
     assert largest_pitch(read_motion_table(degrees), 2.0)[0] == pytest.approx(np.radians(16))
     runner = CliRunner()
     res = runner.invoke(cli, ["cfd", "write", str(CASE), str(tmp_path / "w"),

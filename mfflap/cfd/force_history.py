@@ -41,7 +41,8 @@ class ForceHistory:
 
 
 def to_loads(history: ForceHistory, state: KinematicState, span: float, depth: float,
-             source: str, frame: str = "inertial") -> Loads:
+             source: str, frame: str = "inertial",
+             pivot_m: tuple[float, float] = (0.0, 0.0)) -> Loads:
     """Body-frame loads on the whole span from a force history on the state's time base.
 
     The forces are scaled by span/depth. ``frame`` is the case's
@@ -51,7 +52,10 @@ def to_loads(history: ForceHistory, state: KinematicState, span: float, depth: f
     (static mesh in the plate's frame; forces along the plate's axes, moment about the
     leading edge at the origin). Moments taken about another point than the origin (the
     forces function object's CofR, :attr:`ForceHistory.centre_of_rotation`) are first
-    moved to the origin: M_O = M_C + r_C x F.
+    moved to the origin: M_O = M_C + r_C x F. ``pivot_m`` is the pivot (the plate's leading
+    edge) at rest in the case's axes, m: in the inertial frame it heaves with the plate, at
+    r_P = (x_P, y_P + h), and the moment is taken about it. mfflap's own cases have it at the
+    origin.
     """
     if history.moment is None:
         raise ParseError("the force history has no moments; need moment.dat or forces.dat")
@@ -66,10 +70,13 @@ def to_loads(history: ForceHistory, state: KinematicState, span: float, depth: f
     if frame not in FRAMES:
         raise ConfigError(f"unknown frame {frame!r}; allowed: {', '.join(FRAMES)}", key="frame")
     if frame == "plate":
+        if tuple(pivot_m) != (0.0, 0.0):
+            raise ConfigError("a case in the plate's frame has its pivot at the origin",
+                              key="pivot")
         normal, tangential = plate_frame_force_to_model(fx, fy)
         return Loads(state.time, normal, tangential, case_moment_to_model(mz), source=source)
-    y_le = state.heave_position
-    mz_le = mz + y_le * fx  # -(x_le fy - y_le fx), x_le = 0
+    x_le, y_le = pivot_m[0], pivot_m[1] + state.heave_position
+    mz_le = mz - (x_le * fy - y_le * fx)  # M_P = M_O - r_P x F
     f_x0, f_y0 = case_force_to_model(fx, fy)
     th = state.pitch_angle
     s, c = np.sin(th), np.cos(th)

@@ -29,6 +29,7 @@ from mfflap.cfd.force_history import to_loads
 from mfflap.cfd.imposed_motion import imposed_state
 from mfflap.cfd.linear_theory import compare_with_theory
 from mfflap.cfd.openfoam.forces import read_forces
+from mfflap.cfd.openfoam.foreign_case import read_foreign_case
 from mfflap.config import load_case
 from mfflap.errors import ConfigError
 from mfflap.hydro.loads import Loads
@@ -39,6 +40,8 @@ from mfflap.records.bursts import bridge_load_bursts
 from mfflap.records.force_envelope import find_envelope_breaches
 from mfflap.toml_io import read_toml
 
+#: the depth a Fluent 2D report's forces are for, m
+FLUENT_DEPTH_M = 1.0
 #: Fluent report columns of the x force, the y force and the z moment about the origin
 FLUENT_COLUMNS = ("fx-plate", "fy-plate", "mz-plate")
 
@@ -72,26 +75,29 @@ class ModelComparison:
 def compare_with_model(source: str | Path, case_file: str | Path, *, discard_s: float = 0.0,
                        ramp_time_s: float | None = None, motion_table: str | Path | None = None,
                        fluent_columns: tuple[str, str, str] = FLUENT_COLUMNS,
-                       fluent_depth_m: float = 1.0, thin_aerofoil: bool = False
+                       depth_m: float | None = None, thin_aerofoil: bool = False
                        ) -> dict[str, Any]:
     """Parse a run's forces and compare them with the case file's model: the summary of
     :func:`model_comparison` (same parameters)."""
     return model_comparison(source, case_file, discard_s=discard_s, ramp_time_s=ramp_time_s,
                             motion_table=motion_table, fluent_columns=fluent_columns,
-                            fluent_depth_m=fluent_depth_m, thin_aerofoil=thin_aerofoil).summary
+                            depth_m=depth_m, thin_aerofoil=thin_aerofoil).summary
 
 
 def model_comparison(source: str | Path, case_file: str | Path, *, discard_s: float = 0.0,
                      ramp_time_s: float | None = None, motion_table: str | Path | None = None,
                      fluent_columns: tuple[str, str, str] = FLUENT_COLUMNS,
-                     fluent_depth_m: float = 1.0, thin_aerofoil: bool = False
+                     depth_m: float | None = None, thin_aerofoil: bool = False
                      ) -> ModelComparison:
     """Parse a run's forces and compare them with the case file's model.
 
     Parameters
     ----------
     source
-        An OpenFOAM case folder written by mfflap, or a Fluent report file.
+        An OpenFOAM case folder, or a Fluent report file. A case mfflap did not write is read
+        as :func:`read_foreign_case` says: its motion from ``motion_table`` or from its
+        dynamicMeshDict, its depth from its mesh, its loads from its forces function object,
+        the moments about its CofR; there is nothing to check the case file against.
     discard_s
         Start-up transient left out of the comparison, s.
     ramp_time_s
@@ -100,8 +106,12 @@ def model_comparison(source: str | Path, case_file: str | Path, *, discard_s: fl
     motion_table
         The CSV table a Fluent UDF was written from, for a report without a
         mfflap_fluent.toml beside it (a case that keeps its table uses that one).
-    fluent_columns, fluent_depth_m
-        A Fluent report's force and moment columns, and the depth its 2D forces are for.
+    fluent_columns
+        A Fluent report's force and moment columns.
+    depth_m
+        The depth the forces are for, m: a Fluent report's (default 1 m, Fluent 2D), or an
+        OpenFOAM case's that mfflap did not write (default the z extent of its mesh); an
+        OpenFOAM case that mfflap wrote keeps its own.
     thin_aerofoil
         Also compare with linear unsteady thin-aerofoil theory
         (:func:`mfflap.cfd.linear_theory.compare_with_theory`).
@@ -128,14 +138,17 @@ def model_comparison(source: str | Path, case_file: str | Path, *, discard_s: fl
     """
     source = Path(source)
     case = load_case(case_file)
-    if source.is_dir():
+    pivot_m, foreign = (0.0, 0.0), None
+    if source.is_dir() and not (source / "mfflap_case.toml").is_file():
+        foreign = read_foreign_case(source, motion_table, depth_m)
+        history, depth_m, pivot_m = foreign.history, foreign.depth_m, foreign.pivot_m
+        meta, frame, label = None, "inertial", f"openfoam:{source}"
+        ramp_time_s = 0.0 if ramp_time_s is None else ramp_time_s
+    elif source.is_dir():
+        if depth_m is not None:
+            raise ConfigError(f"{source} keeps its depth (mfflap_case.toml); leave out the "
+                              "depth", key="depth")
         kept = source / "mfflap_case.toml"
-        if not kept.is_file():
-            raise ConfigError("no mfflap_case.toml: not a case written by `mfflap cfd write`, "
-                              "so nothing says in which frame, at which depth and for which "
-                              "motion its forces were computed; write the case with `mfflap "
-                              "cfd write` (with --motion-table for any motion) and run it",
-                              source=str(source))
         meta: dict[str, Any] | None = read_toml(kept)
         history = read_forces(source)
         depth_m = float(meta["depth"])
@@ -143,7 +156,8 @@ def model_comparison(source: str | Path, case_file: str | Path, *, discard_s: fl
         label = f"openfoam:{source}"
     else:
         history = report_forces(source, *fluent_columns)
-        depth_m, frame, label = fluent_depth_m, "inertial", f"fluent:{source}"
+        depth_m = FLUENT_DEPTH_M if depth_m is None else depth_m
+        frame, label = "inertial", f"fluent:{source}"
         kept = source.parent / FLUENT_KEPT_FILE
         meta = read_toml(kept) if kept.is_file() else None
     if meta is not None:  # what the case was written for: its table, its ramp
@@ -161,11 +175,16 @@ def model_comparison(source: str | Path, case_file: str | Path, *, discard_s: fl
                               "--ramp-time", key="ramp_time")
         ramp_time_s = kept_ramp_time
     ramp_time_s = 0.0 if ramp_time_s is None else ramp_time_s
-    motion = case.motion.build() if motion_table is None else read_motion_table(motion_table)
+    if foreign is not None:
+        motion = foreign.motion
+    else:
+        motion = (case.motion.build() if motion_table is None
+                  else read_motion_table(motion_table))
     if meta is not None:  # the case file must describe what the case was written for
         check_case_inputs(kept, meta, case_file, motion, case.plate, case.fluid, case.flow)
     state = imposed_state(motion, history.time, ramp_time_s)
-    cfd_loads = to_loads(history, state, case.plate.span, depth_m, source=label, frame=frame)
+    cfd_loads = to_loads(history, state, case.plate.span, depth_m, source=label, frame=frame,
+                         pivot_m=pivot_m)
     model_loads = case.morison_model().loads(state)
     keep = history.time >= discard_s
     if keep.sum() < 2:
@@ -187,7 +206,9 @@ def model_comparison(source: str | Path, case_file: str | Path, *, discard_s: fl
             history.time, float(meta["end_time"])),
         "numerical_bursts": [b.describe() for b in bursts],
         "forces_beyond_what_the_motion_can_drive": [b.describe() for b in breaches],
-        "inputs_checked_against": None if meta is None else str(kept)}
+        "inputs_checked_against": None if meta is None else str(kept),
+        "depth_m": depth_m, "pivot_m": list(pivot_m),
+        "motion_from": None if foreign is None else foreign.motion_from}
     for name in ("normal_force", "tangential_force", "moment"):
         a, b = getattr(model_loads, name)[keep], getattr(cfd_loads, name)[keep]
         out[f"nrmse_{name}"] = float(nrmse(a, b))

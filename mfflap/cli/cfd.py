@@ -238,8 +238,10 @@ def run(case_dir: Path, timeout: float, procs: int, progress_every: float,
               help="Fluent: report column of the y force.")
 @click.option("--mz", default="mz-plate", show_default=True,
               help="Fluent: report column of the z moment about the origin.")
-@click.option("--depth", default=1.0, show_default=True, type=POSITIVE,
-              help="Fluent: depth the 2D forces are given for, m (Fluent 2D: 1 m).")
+@click.option("--depth", default=None, type=POSITIVE,
+              help="Depth the forces are given for, m: a Fluent report's (default 1 m, "
+                   "Fluent 2D) or an OpenFOAM case's that mfflap did not write (default the "
+                   "z extent of its mesh).")
 @click.option("--ramp-time", type=NON_NEGATIVE, default=None,
               help="Start-up ramp of the case, s; default: the one it was written with "
                    "(an OpenFOAM case's mfflap_case.toml, the mfflap_fluent.toml `cfd "
@@ -250,10 +252,11 @@ def run(case_dir: Path, timeout: float, procs: int, progress_every: float,
                    "thin-aerofoil theory (Theodorsen/Wagner): the yardstick for small "
                    "motions (effective incidence of a few degrees, printed).")
 @click.option("--motion-table", type=click.Path(dir_okay=False, exists=True, path_type=Path),
-              default=None, help="Fluent: the CSV motion table the UDF was written from, "
-                                 "for a report file without the mfflap_fluent.toml of "
-                                 "`cfd fluent` beside it (that and an OpenFOAM case written "
-                                 "from a table keep it).")
+              default=None, help="The CSV motion table the run imposed: for a Fluent report "
+                                 "without the mfflap_fluent.toml of `cfd fluent` beside it, "
+                                 "or an OpenFOAM case mfflap did not write (default: the "
+                                 "motion of its dynamicMeshDict). A case mfflap wrote keeps "
+                                 "its own.")
 @click.option("--plot", "plot_path", type=FigureFile(), default=None,
               help="Write a figure of F_n, F_t, M, thrust and power, CFD beside the model, "
                    "over time (.png, .pdf or .svg).")
@@ -267,8 +270,12 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
           as_json: bool) -> None:
     """Parse forces into F_n, F_t, M, thrust and power, compared with the model.
 
-    SOURCE is an OpenFOAM case folder written by mfflap, or a Fluent report file (.out) with
-    force and moment columns and the flow time. Numerical bursts after --discard (a few
+    SOURCE is an OpenFOAM case folder, or a Fluent report file (.out) with force and
+    moment columns and the flow time. A case mfflap did not write is read from its own
+    files: the motion of its dynamicMeshDict (solidBody: tabulated6DoFMotion, or
+    oscillatingLinearMotion and oscillatingRotatingMotion under multiMotion; the rotation's
+    centre is the pivot) or --motion-table, the depth of its mesh or --depth, the loads of
+    its forces function object about its CofR. Numerical bursts after --discard (a few
     time steps where the solver lost its pressure coupling, mfflap.records.bursts) are bridged
     before the comparison and listed, and so are stretches whose forces the motion cannot
     have driven (a run that lost its numerics, mfflap.records.force_envelope: listed, not
@@ -280,12 +287,12 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
     from mfflap.cfd.model_comparison import model_comparison, write_model_comparison
 
     if source.is_dir():  # an OpenFOAM case: the Fluent report's options would be ignored
-        refuse_given(("fx", "fy", "mz", "depth"),
-                     f"a Fluent report; {source} is an OpenFOAM case folder (its forces and "
-                     "depth are read from the case)")
+        refuse_given(("fx", "fy", "mz"),
+                     f"a Fluent report; {source} is an OpenFOAM case folder (its forces are "
+                     "read from the case)")
     comparison = model_comparison(source, case_file, discard_s=discard, ramp_time_s=ramp_time,
                                   motion_table=motion_table, fluent_columns=(fx, fy, mz),
-                                  fluent_depth_m=depth, thin_aerofoil=thin_aerofoil)
+                                  depth_m=depth, thin_aerofoil=thin_aerofoil)
     out = comparison.summary
     if plot_path is not None:
         from mfflap.plots import model_comparison_figure, save_figure

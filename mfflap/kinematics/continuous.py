@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
 import numpy as np
-from scipy.interpolate import CubicSpline
+from scipy.interpolate import CubicHermiteSpline, CubicSpline
 
 from mfflap.errors import MotionError
 from mfflap.kinematics.state import KinematicState
@@ -257,19 +257,47 @@ class TabulatedMotion:
         motion table runs past the simulated end time (OpenFOAM's interpolation needs rows
         there); a run of a user's table ends at or before its last row, so those rows are
         never simulated.
+    pitch_rate, heave_velocity : ndarray, rad/s and m/s, shape (n,), optional
+        Rates at the rows, used as given: the position between rows is then the cubic
+        Hermite spline through the positions with these slopes.
+    pitch_acceleration, heave_acceleration : ndarray, rad/s^2 and m/s^2, optional
+        Accelerations at the rows, used as given with their rates: the rate between rows is
+        the cubic Hermite spline through the rates with these slopes.
     """
 
     def __init__(self, time: np.ndarray, pitch_angle: np.ndarray, heave_position: np.ndarray,
-                 hold_after_end: bool = False):
+                 hold_after_end: bool = False, *, pitch_rate: np.ndarray | None = None,
+                 heave_velocity: np.ndarray | None = None,
+                 pitch_acceleration: np.ndarray | None = None,
+                 heave_acceleration: np.ndarray | None = None):
         t = check_times(time, "table time column")
-        th = _finite_array(pitch_angle, "pitch_angle")
-        hp = _finite_array(heave_position, "heave_position")
-        if t.size < 4 or th.shape != t.shape or hp.shape != t.shape:
+        given = {"pitch_angle": pitch_angle, "heave_position": heave_position,
+                 "pitch_rate": pitch_rate, "heave_velocity": heave_velocity,
+                 "pitch_acceleration": pitch_acceleration,
+                 "heave_acceleration": heave_acceleration}
+        cols = {k: _finite_array(v, k) for k, v in given.items() if v is not None}
+        if t.size < 4 or any(c.shape != t.shape for c in cols.values()):
             raise MotionError("a motion table needs >= 4 rows and equal-length columns")
+        for acc, rate in (("pitch_acceleration", "pitch_rate"),
+                          ("heave_acceleration", "heave_velocity")):
+            if acc in cols and rate not in cols:
+                raise MotionError(f"{acc} is used with {rate}: give both, or neither")
         self.table_time = t
         self.hold_after_end = hold_after_end
-        self._pitch = CubicSpline(t, th)
-        self._heave = CubicSpline(t, hp)
+        self._pitch, self._pitch_rate = self._splines(t, cols, "pitch_angle", "pitch_rate",
+                                                      "pitch_acceleration")
+        self._heave, self._heave_rate = self._splines(t, cols, "heave_position",
+                                                      "heave_velocity", "heave_acceleration")
+
+    @staticmethod
+    def _splines(t, cols, position, rate, acceleration):
+        """(position spline, rate spline or None): cubic through the positions alone, else
+        Hermite with the given rates (and the rates Hermite with the given accelerations)."""
+        if rate not in cols:
+            return CubicSpline(t, cols[position]), None
+        rates = (CubicHermiteSpline(t, cols[rate], cols[acceleration])
+                 if acceleration in cols else None)
+        return CubicHermiteSpline(t, cols[position], cols[rate]), rates
 
     def sample(self, times: np.ndarray) -> KinematicState:
         """State at ``times`` inside the table's range (or past it, if held)."""
@@ -288,8 +316,12 @@ class TabulatedMotion:
         def moving(values: np.ndarray) -> np.ndarray:  # rates and accelerations: 0 when held
             return np.where(inside, values, 0.0)
 
+        pr, hr = self._pitch_rate, self._heave_rate
         return KinematicState(
-            time=t, pitch_angle=p(tc), pitch_rate=moving(p(tc, 1)),
-            pitch_acceleration=moving(p(tc, 2)), heave_position=h(tc),
-            heave_velocity=moving(h(tc, 1)), heave_acceleration=moving(h(tc, 2)),
+            time=t, pitch_angle=p(tc),
+            pitch_rate=moving(p(tc, 1) if pr is None else pr(tc)),
+            pitch_acceleration=moving(p(tc, 2) if pr is None else pr(tc, 1)),
+            heave_position=h(tc),
+            heave_velocity=moving(h(tc, 1) if hr is None else hr(tc)),
+            heave_acceleration=moving(h(tc, 2) if hr is None else hr(tc, 1)),
         )

@@ -1,18 +1,18 @@
 """A user's motion table from a CSV file: any pitch and heave history a solver should
 impose.
 
-The file has a header line naming its columns, in any order:
+The file has a header line naming its columns, in any order and by any of their aliases,
+with their units (:mod:`mfflap.kinematics.motion_columns`): a time (``t``, ``time``; it
+starts at 0 and increases), a heave (``h``, ``heave``, ``heave_position``) and a pitch
+(``theta``, ``pitch``, ``pitch_angle``), for example ``t, theta [deg], h [m]``; without a
+unit, SI (s, m, rad). Rate and acceleration columns (``theta_dot``, ``h_dot``,
+``theta_ddot``, ``h_ddot``, ...) are used as given at the rows. A flapping plate pitches
+less than 90 deg (:data:`~mfflap.kinematics.continuous.UPRIGHT_PITCH`); the commands that
+write a case from a table warn when it does not (:func:`largest_pitch`).
 
-- ``time`` in s, starting at 0 and strictly increasing;
-- ``heave_position`` in m;
-- ``pitch_angle`` in rad, or ``pitch_angle_deg`` in degrees (one of the two). A flapping
-  plate pitches less than 90 deg (:data:`~mfflap.kinematics.continuous.UPRIGHT_PITCH`);
-  the commands that write a case from a table warn when it does not
-  (:func:`largest_pitch`).
-
-Values beyond any flapping motion are refused, naming the line: a ``pitch_angle`` above
-pi rad in magnitude (degrees in the radians column), a heave beyond
-:data:`MAX_HEAVE_M`, a time beyond :data:`MAX_TIME_S`.
+Values beyond any flapping motion are refused, naming the line: a pitch above pi rad in
+magnitude (degrees in a radians column), a heave beyond :data:`MAX_HEAVE_M`, a time beyond
+:data:`MAX_TIME_S`.
 
 Other columns are ignored; lines starting with ``#`` are comments. Between rows the motion
 is a cubic spline (continuous rates and accelerations); past the last row it is held at
@@ -28,6 +28,7 @@ import numpy as np
 from mfflap.csv_columns import read_csv_columns
 from mfflap.errors import MotionError, ParseError
 from mfflap.kinematics.continuous import Motion, TabulatedMotion
+from mfflap.kinematics.motion_columns import motion_columns
 
 #: the fewest rows a cubic spline through the table needs
 MIN_ROWS = 4
@@ -58,9 +59,9 @@ def read_motion_table(path: str | Path) -> TabulatedMotion:
         beyond any flapping motion.
     """
     path = Path(path)
-    col = read_csv_columns(path, ("time", "heave_position"),
-                           one_of=[("pitch_angle", "pitch_angle_deg")])
-    t, lines = col["time"], col.line_numbers
+    table = read_csv_columns(path, ())
+    col = motion_columns(table, str(path))
+    t, lines = col["time"].values, table.line_numbers
     if t[0] != 0.0:
         raise ParseError(f"the table must start at t = 0 s (the solver starts there), "
                          f"got {t[0]:g} s", path=str(path), line=int(lines[0]))
@@ -72,19 +73,21 @@ def read_motion_table(path: str | Path) -> TabulatedMotion:
     if len(t) < MIN_ROWS:
         raise ParseError(f"{len(t)} data rows; a motion table needs at least {MIN_ROWS}",
                          path=str(path), line=int(lines[-1]))
-    _check_range(path, lines, t, MAX_TIME_S, "time", " s")
-    _check_range(path, lines, col["heave_position"], MAX_HEAVE_M, "heave_position",
-                 " m in magnitude")
-    if "pitch_angle" in col:
-        _check_range(path, lines, col["pitch_angle"], np.pi, "pitch_angle",
-                     " rad in magnitude: is it in degrees? Name the column pitch_angle_deg")
-        pitch = col["pitch_angle"]
+    _check_range(path, lines, t, MAX_TIME_S, col["time"].header, " s")
+    heave = col["heave_position"]
+    _check_range(path, lines, heave.values, MAX_HEAVE_M, heave.header, " m in magnitude")
+    pitch = col["pitch_angle"]
+    if pitch.unit == "rad":
+        _check_range(path, lines, pitch.values, np.pi, pitch.header,
+                     " rad in magnitude: is it in degrees? Name its unit: "
+                     f"'{pitch.header} [deg]'")
     else:
-        _check_range(path, lines, col["pitch_angle_deg"], 180.0, "pitch_angle_deg",
+        _check_range(path, lines, np.degrees(pitch.values), 180.0, pitch.header,
                      " deg in magnitude")
-        pitch = np.radians(col["pitch_angle_deg"])
+    extra = {q: c.values for q, c in col.items()
+             if q not in ("time", "heave_position", "pitch_angle")}
     try:
-        return TabulatedMotion(t, pitch, col["heave_position"], hold_after_end=True)
+        return TabulatedMotion(t, pitch.values, heave.values, hold_after_end=True, **extra)
     except MotionError as exc:  # what the reader has not caught already
         raise ParseError(str(exc), path=str(path)) from exc
 
