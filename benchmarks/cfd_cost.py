@@ -92,9 +92,9 @@ import numpy as np
 from mfflap.cfd.force_history import to_loads
 from mfflap.cfd.imposed_motion import imposed_state
 from mfflap.cfd.openfoam.forces import read_forces
-from mfflap.cfd.openfoam.runner import ran_to_end, run_case, solver_progress
+from mfflap.cfd.openfoam.runner import ran_to_end, run_case
 from mfflap.cfd.openfoam.setups import mesh_and_solver, setup
-from mfflap.cfd.openfoam.solver_log import solver_provenance
+from mfflap.cfd.openfoam.solver_log import solver_progress, solver_provenance
 from mfflap.cfd.openfoam.writer import (
     WALL_TREATMENTS,
     AnyMeshSpec,

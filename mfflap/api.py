@@ -26,7 +26,7 @@ from typing import Any
 from mfflap.backtest.run import BacktestOutcome
 from mfflap.backtest.workflow import backtest_all
 from mfflap.config import CaseConfig, load_case
-from mfflap.errors import ConfigError
+from mfflap.errors import ConfigError, shown
 from mfflap.gap.diagnose import Diagnosis
 from mfflap.identification.fit import IdentificationResult
 from mfflap.identification.workflow import identify_strategies, load_cases
@@ -99,7 +99,7 @@ class Study:
             For a weighting that is not one of :data:`WEIGHTINGS`.
         """
         if weighting not in WEIGHTINGS:
-            raise ConfigError(f"value {weighting!r}; allowed: {', '.join(WEIGHTINGS)}",
+            raise ConfigError(f"value {shown(weighting)}; allowed: {', '.join(WEIGHTINGS)}",
                               key="weighting")
         cases, excluded = load_cases(self.config, records)
         result = identify_strategies(self.config, cases, excluded, [weighting],

@@ -20,6 +20,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import tomllib
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -27,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from mfflap.errors import ConfigError
+from mfflap.hydro.morison import MorisonModel
 from mfflap.kinematics.continuous import UPRIGHT_PITCH, HarmonicMotion, RampHarmonicMotion
 from mfflap.parameters import Fluid, FreeStream, MorisonCoefficients, Plate, StripSettings
 from mfflap.toml_io import dumps, read_toml
@@ -343,7 +346,6 @@ class CaseConfig:
 
     def morison_model(self):
         """The Morison model this case describes."""
-        from mfflap.hydro.morison import MorisonModel
 
         return MorisonModel(self.plate, self.fluid, self.flow, self.coefficients,
                             self.model.strip_settings())
@@ -423,7 +425,6 @@ class ConfigWarning(UserWarning):
 def _check_motion_keys(table: dict[str, Any], kind: str, source: str | None) -> None:
     """Refuse a [motion] table that leaves out a key its kind needs (the default would be
     run as if given); warn of a key its kind does not read, naming it."""
-    import warnings
 
     missing = [k for k in MOTION_KEYS[kind] if k not in table]
     if missing:
@@ -459,7 +460,6 @@ def load_case(path: str | Path) -> CaseConfig:
 
 def loads_case(text: str, source: str = "<string>") -> CaseConfig:
     """Validate case TOML given as text (e.g. the copy stored in a results file)."""
-    import tomllib
 
     try:
         data = tomllib.loads(text)

@@ -9,8 +9,10 @@ Defaults are the paper's set-up (Yin et al. 2026, Biomimetics 11, 393).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field, replace
 
+from mfflap.errors import ConfigError
 from mfflap.validation import bounded, check_fields
 
 
@@ -40,7 +42,6 @@ class Plate:
     def __post_init__(self) -> None:
         check_fields(self, prefix="plate.")
         if self.thickness >= self.chord:
-            from mfflap.errors import ConfigError
 
             raise ConfigError(
                 f"value {self.thickness!r} must be smaller than the chord {self.chord!r} m",
@@ -111,7 +112,6 @@ class StripSettings:
 
     def __post_init__(self) -> None:
         if isinstance(self.n_strips, bool) or not isinstance(self.n_strips, int):
-            from mfflap.errors import ConfigError
 
             raise ConfigError(f"value {self.n_strips!r} must be a whole number >= 1",
                               key="model.n_strips")
@@ -120,7 +120,6 @@ class StripSettings:
                      "drag_area_normal", "drag_area_tangential"):
             v = getattr(self, name)
             if v is not None and not (v >= 0.0 and v < float("inf")):
-                from mfflap.errors import ConfigError
 
                 raise ConfigError(f"value {v!r} out of range; allowed: [0, inf)",
                                   key=f"model.{name}")
@@ -141,7 +140,6 @@ class StripGeometry:
     @classmethod
     def from_settings(cls, plate: Plate, settings: StripSettings) -> StripGeometry:
         """Resolve the defaults of :class:`StripSettings` against a plate."""
-        import math
 
         n = settings.n_strips
         chord, s, d = plate.chord, plate.span, plate.thickness

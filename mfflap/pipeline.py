@@ -3,24 +3,77 @@ beta -> where the motions lie against the identification data -> back-test again
 gap diagnosis (its effect checked on the back-tests) -> coefficient sensitivity -> one HTML
 report and one HDF5 file with every number and the inputs.
 
-Each stage that fails is reported and the run goes on with the rest; the report says what is
-missing and why.
+Each stage ends in a :class:`StageOutcome` (done, failed with an mfflap error, or
+interrupted). A stage that fails with an mfflap error (bad input, a CFD run that failed, a
+fit that cannot be made) is reported and the run goes on with the rest; the report says what
+is missing and why. Any other exception is a fault in mfflap, not in the input: it ends the
+run with its traceback.
 """
 
 from __future__ import annotations
 
 import json
 import time
-import traceback
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
+import numpy as np
+
+from mfflap.backtest.store import safe_label, write_backtests
+from mfflap.backtest.workflow import backtest_all
+from mfflap.cfd.openfoam.case_path import check_case_path
 from mfflap.config import CaseConfig
 from mfflap.errors import ConfigError, MfflapError
 from mfflap.gap.store import write_diagnosis
+from mfflap.gap.transfer import held_out_motions
+from mfflap.gap.workflow import diagnose_cases
+from mfflap.identification.coverage import CoverageReference
+from mfflap.identification.error_growth import scaling_advice
+from mfflap.identification.store import write_identification
+from mfflap.identification.workflow import identify_strategies, load_cases
+from mfflap.kinematics.convert import to_spline
+from mfflap.optimisation.optimise import optimise_sqp
+from mfflap.optimisation.output_correction import OutputCorrection, check_gain
+from mfflap.optimisation.store import beta_key, beta_label, write_result
+from mfflap.optimisation.study import (
+    StudyInterrupted,
+    beta_study,
+    gain_table,
+    problem_for,
+    sinusoid_motion,
+)
+from mfflap.optimisation.workflow import write_study
+from mfflap.records.record import backtest_fixture_dirs, fixture_dir
+from mfflap.results import ResultsFile
 
 Progress = Callable[[str], None]
+
+#: how a stage ended
+DONE, FAILED, INTERRUPTED = "done", "failed", "interrupted"
+
+
+@dataclass(frozen=True)
+class StageOutcome:
+    """How one stage of the main job ended.
+
+    Attributes
+    ----------
+    name : str
+        The stage ("identification", "optimisation", "back-test", ...).
+    status : str
+        :data:`DONE`, :data:`FAILED` (an mfflap error, ``problem`` says which) or
+        :data:`INTERRUPTED` (Ctrl-C).
+    seconds : float
+        Wall time it took, s.
+    problem : str
+        What failed, '' when it did not.
+    """
+
+    name: str
+    status: str
+    seconds: float
+    problem: str = ""
 
 #: the frequency weightings the main job identifies, one coefficient set each
 RUN_STRATEGIES = ("uniform", "low", "high")
@@ -78,11 +131,9 @@ class RunOptions:
                               f"use one of {', '.join(allowed)}", key="coefficients")
         if self.n_starts < 1:
             raise ConfigError(f"n_starts must be >= 1, got {self.n_starts!r}", key="n_starts")
-        from mfflap.optimisation.output_correction import check_gain
 
         check_gain(self.correction_gain)
         if self.live:  # the live back-test's cases go there: refused before the first stage
-            from mfflap.cfd.openfoam.case_path import check_case_path
 
             check_case_path(self.work_dir)
 
@@ -115,28 +166,35 @@ class RunOutcome:
     corrections: dict = field(default_factory=dict)
     #: label -> the discrete motion back-tested under it (the best sinusoid, each beta's)
     backtest_motions: dict = field(default_factory=dict)
+    #: every stage that ran, in order, with how it ended
+    stages: list[StageOutcome] = field(default_factory=list)
 
 
 def _stage(outcome: RunOutcome, name: str, progress: Progress, fn):
+    """Run one stage, keeping how it ended in ``outcome.stages``; its result, or None when it
+    failed with an mfflap error. Any other exception propagates: a fault, not bad input."""
     t0 = time.perf_counter()
     progress(f"[{name}] started")
+
+    def ended(status: str, problem: str = "") -> None:
+        seconds = time.perf_counter() - t0
+        outcome.stages.append(StageOutcome(name, status, seconds, problem))
+        outcome.timings[name] = seconds
+        if problem:
+            outcome.problems.append(f"{name}: {problem}")
+
     try:
         result = fn()
     except KeyboardInterrupt:  # run_study ends the run with the stages so far
         outcome.interrupted = name
-        outcome.problems.append(f"{name}: interrupted (Ctrl-C) after "
-                                f"{time.perf_counter() - t0:.1f} s; the later stages did not run")
+        ended(INTERRUPTED, f"interrupted (Ctrl-C) after {time.perf_counter() - t0:.1f} s; "
+                           "the later stages did not run")
         raise
     except MfflapError as exc:
-        outcome.problems.append(f"{name}: {exc}")
+        ended(FAILED, str(exc))
         progress(f"[{name}] FAILED: {exc}")
-        result = None
-    except Exception as exc:  # report and go on; the traceback goes to the report
-        outcome.problems.append(f"{name}: unexpected {type(exc).__name__}: {exc}\n"
-                                f"{traceback.format_exc(limit=4)}")
-        progress(f"[{name}] FAILED: {type(exc).__name__}: {exc}")
-        result = None
-    outcome.timings[name] = time.perf_counter() - t0
+        return None
+    ended(DONE)
     progress(f"[{name}] done in {outcome.timings[name]:.1f} s")
     return result
 
@@ -144,8 +202,6 @@ def _stage(outcome: RunOutcome, name: str, progress: Progress, fn):
 def coefficient_sensitivity(config: CaseConfig, identification: dict, sweep,
                             progress: Progress) -> dict:
     """Re-optimise beta = 0 with each weighting strategy's coefficients (Figure 5)."""
-    from mfflap.optimisation.optimise import optimise_sqp
-    from mfflap.optimisation.study import problem_for, sinusoid_motion
 
     o = config.optimisation
     out = {}
@@ -168,9 +224,7 @@ def within_data_config(config: CaseConfig, cases: list, reference=None
     peak pitch rate and acceleration of the pitch envelope, the period bounds and the
     heave limit (each the tighter of the case's own and the data's; the case's period
     bounds where the data's frequencies lie outside them); and those settings."""
-    from dataclasses import replace
 
-    from mfflap.identification.coverage import CoverageReference
 
     reference = reference or CoverageReference.from_cases(cases, config.morison_model(),
                                                           config.flow.velocity)
@@ -198,10 +252,7 @@ def motion_coverage(config: CaseConfig, cases: list, motions: dict, reference=No
     """Where each motion, as CFD imposes it (the periodic spline through its cycle), lies
     against the identification cases (:mod:`mfflap.identification.coverage`; ``reference``
     their :class:`~mfflap.identification.coverage.CoverageReference`, built if not given)."""
-    import numpy as np
 
-    from mfflap.identification.coverage import CoverageReference
-    from mfflap.kinematics.convert import to_spline
 
     reference = reference or CoverageReference.from_cases(cases, config.morison_model(),
                                                           config.flow.velocity)
@@ -217,8 +268,6 @@ def gap_diagnosis(config: CaseConfig, cases: list, backtests: dict | None = None
     """Diagnosis and residual decomposition of the case's model on the identification CFD;
     with back-tests, whether its effect carries over to their CFD runs (the motions the fits
     never saw)."""
-    from mfflap.gap.transfer import held_out_motions
-    from mfflap.gap.workflow import diagnose_cases
 
     records = [o.record for o in (backtests or {}).values() if o.record is not None]
     held_out, excluded = (held_out_motions(records, config.identification.discard_time,
@@ -252,17 +301,6 @@ def run_study(config: CaseConfig, options: RunOptions, progress: Progress = prin
 def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
                 outcome: RunOutcome) -> None:
     """The stages of :func:`run_study`, filling ``outcome``."""
-    from mfflap.backtest.workflow import backtest_all
-    from mfflap.identification.error_growth import scaling_advice
-    from mfflap.identification.workflow import identify_strategies, load_cases
-    from mfflap.optimisation.store import beta_label
-    from mfflap.optimisation.study import (
-        StudyInterrupted,
-        beta_study,
-        gain_table,
-        sinusoid_motion,
-    )
-    from mfflap.records.record import backtest_fixture_dirs, fixture_dir
 
     folders = options.fixtures or (fixture_dir(),)
 
@@ -290,7 +328,6 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
     outcome.config = config
     reference = None  # the identification data's coverage, built once when asked for
     if outcome.cases:
-        from mfflap.identification.coverage import CoverageReference
 
         reference = _stage(outcome, "identification coverage", progress,
                            lambda: CoverageReference.from_cases(
@@ -309,8 +346,6 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
                                     f"(asked): {why}")
 
     if options.correct_at:
-        from mfflap.optimisation.output_correction import OutputCorrection
-        from mfflap.optimisation.study import problem_for
 
         scheme = config.optimisation.scheme
 
@@ -381,6 +416,7 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
                                              config, outcome.identification, study.sweep,
                                              progress)) or {}
         if options.vtk_dir is not None:
+            # pyvista takes seconds to load: only a VTK export needs it
             from mfflap.export.vtk import export_motion
 
             def vtk():
@@ -394,11 +430,6 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
 def write_results(config: CaseConfig, outcome: RunOutcome, h5_path: Path) -> None:
     """One HDF5 file with every number of the run and its inputs (the report beside it:
     :func:`mfflap.reports.run.write_run_outputs`)."""
-    from mfflap.backtest.store import safe_label, write_backtests
-    from mfflap.identification.store import write_identification
-    from mfflap.optimisation.store import beta_key, write_result
-    from mfflap.optimisation.workflow import write_study
-    from mfflap.results import ResultsFile
 
     with ResultsFile(h5_path, "w", kind="run", config_toml=config.to_toml()) as rf:
         for res in outcome.identification.values():
@@ -415,7 +446,9 @@ def write_results(config: CaseConfig, outcome: RunOutcome, h5_path: Path) -> Non
             write_diagnosis(rf, *outcome.gap)
         rf.h5.attrs["problems"] = "\n".join(outcome.problems)
         rf.h5.attrs["stage_times_s"] = str(outcome.timings)
+        rf.h5.attrs["stages"] = json.dumps([asdict(stage) for stage in outcome.stages])
         rf.h5.attrs["interrupted_stage"] = outcome.interrupted or ""  # "": ran to the end
 
 
-__all__ = ["RunOptions", "RunOutcome", "run_study", "write_results"]
+__all__ = ["DONE", "FAILED", "INTERRUPTED", "RunOptions", "RunOutcome", "StageOutcome", "run_study",
+           "write_results"]

@@ -25,6 +25,7 @@ from mfflap.errors import MfflapError
 from mfflap.hydro.loads import LOAD_UNITS, Loads
 from mfflap.kinematics.discrete import DiscreteMotion
 from mfflap.kinematics.state import KINEMATIC_UNITS, KinematicState
+from mfflap.performance import CycleSummary
 from mfflap.version import __version__
 
 SCHEMA_VERSION = 1
@@ -237,14 +238,12 @@ class ResultsFile:
 
     def write_summary(self, name: str, summary) -> None:
         """Store a :class:`~mfflap.performance.CycleSummary`."""
-        from mfflap.performance import CycleSummary
 
         self.write_group(name, {k: getattr(summary, k) for k in CycleSummary.UNITS},
                          CycleSummary.UNITS)
 
     def read_summary(self, name: str):
         """Read back a :class:`~mfflap.performance.CycleSummary`."""
-        from mfflap.performance import CycleSummary
 
         arrays, _ = self.read_group(name)
         return CycleSummary(**{k: arrays[k] for k in CycleSummary.UNITS})

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mfflap.errors import ConfigError
+from mfflap.hydro.morison import MorisonModel
 from mfflap.kinematics.convert import harmonic_to_discrete
 from mfflap.performance import evaluate_discrete
 
@@ -82,12 +83,14 @@ def sinusoid_sweep(model, frequencies, heave_amplitudes, pitch_amplitudes, phase
         raise ConfigError("sweep frequencies must be finite and > 0 Hz", key="frequencies")
     constants = None
     if compiled and scheme in ("paper", "midpoint"):
-        from mfflap.hydro.morison import MorisonModel
+
+        # the compiled (numba) kernel loads in about a second: only the compiled path needs it
         from mfflap.sweep_kernel import kernel_constants
 
         if type(model) is MorisonModel:
             constants = kernel_constants(model)
     if constants is not None:
+        # the compiled (numba) kernel loads in about a second: only the compiled path needs it
         from mfflap.sweep_kernel import sweep_grid_kernel
 
         u = constants["u"]

@@ -357,7 +357,7 @@ def test_ctrl_c_during_a_live_back_test_writes_the_stages_finished_before(tmp_pa
     import sys
     import time
 
-    from mfflap.cfd.openfoam.runner import solver_progress
+    from mfflap.cfd.openfoam.solver_log import solver_progress
     from mfflap.results import ResultsFile
 
     assert openfoam_available()
@@ -471,7 +471,7 @@ def test_ctrl_c_during_a_live_backtest_command_shows_what_was_done_and_how_to_re
     import sys
     import time
 
-    from mfflap.cfd.openfoam.runner import solver_progress
+    from mfflap.cfd.openfoam.solver_log import solver_progress
 
     assert openfoam_available()
     work = tmp_path / "work"

@@ -312,7 +312,7 @@ def test_a_record_with_a_damaged_compressed_chunk_is_unreadable_not_a_crash(tmp_
 def test_status_tells_how_far_a_started_run_got(tmp_path):
     """A case folder with a solver log and no record is "started"; the message reads the
     real pimpleFoam log's last time step, the folder a rerun resumes from, the retries."""
-    from mfflap.cfd.openfoam.runner import solver_progress
+    from mfflap.cfd.openfoam.solver_log import solver_progress
 
     out = tmp_path / "camp"
     out.mkdir()
@@ -1007,7 +1007,7 @@ def test_a_solver_dies_with_the_process_that_runs_it(tmp_path, n_procs):
     a dask nanny kills a worker), takes its pimpleFoam with it, serial or mpirun and its
     ranks: no orphan goes on writing into the case that a rerun resumes. The solver first
     writes the time step it reached (every rank), so the rerun loses nothing."""
-    from mfflap.cfd.openfoam.runner import solver_progress
+    from mfflap.cfd.openfoam.solver_log import solver_progress
     from mfflap.cfd.openfoam.time_folders import latest_solution_time
 
     case_dir = tmp_path / "c"
@@ -1055,7 +1055,7 @@ def test_a_decomposed_run_stopped_for_its_timeout_leaves_no_rank_running(tmp_pat
     _solvers_left(case_dir, wait_s=0.0)
     assert not running
     # both ranks wrote the time step they had reached, where a rerun resumes: nothing lost
-    from mfflap.cfd.openfoam.runner import solver_progress
+    from mfflap.cfd.openfoam.solver_log import solver_progress
     from mfflap.cfd.openfoam.time_folders import latest_solution_time
 
     written = latest_solution_time(case_dir)
@@ -1213,7 +1213,7 @@ def test_an_interrupted_campaign_stops_its_solvers_and_says_how_to_resume(tmp_pa
     assert openfoam_available()
     from mfflap.campaign.execute import campaign_status
     from mfflap.campaign.linear_check import SMALL_MOTIONS
-    from mfflap.cfd.openfoam.runner import solver_progress
+    from mfflap.cfd.openfoam.solver_log import solver_progress
 
     case_file = Path(__file__).parents[1] / "cases" / "paper2026.toml"
     out = tmp_path / "camp"
@@ -1356,7 +1356,7 @@ def test_an_interrupted_campaign_on_an_external_cluster_has_its_solvers_write(tm
     it frees (it would run to its end unattended)."""
     from mfflap.campaign.execute import campaign_status
     from mfflap.cfd.openfoam.case_lock import lock_holder
-    from mfflap.cfd.openfoam.runner import solver_progress
+    from mfflap.cfd.openfoam.solver_log import solver_progress
     from mfflap.cfd.openfoam.time_folders import latest_solution_time
 
     case_file = Path(__file__).parents[1] / "cases" / "paper2026.toml"

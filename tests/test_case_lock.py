@@ -74,7 +74,7 @@ def test_the_lock_is_reentrant_in_a_thread_and_refused_to_another(tmp_path):
 @pytest.mark.openfoam
 def test_a_second_cfd_run_of_a_running_case_is_refused_and_the_first_finishes(tmp_path):
     from mfflap.cfd.openfoam.forces import read_forces
-    from mfflap.cfd.openfoam.runner import solver_progress
+    from mfflap.cfd.openfoam.solver_log import solver_progress
     from mfflap.cli.main import cli
 
     case = tmp_path / "case"

@@ -300,9 +300,7 @@ def test_a_slope_makes_the_corrected_objective_cfds_at_every_earlier_motion(beta
     CFD means, power penalty active) at the centre and at each earlier motion; lambda is
     minimum-norm: it lies in the span of the scaled secants; the optimisers' problem, times
     c, is that objective."""
-    from mfflap.optimisation.optimise import _pack
     from mfflap.optimisation.output_correction import cfd_objective
-    from mfflap.optimisation.trust_region import control_scales
 
     model, cfd = MorisonModel(), _cfd_stand_in()
     p = problem(beta)
@@ -327,8 +325,9 @@ def test_a_slope_makes_the_corrected_objective_cfds_at_every_earlier_motion(beta
     assert np.max(own.power_scale * power) > p.max_power
     assert cfd_objective(q, p) == pytest.approx(float(corrected_objective(
         p, q.motion, own.thrust_scale, own.power_scale)), rel=1e-11)
-    w = control_scales(centre.motion)
-    secants = np.array([(_pack(x.motion) - _pack(centre.motion)) / w for x in others])
+    w = centre.motion.control_scales()
+    c = np.real(centre.motion.controls())
+    secants = np.array([(np.real(x.motion.controls()) - c) / w for x in others])
     scaled = sloped.slopes.objective * w
     in_span = secants.T @ np.linalg.lstsq(secants.T, scaled, rcond=None)[0]
     assert np.allclose(in_span, scaled, rtol=1e-9, atol=1e-12 * np.abs(scaled).max())

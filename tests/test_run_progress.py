@@ -110,7 +110,7 @@ def test_an_interrupted_cfd_run_stops_its_solver_and_says_where_it_resumes(tmp_p
     import time
 
     from mfflap.cfd.openfoam.forces import read_forces
-    from mfflap.cfd.openfoam.runner import solver_progress
+    from mfflap.cfd.openfoam.solver_log import solver_progress
     from mfflap.cfd.openfoam.time_folders import latest_solution_time
     from mfflap.cli.main import cli
 
@@ -192,7 +192,7 @@ def test_a_solver_stopped_by_a_signal_of_its_own_is_not_a_finished_run(tmp_path)
     import time
 
     from mfflap.cfd.openfoam.forces import read_forces
-    from mfflap.cfd.openfoam.runner import solver_progress
+    from mfflap.cfd.openfoam.solver_log import solver_progress
     from mfflap.cfd.openfoam.time_folders import latest_solution_time
     from mfflap.cli.main import cli
 

@@ -6,10 +6,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from mfflap.backtest.cycles import cycle_means
 from mfflap.errors import MfflapError
 from mfflap.metrics import nrmse, pearson, time_mean
 from mfflap.parameters import Fluid, FreeStream, Plate
 from mfflap.performance import thrust_and_power
+from mfflap.records.as_run import as_run_since_s
 from mfflap.records.bursts import bridge_load_bursts
 from mfflap.records.force_envelope import find_envelope_breaches
 from mfflap.records.record import CfdRecord
@@ -141,8 +143,6 @@ def compare_last_cycle(record: CfdRecord, model, period: float,
         ``average_cycles`` more than the whole cycles the record holds after its start-up
         (key ``average_cycles``).
     """
-    from mfflap.backtest.cycles import cycle_means
-    from mfflap.records.as_run import as_run_since_s
 
     averaged = (None if average_cycles == 1
                 else cycle_means(record, period).last(average_cycles))

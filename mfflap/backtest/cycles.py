@@ -197,6 +197,7 @@ def cycles_figure(runs: list[tuple[CycleMeans, CycleMeans]],
     and its standard error as a band; ``runs``: (every cycle, the settled ones) per run,
     each in a colour of its own (up to 20), named by ``labels`` (default: the records'
     names) in a legend beside the axes."""
+    # matplotlib takes about a second to load: only figures need it
     import matplotlib
 
     matplotlib.use("Agg")

@@ -25,7 +25,12 @@ from pathlib import Path
 
 import numpy as np
 
+from mfflap.backtest.compare import compare_last_cycle
+from mfflap.backtest.run import cfd_motion, matching_fixture, motion_key, run_backtest_case
+from mfflap.cfd.openfoam.writer import SolverSettings
 from mfflap.errors import ConfigError
+from mfflap.records.as_run import as_run_differences, as_run_since_s
+from mfflap.records.record import read_record, write_record
 
 #: the relative change of the Courant limit (so of every time step) between two copies
 REPEAT_PERTURBATION = 1e-6
@@ -112,8 +117,6 @@ def repeatability_of(records: Sequence, label: str, model, period: float,
     ConfigError
         Fewer than two records, or records of different motions (key ``repeat``).
     """
-    from mfflap.backtest.compare import compare_last_cycle
-    from mfflap.records.as_run import as_run_differences
 
     if len(records) < 2:
         raise ConfigError(f"a repeatability needs two runs or more, got {len(records)}",
@@ -137,7 +140,6 @@ def repeatability_of(records: Sequence, label: str, model, period: float,
 
 def copy_settings(solver, copy: int):
     """The solver settings of copy ``copy`` (module docstring; copy 0: ``solver`` itself)."""
-    from mfflap.cfd.openfoam.writer import SolverSettings
 
     base = solver or SolverSettings()
     return replace(base, max_courant=base.max_courant * (1 + copy * REPEAT_PERTURBATION))
@@ -171,8 +173,6 @@ def repeat_runs(motion, label: str, model, max_power: float, *, copies: int,
     MfflapError
         A copy's run failed (the copies before it are kept).
     """
-    from mfflap.backtest.run import cfd_motion, motion_key, run_backtest_case
-    from mfflap.records.record import write_record
 
     if not (isinstance(copies, int) and copies >= 2):
         raise ConfigError(f"--repeat must be 2 or more runs, got {copies!r}", key="repeat")
@@ -212,8 +212,6 @@ def _usable_copy(path: Path, limit: float, n_cycles: float, retries_from_start: 
     """The saved copy at ``path`` (a :class:`~mfflap.records.record.CfdRecord`) when it
     ran at the Courant ``limit`` for ``n_cycles`` periods (and, with ``retries_from_start``,
     no retry resumed it part-way), else None."""
-    from mfflap.records.as_run import as_run_since_s
-    from mfflap.records.record import read_record
 
     if not path.is_file():
         return None
@@ -239,7 +237,6 @@ def _saved_copies_key(motion, key: str, save_to: Path, limits: Sequence[float],
     when every copy asked for is there and usable: copies run now would be of another key,
     and copies of two motions are no repeatability.
     """
-    from mfflap.backtest.run import matching_fixture
 
     if any((save_to / f"backtest_{key}_copy{k}.h5").is_file() for k in range(len(limits))):
         return key, ""

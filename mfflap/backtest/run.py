@@ -14,14 +14,19 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
+from scipy.optimize import minimize_scalar
 
 from mfflap.backtest.compare import BacktestComparison, compare_last_cycle
 from mfflap.cfd.case_inputs import kept_differences, solver_keys
+from mfflap.cfd.openfoam.case_lock import CaseBusyError
+from mfflap.cfd.openfoam.run_motion import run_motion
+from mfflap.cfd.openfoam.runner import openfoam_available
 from mfflap.cfd.openfoam.writer import AnyMeshSpec, SolverSettings
 from mfflap.errors import MfflapError
 from mfflap.kinematics.continuous import PeriodicSplineMotion
 from mfflap.kinematics.convert import to_spline
 from mfflap.kinematics.discrete import DiscreteMotion
+from mfflap.records.as_run import as_run_since_s
 from mfflap.records.inputs import folder_setup, input_mismatches
 from mfflap.records.record import CfdRecord, read_record, read_record_parameters, write_record
 from mfflap.toml_io import dumps, read_toml
@@ -124,7 +129,6 @@ def closest_cycle_shift(rec: CfdRecord, spline: PeriodicSplineMotion,
     The shift is found on ``n_samples`` shifts, then refined between the neighbours of the
     best. None for a record whose last period does not follow its start-up ramp.
     """
-    from scipy.optimize import minimize_scalar
 
     period = spline.period
     t_end = float(rec.time[-1])
@@ -193,7 +197,6 @@ def _other_set_up(record: CfdRecord, mesh: str | AnyMeshSpec,
     its provenance gives, fewer periods, with ``retries_from_start`` a retry part-way), or
     None: then it is the CFD that run would have been (a longer run holds the shorter one's
     cycles after its own start-up too)."""
-    from mfflap.records.as_run import as_run_since_s
 
     had_cycles = float(record.parameters.get("n_cycles", 3.0))
     if had_cycles < n_cycles - 1e-9:
@@ -251,7 +254,6 @@ def run_backtest_case(motion: DiscreteMotion, label: str, name: str, *,
     MfflapError
         The run failed (:func:`~mfflap.cfd.openfoam.run_motion.run_motion`).
     """
-    from mfflap.cfd.openfoam.run_motion import run_motion
 
     spline = cfd_motion(motion)
     period = spline.period
@@ -310,8 +312,6 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
         solver settings (``backtest_<key>.h5``) are taken instead of a new run (the rounds of
         :mod:`mfflap.rounds` back-test a motion repeated from an earlier round once).
     """
-    from mfflap.cfd.openfoam.case_lock import CaseBusyError
-    from mfflap.cfd.openfoam.runner import openfoam_available
 
     key = motion_key(motion)
     period = cfd_motion(motion).period

@@ -8,8 +8,9 @@ from collections.abc import Iterable, Sequence
 from dataclasses import asdict, dataclass
 from typing import Protocol
 
+from mfflap.cfd.imposed_motion import check_end_time, check_ramp_time
 from mfflap.config import CASE_ID_DECIMALS, IdentificationGrid
-from mfflap.errors import ConfigError
+from mfflap.errors import ConfigError, MotionError
 from mfflap.kinematics.continuous import HarmonicMotion, Motion, RampHarmonicMotion
 
 
@@ -33,8 +34,6 @@ def _check_run_times(case_id: str, duration: float, ramp_time: float) -> None:
     """Refuse, when a case is made, a run of no or endless length or a start-up ramp that
     lasts it all (the case would be refused only when it came to run, after its campaign
     had started), naming the case."""
-    from mfflap.cfd.imposed_motion import check_end_time, check_ramp_time
-    from mfflap.errors import MotionError
 
     try:
         check_ramp_time(ramp_time, check_end_time(duration))

@@ -27,10 +27,12 @@ from mfflap.hydro.loads import LOAD_COMPONENTS, Loads
 from mfflap.metrics import nrmse, pearson, time_mean
 from mfflap.parameters import Fluid, FreeStream, Plate
 from mfflap.performance import thrust_and_power
+from mfflap.plots import save_figure
 from mfflap.records.bursts import bridge_bursts, bridge_load_bursts
 from mfflap.records.force_envelope import find_envelope_breaches
 from mfflap.records.inputs import folder_setup, run_for, run_for_differences
-from mfflap.records.record import CfdRecord, read_records
+from mfflap.records.record import CfdRecord, read_record, read_records
+from mfflap.results import ResultsFile
 from mfflap.toml_io import read_toml
 
 COMPONENTS = LOAD_COMPONENTS
@@ -256,7 +258,6 @@ def compare_campaigns(folder_a: str | Path, folder_b: str | Path,
 def write_comparison(path: str | Path, comparison: CampaignComparison) -> Path:
     """The comparison as an HDF5 results file (``kind="campaign_comparison"``), with both
     campaigns' manifests (campaign.toml) stored beside it."""
-    from mfflap.results import ResultsFile
 
     manifests = []
     for label, folder in (("A", comparison.folder_a), ("B", comparison.folder_b)):
@@ -284,13 +285,12 @@ def plot_comparison(path: str | Path, comparison: CampaignComparison,
                     labels: Sequence[str] = ("A", "B")) -> Path:
     """NRMSE of F_n and M per case against frequency, one marker per heave amplitude, and
     the relative mean-thrust difference."""
+    # matplotlib takes about a second to load: only figures need it
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from mfflap.plots import save_figure
-    from mfflap.records.record import read_record
 
     folder_b = Path(comparison.folder_b)
     params = {c.case_id: read_record(folder_b / f"{c.case_id}.h5").parameters

@@ -24,6 +24,7 @@ import numpy as np
 from mfflap.cfd.case_inputs import kept_differences, kept_wall_treatment, solver_keys
 from mfflap.cfd.gci import GridConvergence, grid_convergence
 from mfflap.cfd.imposed_motion import check_end_time, check_ramp_time, imposed_state
+from mfflap.cfd.openfoam.run_motion import run_motion
 from mfflap.cfd.openfoam.setups import CfdSetup
 from mfflap.cfd.openfoam.writer import SolverSettings, resolve_mesh
 from mfflap.cfd.openfoam.yplus import (
@@ -249,7 +250,6 @@ def run_convergence(out_dir: str | Path, motion: Motion, end_time: float, *,
         the first cycle and the start of the comparison, so that the start-up cycle is left
         out; a three-period run then gives two cycles).
     """
-    from mfflap.cfd.openfoam.run_motion import run_motion
 
     base = solver or SolverSettings()
     out = Path(out_dir)
@@ -377,6 +377,7 @@ def compare_mean_cycles(study: ConvergenceStudy, period: float, start: float) ->
 
 def convergence_figure(study: ConvergenceStudy):
     """F_n over time per run, and y+ (min, mean, max) over time like the paper's Fig. 2c."""
+    # matplotlib takes about a second to load: only figures need it
     import matplotlib
 
     matplotlib.use("Agg")

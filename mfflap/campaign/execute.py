@@ -25,6 +25,7 @@ import shutil
 import signal
 import threading
 import time
+import tomllib
 import traceback
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
@@ -38,11 +39,15 @@ from mfflap.cfd.case_inputs import ADDED_SOLVER_SETTINGS
 from mfflap.cfd.openfoam.case_lock import CaseBusyError, lock_holder
 from mfflap.cfd.openfoam.case_path import check_case_path
 from mfflap.cfd.openfoam.retry_log import read_retry_log, request_rerun
+from mfflap.cfd.openfoam.run_motion import run_motion
 from mfflap.cfd.openfoam.runner import RunStopped, stop_running_solvers, stoppable
+from mfflap.cfd.openfoam.solver_log import solver_progress
+from mfflap.cfd.openfoam.time_folders import latest_solution_time
 from mfflap.cfd.openfoam.writer import SolverSettings
 from mfflap.errors import ConfigError, MfflapError
 from mfflap.parameters import Fluid, FreeStream, Plate
-from mfflap.records.bursts import find_load_bursts
+from mfflap.records.bursts import bridge_load_bursts, find_load_bursts
+from mfflap.records.force_envelope import find_envelope_breaches
 from mfflap.records.mixed_set_up import DEFAULT_DISCARD_TIME_S, describe_mixed, mixed_since_s
 from mfflap.records.record import (
     LOST_SUFFIX,
@@ -122,8 +127,6 @@ def lost_numerics(rec: CfdRecord, plate: Plate, fluid: Fluid, stream: FreeStream
     more than ``max_lost_share`` of the time after its ramp: what identification leaves out
     (:func:`mfflap.identification.data.prepare_case`; shorter stretches it bridges).
     """
-    from mfflap.records.bursts import bridge_load_bursts
-    from mfflap.records.force_envelope import find_envelope_breaches
 
     after_ramp = rec.time >= float(rec.parameters.get("ramp_time", 0.0))
     loads, bursts = bridge_load_bursts(rec.loads, after_ramp)
@@ -142,7 +145,6 @@ def run_one(case: CampaignCase, out_dir: str, setup: CampaignSetup) -> CaseStatu
 
     Never raises for a CFD failure: the failure is written beside the records and returned.
     """
-    from mfflap.cfd.openfoam.run_motion import run_motion
 
     out = Path(out_dir)
     record_path = out / f"{case.case_id}{RECORD_SUFFIX}"
@@ -283,7 +285,6 @@ def manifest_setup(out_dir: str | Path) -> dict[str, Any] | None:
 
 def read_toml_text(text: str) -> dict[str, Any]:
     """Parse TOML text (round-trip helper for comparing manifests)."""
-    import tomllib
 
     return tomllib.loads(text)
 
@@ -374,7 +375,6 @@ def campaign_status(out_dir: str | Path,
 def _simulated(case_dir: Path) -> tuple[float, float, float] | None:
     """(time reached, time step, end time) of a case's OpenFOAM run in s, or None if its
     solver has not begun."""
-    from mfflap.cfd.openfoam.runner import solver_progress
 
     reached = solver_progress(case_dir)
     if reached is None or not (case_dir / "mfflap_case.toml").is_file():
@@ -416,7 +416,6 @@ def retries_in_flight(out_dir: str | Path, case_ids: Sequence[str]) -> str:
 def _started(case_dir: Path) -> tuple[str, float] | None:
     """How far a case's OpenFOAM run got (a message and the simulated share), or None if its
     solver has not begun."""
-    from mfflap.cfd.openfoam.time_folders import latest_solution_time
 
     reached = _simulated(case_dir)
     if reached is None:
@@ -441,6 +440,7 @@ def _status_of(future: Any, case_id: str, out: Path) -> CaseStatus:
     the other cases go on. A task the scheduler cancelled (the scheduler lost) stops the
     campaign: rerunning the command resumes it.
     """
+    # dask.distributed takes about a second to load: only a campaign run needs it
     from distributed import KilledWorker
 
     if future.status == "cancelled":
@@ -501,6 +501,7 @@ class IgnoreInterrupt(WorkerPlugin):
 
 def _check_scheduler_address(address: str) -> None:
     """Refuse a scheduler address dask cannot parse (ConfigError, key scheduler_address)."""
+    # dask.distributed takes about a second to load: only a campaign run needs it
     from distributed.comm.addressing import get_address_host_port
 
     try:
@@ -554,6 +555,7 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
     MfflapError
         If the scheduler at ``scheduler_address`` cannot be reached.
     """
+    # dask.distributed takes about a second to load: only a campaign run needs it
     from dask.distributed import Client, LocalCluster, as_completed
 
 
@@ -633,6 +635,7 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
                                      pure=False) for c in todo]
             bar = None
             if progress:
+                # only a campaign run with a progress bar needs it
                 from tqdm import tqdm
 
                 bar = tqdm(total=len(todo), desc="CFD cases", unit="case",

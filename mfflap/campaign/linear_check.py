@@ -26,8 +26,10 @@ from mfflap.hydro.thin_aerofoil import thin_aerofoil_loads_at
 from mfflap.metrics import nrmse, time_mean
 from mfflap.parameters import Fluid, FreeStream, Plate
 from mfflap.performance import thrust_and_power
+from mfflap.plots import save_figure
 from mfflap.records.bursts import bridge_load_bursts
 from mfflap.records.record import CfdRecord
+from mfflap.results import ResultsFile
 
 #: Start-up left out of the comparison, s (the motions ramp up over 0.25 s).
 DISCARD_TIME_S = 0.5
@@ -143,7 +145,6 @@ def summary_table(checks: Sequence[LinearCheck]) -> str:
 
 def write_checks(path: str | Path, checks: Sequence[LinearCheck], config_toml: str) -> Path:
     """The checks as an HDF5 results file (``kind="linear_check"``), the set-up beside them."""
-    from mfflap.results import ResultsFile
 
     rows = [asdict(c) for c in checks]
     units = {"reduced_frequency": "1", "max_effective_incidence_deg": "deg",
@@ -163,12 +164,12 @@ def plot_checks(path: str | Path, records: Sequence[CfdRecord], model: ForceMode
                 plate: Plate | None = None, fluid: Fluid | None = None,
                 stream: FreeStream | None = None) -> Path:
     """F_n of each record: CFD, linear theory and the strip model, one panel per case."""
+    # matplotlib takes about a second to load: only figures need it
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from mfflap.plots import save_figure
 
     n = len(records)
     cols = min(3, max(n, 1))

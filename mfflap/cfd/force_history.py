@@ -13,7 +13,7 @@ from mfflap.cfd.frames import (
     case_moment_to_model,
     plate_frame_force_to_model,
 )
-from mfflap.errors import ConfigError, ParseError
+from mfflap.errors import ConfigError, ParseError, shown
 from mfflap.hydro.loads import Loads
 from mfflap.kinematics.state import KinematicState
 
@@ -68,7 +68,8 @@ def to_loads(history: ForceHistory, state: KinematicState, span: float, depth: f
         xc, yc = float(history.centre_of_rotation[0]), float(history.centre_of_rotation[1])
         mz = mz + xc * fy - yc * fx  # about the origin: M_O = M_C + r_C x F
     if frame not in FRAMES:
-        raise ConfigError(f"unknown frame {frame!r}; allowed: {', '.join(FRAMES)}", key="frame")
+        raise ConfigError(f"unknown frame {shown(frame)}; allowed: {', '.join(FRAMES)}",
+                          key="frame")
     if frame == "plate":
         if tuple(pivot_m) != (0.0, 0.0):
             raise ConfigError("a case in the plate's frame has its pivot at the origin",

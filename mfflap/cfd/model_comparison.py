@@ -23,13 +23,11 @@ from typing import Any
 import numpy as np
 
 from mfflap.cfd.case_inputs import check_case_inputs
-from mfflap.cfd.fluent.report import report_forces
-from mfflap.cfd.fluent.udf import FLUENT_KEPT_FILE
+from mfflap.cfd.fluent.solver import FLUENT_COLUMNS, Fluent
 from mfflap.cfd.force_history import to_loads
 from mfflap.cfd.imposed_motion import imposed_state
 from mfflap.cfd.linear_theory import compare_with_theory
-from mfflap.cfd.openfoam.forces import read_forces
-from mfflap.cfd.openfoam.foreign_case import read_foreign_case
+from mfflap.cfd.openfoam.solver import OpenFoam
 from mfflap.config import load_case
 from mfflap.errors import ConfigError
 from mfflap.hydro.loads import Loads
@@ -38,12 +36,7 @@ from mfflap.metrics import nrmse, pearson, time_mean
 from mfflap.performance import thrust_and_power
 from mfflap.records.bursts import bridge_load_bursts
 from mfflap.records.force_envelope import find_envelope_breaches
-from mfflap.toml_io import read_toml
-
-#: the depth a Fluent 2D report's forces are for, m
-FLUENT_DEPTH_M = 1.0
-#: Fluent report columns of the x force, the y force and the z moment about the origin
-FLUENT_COLUMNS = ("fx-plate", "fy-plate", "mz-plate")
+from mfflap.results import ResultsFile
 
 
 @dataclass
@@ -138,28 +131,12 @@ def model_comparison(source: str | Path, case_file: str | Path, *, discard_s: fl
     """
     source = Path(source)
     case = load_case(case_file)
-    pivot_m, foreign = (0.0, 0.0), None
-    if source.is_dir() and not (source / "mfflap_case.toml").is_file():
-        foreign = read_foreign_case(source, motion_table, depth_m)
-        history, depth_m, pivot_m = foreign.history, foreign.depth_m, foreign.pivot_m
-        meta, frame, label = None, "inertial", f"openfoam:{source}"
+    solver = OpenFoam() if source.is_dir() else Fluent(columns=fluent_columns)
+    run = solver.read_forces(source, depth_m=depth_m, motion_table=motion_table)
+    history, depth_m, frame, label = run.history, run.depth_m, run.frame, run.label
+    kept, meta, pivot_m = run.kept, run.written_for, run.pivot_m
+    if run.motion is not None:
         ramp_time_s = 0.0 if ramp_time_s is None else ramp_time_s
-    elif source.is_dir():
-        if depth_m is not None:
-            raise ConfigError(f"{source} keeps its depth (mfflap_case.toml); leave out the "
-                              "depth", key="depth")
-        kept = source / "mfflap_case.toml"
-        meta: dict[str, Any] | None = read_toml(kept)
-        history = read_forces(source)
-        depth_m = float(meta["depth"])
-        frame = str(meta.get("frame", "inertial"))
-        label = f"openfoam:{source}"
-    else:
-        history = report_forces(source, *fluent_columns)
-        depth_m = FLUENT_DEPTH_M if depth_m is None else depth_m
-        frame, label = "inertial", f"fluent:{source}"
-        kept = source.parent / FLUENT_KEPT_FILE
-        meta = read_toml(kept) if kept.is_file() else None
     if meta is not None:  # what the case was written for: its table, its ramp
         if "motion_table" in meta:
             if motion_table is not None:
@@ -175,8 +152,8 @@ def model_comparison(source: str | Path, case_file: str | Path, *, discard_s: fl
                               "--ramp-time", key="ramp_time")
         ramp_time_s = kept_ramp_time
     ramp_time_s = 0.0 if ramp_time_s is None else ramp_time_s
-    if foreign is not None:
-        motion = foreign.motion
+    if run.motion is not None:
+        motion = run.motion
     else:
         motion = (case.motion.build() if motion_table is None
                   else read_motion_table(motion_table))
@@ -208,7 +185,7 @@ def model_comparison(source: str | Path, case_file: str | Path, *, discard_s: fl
         "forces_beyond_what_the_motion_can_drive": [b.describe() for b in breaches],
         "inputs_checked_against": None if meta is None else str(kept),
         "depth_m": depth_m, "pivot_m": list(pivot_m),
-        "motion_from": None if foreign is None else foreign.motion_from}
+        "motion_from": run.motion_from}
     for name in ("normal_force", "tangential_force", "moment"):
         a, b = getattr(model_loads, name)[keep], getattr(cfd_loads, name)[keep]
         out[f"nrmse_{name}"] = float(nrmse(a, b))
@@ -252,7 +229,6 @@ def write_model_comparison(path: str | Path, comparison: ModelComparison,
     of the ``summary`` group; F_n, F_t and M of both are ``cfd_loads`` and ``model_loads``,
     thrust and power ``performance``.
     """
-    from mfflap.results import ResultsFile
 
     summary = comparison.summary
     kept = summary.get("inputs_checked_against")
@@ -275,7 +251,6 @@ def write_model_comparison(path: str | Path, comparison: ModelComparison,
 
 def read_model_comparison(path: str | Path) -> ModelComparison:
     """A comparison stored by :func:`write_model_comparison`."""
-    from mfflap.results import ResultsFile
 
     with ResultsFile(path, kinds=("cfd_model_comparison",)) as stored:
         series, _ = stored.read_group("performance")

@@ -161,8 +161,8 @@ def run(case_dir: Path, timeout: float, procs: int, progress_every: float,
     log-law range.
     """
     from mfflap.cfd.openfoam.forces import read_forces
-    from mfflap.cfd.openfoam.runner import run_case, solver_progress, written_where_stopped
-    from mfflap.cfd.openfoam.solver_log import solver_provenance
+    from mfflap.cfd.openfoam.runner import run_case, written_where_stopped
+    from mfflap.cfd.openfoam.solver_log import solver_progress, solver_provenance
     from mfflap.cfd.openfoam.time_folders import latest_solution_time
     from mfflap.cfd.openfoam.writer import written_wall_treatment
     from mfflap.cfd.openfoam.yplus import read_y_plus, wall_function_note, y_plus_summary

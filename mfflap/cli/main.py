@@ -12,7 +12,7 @@ import numpy as np
 
 from mfflap.cli.json_output import echo_json
 from mfflap.cli.options import FigureFile, ResultsOutput
-from mfflap.errors import MfflapError
+from mfflap.errors import SHOWN_CHARS, MfflapError
 
 
 @contextlib.contextmanager
@@ -51,6 +51,11 @@ class MfflapGroup(click.Group):
         except MfflapError as exc:
             click.echo(f"mfflap: error: {exc}", err=True)
             sys.exit(2)
+        except click.UsageError as exc:  # click repeats a bad value whole: cut it short
+            exc.message = " ".join(word if len(word) <= SHOWN_CHARS + 3
+                                   else word[:SHOWN_CHARS] + "..."
+                                   for word in exc.message.split(" "))
+            raise
 
 
 @click.group(cls=MfflapGroup, context_settings={"help_option_names": ["-h", "--help"]})

@@ -34,6 +34,7 @@ from mfflap.errors import ConfigError
 from mfflap.gap.candidates import CandidateEffect, FlowContext, load_all
 from mfflap.gap.system import COMPONENTS, GapSystem, group_folds
 from mfflap.hydro.base import ForceModel
+from mfflap.hydro.loads import Loads
 from mfflap.identification.data import CaseData
 from mfflap.identification.error_growth import (
     AUTO,
@@ -176,7 +177,6 @@ def _predictions(system: GapSystem, cols: list[int], folds) -> list[dict[str, np
 
 def gap_metrics(system: GapSystem, predictions: list[dict[str, np.ndarray]]) -> dict:
     """Per case, per signal: NRMSE, Pearson; mean-thrust and mean-power errors."""
-    from mfflap.hydro.loads import Loads
 
     n = len(system.cases)
     out = {s: {"nrmse": np.empty(n), "pearson": np.empty(n)} for s in

@@ -52,6 +52,7 @@ def vorticity_field(case_dir: str | Path, time: float) -> tuple[np.ndarray, np.n
 def vorticity_figure(case_dir: str | Path, time: float, chord: float, window_chords: float = 1.2,
                      title: str = ""):
     """z-vorticity around the plate at the written time nearest ``time``."""
+    # matplotlib takes about a second to load: only figures need it
     import matplotlib
 
     matplotlib.use("Agg")

@@ -51,6 +51,7 @@ from mfflap.identification.error_growth import (
 )
 from mfflap.identification.weights import frequency_weights
 from mfflap.metrics import nrmse, pearson
+from mfflap.performance import thrust_and_power
 
 #: How residuals are made comparable across components and cases (``identify``'s
 #: ``residual_scaling``), with what each means for the report and the CLI.
@@ -327,7 +328,6 @@ def most_influential(result: IdentificationResult) -> list[Influence]:
 def score(cases: Sequence[CaseData], model: ForceModel,
           signals: Sequence[str] = (*COMPONENTS, *DERIVED)) -> dict[str, dict[str, np.ndarray]]:
     """NRMSE and Pearson of ``model`` against the CFD of every case, per signal."""
-    from mfflap.performance import thrust_and_power
 
     out = {s: {"nrmse": np.empty(len(cases)), "pearson": np.empty(len(cases))}
            for s in signals}

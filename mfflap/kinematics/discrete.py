@@ -18,7 +18,7 @@ from typing import Literal
 
 import numpy as np
 
-from mfflap.errors import MotionError
+from mfflap.errors import MotionError, shown
 from mfflap.kinematics.state import KinematicState
 
 #: ``"paper"``: hydrodynamics at the backward-difference rate of step j (the paper's scheme).
@@ -98,6 +98,51 @@ class DiscreteMotion:
         """N, the number of steps in a half cycle."""
         return int(self.pitch_acceleration.shape[-1])
 
+    def controls(self) -> np.ndarray:
+        """The optimiser's design vector (2N + 1,): the N pitch accelerations, the N heave
+        accelerations, then the time step (complex values kept, for complex-step checks).
+
+        Examples
+        --------
+        >>> d = DiscreteMotion(np.array([1.0, -1.0]), np.array([2.0, -2.0]), 0.01)
+        >>> d.controls().tolist()
+        [1.0, -1.0, 2.0, -2.0, 0.01]
+        >>> DiscreteMotion.from_controls(d.controls()) == d
+        True
+        """
+        return np.concatenate([self.pitch_acceleration, self.heave_acceleration,
+                               np.asarray(self.time_step).reshape(1)])
+
+    @classmethod
+    def from_controls(cls, controls: np.ndarray) -> DiscreteMotion:
+        """The motion of a design vector (:meth:`controls`)."""
+        z = np.asarray(controls)
+        if z.ndim != 1 or z.size < 5 or z.size % 2 == 0:
+            raise MotionError(f"a design vector holds 2N + 1 values (N >= 2), got shape "
+                              f"{z.shape}")
+        n = (z.size - 1) // 2
+        dt = z[2 * n]
+        return cls(z[:n], z[n:2 * n], dt.item() if np.isrealobj(z) else dt)
+
+    def control_scales(self) -> np.ndarray:
+        """The scale of each control (2N + 1,): the peak |pitch acceleration| and the peak
+        |heave acceleration| (each at least 1e-3) and the time step, the units the
+        optimisers scale the design vector by and a trust region's radius is measured in."""
+        n = self.n_steps
+        peak_pitch = max(float(np.max(np.abs(np.real(self.pitch_acceleration)))), 1e-3)
+        peak_heave = max(float(np.max(np.abs(np.real(self.heave_acceleration)))), 1e-3)
+        return np.concatenate([np.full(n, peak_pitch), np.full(n, peak_heave),
+                               [float(np.real(self.time_step))]])
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, DiscreteMotion):
+            return NotImplemented
+        return (np.array_equal(self.pitch_acceleration, other.pitch_acceleration)
+                and np.array_equal(self.heave_acceleration, other.heave_acceleration)
+                and np.array_equal(self.time_step, other.time_step))
+
+    __hash__ = None  # arrays: not hashable
+
     @property
     def period(self) -> np.ndarray:
         """T = 2 N dt, s."""
@@ -134,7 +179,7 @@ class DiscreteMotion:
             :meth:`trajectory` if the caller has it already (saves integrating twice).
         """
         if scheme not in SCHEMES:
-            raise MotionError(f"unknown scheme {scheme!r}; allowed: {', '.join(SCHEMES)}")
+            raise MotionError(f"unknown scheme {shown(scheme)}; allowed: {', '.join(SCHEMES)}")
         tr = self.trajectory() if trajectory is None else trajectory
         dt = np.asarray(self.time_step)[..., None]
         pr, hr = tr["pitch_rate"][..., :-1], tr["heave_velocity"][..., :-1]

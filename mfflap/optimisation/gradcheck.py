@@ -9,6 +9,7 @@ import numpy as np
 
 from mfflap.kinematics.discrete import DiscreteMotion
 from mfflap.metrics import cosine_similarity
+from mfflap.optimisation.casadi_objective import casadi_gradient
 from mfflap.optimisation.problem import FlappingProblem
 
 FD_NOTE = (
@@ -67,15 +68,6 @@ class GradCheck:
             "penalty_share")}
 
 
-def _pack(d: DiscreteMotion) -> np.ndarray:
-    return np.concatenate([d.pitch_acceleration, d.heave_acceleration,
-                           [np.asarray(d.time_step).item()]])
-
-
-def _unpack(x: np.ndarray, n: int) -> DiscreteMotion:
-    return DiscreteMotion(x[:n], x[n:2 * n], x[2 * n])
-
-
 def check_gradient(problem: FlappingProblem, motion: DiscreteMotion,
                    fd_relative_step: float = 1e-6,
                    progress: Callable[[int, int], None] | None = None) -> GradCheck:
@@ -85,23 +77,22 @@ def check_gradient(problem: FlappingProblem, motion: DiscreteMotion,
     N^2; ``progress``, if given, is called with (components done, 2N + 1) after each.
     """
     n = motion.n_steps
-    x = _pack(motion)
+    x = motion.controls()
     adj = problem.gradient(motion).flat()
     cs = np.empty_like(x)
     fd = np.empty_like(x)
     for i in range(x.size):
         xc = x.astype(complex)
         xc[i] += 1e-30j
-        cs[i] = np.imag(problem.objective(_unpack(xc, n))) / 1e-30
+        cs[i] = np.imag(problem.objective(DiscreteMotion.from_controls(xc))) / 1e-30
         step = fd_relative_step * max(abs(x[i]), 1e-3 if i < 2 * n else 1e-6)
         xp, xm = x.copy(), x.copy()
         xp[i] += step
         xm[i] -= step
-        fd[i] = (problem.objective(_unpack(xp, n)) - problem.objective(_unpack(xm, n))) / (
-            2 * step)
+        fd[i] = (problem.objective(DiscreteMotion.from_controls(xp))
+                 - problem.objective(DiscreteMotion.from_controls(xm))) / (2 * step)
         if progress is not None:
             progress(i + 1, x.size)
-    from mfflap.optimisation.casadi_objective import casadi_gradient
 
     ca_grad = casadi_gradient(problem, motion)
     controls_scale = np.max(np.abs(cs[:-1]))
@@ -163,6 +154,7 @@ def check_point(problems: list[FlappingProblem], motion: DiscreteMotion,
 
 def scatter_figure(checks: dict[float, GradCheck]):
     """Adjoint vs FD per beta (the paper's Figure 6); the dt component scaled separately."""
+    # matplotlib takes about a second to load: only figures need it
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(1, len(checks), figsize=(4.2 * len(checks), 4), squeeze=False)

@@ -20,6 +20,7 @@ from mfflap.errors import ConfigError
 from mfflap.kinematics.convert import resample
 from mfflap.kinematics.discrete import DiscreteMotion
 from mfflap.optimisation.blas_threads import optimiser_blas_threads
+from mfflap.optimisation.casadi_objective import symbolic_stages
 from mfflap.optimisation.interrupts import interrupts_kept
 from mfflap.optimisation.phase import check_phase_can_be_fixed, phase_condition_row
 from mfflap.optimisation.problem import FlappingProblem
@@ -74,22 +75,6 @@ class OptimisationResult:
     flags: list[str] = field(default_factory=list)
     n_iterations: int = 0
     wall_time_s: float = 0.0
-
-
-def _pack(motion: DiscreteMotion) -> np.ndarray:
-    return np.concatenate([np.real(motion.pitch_acceleration),
-                           np.real(motion.heave_acceleration), [float(np.real(motion.time_step))]])
-
-
-def _unpack(z: np.ndarray, n: int) -> DiscreteMotion:
-    return DiscreteMotion(z[:n], z[n:2 * n], float(z[2 * n]))
-
-
-def _scales(motion: DiscreteMotion) -> np.ndarray:
-    n = motion.n_steps
-    sp = max(float(np.max(np.abs(motion.pitch_acceleration))), 1e-3)
-    sh = max(float(np.max(np.abs(motion.heave_acceleration))), 1e-3)
-    return np.concatenate([np.full(n, sp), np.full(n, sh), [float(motion.time_step)]])
 
 
 def time_step_bounds(n_steps: int, min_period: float, max_period: float) -> tuple[float, float]:
@@ -150,9 +135,9 @@ def optimise_sqp(problem: FlappingProblem, start: DiscreteMotion, *, min_period:
     lo, hi = time_step_bounds(n, min_period, max_period)
     dt0 = float(np.clip(start.time_step, lo, hi))
     start = DiscreteMotion(start.pitch_acceleration, start.heave_acceleration, dt0)
-    scale = _scales(start)
+    scale = start.control_scales()
     bounds = [(None, None)] * (2 * n) + [(lo / scale[-1], hi / scale[-1])]
-    x = _pack(start) / scale
+    x = np.real(start.controls()) / scale
     if trust_region is not None:
         lower, upper = trust_region.bounds(n, (lo, hi))
         bounds = list(zip(lower / scale, upper / scale, strict=True))
@@ -181,7 +166,7 @@ def optimise_sqp(problem: FlappingProblem, start: DiscreteMotion, *, min_period:
         x = res.x
         converged, message = bool(res.success), str(res.message)
         iterations += int(res.nit)
-    motion = _unpack(x * scale, n)
+    motion = DiscreteMotion.from_controls(x * scale)
     summary, peak, flags = assess(problem, motion)
     return OptimisationResult(problem.beta, motion, "sqp-penalty", start_label, converged,
                               message, float(problem.objective(motion)), np.array(history),
@@ -224,9 +209,9 @@ def _ipopt_solver(problem: FlappingProblem, n: int, max_iterations: int, toleran
     (their limits are bounds given at the solve); with ``fix_phase`` the phase condition is
     the last constraint (:mod:`mfflap.optimisation.phase`).
     """
+    # CasADi loads its compiled libraries: only the IPOPT path needs it
     import casadi as ca
 
-    from mfflap.optimisation.casadi_objective import symbolic_stages
 
     m = problem.model
     envelope = _has_state_envelope(problem)
@@ -282,7 +267,7 @@ def optimise_ipopt(problem: FlappingProblem, start: DiscreteMotion, *, min_perio
     lo, hi = time_step_bounds(n, min_period, max_period)
     dt0 = float(np.clip(start.time_step, lo, hi))
     start = DiscreteMotion(start.pitch_acceleration, start.heave_acceleration, dt0)
-    scale = _scales(start)
+    scale = start.control_scales()
     t0 = time.perf_counter()
     solver = _ipopt_solver(problem, n, max_iterations, tolerance, fix_phase)
     modifier = problem.linear_modifier
@@ -315,12 +300,12 @@ def optimise_ipopt(problem: FlappingProblem, start: DiscreteMotion, *, min_perio
                               "lies outside the pitch acceleration limit "
                               f"{problem.max_pitch_acceleration:g} rad/s^2",
                               key="trust_region")
-    x0 = np.clip(_pack(start) / scale, lbx, ubx)
+    x0 = np.clip(np.real(start.controls()) / scale, lbx, ubx)
     # a Ctrl-C stops the solve and the caller, not only IPOPT
     with interrupts_kept(), optimiser_blas_threads():
         sol = solver(x0=x0, p=par, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
     stats = solver.stats()
-    motion = _unpack(np.asarray(sol["x"]).ravel() * scale, n)
+    motion = DiscreteMotion.from_controls(np.asarray(sol["x"]).ravel() * scale)
     summary, peak, flags = assess(problem, motion)
     hard = replace_problem(problem, penalty_power=0.0, penalty_heave=0.0, penalty_pitch=0.0)
     return OptimisationResult(problem.beta, motion, "ipopt-constrained", start_label,

@@ -60,12 +60,12 @@ the model's outputs scaled to u's own CFD means (what a trust region judges step
 so the corrected objective is CFD's at the centre and at every u_i: its values, and so its
 slope along the secants, power penalty included. lambda is the minimum-norm solution in the
 controls scaled as a trust region scales them
-(:func:`~mfflap.optimisation.trust_region.control_scales`): the slope is corrected only along
-the secants, the model's own kept across them (minimum-norm interpolation of derivative-free
-trust-region methods, Conn, Scheinberg and Vicente 2009, applied to the residual of a physics
-model as in first-order-consistent model management, Alexandrov and Lewis 2001). The rounds
-take the earlier motions within :data:`SECANT_REACH` radii of the centre
-(:func:`secants_within`). The term enters J as a
+(:meth:`~mfflap.kinematics.discrete.DiscreteMotion.control_scales`): the slope is
+corrected only along the secants, the model's own kept across them (minimum-norm
+interpolation of derivative-free trust-region methods, Conn, Scheinberg and Vicente 2009,
+applied to the residual of a physics model as in first-order-consistent model management,
+Alexandrov and Lewis 2001). The rounds take the earlier motions within
+:data:`SECANT_REACH` radii of the centre (:func:`secants_within`). The term enters J as a
 :class:`~mfflap.optimisation.problem.LinearModifier`; the predicted means stay the scaled
 ones. Unbounded it would lead the optimiser off along a secant: it belongs in a trust region.
 
@@ -85,7 +85,10 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from mfflap.errors import ConfigError
-from mfflap.optimisation.problem import FlappingProblem
+from mfflap.kinematics.discrete import DiscreteMotion
+from mfflap.optimisation.optimise import replace_problem
+from mfflap.optimisation.problem import FlappingProblem, LinearModifier
+from mfflap.performance import evaluate_discrete
 
 
 @dataclass(frozen=True)
@@ -122,7 +125,7 @@ SECANT_REACH = 2.0
 def secants_within(centre, points, reach: float) -> list:
     """The ``points`` (:class:`CorrectionPoint`) within ``reach`` of the ``centre`` motion,
     the largest change of a control scaled as a trust region scales it
-    (:func:`~mfflap.optimisation.trust_region.control_scales`); points of another N are
+    (:meth:`~mfflap.kinematics.discrete.DiscreteMotion.control_scales`); points of another N are
     left out too.
 
     Derivative-free trust-region methods build their linear models from points within a
@@ -131,12 +134,10 @@ def secants_within(centre, points, reach: float) -> list:
     step just refused (a refused step halves the radius) and drop the older, farther ones
     as the region shrinks.
     """
-    from mfflap.optimisation.optimise import _pack
-    from mfflap.optimisation.trust_region import control_scales
 
-    c, w = _pack(centre), control_scales(centre)
+    c, w = np.real(centre.controls()), centre.control_scales()
     return [p for p in points if p.motion.n_steps == centre.n_steps
-            and np.max(np.abs((_pack(p.motion) - c) / w)) <= reach * (1 + 1e-9)]
+            and np.max(np.abs((np.real(p.motion.controls()) - c) / w)) <= reach * (1 + 1e-9)]
 
 
 def cfd_objective(point: CorrectionPoint, problem: FlappingProblem) -> float:
@@ -167,9 +168,8 @@ class Slopes:
 
     def shift(self, motion) -> float:
         """lambda . (u - c) at ``motion`` (units of J)."""
-        from mfflap.optimisation.optimise import _pack
 
-        z = _pack(motion)
+        z = np.real(motion.controls())
         if z.size != self.centre.size:
             raise ConfigError(f"the output correction's slopes are for N = "
                               f"{(self.centre.size - 1) // 2} steps, the motion has "
@@ -178,10 +178,8 @@ class Slopes:
 
     def as_dict(self) -> dict:
         """JSON-friendly: the sources, residuals and the slope's scaled length."""
-        from mfflap.optimisation.optimise import _unpack
-        from mfflap.optimisation.trust_region import control_scales
 
-        w = control_scales(_unpack(self.centre, (self.centre.size - 1) // 2))
+        w = DiscreteMotion.from_controls(self.centre).control_scales()
         return {"sources": list(self.sources), "residuals": list(self.residuals),
                 "scaled_norm": float(np.linalg.norm(self.objective * w))}
 
@@ -230,7 +228,6 @@ class OutputCorrection:
     @classmethod
     def measured(cls, point: CorrectionPoint, model, scheme: str) -> OutputCorrection:
         """The correction that makes ``model`` predict ``point``'s CFD means."""
-        from mfflap.performance import evaluate_discrete
 
         s = evaluate_discrete(model, point.motion, scheme).summary
         model_thrust, model_power = float(s.mean_thrust), float(s.mean_power)
@@ -298,21 +295,19 @@ class OutputCorrection:
         ConfigError
             The scales come through a filter (gain < 1): the centre would not be met.
         """
-        from mfflap.optimisation.optimise import _pack
-        from mfflap.optimisation.trust_region import control_scales
 
         if self.gain != 1.0:
             raise ConfigError("slopes need the measured scales (filter gain 1), so that the "
                               f"corrected model meets CFD at the centre; gain {self.gain:g}",
                               key="correction_gain")
-        c, w = _pack(centre), control_scales(centre)
+        c, w = np.real(centre.controls()), centre.control_scales()
         zeroth = self.problem(problem)
         factor = self.objective_factor(problem.beta)
         rows, residuals, sources = [], [], []
         for p in points:
             if p.motion.n_steps != centre.n_steps:
                 continue
-            step = (_pack(p.motion) - c) / w
+            step = (np.real(p.motion.controls()) - c) / w
             if np.max(np.abs(step)) < SECANT_MIN_STEP:
                 continue
             rows.append(step)
@@ -338,8 +333,6 @@ class OutputCorrection:
 
     def problem(self, problem: FlappingProblem) -> FlappingProblem:
         """The ordinary problem whose objective is the corrected one of ``problem`` over c."""
-        from mfflap.optimisation.optimise import replace_problem
-        from mfflap.optimisation.problem import LinearModifier
 
         c = self.objective_factor(problem.beta)
         k_p = self.power_scale

@@ -23,9 +23,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mfflap.errors import ConfigError
+from mfflap.errors import ConfigError, shown
 from mfflap.hydro.morison import MorisonModel
 from mfflap.kinematics.discrete import SCHEMES, DiscreteMotion, initial_state_weights
+from mfflap.optimisation.adjoint_kernel import objective_and_gradient
 from mfflap.performance import thrust_and_power
 
 
@@ -163,7 +164,8 @@ class FlappingProblem:
                 raise ConfigError(f"value {value!r} is not allowed; allowed: (0, inf] {unit}",
                                   key=f"optimisation.{name}")
         if scheme not in SCHEMES:
-            raise ConfigError(f"value {scheme!r}; allowed: {SCHEMES}", key="optimisation.scheme")
+            raise ConfigError(f"value {shown(scheme)}; allowed: {SCHEMES}",
+                              key="optimisation.scheme")
         names = sorted(getattr(model, "coefficients", {}))
         if not isinstance(model, MorisonModel) or names != sorted(_MORISON_TERMS):
             raise ConfigError(
@@ -203,6 +205,7 @@ class FlappingProblem:
                 or np.iscomplexobj(ha) or np.iscomplexobj(motion.time_step)):
             return None
         if self._kernel_args is False:
+            # the compiled (numba) kernel loads in about a second: only the compiled path needs it
             from mfflap.optimisation.adjoint_kernel import problem_constants
 
             self._kernel_args = problem_constants(self)
@@ -251,6 +254,7 @@ class FlappingProblem:
         extra = 0.0 if self.linear_modifier is None else self.linear_modifier.value(motion)
         args = self._kernel(motion)
         if args is not None:
+            # the compiled (numba) kernel loads in about a second: only the compiled path needs it
             from mfflap.optimisation.adjoint_kernel import objective_and_gradient
 
             return objective_and_gradient(
@@ -337,7 +341,6 @@ class FlappingProblem:
         args = self._kernel(motion)
         if args is None:
             return float(self.objective(motion)), self.gradient(motion).flat()
-        from mfflap.optimisation.adjoint_kernel import objective_and_gradient
 
         self._check_modifier(motion.n_steps)
         out = np.empty(2 * motion.n_steps + 1)
@@ -369,7 +372,6 @@ class FlappingProblem:
             if not want_gradient:
                 return float(self.objective(motion)), None
             return float(self.objective(motion)), self.adjoint_gradient(motion).flat()
-        from mfflap.optimisation.adjoint_kernel import objective_and_gradient
 
         self._check_modifier(n)
         out = np.empty(2 * n + 1) if want_gradient else _NO_GRAD

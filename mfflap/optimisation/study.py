@@ -16,6 +16,7 @@ from mfflap.optimisation.optimise import (
     OptimisationResult,
     multistart,
     optimise_ipopt,
+    optimise_sqp,
     peak_power_flag,
 )
 from mfflap.optimisation.output_correction import OutputCorrection
@@ -325,9 +326,7 @@ def gain_table(config: CaseConfig, n_steps: Sequence[int] = (25, 50, 100),
     Returns arrays ``gain`` (n_N, n_factors; NaN where the best sinusoid makes no thrust),
     ``thrust`` N, ``strouhal_number``, ``flagged``.
     """
-    from dataclasses import replace
 
-    from mfflap.optimisation.optimise import optimise_sqp
 
     model = model or config.morison_model()
     sweep = sweep if sweep is not None else default_sweep(config, model, progress)

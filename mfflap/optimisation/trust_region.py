@@ -90,18 +90,6 @@ def check_radius(radius: float, key: str = "trust_region") -> None:
                           key=key)
 
 
-def control_scales(motion) -> np.ndarray:
-    """The scale of each packed control (N pitch, N heave accelerations, dt) of ``motion``:
-    its peak pitch and heave accelerations (at least 1e-3) and its time step. A trust
-    region's radius, and a secant's length (:mod:`~mfflap.optimisation.output_correction`),
-    are measured in these units."""
-    n = motion.n_steps
-    peak_pitch = max(float(np.max(np.abs(np.real(motion.pitch_acceleration)))), 1e-3)
-    peak_heave = max(float(np.max(np.abs(np.real(motion.heave_acceleration)))), 1e-3)
-    return np.concatenate([np.full(n, peak_pitch), np.full(n, peak_heave),
-                           [float(np.real(motion.time_step))]])
-
-
 def check_repeatability(share: float, key: str = "cfd_repeatability") -> None:
     """Refuse a CFD repeatability that is not a share in (0, 1)
     (:class:`~mfflap.errors.ConfigError` naming ``key``)."""
@@ -138,7 +126,7 @@ class TrustRegion:
 
     def half_widths(self) -> np.ndarray:
         """Per packed variable (N pitch, N heave accelerations, dt): how far it may move."""
-        return self.radius * control_scales(self.centre)
+        return self.radius * self.centre.control_scales()
 
     def bounds(self, n_steps: int, time_step_bounds: tuple[float, float]
                ) -> tuple[np.ndarray, np.ndarray]:
@@ -150,13 +138,12 @@ class TrustRegion:
         ConfigError
             The centre has not ``n_steps`` steps, or its dt range misses the period bounds.
         """
-        from mfflap.optimisation.optimise import _pack
 
         if self.centre.n_steps != n_steps:
             raise ConfigError(f"the trust region's centre ({self.source or 'a motion'}) has "
                               f"{self.centre.n_steps} steps, the optimisation {n_steps}",
                               key="trust_region")
-        x_c, width = _pack(self.centre), self.half_widths()
+        x_c, width = np.real(self.centre.controls()), self.half_widths()
         lower, upper = x_c - width, x_c + width
         lower[-1] = max(lower[-1], time_step_bounds[0])
         upper[-1] = min(upper[-1], time_step_bounds[1])
@@ -170,9 +157,9 @@ class TrustRegion:
     def step_fraction(self, motion) -> float:
         """The step from the centre to ``motion`` as a share of the radius (the largest over
         the variables; 1: on the boundary)."""
-        from mfflap.optimisation.optimise import _pack
 
-        return float(np.max(np.abs(_pack(motion) - _pack(self.centre)) / self.half_widths()))
+        step = np.real(motion.controls()) - np.real(self.centre.controls())
+        return float(np.max(np.abs(step) / self.half_widths()))
 
     def on_boundary(self, motion) -> bool:
         """Whether ``motion`` lies on a face of the box (within :data:`BOUNDARY_SHARE`)."""
@@ -335,7 +322,6 @@ __all__ = [
     "accepted",
     "check_radius",
     "check_repeatability",
-    "control_scales",
     "describe_step",
     "noise_of_objective",
     "step_ratio",

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Mapping
+from dataclasses import asdict
 
 import numpy as np
 
@@ -61,7 +62,6 @@ def write_study(rf: ResultsFile, config: CaseConfig, study: BetaStudy,
     if study.thrust_gain_caveat is not None:
         rf.h5[prefix].attrs["thrust_gain_beta0_caveat"] = study.thrust_gain_caveat
     if study.refined is not None:
-        from dataclasses import asdict
 
         r = study.refined
         rf.write_group(f"{prefix}/refined_sinusoid",

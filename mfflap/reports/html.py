@@ -39,6 +39,7 @@ img { max-width: 100%; } figure { margin: 1em 0; } figcaption { color: #555; }
 
 def figure_html(fig: Figure, caption: str = "", dpi: int = 110) -> str:
     """An ``<figure>`` with the PNG embedded (base64); closes the figure."""
+    # matplotlib takes about a second to load: only figures need it
     import matplotlib.pyplot as plt
 
     buf = io.BytesIO()

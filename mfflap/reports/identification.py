@@ -14,7 +14,7 @@ from matplotlib.figure import Figure
 
 from mfflap.cfd.case_inputs import kept_wall_treatment
 from mfflap.hydro.base import ForceModel
-from mfflap.identification.data import BURST_NOTE, CaseData
+from mfflap.identification.data import BURST_NOTE, CaseData, motion_frequency
 from mfflap.identification.error_growth import scaling_advice
 from mfflap.identification.fit import (
     HELD_AT_ZERO,
@@ -22,6 +22,7 @@ from mfflap.identification.fit import (
     most_influential,
     scalings_said,
 )
+from mfflap.performance import thrust_and_power
 from mfflap.reports.error_growth_plot import error_growth_figure
 from mfflap.reports.html import Report, figure_html, signed_percent, table_html, text_html
 
@@ -33,7 +34,6 @@ APPLICABLE_NRMSE = 0.10
 def _param(result: IdentificationResult, key: str) -> np.ndarray:
     """A motion parameter of every case (NaN where its record has none); the frequency as
     identification weighs it (:func:`~mfflap.identification.data.motion_frequency`)."""
-    from mfflap.identification.data import motion_frequency
 
     if key == "frequency":
         return np.array([motion_frequency(p) for p in result.case_parameters])
@@ -89,7 +89,6 @@ def map_figure(result: IdentificationResult, signal: str = "normal_force",
 def overlay_figure(cases: Sequence[CaseData], model: ForceModel, names: Sequence[str],
                    signals: Sequence[str] = ("normal_force", "thrust")) -> Figure:
     """CFD and model time histories of chosen cases."""
-    from mfflap.performance import thrust_and_power
 
     by_name = {c.name: c for c in cases}
     chosen = [by_name[n] for n in names if n in by_name]

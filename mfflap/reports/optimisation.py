@@ -13,6 +13,9 @@ from matplotlib.figure import Figure
 
 from mfflap.kinematics.discrete import DiscreteMotion
 from mfflap.optimisation.optimise import OptimisationResult
+from mfflap.optimisation.phase import pitch_phase_rad
+from mfflap.optimisation.store import beta_label
+from mfflap.optimisation.study import sinusoid_motion
 from mfflap.performance import evaluate_discrete
 from mfflap.reports.html import Report, figure_html, signed_percent, table_html, text_html
 from mfflap.sweep import SweepResult, pareto_front
@@ -111,7 +114,6 @@ RESULT_HEADER = ["motion", "method", "mean thrust [N]", "mean power [W]", "η", 
 def phase_text(phase: str, results: Mapping[float, OptimisationResult]) -> str:
     """What the report says of the optimised motions' phase (``optimisation.phase``) and
     each one's pitch phase against sin(2 pi t / T) (:mod:`mfflap.optimisation.phase`)."""
-    from mfflap.optimisation.phase import pitch_phase_rad
 
     measured = ", ".join(f"β = {b:g}: {pitch_phase_rad(r.motion):+.3f} rad"
                          for b, r in results.items())
@@ -189,8 +191,6 @@ def add_optimisation_sections(rep: Report, study, model, scheme: str, max_power:
                 "flow drives the plate), as the paper reports for β = 1."))
         if r.flags:
             s.blocks.append(text_html(f"β = {b:g}: " + " ".join(r.flags), warn=True))
-    from mfflap.optimisation.store import beta_label
-    from mfflap.optimisation.study import sinusoid_motion
 
     motions = {"best sinusoid": sinusoid_motion(sw, best, next(iter(study.sqp.values()))
                                                 .motion.n_steps)}

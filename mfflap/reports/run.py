@@ -13,13 +13,15 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from mfflap.backtest.run import BacktestOutcome
+from mfflap.backtest.workflow import gain_in_cfd, no_gain_in_cfd_reason
 from mfflap.config import CaseConfig
 from mfflap.pipeline import RunOutcome, write_results
+from mfflap.records.as_run import describe_as_run
 from mfflap.reports.coverage import add_coverage_section
 from mfflap.reports.gap import add_gap_sections
 from mfflap.reports.html import Report, figure_html, table_html, text_html
 from mfflap.reports.identification import add_identification_sections
-from mfflap.reports.optimisation import add_optimisation_sections
+from mfflap.reports.optimisation import add_optimisation_sections, cycle_curves
 
 
 def backtest_figure(outcomes: Mapping[str, BacktestOutcome], max_power: float) -> Figure:
@@ -48,13 +50,11 @@ def backtest_figure(outcomes: Mapping[str, BacktestOutcome], max_power: float) -
 def add_backtest_sections(rep: Report, outcomes: Mapping[str, BacktestOutcome],
                           max_power: float) -> None:
     """Back-test table, figure and the CFD thrust gain."""
-    from mfflap.backtest.workflow import gain_in_cfd, no_gain_in_cfd_reason
 
     s = rep.section("Back-test against CFD")
     if not outcomes:
         s.blocks.append(text_html("No back-test was run.", warn=True))
         return
-    from mfflap.records.as_run import describe_as_run
 
     rows = []
     for label, o in outcomes.items():
@@ -108,7 +108,6 @@ def add_backtest_sections(rep: Report, outcomes: Mapping[str, BacktestOutcome],
 
 def add_sensitivity_section(rep: Report, sensitivity: Mapping[str, tuple], scheme: str) -> None:
     """Figure 5: beta = 0 re-optimised with each strategy's coefficients."""
-    from mfflap.reports.optimisation import cycle_curves
 
     s = rep.section("Coefficient sensitivity (β = 0 re-optimised per weighting strategy)")
     fig, axes = plt.subplots(2, 2, figsize=(11, 6))

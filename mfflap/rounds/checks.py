@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mfflap.config import CaseConfig
+from mfflap.performance import discrete_means
 
 #: a motion's relative mean thrust error counts where its CFD mean thrust is at least this
 #: fraction of the largest CFD mean thrust among the round's back-tested motions
@@ -133,7 +134,6 @@ def optimised_means(outcome, config: CaseConfig) -> dict[str, tuple[float, float
     """label -> (mean thrust N, mean power W) of each back-tested motion of a round as its
     optimiser saw them (:func:`~mfflap.performance.discrete_means`, the round's model and
     scheme); empty without a model."""
-    from mfflap.performance import discrete_means
 
     if outcome.model is None:
         return {}

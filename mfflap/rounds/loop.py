@@ -8,11 +8,16 @@ from dataclasses import replace
 from pathlib import Path
 
 from mfflap.config import CaseConfig
-from mfflap.optimisation.trust_region import MIN_RADIUS
+from mfflap.optimisation.output_correction import SECANT_REACH, secants_within
+from mfflap.optimisation.store import beta_label
+from mfflap.optimisation.trust_region import MIN_RADIUS, TrustRegion
 from mfflap.pipeline import RunOutcome, run_study, write_results
+from mfflap.records.as_run import as_run_differences
+from mfflap.records.record import backtest_fixture_dirs, fixture_dir, write_record
 from mfflap.rounds.checks import motion_checks, optimised_means
 from mfflap.rounds.output import write_rounds_results
 from mfflap.rounds.refusals import check_rounds
+from mfflap.rounds.state import BetaState, with_centres
 from mfflap.rounds.steps import (
     backtest_record_of,
     correction_points,
@@ -44,7 +49,6 @@ RECORDS_FOLDER = "loop_records"
 def _keep_records(backtests: dict, folder: Path) -> None:
     """Write each back-tested motion's CFD record into ``folder`` under its own name (a
     fixture found within the look-up's tolerance keeps the name of the motion it ran)."""
-    from mfflap.records.record import write_record
 
     folder.mkdir(parents=True, exist_ok=True)
     for o in backtests.values():
@@ -99,11 +103,6 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
     (LoopResult, RunOutcome)
         The rounds and the last round's outcome.
     """
-    from mfflap.optimisation.output_correction import SECANT_REACH, secants_within
-    from mfflap.optimisation.store import beta_label
-    from mfflap.optimisation.trust_region import TrustRegion
-    from mfflap.records.as_run import as_run_differences
-    from mfflap.records.record import backtest_fixture_dirs, fixture_dir
 
     check_rounds(n_rounds, tolerance, options.coefficients, correct_outputs, refit,
                  trust_radius, first_order, correction_gain, cfd_repeatability)
@@ -114,18 +113,16 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
     rounds: list[RoundSummary] = []
     seen: set[str] = set()  # motion keys back-tested in earlier rounds
     outcome = None
-    points: dict = {}  # beta -> the last round's optimum with its CFD (correct_outputs)
-    centres: dict = {}  # beta -> the trust region's centre with its CFD (trust_radius)
-    radii: dict[float, float] = {}  # beta -> the trust region's radius
-    centre_runs: dict = {}  # beta -> the centre's CFD record (how it ran: as_run_differences)
-    centre_mixed: dict = {}  # beta -> what mixes two set-ups in the centre's compared cycles
-    visited: dict = {}  # beta -> the back-tested optima the secants take (first_order)
-    records_used: dict = {}  # beta -> the CFD records its visited optima were measured on
+    states: dict[float, BetaState] = {}  # beta -> what the rounds carry for it
     converged, why = False, f"ran the {n_rounds} round(s) asked for"
     for k in range(1, n_rounds + 1):
         round_dir = out_dir / f"round_{k}"
         pooled = sorted(records.glob("backtest_*.h5")) if refit and records.is_dir() else []
-        regions = {b: TrustRegion(p.motion, radii[b], p.source) for b, p in centres.items()}
+        centred = with_centres(states)
+        centres = {b: st.centre for b, st in centred.items()}
+        points = {b: st.last_point for b, st in states.items() if st.last_point is not None}
+        regions = {b: TrustRegion(st.centre.motion, st.radius, st.centre.source)
+                   for b, st in centred.items()}
         opts = replace(options, fixtures=base_fixtures + tuple(pooled),
                        backtest_fixtures=(records, *base_backtests),
                        done_backtests=(records,),
@@ -133,8 +130,8 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
                        if correct_outputs else {},
                        trust_at=regions,
                        secant_at={b: tuple(secants_within(
-                           c.motion, [p for p in visited.get(b, ()) if p is not c],
-                           SECANT_REACH * radii[b])) for b, c in centres.items()}
+                           st.centre.motion, [p for p in st.visited if p is not st.centre],
+                           SECANT_REACH * st.radius)) for b, st in centred.items()}
                        if first_order else {},
                        correction_gain=correction_gain,
                        work_dir=round_dir / "cfd_cases",
@@ -159,27 +156,37 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
             {lbl: o.source for lbl, o in outcome.backtests.items() if o.comparison is None},
             {b: c.as_dict() for b, c in outcome.corrections.items()})
         points = correction_points(outcome, summary.checks, k)
-        for beta, point in secant_points(points, summary.checks, records_used).items():
-            visited.setdefault(beta, []).append(point)
+        for beta in states.keys() - points.keys():  # no point this round: none to correct to
+            states[beta].last_point = None
+        for beta, point in points.items():
+            states.setdefault(beta, BetaState()).last_point = point
+        used = {b: states[b].records_used for b in points}
+        for beta, point in secant_points(points, summary.checks, used).items():
+            states[beta].visited.append(point)
         if trust_radius is not None:
             summary.trust_steps = trust_steps(outcome, summary.checks, regions, centres,
                                               config, cfd_repeatability)
             for beta, step in list(summary.trust_steps.items()):
+                state = states.setdefault(beta, BetaState())
                 run = backtest_record_of(outcome, beta)
                 mixed = mixed_set_up_notes(outcome, beta, "the optimum")
-                if centre_runs.get(beta) is not None and run is not None:
+                if state.centre_run is not None and run is not None:
                     step = summary.trust_steps[beta] = replace(step, ran_otherwise=tuple(
-                        as_run_differences(centre_runs[beta], run)
-                        + centre_mixed.get(beta, []) + mixed))
-                radii[beta] = step.next_radius
+                        as_run_differences(state.centre_run, run)
+                        + state.centre_mixed + mixed))
+                state.radius = step.next_radius
                 if step.accepted and beta in points:
-                    centres[beta] = points[beta]
-                    centre_runs[beta] = run
-                    centre_mixed[beta] = mixed_set_up_notes(outcome, beta, "the centre")
+                    state.centre, state.centre_run = points[beta], run
+                    state.centre_mixed = mixed_set_up_notes(outcome, beta, "the centre")
             if k == 1:
-                centres, radii = dict(points), {b: float(trust_radius) for b in points}
-                centre_runs = {b: backtest_record_of(outcome, b) for b in points}
-                centre_mixed = {b: mixed_set_up_notes(outcome, b, "the centre") for b in points}
+                for beta, state in states.items():  # the first round's optima are the centres
+                    if beta in points:
+                        state.centre, state.radius = points[beta], float(trust_radius)
+                        state.centre_run = backtest_record_of(outcome, beta)
+                        state.centre_mixed = mixed_set_up_notes(outcome, beta, "the centre")
+                    else:
+                        state.centre = state.radius = state.centre_run = None
+                        state.centre_mixed = []
         rounds.append(summary)
         _keep_records(outcome.backtests, records)
         progress(describe_round(summary, tolerance))
@@ -192,8 +199,9 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
             converged, why = stop
             break
         seen |= keys
-    answers = {b: f"{p.source}: CFD mean thrust {p.cfd_mean_thrust:.4g} N, mean power "
-                  f"{p.cfd_mean_power:.4g} W" for b, p in centres.items()}
+    answers = {b: f"{st.centre.source}: CFD mean thrust {st.centre.cfd_mean_thrust:.4g} N, "
+                  f"mean power {st.centre.cfd_mean_power:.4g} W"
+               for b, st in with_centres(states).items()}
     result = LoopResult(rounds, tolerance, converged, why, correct_outputs, correction_gain,
                         refit, trust_radius, answers, first_order, cfd_repeatability)
     progress(f"rounds: {why}")

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from mfflap.errors import ConfigError
+from mfflap.optimisation.trust_region import check_radius, check_repeatability
 
 
 def check_rounds(n_rounds: int, tolerance: float, coefficients: str,
@@ -45,14 +46,12 @@ def check_rounds(n_rounds: int, tolerance: float, coefficients: str,
                               "--correct-outputs every round would optimise the same motions",
                               key="refit")
     if trust_radius is not None:
-        from mfflap.optimisation.trust_region import check_radius
 
         check_radius(trust_radius)
         if n_rounds < 2:
             raise ConfigError("--trust-region bounds each round's optimum about the last one "
                               "CFD confirmed, so it needs --rounds 2 or more", key="trust_region")
     if cfd_repeatability is not None:
-        from mfflap.optimisation.trust_region import check_repeatability
 
         check_repeatability(cfd_repeatability)
         if trust_radius is None:

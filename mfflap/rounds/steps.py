@@ -4,6 +4,10 @@ and each trust region's step judged by CFD, with whatever made its two runs diff
 from __future__ import annotations
 
 from mfflap.config import CaseConfig
+from mfflap.optimisation.output_correction import CorrectionPoint, OutputCorrection, cfd_objective
+from mfflap.optimisation.store import beta_label
+from mfflap.optimisation.study import problem_for
+from mfflap.optimisation.trust_region import TrustStep, noise_of_objective
 from mfflap.rounds.checks import MotionCheck
 
 
@@ -11,8 +15,6 @@ def correction_points(outcome, checks: dict[str, MotionCheck], index: int) -> di
     """beta -> :class:`~mfflap.optimisation.output_correction.CorrectionPoint`: each
     back-tested optimum of round ``index`` with its CFD means, for the next round's output
     correction."""
-    from mfflap.optimisation.output_correction import CorrectionPoint
-    from mfflap.optimisation.store import beta_label
 
     points = {}
     for beta, result in (outcome.study.sqp.items() if outcome.study is not None else ()):
@@ -35,7 +37,6 @@ def secant_points(points: dict, checks: dict[str, MotionCheck],
     has not yet given that beta a point. A trust region's short step that reuses an earlier
     run adds no second point with that run's CFD. ``records_used`` (beta -> the record
     names its points were measured on) is brought up to date."""
-    from mfflap.optimisation.store import beta_label
 
     kept = {}
     for beta, point in points.items():
@@ -60,14 +61,6 @@ def trust_steps(outcome, checks: dict[str, MotionCheck], regions: dict, centres:
     which two CFD runs of one motion differ, which relaxes the ratio by the noise of J at the
     centre (:func:`~mfflap.optimisation.trust_region.noise_of_objective`; None: not known).
     """
-    from mfflap.optimisation.output_correction import (
-        CorrectionPoint,
-        OutputCorrection,
-        cfd_objective,
-    )
-    from mfflap.optimisation.store import beta_label
-    from mfflap.optimisation.study import problem_for
-    from mfflap.optimisation.trust_region import TrustStep, noise_of_objective
 
     steps = {}
     sqp = outcome.study.sqp if outcome.study is not None else {}
@@ -98,7 +91,6 @@ def trust_steps(outcome, checks: dict[str, MotionCheck], regions: dict, centres:
 
 def backtest_record_of(outcome, beta: float):
     """The CFD record of this round's back-test of ``beta``'s optimum, or None."""
-    from mfflap.optimisation.store import beta_label
 
     found = outcome.backtests.get(beta_label(beta))
     return None if found is None else found.record
@@ -107,7 +99,6 @@ def backtest_record_of(outcome, beta: float):
 def mixed_set_up_notes(outcome, beta: float, whose: str) -> list[str]:
     """``whose`` run's compared cycles mixing two set-ups (a retry resumed it part-way
     through them), said for a trust step's ``ran_otherwise``; empty if not."""
-    from mfflap.optimisation.store import beta_label
 
     found = outcome.backtests.get(beta_label(beta))
     c = None if found is None else found.comparison

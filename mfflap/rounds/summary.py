@@ -6,6 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from mfflap.optimisation.output_correction import describe_correction
 from mfflap.rounds.checks import MotionCheck
 
 
@@ -89,7 +90,6 @@ class LoopResult:
 
 def describe_round(summary: RoundSummary, tolerance: float) -> str:
     """One line per motion: model against CFD mean thrust and power."""
-    from mfflap.optimisation.output_correction import describe_correction
 
     lines = [f"round {summary.index}: {summary.n_cases} CFD runs in the fit "
              f"({summary.loop_records_in_fit} from earlier rounds); "

@@ -23,6 +23,7 @@ def foam_file(path: str | Path) -> Any:
     >>> foam_file(path)["maxCo"]
     2.0
     """
+    # foamlib takes about half a second to load: only case edits need it
     from foamlib import FoamFile
 
     return FoamFile(path)
@@ -30,6 +31,7 @@ def foam_file(path: str | Path) -> Any:
 
 def decode_error() -> type[Exception]:
     """foamlib's error for a file it cannot parse (for ``except decode_error():``)."""
+    # foamlib takes about half a second to load: only case edits need it
     from foamlib import FoamFileDecodeError
 
     return FoamFileDecodeError

@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from mfflap.cfd.force_history import ForceHistory
+from mfflap.cfd.openfoam.foam_files import decode_error, foam_file
 from mfflap.cfd.openfoam.forces import read_forces
 from mfflap.errors import ConfigError, ParseError
 from mfflap.kinematics.continuous import Motion, TabulatedMotion
@@ -74,7 +75,6 @@ def _read_foam(path: Path, key: str | None = "") -> Any:
     ParseError
         Naming the file, for one foamlib cannot parse.
     """
-    from mfflap.cfd.openfoam.foam_files import decode_error, foam_file
 
     try:
         data = foam_file(path)

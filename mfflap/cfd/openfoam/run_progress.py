@@ -9,7 +9,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from mfflap.cfd.openfoam.control_dict import end_time
-from mfflap.cfd.openfoam.runner import solver_progress
+from mfflap.cfd.openfoam.solver_log import solver_progress
 
 
 def _duration(seconds: float) -> str:

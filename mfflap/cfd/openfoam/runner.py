@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import math
 import os
-import re
 import shutil
 import signal
 import subprocess
@@ -20,7 +19,15 @@ from mfflap.cfd.openfoam.case_path import check_case_path
 from mfflap.cfd.openfoam.control_dict import align_writes_to_end, end_time, set_start_time
 from mfflap.cfd.openfoam.foam_files import foam_file
 from mfflap.cfd.openfoam.release import require_supported_release
-from mfflap.cfd.openfoam.solver_log import DIVERGED, failure_reason, read_tail
+from mfflap.cfd.openfoam.run_progress import RunProgress
+from mfflap.cfd.openfoam.solver_log import (
+    DELTA_T_LINE,
+    DIVERGED,
+    TIME_LINE,
+    failure_reason,
+    read_tail,
+    solver_progress,
+)
 from mfflap.cfd.openfoam.time_folders import (
     is_time_folder,
     latest_solution_time,
@@ -175,24 +182,6 @@ def _tail(path: Path, n: int = 20) -> str:
     if not path.exists():
         return ""
     return "\n".join(path.read_text(errors="replace").splitlines()[-n:])
-
-
-_DELTA_T = re.compile(r"^deltaT = ([0-9.eE+-]+)\s*$", re.M)
-_TIME = re.compile(r"^Time = ([0-9.eE+-]+)\s*$", re.M)
-
-
-def solver_progress(case_dir: str | Path, log_name: str = "log.pimpleFoam"
-                    ) -> tuple[float, float] | None:
-    """(time, deltaT) of the last time step the solver's log reports, in s; None if the
-    case has no such log or it has no time step yet. Reads only the log's tail."""
-    path = Path(case_dir) / log_name
-    if not path.is_file():
-        return None
-    text = read_tail(path)
-    times, steps = _TIME.findall(text), _DELTA_T.findall(text)
-    if not times:
-        return None
-    return float(times[-1]), float(steps[-1]) if steps else float("nan")
 
 
 def _collapsed(application: str, time_steps: TimeStepWatch, case_dir: Path, log: Path,
@@ -424,10 +413,10 @@ def ran_to_end(case_dir: str | Path) -> bool:
     log = Path(case_dir) / "log.pimpleFoam"
     final = end_time(case_dir)
     text = read_tail(log) if log.is_file() else ""
-    times = [float(t) for t in _TIME.findall(text)]
+    times = [float(t) for t in TIME_LINE.findall(text)]
     if not times or final is None:
         return False
-    steps = _DELTA_T.findall(text)  # a fixed time step prints none: the last two times
+    steps = DELTA_T_LINE.findall(text)  # a fixed time step prints none: the last two times
     step = (float(steps[-1]) if steps else times[-1] - times[-2] if len(times) > 1 else 0.0)
     if times[-1] < final - step - 1e-9 * abs(final):
         return False
@@ -513,7 +502,6 @@ def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
         error before the case's end time (a stop signal sent to it directly: it wrote its
         fields, and a rerun resumes there), or as :func:`run_application`.
     """
-    from mfflap.cfd.openfoam.run_progress import RunProgress
 
     case_dir = check_case_path(case_dir)  # before "meshing" is said
     _check_time_limit(timeout_s, "pimpleFoam")

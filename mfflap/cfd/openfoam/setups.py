@@ -18,7 +18,7 @@ from mfflap.cfd.openfoam.writer import (
     resolve_mesh,
     template_dir,
 )
-from mfflap.errors import ConfigError
+from mfflap.errors import ConfigError, shown
 from mfflap.toml_io import read_toml
 
 
@@ -90,7 +90,7 @@ def setup(name: str) -> CfdSetup:
     """
     setups = named_setups()
     if name not in setups:
-        raise ConfigError(f"unknown set-up {name!r}; allowed: {', '.join(setups)}",
+        raise ConfigError(f"unknown set-up {shown(name)}; allowed: {', '.join(setups)}",
                           source=str(setups_path()), key="setup")
     return setups[name]
 

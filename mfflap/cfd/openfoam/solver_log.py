@@ -205,3 +205,23 @@ def failure_reason(log_text: str, returncode: int | None) -> str:
         return f"killed by {name}" + (" (the out-of-memory killer?)" if name == "SIGKILL"
                                       else "")
     return f"exit code {returncode}"
+
+
+#: a solver log's line of a time step's size, s
+DELTA_T_LINE = re.compile(r"^deltaT = ([0-9.eE+-]+)\s*$", re.M)
+#: a solver log's line of a time step's time, s
+TIME_LINE = re.compile(r"^Time = ([0-9.eE+-]+)\s*$", re.M)
+
+
+def solver_progress(case_dir: str | Path, log_name: str = "log.pimpleFoam"
+                    ) -> tuple[float, float] | None:
+    """(time, deltaT) of the last time step the solver's log reports, in s; None if the
+    case has no such log or it has no time step yet. Reads only the log's tail."""
+    path = Path(case_dir) / log_name
+    if not path.is_file():
+        return None
+    text = read_tail(path)
+    times, steps = TIME_LINE.findall(text), DELTA_T_LINE.findall(text)
+    if not times:
+        return None
+    return float(times[-1]), float(steps[-1]) if steps else float("nan")

@@ -41,7 +41,7 @@ from mfflap.cfd.openfoam.plate_frame import (
     format_function1_table,
     plate_frame_tables,
 )
-from mfflap.errors import ConfigError
+from mfflap.errors import ConfigError, shown
 from mfflap.kinematics.continuous import Motion
 from mfflap.parameters import Fluid, FreeStream, Plate
 from mfflap.toml_io import read_toml
@@ -128,7 +128,7 @@ def resolve_mesh(mesh: str | AnyMeshSpec) -> AnyMeshSpec:
         return mesh
     specs = mesh_specs()
     if mesh not in specs:
-        raise ConfigError(f"unknown mesh {mesh!r}; allowed: {', '.join(specs)}", key="mesh",
+        raise ConfigError(f"unknown mesh {shown(mesh)}; allowed: {', '.join(specs)}", key="mesh",
                           source=str(template_dir() / "meshes.toml"))
     return specs[mesh]
 

@@ -1,0 +1,54 @@
+"""The main job's stages end typed: an mfflap error fails its stage and the run goes on
+(the report says what is missing); any other exception is a fault and ends the run with its
+traceback, from the Python API and from the command line alike."""
+
+import json
+from pathlib import Path
+
+import h5py
+import pytest
+from click.testing import CliRunner
+
+from mfflap.cli.main import cli
+from mfflap.config import load_case
+from mfflap.errors import MfflapError
+from mfflap.pipeline import DONE, FAILED, RunOptions, run_study, write_results
+
+CASE = Path(__file__).parents[2] / "cases" / "paper2026.toml"
+
+
+def _quick() -> RunOptions:
+    return RunOptions(n_starts=1, with_ipopt=False, sensitivity=False)
+
+
+@pytest.mark.slow
+def test_an_mfflap_error_fails_its_stage_and_the_run_goes_on(monkeypatch, tmp_path):
+    import mfflap.identification.workflow as workflow
+
+    def refused(*args, **kwargs):
+        raise MfflapError("the records are not readable")
+
+    monkeypatch.setattr(workflow, "load_cases", refused)
+    outcome = run_study(load_case(CASE), _quick(), progress=lambda m: None)
+    first = outcome.stages[0]
+    assert (first.name, first.status, first.problem) == ("identification", FAILED,
+                                                         "the records are not readable")
+    assert "optimisation" in [s.name for s in outcome.stages if s.status == DONE]
+    assert outcome.problems[0] == "identification: the records are not readable"
+    write_results(load_case(CASE), outcome, tmp_path / "results.h5")
+    with h5py.File(tmp_path / "results.h5") as h5:
+        kept = json.loads(h5.attrs["stages"])
+    assert kept[0]["status"] == FAILED and kept[0]["name"] == "identification"
+
+
+def test_any_other_exception_ends_the_run_with_its_traceback(monkeypatch, tmp_path):
+    import mfflap.identification.workflow as workflow
+
+    def broken(*args, **kwargs):
+        raise TypeError("a fault in the code")
+
+    monkeypatch.setattr(workflow, "load_cases", broken)
+    with pytest.raises(TypeError, match="a fault in the code"):
+        run_study(load_case(CASE), _quick(), progress=lambda m: None)
+    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(tmp_path / "run")])
+    assert res.exit_code == 1 and isinstance(res.exception, TypeError)
