@@ -12,7 +12,7 @@ from openblas_kernels import (
 
 def _pin_openblas_kernels() -> None:
     """On a CPU with AVX-512, have OpenBLAS use its SkylakeX kernels, as it chose itself on
-    the machines the shipped series of rounds (tests/test_rounds.py) were computed on.
+    the machines the shipped series of rounds (tests/rounds/test_loop.py) were computed on.
 
     Those series replay a computation that round-off steers: beta = 1's least-power optimum
     has no phase that anything in the problem fixes, and OpenBLAS's Haswell kernels (what it

@@ -3,7 +3,7 @@
 Two OpenFOAM runs of one optimised motion whose controlDicts differed only in the 13th digit
 of endTime and writeInterval took different time steps and parted in the flow's vortex
 shedding: the last cycle's mean thrust 2.8 % apart (docs/findings/optimised_motions.md, "First-order
-corrections"; ``tests/test_cfd_repeatability.py``). That spread is the noise under every
+corrections"; ``tests/backtest/test_repeat.py``). That spread is the noise under every
 back-test's comparison and every trust-region step the rounds judge (``mfflap run
 --cfd-repeatability``).
 
@@ -14,7 +14,7 @@ copy k is then that much longer: a change far below anything the flow could reso
 whatever the copies differ by beyond it is the flow's own sensitivity. (pimpleFoam run twice
 on the same case repeats itself bit for bit, and a first time step perturbed alone is not a
 probe: the solver resets it from the Courant number at the start, which cancels it; both
-were found running this module, ``tests/test_cfd_repeatability.py``.)
+were found running this module, ``tests/backtest/test_repeat.py``.)
 """
 
 from __future__ import annotations

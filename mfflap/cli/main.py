@@ -52,7 +52,7 @@ class MfflapGroup(click.Group):
             click.echo(f"mfflap: error: {exc}", err=True)
             sys.exit(2)
         except click.UsageError as exc:  # click repeats a bad value whole: cut it short
-            exc.message = " ".join(word if len(word) <= SHOWN_CHARS + 3
+            exc.message = " ".join(word if len(word) <= 200
                                    else word[:SHOWN_CHARS] + "..."
                                    for word in exc.message.split(" "))
             raise

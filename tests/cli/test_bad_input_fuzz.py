@@ -19,7 +19,7 @@ VALUES = st.sampled_from(["0", "-1", "1e308", "-1e308", "nan", "inf", '"x"', "[]
                           "true", "1e-320", '"' + "z" * 5000 + '"', "", "[1, 2", "0.3.4"])
 CSV_CELLS = st.sampled_from(["0", "-1", "1e308", "nan", "x", "", "1,5", "١٢", "1_000",
                              "0.1", "1e-3", "-1e308", "inf"])
-FUZZ = settings(max_examples=30, deadline=None,
+FUZZ = settings(max_examples=20, deadline=None,
                 suppress_health_check=[HealthCheck.function_scoped_fixture])
 
 

@@ -23,12 +23,12 @@ def _quick() -> RunOptions:
 
 @pytest.mark.slow
 def test_an_mfflap_error_fails_its_stage_and_the_run_goes_on(monkeypatch, tmp_path):
-    import mfflap.identification.workflow as workflow
+    import mfflap.pipeline as pipeline
 
     def refused(*args, **kwargs):
         raise MfflapError("the records are not readable")
 
-    monkeypatch.setattr(workflow, "load_cases", refused)
+    monkeypatch.setattr(pipeline, "load_cases", refused)
     outcome = run_study(load_case(CASE), _quick(), progress=lambda m: None)
     first = outcome.stages[0]
     assert (first.name, first.status, first.problem) == ("identification", FAILED,
@@ -42,12 +42,12 @@ def test_an_mfflap_error_fails_its_stage_and_the_run_goes_on(monkeypatch, tmp_pa
 
 
 def test_any_other_exception_ends_the_run_with_its_traceback(monkeypatch, tmp_path):
-    import mfflap.identification.workflow as workflow
+    import mfflap.pipeline as pipeline
 
     def broken(*args, **kwargs):
         raise TypeError("a fault in the code")
 
-    monkeypatch.setattr(workflow, "load_cases", broken)
+    monkeypatch.setattr(pipeline, "load_cases", broken)
     with pytest.raises(TypeError, match="a fault in the code"):
         run_study(load_case(CASE), _quick(), progress=lambda m: None)
     res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(tmp_path / "run")])
