@@ -346,7 +346,6 @@ class CaseConfig:
 
     def morison_model(self):
         """The Morison model this case describes."""
-
         return MorisonModel(self.plate, self.fluid, self.flow, self.coefficients,
                             self.model.strip_settings())
 
@@ -425,7 +424,6 @@ class ConfigWarning(UserWarning):
 def _check_motion_keys(table: dict[str, Any], kind: str, source: str | None) -> None:
     """Refuse a [motion] table that leaves out a key its kind needs (the default would be
     run as if given); warn of a key its kind does not read, naming it."""
-
     missing = [k for k in MOTION_KEYS[kind] if k not in table]
     if missing:
         raise ConfigError(f"a {kind} motion needs {', '.join(MOTION_KEYS[kind])}; "
@@ -460,7 +458,6 @@ def load_case(path: str | Path) -> CaseConfig:
 
 def loads_case(text: str, source: str = "<string>") -> CaseConfig:
     """Validate case TOML given as text (e.g. the copy stored in a results file)."""
-
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

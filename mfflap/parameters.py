@@ -140,7 +140,6 @@ class StripGeometry:
     @classmethod
     def from_settings(cls, plate: Plate, settings: StripSettings) -> StripGeometry:
         """Resolve the defaults of :class:`StripSettings` against a plate."""
-
         n = settings.n_strips
         chord, s, d = plate.chord, plate.span, plate.thickness
         vn = settings.added_mass_volume_normal

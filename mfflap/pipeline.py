@@ -202,7 +202,6 @@ def _stage(outcome: RunOutcome, name: str, progress: Progress, fn):
 def coefficient_sensitivity(config: CaseConfig, identification: dict, sweep,
                             progress: Progress) -> dict:
     """Re-optimise beta = 0 with each weighting strategy's coefficients (Figure 5)."""
-
     o = config.optimisation
     out = {}
     base = config.morison_model()
@@ -224,8 +223,6 @@ def within_data_config(config: CaseConfig, cases: list, reference=None
     peak pitch rate and acceleration of the pitch envelope, the period bounds and the
     heave limit (each the tighter of the case's own and the data's; the case's period
     bounds where the data's frequencies lie outside them); and those settings."""
-
-
     reference = reference or CoverageReference.from_cases(cases, config.morison_model(),
                                                           config.flow.velocity)
     ranges = reference.ranges
@@ -252,8 +249,6 @@ def motion_coverage(config: CaseConfig, cases: list, motions: dict, reference=No
     """Where each motion, as CFD imposes it (the periodic spline through its cycle), lies
     against the identification cases (:mod:`mfflap.identification.coverage`; ``reference``
     their :class:`~mfflap.identification.coverage.CoverageReference`, built if not given)."""
-
-
     reference = reference or CoverageReference.from_cases(cases, config.morison_model(),
                                                           config.flow.velocity)
     out = {}
@@ -268,7 +263,6 @@ def gap_diagnosis(config: CaseConfig, cases: list, backtests: dict | None = None
     """Diagnosis and residual decomposition of the case's model on the identification CFD;
     with back-tests, whether its effect carries over to their CFD runs (the motions the fits
     never saw)."""
-
     records = [o.record for o in (backtests or {}).values() if o.record is not None]
     held_out, excluded = (held_out_motions(records, config.identification.discard_time,
                                            plate=config.plate, fluid=config.fluid,
@@ -301,7 +295,6 @@ def run_study(config: CaseConfig, options: RunOptions, progress: Progress = prin
 def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
                 outcome: RunOutcome) -> None:
     """The stages of :func:`run_study`, filling ``outcome``."""
-
     folders = options.fixtures or (fixture_dir(),)
 
     def identification():
@@ -430,7 +423,6 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
 def write_results(config: CaseConfig, outcome: RunOutcome, h5_path: Path) -> None:
     """One HDF5 file with every number of the run and its inputs (the report beside it:
     :func:`mfflap.reports.run.write_run_outputs`)."""
-
     with ResultsFile(h5_path, "w", kind="run", config_toml=config.to_toml()) as rf:
         for res in outcome.identification.values():
             write_identification(rf, res)

@@ -238,12 +238,10 @@ class ResultsFile:
 
     def write_summary(self, name: str, summary) -> None:
         """Store a :class:`~mfflap.performance.CycleSummary`."""
-
         self.write_group(name, {k: getattr(summary, k) for k in CycleSummary.UNITS},
                          CycleSummary.UNITS)
 
     def read_summary(self, name: str):
         """Read back a :class:`~mfflap.performance.CycleSummary`."""
-
         arrays, _ = self.read_group(name)
         return CycleSummary(**{k: arrays[k] for k in CycleSummary.UNITS})

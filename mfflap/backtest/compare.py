@@ -143,7 +143,6 @@ def compare_last_cycle(record: CfdRecord, model, period: float,
         ``average_cycles`` more than the whole cycles the record holds after its start-up
         (key ``average_cycles``).
     """
-
     averaged = (None if average_cycles == 1
                 else cycle_means(record, period).last(average_cycles))
     t = record.time

@@ -117,7 +117,6 @@ def repeatability_of(records: Sequence, label: str, model, period: float,
     ConfigError
         Fewer than two records, or records of different motions (key ``repeat``).
     """
-
     if len(records) < 2:
         raise ConfigError(f"a repeatability needs two runs or more, got {len(records)}",
                           key="repeat")
@@ -140,7 +139,6 @@ def repeatability_of(records: Sequence, label: str, model, period: float,
 
 def copy_settings(solver, copy: int):
     """The solver settings of copy ``copy`` (module docstring; copy 0: ``solver`` itself)."""
-
     base = solver or SolverSettings()
     return replace(base, max_courant=base.max_courant * (1 + copy * REPEAT_PERTURBATION))
 
@@ -173,7 +171,6 @@ def repeat_runs(motion, label: str, model, max_power: float, *, copies: int,
     MfflapError
         A copy's run failed (the copies before it are kept).
     """
-
     if not (isinstance(copies, int) and copies >= 2):
         raise ConfigError(f"--repeat must be 2 or more runs, got {copies!r}", key="repeat")
     key = motion_key(motion)
@@ -212,7 +209,6 @@ def _usable_copy(path: Path, limit: float, n_cycles: float, retries_from_start: 
     """The saved copy at ``path`` (a :class:`~mfflap.records.record.CfdRecord`) when it
     ran at the Courant ``limit`` for ``n_cycles`` periods (and, with ``retries_from_start``,
     no retry resumed it part-way), else None."""
-
     if not path.is_file():
         return None
     record = read_record(path)
@@ -237,7 +233,6 @@ def _saved_copies_key(motion, key: str, save_to: Path, limits: Sequence[float],
     when every copy asked for is there and usable: copies run now would be of another key,
     and copies of two motions are no repeatability.
     """
-
     if any((save_to / f"backtest_{key}_copy{k}.h5").is_file() for k in range(len(limits))):
         return key, ""
     if not save_to.is_dir():

@@ -129,7 +129,6 @@ def closest_cycle_shift(rec: CfdRecord, spline: PeriodicSplineMotion,
     The shift is found on ``n_samples`` shifts, then refined between the neighbours of the
     best. None for a record whose last period does not follow its start-up ramp.
     """
-
     period = spline.period
     t_end = float(rec.time[-1])
     if t_end - period < float(rec.parameters.get("ramp_time", 0.0)) - 1e-12:
@@ -197,7 +196,6 @@ def _other_set_up(record: CfdRecord, mesh: str | AnyMeshSpec,
     its provenance gives, fewer periods, with ``retries_from_start`` a retry part-way), or
     None: then it is the CFD that run would have been (a longer run holds the shorter one's
     cycles after its own start-up too)."""
-
     had_cycles = float(record.parameters.get("n_cycles", 3.0))
     if had_cycles < n_cycles - 1e-9:
         return f"for {had_cycles:g} periods, not {n_cycles:g} as asked"
@@ -254,7 +252,6 @@ def run_backtest_case(motion: DiscreteMotion, label: str, name: str, *,
     MfflapError
         The run failed (:func:`~mfflap.cfd.openfoam.run_motion.run_motion`).
     """
-
     spline = cfd_motion(motion)
     period = spline.period
     params = {"kind": "periodic_spline", "label": label, "period": period,
@@ -312,7 +309,6 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
         solver settings (``backtest_<key>.h5``) are taken instead of a new run (the rounds of
         :mod:`mfflap.rounds` back-test a motion repeated from an earlier round once).
     """
-
     key = motion_key(motion)
     period = cfd_motion(motion).period
     folders = [Path(f) for f in fixture_folders if Path(f).is_dir()]

@@ -34,7 +34,6 @@ def _check_run_times(case_id: str, duration: float, ramp_time: float) -> None:
     """Refuse, when a case is made, a run of no or endless length or a start-up ramp that
     lasts it all (the case would be refused only when it came to run, after its campaign
     had started), naming the case."""
-
     try:
         check_ramp_time(ramp_time, check_end_time(duration))
     except ConfigError as exc:

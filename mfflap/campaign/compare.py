@@ -258,7 +258,6 @@ def compare_campaigns(folder_a: str | Path, folder_b: str | Path,
 def write_comparison(path: str | Path, comparison: CampaignComparison) -> Path:
     """The comparison as an HDF5 results file (``kind="campaign_comparison"``), with both
     campaigns' manifests (campaign.toml) stored beside it."""
-
     manifests = []
     for label, folder in (("A", comparison.folder_a), ("B", comparison.folder_b)):
         manifest = Path(folder) / "campaign.toml"
@@ -290,7 +289,6 @@ def plot_comparison(path: str | Path, comparison: CampaignComparison,
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
 
     folder_b = Path(comparison.folder_b)
     params = {c.case_id: read_record(folder_b / f"{c.case_id}.h5").parameters

@@ -250,7 +250,6 @@ def run_convergence(out_dir: str | Path, motion: Motion, end_time: float, *,
         the first cycle and the start of the comparison, so that the start-up cycle is left
         out; a three-period run then gives two cycles).
     """
-
     base = solver or SolverSettings()
     out = Path(out_dir)
     dt_mesh = meshes[0] if time_step_mesh is None else time_step_mesh

@@ -127,7 +127,6 @@ def lost_numerics(rec: CfdRecord, plate: Plate, fluid: Fluid, stream: FreeStream
     more than ``max_lost_share`` of the time after its ramp: what identification leaves out
     (:func:`mfflap.identification.data.prepare_case`; shorter stretches it bridges).
     """
-
     after_ramp = rec.time >= float(rec.parameters.get("ramp_time", 0.0))
     loads, bursts = bridge_load_bursts(rec.loads, after_ramp)
     breaches = find_envelope_breaches(rec.state, loads, plate, fluid, stream,
@@ -145,7 +144,6 @@ def run_one(case: CampaignCase, out_dir: str, setup: CampaignSetup) -> CaseStatu
 
     Never raises for a CFD failure: the failure is written beside the records and returned.
     """
-
     out = Path(out_dir)
     record_path = out / f"{case.case_id}{RECORD_SUFFIX}"
     if record_path.exists():
@@ -285,7 +283,6 @@ def manifest_setup(out_dir: str | Path) -> dict[str, Any] | None:
 
 def read_toml_text(text: str) -> dict[str, Any]:
     """Parse TOML text (round-trip helper for comparing manifests)."""
-
     return tomllib.loads(text)
 
 
@@ -375,7 +372,6 @@ def campaign_status(out_dir: str | Path,
 def _simulated(case_dir: Path) -> tuple[float, float, float] | None:
     """(time reached, time step, end time) of a case's OpenFOAM run in s, or None if its
     solver has not begun."""
-
     reached = solver_progress(case_dir)
     if reached is None or not (case_dir / "mfflap_case.toml").is_file():
         return None
@@ -416,7 +412,6 @@ def retries_in_flight(out_dir: str | Path, case_ids: Sequence[str]) -> str:
 def _started(case_dir: Path) -> tuple[str, float] | None:
     """How far a case's OpenFOAM run got (a message and the simulated share), or None if its
     solver has not begun."""
-
     reached = _simulated(case_dir)
     if reached is None:
         return None
@@ -557,7 +552,6 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
     """
     # dask.distributed takes about a second to load: only a campaign run needs it
     from dask.distributed import Client, LocalCluster, as_completed
-
 
     setup = setup or CampaignSetup()
     if scheduler_address is None and n_workers < 1:

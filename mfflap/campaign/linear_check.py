@@ -145,7 +145,6 @@ def summary_table(checks: Sequence[LinearCheck]) -> str:
 
 def write_checks(path: str | Path, checks: Sequence[LinearCheck], config_toml: str) -> Path:
     """The checks as an HDF5 results file (``kind="linear_check"``), the set-up beside them."""
-
     rows = [asdict(c) for c in checks]
     units = {"reduced_frequency": "1", "max_effective_incidence_deg": "deg",
              "nrmse_normal_force": "1", "pearson_normal_force": "1", "nrmse_moment": "1",
@@ -169,7 +168,6 @@ def plot_checks(path: str | Path, records: Sequence[CfdRecord], model: ForceMode
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
 
     n = len(records)
     cols = min(3, max(n, 1))

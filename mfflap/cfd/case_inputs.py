@@ -197,7 +197,6 @@ def with_added_solver_settings(kept: dict[str, Any]) -> dict[str, Any]:
 def solver_keys(solver: Any, leave_out: tuple[str, ...] = ()) -> dict[str, Any]:
     """A solver's settings under the keys a case and a record keep them (``solver_<name>``),
     without those named in ``leave_out``."""
-
     return {f"solver_{key}": value for key, value in asdict(solver).items()
             if key not in leave_out}
 

@@ -229,7 +229,6 @@ def write_model_comparison(path: str | Path, comparison: ModelComparison,
     of the ``summary`` group; F_n, F_t and M of both are ``cfd_loads`` and ``model_loads``,
     thrust and power ``performance``.
     """
-
     summary = comparison.summary
     kept = summary.get("inputs_checked_against")
     attrs = {"summary_json": json.dumps(summary, default=lambda o: np.asarray(o).tolist()),
@@ -251,7 +250,6 @@ def write_model_comparison(path: str | Path, comparison: ModelComparison,
 
 def read_model_comparison(path: str | Path) -> ModelComparison:
     """A comparison stored by :func:`write_model_comparison`."""
-
     with ResultsFile(path, kinds=("cfd_model_comparison",)) as stored:
         series, _ = stored.read_group("performance")
         _, attrs = stored.read_group("summary")

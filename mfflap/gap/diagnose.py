@@ -177,7 +177,6 @@ def _predictions(system: GapSystem, cols: list[int], folds) -> list[dict[str, np
 
 def gap_metrics(system: GapSystem, predictions: list[dict[str, np.ndarray]]) -> dict:
     """Per case, per signal: NRMSE, Pearson; mean-thrust and mean-power errors."""
-
     n = len(system.cases)
     out = {s: {"nrmse": np.empty(n), "pearson": np.empty(n)} for s in
            (*COMPONENTS, "thrust", "input_power")}

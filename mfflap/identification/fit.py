@@ -328,7 +328,6 @@ def most_influential(result: IdentificationResult) -> list[Influence]:
 def score(cases: Sequence[CaseData], model: ForceModel,
           signals: Sequence[str] = (*COMPONENTS, *DERIVED)) -> dict[str, dict[str, np.ndarray]]:
     """NRMSE and Pearson of ``model`` against the CFD of every case, per signal."""
-
     out = {s: {"nrmse": np.empty(len(cases)), "pearson": np.empty(len(cases))}
            for s in signals}
     for i, c in enumerate(cases):

@@ -202,7 +202,6 @@ def objective_and_gradient(pitch_acc, heave_acc, dt, midpoint, want_gradient, u,
 def problem_constants(problem) -> tuple | None:
     """Arguments after ``want_gradient`` for :func:`objective_and_gradient`, or None when
     the problem's model is not the plain four-term Morison model with equal strips."""
-
     k = kernel_constants(problem.model)
     if k is None:
         return None

@@ -212,7 +212,6 @@ def _ipopt_solver(problem: FlappingProblem, n: int, max_iterations: int, toleran
     # CasADi loads its compiled libraries: only the IPOPT path needs it
     import casadi as ca
 
-
     m = problem.model
     envelope = _has_state_envelope(problem)
     key = (n, problem.scheme, tuple(sorted(m.coefficients.items())), m.geometry,

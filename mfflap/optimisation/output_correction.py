@@ -134,7 +134,6 @@ def secants_within(centre, points, reach: float) -> list:
     step just refused (a refused step halves the radius) and drop the older, farther ones
     as the region shrinks.
     """
-
     c, w = np.real(centre.controls()), centre.control_scales()
     return [p for p in points if p.motion.n_steps == centre.n_steps
             and np.max(np.abs((np.real(p.motion.controls()) - c) / w)) <= reach * (1 + 1e-9)]
@@ -168,7 +167,6 @@ class Slopes:
 
     def shift(self, motion) -> float:
         """lambda . (u - c) at ``motion`` (units of J)."""
-
         z = np.real(motion.controls())
         if z.size != self.centre.size:
             raise ConfigError(f"the output correction's slopes are for N = "
@@ -178,7 +176,6 @@ class Slopes:
 
     def as_dict(self) -> dict:
         """JSON-friendly: the sources, residuals and the slope's scaled length."""
-
         w = DiscreteMotion.from_controls(self.centre).control_scales()
         return {"sources": list(self.sources), "residuals": list(self.residuals),
                 "scaled_norm": float(np.linalg.norm(self.objective * w))}
@@ -228,7 +225,6 @@ class OutputCorrection:
     @classmethod
     def measured(cls, point: CorrectionPoint, model, scheme: str) -> OutputCorrection:
         """The correction that makes ``model`` predict ``point``'s CFD means."""
-
         s = evaluate_discrete(model, point.motion, scheme).summary
         model_thrust, model_power = float(s.mean_thrust), float(s.mean_power)
         notes = []
@@ -295,7 +291,6 @@ class OutputCorrection:
         ConfigError
             The scales come through a filter (gain < 1): the centre would not be met.
         """
-
         if self.gain != 1.0:
             raise ConfigError("slopes need the measured scales (filter gain 1), so that the "
                               f"corrected model meets CFD at the centre; gain {self.gain:g}",
@@ -333,7 +328,6 @@ class OutputCorrection:
 
     def problem(self, problem: FlappingProblem) -> FlappingProblem:
         """The ordinary problem whose objective is the corrected one of ``problem`` over c."""
-
         c = self.objective_factor(problem.beta)
         k_p = self.power_scale
         modifier = None

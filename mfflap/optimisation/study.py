@@ -326,8 +326,6 @@ def gain_table(config: CaseConfig, n_steps: Sequence[int] = (25, 50, 100),
     Returns arrays ``gain`` (n_N, n_factors; NaN where the best sinusoid makes no thrust),
     ``thrust`` N, ``strouhal_number``, ``flagged``.
     """
-
-
     model = model or config.morison_model()
     sweep = sweep if sweep is not None else default_sweep(config, model, progress)
     best = sweep.best_feasible()

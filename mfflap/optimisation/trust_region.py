@@ -138,7 +138,6 @@ class TrustRegion:
         ConfigError
             The centre has not ``n_steps`` steps, or its dt range misses the period bounds.
         """
-
         if self.centre.n_steps != n_steps:
             raise ConfigError(f"the trust region's centre ({self.source or 'a motion'}) has "
                               f"{self.centre.n_steps} steps, the optimisation {n_steps}",
@@ -157,7 +156,6 @@ class TrustRegion:
     def step_fraction(self, motion) -> float:
         """The step from the centre to ``motion`` as a share of the radius (the largest over
         the variables; 1: on the boundary)."""
-
         step = np.real(motion.controls()) - np.real(self.centre.controls())
         return float(np.max(np.abs(step) / self.half_widths()))
 

@@ -117,6 +117,23 @@ class Retry:
         return json.dumps(asdict(self))
 
     @classmethod
+    def from_dict(cls, data: object, path: str = "<text>", lineno: int = 1) -> Retry:
+        """A retry from its fields as a dict (:meth:`to_json`'s object).
+
+        Raises
+        ------
+        ParseError
+            Naming ``path`` and ``lineno``, for anything that is not such an object.
+        """
+        try:
+            known = {f.name for f in fields(cls)}
+            if not isinstance(data, dict) or not set(data) <= known:
+                raise ValueError(f"keys {sorted(data) if isinstance(data, dict) else data!r}")
+            return cls(**data)
+        except (ValueError, TypeError) as exc:
+            raise ParseError(f"not a retry ({exc})", path=path, line=lineno) from None
+
+    @classmethod
     def from_json(cls, line: str, path: str = "<text>", lineno: int = 1) -> Retry:
         """A retry from one line of JSON (:meth:`to_json`).
 
@@ -127,12 +144,9 @@ class Retry:
         """
         try:
             data = json.loads(line)
-            known = {f.name for f in fields(cls)}
-            if not isinstance(data, dict) or not set(data) <= known:
-                raise ValueError(f"keys {sorted(data) if isinstance(data, dict) else data!r}")
-            return cls(**data)
-        except (ValueError, TypeError) as exc:
+        except ValueError as exc:
             raise ParseError(f"not a retry ({exc})", path=path, line=lineno) from None
+        return cls.from_dict(data, path, lineno)
 
 
 def retries_to_json(retries: list[Retry]) -> str:
@@ -154,7 +168,7 @@ def retries_from_json(text: str, path: str = "<text>") -> list[Retry]:
         raise ParseError(f"retry log is not JSON ({exc})", path=path) from None
     if not isinstance(items, list):
         raise ParseError("retry log is not a JSON array", path=path)
-    return [Retry.from_json(json.dumps(item), path, k + 1) for k, item in enumerate(items)]
+    return [Retry.from_dict(item, path, k + 1) for k, item in enumerate(items)]
 
 
 #: where a retry of a record's text-only ``retries`` provenance restarted the run from:

@@ -124,7 +124,6 @@ class Report:
 
     def write(self, path: str | Path) -> Path:
         """Write the HTML file."""
-
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         # beside it first, then in its place: a stop while writing keeps the report before

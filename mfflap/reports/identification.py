@@ -34,7 +34,6 @@ APPLICABLE_NRMSE = 0.10
 def _param(result: IdentificationResult, key: str) -> np.ndarray:
     """A motion parameter of every case (NaN where its record has none); the frequency as
     identification weighs it (:func:`~mfflap.identification.data.motion_frequency`)."""
-
     if key == "frequency":
         return np.array([motion_frequency(p) for p in result.case_parameters])
     return np.array([float(p.get(key, np.nan)) for p in result.case_parameters])
@@ -89,7 +88,6 @@ def map_figure(result: IdentificationResult, signal: str = "normal_force",
 def overlay_figure(cases: Sequence[CaseData], model: ForceModel, names: Sequence[str],
                    signals: Sequence[str] = ("normal_force", "thrust")) -> Figure:
     """CFD and model time histories of chosen cases."""
-
     by_name = {c.name: c for c in cases}
     chosen = [by_name[n] for n in names if n in by_name]
     fig, axes = plt.subplots(len(signals), max(len(chosen), 1),

@@ -114,7 +114,6 @@ RESULT_HEADER = ["motion", "method", "mean thrust [N]", "mean power [W]", "η", 
 def phase_text(phase: str, results: Mapping[float, OptimisationResult]) -> str:
     """What the report says of the optimised motions' phase (``optimisation.phase``) and
     each one's pitch phase against sin(2 pi t / T) (:mod:`mfflap.optimisation.phase`)."""
-
     measured = ", ".join(f"β = {b:g}: {pitch_phase_rad(r.motion):+.3f} rad"
                          for b, r in results.items())
     if phase == "fixed":

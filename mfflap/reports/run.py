@@ -50,7 +50,6 @@ def backtest_figure(outcomes: Mapping[str, BacktestOutcome], max_power: float) -
 def add_backtest_sections(rep: Report, outcomes: Mapping[str, BacktestOutcome],
                           max_power: float) -> None:
     """Back-test table, figure and the CFD thrust gain."""
-
     s = rep.section("Back-test against CFD")
     if not outcomes:
         s.blocks.append(text_html("No back-test was run.", warn=True))
@@ -108,7 +107,6 @@ def add_backtest_sections(rep: Report, outcomes: Mapping[str, BacktestOutcome],
 
 def add_sensitivity_section(rep: Report, sensitivity: Mapping[str, tuple], scheme: str) -> None:
     """Figure 5: beta = 0 re-optimised with each strategy's coefficients."""
-
     s = rep.section("Coefficient sensitivity (β = 0 re-optimised per weighting strategy)")
     fig, axes = plt.subplots(2, 2, figsize=(11, 6))
     rows = []

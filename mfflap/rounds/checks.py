@@ -134,7 +134,6 @@ def optimised_means(outcome, config: CaseConfig) -> dict[str, tuple[float, float
     """label -> (mean thrust N, mean power W) of each back-tested motion of a round as its
     optimiser saw them (:func:`~mfflap.performance.discrete_means`, the round's model and
     scheme); empty without a model."""
-
     if outcome.model is None:
         return {}
     scheme = (outcome.config or config).optimisation.scheme

@@ -49,7 +49,6 @@ RECORDS_FOLDER = "loop_records"
 def _keep_records(backtests: dict, folder: Path) -> None:
     """Write each back-tested motion's CFD record into ``folder`` under its own name (a
     fixture found within the look-up's tolerance keeps the name of the motion it ran)."""
-
     folder.mkdir(parents=True, exist_ok=True)
     for o in backtests.values():
         if o.record is not None and not (folder / f"{o.record.name}.h5").exists():
@@ -103,7 +102,6 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
     (LoopResult, RunOutcome)
         The rounds and the last round's outcome.
     """
-
     check_rounds(n_rounds, tolerance, options.coefficients, correct_outputs, refit,
                  trust_radius, first_order, correction_gain, cfd_repeatability)
     refit = refit and options.coefficients.startswith("identified:")  # case: none to refit

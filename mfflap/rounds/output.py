@@ -15,7 +15,6 @@ from mfflap.rounds.summary import LoopResult
 
 def write_rounds_results(result: LoopResult, config: CaseConfig, out_dir: Path) -> None:
     """``out_dir/rounds.h5``: every round's numbers, the case file beside them."""
-
     with ResultsFile(out_dir / "rounds.h5", "w", kind="rounds",
                      config_toml=config.to_toml()) as rf:
         rf.h5.attrs["tolerance"] = result.tolerance

@@ -15,7 +15,6 @@ def correction_points(outcome, checks: dict[str, MotionCheck], index: int) -> di
     """beta -> :class:`~mfflap.optimisation.output_correction.CorrectionPoint`: each
     back-tested optimum of round ``index`` with its CFD means, for the next round's output
     correction."""
-
     points = {}
     for beta, result in (outcome.study.sqp.items() if outcome.study is not None else ()):
         label = beta_label(beta)
@@ -37,7 +36,6 @@ def secant_points(points: dict, checks: dict[str, MotionCheck],
     has not yet given that beta a point. A trust region's short step that reuses an earlier
     run adds no second point with that run's CFD. ``records_used`` (beta -> the record
     names its points were measured on) is brought up to date."""
-
     kept = {}
     for beta, point in points.items():
         check = checks[beta_label(beta)]
@@ -61,7 +59,6 @@ def trust_steps(outcome, checks: dict[str, MotionCheck], regions: dict, centres:
     which two CFD runs of one motion differ, which relaxes the ratio by the noise of J at the
     centre (:func:`~mfflap.optimisation.trust_region.noise_of_objective`; None: not known).
     """
-
     steps = {}
     sqp = outcome.study.sqp if outcome.study is not None else {}
     cfg = outcome.config or config
@@ -91,7 +88,6 @@ def trust_steps(outcome, checks: dict[str, MotionCheck], regions: dict, centres:
 
 def backtest_record_of(outcome, beta: float):
     """The CFD record of this round's back-test of ``beta``'s optimum, or None."""
-
     found = outcome.backtests.get(beta_label(beta))
     return None if found is None else found.record
 
@@ -99,7 +95,6 @@ def backtest_record_of(outcome, beta: float):
 def mixed_set_up_notes(outcome, beta: float, whose: str) -> list[str]:
     """``whose`` run's compared cycles mixing two set-ups (a retry resumed it part-way
     through them), said for a trust step's ``ran_otherwise``; empty if not."""
-
     found = outcome.backtests.get(beta_label(beta))
     c = None if found is None else found.comparison
     if c is None or not c.compared_cycles_mixed_set_up:

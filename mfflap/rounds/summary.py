@@ -90,7 +90,6 @@ class LoopResult:
 
 def describe_round(summary: RoundSummary, tolerance: float) -> str:
     """One line per motion: model against CFD mean thrust and power."""
-
     lines = [f"round {summary.index}: {summary.n_cases} CFD runs in the fit "
              f"({summary.loop_records_in_fit} from earlier rounds); "
              + ", ".join(f"{k} {v:.3g}" for k, v in summary.coefficients.items())]

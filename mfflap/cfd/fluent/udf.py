@@ -68,7 +68,6 @@ def analytic_udf(motion: HarmonicMotion | RampHarmonicMotion, ramp_time: float =
                  udf_name: str = "mfflap_motion") -> str:
     """C source of an analytic DEFINE_CG_MOTION for a sinusoid (with or without the
     theta_kamp t pitch ramp) and the C^2 start-up ramp."""
-
     _check_name(udf_name)
     ramp = isinstance(motion, RampHarmonicMotion)
     coeff = motion.pitch_ramp_rate if ramp else motion.pitch_amplitude
@@ -104,7 +103,6 @@ def table_udf(motion: Motion, end_time: float, ramp_time: float = 0.0,
     ``end_time`` is then not used. Otherwise the table covers the run and its end values
     are held past it.
     """
-
     _check_name(udf_name)
     ramp_time = check_ramp_time(ramp_time)
     if periodic_period is not None:
@@ -146,7 +144,6 @@ def journal(udf_file: str, report_file: str = REPORT_FILE, case_file: str = "pla
     """Batch journal: read the case, compile and load the UDF, make the fluid zone a rigid
     body driven by it, add force/moment report definitions and a report file with the flow
     time, and run ``n_steps`` time steps."""
-
     _check_name(udf_name)
     if n_steps < 1 or time_step <= 0 or max_iterations < 1:
         raise ConfigError("n_steps and max_iterations must be >= 1 and time_step > 0",

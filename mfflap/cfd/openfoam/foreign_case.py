@@ -66,19 +66,18 @@ class CaseMotion:
     source: str
 
 
-def _read_foam(path: Path, key: str | None = "") -> Any:
-    """A dictionary file read whole by foamlib (``key`` ""), or one of its entries (None: a
-    headerless list such as a mesh's points).
+def _read_foam(path: Path, headerless: bool = False) -> Any:
+    """A dictionary file read whole by foamlib, or (``headerless``) the list a file without
+    entries holds, such as a mesh's points.
 
     Raises
     ------
     ParseError
         Naming the file, for one foamlib cannot parse.
     """
-
     try:
         data = foam_file(path)
-        return data.as_dict() if key == "" else data[key]
+        return data[None] if headerless else data.as_dict()
     except decode_error() as exc:
         first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise ParseError(f"not an OpenFOAM dictionary foamlib can read ({first[:200]})",
@@ -126,16 +125,12 @@ def _rotation_z(angle_rad: np.ndarray) -> np.ndarray:
     return out
 
 
-#: a rigid transform over time: points (3,) -> their places at each time, (n, 3)
-Transform = Callable[[np.ndarray], np.ndarray]
-
-
 @dataclass(frozen=True)
 class _Part:
     """One analytic motion function: how it moves a point, its rotation's centre (None for
     a translation) and its angular frequency."""
 
-    move: Callable[[np.ndarray, np.ndarray], np.ndarray]  # (times, points (3,)) -> (n, 3)
+    move: Callable[[np.ndarray, np.ndarray], np.ndarray]  # (times (n,), points (n, 3)) -> (n, 3)
     origin: np.ndarray | None
     omega: float
     rotation_deg: Callable[[np.ndarray], np.ndarray]  # times -> (n, 3) degrees
@@ -160,7 +155,7 @@ def _part(entry: Mapping[str, Any], path: Path, name: str) -> _Part:
 
         def move(t: np.ndarray, x: np.ndarray) -> np.ndarray:
             rot = _rotation_z(np.radians(amplitude[2] * np.sin(omega * t)))
-            return origin + np.einsum("nij,j->ni", rot, x - origin)
+            return origin + np.einsum("nij,nj->ni", rot, x - origin)
 
         return _Part(move, origin, omega,
                      lambda t: np.sin(omega * t)[:, None] * amplitude)
@@ -298,7 +293,7 @@ def read_case_motion(case_dir: str | Path, end_time_s: float) -> CaseMotion:
     place = np.broadcast_to(pivot, (n, 3)).copy()
     angle = np.zeros(n)
     for p in reversed(parts):  # OpenFOAM applies the last function listed first
-        place = np.stack([p.move(t[k:k + 1], place[k])[0] for k in range(n)])
+        place = p.move(t, place)
         angle += np.radians(p.rotation_deg(t)[:, 2])
     displacement = place - pivot
     rotation = np.zeros((n, 3))
@@ -323,7 +318,7 @@ def mesh_depth(case_dir: str | Path) -> float:
     if not path.is_file():
         raise ParseError("no mesh points: mesh the case (blockMesh) or give --depth",
                          path=str(path))
-    points = np.asarray(_read_foam(path, None), dtype=float)
+    points = np.asarray(_read_foam(path, headerless=True), dtype=float)
     depth = float(points[:, 2].max() - points[:, 2].min()) if points.ndim == 2 else 0.0
     if not depth > 0.0:
         raise ParseError("the mesh has no depth along z", path=str(path))

@@ -73,11 +73,16 @@ def budget_retries(case_dir: str | Path) -> tuple[list[Retry], int]:
     return retries, len(earlier)
 
 
-def describe_retries(case_dir: str | Path) -> list[str]:
-    """Every retry of the case so far in words, one line each, rerun requests included."""
-    retries, earlier = read_retry_log(case_dir)
+def retry_lines(retries: list[Retry], earlier: list[str]) -> list[str]:
+    """A read retry log (:func:`read_retry_log`) in words, one line a retry, rerun requests
+    included."""
     return earlier + [r.describe() for r in retries]
 
 
+def describe_retries(case_dir: str | Path) -> list[str]:
+    """Every retry of the case so far in words, one line each, rerun requests included."""
+    return retry_lines(*read_retry_log(case_dir))
+
+
 __all__ = ["LEGACY_RETRY_LOG", "RETRY_LOG", "append_retry", "budget_retries",
-           "describe_retries", "read_retry_log", "request_rerun"]
+           "describe_retries", "read_retry_log", "request_rerun", "retry_lines"]

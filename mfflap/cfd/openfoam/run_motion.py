@@ -31,8 +31,8 @@ from mfflap.cfd.openfoam.retry_edits import (
 from mfflap.cfd.openfoam.retry_log import (
     append_retry,
     budget_retries,
-    describe_retries,
     read_retry_log,
+    retry_lines,
 )
 from mfflap.cfd.openfoam.rewind import rewind_case
 from mfflap.cfd.openfoam.runner import RunStopped, run_case
@@ -217,8 +217,8 @@ def _last_resume_s(retries: list[Retry]) -> float:
 
 def _retries_tried(case_dir: Path) -> str:
     """The case's retries so far (its retry log, across calls) in one line, or ''."""
-    lines = describe_retries(case_dir)
     retries, earlier = read_retry_log(case_dir)
+    lines = retry_lines(retries, earlier)
     n_retries = len(earlier) + sum(r.cause != RERUN_REQUESTED for r in retries)
     if not n_retries:
         return ""
@@ -431,7 +431,7 @@ def run_motion(case_dir: str | Path, motion: Motion, name: str, parameters: dict
                    max_courant=max_co)
         logged, earlier = read_retry_log(case_dir)
         if logged or earlier:
-            record.provenance["retries"] = "; ".join(describe_retries(case_dir))
+            record.provenance["retries"] = "; ".join(retry_lines(logged, earlier))
         if logged:
             record.provenance["retry_log"] = retries_to_json(logged)
         if record.time[-1] < 0.98 * end_time:

@@ -502,7 +502,6 @@ def run_case(case_dir: str | Path, timeout_s: float = 3600.0, n_procs: int = 1,
         error before the case's end time (a stop signal sent to it directly: it wrote its
         fields, and a rerun resumes there), or as :func:`run_application`.
     """
-
     case_dir = check_case_path(case_dir)  # before "meshing" is said
     _check_time_limit(timeout_s, "pimpleFoam")
     meshed = (case_dir / "constant" / "polyMesh" / "points").exists()
