@@ -168,6 +168,9 @@ class RunOutcome:
     backtest_motions: dict = field(default_factory=dict)
     #: every stage that ran, in order, with how it ended
     stages: list[StageOutcome] = field(default_factory=list)
+    #: the weighting whose identified coefficients the optimisation used, or None when it
+    #: used the case file's
+    optimised_with: str | None = None
 
 
 def _stage(outcome: RunOutcome, name: str, progress: Progress, fn):
@@ -314,6 +317,7 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
         strategy = options.coefficients.split(":", 1)[1]
         if strategy in outcome.identification:
             model = outcome.identification[strategy].model(model)
+            outcome.optimised_with = strategy
         else:
             outcome.problems.append(f"optimisation: no identified coefficients for strategy "
                                     f"{strategy!r}; used the case's coefficients")
@@ -321,7 +325,6 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
     outcome.config = config
     reference = None  # the identification data's coverage, built once when asked for
     if outcome.cases:
-
         reference = _stage(outcome, "identification coverage", progress,
                            lambda: CoverageReference.from_cases(
                                outcome.cases, config.morison_model(), config.flow.velocity))

@@ -27,5 +27,5 @@ lint-imports                                # the layers (.importlinter)
 python -m pytest -q                         # the fast tier: no OpenFOAM, no slow tests
 if [ "${1:-}" != "--fast" ]; then
   # the rest of the full tier (the two runs together are `pytest --full`)
-  python -m pytest -q -m "openfoam or slow"
+  python -m pytest -q -m "openfoam or slow"  # the replays (pytest --replays) are not in it
 fi

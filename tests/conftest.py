@@ -1,52 +1,10 @@
-"""Shared fixtures; OpenBLAS's kernels and thread count pinned before numpy loads (below)."""
+"""Shared fixtures and the test tiers: fast (the default), full (``--full``: also real
+OpenFOAM and the slow tests) and the replays of shipped series (``--replays``).
 
-import os
-
-from openblas_kernels import (
-    SHIPPED_KERNELS,
-    SHIPPED_THREADS,
-    has_avx512,
-    unlike_the_shipped_series,
-)
-
-
-def _pin_openblas_kernels() -> None:
-    """On a CPU with AVX-512, have OpenBLAS use its SkylakeX kernels, as it chose itself on
-    the machines the shipped series of rounds (tests/rounds/test_loop.py) were computed on.
-
-    Those series replay a computation that round-off steers: beta = 1's least-power optimum
-    has no phase that anything in the problem fixes, and OpenBLAS's Haswell kernels (what it
-    picks on an AVX-512 AMD EPYC, whose model it does not know) or another thread count
-    find it up to half a second elsewhere in its 10 s cycle (J alike to 1e-8). Its
-    back-test is found shifted in time (mfflap.backtest.run.matching_fixture), but each
-    later round then optimises about another centre, and the series take other steps
-    from round 2 on (docs/findings/known_limits.md). Set before numpy loads, here and in every
-    process the tests start (xdist's workers, the CLI's subprocesses), over a value the
-    environment gives (machines here have come with OPENBLAS_CORETYPE=Haswell set); the
-    value found is kept in MFFLAP_TESTS_OPENBLAS_CORETYPE_WAS. Left alone on a CPU without
-    AVX-512, where those kernels would not run.
-    """
-    if has_avx512():
-        os.environ.setdefault("MFFLAP_TESTS_OPENBLAS_CORETYPE_WAS",
-                              os.environ.get("OPENBLAS_CORETYPE", ""))
-        os.environ["OPENBLAS_CORETYPE"] = SHIPPED_KERNELS
-
-
-def _pin_openblas_threads() -> None:
-    """Have OpenBLAS use two threads, as it did on the two-core machines the shipped series of
-    rounds were computed on: one thread instead of two moves beta = 1's least-power optimum
-    as far as other kernels do (docs/findings/phase_of_optima.md), and OpenBLAS would
-    otherwise take one thread per core of whatever machine runs the tests. Set before numpy
-    loads, over a value the environment gives (kept in
-    MFFLAP_TESTS_OPENBLAS_NUM_THREADS_WAS); OpenBLAS itself caps it at the cores there are.
-    Tests that start processes on other thread counts set OPENBLAS_NUM_THREADS for them."""
-    os.environ.setdefault("MFFLAP_TESTS_OPENBLAS_NUM_THREADS_WAS",
-                          os.environ.get("OPENBLAS_NUM_THREADS", ""))
-    os.environ["OPENBLAS_NUM_THREADS"] = str(SHIPPED_THREADS)
-
-
-_pin_openblas_kernels()
-_pin_openblas_threads()
+OpenBLAS runs whatever kernels and thread count it picks on the machine: no test depends
+on them. The replays that follow a path round-off steers say so with the
+``shipped_kernels`` marker and are skipped, saying why, where OpenBLAS runs otherwise.
+"""
 
 import importlib.util
 import subprocess
@@ -58,6 +16,7 @@ from types import ModuleType
 
 import numpy as np
 import pytest
+from openblas_kernels import unlike_the_shipped_series
 
 from mfflap.hydro import MorisonModel
 
@@ -66,6 +25,9 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     parser.addoption("--full", action="store_true",
                      help="the full tier: also the tests marked openfoam (real OpenFOAM runs) "
                           "and slow; without it, the fast tier runs")
+    parser.addoption("--replays", action="store_true",
+                     help="the replays of the shipped series of rounds (marked replay, "
+                          "2-6 minutes each), which no other tier runs")
 
 
 #: the markers of the tests only the full tier runs
@@ -74,13 +36,20 @@ FULL_TIER_MARKERS = ("openfoam", "slow")
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     """The fast tier (the default) deselects the tests marked openfoam or slow; ``--full``
-    runs them all. A ``-m`` expression given on the command line chooses instead."""
-    if config.getoption("--full") or config.getoption("-m"):
-        return
+    runs them all. A ``-m`` expression given on the command line chooses instead. The
+    replays (marked replay) run with ``--replays`` only, alone."""
+    replays = config.getoption("--replays")
     kept, dropped = [], []
     for item in items:
+        replay = item.get_closest_marker("replay") is not None
         full = any(item.get_closest_marker(m) is not None for m in FULL_TIER_MARKERS)
-        (dropped if full else kept).append(item)
+        if replays:
+            keep = replay
+        elif replay:
+            keep = False
+        else:
+            keep = bool(config.getoption("--full") or config.getoption("-m")) or not full
+        (kept if keep else dropped).append(item)
     if dropped:
         config.hook.pytest_deselected(items=dropped)
         items[:] = kept
@@ -88,9 +57,9 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
 
 def pytest_runtest_setup(item: pytest.Item) -> None:
     """Skip a test marked ``shipped_kernels`` where OpenBLAS runs other kernels or another
-    thread count than the shipped series of rounds were computed with (on a CPU without
-    AVX-512, or with one core), saying which: there the series take other steps from round
-    2 on, as docs/findings/known_limits.md say, and the test's assertions are those steps."""
+    thread count than the shipped series of rounds were computed with, saying which: there
+    the series take other steps from round 2 on, as docs/findings/known_limits.md say, and
+    the test's assertions are those steps."""
     if item.get_closest_marker("shipped_kernels") is not None:
         why = unlike_the_shipped_series()
         if why is not None:

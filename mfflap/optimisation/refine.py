@@ -58,11 +58,18 @@ def refine_best_sinusoid(model, sweep: SweepResult, n_steps: int, max_power: flo
                    sweep.phase[i]])
     scale = np.array([1.0, 0.1, 0.1, 1.0])
 
+    evaluated: dict[bytes, tuple[float, float]] = {}
+
     def evaluate(xs):
-        f, h, th, ph = xs * scale
-        s = evaluate_discrete(model, harmonic_to_discrete(f, h, th, ph, n_steps),
-                              scheme).summary  # type: ignore[arg-type]
-        return float(s.mean_thrust), float(s.max_power)
+        # SLSQP asks for the objective and the power constraint at the same points: each
+        # point is evaluated once
+        key = np.asarray(xs, dtype=float).tobytes()
+        if key not in evaluated:
+            f, h, th, ph = xs * scale
+            s = evaluate_discrete(model, harmonic_to_discrete(f, h, th, ph, n_steps),
+                                  scheme).summary  # type: ignore[arg-type]
+            evaluated[key] = float(s.mean_thrust), float(s.max_power)
+        return evaluated[key]
 
     bounds = [(1 / max_period / scale[0], 1 / min_period / scale[0]),
               (0.0, max_heave / scale[1]), (0.0, np.pi / 2 / scale[2]),

@@ -253,8 +253,14 @@ def identification_report(path: str | Path, results: Mapping[str, Identification
 
 def add_identification_sections(rep: Report, results: Mapping[str, IdentificationResult],
                                 cases: Sequence[CaseData], base_model: ForceModel,
-                                velocity: float, source: str = "") -> None:
-    """Coefficients, agreement maps, overlays, applicability and weighting sensitivity."""
+                                velocity: float, source: str = "",
+                                mapped: str | None = None) -> None:
+    """Coefficients, agreement maps, overlays, applicability and weighting sensitivity.
+
+    The agreement maps, overlays and applicability region are drawn for one weighting:
+    ``mapped`` (the one the optimisation used), else the first; the others are compared in
+    the weighting-sensitivity table, which counts each one's cases within NRMSE 10 %.
+    """
     first = next(iter(results.values()))
     s = rep.section(f"Identified coefficients ({len(first.case_names)} CFD cases"
                     f"{f' from {source}' if source else ''})")
@@ -342,34 +348,37 @@ def add_identification_sections(rep: Report, results: Mapping[str, Identificatio
     if first.excluded:
         s.blocks.append(text_html("Cases left out of the fit:", warn=True))
         s.blocks.append(table_html(["case", "reason"], sorted(first.excluded.items())))
-    for label, res in results.items():
-        model = res.model(base_model)
-        sec = rep.section(f"Agreement maps ({label} weighting)")
-        for sig in ("normal_force", "thrust"):
-            for metric in ("pearson", "nrmse"):
-                sec.blocks.append(figure_html(map_figure(res, sig, metric),
-                                              f"{metric} of {SIGNAL_LABELS[sig]} over "
-                                              "(f, h_amp) per phase"))
-        err = res.metrics["normal_force"]["nrmse"]
-        order = np.argsort(err)
-        pick = [res.case_names[order[0]], res.case_names[order[len(order) // 2]],
-                res.case_names[order[-1]]]
-        sec.blocks.append(figure_html(overlay_figure(cases, model, pick),
-                                      "Best, median and worst case by NRMSE of F_n"))
-        sec.blocks.append(figure_html(applicability_figure(res, velocity),
-                                      "Applicability region: NRMSE ≤ 10 %"))
-        ok = err <= APPLICABLE_NRMSE
-        sec.blocks.append(text_html(f"{ok.sum()} of {len(err)} cases within NRMSE ≤ 10 % on "
-                                    f"F_n; median Pearson of F_n "
-                                    f"{np.median(res.metrics['normal_force']['pearson']):.3f}."))
+    label = mapped if mapped in results else next(iter(results))
+    res = results[label]
+    model = res.model(base_model)
+    sec = rep.section(f"Agreement maps ({label} weighting)")
+    for sig in ("normal_force", "thrust"):
+        for metric in ("pearson", "nrmse"):
+            sec.blocks.append(figure_html(map_figure(res, sig, metric),
+                                          f"{metric} of {SIGNAL_LABELS[sig]} over "
+                                          "(f, h_amp) per phase"))
+    err = res.metrics["normal_force"]["nrmse"]
+    order = np.argsort(err)
+    pick = [res.case_names[order[0]], res.case_names[order[len(order) // 2]],
+            res.case_names[order[-1]]]
+    sec.blocks.append(figure_html(overlay_figure(cases, model, pick),
+                                  "Best, median and worst case by NRMSE of F_n"))
+    sec.blocks.append(figure_html(applicability_figure(res, velocity),
+                                  "Applicability region: NRMSE ≤ 10 %"))
+    ok = err <= APPLICABLE_NRMSE
+    sec.blocks.append(text_html(f"{ok.sum()} of {len(err)} cases within NRMSE ≤ 10 % on "
+                                f"F_n; median Pearson of F_n "
+                                f"{np.median(res.metrics['normal_force']['pearson']):.3f}."))
     if len(results) > 1:
         sec = rep.section("Sensitivity to the frequency weighting")
         sec.blocks.append(figure_html(strategy_error_figure(results),
                                       "Mean NRMSE of F_n per frequency, per strategy"))
         rows = []
         for label, res in results.items():
+            err = res.metrics["normal_force"]["nrmse"]
             rows.append([label] + [float(np.median(res.metrics[s]["nrmse"])) for s in
                                    ("normal_force", "tangential_force", "moment", "thrust",
-                                    "input_power")])
+                                    "input_power")]
+                        + [f"{int((err <= APPLICABLE_NRMSE).sum())} of {len(err)}"])
         sec.blocks.append(table_html(["weighting", "median NRMSE F_n", "F_t", "M", "thrust",
-                                      "power"], rows))
+                                      "power", "cases with NRMSE F_n ≤ 10 %"], rows))

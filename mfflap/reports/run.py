@@ -147,7 +147,8 @@ def write_run_report(config: CaseConfig, outcome: RunOutcome, html_path: Path,
                                                           outcome.timings.items())))
     if outcome.identification:
         add_identification_sections(rep, outcome.identification, outcome.cases,
-                                    config.morison_model(), config.flow.velocity, source)
+                                    config.morison_model(), config.flow.velocity, source,
+                                    mapped=outcome.optimised_with)
     if outcome.study is not None:
         add_optimisation_sections(rep, outcome.study, outcome.model, config.optimisation.scheme,
                                   config.optimisation.max_power, outcome.gain,

@@ -453,10 +453,10 @@ def test_a_stop_during_the_gain_table_writes_the_beta_study_without_it(tmp_path,
                                                                        sigterm_before):
     """SIGTERM as the gain table's first beta = 0 optimisation starts: the beta study
     (beta = 0.5, finished) is written whole, without a gain table, and the message says so."""
-    import mfflap.optimisation.optimise as optimise_module
+    import mfflap.optimisation.study as study_module
 
     # only the gain table's problems have beta = 0: the study's beta is 0.5
-    sigterm_before(optimise_module, "optimise_sqp", 0.0)
+    sigterm_before(study_module, "optimise_sqp", 0.0)
     out = tmp_path / "opt.h5"
     res = CliRunner().invoke(__import__("mfflap.cli.main", fromlist=["cli"]).cli,
                              ["optimise", str(CASE), "--betas", "0.5", "--starts", "1",

@@ -179,7 +179,8 @@ def _fixed_phase_series_on_other_kernels(out: Path, n_rounds: int, *flags: str
     """`mfflap run` of the shipped case in ``n_rounds`` rounds with --fix-phase,
     ``--correct-outputs --no-refit`` and ``flags``, where the shipped series' arithmetic is
     not replayed: OpenBLAS's Haswell kernels (where the CPU has AVX2) on one thread, not the
-    SkylakeX kernels the tests pin (tests/conftest.py). Its rounds summary and its stderr."""
+    SkylakeX kernels on two threads the shipped series were computed with. Its rounds
+    summary and its stderr."""
     env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_CORETYPE"}
     env["OPENBLAS_NUM_THREADS"] = "1"
     if "avx2" in cpu_flags():
@@ -199,12 +200,13 @@ def test_the_trust_series_with_a_fixed_phase_takes_the_shipped_steps_on_other_ke
         tmp_path):
     """The trust series (`--rounds 6 --correct-outputs --no-refit --trust-region 0.25`) with
     --fix-phase, run where the shipped series' arithmetic is not replayed: OpenBLAS's
-    Haswell kernels (where the CPU has AVX2) on one thread, not the SkylakeX kernels the
-    tests pin (tests/conftest.py). It takes the shipped series' steps round by round
-    (tests/rounds/test_loop.py: all of round 2 confirmed, beta = 0's J decrease with a ratio of
-    1.00; beta = 0 and 0.5 refused in round 3; beta = 0.5 confirmed in round 4; beta = 0's
-    region collapsed in round 5) on the same CFD records through round 4, each found
-    shifted in time where its phase moved (docs/findings/phase_of_optima.md)."""
+    Haswell kernels (where the CPU has AVX2) on one thread, not the SkylakeX kernels on two
+    threads the shipped series were computed with. It takes the shipped series' steps round
+    by round (tests/findings/test_rounds_series.py: all of round 2 confirmed, beta = 0's J
+    decrease with a ratio of 1.00; beta = 0 and 0.5 refused in round 3; beta = 0.5
+    confirmed in round 4; beta = 0's region collapsed in round 5) on the same CFD records
+    through round 4, each found shifted in time where its phase moved
+    (docs/findings/phase_of_optima.md)."""
     loop, told = _fixed_phase_series_on_other_kernels(tmp_path / "loop", 6, "--trust-region",
                                                        "0.25")
     rounds = loop["rounds"]
@@ -231,30 +233,3 @@ def test_the_trust_series_with_a_fixed_phase_takes_the_shipped_steps_on_other_ke
     # found shifted in time: beta = 1's optimum of round 1 lies 4.1 s along its cycle from
     # the free one the shipped series ran
     assert "shifted in time by +4.1" in told
-
-
-@pytest.mark.slow
-def test_the_first_order_series_with_a_fixed_phase_asks_for_the_same_cfd_on_other_kernels(
-        tmp_path):
-    """The first-order series (`--trust-region 0.25 --first-order`) with --fix-phase on
-    Haswell's kernels and one thread: every motion of its five rounds finds the record it
-    finds on the tests' SkylakeX kernels (tests/rounds/test_loop.py: the free series' records
-    shifted in rounds 1-2, for beta = 0 and 0.5 its own runs of
-    backtest_first_order_fixed_phase in rounds 3-5), and CFD refuses and confirms the same
-    steps. Its secants run through those records, so the CFD it needs does not turn on the
-    CPU it runs on."""
-    loop, _ = _fixed_phase_series_on_other_kernels(
-        tmp_path / "loop", 5, "--trust-region", "0.25", "--first-order")
-    rounds = loop["rounds"]
-    assert loop["stopped_because"] == "ran the 5 round(s) asked for"
-    shipped = [("598a5388e592df63", "c91660e722b01742", "fb22156550965a86"),
-               ("f85edc06d9cf46a0", "34cd2b07c53664ae", "1a923f3083e54ac4"),
-               ("5329c3324f32e161", "5e9d900e669b668f", "1a923f3083e54ac4"),
-               ("ac4de2b2334065d7", "548f9c5cc3aa25be", "1a923f3083e54ac4"),
-               ("ec8f26d2a076fb37", "1bbea7efd9e4e35b", "1a923f3083e54ac4")]
-    assert [tuple(r["checks"][f"β = {b}"]["cfd_record"].removeprefix("backtest_")
-                  for b in ("0", "0.5", "1")) for r in rounds] == shipped
-    accepted = [{beta: step["accepted"] for beta, step in r["trust_steps"].items()
-                 if beta != "1"} for r in rounds[2:]]
-    assert accepted == [{"0": False, "0.5": False}, {"0": False, "0.5": False},
-                        {"0": True, "0.5": True}]
