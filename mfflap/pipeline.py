@@ -295,132 +295,214 @@ def run_study(config: CaseConfig, options: RunOptions, progress: Progress = prin
     return outcome
 
 
-def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
-                outcome: RunOutcome) -> None:
-    """The stages of :func:`run_study`, filling ``outcome``."""
-    folders = options.fixtures or (fixture_dir(),)
+@dataclass
+class RunContext:
+    """What the stages of one run share: its inputs, the outcome they fill, and what one
+    stage hands the next (the model the optimisation uses, the identification data's
+    coverage, the motions to back-test)."""
 
-    def identification():
-        cases, excluded = load_cases(config, folders)
-        for name, why in excluded.items():
-            outcome.problems.append(f"identification: case {name} left out: {why}")
-        outcome.cases = cases
-        return identify_strategies(config, cases, excluded, list(RUN_STRATEGIES))
+    config: CaseConfig
+    options: RunOptions
+    progress: Progress
+    outcome: RunOutcome
+    #: the model the optimisation uses: the case's coefficients, or identified ones
+    model: object = None
+    #: the identification data's coverage, built once by its stage (None before it)
+    reference: CoverageReference | None = None
+    #: label -> the discrete motion to back-test (the best sinusoid, each beta's optimum)
+    motions: dict = field(default_factory=dict)
 
-    outcome.identification = _stage(outcome, "identification", progress, identification) or {}
+
+@dataclass(frozen=True)
+class Stage:
+    """One stage of the main job: its name (as progress lines and the results file give
+    it), what it does with the run's context, and whether it runs in this one."""
+
+    name: str
+    run: Callable[[RunContext], None]
+    runs_when: Callable[[RunContext], bool] = lambda ctx: True
+
+
+def _identify(ctx: RunContext) -> None:
+    folders = ctx.options.fixtures or (fixture_dir(),)
+    cases, excluded = load_cases(ctx.config, folders)
+    for name, why in excluded.items():
+        ctx.outcome.problems.append(f"identification: case {name} left out: {why}")
+    ctx.outcome.cases = cases
+    ctx.outcome.identification = identify_strategies(ctx.config, cases, excluded,
+                                                     list(RUN_STRATEGIES))
+
+
+def _choose_model(ctx: RunContext) -> None:
+    """The optimisation's model: the case's coefficients, or the identified ones asked for
+    (a problem said when the identification did not give them)."""
+    outcome, options = ctx.outcome, ctx.options
     if outcome.identification:  # whether the fit weighs the runs as their errors say
         first = next(iter(outcome.identification.values()))
-        progress(f"identification ({first.strategy} weighting): "
-                 f"{scaling_advice(first.error_growth, first.residual_scaling)}")
-    model = config.morison_model()
+        ctx.progress(f"identification ({first.strategy} weighting): "
+                     f"{scaling_advice(first.error_growth, first.residual_scaling)}")
+    ctx.model = ctx.config.morison_model()
     if options.coefficients.startswith("identified:"):
         strategy = options.coefficients.split(":", 1)[1]
         if strategy in outcome.identification:
-            model = outcome.identification[strategy].model(model)
+            ctx.model = outcome.identification[strategy].model(ctx.model)
             outcome.optimised_with = strategy
         else:
             outcome.problems.append(f"optimisation: no identified coefficients for strategy "
                                     f"{strategy!r}; used the case's coefficients")
-    outcome.model = model
-    outcome.config = config
-    reference = None  # the identification data's coverage, built once when asked for
-    if outcome.cases:
-        reference = _stage(outcome, "identification coverage", progress,
-                           lambda: CoverageReference.from_cases(
-                               outcome.cases, config.morison_model(), config.flow.velocity))
-    if options.within_data:
-        if reference is not None:
-            config, outcome.within_data_limits = within_data_config(config, outcome.cases,
-                                                                    reference)
-            outcome.config = config
-            progress("optimisation kept within the identification data: " + ", ".join(
-                f"{k} = {v:.4g}" for k, v in outcome.within_data_limits.items()))
-        else:
-            why = ("the identification data's coverage failed (above)" if outcome.cases
-                   else "there are no identification cases")
-            outcome.problems.append("optimisation: not kept within the identification data "
-                                    f"(asked): {why}")
+    outcome.model = ctx.model
+    outcome.config = ctx.config
 
-    if options.correct_at:
 
-        scheme = config.optimisation.scheme
+def _coverage_reference(ctx: RunContext) -> None:
+    ctx.reference = CoverageReference.from_cases(ctx.outcome.cases, ctx.config.morison_model(),
+                                                 ctx.config.flow.velocity)
 
-        def corrections() -> dict:
-            out = {}
-            for beta, point in options.correct_at.items():
-                corr = OutputCorrection.measured(point, model, scheme).filtered(
-                    point.scales, options.correction_gain)
-                if beta in options.secant_at:
-                    corr = corr.with_slopes(point.motion, options.secant_at[beta],
-                                            problem_for(config, beta, model))
-                out[beta] = corr
-            return out
 
-        outcome.corrections = _stage(outcome, "output correction", progress,
-                                     corrections) or {}
+def _keep_within_data(ctx: RunContext) -> None:
+    """With ``within_data``, the optimisation limited to the identification data's reach."""
+    if not ctx.options.within_data:
+        return
+    outcome = ctx.outcome
+    if ctx.reference is not None:
+        ctx.config, outcome.within_data_limits = within_data_config(ctx.config, outcome.cases,
+                                                                    ctx.reference)
+        outcome.config = ctx.config
+        ctx.progress("optimisation kept within the identification data: " + ", ".join(
+            f"{k} = {v:.4g}" for k, v in outcome.within_data_limits.items()))
+    else:
+        why = ("the identification data's coverage failed (above)" if outcome.cases
+               else "there are no identification cases")
+        outcome.problems.append("optimisation: not kept within the identification data "
+                                f"(asked): {why}")
 
-    def optimisation():
-        try:
-            return beta_study(config, n_starts=options.n_starts,
-                              with_ipopt=options.with_ipopt, model=model, progress=progress,
-                              corrections=outcome.corrections,
-                              trust_regions=options.trust_at)
-        except StudyInterrupted as exc:  # the betas finished before it are written
-            outcome.study = exc.study
-            outcome.problems.append(f"optimisation: {exc.study.interruption}")
-            raise
 
-    outcome.study = _stage(outcome, "optimisation", progress, optimisation)
-    study = outcome.study
-    if study is not None and options.gain_table:
-        outcome.gain = _stage(outcome, "gain table", progress, lambda: gain_table(
-            config, model=model, sweep=study.sweep, progress=progress))
-    if study is not None:
-        n = config.optimisation.n_steps
-        motions = {"best sinusoid": sinusoid_motion(study.sweep, study.best_sinusoid, n)}
-        motions.update({beta_label(b): r.motion for b, r in study.sqp.items()})
-        outcome.backtest_motions = motions
-        if reference is not None:
-            outcome.coverage = _stage(outcome, "motions against the identification data",
-                                      progress, lambda: motion_coverage(
-                                          config, outcome.cases, motions, reference)) or {}
-            for label, cov in outcome.coverage.items():
-                progress(f"{label}: {cov.describe()}")
-        folders = list(options.backtest_fixtures) or backtest_fixture_dirs()
-        _stage(outcome, "back-test", progress, lambda: backtest_all(
-            config, motions, model, fixture_folders=folders, live=options.live,
-            work_dir=options.work_dir, mesh=options.mesh, progress=progress,
-            # those done before a failure or Ctrl-C are kept in outcome.backtests
-            into=outcome.backtests, done_folders=options.done_backtests,
-            n_cycles=options.backtest_cycles, average_cycles=options.average_cycles,
-            retries_from_start=options.retries_from_start))
-        for label, o in outcome.backtests.items():
-            if o.status != "back-tested":
-                outcome.problems.append(f"back-test: {label} not back-tested: {o.source}")
-    if outcome.cases:  # after the back-test: its runs are the ones the fits never saw
-        outcome.gap = _stage(outcome, "gap diagnosis", progress,
-                             lambda: gap_diagnosis(config, outcome.cases, outcome.backtests))
-        if outcome.gap is not None:
-            progress(f"gap diagnosis: {outcome.gap[0].verdict}")
-            if outcome.gap[0].transfer is not None:
-                progress(f"gap diagnosis, on the back-tested motions: "
-                         f"{outcome.gap[0].transfer.verdict}")
-    if study is not None:
-        if options.sensitivity and outcome.identification:
-            outcome.sensitivity = _stage(outcome, "coefficient sensitivity", progress,
-                                         lambda: coefficient_sensitivity(
-                                             config, outcome.identification, study.sweep,
-                                             progress)) or {}
-        if options.vtk_dir is not None:
-            # pyvista takes seconds to load: only a VTK export needs it
-            from mfflap.export.vtk import export_motion
+def _measure_corrections(ctx: RunContext) -> None:
+    options, scheme = ctx.options, ctx.config.optimisation.scheme
+    out = {}
+    for beta, point in options.correct_at.items():
+        corr = OutputCorrection.measured(point, ctx.model, scheme).filtered(
+            point.scales, options.correction_gain)
+        if beta in options.secant_at:
+            corr = corr.with_slopes(point.motion, options.secant_at[beta],
+                                    problem_for(ctx.config, beta, ctx.model))
+        out[beta] = corr
+    ctx.outcome.corrections = out
 
-            def vtk():
-                for label, m in motions.items():
-                    safe = label.replace(" ", "_").replace("=", "").replace("β", "beta")
-                    export_motion(options.vtk_dir, m, model, config.optimisation.scheme, safe)
 
-            _stage(outcome, "VTK export", progress, vtk)
+def _optimise(ctx: RunContext) -> None:
+    options, outcome = ctx.options, ctx.outcome
+    try:
+        outcome.study = beta_study(ctx.config, n_starts=options.n_starts,
+                                   with_ipopt=options.with_ipopt, model=ctx.model,
+                                   progress=ctx.progress, corrections=outcome.corrections,
+                                   trust_regions=options.trust_at)
+    except StudyInterrupted as exc:  # the betas finished before it are written
+        outcome.study = exc.study
+        outcome.problems.append(f"optimisation: {exc.study.interruption}")
+        raise
+
+
+def _gain_table(ctx: RunContext) -> None:
+    ctx.outcome.gain = gain_table(ctx.config, model=ctx.model, sweep=ctx.outcome.study.sweep,
+                                  progress=ctx.progress)
+
+
+def _motions_to_backtest(ctx: RunContext) -> None:
+    study, n = ctx.outcome.study, ctx.config.optimisation.n_steps
+    ctx.motions = {"best sinusoid": sinusoid_motion(study.sweep, study.best_sinusoid, n)}
+    ctx.motions.update({beta_label(b): r.motion for b, r in study.sqp.items()})
+    ctx.outcome.backtest_motions = ctx.motions
+
+
+def _motion_coverage(ctx: RunContext) -> None:
+    ctx.outcome.coverage = motion_coverage(ctx.config, ctx.outcome.cases, ctx.motions,
+                                           ctx.reference)
+    for label, cov in ctx.outcome.coverage.items():
+        ctx.progress(f"{label}: {cov.describe()}")
+
+
+def _backtest(ctx: RunContext) -> None:
+    options = ctx.options
+    folders = list(options.backtest_fixtures) or backtest_fixture_dirs()
+    backtest_all(ctx.config, ctx.motions, ctx.model, fixture_folders=folders,
+                 live=options.live, work_dir=options.work_dir, mesh=options.mesh,
+                 progress=ctx.progress,
+                 # those done before a failure or Ctrl-C are kept in outcome.backtests
+                 into=ctx.outcome.backtests, done_folders=options.done_backtests,
+                 n_cycles=options.backtest_cycles, average_cycles=options.average_cycles,
+                 retries_from_start=options.retries_from_start)
+
+
+def _say_what_was_not_backtested(ctx: RunContext) -> None:
+    for label, o in ctx.outcome.backtests.items():
+        if o.status != "back-tested":
+            ctx.outcome.problems.append(f"back-test: {label} not back-tested: {o.source}")
+
+
+def _diagnose(ctx: RunContext) -> None:
+    outcome = ctx.outcome
+    outcome.gap = gap_diagnosis(ctx.config, outcome.cases, outcome.backtests)
+    ctx.progress(f"gap diagnosis: {outcome.gap[0].verdict}")
+    if outcome.gap[0].transfer is not None:
+        ctx.progress(f"gap diagnosis, on the back-tested motions: "
+                     f"{outcome.gap[0].transfer.verdict}")
+
+
+def _sensitivity(ctx: RunContext) -> None:
+    ctx.outcome.sensitivity = coefficient_sensitivity(ctx.config, ctx.outcome.identification,
+                                                      ctx.outcome.study.sweep, ctx.progress)
+
+
+def _export_vtk(ctx: RunContext) -> None:
+    # pyvista takes seconds to load: only a VTK export needs it
+    from mfflap.export.vtk import export_motion
+
+    for label, m in ctx.motions.items():
+        safe = label.replace(" ", "_").replace("=", "").replace("β", "beta")
+        export_motion(ctx.options.vtk_dir, m, ctx.model, ctx.config.optimisation.scheme, safe)
+
+
+def _optimised(ctx: RunContext) -> bool:
+    return ctx.outcome.study is not None
+
+
+#: the main job in order: its stages (each timed, ending in a :class:`StageOutcome`) and
+#: the bookkeeping between them (plain functions of the run's context)
+STAGES: tuple[Stage | Callable[[RunContext], None], ...] = (
+    Stage("identification", _identify),
+    _choose_model,
+    Stage("identification coverage", _coverage_reference,
+          lambda ctx: bool(ctx.outcome.cases)),
+    _keep_within_data,
+    Stage("output correction", _measure_corrections,
+          lambda ctx: bool(ctx.options.correct_at)),
+    Stage("optimisation", _optimise),
+    Stage("gain table", _gain_table, lambda ctx: _optimised(ctx) and ctx.options.gain_table),
+    lambda ctx: _motions_to_backtest(ctx) if _optimised(ctx) else None,
+    Stage("motions against the identification data", _motion_coverage,
+          lambda ctx: _optimised(ctx) and ctx.reference is not None),
+    Stage("back-test", _backtest, _optimised),
+    _say_what_was_not_backtested,
+    # after the back-test: its runs are the ones the fits never saw
+    Stage("gap diagnosis", _diagnose, lambda ctx: bool(ctx.outcome.cases)),
+    Stage("coefficient sensitivity", _sensitivity,
+          lambda ctx: (_optimised(ctx) and ctx.options.sensitivity
+                       and bool(ctx.outcome.identification))),
+    Stage("VTK export", _export_vtk,
+          lambda ctx: _optimised(ctx) and ctx.options.vtk_dir is not None),
+)
+
+
+def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
+                outcome: RunOutcome) -> None:
+    """The :data:`STAGES` of :func:`run_study`, in order, filling ``outcome``."""
+    ctx = RunContext(config, options, progress, outcome)
+    for step in STAGES:
+        if not isinstance(step, Stage):
+            step(ctx)
+        elif step.runs_when(ctx):
+            _stage(outcome, step.name, progress, lambda step=step: step.run(ctx))
 
 
 def write_results(config: CaseConfig, outcome: RunOutcome, h5_path: Path) -> None:

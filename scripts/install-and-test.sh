@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Set up a fresh Debian machine for mfflap's tests and run them: OpenFOAM (the solvers the
-# full tier runs) and gcc (it compiles the generated Fluent UDFs) from Debian, mfflap, its
+# full tier runs), gcc (it compiles the generated Fluent UDFs) and Chromium with its
+# WebDriver (the full tier renders the HTML report in it) from Debian, mfflap, its
 # CFD records (./data) and its test and documentation tools; then ruff, the fast tier and
 # the full tier.
 #
@@ -10,14 +11,15 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 if ! command -v pimpleFoam >/dev/null 2>&1 || ! command -v gcc >/dev/null 2>&1 \
-    || ! command -v setpriv >/dev/null 2>&1; then
+    || ! command -v setpriv >/dev/null 2>&1 || ! command -v chromedriver >/dev/null 2>&1; then
   sudo=""
   if [ "$(id -u)" -ne 0 ]; then sudo="sudo"; fi
   export DEBIAN_FRONTEND=noninteractive
   $sudo apt-get update -qq
   # util-linux's setpriv (essential on Debian, named in case an image left it out) ties
   # each solver to the process that started it
-  $sudo apt-get install -y -qq openfoam gcc libc6-dev util-linux >/dev/null
+  $sudo apt-get install -y -qq openfoam gcc libc6-dev util-linux chromium chromium-driver \
+    >/dev/null
 fi
 
 python -m pip install -q --upgrade pip

@@ -30,9 +30,12 @@ pre { font-size: 85%; overflow-x: auto; }
 img { max-width: 100%; } figure { margin: 1em 0; } figcaption { color: #555; }
 </style></head><body>
 <h1>{{ title }}</h1><p>{{ subtitle }}</p>
-{% for s in sections %}<section><h2>{{ s.title }}</h2>
+{% for s in sections %}<section id="s{{ loop.index }}"><h2>{{ s.title }}</h2>
 {% for block in s.blocks %}{{ block }}
-{% endfor %}</section>{% endfor %}
+{% endfor %}</section>
+{% if loop.first and sections|length > 2 %}<nav><h2>Contents</h2><ol>
+{% for t in sections[1:] %}<li><a href="#s{{ loop.index + 1 }}">{{ t.title }}</a></li>
+{% endfor %}</ol></nav>{% endif %}{% endfor %}
 <hr><p><small>mfflap {{ version }}, {{ created }}</small></p></body></html>
 """)
 

@@ -22,6 +22,7 @@ from mfflap.reports.gap import add_gap_sections
 from mfflap.reports.html import Report, figure_html, table_html, text_html
 from mfflap.reports.identification import add_identification_sections
 from mfflap.reports.optimisation import add_optimisation_sections, cycle_curves
+from mfflap.reports.summary import add_run_summary
 
 
 def backtest_figure(outcomes: Mapping[str, BacktestOutcome], max_power: float) -> Figure:
@@ -137,6 +138,7 @@ def write_run_report(config: CaseConfig, outcome: RunOutcome, html_path: Path,
     """The run's self-contained HTML report (``source``: where its CFD records came from)."""
     rep = Report(f"mfflap run: {config.study.name}", config.study.description)
     s = rep.section("Summary")
+    add_run_summary(s, config, outcome)
     if outcome.problems:
         s.blocks.append(text_html("What is missing and why:", warn=True))
         for p in outcome.problems:

@@ -52,3 +52,25 @@ def test_any_other_exception_ends_the_run_with_its_traceback(monkeypatch, tmp_pa
         run_study(load_case(CASE), _quick(), progress=lambda m: None)
     res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(tmp_path / "run")])
     assert res.exit_code == 1 and isinstance(res.exception, TypeError)
+
+
+@pytest.mark.slow
+def test_the_main_job_is_its_list_of_stages_in_order():
+    """The stages a run reports are those of STAGES whose condition holds, in that order:
+    without CFD records nothing but the optimisation and the back-test runs (the
+    identification fails, and the stages that need its cases are not run)."""
+    import mfflap.pipeline as pipeline
+
+    names = [s.name for s in pipeline.STAGES if isinstance(s, pipeline.Stage)]
+    assert names == ["identification", "identification coverage", "output correction",
+                     "optimisation", "gain table", "motions against the identification data",
+                     "back-test", "gap diagnosis", "coefficient sensitivity", "VTK export"]
+    told: list[str] = []
+    outcome = run_study(load_case(CASE), RunOptions(n_starts=1, with_ipopt=False,
+                                                    gain_table=False, sensitivity=False,
+                                                    fixtures=(Path("/nonexistent"),)),
+                        progress=told.append)
+    assert [(s.name, s.status) for s in outcome.stages] == [
+        ("identification", FAILED), ("optimisation", DONE), ("back-test", DONE)]
+    assert told.index("[optimisation] started") < told.index("[back-test] started")
+    assert outcome.model is not None and outcome.optimised_with is None
