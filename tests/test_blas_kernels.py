@@ -15,13 +15,24 @@ from openblas_kernels import (
 )
 
 
+def _started_with(name: str) -> str | None:
+    """``name`` in the environment this process started with (/proc/self/environ: what
+    OpenBLAS read as it loaded, whatever a library set in os.environ since, as dask's
+    nanny does for its workers)."""
+    for item in Path("/proc/self/environ").read_bytes().split(b"\0"):
+        key, _, value = item.decode(errors="replace").partition("=")
+        if key == name:
+            return value
+    return None
+
+
 def test_the_tests_leave_openblas_its_own_kernels_and_threads():
     """Nothing in the suite sets OpenBLAS's kernels or thread count: what it runs is what
     it picks here, or what the environment the tests started in asked for."""
     names = openblas_corenames()
     assert names, "no bundled OpenBLAS found beside numpy or scipy"
     threads = openblas_answers("get_num_threads")
-    asked = os.environ.get("OPENBLAS_NUM_THREADS")
+    asked = _started_with("OPENBLAS_NUM_THREADS")
     if asked:
         assert set(threads.values()) == {min(int(asked), os.cpu_count() or 1)}, threads
     else:

@@ -980,10 +980,10 @@ def _solvers_in(case_dir: Path) -> list[str]:
     return found
 
 
-def _solvers_left(case_dir: Path, wait_s: float = 10.0) -> list[str]:
+def _solvers_left(case_dir: Path, wait_s: float = 60.0) -> list[str]:
     """The processes still running in ``case_dir`` after waiting up to ``wait_s`` for them
-    to end (a signalled solver takes a moment); those left are killed, whatever the test
-    then asserts."""
+    to end (a signalled solver writes its last step first, which takes seconds on a loaded
+    machine); those left are killed, whatever the test then asserts."""
     deadline = time.monotonic() + wait_s
     while _solvers_in(case_dir) and time.monotonic() < deadline:
         time.sleep(0.1)
