@@ -12,13 +12,11 @@ phase fixed find theirs on any kernels.
 """
 
 import json
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
+from rounds_series import fixed_phase_series
 
 from mfflap.cli.main import cli
 
@@ -31,7 +29,6 @@ def _series(out, n_rounds, *flags):
     """`mfflap run` of the shipped case in ``n_rounds`` rounds of the series the shipped
     back-tests were run for (identified coefficients, kept within the data, no IPOPT or
     gain table) with ``flags``: the result and its JSON summary."""
-    import json
 
     res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--rounds",
                                    str(n_rounds), "--coefficients", "identified:uniform",
@@ -66,7 +63,6 @@ def test_rounds_refit_on_their_back_tests_and_stop_when_a_motion_has_no_cfd(tmp_
     docs/findings/optimised_motions.md says of it: the refit moves the coefficients but not the
     model's error on its
     new optima (beta = 0 about -18 % thrust, -20 % power in every round)."""
-    import json
 
     import h5py
 
@@ -134,7 +130,6 @@ def test_corrected_rounds_predict_their_new_optima_far_better(tmp_path):
     then high (docs/findings/optimised_motions.md, "Output correction"). Round 6's motions have no
     CFD here,
     so the rounds stop there."""
-    import json
 
     import h5py
 
@@ -449,7 +444,6 @@ def test_first_order_rounds_predict_gains_on_the_boxs_faces_that_cfd_refuses(tmp
     slope's share makes most of the predicted decrease, and CFD refuses every step of
     beta = 0 and 0.5 while predicting their means within 10 % in rounds 3-4
     (docs/findings/optimised_motions.md, "First-order corrections")."""
-    import json
 
     import h5py
 
@@ -569,7 +563,6 @@ def test_trust_region_rounds_that_know_cfds_noise_converge_in_round_3(tmp_path):
     assert "counts CFD&#x27;s noise (3.0% of the means" in (out / "rounds.html").read_text()
     # the repeatability of round 2's beta = 0 optimum, from its three shipped copies (taken,
     # not run again: `--repeat` finds them in --save-to)
-    import json
     import shutil
 
     from mfflap.records.record import fixture_dir
@@ -613,21 +606,6 @@ def test_trust_region_rounds_that_know_cfds_noise_converge_in_round_3(tmp_path):
     assert "--cfd-repeatability" not in rep.stdout
 
 
-def _fixed_phase_series(out: Path, n_rounds: int, *flags: str) -> tuple[dict, str]:
-    """`mfflap run` of the shipped case in ``n_rounds`` rounds with --fix-phase,
-    ``--correct-outputs --no-refit`` and ``flags``, in a process of its own on one OpenBLAS
-    thread: its rounds summary and its stderr."""
-    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
-    proc = subprocess.run(
-        [sys.executable, "-c", "from mfflap.cli.main import cli; cli()", "run", str(CASE),
-         "--out", str(out), "--rounds", str(n_rounds), "--coefficients",
-         "identified:uniform", "--within-data", "--correct-outputs", "--no-refit", *flags,
-         "--no-ipopt", "--no-gain-table", "--fix-phase", "--json"],
-        env=env, capture_output=True, text=True, timeout=1800)
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    return json.loads(proc.stdout[proc.stdout.index("{"):])["rounds"], proc.stderr
-
-
 def test_the_first_order_series_with_a_fixed_phase_asks_for_the_same_cfd_on_one_thread(
         tmp_path):
     """The first-order series (`--trust-region 0.25 --first-order`) with --fix-phase on one
@@ -637,7 +615,7 @@ def test_the_first_order_series_with_a_fixed_phase_asks_for_the_same_cfd_on_one_
     backtest_first_order_fixed_phase in rounds 3-5), and CFD refuses and confirms the same
     steps. Its secants run through those records, so the CFD it needs does not turn on the
     CPU it runs on."""
-    loop, _ = _fixed_phase_series(
+    loop, _ = fixed_phase_series(
         tmp_path / "loop", 5, "--trust-region", "0.25", "--first-order")
     rounds = loop["rounds"]
     assert loop["stopped_because"] == "ran the 5 round(s) asked for"

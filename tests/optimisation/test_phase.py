@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from click.testing import CliRunner
-from openblas_kernels import cpu_flags
+from rounds_series import fixed_phase_series
 
 from mfflap.cli.main import cli
 from mfflap.config import load_case, loads_case
@@ -174,27 +174,6 @@ def test_a_fixed_phase_puts_beta_1s_optimum_in_one_place_and_finds_the_shipped_c
         assert abs(pitch_phase_rad(r.motion)) < 1e-8
 
 
-def _fixed_phase_series_on_other_kernels(out: Path, n_rounds: int, *flags: str
-                                         ) -> tuple[dict, str]:
-    """`mfflap run` of the shipped case in ``n_rounds`` rounds with --fix-phase,
-    ``--correct-outputs --no-refit`` and ``flags``, where the shipped series' arithmetic is
-    not replayed: OpenBLAS's Haswell kernels (where the CPU has AVX2) on one thread, not the
-    SkylakeX kernels on two threads the shipped series were computed with. Its rounds
-    summary and its stderr."""
-    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_CORETYPE"}
-    env["OPENBLAS_NUM_THREADS"] = "1"
-    if "avx2" in cpu_flags():
-        env["OPENBLAS_CORETYPE"] = "Haswell"
-    proc = subprocess.run(
-        [sys.executable, "-c", "from mfflap.cli.main import cli; cli()", "run", str(CASE),
-         "--out", str(out), "--rounds", str(n_rounds), "--coefficients",
-         "identified:uniform", "--within-data", "--correct-outputs", "--no-refit", *flags,
-         "--no-ipopt", "--no-gain-table", "--fix-phase", "--json"],
-        env=env, capture_output=True, text=True, timeout=1800)
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    return json.loads(proc.stdout[proc.stdout.index("{"):])["rounds"], proc.stderr
-
-
 @pytest.mark.slow
 def test_the_trust_series_with_a_fixed_phase_takes_the_shipped_steps_on_other_kernels(
         tmp_path):
@@ -207,8 +186,8 @@ def test_the_trust_series_with_a_fixed_phase_takes_the_shipped_steps_on_other_ke
     confirmed in round 4; beta = 0's region collapsed in round 5) on the same CFD records
     through round 4, each found shifted in time where its phase moved
     (docs/findings/phase_of_optima.md)."""
-    loop, told = _fixed_phase_series_on_other_kernels(tmp_path / "loop", 6, "--trust-region",
-                                                       "0.25")
+    loop, told = fixed_phase_series(tmp_path / "loop", 6, "--trust-region", "0.25",
+                                    haswell=True)
     rounds = loop["rounds"]
     assert [r["round"] for r in rounds] == [1, 2, 3, 4, 5]
     assert loop["stopped_because"].startswith("round 5: the trust region of beta 0 collapsed")

@@ -56,7 +56,7 @@ def test_the_summarys_numbers_are_on_the_first_screen_in_chromium(run):
     from selenium.webdriver.chrome.service import Service
     from selenium.webdriver.common.by import By
 
-    config, outcome, html = run
+    _, outcome, html = run
     options = webdriver.ChromeOptions()
     for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--window-size=1280,900"):
         options.add_argument(arg)
