@@ -299,7 +299,7 @@ def run_study(config: CaseConfig, options: RunOptions, progress: Progress = prin
 class RunContext:
     """What the stages of one run share: its inputs, the outcome they fill, and what one
     stage hands the next (the model the optimisation uses, the identification data's
-    coverage, the motions to back-test)."""
+    coverage)."""
 
     config: CaseConfig
     options: RunOptions
@@ -309,8 +309,6 @@ class RunContext:
     model: object = None
     #: the identification data's coverage, built once by its stage (None before it)
     reference: CoverageReference | None = None
-    #: label -> the discrete motion to back-test (the best sinusoid, each beta's optimum)
-    motions: dict = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -409,23 +407,29 @@ def _gain_table(ctx: RunContext) -> None:
 
 
 def _motions_to_backtest(ctx: RunContext) -> None:
-    study, n = ctx.outcome.study, ctx.config.optimisation.n_steps
-    ctx.motions = {"best sinusoid": sinusoid_motion(study.sweep, study.best_sinusoid, n)}
-    ctx.motions.update({beta_label(b): r.motion for b, r in study.sqp.items()})
-    ctx.outcome.backtest_motions = ctx.motions
+    """The motions to back-test once the optimisation gave them: the best sinusoid and
+    each beta's optimum."""
+    study = ctx.outcome.study
+    if study is None:
+        return
+    n = ctx.config.optimisation.n_steps
+    motions = {"best sinusoid": sinusoid_motion(study.sweep, study.best_sinusoid, n)}
+    motions.update({beta_label(b): r.motion for b, r in study.sqp.items()})
+    ctx.outcome.backtest_motions = motions
 
 
 def _motion_coverage(ctx: RunContext) -> None:
-    ctx.outcome.coverage = motion_coverage(ctx.config, ctx.outcome.cases, ctx.motions,
-                                           ctx.reference)
-    for label, cov in ctx.outcome.coverage.items():
+    outcome = ctx.outcome
+    outcome.coverage = motion_coverage(ctx.config, outcome.cases, outcome.backtest_motions,
+                                       ctx.reference)
+    for label, cov in outcome.coverage.items():
         ctx.progress(f"{label}: {cov.describe()}")
 
 
 def _backtest(ctx: RunContext) -> None:
     options = ctx.options
     folders = list(options.backtest_fixtures) or backtest_fixture_dirs()
-    backtest_all(ctx.config, ctx.motions, ctx.model, fixture_folders=folders,
+    backtest_all(ctx.config, ctx.outcome.backtest_motions, ctx.model, fixture_folders=folders,
                  live=options.live, work_dir=options.work_dir, mesh=options.mesh,
                  progress=ctx.progress,
                  # those done before a failure or Ctrl-C are kept in outcome.backtests
@@ -458,7 +462,7 @@ def _export_vtk(ctx: RunContext) -> None:
     # pyvista takes seconds to load: only a VTK export needs it
     from mfflap.export.vtk import export_motion
 
-    for label, m in ctx.motions.items():
+    for label, m in ctx.outcome.backtest_motions.items():
         safe = label.replace(" ", "_").replace("=", "").replace("β", "beta")
         export_motion(ctx.options.vtk_dir, m, ctx.model, ctx.config.optimisation.scheme, safe)
 
@@ -479,7 +483,7 @@ STAGES: tuple[Stage | Callable[[RunContext], None], ...] = (
           lambda ctx: bool(ctx.options.correct_at)),
     Stage("optimisation", _optimise),
     Stage("gain table", _gain_table, lambda ctx: _optimised(ctx) and ctx.options.gain_table),
-    lambda ctx: _motions_to_backtest(ctx) if _optimised(ctx) else None,
+    _motions_to_backtest,
     Stage("motions against the identification data", _motion_coverage,
           lambda ctx: _optimised(ctx) and ctx.reference is not None),
     Stage("back-test", _backtest, _optimised),

@@ -39,16 +39,12 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
     runs them all. A ``-m`` expression given on the command line chooses instead. The
     replays (marked replay) run with ``--replays`` only, alone."""
     replays = config.getoption("--replays")
+    every_tier = bool(config.getoption("--full") or config.getoption("-m"))
     kept, dropped = [], []
     for item in items:
         replay = item.get_closest_marker("replay") is not None
         full = any(item.get_closest_marker(m) is not None for m in FULL_TIER_MARKERS)
-        if replays:
-            keep = replay
-        elif replay:
-            keep = False
-        else:
-            keep = bool(config.getoption("--full") or config.getoption("-m")) or not full
+        keep = replay if replays else not replay and (every_tier or not full)
         (kept if keep else dropped).append(item)
     if dropped:
         config.hook.pytest_deselected(items=dropped)
