@@ -10,28 +10,37 @@ values)::
     [model]           n_strips, scheme, and [model.coefficients] (the four Morison values)
     [motion]          the motion evaluated by ``mfflap evaluate``
     [discretisation]  n_steps (N per half cycle)
-    [optimisation]    beta values, limits, penalties, smoothing, period bounds
+    [optimisation]    beta values, limits, penalties, smoothing, period bounds, and the
+                      coefficients ``mfflap run`` optimises with
     [identification]  the Table 1 grid and the pitch ramp rate
+    [backtest]        how ``mfflap run`` checks its optima in CFD
+    [rounds]          CFD in the loop (studies of the method)
+
+Any key can be set from the command line too (``--set table.key=value``,
+:func:`apply_settings`), checked like the file.
 
 Every error names the file, the key, the value and the allowed range.
 """
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import math
 import tomllib
 import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from mfflap.errors import ConfigError
+from mfflap.errors import ConfigError, shown
 from mfflap.hydro.morison import MorisonModel
 from mfflap.kinematics.continuous import UPRIGHT_PITCH, HarmonicMotion, RampHarmonicMotion
 from mfflap.parameters import Fluid, FreeStream, MorisonCoefficients, Plate, StripSettings
+from mfflap.study_tables import BacktestSettings, RoundsSettings
 from mfflap.toml_io import dumps, read_toml
 from mfflap.validation import bounded, check_fields, from_mapping
 
@@ -198,9 +207,25 @@ class OptimisationSettings:
                                    "relative excess over the pitch envelope")
     # mfflap: "fixed" keeps the pitch's first harmonic at the phase of sin(2 pi t / T), so
     # that round-off cannot move a periodic optimum along its cycle (mfflap.optimisation.phase)
-    phase: str = bounded("free", choices=("free", "fixed"), unit="",
-                         doc="the phase of the optimised motions: free (as the paper) or "
-                             "fixed (the pitch's first harmonic in phase with sin(2 pi t/T))")
+    phase: str = bounded("fixed", choices=("fixed", "free"), unit="",
+                         doc="the phase of the optimised motions: fixed (the pitch's first "
+                             "harmonic in phase with sin(2 pi t/T)) or free (the paper's "
+                             "problem, where round-off can move a periodic optimum along "
+                             "its cycle)")
+    coefficients: str = bounded("uniform", choices=("uniform", "low", "high", "case"), unit="",
+                                doc="the coefficients `mfflap run` optimises with: those it "
+                                    "identifies with this frequency weighting, or the case "
+                                    "file's [model.coefficients] (case)")
+    starts: int = bounded(3, low=1, high=100, unit="1", doc="multi-start points per beta")
+    gain_table: bool = bounded(True, choices=(True, False), unit="",
+                               doc="tabulate the beta = 0 gain against N and the smoothing "
+                                   "weights")
+    ipopt: bool = bounded(True, choices=(True, False), unit="",
+                          doc="compare each optimum with IPOPT's hard-constrained problem")
+    within_data: bool = bounded(False, choices=(True, False), unit="",
+                                doc="bound the optimisation by what the identification cases "
+                                    "reach (pitch amplitude, rate and acceleration, frequency, "
+                                    "heave), each the tighter of this table's and the data's")
 
     def __post_init__(self) -> None:
         check_fields(self, prefix="optimisation.")
@@ -261,7 +286,7 @@ class IdentificationGrid:
     frequency_weights: tuple[float, ...] | None = bounded(None, low=0.0, unit="1",
                                                           doc="one weight per frequency")
     residual_scaling: str = bounded(
-        "grid", choices=("grid", "case", "auto"), unit="",
+        "auto", choices=("auto", "grid", "case"), unit="",
         doc="residuals over each component's RMS across every case (grid), over its "
             "range in each case (case: the fit minimises the mean square NRMSE), or the one "
             "of the two that the model's errors ask for (auto)")
@@ -342,7 +367,19 @@ class CaseConfig:
     discretisation: Discretisation = field(default_factory=Discretisation)
     optimisation: OptimisationSettings = field(default_factory=OptimisationSettings)
     identification: IdentificationGrid = field(default_factory=IdentificationGrid)
+    backtest: BacktestSettings = field(default_factory=BacktestSettings)
+    rounds: RoundsSettings = field(default_factory=RoundsSettings)
     source: str | None = field(default=None, compare=False)
+
+    def __post_init__(self) -> None:
+        r = self.rounds
+        if r.count > 1 and not r.correct_outputs and self.optimisation.coefficients == "case":
+            raise ConfigError(
+                "rounds.count > 1 refits the model on each round's back-tests, which only "
+                "identified coefficients take up; with optimisation.coefficients = \"case\" "
+                "every round would optimise the same motions: give a weighting (uniform, low, "
+                "high) or rounds.correct_outputs = true", source=self.source,
+                key="rounds.count")
 
     def morison_model(self):
         """The Morison model this case describes."""
@@ -375,6 +412,8 @@ _SECTIONS: dict[str, type] = {
     "discretisation": Discretisation,
     "optimisation": OptimisationSettings,
     "identification": IdentificationGrid,
+    "backtest": BacktestSettings,
+    "rounds": RoundsSettings,
 }
 
 
@@ -437,22 +476,96 @@ def _check_motion_keys(table: dict[str, Any], kind: str, source: str | None) -> 
                       stacklevel=3)
 
 
-def load_case(path: str | Path) -> CaseConfig:
-    """Read and validate a TOML case file.
+def _setting_value(text: str) -> Any:
+    """A ``--set`` value as TOML reads it (``3``, ``1e-4``, ``true``, ``[0, 0.5]``,
+    ``"case"``); text that is not a TOML value is a string (``case``)."""
+    try:
+        return tomllib.loads(f"value = {text}")["value"]
+    except tomllib.TOMLDecodeError:
+        return text
+
+
+def apply_settings(data: dict[str, Any], settings: Sequence[str]) -> dict[str, Any]:
+    """The case mapping ``data`` with each ``table.key=value`` of ``settings`` set in it.
+
+    Parameters
+    ----------
+    data
+        A parsed case file (left unchanged).
+    settings
+        ``"table.key=value"`` texts; a value is read as TOML, and text that is not a TOML
+        value as a string. ``model.coefficients.drag_normal=3`` reaches the nested table.
+
+    Returns
+    -------
+    dict
+        A new mapping, for :func:`case_from_dict` to check like the file.
+
+    Raises
+    ------
+    ConfigError
+        A setting without ``=`` or without a table and key, naming it.
+
+    Examples
+    --------
+    >>> apply_settings({"rounds": {"count": 2}}, ["rounds.count=3", "optimisation.phase=free"])
+    {'rounds': {'count': 3}, 'optimisation': {'phase': 'free'}}
+    """
+    out = copy.deepcopy(data)
+    for text in settings:
+        dotted, sep, value = text.partition("=")
+        parts = dotted.strip().split(".")
+        if not sep or len(parts) < 2 or not all(parts):
+            raise ConfigError(f"{shown(text)} is not table.key=value (e.g. "
+                              "optimisation.coefficients=case)", source="--set")
+        table = out
+        for name in parts[:-1]:
+            inner = table.setdefault(name, {})
+            if not isinstance(inner, dict):
+                raise ConfigError(f"{'.'.join(parts[:-1])} is a value, not a table",
+                                  source="--set", key=dotted.strip())
+            table = inner
+        table[parts[-1]] = _setting_value(value.strip())
+    return out
+
+
+def load_case(path: str | Path, settings: Sequence[str] = ()) -> CaseConfig:
+    """Read and validate a TOML case file, with command-line settings applied.
 
     Beyond the ranges of each key, a [motion] table must give every key its kind reads
     (:data:`MOTION_KEYS`), and a key only the other kind reads is warned of
     (:class:`ConfigWarning`).
 
+    Parameters
+    ----------
+    path
+        The case file.
+    settings
+        ``table.key=value`` texts that override the file's keys (:func:`apply_settings`).
+
     Raises
     ------
     ConfigError
-        Naming the file, the key, the value and what is allowed.
+        Naming the file (with ``--set`` when a setting is at fault), the key, the value and
+        what is allowed.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> case = pathlib.Path(tempfile.mkdtemp()) / "case.toml"
+    >>> _ = case.write_text('[study]\\nname = "demo"\\n')
+    >>> load_case(case, ["optimisation.coefficients=case"]).optimisation.coefficients
+    'case'
     """
     data = read_toml(path)
-    config = case_from_dict(data, source=str(path))
+    if settings:
+        data = apply_settings(data, settings)
+        source = f"{path} with --set {' '.join(settings)}"
+    else:
+        source = str(path)
+    config = case_from_dict(data, source=source)
     if isinstance(data.get("motion"), dict):
-        _check_motion_keys(data["motion"], config.motion.kind, str(path))
+        _check_motion_keys(data["motion"], config.motion.kind, source)
     return config
 
 

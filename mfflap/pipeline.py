@@ -79,6 +79,11 @@ class StageOutcome:
 RUN_STRATEGIES = ("uniform", "low", "high")
 
 
+#: the folder of a run's output that holds its live back-tests' records (fixtures that
+#: ``--backtest-fixtures`` reads back)
+BACKTEST_RECORDS = "backtest_records"
+
+
 @dataclass
 class RunOptions:
     """Options of the main job."""
@@ -87,6 +92,9 @@ class RunOptions:
     backtest_fixtures: tuple[Path, ...] = ()  # default: shipped backtest folder
     live: bool = False  # run the back-test CFD with OpenFOAM
     work_dir: Path = Path("mfflap_run_cases")
+    #: where a live back-test's record is written, as ``backtest_<key>.h5`` (None: kept in
+    #: the results only)
+    save_to: Path | None = None
     coefficients: str = "case"  # "case" or "identified:<strategy>"
     n_starts: int = 3
     with_ipopt: bool = True
@@ -109,7 +117,7 @@ class RunOptions:
     done_backtests: tuple[Path, ...] = ()
     #: beta -> a motion with its CFD means: that beta is optimised with the model's outputs
     #: corrected to predict them (:mod:`mfflap.optimisation.output_correction`; the rounds'
-    #: ``--correct-outputs``)
+    #: ``rounds.correct_outputs``)
     correct_at: dict = field(default_factory=dict)
     #: K of the first-order filter from each point's scales to the measured ones (1: none;
     #: :meth:`~mfflap.optimisation.output_correction.OutputCorrection.filtered`)
@@ -118,11 +126,38 @@ class RunOptions:
     #: (:class:`~mfflap.optimisation.output_correction.CorrectionPoint`): its corrected
     #: objective (``correct_at``) gets a slope that makes it CFD's there too
     #: (:meth:`~mfflap.optimisation.output_correction.OutputCorrection.with_slopes`; the
-    #: rounds' ``--first-order``)
+    #: rounds' ``first_order``)
     secant_at: dict = field(default_factory=dict)
     #: beta -> the trust region that beta's optimum is kept in
-    #: (:class:`~mfflap.optimisation.trust_region.TrustRegion`; the rounds' ``--trust-region``)
+    #: (:class:`~mfflap.optimisation.trust_region.TrustRegion`; the rounds' ``trust_radius``)
     trust_at: dict = field(default_factory=dict)
+
+    @classmethod
+    def for_case(cls, config: CaseConfig, out_dir: Path, *,
+                 fixtures: tuple[Path, ...] = (), backtest_fixtures: tuple[Path, ...] = (),
+                 live: bool = False) -> RunOptions:
+        """The options of the main job as ``config``'s [optimisation] and [backtest] tables
+        say, writing under ``out_dir``.
+
+        Examples
+        --------
+        >>> from mfflap.config import CaseConfig
+        >>> options = RunOptions.for_case(CaseConfig(), Path("demo_run"))
+        >>> options.coefficients, options.average_cycles, options.backtest_cycles
+        ('identified:uniform', 2, 3.5)
+        """
+        opt, backtest = config.optimisation, config.backtest
+        return cls(fixtures=fixtures, backtest_fixtures=backtest_fixtures, live=live,
+                   work_dir=out_dir / "cfd_cases", vtk_dir=out_dir / "vtk",
+                   # rounds keep their records in their own folder (mfflap.rounds)
+                   save_to=(out_dir / BACKTEST_RECORDS if live and config.rounds.count == 1
+                            else None),
+                   coefficients=("case" if opt.coefficients == "case"
+                                 else f"identified:{opt.coefficients}"),
+                   n_starts=opt.starts, with_ipopt=opt.ipopt, gain_table=opt.gain_table,
+                   within_data=opt.within_data, backtest_cycles=backtest.simulated_periods,
+                   average_cycles=backtest.average_cycles,
+                   retries_from_start=backtest.retries_from_start)
 
     def __post_init__(self) -> None:
         allowed = ["case", *(f"identified:{s}" for s in RUN_STRATEGIES)]
@@ -435,7 +470,7 @@ def _backtest(ctx: RunContext) -> None:
                  # those done before a failure or Ctrl-C are kept in outcome.backtests
                  into=ctx.outcome.backtests, done_folders=options.done_backtests,
                  n_cycles=options.backtest_cycles, average_cycles=options.average_cycles,
-                 retries_from_start=options.retries_from_start)
+                 retries_from_start=options.retries_from_start, save_to=options.save_to)
 
 
 def _say_what_was_not_backtested(ctx: RunContext) -> None:

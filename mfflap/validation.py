@@ -69,6 +69,8 @@ def bounded(
 
 def describe_range(meta: Mapping[str, Any]) -> str:
     """Human-readable allowed range of a field, e.g. ``(0, inf) m``."""
+    if meta.get("choices") == (True, False):
+        return "true or false"
     if meta.get("choices"):
         return "one of " + ", ".join(repr(c) for c in meta["choices"])
     low, high = meta.get("low"), meta.get("high")
@@ -211,6 +213,9 @@ def from_mapping(cls: type[T], mapping: Mapping[str, Any], *, source: str | None
         if f.type in ("int", int) and (isinstance(v, bool) or not isinstance(v, int)):
             raise ConfigError(f"value {shown(v)} must be a whole number; allowed: "
                               f"{describe_range(f.metadata)}", source=source, key=prefix + k)
+        if f.type in ("bool", bool) and not isinstance(v, bool):
+            raise ConfigError(f"value {shown(v)} must be true or false", source=source,
+                              key=prefix + k)
         if f.type in ("str", str) and not isinstance(v, str):
             allowed = (describe_range(f.metadata) if f.metadata.get("choices")
                        else "any text in quotes")

@@ -81,8 +81,10 @@ def optimisation_file(tmp_path_factory) -> Path:
 
     case = Path(__file__).parents[1] / "cases" / "paper2026.toml"
     out = tmp_path_factory.mktemp("opt") / "opt.h5"
-    res = CliRunner().invoke(cli, ["optimise", str(case), "--betas", "0.5", "--starts", "1",
-                                   "--no-ipopt", "--output", str(out)])
+    res = CliRunner().invoke(cli, ["optimise", str(case), "--betas", "0.5", "--set",
+                                   "optimisation.starts=1", "--set", "optimisation.ipopt=false",
+                                   "--set", "optimisation.gain_table=false", "--set",
+                                   "optimisation.phase=free", "--output", str(out)])
     assert res.exit_code == 0, res.output
     return out
 

@@ -5,7 +5,7 @@ of endTime and writeInterval took different time steps and parted in the flow's 
 shedding: the last cycle's mean thrust 2.8 % apart (docs/findings/optimised_motions.md, "First-order
 corrections"; ``tests/backtest/test_repeat.py``). That spread is the noise under every
 back-test's comparison and every trust-region step the rounds judge (``mfflap run
---cfd-repeatability``).
+[rounds] cfd_repeatability``).
 
 :func:`repeat_runs` measures it: copy k of a motion runs with the Courant limit multiplied
 by 1 + k :data:`REPEAT_PERTURBATION` (copy 0: the settings as given), everything else the
@@ -81,7 +81,7 @@ class Repeatability:
 
     @property
     def share(self) -> float:
-        """The larger spread: what ``mfflap run --cfd-repeatability`` takes."""
+        """The larger spread: what ``[rounds] cfd_repeatability`` takes."""
         return max(self.thrust_spread, self.power_spread)
 
     def describe(self) -> str:

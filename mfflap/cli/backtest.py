@@ -33,7 +33,7 @@ from mfflap.cli.options import mesh_and_setup_options, refuse_given, retries_fro
                    "Courant limit a millionth apart, and print how far their last-cycle "
                    "mean thrust and power (with --average-cycles, their means over that many "
                    "cycles) spread: CFD's repeatability, which mfflap run "
-                   "--cfd-repeatability takes.")
+                   "[rounds] cfd_repeatability takes.")
 @click.option("--cycles", type=float, default=None,
               help="With --live: the periods each run simulates, after a start-up ramp of "
                    "half a period [default: 3]. A record of the motion run for fewer is not "
@@ -193,7 +193,7 @@ def _repeat(case, motions: dict, model, copies: int, work_dir: Path, save_to: Pa
     click.echo(f"CFD's repeatability: {worst.share:.2%} ({worst.label}"
                + (f"; of the {len(alike)} motions whose runs ran alike"
                   if len(alike) < len(found) else "")
-               + f"); mfflap run --cfd-repeatability {worst.share:.3g}")
+               + f"); mfflap run --set rounds.cfd_repeatability={worst.share:.3g}")
 
 
 def _chosen(motions: dict, only: tuple[str, ...]) -> dict:
@@ -226,7 +226,7 @@ def _chosen(motions: dict, only: tuple[str, ...]) -> dict:
 
 def optimised_with(rf, case):
     """The model the motions of an optimisation or run file were optimised with: the case's
-    with the coefficients stored beside them (``--coefficients identified:...`` runs), or
+    with the coefficients stored beside them (runs with identified coefficients), or
     the case's own for files written before they were stored."""
     import json
 
@@ -296,7 +296,7 @@ def _show(outcomes: dict, as_json: bool, scales: dict | None = None,
         share, label = max(scattered)
         click.echo(f"one cycle's CFD means scatter by up to {share:.1%} of the mean ({label}): "
                    "the noise of a back-test that reads one cycle; mfflap run "
-                   f"--cfd-repeatability {share:.3g}")
+                   f"--set rounds.cfd_repeatability={share:.3g}")
     if gain is not None:
         click.echo(f"beta = 0 thrust gain over the best sinusoid in CFD: {gain:+.1%}")
     else:

@@ -7,6 +7,8 @@ from pathlib import Path
 
 import click
 
+from mfflap.cli.options import set_option
+
 
 @click.command("init")
 @click.argument("case_file", type=click.Path(dir_okay=False, path_type=Path))
@@ -36,15 +38,17 @@ def case() -> None:
 
 @case.command("show")
 @click.argument("case_file", type=click.Path(dir_okay=False, exists=True, path_type=Path))
-def show(case_file: Path) -> None:
-    """Print CASE_FILE as mfflap reads it: every key with its value, those the file leaves
-    out marked (default)."""
-    from mfflap.config import load_case
+@set_option()
+def show(case_file: Path, settings: tuple[str, ...]) -> None:
+    """Print CASE_FILE as mfflap reads it, with any --set applied: every key with its
+    value, those neither the file nor --set gives marked (default)."""
+    from mfflap.config import apply_settings, load_case
     from mfflap.config_reference import commented_case_toml
     from mfflap.toml_io import read_toml
 
-    config = load_case(case_file)
-    click.echo(commented_case_toml(config, given=read_toml(case_file)), nl=False)
+    config = load_case(case_file, settings)
+    given = apply_settings(read_toml(case_file), settings)
+    click.echo(commented_case_toml(config, given=given), nl=False)
 
 
 __all__ = ["case", "init"]

@@ -7,28 +7,24 @@ from pathlib import Path
 import click
 
 from mfflap.cli.json_output import echo_json
-from mfflap.cli.options import FloatList, ResultsOutput, fix_phase_option, with_phase_fixed
+from mfflap.cli.options import FloatList, ResultsOutput, set_option
 
 
 @click.command()
 @click.argument("case_file", type=click.Path(dir_okay=False, exists=True, path_type=Path))
 @click.option("--betas", type=FloatList(), default=None,
               help="Comma-separated betas (default: the case's).")
-@click.option("--starts", default=3, show_default=True, type=click.IntRange(min=1),
-              help="Multi-start: best sinusoid plus points along the Pareto front.")
-@click.option("--ipopt/--no-ipopt", default=True, show_default=True,
-              help="Also solve the hard-constrained problem with IPOPT.")
-@click.option("--gain-table", is_flag=True,
-              help="Also tabulate the beta = 0 gain against N and the smoothing weights.")
 @click.option("--output", type=ResultsOutput("optimisation"),
               default=Path("optimisation.h5"), show_default=True)
 @click.option("--report", "report_path", type=click.Path(dir_okay=False, path_type=Path),
               default=None, help="HTML report (default: <output>.html).")
-@fix_phase_option()
+@set_option()
 @click.option("--json", "as_json", is_flag=True, help="Print the optimised means as JSON.")
-def optimise(case_file: Path, betas: list[float] | None, starts: int, ipopt: bool, gain_table: bool,
-             output: Path, report_path: Path | None, fix_phase: bool, as_json: bool) -> None:
-    """Optimise the motion of CASE_FILE for each beta with the discrete adjoint.
+def optimise(case_file: Path, betas: list[float] | None, output: Path,
+             report_path: Path | None, settings: tuple[str, ...], as_json: bool) -> None:
+    """Optimise the motion of CASE_FILE for each beta with the discrete adjoint, with the
+    case file's [model.coefficients] and its [optimisation] table (multi-starts, the IPOPT
+    comparison, the gain table).
 
     Ctrl-C (or SIGTERM, SIGUSR1) stops it and writes the betas optimised before it.
     """
@@ -36,7 +32,8 @@ def optimise(case_file: Path, betas: list[float] | None, starts: int, ipopt: boo
     from mfflap.optimisation.study import StudyInterrupted, beta_study
     from mfflap.optimisation.study import gain_table as make_gain_table
 
-    case = with_phase_fixed(load_case(case_file), fix_phase)
+    case = load_case(case_file, settings)
+    opt = case.optimisation
 
     def progress(msg: str) -> None:
         if not as_json:
@@ -44,7 +41,7 @@ def optimise(case_file: Path, betas: list[float] | None, starts: int, ipopt: boo
 
     model = case.morison_model()
     try:
-        study = beta_study(case, betas, n_starts=starts, with_ipopt=ipopt, model=model,
+        study = beta_study(case, betas, n_starts=opt.starts, with_ipopt=opt.ipopt, model=model,
                            progress=progress)
     except StudyInterrupted as exc:  # write the betas finished before it, then stop
         html = _write(case, exc.study, None, model, output, report_path)
@@ -53,7 +50,7 @@ def optimise(case_file: Path, betas: list[float] | None, starts: int, ipopt: boo
         raise click.Abort() from None
     try:
         gain = make_gain_table(case, model=model, sweep=study.sweep, progress=progress) \
-            if gain_table else None
+            if opt.gain_table else None
     except KeyboardInterrupt:  # the beta study is finished: write it without the table
         html = _write(case, study, None, model, output, report_path)
         click.echo(f"interrupted during the gain table; wrote the beta study without it to "

@@ -245,33 +245,20 @@ def retries_from_start_option(runs: str = "With --live: a run") -> Callable:
              "flow time run before the retry again.")
 
 
-def fix_phase_option() -> Callable:
-    """``--fix-phase``: the case's ``optimisation.phase = "fixed"`` for this run
-    (:func:`with_phase_fixed`)."""
+def set_option() -> Callable:
+    """``--set table.key=value`` (repeatable): any case-file key for this run, checked like
+    the file (:func:`mfflap.config.apply_settings`)."""
     return click.option(
-        "--fix-phase", is_flag=True,
-        help="Fix the phase of the optimised motions: the pitch's first harmonic in phase "
-             "with sin(2 pi t / T), as the sinusoids they start from (the case key "
-             "optimisation.phase = 'fixed'). A periodic motion shifted in time is the same "
-             "motion, so the phase is otherwise free, and where J is flat along it too "
-             "(beta = 1) round-off decides where the optimum lands: docs/findings/"
-             "phase_of_optima.md.")
-
-
-def with_phase_fixed(case, fix_phase: bool):
-    """``case`` with ``optimisation.phase = "fixed"`` when ``fix_phase`` (the stored case
-    file then says so), else ``case``."""
-    from dataclasses import replace
-
-    if not fix_phase:
-        return case
-    return replace(case, optimisation=replace(case.optimisation, phase="fixed"))
+        "--set", "settings", multiple=True, metavar="TABLE.KEY=VALUE",
+        help="Set a case-file key for this run, checked like the file, e.g. "
+             "--set optimisation.coefficients=case or --set rounds.count=3 (repeatable; "
+             "`mfflap case show CASE_FILE --set ...` prints the result).")
 
 
 def given_options(*names: str) -> list[str]:
     """The options of the running command among the parameters ``names`` that its command
     line gives, as their flags (``work_dir`` given as ``--work`` is ``"--work"``; an on/off
-    flag given off, ``--no-refit``, by its off flag)."""
+    flag given off, ``--no-color``, by its off flag)."""
     context = click.get_current_context()
 
     def flag(param: click.Parameter) -> str:

@@ -61,6 +61,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mfflap.errors import ConfigError
+from mfflap.study_tables import MAX_TRUST_RADIUS
 
 #: a step is accepted when CFD confirms at least this share of the predicted decrease
 ACCEPT_RATIO = 0.1
@@ -69,7 +70,7 @@ SHRINK_RATIO = 0.25
 #: above this share, with the optimum on the boundary, the radius doubles
 GROW_RATIO = 0.75
 #: the largest radius the update reaches
-MAX_RADIUS = 2.0
+MAX_RADIUS = MAX_TRUST_RADIUS
 #: a radius below this is a collapsed region: the rounds stop
 MIN_RADIUS = 1e-3
 #: an optimum within this share of the radius from a face of the box is on the boundary

@@ -271,12 +271,13 @@ def fixture_dir(name: str = "table1_coarse") -> Path:
     return fixtures_root() / name
 
 
-#: The shipped back-test fixture folders: the optimised motions of the shipped case, those
-#: of ``mfflap run --within-data``, those of the later rounds of ``mfflap run --rounds`` and
-#: of ``mfflap run --rounds --correct-outputs`` (filtered, with round 1's model kept, in a
-#: trust region, in a trust region with slopes, the same with the phase fixed; each record
-#: named by its motion's key).
-BACKTEST_FIXTURES = ("backtest", "backtest_within_data", "backtest_rounds",
+#: The shipped back-test fixture folders: the optimised motions of the main job as the
+#: shipped case file runs it (main_job), of the shipped case with its own coefficients
+#: (backtest), kept within the identification data (within_data), of the later rounds of
+#: CFD in the loop and of rounds with the output correction (filtered, with round 1's model
+#: kept, in a trust region, in a trust region with slopes, the same with the phase fixed;
+#: each record named by its motion's key).
+BACKTEST_FIXTURES = ("backtest_main_job", "backtest", "backtest_within_data", "backtest_rounds",
                      "backtest_corrected", "backtest_filtered", "backtest_fixed_model",
                      "backtest_trust_region", "backtest_first_order",
                      "backtest_first_order_fixed_phase")

@@ -121,7 +121,7 @@ def phase_text(phase: str, results: Mapping[float, OptimisationResult]) -> str:
                 f"harmonic is in phase with sin(2πt/T) ({measured}).")
     return ("Phase free (the paper's problem): a motion shifted in time is the same motion, "
             "so nothing fixes the optima's phase, and where J is flat (β = 1) round-off "
-            "decides it; optimisation.phase = \"fixed\" (--fix-phase) fixes it. Pitch first "
+            "decides it; optimisation.phase = \"fixed\" (the default) fixes it. Pitch first "
             f"harmonic's phase against sin(2πt/T): {measured}.")
 
 

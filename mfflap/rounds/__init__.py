@@ -1,4 +1,4 @@
-"""CFD in the loop: rounds of the main job (``mfflap run --rounds N``).
+"""CFD in the loop: rounds of the main job (``mfflap run`` with ``[rounds] count = N``).
 
 The model optimises its motions where it has never been checked (three of the four shipped
 optima lie outside the identification data, :mod:`mfflap.identification.coverage`), and
@@ -22,17 +22,17 @@ they are looked up before the shipped fixtures and, live, before a new OpenFOAM 
 motion repeated from an earlier round is not run again and the same command run again (after
 a Ctrl-C) finds the CFD done before.
 
-With ``refit`` False (``--no-refit``) or the case file's coefficients, the back-tests are
+With ``refit`` False (``rounds.refit = false``) or the case file's coefficients, the back-tests are
 not pooled into the fits: every round optimises with round 1's coefficients, and only the
 output correction learns from the CFD (the classical modifier adaptation of a fixed model).
 
-With ``correct_outputs`` (``--correct-outputs``), round k >= 2 also corrects the model's
+With ``correct_outputs`` (``rounds.correct_outputs``), round k >= 2 also corrects the model's
 outputs: each beta is optimised with the model's mean thrust and power scaled to predict
 the CFD means of round k - 1's optimum of that beta, measured with round k's refitted model
 (:mod:`mfflap.optimisation.output_correction`), and the error counted is that of the
 corrected prediction, the one the optimiser relied on. If the rounds reach a fixed point,
 the corrected model predicts CFD's means there. With ``correction_gain`` K < 1
-(``--correction-gain``), the scales move only that fraction of the way from those the last
+(``rounds.correction_gain``), the scales move only that fraction of the way from those the last
 optimum was optimised with to the measured ones (a first-order filter, the usual cure for
 the oscillation of the undamped correction).
 
@@ -42,10 +42,10 @@ correction's scales are measured with, so that at a fixed point it is CFD's exac
 back-test reports keep the model on the kinematics CFD imposed, which differs by the
 scheme's discretisation.
 
-With ``trust_radius`` (``--trust-region``), each round's optimum of a beta is kept near the
+With ``trust_radius`` (``rounds.trust_radius``), each round's optimum of a beta is kept near the
 last one CFD confirmed (:mod:`mfflap.optimisation.trust_region`); the rounds then converge
 only where no optimum is on its region's boundary and no step was refused, and stop when a
-region collapses. With ``first_order`` (``--first-order``) the corrected objective also gets
+region collapses. With ``first_order`` (``rounds.first_order``) the corrected objective also gets
 a slope through the earlier back-tested motions of the beta near the centre, so that it is
 CFD's objective there too
 (:meth:`~mfflap.optimisation.output_correction.OutputCorrection.with_slopes`); the predicted

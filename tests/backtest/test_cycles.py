@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from shipped_settings import as_shipped
 
 from mfflap.backtest.compare import compare_last_cycle
 from mfflap.backtest.cycles import cycle_means
@@ -243,18 +244,20 @@ def test_cfd_cycles_refuses_pitch_ramp_runs_and_cycles_skipped_past_the_end():
 
 @pytest.mark.slow
 def test_run_and_its_rounds_judge_the_means_over_the_cycles_asked(tmp_path):
-    """`mfflap run --rounds 2 --average-cycles 2` on the shipped three-period fixtures: round
-    1's back-tests (the main job's) and the rounds' checks take the means of the last two
-    cycles, not the last cycle's; --backtest-cycles needs --live."""
+    """`mfflap run` of two rounds averaging two cycles on the shipped three-period fixtures:
+    round 1's back-tests (the main job's) and the rounds' checks take the means of the last
+    two cycles, not the last cycle's; a live run too short for them is refused."""
     from mfflap.records.record import backtest_fixture_dirs
 
     case = Path(__file__).parents[2] / "cases" / "paper2026.toml"
     out = tmp_path / "loop"
     res = CliRunner().invoke(cli, [
-        "run", str(case), "--out", str(out), "--rounds", "2", "--coefficients",
-        "identified:uniform", "--within-data", "--correct-outputs", "--no-refit",
-        "--trust-region", "0.25", "--no-ipopt", "--no-gain-table", "--average-cycles", "2",
-        "--json"])
+        "run", str(case), "--out", str(out), *as_shipped(
+            "--set", "rounds.count=2", "--set", "optimisation.coefficients=uniform",
+            "--set", "optimisation.within_data=true", "--set", "rounds.correct_outputs=true",
+            "--set", "rounds.refit=false", "--set", "rounds.trust_radius=0.25",
+            "--set", "optimisation.ipopt=false", "--set", "optimisation.gain_table=false",
+            "--set", "backtest.average_cycles=2"), "--json"])
     assert res.exit_code == 0, res.output
     checks = json.loads(res.stdout[res.stdout.index("{"):])["rounds"]["rounds"][0]["checks"]
     assert checks
@@ -273,12 +276,12 @@ def test_run_and_its_rounds_judge_the_means_over_the_cycles_asked(tmp_path):
         assert metrics["cycles_averaged"] == 2 and f["backtest/beta__0"].attrs[
             "cfd_n_cycles"] == 3
     assert "Means over the last 2 whole cycles" in (out / "round_1" / "report.html").read_text()
-    for args, says in ((["--backtest-cycles", "10"], "--backtest-cycles applies only to live"),
-                       (["--average-cycles", "0"], "must be 1 or more cycles"),
-                       (["--live", "--backtest-cycles", "4", "--average-cycles", "4"],
-                        "a run of --backtest-cycles 4 holds 3 whole cycle(s)")):
+    for args, says in ((["--set", "backtest.average_cycles=0"], "out of range"),
+                       (["--live", "--set", "backtest.cycles=3", "--set",
+                         "backtest.average_cycles=4"], "4 whole cycles need cycles >= 4")):
         res = CliRunner().invoke(cli, ["run", str(case), "--out", str(tmp_path / "x"), *args])
         assert res.exit_code == 2 and says in res.output, (args, res.output)
+        assert "backtest.average_cycles" in res.output and not (tmp_path / "x").exists()
 
 
 def test_a_retry_at_half_the_courant_limit_moves_the_beta_05_optimum_by_7_percent():

@@ -5,6 +5,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from shipped_settings import as_shipped
 
 from mfflap.backtest.compare import compare_last_cycle
 from mfflap.backtest.run import backtest_motion, cfd_motion, motion_key
@@ -201,8 +202,9 @@ def test_main_job_runs_end_to_end_on_the_shipped_fixtures(tmp_path):
     from mfflap.results import ResultsFile
 
     out = tmp_path / "run"
-    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--starts", "1",
-                                   "--no-ipopt", "--no-gain-table", "--json"])
+    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), *as_shipped(
+        "--set", "optimisation.starts=1", "--set", "optimisation.ipopt=false",
+        "--set", "optimisation.gain_table=false"), "--json"])
     assert res.exit_code == 0, res.output
     import json
 
@@ -270,8 +272,9 @@ def test_a_stop_during_the_main_jobs_optimisation_writes_the_betas_optimised_bef
 
     sigterm_before(study_module, "multistart", 0.5)
     out = tmp_path / "run"
-    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--starts", "1",
-                                   "--no-ipopt", "--no-gain-table"])
+    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), *as_shipped(
+        "--set", "optimisation.starts=1", "--set", "optimisation.ipopt=false",
+        "--set", "optimisation.gain_table=false")])
     assert res.exit_code == 1, res.output
     assert "interrupted (optimisation): " in res.output
     left = "interrupted during beta = 0.5: beta 0.5, 1 not optimised (optimised: 0)"
@@ -364,7 +367,9 @@ def test_ctrl_c_during_a_live_back_test_writes_the_stages_finished_before(tmp_pa
     out = tmp_path / "run"
     proc = subprocess.Popen(
         [sys.executable, "-c", "from mfflap.cli.main import cli; cli()", "run", str(CASE),
-         "--out", str(out), "--starts", "1", "--no-ipopt", "--no-gain-table", "--live"],
+         "--out", str(out), *as_shipped("--set", "optimisation.starts=1",
+                                        "--set", "optimisation.ipopt=false",
+                                        "--set", "optimisation.gain_table=false"), "--live"],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     deadline = time.monotonic() + 600
@@ -520,12 +525,12 @@ def test_the_gain_in_cfd_is_not_a_ratio_to_a_drag():
     assert no_gain_in_cfd_reason({}) == "there is no β = 0 motion (not optimised)"
 
 
-@pytest.mark.parametrize("coefficients", ["case", "identified:uniform"])
+@pytest.mark.parametrize("coefficients", ["case", "uniform"])
 @pytest.mark.slow
 def test_the_main_job_kept_within_the_identification_data(tmp_path, coefficients):
-    """`mfflap run --within-data`: the pitch envelope, period bounds and heave limit are
-    what the identification cases reach, the optimised motions keep to them (within the
-    coverage's tolerance), and the case file stored with the results says so; with the
+    """`mfflap run` with optimisation.within_data: the pitch envelope, period bounds and
+    heave limit are what the identification cases reach, the optimised motions keep to them
+    (within the coverage's tolerance), and the case file stored with the results says so; with the
     case file's coefficients and with those identified from the CFD."""
     import json
 
@@ -535,9 +540,10 @@ def test_the_main_job_kept_within_the_identification_data(tmp_path, coefficients
 
     out = tmp_path / "run"
     # three starts, as the main job's default: its motions' back-tests ship as fixtures
-    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--no-ipopt",
-                                   "--no-gain-table", "--within-data", "--coefficients",
-                                   coefficients, "--json"])
+    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), *as_shipped(
+        "--set", "optimisation.ipopt=false", "--set", "optimisation.gain_table=false",
+        "--set", "optimisation.within_data=true", "--set",
+        f"optimisation.coefficients={coefficients}"), "--json"])
     assert res.exit_code == 0, res.output
     summary = json.loads(res.output[res.output.index("{\n"):])
     limits = summary["within_data_limits"]
@@ -804,3 +810,34 @@ def test_the_look_up_takes_a_record_of_the_same_periodic_motion_shifted_in_time(
     short = CfdRecord("backtest_short", state, Loads(t, zero, zero, zero),
                       {"kind": "table", "period": spline.period, "ramp_time": 2.5 * t[-1]})
     assert cycle_shift(short, spline) is None
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("threads", ["1", "2"])
+def test_the_main_job_as_shipped_back_tests_every_optimum_from_the_shipped_cfd(tmp_path,
+                                                                            threads):
+    """`mfflap run` of the shipped case file with nothing set, as the README runs it, on one
+    and two OpenBLAS threads: it optimises with the coefficients it identified, the phase
+    fixed, and finds a shipped OpenFOAM run of every motion in backtest_main_job, whose
+    means it compares over the last two of three cycles."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    from mfflap.records.record import fixture_dir
+
+    env = {**os.environ, "OPENBLAS_NUM_THREADS": threads}
+    done = subprocess.run([sys.executable, "-c", "from mfflap.cli.main import cli; cli()",
+                           "run", str(CASE), "--out", str(tmp_path / "run"), "--json"],
+                          env=env, capture_output=True, text=True, timeout=1200)
+    assert done.returncode == 0, done.stderr[-3000:]
+    summary = json.loads(done.stdout[done.stdout.index("{"):])
+    assert summary["optimised_with"] == "uniform"
+    assert {k: v["used"] for k, v in summary["residual_scaling"].items()}["uniform"] == "case"
+    shipped = {f"fixture {p.name}" for p in fixture_dir("backtest_main_job").glob("*.h5")}
+    backtests = summary["backtest"]
+    assert set(backtests) == {"best sinusoid", "β = 0", "β = 0.5", "β = 1"}
+    assert {b["status"] for b in backtests.values()} == {"back-tested"}, backtests
+    assert {b["source"] for b in backtests.values()} <= shipped
+    assert {b["cycles_averaged"] for b in backtests.values()} == {2}

@@ -63,13 +63,11 @@ REFUSED = [
     (["campaign", "run", str(CASE), "--out", "OUT", "--workers", "0"], "--workers", "x>=1"),
     (["campaign", "run", str(CASE), "--out", "OUT", "--timeout", "-5"], "--timeout",
      "finite number > 0"),
-    (["optimise", str(CASE), "--starts", "0", "--output", "OUT/o.h5"], "--starts", "x>=1"),
     (["gradcheck", str(CASE), "--n-steps", "1", "--out", "OUT"], "--n-steps", "x>=2"),
     # a figure format matplotlib cannot write: refused before the work, not after it
     (["evaluate", str(CASE), "--figure", "OUT/f.txt"], "--figure", "written as .png, .pdf"),
     (["campaign", "compare", "OUT", "OUT", "--figure", "OUT/c.gif"], "--figure",
      "written as .png, .pdf"),
-    (["run", str(CASE), "--out", "OUT", "--starts", "0"], "--starts", "x>=1"),
     (["identify", str(CASE), "--bootstrap", "-1", "--output", "OUT/i.h5"], "--bootstrap",
      "x>=0"),
     (["campaign", "compare", "OUT", "OUT", "--start", "nan"], "--start", "finite number >= 0"),
@@ -285,11 +283,11 @@ def test_an_application_without_time_to_run_is_refused_before_it_starts(tmp_path
 def test_run_refuses_a_coefficient_set_it_does_not_identify_before_its_folder_is_made(
         tmp_path):
     out = tmp_path / "run"
-    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--coefficients",
-                                   "identified:medium"])
+    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--set",
+                                   "optimisation.coefficients=medium"])
     assert res.exit_code == 2, res.output
-    assert "coefficients: 'identified:medium' is not a coefficient set of the run" in res.output
-    assert "identified:uniform, identified:low, identified:high" in res.output
+    assert "optimisation.coefficients: value 'medium' is not allowed" in res.output
+    assert "one of 'uniform', 'low', 'high', 'case'" in res.output
     assert not out.exists()
 
 

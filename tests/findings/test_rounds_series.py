@@ -17,6 +17,7 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 from rounds_series import fixed_phase_series
+from shipped_settings import as_shipped
 
 from mfflap.cli.main import cli
 
@@ -30,10 +31,10 @@ def _series(out, n_rounds, *flags):
     back-tests were run for (identified coefficients, kept within the data, no IPOPT or
     gain table) with ``flags``: the result and its JSON summary."""
 
-    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--rounds",
-                                   str(n_rounds), "--coefficients", "identified:uniform",
-                                   "--within-data", *flags, "--no-ipopt", "--no-gain-table",
-                                   "--json"])
+    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), *as_shipped(
+        "--set", f"rounds.count={n_rounds}", "--set", "optimisation.coefficients=uniform",
+        "--set", "optimisation.within_data=true", *flags, "--set", "optimisation.ipopt=false",
+        "--set", "optimisation.gain_table=false"), "--json"])
     assert res.exit_code == 0, res.output
     return res, json.loads(res.stdout[res.stdout.index("{"):])
 
@@ -134,7 +135,8 @@ def test_corrected_rounds_predict_their_new_optima_far_better(tmp_path):
     import h5py
 
     out = tmp_path / "loop"
-    res, summary = _series(out, 6, "--correct-outputs", "--loop-tolerance", "0.05")
+    res, summary = _series(out, 6, "--set", "rounds.correct_outputs=true", "--set",
+                           "rounds.tolerance=0.05")
     loop = summary["rounds"]
     rounds = loop["rounds"]
     assert [r["round"] for r in rounds] == [1, 2, 3, 4, 5, 6]
@@ -237,8 +239,8 @@ def test_rounds_without_a_refit_keep_round_ones_model_and_filter_its_correction(
     import h5py
 
     out = tmp_path / "loop"
-    res, summary = _series(out, 6, "--correct-outputs", "--no-refit", "--correction-gain",
-                           "0.5")
+    res, summary = _series(out, 6, "--set", "rounds.correct_outputs=true", "--set",
+                           "rounds.refit=false", "--set", "rounds.correction_gain=0.5")
     loop = summary["rounds"]
     rounds = loop["rounds"]
     first, second = rounds[:2]
@@ -313,7 +315,8 @@ def test_filtered_corrected_rounds_close_in_then_part_again_with_the_refit(tmp_p
     import itertools
 
     out = tmp_path / "loop"
-    _, summary = _series(out, 7, "--correct-outputs", "--correction-gain", "0.5")
+    _, summary = _series(out, 7, "--set", "rounds.correct_outputs=true", "--set",
+                         "rounds.correction_gain=0.5")
     loop = summary["rounds"]
     rounds = loop["rounds"]
     assert [r["round"] for r in rounds] == [1, 2, 3, 4, 5, 6, 7]
@@ -363,8 +366,8 @@ def test_rounds_in_a_trust_region_take_the_steps_cfd_confirms_until_one_collapse
     import h5py
 
     out = tmp_path / "loop"
-    res, summary = _series(out, 6, "--correct-outputs", "--no-refit", "--trust-region",
-                           "0.25")
+    res, summary = _series(out, 6, "--set", "rounds.correct_outputs=true", "--set",
+                           "rounds.refit=false", "--set", "rounds.trust_radius=0.25")
     loop = summary["rounds"]
     rounds = loop["rounds"]
     assert [r["round"] for r in rounds] == [1, 2, 3, 4, 5]
@@ -448,8 +451,9 @@ def test_first_order_rounds_predict_gains_on_the_boxs_faces_that_cfd_refuses(tmp
     import h5py
 
     out = tmp_path / "loop"
-    _, summary = _series(out, 5, "--correct-outputs", "--no-refit", "--trust-region", "0.25",
-                         "--first-order")
+    _, summary = _series(out, 5, "--set", "rounds.correct_outputs=true", "--set",
+                         "rounds.refit=false", "--set", "rounds.trust_radius=0.25", "--set",
+                         "rounds.first_order=true")
     loop = summary["rounds"]
     rounds = loop["rounds"]
     assert loop["first_order"] and not loop["converged"]
@@ -509,8 +513,9 @@ def test_first_order_rounds_with_the_phase_fixed_take_slopes_through_shifted_rec
     0.5 and confirms round 5's, at a quarter of the first radius; beta = 1 keeps its
     centre from round 3 on (docs/findings/phase_of_optima.md)."""
     out = tmp_path / "loop"
-    _, summary = _series(out, 5, "--correct-outputs", "--no-refit", "--trust-region", "0.25",
-                         "--first-order", "--fix-phase")
+    _, summary = _series(out, 5, "--set", "rounds.correct_outputs=true", "--set",
+                         "rounds.refit=false", "--set", "rounds.trust_radius=0.25", "--set",
+                         "rounds.first_order=true", "--set", "optimisation.phase=fixed")
     loop = summary["rounds"]
     rounds = loop["rounds"]
     assert [r["round"] for r in rounds] == [1, 2, 3, 4, 5]
@@ -543,8 +548,9 @@ def test_trust_region_rounds_that_know_cfds_noise_converge_in_round_3(tmp_path):
     import h5py
 
     out = tmp_path / "loop"
-    res, summary = _series(out, 6, "--correct-outputs", "--no-refit", "--trust-region",
-                           "0.25", "--cfd-repeatability", "0.03")
+    res, summary = _series(out, 6, "--set", "rounds.correct_outputs=true", "--set",
+                           "rounds.refit=false", "--set", "rounds.trust_radius=0.25", "--set",
+                           "rounds.cfd_repeatability=0.03")
     loop = summary["rounds"]
     assert loop["converged"] and loop["cfd_repeatability"] == 0.03
     assert [r["round"] for r in loop["rounds"]] == [1, 2, 3]
@@ -597,7 +603,7 @@ def test_trust_region_rounds_that_know_cfds_noise_converge_in_round_3(tmp_path):
     rep = CliRunner().invoke(cli, ["backtest", str(out / "round_2" / "results.h5"), "--live",
                                    "--repeat", "2", "--motion", "0.5", "--save-to", str(saved),
                                    "--work", str(tmp_path / "w"), "--cycles", "8",
-                                   "--average-cycles", "6"])
+                                   "--set", "backtest.average_cycles=6"])
     assert rep.exit_code == 0, rep.output
     assert rep.stderr.count("taken from") == 2 and "pimpleFoam" not in rep.stderr
     assert ("not a repeatability: the runs did not run alike (backtest_34cd2b07c53664ae_copy1:"
@@ -615,8 +621,8 @@ def test_the_first_order_series_with_a_fixed_phase_asks_for_the_same_cfd_on_one_
     backtest_first_order_fixed_phase in rounds 3-5), and CFD refuses and confirms the same
     steps. Its secants run through those records, so the CFD it needs does not turn on the
     CPU it runs on."""
-    loop, _ = fixed_phase_series(
-        tmp_path / "loop", 5, "--trust-region", "0.25", "--first-order")
+    loop, _ = fixed_phase_series(tmp_path / "loop", 5, "--set", "rounds.trust_radius=0.25", "--set",
+                                 "rounds.first_order=true")
     rounds = loop["rounds"]
     assert loop["stopped_because"] == "ran the 5 round(s) asked for"
     shipped = [("598a5388e592df63", "c91660e722b01742", "fb22156550965a86"),

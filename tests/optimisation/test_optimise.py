@@ -16,6 +16,9 @@ from mfflap.optimisation.problem import FlappingProblem
 from mfflap.optimisation.store import read_result, read_sweep, write_result
 from mfflap.results import ResultsFile
 
+#: one start and no IPOPT comparison or gain table unless asked: the quick optimisation
+ONE_START_NO_IPOPT = ("--set", "optimisation.starts=1", "--set", "optimisation.ipopt=false",
+                      "--set", "optimisation.gain_table=false")
 CASE = Path(__file__).parents[2] / "cases" / "paper2026.toml"
 START = harmonic_to_discrete(2.1, 0.05, np.deg2rad(50), np.deg2rad(112.5), 30)
 
@@ -108,8 +111,8 @@ def test_result_round_trip(tmp_path):
 def test_optimise_cli_writes_results_and_report(tmp_path):
     out = tmp_path / "opt.h5"
     res = CliRunner().invoke(__import__("mfflap.cli.main", fromlist=["cli"]).cli,
-                             ["optimise", str(CASE), "--betas", "0.5", "--starts", "1",
-                              "--no-ipopt", "--output", str(out), "--json"])
+                             ["optimise", str(CASE), "--betas", "0.5", *ONE_START_NO_IPOPT,
+                              "--output", str(out), "--json"])
     assert res.exit_code == 0, res.output
     data = json.loads(res.output[res.output.index("{"):])
     assert data["optimised"]["0.5"]["converged"] is True
@@ -148,8 +151,8 @@ def test_no_gain_is_given_when_the_best_sinusoid_makes_drag(tmp_path):
     out = tmp_path / "opt.h5"
     runner = CliRunner()
     cli = __import__("mfflap.cli.main", fromlist=["cli"]).cli
-    res = runner.invoke(cli, ["optimise", str(case), "--betas", "0", "--starts", "1",
-                              "--no-ipopt", "--output", str(out)])
+    res = runner.invoke(cli, ["optimise", str(case), "--betas", "0", *ONE_START_NO_IPOPT,
+                              "--output", str(out)])
     assert res.exit_code == 0, res.output
     assert "beta = 0 thrust gain: not given: the best feasible sinusoid makes no thrust" \
         in res.output
@@ -178,7 +181,7 @@ def test_a_gain_from_a_flagged_beta_0_optimum_says_so(tmp_path):
     case.write_text(CASE.read_text().replace("n_steps = 50", "n_steps = 2"))
     out = tmp_path / "opt.h5"
     cli = __import__("mfflap.cli.main", fromlist=["cli"]).cli
-    args = ["optimise", str(case), "--betas", "0", "--starts", "1", "--no-ipopt", "--output",
+    args = ["optimise", str(case), "--betas", "0", *ONE_START_NO_IPOPT, "--output",
             str(out)]
     res = CliRunner().invoke(cli, args)
     assert res.exit_code == 0, res.output
@@ -432,8 +435,8 @@ def test_an_interrupted_optimise_writes_the_betas_optimised_before_it(tmp_path,
     sigterm_before(study_module, "multistart", 0.75)
     out = tmp_path / "opt.h5"
     res = CliRunner().invoke(__import__("mfflap.cli.main", fromlist=["cli"]).cli,
-                             ["optimise", str(CASE), "--betas", "0.5,0.75,1", "--starts", "1",
-                              "--no-ipopt", "--output", str(out)])
+                             ["optimise", str(CASE), "--betas", "0.5,0.75,1", *ONE_START_NO_IPOPT,
+                              "--output", str(out)])
     assert res.exit_code == 1, res.output
     html = out.with_suffix(".html")
     assert (f"interrupted during beta = 0.75: beta 0.75, 1 not optimised (optimised: 0.5); "
@@ -459,8 +462,8 @@ def test_a_stop_during_the_gain_table_writes_the_beta_study_without_it(tmp_path,
     sigterm_before(study_module, "optimise_sqp", 0.0)
     out = tmp_path / "opt.h5"
     res = CliRunner().invoke(__import__("mfflap.cli.main", fromlist=["cli"]).cli,
-                             ["optimise", str(CASE), "--betas", "0.5", "--starts", "1",
-                              "--no-ipopt", "--gain-table", "--output", str(out)])
+                             ["optimise", str(CASE), "--betas", "0.5", *ONE_START_NO_IPOPT,
+                              "--set", "optimisation.gain_table=true", "--output", str(out)])
     assert res.exit_code == 1, res.output
     assert (f"interrupted during the gain table; wrote the beta study without it to {out}"
             in res.output)

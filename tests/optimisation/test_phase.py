@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 from rounds_series import fixed_phase_series
+from shipped_settings import as_shipped
 
 from mfflap.cli.main import cli
 from mfflap.config import load_case, loads_case
@@ -80,10 +81,10 @@ def test_a_start_without_a_pitch_harmonic_cannot_have_its_phase_fixed():
 
 def test_the_case_key_takes_free_or_fixed_and_nothing_else():
     text = CASE.read_text()
-    assert load_case(CASE).optimisation.phase == "free"  # the paper's problem by default
-    fixed = loads_case(text.replace("[optimisation]", '[optimisation]\nphase = "fixed"'))
-    assert fixed.optimisation.phase == "fixed"
-    assert 'phase = "fixed"' in fixed.to_toml()
+    assert load_case(CASE).optimisation.phase == "fixed"  # by default
+    free = loads_case(text.replace("[optimisation]", '[optimisation]\nphase = "free"'))
+    assert free.optimisation.phase == "free"  # the paper's problem
+    assert 'phase = "free"' in free.to_toml()
     with pytest.raises(ConfigError, match=r"optimisation\.phase"):
         loads_case(text.replace("[optimisation]", '[optimisation]\nphase = "locked"'))
 
@@ -120,8 +121,10 @@ def test_optimise_fix_phase_stores_the_setting_and_optimises_in_phase(tmp_path):
     from mfflap.results import ResultsFile
 
     out = tmp_path / "opt.h5"
-    res = CliRunner().invoke(cli, ["optimise", str(CASE), "--betas", "1", "--starts", "1",
-                                   "--no-ipopt", "--fix-phase", "--output", str(out)])
+    res = CliRunner().invoke(cli, ["optimise", str(CASE), "--betas", "1", "--set",
+                                   "optimisation.starts=1", "--set", "optimisation.ipopt=false",
+                                   "--set", "optimisation.gain_table=false", "--set",
+                                   "optimisation.phase=fixed", "--output", str(out)])
     assert res.exit_code == 0, res.output
     with ResultsFile(out) as rf:
         assert loads_case(rf.config_toml).optimisation.phase == "fixed"
@@ -149,8 +152,11 @@ def test_a_fixed_phase_puts_beta_1s_optimum_in_one_place_and_finds_the_shipped_c
         env = {**os.environ, "OPENBLAS_NUM_THREADS": str(threads)}
         procs[threads] = subprocess.Popen(
             [sys.executable, "-c", "from mfflap.cli.main import cli; cli()", "run", str(CASE),
-             "--out", str(tmp_path / f"threads_{threads}"), "--no-ipopt", "--no-gain-table",
-             "--within-data", "--coefficients", "identified:uniform", "--fix-phase", "--json"],
+             "--out", str(tmp_path / f"threads_{threads}"), *as_shipped(
+                 "--set", "optimisation.ipopt=false", "--set", "optimisation.gain_table=false",
+                 "--set", "optimisation.within_data=true", "--set",
+                 "optimisation.coefficients=uniform", "--set", "optimisation.phase=fixed"),
+             "--json"],
             env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     from mfflap.optimisation.store import read_result
     from mfflap.results import ResultsFile
@@ -186,7 +192,7 @@ def test_the_trust_series_with_a_fixed_phase_takes_the_shipped_steps_on_other_ke
     confirmed in round 4; beta = 0's region collapsed in round 5) on the same CFD records
     through round 4, each found shifted in time where its phase moved
     (docs/findings/phase_of_optima.md)."""
-    loop, told = fixed_phase_series(tmp_path / "loop", 6, "--trust-region", "0.25",
+    loop, told = fixed_phase_series(tmp_path / "loop", 6, "--set", "rounds.trust_radius=0.25",
                                     haswell=True)
     rounds = loop["rounds"]
     assert [r["round"] for r in rounds] == [1, 2, 3, 4, 5]

@@ -1,90 +1,20 @@
-"""CFD in the loop: `mfflap run --rounds N` (mfflap.rounds)."""
+"""CFD in the loop: `mfflap run` with [rounds] count above 1 (mfflap.rounds)."""
 
 from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 
-from mfflap.cli.main import cli
-from mfflap.errors import ConfigError
 from mfflap.rounds import (
     THRUST_FLOOR,
     MotionCheck,
     RoundSummary,
-    check_rounds,
     motion_checks,
     stop_reason,
 )
 
 CASE = Path(__file__).parents[2] / "cases" / "paper2026.toml"
-
-
-@pytest.mark.parametrize(("rounds", "tolerance", "coefficients", "says"), [
-    (0, 0.1, "identified:uniform", "--rounds must be >= 1"),
-    (2, 0.0, "identified:uniform", "--loop-tolerance must be a fraction in (0, 1)"),
-    (2, 1.0, "identified:uniform", "--loop-tolerance must be a fraction in (0, 1)"),
-    (2, float("nan"), "identified:uniform", "--loop-tolerance must be a fraction"),
-    (2, 0.1, "case", "with --coefficients case every round would optimise the same motions"),
-])
-def test_rounds_that_cannot_learn_are_refused(rounds, tolerance, coefficients, says):
-    with pytest.raises(ConfigError, match=says.replace("(", r"\(").replace(")", r"\)")):
-        check_rounds(rounds, tolerance, coefficients)
-
-
-def test_one_round_with_the_case_coefficients_is_the_main_job():
-    check_rounds(1, 0.1, "case")  # no error: the default run
-
-
-def test_rounds_learn_by_a_refit_or_an_output_correction():
-    check_rounds(3, 0.1, "identified:uniform")  # the refit learns
-    check_rounds(3, 0.1, "case", correct_outputs=True)  # the correction learns
-    check_rounds(3, 0.1, "identified:uniform", correct_outputs=True, refit=False)
-    with pytest.raises(ConfigError, match="--no-refit keeps the coefficients of round 1"):
-        check_rounds(3, 0.1, "identified:uniform", refit=False)
-    with pytest.raises(ConfigError, match="or --correct-outputs"):
-        check_rounds(3, 0.1, "case", refit=False)
-
-
-def test_the_cli_refuses_rounds_with_the_case_coefficients_before_anything_is_written(
-        tmp_path):
-    out = tmp_path / "run"
-    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--rounds", "2"])
-    assert res.exit_code == 2
-    assert "--coefficients identified:uniform" in res.output
-    assert not out.exists()
-    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--loop-tolerance",
-                                   "0.2"])
-    assert res.exit_code == 2
-    assert "--loop-tolerance applies only to rounds of CFD in the loop" in res.output
-    assert not out.exists()
-    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--correct-outputs"])
-    assert res.exit_code == 2
-    assert "--correct-outputs applies only to rounds of CFD in the loop" in res.output
-    assert not out.exists()
-    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--rounds", "2",
-                                   "--coefficients", "identified:uniform",
-                                   "--correction-gain", "0.5"])
-    assert res.exit_code == 2
-    assert "--correction-gain applies only to corrected outputs" in res.output
-    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--rounds", "2",
-                                   "--coefficients", "identified:uniform",
-                                   "--correct-outputs", "--correction-gain", "0"])
-    assert res.exit_code == 2
-    assert "correction_gain" in res.output and "(0, 1]" in res.output
-    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--no-refit"])
-    assert res.exit_code == 2
-    assert "--no-refit applies only to rounds of CFD in the loop" in res.output
-    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--rounds", "2",
-                                   "--correct-outputs", "--no-refit"])
-    assert res.exit_code == 2
-    assert "--no-refit applies only to identified coefficients" in res.output
-    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--rounds", "2",
-                                   "--coefficients", "identified:low", "--no-refit"])
-    assert res.exit_code == 2
-    assert "without --correct-outputs every round would optimise the same" in res.output
-    assert not out.exists()
 
 
 def _outcome(key, cfd_thrust, model_thrust, cfd_power, model_power):
@@ -288,70 +218,6 @@ def test_a_stop_in_a_round_ends_the_rounds_and_keeps_what_was_done(tmp_path):
     assert not result.converged
     assert (out / "round_2" / "results.h5").is_file() and (out / "rounds.h5").is_file()
     assert len(list((out / "loop_records").glob("*.h5"))) == 4  # round 1's, for the next call
-
-
-def _refused(out, *flags) -> str:
-    """`mfflap run` of the shipped case with ``flags`` that the command line refuses (a usage
-    error): its output."""
-    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), *flags])
-    assert res.exit_code == 2, res.output
-    return res.output
-
-
-def test_a_trust_region_needs_several_rounds_and_a_radius_in_its_range(tmp_path):
-    check_rounds(3, 0.1, "identified:uniform", correct_outputs=True, refit=False,
-                 trust_radius=0.25)
-    with pytest.raises(ConfigError, match="needs --rounds 2 or more") as err:
-        check_rounds(1, 0.1, "case", trust_radius=0.25)
-    assert err.value.key == "trust_region"
-    with pytest.raises(ConfigError, match="radius must be a fraction in"):
-        check_rounds(3, 0.1, "identified:uniform", trust_radius=0.0)
-    out = tmp_path / "run"
-    assert "--trust-region applies only to rounds of CFD in the loop" in _refused(
-        out, "--trust-region", "0.25")
-    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--rounds", "2",
-                                   "--coefficients", "identified:uniform", "--trust-region",
-                                   "-1"])
-    assert res.exit_code != 0 and "radius must be a fraction" in res.output
-    assert not out.exists()
-
-
-def test_first_order_rounds_need_the_correction_its_measured_scales_and_a_trust_region(
-        tmp_path):
-    check_rounds(3, 0.1, "identified:uniform", correct_outputs=True, refit=False,
-                 trust_radius=0.25, first_order=True)
-    for kwargs, says in (({"correct_outputs": True}, "it needs --trust-region"),
-                         ({"trust_radius": 0.25}, "it needs --correct-outputs"),
-                         ({}, "it needs --correct-outputs and --trust-region"),
-                         ({"correct_outputs": True, "trust_radius": 0.25,
-                           "correction_gain": 0.5}, "--correction-gain 0.5 filters them")):
-        with pytest.raises(ConfigError, match=says) as err:
-            check_rounds(3, 0.1, "identified:uniform", first_order=True, **kwargs)
-        assert err.value.key == "first_order"
-    out = tmp_path / "run"
-    assert "--first-order applies only to rounds of CFD in the loop" in _refused(
-        out, "--first-order")
-    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(out), "--rounds", "2",
-                                   "--coefficients", "identified:uniform", "--first-order",
-                                   "--correct-outputs"])
-    assert res.exit_code != 0 and "it needs --trust-region" in res.output
-    assert not out.exists()
-
-
-def test_a_cfd_repeatability_needs_a_trust_region_and_a_share_in_its_range(tmp_path):
-    check_rounds(3, 0.1, "identified:uniform", correct_outputs=True, trust_radius=0.25,
-                 cfd_repeatability=0.03)
-    with pytest.raises(ConfigError, match="needs --trust-region") as err:
-        check_rounds(3, 0.1, "identified:uniform", correct_outputs=True,
-                     cfd_repeatability=0.03)
-    assert err.value.key == "cfd_repeatability"
-    with pytest.raises(ConfigError, match=r"in \(0, 1\)"):
-        check_rounds(3, 0.1, "identified:uniform", correct_outputs=True, trust_radius=0.25,
-                     cfd_repeatability=3.0)
-    out = tmp_path / "run"
-    assert "--cfd-repeatability applies only to rounds of CFD in the loop" in _refused(
-        out, "--cfd-repeatability", "0.03")
-    assert not out.exists()
 
 
 def test_a_step_within_cfds_noise_does_not_keep_the_rounds_from_converging():

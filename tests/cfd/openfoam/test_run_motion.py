@@ -111,13 +111,10 @@ def test_cfd_cycles_names_the_cycles_run_before_a_retry_part_way():
     assert run["cycles_before_settings"] == [2]
 
 
-@pytest.mark.parametrize("command", [["backtest"], ["run"]])
-def test_retries_from_start_is_refused_without_live_runs(tmp_path, command):
-    target = (str(tmp_path / "missing.h5") if command == ["backtest"]
-              else str(tmp_path / "case.toml"))
+def test_retries_from_start_is_refused_without_live_runs(tmp_path):
     (tmp_path / "missing.h5").write_bytes(b"")
-    (tmp_path / "case.toml").write_text("")
-    result = CliRunner().invoke(cli, [*command, target, "--retries-from-start"])
+    result = CliRunner().invoke(cli, ["backtest", str(tmp_path / "missing.h5"),
+                                      "--retries-from-start"])
     assert result.exit_code != 0
     assert "--retries-from-start applies only to live" in result.output
 
