@@ -12,6 +12,36 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
 
+#: the colour of the best feasible sinusoid in every figure
+SINUSOID_COLOUR = "0.35"
+
+
+def motion_colour(label: str) -> str | tuple[float, float, float, float]:
+    """The colour of a motion in every figure of a report: one colour per β, the same in
+    each figure (viridis at 0.85 β), grey for the best sinusoid, matplotlib's next colour
+    (None) for anything else.
+
+    Parameters
+    ----------
+    label
+        ``"β = 0.5"``, ``"best sinusoid"`` or another label.
+
+    Examples
+    --------
+    >>> motion_colour("β = 0") == motion_colour("β = 0.0")
+    True
+    >>> motion_colour("best sinusoid")
+    '0.35'
+    """
+    if "sinusoid" in label:
+        return SINUSOID_COLOUR
+    text = label.replace("β", "").replace("=", "").strip()
+    try:
+        beta = float(text)
+    except ValueError:
+        return None  # type: ignore[return-value]
+    return plt.cm.viridis(0.85 * min(max(beta, 0.0), 1.0))
+
 
 def save_figure(figure: Figure, path: str | Path, dpi: int = 120) -> Path:
     """Save ``figure`` to ``path`` (its format from the suffix), making the folders it lies

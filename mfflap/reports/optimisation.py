@@ -17,6 +17,7 @@ from mfflap.optimisation.phase import pitch_phase_rad
 from mfflap.optimisation.store import beta_label
 from mfflap.optimisation.study import sinusoid_motion
 from mfflap.performance import evaluate_discrete
+from mfflap.plots import motion_colour
 from mfflap.reports.html import Report, figure_html, signed_percent, table_html, text_html
 from mfflap.sweep import SweepResult, pareto_front
 
@@ -36,11 +37,25 @@ def pareto_figure(sweep: SweepResult, best: int,
            label="constrained Pareto front")
     for beta, r in (optimised or {}).items():
         s = r.summary
-        a.plot(float(s.mean_power), float(s.mean_thrust), "o", ms=8, mec="k",
+        colour = motion_colour(beta_label(beta))
+        a.plot(float(s.mean_power), float(s.mean_thrust), "o", ms=8, mec="k", color=colour,
                label=f"optimised β = {beta:g}")
-        b.plot(float(s.efficiency), float(s.mean_thrust), "o", ms=8, mec="k")
+        b.plot(float(s.efficiency), float(s.mean_thrust), "o", ms=8, mec="k", color=colour)
+    # the feasible set and the optima fill the axes; the infeasible sinusoids, which reach
+    # kilowatts, are clipped
+    shown_power = [*sweep.mean_power[feas], *(float(r.summary.mean_power)
+                                             for r in (optimised or {}).values())]
+    shown_thrust = [*sweep.mean_thrust[feas], *(float(r.summary.mean_thrust)
+                                               for r in (optimised or {}).values())]
+    if shown_power:
+        top_power, top_thrust = max(shown_power), max(shown_thrust)
+        low_thrust = min(0.0, min(shown_thrust))
+        a.set_xlim(min(0.0, min(shown_power)), 1.15 * top_power if top_power > 0 else 1.0)
+        for ax in (a, b):
+            ax.set_ylim(low_thrust - 0.05 * abs(top_thrust),
+                        1.15 * top_thrust if top_thrust > 0 else 1.0)
     a.set_xlabel("mean input power [W]")
-    b.set_xlabel("efficiency η")
+    b.set_xlabel("efficiency η [-]")
     b.set_xlim(-0.2, 1.0)
     for ax in (a, b):
         ax.set_ylabel("mean thrust [N]")
@@ -66,10 +81,11 @@ def motion_figure(model, motions: Mapping[str, DiscreteMotion], scheme: str,
     for label, m in motions.items():
         c = cycle_curves(model, m, scheme)
         ls = "--" if "sinusoid" in label else "-"
-        axes[0, 0].plot(c["t"], c["pitch_deg"], ls, label=label)
-        axes[0, 1].plot(c["t"], c["heave"], ls)
-        axes[1, 0].plot(c["t"], c["thrust"], ls)
-        axes[1, 1].plot(c["t"], c["power"], ls)
+        colour = motion_colour(label)
+        axes[0, 0].plot(c["t"], c["pitch_deg"], ls, color=colour, label=label)
+        axes[0, 1].plot(c["t"], c["heave"], ls, color=colour)
+        axes[1, 0].plot(c["t"], c["thrust"], ls, color=colour)
+        axes[1, 1].plot(c["t"], c["power"], ls, color=colour)
     if max_power is not None:
         axes[1, 1].axhline(max_power, color="k", ls=":", label="P_max")
         axes[1, 1].legend(fontsize=8)
@@ -89,10 +105,11 @@ def history_figure(results: Mapping[float, OptimisationResult]) -> Figure:
     for beta, r in results.items():
         h = r.history
         if len(h):
-            ax.plot(np.arange(1, len(h) + 1), h - h.min() + 1e-12, label=f"β = {beta:g}")
+            ax.plot(np.arange(1, len(h) + 1), h - h.min() + 1e-12,
+                    color=motion_colour(beta_label(beta)), label=f"β = {beta:g}")
     ax.set_yscale("log")
     ax.set_xlabel("SQP iteration")
-    ax.set_ylabel("J - min J")
+    ax.set_ylabel("J - min J (thrust N and power W, as J weighs them)")
     ax.legend(fontsize=8)
     fig.tight_layout()
     return fig

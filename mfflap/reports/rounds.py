@@ -9,6 +9,7 @@ from matplotlib.figure import Figure
 
 from mfflap.config import CaseConfig
 from mfflap.optimisation.output_correction import describe_correction
+from mfflap.plots import motion_colour
 from mfflap.reports.html import Report, figure_html, table_html, text_html
 from mfflap.rounds.checks import MotionCheck
 from mfflap.rounds.output import write_rounds_results
@@ -127,7 +128,7 @@ def rounds_figure(result: LoopResult):
     axes = fig.subplots(1, 3)
     labels = sorted({lbl for r in result.rounds for lbl in r.checks})
     for i, label in enumerate(labels):
-        colour = f"C{i % 10}"
+        colour = motion_colour(label) or f"C{i % 10}"
         pts = [(r.index, r.checks[label]) for r in result.rounds if label in r.checks]
         x = [p[0] for p in pts]
         for ax, cfd, mod in ((axes[0], "cfd_mean_thrust", "predicted_thrust"),
