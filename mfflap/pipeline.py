@@ -33,6 +33,7 @@ from mfflap.identification.error_growth import scaling_advice
 from mfflap.identification.store import write_identification
 from mfflap.identification.workflow import identify_strategies, load_cases
 from mfflap.kinematics.convert import to_spline
+from mfflap.optimisation.gradcheck import gradient_checks
 from mfflap.optimisation.optimise import optimise_sqp
 from mfflap.optimisation.output_correction import OutputCorrection, check_gain
 from mfflap.optimisation.store import beta_key, beta_label, write_result
@@ -82,6 +83,11 @@ RUN_STRATEGIES = ("uniform", "low", "high")
 #: the folder of a run's output that holds its live back-tests' records (fixtures that
 #: ``--backtest-fixtures`` reads back)
 BACKTEST_RECORDS = "backtest_records"
+
+
+#: N per half cycle of the main job's gradient check (half a second; `mfflap gradcheck`
+#: checks at any N)
+GRADIENT_CHECK_STEPS = 20
 
 
 @dataclass
@@ -182,6 +188,9 @@ class RunOutcome:
     gain: dict | None = None
     backtests: dict = field(default_factory=dict)
     sensitivity: dict = field(default_factory=dict)
+    #: beta -> the adjoint gradient's check at the case's sinusoid
+    #: (:func:`~mfflap.optimisation.gradcheck.gradient_checks`; the paper's Fig. 6)
+    gradient_checks: dict = field(default_factory=dict)
     problems: list[str] = field(default_factory=list)
     timings: dict[str, float] = field(default_factory=dict)
     cases: list = field(default_factory=list)
@@ -488,6 +497,13 @@ def _diagnose(ctx: RunContext) -> None:
                      f"{outcome.gap[0].transfer.verdict}")
 
 
+def _check_gradient(ctx: RunContext) -> None:
+    ctx.outcome.gradient_checks = gradient_checks(ctx.config, GRADIENT_CHECK_STEPS)
+    worst = max(max(c.controls_error_complex_step, c.time_step_error_complex_step)
+                for c in ctx.outcome.gradient_checks.values())
+    ctx.progress(f"gradient check: largest relative error against complex step {worst:.1e}")
+
+
 def _sensitivity(ctx: RunContext) -> None:
     ctx.outcome.sensitivity = coefficient_sensitivity(ctx.config, ctx.outcome.identification,
                                                       ctx.outcome.study.sweep, ctx.progress)
@@ -517,6 +533,7 @@ STAGES: tuple[Stage | Callable[[RunContext], None], ...] = (
     Stage("output correction", _measure_corrections,
           lambda ctx: bool(ctx.options.correct_at)),
     Stage("optimisation", _optimise),
+    Stage("gradient check", _check_gradient),
     Stage("gain table", _gain_table, lambda ctx: _optimised(ctx) and ctx.options.gain_table),
     _motions_to_backtest,
     Stage("motions against the identification data", _motion_coverage,
@@ -558,6 +575,13 @@ def write_results(config: CaseConfig, outcome: RunOutcome, h5_path: Path) -> Non
                                                         "coverage": json.dumps(cov.as_dict())})
         for label, (_, r) in outcome.sensitivity.items():
             write_result(rf, f"sensitivity/{label}/{beta_key(0.0)}", r)
+        for beta, check in outcome.gradient_checks.items():
+            rf.write_group(f"gradient_check/{beta_key(beta)}",
+                           {"adjoint": check.adjoint, "complex_step": check.complex_step,
+                            "finite_difference": check.finite_difference},
+                           dict.fromkeys(("adjoint", "complex_step", "finite_difference"),
+                                         "dJ/du_j, then dJ/d(dt)"),
+                           {"beta": beta, **check.as_dict()})
         if outcome.gap is not None:
             write_diagnosis(rf, *outcome.gap)
         rf.h5.attrs["problems"] = "\n".join(outcome.problems)

@@ -8,7 +8,6 @@ import sys
 from pathlib import Path
 
 import click
-import numpy as np
 
 from mfflap.cli.json_output import echo_json
 from mfflap.cli.options import FigureFile, ResultsOutput
@@ -149,32 +148,20 @@ def gradcheck(case_file: Path, n_steps: int, as_json: bool, out_dir: Path | None
     from tqdm import tqdm
 
     from mfflap.config import load_case
-    from mfflap.kinematics import DiscreteMotion, to_discrete
-    from mfflap.optimisation import FlappingProblem
-    from mfflap.optimisation.gradcheck import FD_NOTE, check_gradient, check_point, scatter_figure
+    from mfflap.optimisation.gradcheck import (
+        CHECKED_BETAS,
+        FD_NOTE,
+        gradient_checks,
+        scatter_figure,
+    )
     from mfflap.plots import save_figure
 
     case = load_case(case_file)
-    o = case.optimisation
     out_dir = out_dir or Path(f"{case_file.stem}_gradcheck")
-    base = to_discrete(case.motion.build(), 1 / case.motion.frequency, n_steps)
-    rng = np.random.default_rng(0)
-    motion = DiscreteMotion(base.pitch_acceleration * (1 + 0.1 * rng.normal(size=n_steps)),
-                            base.heave_acceleration * (1 + 0.1 * rng.normal(size=n_steps)),
-                            base.time_step)
-    betas = (0.0, 0.5, 1.0)
-    problems = {beta: FlappingProblem(case.morison_model(), beta, o.max_power, o.max_heave,
-                                      o.penalty_power, o.penalty_heave, o.smoothing_pitch,
-                                      o.smoothing_heave, o.scheme, **o.pitch_envelope(),
-                                      penalty_pitch=o.penalty_pitch) for beta in betas}
-    motion = check_point(list(problems.values()), motion)
-    checks = {}
     # three evaluations of the objective per component: N^2 work, shown as it goes
-    with tqdm(total=len(betas) * (2 * n_steps + 1), desc="gradient components",
+    with tqdm(total=len(CHECKED_BETAS) * (2 * n_steps + 1), desc="gradient components",
               disable=as_json, leave=False) as bar:
-        for beta, problem in problems.items():
-            checks[beta] = check_gradient(problem, motion,
-                                          progress=lambda done, total: bar.update())
+        checks = gradient_checks(case, n_steps, progress=bar.update)
     out_dir.mkdir(parents=True, exist_ok=True)
     figure = out_dir / "gradcheck.png"
     save_figure(scatter_figure(checks), figure)

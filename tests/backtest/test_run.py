@@ -243,7 +243,8 @@ def test_main_job_runs_end_to_end_on_the_shipped_fixtures(tmp_path):
     assert "Does it carry over to runs outside the cases?" in html
     assert "Do the motions lie within the identification data?" in html
     for title in ("Identified coefficients", "Optimised motions", "Back-test against CFD",
-                  "Coefficient sensitivity", "Sinusoidal sweep", "Sim-to-real gap"):
+                  "Coefficient sensitivity", "Sinusoidal sweep", "Sim-to-real gap",
+                  "Gradient check (Fig. 6)"):
         assert title in html
     assert html.count("<img") >= 15
     # the two failed fixtures' log lines stay lines, folded under their reasons: in the
@@ -251,7 +252,11 @@ def test_main_job_runs_end_to_end_on_the_shipped_fixtures(tmp_path):
     assert html.count("<summary>last log lines</summary><pre>PIMPLE: iteration 1\n") == 4
     with ResultsFile(out / "results.h5") as rf:
         assert "paper2026" in rf.config_toml
-        assert {"identification", "optimisation", "backtest", "sensitivity", "gap"} <= set(rf.h5)
+        assert {"identification", "optimisation", "backtest", "sensitivity", "gap",
+                "gradient_check"} <= set(rf.h5)
+        check = rf.h5["gradient_check/beta_0.00"]
+        assert check.attrs["controls_error_complex_step"] < 1e-10
+        assert check["adjoint"].shape == check["complex_step"].shape == (41,)
         statuses = {rf.h5[f"backtest/{k}"].attrs["status"] for k in rf.h5["backtest"]}
         assert len(json.loads(rf.h5["gap/transfer"].attrs["motion_names"])) == 4
         assert rf.h5["coverage/beta__0"].attrs["label"] == "β = 0"

@@ -63,7 +63,8 @@ def test_the_main_job_is_its_list_of_stages_in_order():
 
     names = [s.name for s in pipeline.STAGES if isinstance(s, pipeline.Stage)]
     assert names == ["identification", "identification coverage", "output correction",
-                     "optimisation", "gain table", "motions against the identification data",
+                     "optimisation", "gradient check", "gain table",
+                     "motions against the identification data",
                      "back-test", "gap diagnosis", "coefficient sensitivity", "VTK export"]
     told: list[str] = []
     outcome = run_study(load_case(CASE), RunOptions(n_starts=1, with_ipopt=False,
@@ -71,6 +72,11 @@ def test_the_main_job_is_its_list_of_stages_in_order():
                                                     fixtures=(Path("/nonexistent"),)),
                         progress=told.append)
     assert [(s.name, s.status) for s in outcome.stages] == [
-        ("identification", FAILED), ("optimisation", DONE), ("back-test", DONE)]
+        ("identification", FAILED), ("optimisation", DONE), ("gradient check", DONE),
+        ("back-test", DONE)]
+    # the adjoint checked against complex step, controls and dt apart (Fig. 6)
+    assert sorted(outcome.gradient_checks) == [0.0, 0.5, 1.0]
+    assert all(max(c.controls_error_complex_step, c.time_step_error_complex_step) < 1e-10
+               for c in outcome.gradient_checks.values())
     assert told.index("[optimisation] started") < told.index("[back-test] started")
     assert outcome.model is not None and outcome.optimised_with is None
