@@ -44,14 +44,15 @@ def _regime_figure(where: dict, diag: Diagnosis):
     keys = [k for k in ("Strouhal number 2 f h / U", "reduced frequency k = pi f c / U",
                         "peak effective angle of attack") if k in rv]
     fig, axes = plt.subplots(1, len(keys), figsize=(4 * len(keys), 3.4), squeeze=False)
-    before = diag.gap["before"]["normal_force"]["nrmse"]
+    before = 100 * np.asarray(diag.gap["before"]["normal_force"]["nrmse"])
     after = diag.gap.get("after", {}).get("normal_force", {}).get("nrmse")
     for ax, k in zip(axes[0], keys, strict=True):
         ax.scatter(rv[k], before, s=14, label="model")
         if after is not None:
-            ax.scatter(rv[k], after, s=14, marker="x", label="model + chosen effect")
-        ax.set_xlabel(k)
-        ax.set_ylabel("held-out NRMSE of F_n")
+            ax.scatter(rv[k], 100 * np.asarray(after), s=14, marker="x",
+                       label="model + chosen effect")
+        ax.set_xlabel(k + (" [rad]" if "angle" in k else " [-]"))
+        ax.set_ylabel("held-out NRMSE of F_n [%]")
     axes[0][0].legend(fontsize=8)
     fig.tight_layout()
     return fig
@@ -200,16 +201,16 @@ def add_gap_sections(rep: Report, diag: Diagnosis, where: dict,
     for sig in SIGNALS:
         b = diag.gap["before"][sig]
         a = diag.gap.get("after", {}).get(sig)
-        rows.append([sig, float(np.median(b["nrmse"])),
-                     float(np.median(a["nrmse"])) if a else "-",
+        rows.append([sig, 100 * float(np.median(b["nrmse"])),
+                     100 * float(np.median(a["nrmse"])) if a else "-",
                      float(np.median(b["pearson"])), float(np.median(a["pearson"])) if a else "-"])
     for key in ("mean_thrust_error", "mean_power_error"):
         b = diag.gap["before"][key]
         a = diag.gap.get("after", {}).get(key)
-        rows.append([key + " (mean |.|)", float(np.mean(np.abs(b))),
-                     float(np.mean(np.abs(a))) if a is not None else "-", "", ""])
-    s.blocks.append(table_html(["signal", "median NRMSE before", "after", "median Pearson "
-                                "before", "after"], rows))
+        rows.append([key + " (mean |.|)", 100 * float(np.mean(np.abs(b))),
+                     100 * float(np.mean(np.abs(a))) if a is not None else "-", "", ""])
+    s.blocks.append(table_html(["signal", "median NRMSE before [%]", "after [%]",
+                                "median Pearson before", "after"], rows))
     if diag.validation:
         s = rep.section("Validation on withheld groups")
         s.blocks.append(table_html(["validation", "candidate", "claimed", "held-out gain", "p",

@@ -121,11 +121,11 @@ def applicability_figure(result: IdentificationResult, velocity: float,
     err = result.metrics[signal]["nrmse"]
     f, h = _param(result, "frequency"), _param(result, "heave_amplitude")
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 3.6))
-    sc = a1.scatter(st, err, c=np.log10(f), cmap="plasma", s=18)
-    a1.axhline(threshold, color="k", ls=":", label=f"NRMSE = {threshold:.0%}")
+    sc = a1.scatter(st, 100 * err, c=np.log10(f), cmap="plasma", s=18)
+    a1.axhline(100 * threshold, color="k", ls=":", label=f"NRMSE = {threshold:.0%}")
     a1.set_xscale("log")
-    a1.set_xlabel("St_h = 2 f h_amp / U")
-    a1.set_ylabel(f"NRMSE of {SIGNAL_LABELS[signal]}")
+    a1.set_xlabel("St_h = 2 f h_amp / U [-]")
+    a1.set_ylabel(f"NRMSE of {SIGNAL_LABELS[signal]} [%]")
     a1.legend(fontsize=8)
     fig.colorbar(sc, ax=a1, label="log10 f [Hz]")
     fs, hs = (np.unique(a[np.isfinite(f) & np.isfinite(h)]) for a in (f, h))
@@ -141,7 +141,7 @@ def applicability_figure(result: IdentificationResult, velocity: float,
     a2.set_xlabel("f [Hz]")
     a2.set_ylabel("h_amp [m]")
     a2.set_title(f"share of phases with NRMSE ≤ {threshold:.0%}")
-    fig.colorbar(im, ax=a2)
+    fig.colorbar(im, ax=a2, label="share of phases [-]")
     fig.tight_layout()
     return fig
 
@@ -160,7 +160,7 @@ def coefficient_figure(results: Mapping[str, IdentificationResult]) -> Figure:
         ax.errorbar(x, v, yerr=[np.maximum(v - lo, 0), np.maximum(hi - v, 0)], fmt="none",
                     ecolor="k", capsize=2)
     ax.set_xticks(range(len(names)), names, rotation=15)
-    ax.set_ylabel("coefficient")
+    ax.set_ylabel("coefficient [-]")
     ax.legend(title="weighting", fontsize=8)
     fig.tight_layout()
     return fig
@@ -174,11 +174,11 @@ def strategy_error_figure(results: Mapping[str, IdentificationResult],
         f = _param(res, "frequency")
         fs = np.unique(f[np.isfinite(f)])
         err = res.metrics[signal]["nrmse"]
-        ax.plot(fs, [err[f == v].mean() for v in fs], "o-", label=label)
+        ax.plot(fs, [100 * err[f == v].mean() for v in fs], "o-", label=label)
     ax.set_xscale("log")
     ax.set_xlabel("f [Hz]")
-    ax.set_ylabel(f"mean NRMSE of {SIGNAL_LABELS[signal]}")
-    ax.axhline(APPLICABLE_NRMSE, color="k", ls=":")
+    ax.set_ylabel(f"mean NRMSE of {SIGNAL_LABELS[signal]} [%]")
+    ax.axhline(100 * APPLICABLE_NRMSE, color="k", ls=":")
     ax.legend(title="weighting", fontsize=8)
     fig.tight_layout()
     return fig
@@ -331,7 +331,7 @@ def add_identification_sections(rep: Report, results: Mapping[str, Identificatio
                      kept_wall_treatment(prov) or "-",
                      float(prov.get("cpu_time_s", np.nan)),
                      str(prov.get("retries", "")) or "-",
-                     float(first.metrics["normal_force"]["nrmse"][i]),
+                     100 * float(first.metrics["normal_force"]["nrmse"][i]),
                      float(first.metrics["normal_force"]["pearson"][i])])
     s.blocks.append(text_html("CFD cases used (provenance from each record; agreement with "
                               f"the {first.strategy}-weighted fit):"))
@@ -339,7 +339,7 @@ def add_identification_sections(rep: Report, results: Mapping[str, Identificatio
                                 "set-up max Co", "set-up far field", "max Co at end",
                                 "far field at end", "wall treatment", "CPU [s]",
                                 "solver retries",
-                                "NRMSE F_n", "Pearson F_n"], rows))
+                                "NRMSE F_n [%]", "Pearson F_n"], rows))
     if first.notes:
         s.blocks.append(text_html("Data cleaning (numerical bursts of the CFD bridged, "
                                   "one-step glitches replaced; marked * in the maps):"))
@@ -376,9 +376,10 @@ def add_identification_sections(rep: Report, results: Mapping[str, Identificatio
         rows = []
         for label, res in results.items():
             err = res.metrics["normal_force"]["nrmse"]
-            rows.append([label] + [float(np.median(res.metrics[s]["nrmse"])) for s in
+            rows.append([label] + [100 * float(np.median(res.metrics[s]["nrmse"])) for s in
                                    ("normal_force", "tangential_force", "moment", "thrust",
                                     "input_power")]
                         + [f"{int((err <= APPLICABLE_NRMSE).sum())} of {len(err)}"])
-        sec.blocks.append(table_html(["weighting", "median NRMSE F_n", "F_t", "M", "thrust",
-                                      "power", "cases with NRMSE F_n ≤ 10 %"], rows))
+        sec.blocks.append(table_html(["weighting", "median NRMSE F_n [%]", "F_t [%]", "M [%]",
+                                      "thrust [%]", "power [%]", "cases with NRMSE F_n ≤ 10 %"],
+                                     rows))

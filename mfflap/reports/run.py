@@ -66,7 +66,7 @@ def add_backtest_sections(rep: Report, outcomes: Mapping[str, BacktestOutcome],
         c = o.comparison
         rows.append([label, o.status, o.source, describe_as_run(o.record) or "-",
                      c.cfd_mean_thrust, c.model_mean_thrust,
-                     c.cfd_mean_power, c.model_mean_power, c.nrmse["thrust"],
+                     c.cfd_mean_power, c.model_mean_power, 100 * c.nrmse["thrust"],
                      c.pearson["thrust"], c.cfd_max_power,
                      "yes" if c.max_power_ok else "NO"])
     averaged = {label: o.comparison for label, o in outcomes.items()
@@ -81,7 +81,7 @@ def add_backtest_sections(rep: Report, outcomes: Mapping[str, BacktestOutcome],
                 f"{c.cfd_power_standard_error:.2g} W" for label, c in averaged.items()) + "."))
     s.blocks.append(table_html(["motion", "status", "CFD from", "CFD as run", "CFD thrust [N]",
                                 "model thrust [N]", "CFD power [W]", "model power [W]",
-                                "NRMSE thrust", "Pearson thrust", "CFD max power [W]",
+                                "NRMSE thrust [%]", "Pearson thrust", "CFD max power [W]",
                                 "CFD power ≤ P_max"], rows))
     if any(o.comparison is not None for o in outcomes.values()):
         s.blocks.append(figure_html(backtest_figure(outcomes, max_power),
