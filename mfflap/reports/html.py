@@ -76,6 +76,12 @@ def _first_line_and_fold(text: str) -> tuple[str, str]:
                                 f"<pre>{html.escape(rest.strip(chr(10)))}</pre></details>")
 
 
+def folded_html(summary: str, body: str) -> str:
+    """``body`` (HTML) folded under a ``<details>`` line reading ``summary``, for what a
+    reader opens only to check where a number came from."""
+    return f"<details><summary>{html.escape(summary)}</summary>{body}</details>"
+
+
 def table_html(header: Sequence[str], rows: Sequence[Sequence[object]]) -> str:
     """A table; floats are shown with 4 significant digits, None as a dash, text of several
     lines as its first line with the rest folded (see `text_html`)."""

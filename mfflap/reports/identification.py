@@ -24,7 +24,14 @@ from mfflap.identification.fit import (
 )
 from mfflap.performance import thrust_and_power
 from mfflap.reports.error_growth_plot import error_growth_figure
-from mfflap.reports.html import Report, figure_html, signed_percent, table_html, text_html
+from mfflap.reports.html import (
+    Report,
+    figure_html,
+    folded_html,
+    signed_percent,
+    table_html,
+    text_html,
+)
 
 SIGNAL_LABELS = {"normal_force": "F_n", "tangential_force": "F_t", "moment": "M",
                  "thrust": "thrust", "input_power": "input power"}
@@ -251,6 +258,14 @@ def identification_report(path: str | Path, results: Mapping[str, Identification
     return rep.write(path)
 
 
+def weights_table_html(results: Mapping[str, IdentificationResult]) -> str:
+    """Each weighting's weight per frequency, as the fit used them (summing to one)."""
+    frequencies = sorted({f for res in results.values() for f in res.weights})
+    rows = [[label, *(res.weights.get(f) for f in frequencies)]
+            for label, res in results.items()]
+    return table_html(["weighting", *(f"f = {f:g} Hz" for f in frequencies)], rows)
+
+
 def add_identification_sections(rep: Report, results: Mapping[str, IdentificationResult],
                                 cases: Sequence[CaseData], base_model: ForceModel,
                                 velocity: float, source: str = "",
@@ -280,6 +295,7 @@ def add_identification_sections(rep: Report, results: Mapping[str, Identificatio
                                              "scalings assume"))
     s.blocks.append(table_html(["weighting", "term", "value", "bootstrap s.e.", "2.5 %",
                                 "97.5 %"], _coefficient_rows(results)))
+    s.blocks.append(weights_table_html(results))
     s.blocks.append(figure_html(coefficient_figure(results),
                                 "Coefficients and bootstrap 95 % intervals per strategy"))
     held: dict[str, list[str]] = {}
@@ -333,13 +349,13 @@ def add_identification_sections(rep: Report, results: Mapping[str, Identificatio
                      str(prov.get("retries", "")) or "-",
                      100 * float(first.metrics["normal_force"]["nrmse"][i]),
                      float(first.metrics["normal_force"]["pearson"][i])])
-    s.blocks.append(text_html("CFD cases used (provenance from each record; agreement with "
-                              f"the {first.strategy}-weighted fit):"))
-    s.blocks.append(table_html(["case", "f [Hz]", "h_amp [m]", "φ [deg]", "mesh", "cells",
-                                "set-up max Co", "set-up far field", "max Co at end",
-                                "far field at end", "wall treatment", "CPU [s]",
-                                "solver retries",
-                                "NRMSE F_n [%]", "Pearson F_n"], rows))
+    s.blocks.append(folded_html(
+        f"CFD cases used: {len(rows)} runs, how each was run and its agreement with the "
+        f"{first.strategy}-weighted fit",
+        table_html(["case", "f [Hz]", "h_amp [m]", "φ [deg]", "mesh", "cells",
+                    "set-up max Co", "set-up far field", "max Co at end", "far field at end",
+                    "wall treatment", "CPU [s]", "solver retries", "NRMSE F_n [%]",
+                    "Pearson F_n"], rows)))
     if first.notes:
         s.blocks.append(text_html("Data cleaning (numerical bursts of the CFD bridged, "
                                   "one-step glitches replaced; marked * in the maps):"))

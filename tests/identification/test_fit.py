@@ -419,11 +419,13 @@ def test_the_refits_are_stored_reported_and_printed(tmp_path):
     out = tmp_path / "id.h5"
     runner = CliRunner()
     res = runner.invoke(cli, ["identify", str(case_file), "--strategy", "uniform",
+                              "--residual-scaling", "grid",
                               "--bootstrap", "50", "--output", str(out)])
     assert res.exit_code == 0, res.output
     assert ("left out, moves most: normal_added_mass: f2p000_h0p500_phi045p0" in res.output
             and "normal_drag: f2p000_h0p500_phi135p0 (5.05 -> 5.53, +9.5%" in res.output)
     res = runner.invoke(cli, ["identify", str(case_file), "--strategy", "uniform",
+                              "--residual-scaling", "grid",
                               "--bootstrap", "50", "--output", str(tmp_path / "j.h5"),
                               "--json"])
     moved = json.loads(res.stdout)["uniform"]["most_influential"]["normal_drag"]
@@ -553,9 +555,11 @@ def test_a_case_can_be_left_out_by_name_and_its_fit_is_the_refit_without_it(tmp_
     case_file = Path(__file__).parents[2] / "cases" / "paper2026.toml"
     runner = CliRunner()
     full = json.loads(runner.invoke(cli, [
-        "identify", str(case_file), "--strategy", "uniform", "--bootstrap", "0", "--output",
+        "identify", str(case_file), "--strategy", "uniform",
+        "--residual-scaling", "grid", "--bootstrap", "0", "--output",
         str(tmp_path / "all.h5"), "--json"]).stdout)["uniform"]
     res = runner.invoke(cli, ["identify", str(case_file), "--strategy", "uniform",
+                              "--residual-scaling", "grid",
                               "--bootstrap", "0", "--exclude", "f2p000_h0p500_phi135p0",
                               "--output", str(tmp_path / "without.h5"), "--json"])
     assert res.exit_code == 0, res.output

@@ -35,3 +35,15 @@ def test_the_identification_figures_draw_nrmse_in_per_cent(monkeypatch):
     assert ax.get_ylabel().endswith("[%]")
     means = ax.lines[0].get_ydata()
     assert np.allclose(means, 100 * np.array([0.065, 0.16, 0.17]))
+
+
+def test_the_report_shows_each_weightings_weight_per_frequency():
+    from mfflap.identification.weights import frequency_weights
+    from mfflap.reports.identification import weights_table_html
+
+    frequencies = [0.1, 0.2, 0.5, 1.0, 2.0]
+    results = {name: SimpleNamespace(weights=frequency_weights(frequencies, name))
+               for name in ("uniform", "low", "high")}
+    html = weights_table_html(results)
+    assert html.count("<tr>") == 4 and "f = 0.1 Hz" in html and "f = 2 Hz" in html
+    assert "0.4" in html and "0.05" in html and "0.2" in html  # low, high and uniform's
