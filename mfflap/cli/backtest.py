@@ -277,7 +277,8 @@ def _show(outcomes: dict, as_json: bool, scales: dict | None = None,
                    f"model {d['model_mean_thrust']:.3f} N; power CFD "
                    f"{d['cfd_mean_power']:.3f}{_error(d, 'power')} W "
                    f"model {d['model_mean_power']:.3f} W; NRMSE thrust "
-                   f"{d['nrmse']['thrust']:.3f}; CFD max power {d['cfd_max_power']:.1f} W"
+                   f"{100 * d['nrmse']['thrust']:.1f} %; CFD max power "
+                   f"{d['cfd_max_power']:.1f} W"
                    + (f"; means over the last {d['cycles_averaged']} cycles"
                       if d["cycles_averaged"] > 1 else ""))
         if "corrected_prediction" in d:

@@ -25,8 +25,12 @@ def test_identify_optimise_backtest_diagnose_in_ten_lines():
     assert 3.0 < fit.coefficients["normal_drag"] < 8.0
     assert study.model.coefficients["normal_drag"] == fit.coefficients["normal_drag"]
     assert optimum.beta == 0.0 and optimum.summary.mean_thrust > 0
-    # no CFD of this optimum ships, and the back-test says so rather than guessing
-    assert outcome.status == "not back-tested" and "no live run" in outcome.source
+    # the same optimum as the main job's (identified coefficients, the phase fixed): its
+    # shipped OpenFOAM run is found
+    from mfflap.records.record import fixture_dir
+
+    assert outcome.status == "back-tested"
+    assert (fixture_dir("backtest_main_job") / outcome.source.removeprefix("fixture ")).is_file()
     assert verdict.verdict
 
 

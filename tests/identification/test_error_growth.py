@@ -142,8 +142,10 @@ def test_on_the_shipped_fixtures_the_errors_grow_in_proportion_and_the_tools_say
     growth = json.loads(res.stdout)["uniform"]["error_growth"]
     for k, g in growth.items():
         assert 0.9 < g["exponent"] < 1.05 and g["matching_scaling"] == "case", k
+    # fitted on the grid's scale, identify says the errors ask for the other
     res = runner.invoke(cli, ["identify", str(CASE), "--strategy", "uniform", "--bootstrap",
-                              "0", "--output", str(tmp_path / "id.h5")])
+                              "0", "--residual-scaling", "grid", "--output",
+                              str(tmp_path / "id.h5")])
     assert ('errors in proportion to each run\'s loads, which residual scaling "case" weighs '
             'the runs by, not "grid" (uniform weighting)') in res.output
     html = tmp_path / "id.html"

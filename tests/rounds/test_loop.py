@@ -5,6 +5,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from shipped_settings import SHIPPED_SETTINGS
 
 from mfflap.rounds import (
     THRUST_FLOOR,
@@ -211,7 +212,9 @@ def test_a_stop_in_a_round_ends_the_rounds_and_keeps_what_was_done(tmp_path):
     options = RunOptions(coefficients="identified:uniform", within_data=True,
                          with_ipopt=False, sensitivity=False, work_dir=tmp_path / "cases")
     out = tmp_path / "loop"
-    result, outcome = run_rounds(load_case(CASE), options, 3, 0.1, out, progress=progress)
+    # the settings the shipped back-tests of round 1 were optimised with
+    result, outcome = run_rounds(load_case(CASE, SHIPPED_SETTINGS), options, 3, 0.1, out,
+                                 progress=progress)
     assert [r.index for r in result.rounds] == [1, 2]
     assert outcome.interrupted is not None and not outcome.backtests
     assert result.stopped_because.startswith("round 2 was stopped (Ctrl-C)")
