@@ -9,7 +9,7 @@ what runs.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 from mfflap.errors import ConfigError
 from mfflap.validation import bounded, check_fields
@@ -17,6 +17,10 @@ from mfflap.validation import bounded, check_fields
 #: the largest trust-region radius, as a fraction of the centre motion's accelerations and
 #: time step
 MAX_TRUST_RADIUS = 2.0
+
+#: the [rounds] keys that act from round 2 on: given for one round, they are refused
+LATER_ROUNDS_KEYS = ("refit", "correct_outputs", "trust_radius", "first_order",
+                     "cfd_repeatability")
 
 
 @dataclass(frozen=True)
@@ -115,10 +119,8 @@ class RoundsSettings:
     def __post_init__(self) -> None:
         check_fields(self, prefix="rounds.")
         if self.count == 1:
-            given = [k for k, default in (("correct_outputs", False), ("refit", True),
-                                          ("trust_radius", None), ("first_order", False),
-                                          ("cfd_repeatability", None))
-                     if getattr(self, k) != default]
+            given = [f.name for f in fields(self) if f.name in LATER_ROUNDS_KEYS
+                     and getattr(self, f.name) != f.default]
             if given:
                 raise ConfigError("rounds of CFD in the loop take this from round 2 on; "
                                   "it needs rounds.count >= 2", key=f"rounds.{given[0]}")
