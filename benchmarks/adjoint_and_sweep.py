@@ -9,23 +9,12 @@ from __future__ import annotations
 import time
 
 import numpy as np
+from timing import best_of
 
 from mfflap.hydro import MorisonModel
 from mfflap.kinematics import harmonic_to_discrete
 from mfflap.optimisation import FlappingProblem
 from mfflap.sweep import sinusoid_sweep
-
-
-def best_of(fn, repeat=5, budget_s=0.5):
-    """Fastest of at least ``repeat`` calls, repeated until ``budget_s`` is spent (the
-    minimum is the least disturbed by other load on the machine)."""
-    times = []
-    start = time.perf_counter()
-    while len(times) < repeat or time.perf_counter() - start < budget_s:
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return min(times)
 
 
 def main() -> None:

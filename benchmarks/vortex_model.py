@@ -8,24 +8,12 @@ Morison model's time on the same 600 samples, measured in the same process.
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
+from timing import best_of
 
 from mfflap.hydro import MorisonModel
 from mfflap.hydro.discrete_vortex import VortexModelSettings, simulate_vortex_model
 from mfflap.kinematics.continuous import HarmonicMotion
-
-
-def best_of(fn, repeat=3, budget_s=0.5):
-    """Fastest of at least ``repeat`` calls, repeated until ``budget_s`` is spent."""
-    times = []
-    start = time.perf_counter()
-    while len(times) < repeat or time.perf_counter() - start < budget_s:
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return min(times)
 
 
 def main() -> None:
@@ -40,7 +28,8 @@ def main() -> None:
     print("wake [chords]   3 cycles [s]   per cycle [s]   / Morison")
     for wake in (0.5, 1.0, 3.0, 10.0):
         settings = VortexModelSettings(wake_chords=wake)
-        t = best_of(lambda settings=settings: simulate_vortex_model(state, settings=settings))
+        t = best_of(lambda settings=settings: simulate_vortex_model(state, settings=settings),
+                    repeat=3)
         print(f"{wake:13.1f}   {t:12.3f}   {t / cycles:13.4f}   {t / base:8.0f}")
 
 
