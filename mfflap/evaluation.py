@@ -1,4 +1,5 @@
-"""Evaluate a case file's motion with its Morison model (what ``mfflap evaluate`` does)."""
+"""Evaluate a case file's motion with its Morison model or with the discrete-vortex model
+(what ``mfflap evaluate`` does)."""
 
 from __future__ import annotations
 
@@ -10,7 +11,10 @@ from matplotlib.figure import Figure
 
 from mfflap.config import CaseConfig, load_case
 from mfflap.errors import ConfigError
+from mfflap.hydro.loads import Loads
 from mfflap.kinematics.convert import to_discrete
+from mfflap.kinematics.state import KinematicState
+from mfflap.parameters import FreeStream, Plate
 from mfflap.performance import CycleSummary, Evaluation, evaluate_discrete, evaluate_states
 from mfflap.plots import cycle_figure
 from mfflap.results import ResultsFile
@@ -48,26 +52,105 @@ class CaseEvaluation:
             rf.write_summary("summary", ev.summary)
 
 
-def evaluate_case(path: str | Path, scheme: str | None = None) -> CaseEvaluation:
+#: the models of ``mfflap evaluate``
+MODELS = ("morison", "vortex")
+#: the discrete-vortex model's time steps per period of the motion
+VORTEX_STEPS_PER_PERIOD = 200
+#: how far the stream travels, in chords, before the period the discrete-vortex model's
+#: means are taken over (the harmonic motion starts from rest; its start-up wake is then
+#: this far downstream)
+VORTEX_SETTLING_CHORDS = 5.0
+
+
+@dataclass(frozen=True)
+class _ComputedLoads:
+    """Loads computed beforehand, with what :func:`evaluate_states` asks of a model."""
+
+    computed: Loads
+    plate: Plate
+    stream: FreeStream
+
+    def loads(self, state: KinematicState) -> Loads:
+        return self.computed
+
+
+def _evaluate_with_vortex_model(case: CaseConfig, motion, frequency: float,
+                                duration: float | None) -> tuple[Evaluation, float, str]:
+    """The discrete-vortex model on the case's motion from rest; a harmonic motion's last
+    period after the stream travelled VORTEX_SETTLING_CHORDS chords, a ramp motion's
+    whole duration. Returns the evaluation, the time it spans and a description."""
+    from mfflap.hydro.discrete_vortex import simulate_vortex_model
+
+    period = 1.0 / frequency
+    if duration is None:
+        travel = case.flow.velocity * period / case.plate.chord  # chords per period
+        periods = max(3, int(np.ceil(VORTEX_SETTLING_CHORDS / max(travel, 1e-12))) + 1)
+    else:
+        periods = duration / period
+    n = int(np.ceil(VORTEX_STEPS_PER_PERIOD * periods))
+    state = motion.sample(np.arange(n) * (periods * period / n))
+    loads = simulate_vortex_model(state, case.plate, case.fluid, case.flow).loads
+    keep = slice(n - VORTEX_STEPS_PER_PERIOD, None) if duration is None else slice(None)
+    kept = KinematicState(state.time[keep], **{k: getattr(state, k)[keep] for k in (
+        "pitch_angle", "pitch_rate", "pitch_acceleration", "heave_position",
+        "heave_velocity", "heave_acceleration")})
+    kept_loads = Loads(kept.time, loads.normal_force[keep], loads.tangential_force[keep],
+                       loads.moment[keep], source=loads.source)
+    ev = evaluate_states(_ComputedLoads(kept_loads, case.plate, case.flow), kept, frequency)
+    span = period if duration is None else duration
+    where = (f"period {periods} of {periods} from rest" if duration is None
+             else f"{periods:g} cycles from rest")
+    return ev, span, f"discrete-vortex model, {where}"
+
+
+def evaluate_case(path: str | Path, scheme: str | None = None,
+                  model: str = "morison") -> CaseEvaluation:
     """Evaluate the [motion] of a case file.
 
-    Harmonic motions use the discrete scheme with the case's N (the paper's model); ramp
-    motions are sampled continuously over the time a campaign case at this frequency runs
-    (``identification.n_cycles`` carrier periods capped at ``max_duration``).
+    With the Morison model, harmonic motions use the discrete scheme with the case's N (the
+    paper's model); ramp motions are sampled continuously over the time a campaign case at
+    this frequency runs (``identification.n_cycles`` carrier periods capped at
+    ``max_duration``). The discrete-vortex model (``model="vortex"``) runs the motion from
+    rest at VORTEX_STEPS_PER_PERIOD steps a period: a harmonic motion's means are those of
+    its last period, once the stream has carried the start-up wake VORTEX_SETTLING_CHORDS
+    chords away; a ramp motion's those of its whole duration.
 
     Raises
     ------
     ConfigError
-        If a ramp motion pitches the plate to 90 deg or past it in that time, or ``scheme``
-        is given for it (a discrete scheme is for a harmonic motion).
+        If a ramp motion pitches the plate to 90 deg or past it in that time, if ``scheme``
+        is given for a ramp motion or for the vortex model (a discrete scheme is the
+        Morison model's, for a harmonic motion), or if ``model`` is not one of MODELS.
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> case = Path(__file__).parents[1] / "cases" / "paper2026.toml"
+    >>> result = evaluate_case(case, model="vortex")
+    >>> result.scheme
+    'discrete-vortex'
     """
+    if model not in MODELS:
+        raise ConfigError(f"model must be one of {list(MODELS)}, got {model!r}", key="model")
     case = load_case(path)
-    model = case.morison_model()
     spec = case.motion
-    if scheme is not None and spec.kind != "harmonic":
-        raise ConfigError(f"scheme {scheme!r} is a discrete scheme of the harmonic motion; "
-                          f"the {spec.kind} motion of [motion] is evaluated continuously",
-                          source=case.source, key="scheme")
+    if scheme is not None and (spec.kind != "harmonic" or model == "vortex"):
+        what = ("the discrete-vortex model runs in continuous time" if model == "vortex"
+                else f"the {spec.kind} motion of [motion] is evaluated continuously")
+        raise ConfigError(f"scheme {scheme!r} is a discrete scheme of the Morison model's "
+                          f"harmonic motion; {what}", source=case.source, key="scheme")
+    if model == "vortex":
+        duration = None
+        if spec.kind != "harmonic":
+            duration = case.identification.case_duration(spec.frequency)
+            spec.check_upright(duration, "identification.n_cycles periods capped at "
+                               "max_duration", source=case.source)
+        ev, span, where = _evaluate_with_vortex_model(case, spec.build(), spec.frequency,
+                                                      duration)
+        desc = f"{spec.kind} f={spec.frequency} Hz, h={spec.heave_amplitude} m, {where}"
+        fig = cycle_figure(ev, span, half_cycle=False, title=f"{case.study.name}: {desc}")
+        return CaseEvaluation(case, ev, "discrete-vortex", desc, fig)
+    model = case.morison_model()
     scheme = scheme or case.model.scheme
     motion = spec.build()
     period = 1.0 / spec.frequency

@@ -212,6 +212,9 @@ class RunOutcome:
     backtest_motions: dict = field(default_factory=dict)
     #: every stage that ran, in order, with how it ended
     stages: list[StageOutcome] = field(default_factory=list)
+    #: label -> CFD, Morison and the discrete-vortex model on its back-test
+    #: (:class:`~mfflap.backtest.model_ladder.LadderComparison`)
+    ladder: dict = field(default_factory=dict)
     #: the weighting whose identified coefficients the optimisation used, or None when it
     #: used the case file's
     optimised_with: str | None = None
@@ -488,6 +491,22 @@ def _say_what_was_not_backtested(ctx: RunContext) -> None:
             ctx.outcome.problems.append(f"back-test: {label} not back-tested: {o.source}")
 
 
+def _model_ladder(ctx: RunContext) -> None:
+    # the discrete-vortex model loads its compiled kernel (numba) when it first runs
+    from mfflap.backtest.model_ladder import compare_model_ladder
+
+    config = ctx.config
+    for label, o in ctx.outcome.backtests.items():
+        if o.record is None or o.comparison is None:
+            continue
+        ladder = compare_model_ladder(o.record, ctx.model, plate=config.plate,
+                                      fluid=config.fluid, stream=config.flow)
+        ctx.outcome.ladder[label] = ladder
+        ctx.progress(f"model ladder, {label}: peak power CFD {ladder.cfd.peak_power:.3g} W, "
+                     f"Morison {ladder.morison.peak_power:.3g} W, discrete-vortex model "
+                     f"{ladder.vortex.peak_power:.3g} W")
+
+
 def _diagnose(ctx: RunContext) -> None:
     outcome = ctx.outcome
     outcome.gap = gap_diagnosis(ctx.config, outcome.cases, outcome.backtests)
@@ -540,6 +559,8 @@ STAGES: tuple[Stage | Callable[[RunContext], None], ...] = (
           lambda ctx: _optimised(ctx) and ctx.reference is not None),
     Stage("back-test", _backtest, _optimised),
     _say_what_was_not_backtested,
+    Stage("model ladder", _model_ladder,
+          lambda ctx: any(o.record is not None for o in ctx.outcome.backtests.values())),
     # after the back-test: its runs are the ones the fits never saw
     Stage("gap diagnosis", _diagnose, lambda ctx: bool(ctx.outcome.cases)),
     Stage("coefficient sensitivity", _sensitivity,
@@ -559,6 +580,11 @@ def _run_stages(config: CaseConfig, options: RunOptions, progress: Progress,
             step(ctx)
         elif step.runs_when(ctx):
             _stage(outcome, step.name, progress, lambda step=step: step.run(ctx))
+
+
+#: the model ladder's figures in the results file, each over (CFD, Morison, vortex model)
+LADDER_UNITS = {"mean_thrust": "N", "mean_power": "W", "peak_power": "W",
+                "normal_force_nrmse": "1"}
 
 
 def write_results(config: CaseConfig, outcome: RunOutcome, h5_path: Path) -> None:
@@ -582,6 +608,13 @@ def write_results(config: CaseConfig, outcome: RunOutcome, h5_path: Path) -> Non
                            dict.fromkeys(("adjoint", "complex_step", "finite_difference"),
                                          "dJ/du_j, then dJ/d(dt)"),
                            {"beta": beta, **check.as_dict()})
+        for label, ladder in outcome.ladder.items():
+            levels = ("cfd", "morison", "vortex")
+            rf.write_group(f"model_ladder/{safe_label(label)}", {
+                f"{figure}": [getattr(getattr(ladder, level), figure) for level in levels]
+                for figure in LADDER_UNITS}, LADDER_UNITS,
+                {"label": label, "record": ladder.name, "levels": json.dumps(levels),
+                 "periods": ladder.periods})
         if outcome.gap is not None:
             write_diagnosis(rf, *outcome.gap)
         rf.h5.attrs["problems"] = "\n".join(outcome.problems)

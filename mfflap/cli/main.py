@@ -102,19 +102,26 @@ def _register_subgroups() -> None:
 @click.option("--output", type=ResultsOutput("evaluation"), default=None,
               help="Also write the results (HDF5, with the case stored beside them).")
 @click.option("--scheme", type=click.Choice(["paper", "midpoint"]), default=None,
-              help="Discrete scheme (default: the case's [model] scheme).")
+              help="Discrete scheme of the Morison model (default: the case's [model] "
+                   "scheme).")
+@click.option("--model", "model", type=click.Choice(["morison", "vortex"]), default="morison",
+              show_default=True,
+              help="The Morison model of the case, or the discrete-vortex model.")
 def evaluate(case_file: Path, as_json: bool, figure: Path | None, output: Path | None,
-             scheme: str | None) -> None:
-    """Evaluate the [motion] of CASE_FILE with the Morison model over one cycle.
+             scheme: str | None, model: str) -> None:
+    """Evaluate the [motion] of CASE_FILE with the Morison model over one cycle, or with
+    the discrete-vortex model.
 
-    A harmonic motion is converted to the discrete half-cycle scheme with the case's
-    [discretisation] n_steps; a ramp motion is evaluated continuously over its cycles.
-    Prints the cycle means and saves a figure of thrust, power, F_n, F_t and M.
+    For the Morison model, a harmonic motion is converted to the discrete half-cycle scheme
+    with the case's [discretisation] n_steps; a ramp motion is evaluated continuously over
+    its cycles. The discrete-vortex model runs the motion from rest, 200 steps a period,
+    and gives a harmonic motion's last period once its start-up wake is 5 chords
+    downstream. Prints the cycle means and saves a figure of thrust, power, F_n, F_t and M.
     """
     from mfflap.evaluation import evaluate_case
     from mfflap.plots import save_figure
 
-    result = evaluate_case(case_file, scheme=scheme)
+    result = evaluate_case(case_file, scheme=scheme, model=model)
     figure = figure or Path(f"{case_file.stem}.cycle.png")
     save_figure(result.figure, figure)
     if output is not None:

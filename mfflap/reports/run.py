@@ -23,6 +23,7 @@ from mfflap.reports.coverage import add_coverage_section
 from mfflap.reports.gap import add_gap_sections
 from mfflap.reports.html import Report, figure_html, table_html, text_html
 from mfflap.reports.identification import add_identification_sections
+from mfflap.reports.ladder import add_ladder_section
 from mfflap.reports.optimisation import add_optimisation_sections, cycle_curves
 from mfflap.reports.summary import add_run_summary
 
@@ -185,6 +186,7 @@ def write_run_report(config: CaseConfig, outcome: RunOutcome, html_path: Path,
     if outcome.coverage:
         add_coverage_section(rep, outcome.coverage, len(outcome.cases))
     add_backtest_sections(rep, outcome.backtests, config.optimisation.max_power)
+    add_ladder_section(rep, outcome.ladder, config.optimisation.max_power)
     if outcome.gap is not None:
         add_gap_sections(rep, *outcome.gap)
     if outcome.sensitivity:

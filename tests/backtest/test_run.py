@@ -846,3 +846,19 @@ def test_the_main_job_as_shipped_back_tests_every_optimum_from_the_shipped_cfd(t
     assert {b["status"] for b in backtests.values()} == {"back-tested"}, backtests
     assert {b["source"] for b in backtests.values()} <= shipped
     assert {b["cycles_averaged"] for b in backtests.values()} == {2}
+    # every back-tested motion on the three levels: Morison, the vortex model and CFD
+    import h5py
+
+    with h5py.File(tmp_path / "run" / "results.h5") as h5:
+        ladder = {h5["model_ladder"][k].attrs["label"]: h5["model_ladder"][k]
+                  for k in h5["model_ladder"]}
+        assert set(ladder) == set(backtests)
+        beta0 = ladder["β = 0"]
+        assert json.loads(beta0.attrs["levels"]) == ["cfd", "morison", "vortex"]
+        assert beta0["peak_power"].attrs["units"] == "W"
+        cfd_peak, morison_peak, vortex_peak = beta0["peak_power"][()]
+        # over the last two periods: at least the last one's peak
+        assert cfd_peak >= 0.999 * backtests["β = 0"]["cfd_max_power"]
+        assert abs(vortex_peak - cfd_peak) < abs(morison_peak - cfd_peak)
+    html = (tmp_path / "run" / "report.html").read_text()
+    assert "Three levels: Morison, the discrete-vortex model and CFD" in html

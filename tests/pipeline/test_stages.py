@@ -57,23 +57,29 @@ def test_any_other_exception_ends_the_run_with_its_traceback(monkeypatch, tmp_pa
 @pytest.mark.slow
 def test_the_main_job_is_its_list_of_stages_in_order():
     """The stages a run reports are those of STAGES whose condition holds, in that order:
-    without CFD records nothing but the optimisation and the back-test runs (the
-    identification fails, and the stages that need its cases are not run)."""
+    without CFD records nothing but the optimisation, the back-test and the model ladder on
+    what it found runs (the identification fails, and the stages that need its cases are
+    not run)."""
     import mfflap.pipeline as pipeline
 
     names = [s.name for s in pipeline.STAGES if isinstance(s, pipeline.Stage)]
     assert names == ["identification", "identification coverage", "output correction",
                      "optimisation", "gradient check", "gain table",
                      "motions against the identification data",
-                     "back-test", "gap diagnosis", "coefficient sensitivity", "VTK export"]
+                     "back-test", "model ladder", "gap diagnosis", "coefficient sensitivity",
+                     "VTK export"]
     told: list[str] = []
     outcome = run_study(load_case(CASE), RunOptions(n_starts=1, with_ipopt=False,
                                                     gain_table=False, sensitivity=False,
                                                     fixtures=(Path("/nonexistent"),)),
                         progress=told.append)
+    # the model ladder runs on the motions whose CFD the back-test found
+    found = any(o.record is not None for o in outcome.backtests.values())
     assert [(s.name, s.status) for s in outcome.stages] == [
         ("identification", FAILED), ("optimisation", DONE), ("gradient check", DONE),
-        ("back-test", DONE)]
+        ("back-test", DONE)] + ([("model ladder", DONE)] if found else [])
+    assert set(outcome.ladder) == {label for label, o in outcome.backtests.items()
+                                   if o.record is not None and o.comparison is not None}
     # the adjoint checked against complex step, controls and dt apart (Fig. 6)
     assert sorted(outcome.gradient_checks) == [0.0, 0.5, 1.0]
     assert all(max(c.controls_error_complex_step, c.time_step_error_complex_step) < 1e-10
