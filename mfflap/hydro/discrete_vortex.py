@@ -93,6 +93,14 @@ class VortexModelSettings:
         The far-wake cut-off: the vortices shed while the stream travels this many chords are
         kept (at least one period of the motion is the rule: a shorter wake loses the plate's
         own wake of the last stroke).
+
+    Examples
+    --------
+    >>> VortexModelSettings(critical_lesp=ATTACHED_FLOW, core_radius_chords=0.001)
+    ... # doctest: +ELLIPSIS
+    VortexModelSettings(critical_lesp=inf, core_radius_chords=0.001, ...)
+    >>> VortexModelSettings().wake_steps(chord=0.16, velocity=0.3, time_step=0.005)
+    320
     """
 
     critical_lesp: float = 0.2
@@ -372,5 +380,16 @@ def simulate_vortex_model(state: KinematicState, plate: Plate | None = None,
 def vortex_loads(state: KinematicState, plate: Plate | None = None, fluid: Fluid | None = None,
                  stream: FreeStream | None = None,
                  settings: VortexModelSettings | None = None) -> Loads:
-    """The loads of :func:`simulate_vortex_model`."""
+    """The loads of :func:`simulate_vortex_model`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from mfflap.kinematics.continuous import HarmonicMotion
+    >>> state = HarmonicMotion(frequency=1.0, heave_amplitude=0.3,
+    ...                        pitch_amplitude=np.radians(20)).sample(np.arange(600) / 200)
+    >>> loads = vortex_loads(state, settings=VortexModelSettings(wake_chords=1.0))
+    >>> loads.normal_force.shape
+    (600,)
+    """
     return simulate_vortex_model(state, plate, fluid, stream, settings).loads
