@@ -17,7 +17,7 @@ from mfflap.hydro.base import ForceModel
 from mfflap.hydro.discrete_vortex import VortexModelSettings, simulate_vortex_model
 from mfflap.hydro.loads import Loads
 from mfflap.hydro.morison import MorisonModel
-from mfflap.kinematics.state import KINEMATIC_UNITS, KinematicState
+from mfflap.kinematics.state import KinematicState
 from mfflap.metrics import nrmse
 from mfflap.parameters import Fluid, FreeStream, Plate
 from mfflap.performance import thrust_and_power
@@ -69,13 +69,6 @@ class LadderComparison:
     def as_dict(self) -> dict:
         """Plain values for JSON and reports."""
         return asdict(self)
-
-
-def _uniform_state(state: KinematicState, time_step: float) -> KinematicState:
-    time = np.arange(0.0, state.time[-1] + 0.5 * time_step, time_step)
-    time = time[time <= state.time[-1]]
-    return KinematicState(time, **{k: np.interp(time, state.time, getattr(state, k))
-                                   for k in KINEMATIC_UNITS})
 
 
 def _figures(loads: Loads, state: KinematicState, window: np.ndarray,
@@ -139,7 +132,7 @@ def compare_model_ladder(record: CfdRecord, morison: ForceModel | None = None,
     if start < 0:
         raise MfflapError(f"record {record.name} runs {t_cfd[-1]:.3g} s, shorter than the "
                           f"{periods} periods of {period:.3g} s to compare")
-    state = _uniform_state(record.state, period / steps_per_period)
+    state = record.state.on_uniform_time(period / steps_per_period, start=0.0)
     window = state.time >= start
     cfd_window = t_cfd >= start
     morison = morison or MorisonModel()

@@ -82,3 +82,28 @@ class KinematicState:
         t = self.time if np.ndim(self.time) == 1 else self.time[index]
         vals = {f.name: getattr(self, f.name)[index] for f in fields(self) if f.name != "time"}
         return KinematicState(time=t, **vals)
+
+    def on_uniform_time(self, time_step: float, start: float | None = None) -> KinematicState:
+        """The state linearly interpolated at start, start + dt, ... up to the last sample
+        time (one motion on a 1-D time base, e.g. a CFD record's adaptive steps); ``start``
+        defaults to the first sample time, and before it the first sample is held.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> t = np.array([0.0, 0.1, 0.3])
+        >>> state = KinematicState(t, t, t, t, t, t, t).on_uniform_time(0.1)
+        >>> state.time.tolist(), state.pitch_angle.round(12).tolist()
+        ([0.0, 0.1, 0.2, 0.3], [0.0, 0.1, 0.2, 0.3])
+        """
+        t = np.asarray(self.time, dtype=float)
+        if t.ndim != 1 or np.shape(self.pitch_angle) != t.shape:
+            raise MotionError(f"a uniform time base is for one motion on a 1-D time base, got "
+                              f"time {t.shape} and states {np.shape(self.pitch_angle)}")
+        if not time_step > 0:
+            raise MotionError(f"time_step must be > 0, got {time_step!r}")
+        start = t[0] if start is None else float(start)
+        n = int(np.floor((t[-1] - start) / time_step + 1e-9)) + 1
+        times = start + np.arange(n) * time_step
+        return KinematicState(times, **{k: np.interp(times, t, getattr(self, k))
+                                        for k in KINEMATIC_UNITS})

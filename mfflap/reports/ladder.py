@@ -12,7 +12,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
 
-from mfflap.backtest.model_ladder import LadderComparison
+from mfflap.backtest.model_ladder import STEPS_PER_PERIOD, LadderComparison
 from mfflap.reports.html import Report, figure_html, table_html, text_html
 
 #: the ladder's levels as the report names them, lowest fidelity first
@@ -52,8 +52,11 @@ def add_ladder_section(rep: Report, ladders: Mapping[str, LadderComparison],
     s.blocks.append(text_html(
         "Morison (the coefficients the optimisation used) and the discrete-vortex model (its "
         "defaults, no parameter fitted) run through the motion each back-test imposed, ramp "
-        f"included; means and peaks over the run's last {', '.join(periods)} periods. F_n "
-        "NRMSE against CFD on CFD's samples."))
+        f"included, at {STEPS_PER_PERIOD} steps a period; means and peaks over the run's "
+        f"last {', '.join(periods)} periods. F_n NRMSE against CFD on CFD's samples. On "
+        "large motions the vortex model's means are not converged at this step: at 600 "
+        "steps a period they can be 10-35 % higher (docs: Findings, The discrete-vortex "
+        "model)."))
     rows = []
     for label, x in ladders.items():
         for level, name in LEVELS.items():
