@@ -13,7 +13,7 @@ from mfflap.config import CaseConfig, load_case
 from mfflap.errors import ConfigError
 from mfflap.hydro.loads import Loads
 from mfflap.kinematics.convert import to_discrete
-from mfflap.kinematics.state import KinematicState
+from mfflap.kinematics.state import KINEMATIC_UNITS, KinematicState
 from mfflap.parameters import FreeStream, Plate
 from mfflap.performance import CycleSummary, Evaluation, evaluate_discrete, evaluate_states
 from mfflap.plots import cycle_figure
@@ -91,9 +91,8 @@ def _evaluate_with_vortex_model(case: CaseConfig, motion, frequency: float,
     state = motion.sample(np.arange(n) * (periods * period / n))
     loads = simulate_vortex_model(state, case.plate, case.fluid, case.flow).loads
     keep = slice(n - VORTEX_STEPS_PER_PERIOD, None) if duration is None else slice(None)
-    kept = KinematicState(state.time[keep], **{k: getattr(state, k)[keep] for k in (
-        "pitch_angle", "pitch_rate", "pitch_acceleration", "heave_position",
-        "heave_velocity", "heave_acceleration")})
+    kept = KinematicState(state.time[keep],
+                          **{k: getattr(state, k)[keep] for k in KINEMATIC_UNITS})
     kept_loads = Loads(kept.time, loads.normal_force[keep], loads.tangential_force[keep],
                        loads.moment[keep], source=loads.source)
     ev = evaluate_states(_ComputedLoads(kept_loads, case.plate, case.flow), kept, frequency)

@@ -281,7 +281,6 @@ def _march(heave, heave_rate, pitch, pitch_rate, chord, velocity, density, span,
         out[6, j] = -kelvin_scale * (coeffs[0] + coeffs[1] / 2) + gs.sum() + dropped
         # the loads from the rate of change of the vortex impulse, in the frame of the fluid
         # at rest (x' = x - U t): every vortex, bound and free, with those that left the ring
-        shift = velocity * time_step * j
         imp_x, imp_y, ang = dropped_x, dropped_y, dropped_ang
         for k in range(2 * wake_steps):
             if gs[k] != 0.0:

@@ -17,21 +17,11 @@ from mfflap.hydro.discrete_vortex import (
 from mfflap.kinematics.continuous import HarmonicMotion
 from mfflap.kinematics.state import KinematicState
 from mfflap.parameters import Fluid, FreeStream, Plate
+from mfflap.performance import thrust_and_power
 
 PLATE, FLUID, STREAM = Plate(), Fluid(), FreeStream()
 #: the linear limit: no leading-edge shedding and a core far below the vortices' spacing
 LINEAR = {"critical_lesp": ATTACHED_FLOW, "core_radius_chords": 0.001}
-
-
-def _thrust(loads, state):
-    return (loads.normal_force * np.sin(state.pitch_angle)
-            - loads.tangential_force * np.cos(state.pitch_angle))
-
-
-def _power(loads, state):
-    theta = state.pitch_angle
-    return (-(loads.normal_force * np.cos(theta) + loads.tangential_force * np.sin(theta))
-            * state.heave_velocity - loads.moment * state.pitch_rate)
 
 
 def _harmonic_run(reduced_frequency, kind, step_chords, wake_chords, cycles=3,
@@ -57,7 +47,7 @@ def _harmonic_run(reduced_frequency, kind, step_chords, wake_chords, cycles=3,
     reference = harmonic_means(frequency, amplitude["heave_position"], abs(pitch_amplitude),
                                c, PLATE.span, FLUID.density, u,
                                pitch_phase=float(np.angle(pitch_amplitude)))
-    thrust, power = _thrust(run.loads, state)[last].mean(), _power(run.loads, state)[last].mean()
+    thrust, power = (x[last].mean() for x in thrust_and_power(run.loads, state))
     return {"normal_force": abs(amplitude["normal_force"]) / abs(reference["normal_force"]) - 1,
             "moment": abs(amplitude["moment"]) / abs(reference["moment"]) - 1,
             "thrust": (thrust - reference["thrust"]) / reference["thrust_scale"],
@@ -120,8 +110,7 @@ def test_the_wake_carries_energy_away_with_and_without_leading_edge_shedding(cri
     """Over a period of a periodic motion the input power is the thrust power U T plus the
     kinetic energy the wake takes away: mean P >= U mean T, and T > 0 for a heaving plate."""
     state, run, last = _heaving_run(critical_lesp)
-    thrust = _thrust(run.loads, state)[last].mean()
-    power = _power(run.loads, state)[last].mean()
+    thrust, power = (x[last].mean() for x in thrust_and_power(run.loads, state))
     assert thrust > 0 and power > STREAM.velocity * thrust
     shed = np.count_nonzero(run.leading_edge_circulation[last])
     assert (shed == 0) if critical_lesp == ATTACHED_FLOW else (shed > 50)
