@@ -22,6 +22,7 @@ from mfflap.cli.options import (
     refuse_given,
     velocity_convection_option,
 )
+from mfflap.errors import shown
 
 
 @click.group()
@@ -133,6 +134,23 @@ def _run_state(source: Path) -> str:
 
 
 
+class FluentColumns(click.ParamType):
+    """Three comma-separated names of a Fluent report's columns (x force, y force, z
+    moment), refused by the option's name otherwise."""
+
+    name = "fx,fy,mz"
+
+    def convert(self, value, param, ctx) -> tuple[str, str, str]:
+        if isinstance(value, tuple):
+            return value
+        names = tuple(v.strip() for v in str(value).split(","))
+        if len(names) != 3 or not all(names):
+            self.fail(f"{shown(value)}: give the three columns of the x force, the y force "
+                      "and the z moment, comma separated (e.g. fx-plate,fy-plate,mz-plate)",
+                      param, ctx)
+        return names  # type: ignore[return-value]
+
+
 @cfd.command()
 @click.argument("case_dir", type=click.Path(file_okay=False, exists=True, path_type=Path))
 @click.option("--timeout", default=3600.0, show_default=True, type=TIMEOUT,
@@ -232,12 +250,10 @@ def run(case_dir: Path, timeout: float, procs: int, progress_every: float,
               help="The case file whose [motion] the CFD case imposes.")
 @click.option("--discard", default=0.0, show_default=True, type=NON_NEGATIVE,
               help="Seconds of start-up transient left out of the comparison.")
-@click.option("--fx", default="fx-plate", show_default=True,
-              help="Fluent: report column of the x force.")
-@click.option("--fy", default="fy-plate", show_default=True,
-              help="Fluent: report column of the y force.")
-@click.option("--mz", default="mz-plate", show_default=True,
-              help="Fluent: report column of the z moment about the origin.")
+@click.option("--columns", type=FluentColumns(), default="fx-plate,fy-plate,mz-plate",
+              show_default=True,
+              help="Fluent: the report's columns of the x force, the y force and the z "
+                   "moment about the origin, comma separated.")
 @click.option("--depth", default=None, type=POSITIVE,
               help="Depth the forces are given for, m: a Fluent report's (default 1 m, "
                    "Fluent 2D) or an OpenFOAM case's that mfflap did not write (default the "
@@ -264,7 +280,7 @@ def run(case_dir: Path, timeout: float, procs: int, progress_every: float,
               default=None, help="Write the comparison to HDF5: both time series, the summary, "
               "the case file and what the run was written for.")
 @click.option("--json", "as_json", is_flag=True, help="Print results as JSON.")
-def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: str,
+def parse(source: Path, case_file: Path, discard: float, columns: tuple[str, str, str],
           depth: float, ramp_time: float | None, thin_aerofoil: bool,
           motion_table: Path | None, plot_path: Path | None, save_path: Path | None,
           as_json: bool) -> None:
@@ -287,11 +303,11 @@ def parse(source: Path, case_file: Path, discard: float, fx: str, fy: str, mz: s
     from mfflap.cfd.model_comparison import model_comparison, write_model_comparison
 
     if source.is_dir():  # an OpenFOAM case: the Fluent report's options would be ignored
-        refuse_given(("fx", "fy", "mz"),
+        refuse_given(("columns",),
                      f"a Fluent report; {source} is an OpenFOAM case folder (its forces are "
                      "read from the case)")
     comparison = model_comparison(source, case_file, discard_s=discard, ramp_time_s=ramp_time,
-                                  motion_table=motion_table, fluent_columns=(fx, fy, mz),
+                                  motion_table=motion_table, fluent_columns=columns,
                                   depth_m=depth, thin_aerofoil=thin_aerofoil)
     out = comparison.summary
     if plot_path is not None:

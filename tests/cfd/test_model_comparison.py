@@ -127,7 +127,7 @@ def test_cfd_parse_writes_the_figure_and_the_hdf5_file(tmp_path):
 
 
 def test_the_fluent_report_options_are_refused_for_an_openfoam_case(tmp_path):
-    """--fx / --fy / --mz name a Fluent report's columns, and a case mfflap wrote keeps its
+    """--columns names a Fluent report's columns, and a case mfflap wrote keeps its
     depth: given with such a case they are refused, not ignored."""
     from click.testing import CliRunner
 
@@ -136,10 +136,13 @@ def test_the_fluent_report_options_are_refused_for_an_openfoam_case(tmp_path):
     case = tmp_path / "case"
     assert CliRunner().invoke(cli, ["cfd", "write", str(CASE), str(case)]).exit_code == 0
     res = CliRunner().invoke(cli, ["cfd", "parse", str(case), "--case-file", str(CASE),
-                                   "--fx", "a", "--mz", "b"])
+                                   "--columns", "a,b,c"])
     assert res.exit_code == 2
-    assert f"--fx, --mz apply only to a Fluent report; {case} is an OpenFOAM case folder" in (
+    assert f"--columns applies only to a Fluent report; {case} is an OpenFOAM case folder" in (
         res.output)
+    res = CliRunner().invoke(cli, ["cfd", "parse", str(case), "--case-file", str(CASE),
+                                   "--columns", "a,b"])
+    assert res.exit_code == 2 and "give the three columns" in res.output
     res = CliRunner().invoke(cli, ["cfd", "parse", str(case), "--case-file", str(CASE),
                                    "--depth", "2"])
     assert res.exit_code == 2 and "keeps its depth (mfflap_case.toml)" in res.output
