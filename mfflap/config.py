@@ -13,7 +13,8 @@ values)::
     [optimisation]    beta values, limits, penalties, smoothing, period bounds, and the
                       coefficients ``mfflap run`` optimises with
     [identification]  the Table 1 grid and the pitch ramp rate
-    [backtest]        how ``mfflap run`` checks its optima in CFD
+    [cfd]             how OpenFOAM runs are set up and kept (mesh, set-up, solver, ranks)
+    [backtest]        how ``mfflap run`` and ``mfflap backtest`` check optima in CFD
     [rounds]          CFD in the loop (studies of the method)
 
 Any key can be set from the command line too (``--set table.key=value``,
@@ -40,7 +41,7 @@ from mfflap.errors import ConfigError, shown
 from mfflap.hydro.morison import MorisonModel
 from mfflap.kinematics.continuous import UPRIGHT_PITCH, HarmonicMotion, RampHarmonicMotion
 from mfflap.parameters import Fluid, FreeStream, MorisonCoefficients, Plate, StripSettings
-from mfflap.study_tables import BacktestSettings, RoundsSettings
+from mfflap.study_tables import BacktestSettings, CfdSettings, RoundsSettings
 from mfflap.toml_io import dumps, read_toml
 from mfflap.validation import bounded, check_fields, from_mapping
 
@@ -367,6 +368,7 @@ class CaseConfig:
     discretisation: Discretisation = field(default_factory=Discretisation)
     optimisation: OptimisationSettings = field(default_factory=OptimisationSettings)
     identification: IdentificationGrid = field(default_factory=IdentificationGrid)
+    cfd: CfdSettings = field(default_factory=CfdSettings)
     backtest: BacktestSettings = field(default_factory=BacktestSettings)
     rounds: RoundsSettings = field(default_factory=RoundsSettings)
     source: str | None = field(default=None, compare=False)
@@ -412,6 +414,7 @@ _SECTIONS: dict[str, type] = {
     "discretisation": Discretisation,
     "optimisation": OptimisationSettings,
     "identification": IdentificationGrid,
+    "cfd": CfdSettings,
     "backtest": BacktestSettings,
     "rounds": RoundsSettings,
 }
@@ -569,12 +572,23 @@ def load_case(path: str | Path, settings: Sequence[str] = ()) -> CaseConfig:
     return config
 
 
-def loads_case(text: str, source: str = "<string>") -> CaseConfig:
-    """Validate case TOML given as text (e.g. the copy stored in a results file)."""
+def loads_case(text: str, source: str = "<string>", settings: Sequence[str] = ()
+               ) -> CaseConfig:
+    """Validate case TOML given as text (e.g. the copy stored in a results file), with
+    command-line ``settings`` applied as :func:`load_case` applies them.
+
+    Examples
+    --------
+    >>> loads_case('[study]\nname = "demo"\n', settings=["cfd.procs=2"]).cfd.procs
+    2
+    """
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"TOML syntax error: {exc}", source=source) from exc
+    if settings:
+        data = apply_settings(data, settings)
+        source = f"{source} with --set {' '.join(settings)}"
     return case_from_dict(data, source=source)
 
 

@@ -163,7 +163,7 @@ class RunOptions:
                    n_starts=opt.starts, with_ipopt=opt.ipopt, gain_table=opt.gain_table,
                    within_data=opt.within_data, backtest_cycles=backtest.simulated_periods,
                    average_cycles=backtest.average_cycles,
-                   retries_from_start=backtest.retries_from_start)
+                   retries_from_start=config.cfd.retries_from_start)
 
     def __post_init__(self) -> None:
         allowed = ["case", *(f"identified:{s}" for s in RUN_STRATEGIES)]

@@ -1,10 +1,12 @@
-"""The case-file tables of the main job's back-tests and of CFD in the loop.
+"""The case-file tables of CFD runs, back-tests and CFD in the loop.
 
-``[backtest]`` says how ``mfflap run`` checks its optima in CFD; ``[rounds]`` holds the
-settings that only studies of the method use (rounds of CFD in the loop, the output
-correction, the trust region, first-order corrections, CFD's repeatability). Each table
-refuses a combination that cannot run, naming the key, so that what a case file says is
-what runs.
+``[cfd]`` says how every OpenFOAM run of a case is set up and kept (mesh, set-up, solver
+details, ranks, time limit, retries, record precision), for every command that runs or
+writes one; ``[backtest]`` says how ``mfflap run`` and ``mfflap backtest`` check optima in
+CFD; ``[rounds]`` holds the settings that only studies of the method use (rounds of CFD in
+the loop, the output correction, the trust region, first-order corrections, CFD's
+repeatability). Each table refuses a combination that cannot run, naming the key, so that
+what a case file says is what runs.
 """
 
 from __future__ import annotations
@@ -23,10 +25,134 @@ LATER_ROUNDS_KEYS = ("refit", "correct_outputs", "trust_radius", "first_order",
                      "cfd_repeatability")
 
 
+#: the plate's wall conditions a run can have (their templates:
+#: :data:`mfflap.cfd.openfoam.writer.WALL_TREATMENTS`)
+WALL_TREATMENT_NAMES = ("log_law", "all_y_plus")
+#: where the mesh moves: with the plate (inertial) or not at all (the plate's frame)
+FRAME_NAMES = ("inertial", "plate")
+#: far-field conditions of the outer boundary
+FAR_FIELD_NAMES = ("freestream", "inletOutlet")
+#: linear solvers of the pressure equation
+PRESSURE_SOLVER_NAMES = ("PCG", "GAMG")
+#: convection schemes of U
+VELOCITY_CONVECTION_NAMES = ("linearUpwind", "LUST")
+#: convection schemes of k and epsilon
+TURBULENCE_CONVECTION_NAMES = ("limitedLinear", "upwind")
+
+#: the [cfd] keys that override a set-up's solver settings, with the
+#: :class:`~mfflap.cfd.openfoam.writer.SolverSettings` field each sets
+SOLVER_KEYS = {"wall_treatment": "wall_treatment", "frame": "frame",
+               "far_field": "far_field", "pressure_solver": "pressure_solver",
+               "velocity_convection": "velocity_convection",
+               "turbulence_convection": "turbulence_convection",
+               "max_courant": "max_courant", "outer_correctors": "n_outer_correctors",
+               "correctors": "n_correctors"}
+
+
+@dataclass(frozen=True)
+class CfdSettings:
+    """How a case's OpenFOAM runs are set up and kept: ``mfflap cfd write``, ``cfd run``,
+    ``cfd convergence``, ``cfd linear-check``, ``campaign run``, ``backtest --live`` and
+    ``run --live`` read it.
+
+    ``setup`` names a mesh with the solver settings it was measured with
+    (``cfd_templates/openfoam/setups.toml``); ``mesh`` puts those settings on another mesh;
+    the solver keys left out keep the set-up's values (or the defaults without one).
+
+    Examples
+    --------
+    >>> CfdSettings().retries_from_start, CfdSettings().single_precision
+    (True, True)
+    >>> CfdSettings(setup="table1", max_courant=2.0).solver_overrides()
+    {'max_courant': 2.0}
+    >>> CfdSettings(frame="plate").solver_overrides()  # the plate's frame needs inletOutlet
+    {'frame': 'plate', 'far_field': 'inletOutlet'}
+    >>> CfdSettings(far_field="outlet")  # doctest: +IGNORE_EXCEPTION_DETAIL
+    Traceback (most recent call last):
+    mfflap.errors.ConfigError: cfd.far_field: value 'outlet' is not allowed
+    """
+
+    setup: str | None = bounded(None, unit="",
+                                doc="a named set-up of cfd_templates/openfoam/setups.toml "
+                                    "(left out: the coarse mesh at the default settings)")
+    mesh: str | None = bounded(None, unit="",
+                               doc="a mesh of cfd_templates/openfoam/meshes.toml (left out: "
+                                   "the set-up's, else coarse)")
+    wall_treatment: str | None = bounded(
+        None, choices=WALL_TREATMENT_NAMES, unit="",
+        doc="the plate's wall conditions: log_law (k-epsilon wall functions, for a first "
+            "cell at y+ 30-300) or all_y_plus (Spalding's law for nut and epsilon's low-Re "
+            "correction: any y+, like Fluent's enhanced wall treatment); left out: the "
+            "set-up's, else log_law")
+    frame: str | None = bounded(
+        None, choices=FRAME_NAMES, unit="",
+        doc="inertial (the whole mesh moves with the plate) or plate (a static mesh in the "
+            "plate's frame, about a third less CPU, with the inletOutlet far field); left "
+            "out: the set-up's, else inertial")
+    far_field: str | None = bounded(
+        None, choices=FAR_FIELD_NAMES, unit="",
+        doc="far-field conditions (inletOutlet for heaves much faster than the stream); "
+            "left out: the set-up's, else freestream")
+    pressure_solver: str | None = bounded(
+        None, choices=PRESSURE_SOLVER_NAMES, unit="",
+        doc="linear solver of the pressure equation; left out: the set-up's, else PCG")
+    velocity_convection: str | None = bounded(
+        None, choices=VELOCITY_CONVECTION_NAMES, unit="",
+        doc="convection scheme of U; left out: the set-up's, else linearUpwind")
+    turbulence_convection: str | None = bounded(
+        None, choices=TURBULENCE_CONVECTION_NAMES, unit="",
+        doc="convection scheme of k and epsilon (upwind: no clipping of negative epsilon); "
+            "left out: the set-up's, else limitedLinear")
+    max_courant: float | None = bounded(
+        None, low=0.0, high=100.0, low_open=True, unit="1",
+        doc="Courant limit of the adaptive time step; left out: the set-up's, else 4")
+    outer_correctors: int | None = bounded(
+        None, low=1, high=100, unit="1",
+        doc="PIMPLE outer iterations per time step (1: PISO); left out: the set-up's, else 2")
+    correctors: int | None = bounded(
+        None, low=1, high=100, unit="1",
+        doc="pressure correctors per outer iteration; left out: the set-up's, else 1")
+    writes: int = bounded(4, low=1, high=100_000, unit="1",
+                          doc="times a case written by cfd write writes its fields over the "
+                              "run (a killed run restarts from the last one)")
+    y_plus: bool = bounded(False, choices=(True, False), unit="",
+                           doc="add the yPlus function object to a case written by cfd write")
+    procs: int = bounded(1, low=1, high=4096, unit="1",
+                         doc="MPI ranks of each run (above 1 the case is decomposed, method "
+                             "simple, and pimpleFoam runs under mpirun)")
+    timeout_s: float = bounded(6 * 3600.0, low=0.0, high=30 * 86400.0, low_open=True,
+                               unit="s", doc="wall-clock limit of each solver run")
+    retries_from_start: bool = bounded(
+        True, choices=(True, False), unit="",
+        doc="a retried run (its time step collapsed, or its forces left what the motion can "
+            "drive) reruns from t = 0 s with the changed far field or Courant limit, so "
+            "that every cycle ran one set-up (false: it resumes from its last written time, "
+            "cheaper, but its cycles can straddle the change)")
+    single_precision: bool = bounded(
+        True, choices=(True, False), unit="",
+        doc="campaign records store their time series in float32, like the shipped "
+            "records (half the size; 7 significant digits, far below CFD's cycle-to-cycle "
+            "scatter)")
+
+    def __post_init__(self) -> None:
+        check_fields(self, prefix="cfd.")
+
+    def solver_overrides(self) -> dict[str, object]:
+        """The solver settings this table gives, as
+        :class:`~mfflap.cfd.openfoam.writer.SolverSettings` fields (the plate's frame with
+        the inletOutlet far field unless ``far_field`` says otherwise)."""
+        out = {field: getattr(self, key) for key, field in SOLVER_KEYS.items()
+               if getattr(self, key) is not None}
+        if self.frame == "plate" and self.far_field is None:
+            out["far_field"] = "inletOutlet"
+        return out
+
+
 @dataclass(frozen=True)
 class BacktestSettings:
-    """How ``mfflap run`` back-tests its optima in CFD: the periods a live run simulates,
-    the whole cycles its means are taken over and how a retried run restarts.
+    """How ``mfflap run`` and ``mfflap backtest`` check optima in CFD: the periods a live
+    run simulates and the whole cycles its means are taken over (how a live run is set up,
+    retried and kept is the case's [cfd]).
 
     Examples
     --------
@@ -43,10 +169,6 @@ class BacktestSettings:
     average_cycles: int = bounded(2, low=1, high=100, unit="1",
                                   doc="the CFD and model means are taken over the last this "
                                       "many whole cycles, with CFD's cycle-to-cycle scatter")
-    retries_from_start: bool = bounded(True, choices=(True, False), unit="",
-                                       doc="a retried live run reruns from t = 0 s, so that "
-                                           "every cycle ran one set-up (false: it resumes "
-                                           "from its last written time)")
 
     def __post_init__(self) -> None:
         check_fields(self, prefix="backtest.")
@@ -148,4 +270,6 @@ class RoundsSettings:
                                   "filters them", key="rounds.first_order")
 
 
-__all__ = ["MAX_TRUST_RADIUS", "BacktestSettings", "RoundsSettings"]
+__all__ = ["FAR_FIELD_NAMES", "FRAME_NAMES", "MAX_TRUST_RADIUS", "PRESSURE_SOLVER_NAMES",
+           "SOLVER_KEYS", "TURBULENCE_CONVECTION_NAMES", "VELOCITY_CONVECTION_NAMES",
+           "WALL_TREATMENT_NAMES", "BacktestSettings", "CfdSettings", "RoundsSettings"]

@@ -29,7 +29,7 @@ def test_the_main_job_optimises_with_identified_coefficients_and_a_fixed_phase()
 def test_a_back_test_runs_three_periods_after_its_ramp_and_averages_the_last_two():
     backtest = BacktestSettings()
     assert (backtest.cycles, backtest.average_cycles) == (3.0, 2)
-    assert backtest.simulated_periods == 3.5 and backtest.retries_from_start
+    assert backtest.simulated_periods == 3.5
     options = RunOptions.for_case(CaseConfig(), Path("out"))
     assert (options.backtest_cycles, options.average_cycles) == (3.5, 2)
     assert options.retries_from_start
@@ -162,3 +162,33 @@ def test_run_help_fits_one_screen_and_every_command_has_at_most_ten_options():
         if name.split()[1] in ("run", "optimise", "case", "init", "evaluate", "gradcheck"):
             options = [p for p in command.params if isinstance(p, click.Option)]
             assert len(options) <= 10, (name, [o.name for o in options])
+
+
+def test_a_case_without_a_set_up_runs_the_wall_treatment_valid_at_the_plates_y_plus():
+    from mfflap.cfd.openfoam.setups import case_mesh_and_solver
+    from mfflap.study_tables import CfdSettings
+
+    _, solver = case_mesh_and_solver(CfdSettings())
+    assert solver.wall_treatment == "all_y_plus"
+    _, solver = case_mesh_and_solver(CfdSettings(wall_treatment="log_law"))
+    assert solver.wall_treatment == "log_law"
+    # a named set-up keeps the wall treatment it was measured with
+    _, solver = case_mesh_and_solver(CfdSettings(setup="affordable"))
+    assert solver.wall_treatment == "log_law"
+    assert CfdSettings().retries_from_start
+
+
+@pytest.mark.parametrize(("settings", "key"), [
+    ({"max_courant": float("nan")}, "cfd.max_courant"),
+    ({"max_courant": 1e9}, "cfd.max_courant"),
+    ({"writes": 1_000_000_000}, "cfd.writes"),
+    ({"timeout_s": -5.0}, "cfd.timeout_s"),
+    ({"far_field": "outlet"}, "cfd.far_field"),
+    ({"procs": 0}, "cfd.procs"),
+])
+def test_an_impossible_cfd_setting_is_refused_by_its_key(settings, key):
+    from mfflap.study_tables import CfdSettings
+
+    with pytest.raises(ConfigError) as err:
+        CfdSettings(**settings)
+    assert err.value.key == key

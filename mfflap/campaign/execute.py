@@ -79,7 +79,7 @@ class CampaignSetup:
     #: a retried run reruns from t = 0 s, one set-up throughout
     #: (:func:`~mfflap.cfd.openfoam.run_motion.run_motion`); how a run is retried, not what it
     #: computes: not in campaign.toml, and a campaign may go on with it changed
-    retries_from_start: bool = False
+    retries_from_start: bool = True
 
     def as_dict(self) -> dict[str, Any]:
         """Plain nested values for campaign.toml (what the runs depend on, and the time
@@ -563,9 +563,10 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
     if scheduler_address is not None:
         _check_scheduler_address(scheduler_address)
     if rerun_mixed and not setup.retries_from_start:
-        raise ConfigError("rerunning the runs that mix two set-ups needs retries from the start "
-                          "(retries_from_start; the CLI's --rerun-mixed sets it): a rerun "
-                          "retried part-way would mix the same two set-ups again",
+        raise ConfigError("rerunning the runs that mix two set-ups needs retries from the "
+                          "start (retries_from_start; a case file's [cfd] retries_from_start, "
+                          "true unless it says false): a rerun retried part-way would mix "
+                          "the same two set-ups again",
                           key="rerun_mixed")
     ids = [c.case_id for c in cases]
     if not ids:

@@ -8,7 +8,13 @@ import click
 import numpy as np
 
 from mfflap.cli.json_output import echo_json
-from mfflap.cli.options import mesh_and_setup_options, refuse_given, retries_from_start_option
+from mfflap.cli.options import (
+    cfd_settings,
+    mesh_and_setup_options,
+    refuse_given,
+    refuse_settings,
+    set_option,
+)
 
 
 @click.command()
@@ -30,40 +36,26 @@ from mfflap.cli.options import mesh_and_setup_options, refuse_given, retries_fro
 @mesh_and_setup_options(" of live runs")
 @click.option("--repeat", "repeat", type=int, default=None,
               help="With --live: run each motion this many times (2 or more), each copy's "
-                   "Courant limit a millionth apart, and print how far their last-cycle "
-                   "mean thrust and power (with --average-cycles, their means over that many "
-                   "cycles) spread: CFD's repeatability, which mfflap run "
+                   "Courant limit a millionth apart, and print how far their mean thrust "
+                   "and power spread: CFD's repeatability, which mfflap run "
                    "[rounds] cfd_repeatability takes.")
-@click.option("--cycles", type=float, default=None,
-              help="With --live: the periods each run simulates, after a start-up ramp of "
-                   "half a period [default: 3]. A record of the motion run for fewer is not "
-                   "taken for it.")
-@click.option("--average-cycles", type=int, default=1, show_default=True,
-              help="Compare the CFD's and the model's mean thrust and power over the last "
-                   "this many whole cycles, with the CFD's standard errors from its cycle "
-                   "means (one cycle's mean can lie 10 % or more from the run's: "
-                   "docs/findings/optimised_motions.md, 'How long a back-test runs'); curves, "
-                   "NRMSE "
-                   "and maximum power stay the last cycle's.")
-@retries_from_start_option()
-@click.option("--procs", type=click.IntRange(min=1), default=None,
-              help="With --live: MPI ranks of each run: above 1 the case is decomposed "
-                   "(method simple) and pimpleFoam runs under mpirun [default: 1]. A record "
-                   "run on another count is taken: the layout changes round-off, not the "
-                   "set-up.")
+@set_option()
 @click.option("--json", "as_json", is_flag=True)
 def backtest(optimisation_file: Path, live: bool, work_dir: Path,
              fixture_folders: tuple[Path, ...], save_to: Path | None, only: tuple[str, ...],
-             mesh: str | None, setup_name: str | None, wall_treatment: str | None,
-             repeat: int | None, cycles: float | None, average_cycles: int,
-             retries_from_start: bool, procs: int | None, as_json: bool) -> None:
+             mesh: str | None, setup_name: str | None, repeat: int | None,
+             settings: tuple[str, ...], as_json: bool) -> None:
     """Back-test the optimised motions (and the best sinusoid) of OPTIMISATION_FILE.
 
-    Ctrl-C stops the run in flight and shows the motions back-tested before it. The exit
-    status is 1 when a motion could not be back-tested (each is listed with why).
+    The periods a live run simulates and the cycles its means are taken over are the
+    [backtest] table of the case stored in the file, and how a live run is set up, retried
+    and spread over ranks its [cfd] table; --set backtest.KEY=VALUE or cfd.KEY=VALUE
+    changes them for this back-test. Ctrl-C stops the run in flight and shows the motions
+    back-tested before it. The exit status is 1 when a motion could not be back-tested
+    (each is listed with why).
     """
     from mfflap.backtest.workflow import backtest_all
-    from mfflap.cfd.openfoam.setups import mesh_and_solver
+    from mfflap.cfd.openfoam.setups import case_mesh_and_solver
     from mfflap.config import loads_case
     from mfflap.optimisation.store import beta_label, read_result, read_sweep
     from mfflap.optimisation.study import sinusoid_motion
@@ -71,15 +63,14 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
     from mfflap.results import ResultsFile
 
     if not live:  # the fixtures' runs are read as they were made
-        refuse_given(("work_dir", "save_to", "mesh", "setup_name", "wall_treatment",
-                      "repeat", "cycles", "retries_from_start", "procs"),
-                     "live runs (--live); without it the back-test reads CFD records "
-                     "(--fixtures), run on the mesh and set-up they were made with")
-    n_cycles = check_cycles(cycles, average_cycles)
-    n_procs = 1 if procs is None else procs
-    spec, solver = mesh_and_solver(mesh, setup_name, wall_treatment)
+        why = ("live runs (--live); without it the back-test reads CFD records "
+               "(--fixtures), run on the mesh and set-up they were made with")
+        refuse_given(("work_dir", "save_to", "mesh", "setup_name", "repeat"), why)
+        refuse_settings(settings, "cfd", why)
+        refuse_settings(settings, "backtest.cycles", why)
     with ResultsFile(optimisation_file, kinds=("optimisation", "run")) as rf:
-        case = loads_case(rf.config_toml, source=f"{optimisation_file}:/inputs")
+        case = loads_case(rf.config_toml, source=f"{optimisation_file}:/inputs",
+                          settings=cfd_settings(settings, mesh, setup_name))
         sweep, best = read_sweep(rf, "optimisation/sweep")
         model = optimised_with(rf, case)
         motions, scales = {}, {}
@@ -90,6 +81,9 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
             if "setting_output_thrust_scale" in attrs:  # optimised with corrected outputs
                 scales[beta_label(r.beta)] = (float(attrs["setting_output_thrust_scale"]),
                                              float(attrs["setting_output_power_scale"]))
+    spec, solver = case_mesh_and_solver(case.cfd, case.source)
+    n_cycles, average_cycles = case.backtest.simulated_periods, case.backtest.average_cycles
+    retries_from_start, n_procs = case.cfd.retries_from_start, case.cfd.procs
     n = next(iter(motions.values())).n_steps
     motions = {"best sinusoid": sinusoid_motion(sweep, best, n), **motions}
     motions = _chosen(motions, only)

@@ -13,13 +13,12 @@ from mfflap.cli.json_output import echo_json
 from mfflap.cli.options import (
     NON_NEGATIVE,
     POSITIVE,
-    TIMEOUT,
     FigureFile,
-    FloatList,
     ResultsOutput,
+    cfd_settings,
     mesh_and_setup_options,
     refuse_given,
-    retries_from_start_option,
+    set_option,
 )
 
 
@@ -49,10 +48,6 @@ def campaign() -> None:
 @click.argument("case_file", type=click.Path(dir_okay=False, exists=True, path_type=Path))
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
               required=True, help="Campaign folder: one HDF5 record per finished case.")
-@click.option("--frequencies", type=FloatList(),
-              help="Subset of the grid's frequencies, Hz (e.g. 0.1,1,2).")
-@click.option("--heave-amplitudes", type=FloatList(), help="Subset of the heave amplitudes, m.")
-@click.option("--phases", type=FloatList(), help="Subset of the phases, deg.")
 @mesh_and_setup_options()
 @click.option("--workers", default=1, show_default=True, type=click.IntRange(min=1),
               help="LocalCluster worker processes.")
@@ -62,31 +57,28 @@ def campaign() -> None:
 @click.option("--retry-failed", is_flag=True, help="Rerun cases that failed before, and "
               "finished cases whose forces leave what the motion can drive (status 'lost'; "
               "their records kept as <case>.lost.h5).")
-@click.option("--rerun-mixed", is_flag=True, help="Rerun from t = 0 s, as one set-up "
-              "(--retries-from-start, set by this), finished cases whose run a retry resumed "
-              "with other settings after the identification's start-up (the case file's "
-              "[identification] discard_time): two set-ups in the fitted window (`campaign "
-              "status` names them); their records kept as <case>.mixed.h5.")
+@click.option("--rerun-mixed", is_flag=True, help="Rerun from t = 0 s, as one set-up, "
+              "finished cases whose run a retry resumed with other settings after the "
+              "identification's start-up (the case file's [identification] discard_time): "
+              "two set-ups in the fitted window (`campaign status` names them); their "
+              "records kept as <case>.mixed.h5.")
 @click.option("--keep-cases", is_flag=True, help="Keep the OpenFOAM case folders.")
-@retries_from_start_option("A run")
-@click.option("--single-precision", is_flag=True,
-              help="Store the records in float32, like the shipped fixtures (half the size).")
-@click.option("--timeout", default=6 * 3600.0, show_default=True, type=TIMEOUT,
-              help="Seconds per case.")
 @click.option("--dry-run", is_flag=True,
               help="List the cases with their state in --out (done, failed, pending, ...) "
                    "and exit; a folder of another setup is refused as the run would be.")
-def run_cmd(case_file: Path, out_dir: Path, frequencies: list[float] | None,
-            heave_amplitudes: list[float] | None, phases: list[float] | None, mesh: str | None,
-            setup_name: str | None, wall_treatment: str | None, workers: int,
-            scheduler: str | None, retry_failed: bool, rerun_mixed: bool, keep_cases: bool,
-            retries_from_start: bool, single_precision: bool, timeout: float,
-            dry_run: bool) -> None:
+@set_option()
+def run_cmd(case_file: Path, out_dir: Path, mesh: str | None, setup_name: str | None,
+            workers: int, scheduler: str | None, retry_failed: bool, rerun_mixed: bool,
+            keep_cases: bool, dry_run: bool, settings: tuple[str, ...]) -> None:
     """Run the identification grid of CASE_FILE in OpenFOAM.
 
-    Finished cases are never rerun: rerun the same command to continue a campaign that was
-    stopped. Failed cases are reported and do not stop the others. The exit status is 1
-    unless every case is done (failed, or left busy to another process running it).
+    The grid is the case file's [identification] table (a part of it:
+    ``--set identification.frequencies=[1,2]``, likewise heave_amplitudes and
+    phases_deg); the runs' mesh, solver settings, time limit, retries and record precision
+    are its [cfd] table, with --mesh, --setup and --set cfd.KEY=VALUE. Finished cases are
+    never rerun: rerun the same command to continue a campaign that was stopped. Failed
+    cases are reported and do not stop the others. The exit status is 1 unless every case
+    is done (failed, or left busy to another process running it).
     """
     if scheduler is not None:
         refuse_given(("workers",), "the LocalCluster mfflap starts; with --scheduler the "
@@ -99,17 +91,17 @@ def run_cmd(case_file: Path, out_dir: Path, frequencies: list[float] | None,
         check_same_setup,
         run_campaign,
     )
-    from mfflap.cfd.openfoam.setups import mesh_and_solver
+    from mfflap.cfd.openfoam.setups import case_mesh_and_solver
     from mfflap.config import load_case
 
-    spec, solver = mesh_and_solver(mesh, setup_name, wall_treatment)
-    case = load_case(case_file)
-    cases = grid_cases(case.identification, frequencies, heave_amplitudes, phases)
+    case = load_case(case_file, cfd_settings(settings, mesh, setup_name))
+    spec, solver = case_mesh_and_solver(case.cfd, case.source)
+    cases = grid_cases(case.identification)
     campaign_setup = CampaignSetup(mesh=spec.name, solver=solver, plate=case.plate,
-                                   fluid=case.fluid, stream=case.flow, timeout_s=timeout,
-                                   keep_case_dirs=keep_cases,
-                                   single_precision=single_precision,
-                                   retries_from_start=retries_from_start or rerun_mixed)
+                                   fluid=case.fluid, stream=case.flow,
+                                   timeout_s=case.cfd.timeout_s, keep_case_dirs=keep_cases,
+                                   single_precision=case.cfd.single_precision,
+                                   retries_from_start=case.cfd.retries_from_start)
     discard_s = case.identification.discard_time
     if dry_run:  # what the run would do: refused as it would be, or each case's state
         check_same_setup(out_dir, campaign_setup)

@@ -10,17 +10,16 @@ import click
 from mfflap.cli.cfd_motion import motion_and_end_time, motion_table_options, warn_not_at_rest
 from mfflap.cli.json_output import echo_json
 from mfflap.cli.options import (
-    COURANT,
     CYCLES,
     NON_NEGATIVE,
     POSITIVE,
     TIMEOUT,
-    WRITES,
     FigureFile,
     ResultsOutput,
+    cfd_settings,
     mesh_and_setup_options,
     refuse_given,
-    velocity_convection_option,
+    set_option,
 )
 from mfflap.errors import shown
 
@@ -38,72 +37,35 @@ def cfd() -> None:
               help="Carrier periods to simulate.")
 @click.option("--ramp-time", default=0.0, show_default=True, type=NON_NEGATIVE,
               help="Smooth start-up ramp, s.")
-@click.option("--y-plus", is_flag=True, help="Add the yPlus function object.")
-@click.option("--far-field", type=click.Choice(["freestream", "inletOutlet"]), default=None,
-              help="Far-field conditions (inletOutlet: for heaves much faster than the "
-                   "stream); default freestream.")
-@click.option("--pressure-solver", type=click.Choice(["PCG", "GAMG"]), default=None,
-              help="Linear solver of the pressure equation; default PCG (or the set-up's).")
-@velocity_convection_option
-@click.option("--turbulence-convection", type=click.Choice(["limitedLinear", "upwind"]),
-              default=None, help="Convection of k and epsilon (upwind: no clipping of "
-                                 "negative epsilon); default limitedLinear (or the set-up's).")
-@click.option("--max-courant", type=COURANT, default=None,
-              help="Courant limit of the adaptive time step; default 4 (or the set-up's).")
-@click.option("--outer-correctors", type=click.IntRange(min=1), default=None,
-              help="PIMPLE outer iterations per time step (1: PISO); default 2 (or the "
-              "set-up's).")
-@click.option("--correctors", type=click.IntRange(min=1), default=None,
-              help="Pressure correctors per outer iteration; default 1 (or the set-up's).")
-@click.option("--writes", default=4, show_default=True, type=WRITES,
-              help="Times the fields are written over the run; `cfd run` restarts a killed "
-                   "run from the last one.")
-@click.option("--frame", type=click.Choice(["inertial", "plate"]), default=None,
-              help="inertial: the whole mesh moves with the plate; plate: a static mesh in "
-                   "the plate's frame (about a third less CPU; inletOutlet far field unless "
-                   "--far-field says otherwise); default inertial (or the set-up's).")
 @motion_table_options("Kept in the case.")
 @click.option("--overwrite", is_flag=True,
               help="Delete a case written into CASE_DIR before (its results, mesh and logs "
                    "too) and write this one; without it such a folder is refused.")
+@set_option()
 def write(case_file: Path, case_dir: Path, mesh: str | None, setup_name: str | None,
-          cycles: float, ramp_time: float, y_plus: bool, far_field: str | None,
-          pressure_solver: str | None, velocity_convection: str | None, writes: int,
-          turbulence_convection: str | None, frame: str | None, motion_table: Path | None,
-          end_time: float | None, max_courant: float | None, outer_correctors: int | None,
-          correctors: int | None, wall_treatment: str | None, overwrite: bool) -> None:
+          cycles: float, ramp_time: float, motion_table: Path | None,
+          end_time: float | None, overwrite: bool, settings: tuple[str, ...]) -> None:
     """Write an OpenFOAM case for the [motion] of CASE_FILE (or a --motion-table) into
-    CASE_DIR, a new or empty folder (or a case written before, with --overwrite)."""
+    CASE_DIR, a new or empty folder (or a case written before, with --overwrite).
+
+    The mesh and solver settings are the case file's [cfd] table (a named set-up, a mesh,
+    and the solver keys that replace the set-up's: frame, far_field, wall_treatment,
+    max_courant, correctors, ...), with --mesh, --setup and --set cfd.KEY=VALUE for this
+    case; `mfflap case show CASE_FILE` lists them with their defaults.
+    """
     from dataclasses import replace
 
-    from mfflap.cfd.openfoam.setups import mesh_and_solver
+    from mfflap.cfd.openfoam.setups import case_mesh_and_solver
     from mfflap.cfd.openfoam.writer import attach_motion_table, write_case
     from mfflap.config import load_case
-    from mfflap.errors import ConfigError
 
-    spec, solver = mesh_and_solver(mesh, setup_name, wall_treatment)
-    case = load_case(case_file)
+    case = load_case(case_file, cfd_settings(settings, mesh, setup_name))
+    spec, solver = case_mesh_and_solver(case.cfd, case.source)
     motion, end_time = motion_and_end_time(case, motion_table, end_time, cycles)
-    if frame == "plate" and far_field is None:
-        far_field = "inletOutlet"
-    overrides = {k: v for k, v in (("far_field", far_field),
-                                   ("pressure_solver", pressure_solver),
-                                   ("velocity_convection", velocity_convection),
-                                   ("turbulence_convection", turbulence_convection),
-                                   ("frame", frame), ("max_courant", max_courant),
-                                   ("n_outer_correctors", outer_correctors),
-                                   ("n_correctors", correctors))
-                 if v is not None}
-    try:
-        solver = replace(solver, write_interval=end_time / writes, **overrides)
-    except ConfigError as exc:  # named by the option that set it, not the library's key
-        option = _SOLVER_OPTIONS.get(exc.key or "")
-        if option is None:
-            raise
-        raise click.BadParameter(exc.detail, param_hint=option) from exc
+    solver = replace(solver, write_interval=end_time / case.cfd.writes)
     write_case(case_dir, motion, end_time, mesh=spec, plate=case.plate,
-               fluid=case.fluid, stream=case.flow, ramp_time=ramp_time, y_plus=y_plus,
-               solver=solver, overwrite=overwrite)
+               fluid=case.fluid, stream=case.flow, ramp_time=ramp_time,
+               y_plus=case.cfd.y_plus, solver=solver, overwrite=overwrite)
     warn_not_at_rest(motion, ramp_time, end_time)
     if motion_table is not None:
         attach_motion_table(case_dir, motion_table)
@@ -112,14 +74,6 @@ def write(case_file: Path, case_dir: Path, mesh: str | None, setup_name: str | N
     click.echo(f"wrote {case_dir} (mesh {spec.name}, {solver.frame} frame, {loop}, max Co "
                f"{solver.max_courant:g}, {solver.pressure_solver}, {solver.wall_treatment} "
                f"wall treatment, end time {end_time:g} s)")
-
-
-#: the `cfd write` option that sets each solver setting
-_SOLVER_OPTIONS = {"far_field": "--far-field", "pressure_solver": "--pressure-solver",
-                   "velocity_convection": "--velocity-convection",
-                   "turbulence_convection": "--turbulence-convection", "frame": "--frame",
-                   "max_courant": "--max-courant", "n_outer_correctors": "--outer-correctors",
-                   "n_correctors": "--correctors", "wall_treatment": "--wall-treatment"}
 
 
 def _run_state(source: Path) -> str:

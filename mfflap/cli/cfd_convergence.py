@@ -12,10 +12,10 @@ from mfflap.cli.json_output import echo_json
 from mfflap.cli.options import (
     CYCLES,
     NON_NEGATIVE,
-    WALL_TREATMENT_NAMES,
     FloatList,
     refuse_given,
 )
+from mfflap.study_tables import WALL_TREATMENT_NAMES
 
 
 @click.command()

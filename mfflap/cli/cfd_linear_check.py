@@ -7,11 +7,7 @@ from pathlib import Path
 import click
 
 from mfflap.cli.json_output import echo_json
-from mfflap.cli.options import (
-    TIMEOUT,
-    mesh_and_setup_options,
-    velocity_convection_option,
-)
+from mfflap.cli.options import cfd_settings, mesh_and_setup_options, set_option
 
 
 @click.command("linear-check")
@@ -20,23 +16,20 @@ from mfflap.cli.options import (
               default=None, help="Plate, fluid, stream and strip-model coefficients (default: "
                                  "the package's, those of cases/paper2026.toml).")
 @mesh_and_setup_options()
-@velocity_convection_option
 @click.option("--cases", "case_ids", default=None,
               help="Comma-separated case ids of the default motions (--list shows them).")
 @click.option("--list", "list_only", is_flag=True, help="List the motions and exit.")
 @click.option("--workers", default=1, show_default=True, type=click.IntRange(min=1),
               help="LocalCluster worker processes.")
-@click.option("--timeout", default=3600.0, show_default=True, type=TIMEOUT,
-              help="Seconds per case.")
-@click.option("--single-precision", is_flag=True, help="Store the records in float32.")
 @click.option("--retry-failed", is_flag=True,
-              help="Rerun the motions that failed before (e.g. with a longer --timeout).")
+              help="Rerun the motions that failed before (e.g. with a longer "
+                   "--set cfd.timeout_s=...).")
+@set_option()
 @click.option("--json", "as_json", is_flag=True, help="Print the checks as JSON.")
 def linear_check(out_dir: Path, case_file: Path | None, mesh: str | None,
-                 setup_name: str | None, wall_treatment: str | None,
-                 velocity_convection: str | None, case_ids: str | None, list_only: bool,
-                 workers: int, timeout: float,
-                 single_precision: bool, retry_failed: bool, as_json: bool) -> None:
+                 setup_name: str | None, case_ids: str | None, list_only: bool,
+                 workers: int, retry_failed: bool, settings: tuple[str, ...],
+                 as_json: bool) -> None:
     """Verify a CFD set-up against linear unsteady thin-aerofoil theory.
 
     Runs small harmonic heaves and pitches (effective incidence of a few degrees, reduced
@@ -45,8 +38,10 @@ def linear_check(out_dir: Path, case_file: Path | None, mesh: str | None,
     OUT_DIR/linear_check/checks.h5 and OUT_DIR/linear_check/normal_force.png. A sound set-up
     lies a few percent from the theory; wrong frames, scaling or moment reference show as
     tens of percent. The exit status is 1 when a motion failed (each is listed with why).
+    The runs' mesh and solver settings are the case file's [cfd] table, with --mesh,
+    --setup and --set cfd.KEY=VALUE.
     """
-    from dataclasses import asdict, replace
+    from dataclasses import asdict
 
     from mfflap.campaign.execute import CampaignSetup, run_campaign
     from mfflap.campaign.linear_check import (
@@ -56,9 +51,9 @@ def linear_check(out_dir: Path, case_file: Path | None, mesh: str | None,
         summary_table,
         write_checks,
     )
-    from mfflap.cfd.openfoam.setups import mesh_and_solver
+    from mfflap.cfd.openfoam.setups import case_mesh_and_solver
     from mfflap.cli.campaign import aborted_with_resume_message
-    from mfflap.config import CaseConfig, load_case
+    from mfflap.config import load_case, loads_case
     from mfflap.records.record import read_record
     from mfflap.toml_io import dumps
 
@@ -78,13 +73,15 @@ def linear_check(out_dir: Path, case_file: Path | None, mesh: str | None,
         for c in motions:
             click.echo(f"{c.case_id}  duration {c.duration:g} s  ramp {c.ramp_time:g} s")
         return
-    config = load_case(case_file) if case_file else CaseConfig()
-    spec, solver = mesh_and_solver(mesh, setup_name, wall_treatment)
-    if velocity_convection is not None:
-        solver = replace(solver, velocity_convection=velocity_convection)
+    settings = cfd_settings(settings, mesh, setup_name)
+    config = (load_case(case_file, settings) if case_file
+              else loads_case("", "the package's case", settings))
+    spec, solver = case_mesh_and_solver(config.cfd, config.source)
     setup = CampaignSetup(mesh=spec.name, solver=solver, plate=config.plate,
-                          fluid=config.fluid, stream=config.flow, timeout_s=timeout,
-                          single_precision=single_precision)
+                          fluid=config.fluid, stream=config.flow,
+                          timeout_s=config.cfd.timeout_s,
+                          single_precision=config.cfd.single_precision,
+                          retries_from_start=config.cfd.retries_from_start)
     with aborted_with_resume_message(out_dir):
         statuses = run_campaign(motions, out_dir, setup, n_workers=workers,
                                 retry_failed=retry_failed, progress=not as_json)

@@ -1,5 +1,6 @@
 """Command-line options that several commands share."""
 
+import json
 import math
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -12,11 +13,6 @@ from mfflap.errors import shown
 MESH_NAMES = ("coarse | lean | medium | medium_r20 | fine | graded | medium_edge10 | "
               "medium_edge9 | medium_edge6 | medium_edge4 | openfoam_md | "
               "openfoam_md_medium | openfoam_md_fine | coarse_r20")  # meshes.toml's order
-#: The U convection schemes of the case template (writer.VELOCITY_CONVECTION_SCHEMES), named
-#: here so that the command line does not import the writer to build its help
-VELOCITY_CONVECTION_NAMES = ("linearUpwind", "LUST")
-#: The plate's wall treatments of the case template (writer.WALL_TREATMENTS), likewise
-WALL_TREATMENT_NAMES = ("log_law", "all_y_plus")
 
 
 class FiniteFloat(click.ParamType):
@@ -175,11 +171,6 @@ TIMEOUT = FiniteFloat(maximum=30 * 86400.0)
 #: how many times a run writes its fields
 WRITES = click.IntRange(min=1, max=100_000)
 
-#: ``--velocity-convection``: a set-up's convection scheme of U swapped
-velocity_convection_option = click.option(
-    "--velocity-convection", type=click.Choice(VELOCITY_CONVECTION_NAMES), default=None,
-    help="Convection scheme of U; default linearUpwind (or the set-up's).")
-
 #: The identification's residual scalings (identification.fit.RESIDUAL_SCALINGS), named here
 #: so that the command line does not import the fit to build its help
 RESIDUAL_SCALING_NAMES = ("grid", "case")
@@ -196,8 +187,9 @@ residual_scaling_option = click.option(
 
 
 def mesh_and_setup_options(runs: str = "") -> Callable:
-    """``--mesh``, ``--setup`` and ``--wall-treatment``: which mesh and solver settings the
-    OpenFOAM runs use.
+    """``--mesh`` and ``--setup``: the case's ``[cfd] mesh`` and ``setup`` for this command
+    (:func:`cfd_settings` turns them into ``--set`` texts; the other solver settings are
+    ``--set cfd.key=value``).
 
     Parameters
     ----------
@@ -207,42 +199,37 @@ def mesh_and_setup_options(runs: str = "") -> Callable:
     Returns
     -------
     Callable
-        A decorator adding the three options (read with
-        :func:`mfflap.cfd.openfoam.setups.mesh_and_solver`).
+        A decorator adding the two options.
     """
     def decorate(command):
         command = click.option(
-            "--wall-treatment", type=click.Choice(WALL_TREATMENT_NAMES), default=None,
-            help=f"The plate's wall conditions{runs}: log_law (k-epsilon wall functions, for "
-                 "a first cell at y+ 30-300) or all_y_plus (Spalding's law for nut and "
-                 "epsilon's low-Re correction: any y+, like Fluent's enhanced wall "
-                 "treatment); default log_law, or the --setup's.",
-        )(command)
-        command = click.option(
             "--setup", "setup_name", default=None,
             help=f"A named set-up{runs} of cfd_templates/openfoam/setups.toml (mesh and "
-                 "solver settings together, e.g. affordable); with --mesh, its solver "
-                 "settings on that mesh.",
+                 "solver settings together, e.g. table1); with --mesh, its solver settings "
+                 "on that mesh; other solver settings: --set cfd.KEY=VALUE. Default: the "
+                 "case's [cfd] setup.",
         )(command)
         return click.option(
             "--mesh", default=None,
             help=f"Mesh{runs}: {MESH_NAMES} (cfd_templates/openfoam/meshes.toml); default "
-                 "coarse, or the --setup's.",
+                 "the case's [cfd] mesh, else the set-up's, else coarse.",
         )(command)
     return decorate
 
 
-def retries_from_start_option(runs: str = "With --live: a run") -> Callable:
-    """``--retries-from-start`` (:func:`mfflap.cfd.openfoam.run_motion.run_motion`'s
-    ``retries_from_start``); ``runs`` opens its help, saying which runs it applies to."""
-    return click.option(
-        "--retries-from-start", is_flag=True,
-        help=f"{runs} that is retried (its time step collapsed, or its forces left what the "
-             "motion can drive) reruns from t = 0 s with the inletOutlet far field or a "
-             "lower Courant limit, instead of resuming from a written time, so that all its "
-             "cycles ran one set-up (resumed, a back-test's last cycle can straddle the "
-             "change: docs/findings/optimised_motions.md, 'Retries and one set-up'). It costs the "
-             "flow time run before the retry again.")
+def cfd_settings(settings: Sequence[str], mesh: str | None,
+                 setup_name: str | None) -> tuple[str, ...]:
+    """``settings`` (the ``--set`` texts) with ``--mesh`` and ``--setup`` as
+    ``cfd.mesh`` and ``cfd.setup`` after them, so that the options win.
+
+    Examples
+    --------
+    >>> cfd_settings(("cfd.procs=2",), "medium", None)
+    ('cfd.procs=2', 'cfd.mesh="medium"')
+    """
+    given = (("mesh", mesh), ("setup", setup_name))
+    return (*settings, *(f"cfd.{key}={json.dumps(value)}" for key, value in given
+                         if value is not None))
 
 
 def set_option() -> Callable:
@@ -290,3 +277,35 @@ def refuse_given(names: Sequence[str], apply_only: str) -> None:
     if given:
         verb = "applies" if len(given) == 1 else "apply"
         raise click.UsageError(f"{', '.join(given)} {verb} only to {apply_only}")
+
+
+def refuse_settings(settings: Sequence[str], key: str, apply_only: str) -> None:
+    """Refuse the ``--set`` texts of ``key`` (a table, or one key of it) where they would
+    be ignored.
+
+    Parameters
+    ----------
+    settings
+        The ``--set`` texts given.
+    key
+        What they would set: a case-file table (``"cfd"``) or a key (``"backtest.cycles"``).
+    apply_only
+        What they apply to and why not here, completing "--set cfd.x applies only to ...".
+
+    Raises
+    ------
+    click.UsageError
+        Naming each setting given.
+
+    Examples
+    --------
+    >>> refuse_settings(["backtest.average_cycles=2"], "backtest.cycles", "live runs")
+    >>> refuse_settings(["cfd.procs=2"], "cfd", "live runs")
+    Traceback (most recent call last):
+    click.exceptions.UsageError: --set cfd.procs applies only to live runs
+    """
+    names = [text.split("=", 1)[0].strip() for text in settings]
+    given = [name for name in names if name == key or name.startswith(f"{key}.")]
+    if given:
+        verb = "applies" if len(given) == 1 else "apply"
+        raise click.UsageError(f"--set {', '.join(given)} {verb} only to {apply_only}")

@@ -114,27 +114,27 @@ def test_a_shorter_run_is_not_the_cfd_a_longer_live_run_asks_for():
 @pytest.mark.slow
 def test_backtest_command_averages_cycles_and_refuses_what_a_run_cannot_hold(
         optimisation_file):
-    """On the shipped three-period fixtures: two cycles averaged (each a whole cycle after
-    the ramp), three not back-tested with the reason; the live-run options refused."""
-    res = CliRunner().invoke(cli, ["backtest", str(optimisation_file), "--average-cycles",
-                                   "2", "--json"])
+    """On the shipped three-period fixtures: two cycles averaged by default (each a whole
+    cycle after the ramp), three not back-tested with the reason; a [backtest] that a live
+    run cannot hold refused by its key."""
+    res = CliRunner().invoke(cli, ["backtest", str(optimisation_file), "--json"])
     assert res.exit_code == 0, res.output
     motions = json.loads(res.stdout)["motions"]
     for d in motions.values():
         assert d["cycles_averaged"] == 2 and d["cfd_thrust_standard_error"] > 0
-    text = CliRunner().invoke(cli, ["backtest", str(optimisation_file), "--average-cycles",
-                                    "2"])
+    text = CliRunner().invoke(cli, ["backtest", str(optimisation_file)])
     assert text.exit_code == 0 and text.stdout.count("means over the last 2 cycles") == 2
     assert " ± " in text.stdout
-    res = CliRunner().invoke(cli, ["backtest", str(optimisation_file), "--average-cycles",
-                                   "3"])
+    res = CliRunner().invoke(cli, ["backtest", str(optimisation_file), "--set",
+                                   "backtest.average_cycles=3"])
     assert res.exit_code == 1 and res.stdout.count("NOT BACK-TESTED") == 2
     assert "holds 2 whole cycle(s)" in res.stdout
-    for args, says in ((["--cycles", "10"], "--cycles applies only to live runs"),
-                       (["--average-cycles", "0"], "must be 1 or more cycles"),
-                       (["--live", "--cycles", "1"], "must be 1.5 or more periods"),
-                       (["--live", "--cycles", "3", "--average-cycles", "3"],
-                        "a run of --cycles 3 holds 2 whole cycle(s)")):
+    for args, says in ((["--set", "backtest.cycles=10"],
+                        "--set backtest.cycles applies only to live runs"),
+                       (["--set", "backtest.average_cycles=0"], "backtest.average_cycles"),
+                       (["--live", "--set", "backtest.cycles=0.5"], "backtest.cycles"),
+                       (["--live", "--set", "backtest.average_cycles=4"],
+                        "4 whole cycles need cycles >= 4")):
         res = CliRunner().invoke(cli, ["backtest", str(optimisation_file), *args])
         assert res.exit_code == 2 and says in res.output, (args, res.output)
 
@@ -168,9 +168,8 @@ def test_a_live_back_test_runs_the_cycles_asked_and_averages_them(tmp_path,
     from mfflap.records.record import read_record_parameters
 
     work, saved = tmp_path / "work", tmp_path / "saved"
-    args = ["backtest", str(optimisation_file), "--live", "--motion", "0.5", "--cycles",
-            "2.5", "--average-cycles", "2", "--work", str(work), "--save-to", str(saved),
-            "--json"]
+    args = ["backtest", str(optimisation_file), "--live", "--motion", "0.5", "--set",
+            "backtest.cycles=2", "--work", str(work), "--save-to", str(saved), "--json"]
     res = CliRunner().invoke(cli, args)
     assert res.exit_code == 0, res.output
     d = json.loads(res.stdout)["motions"]["β = 0.5"]
@@ -384,7 +383,7 @@ def test_the_beta_0_optimum_with_a_retrys_set_up_from_the_start_is_not_resolved_
 def test_the_beta_0_optimum_on_the_medium_mesh_reads_the_coarse_meshs_means_over_cycles_3_to_5():
     """Round 2's beta = 0 optimum on the medium mesh (12,880 cells) with the set-up the
     coarse mesh's eight-period run above ended with (inletOutlet far field, max Co 2, from
-    t = 0 s), five periods decomposed on two ranks (`--procs 2`), with no retry. Over cycles
+    t = 0 s), five periods decomposed on two ranks (`[cfd] procs = 2`), with no retry. Over cycles
     3-5 it reads 25.18 N / 38.28 W, 1.2 % and 2.5 % below the coarse mesh's same cycles
     (25.48 N / 39.25 W), a quarter of their combined standard error; cycle by cycle the two
     meshes lie up to 12 % apart, within the coarse mesh's 9 % cycle scatter, and the medium
@@ -456,18 +455,18 @@ def test_the_beta_0_optimum_on_the_medium_mesh_reads_the_coarse_meshs_means_over
 
 
 def test_procs_applies_only_to_live_runs(optimisation_file):
-    res = CliRunner().invoke(cli, ["backtest", str(optimisation_file), "--procs", "2"])
-    assert res.exit_code == 2 and "--procs applies only to live runs" in res.output
-    res = CliRunner().invoke(cli, ["backtest", str(optimisation_file), "--live", "--procs",
-                                   "0"])
-    assert res.exit_code == 2 and "--procs" in res.output
+    res = CliRunner().invoke(cli, ["backtest", str(optimisation_file), "--set", "cfd.procs=2"])
+    assert res.exit_code == 2 and "--set cfd.procs applies only to live runs" in res.output
+    res = CliRunner().invoke(cli, ["backtest", str(optimisation_file), "--live", "--set",
+                                   "cfd.procs=0"])
+    assert res.exit_code == 2 and "cfd.procs" in res.output
 
 
 @pytest.mark.slow
 @pytest.mark.openfoam
 def test_a_live_back_test_on_two_processes_runs_the_serial_runs_flow(tmp_path,
                                                                      optimisation_file):
-    """Real pimpleFoam decomposed on two ranks under mpirun (`--procs 2`), coarse mesh: the
+    """Real pimpleFoam decomposed on two ranks under mpirun (`[cfd] procs = 2`), coarse mesh: the
     beta = 0.5 optimum for 1.5 periods. Its record says it ran on two processes, and its
     forces follow the shipped serial run of the same motion and set-up (backtest/) within
     1 % NRMSE over that time: the decomposition changes round-off, not the flow, before
@@ -478,7 +477,9 @@ def test_a_live_back_test_on_two_processes_runs_the_serial_runs_flow(tmp_path,
 
     work, saved = tmp_path / "work", tmp_path / "saved"
     res = CliRunner().invoke(cli, ["backtest", str(optimisation_file), "--live", "--motion",
-                                   "0.5", "--cycles", "1.5", "--procs", "2", "--work",
+                                   "0.5", "--set", "backtest.cycles=1",
+                                   "--set", "backtest.average_cycles=1",
+                                   "--set", "cfd.procs=2", "--work",
                                    str(work), "--save-to", str(saved), "--json"])
     assert res.exit_code == 0, res.output
     d = json.loads(res.stdout)["motions"]["β = 0.5"]

@@ -343,14 +343,16 @@ def test_a_live_run_asked_for_and_not_had_is_said_beside_the_fixture_used(tmp_pa
     RunOptions(live=False, work_dir=spaced / "cfd_cases")  # not run: not checked
 
 
-def test_backtest_command_refuses_an_unknown_mesh_for_a_set_up():
+def test_backtest_command_refuses_an_unknown_mesh_for_a_set_up(optimisation_file, tmp_path):
     from click.testing import CliRunner
 
     from mfflap.cli.main import cli
 
-    res = CliRunner().invoke(cli, ["backtest", __file__, "--live", "--mesh", "finest",
-                                   "--setup", "affordable"])
+    res = CliRunner().invoke(cli, ["backtest", str(optimisation_file), "--live", "--mesh",
+                                   "finest", "--setup", "affordable", "--work",
+                                   str(tmp_path / "work")])
     assert res.exit_code == 2 and "finest" in res.output and "meshes.toml" in res.output
+    assert "cfd.mesh" in res.output and not (tmp_path / "work").exists()
 
 
 @pytest.mark.openfoam
@@ -667,8 +669,11 @@ def test_a_live_backtest_takes_a_motion_saved_before_on_the_same_set_up(optimisa
     for path in fixture_dir("backtest").glob("backtest_*.h5"):
         shutil.copy(path, saved / path.name)
     work = tmp_path / "work"
+    # the saved records ran 2.5 periods after the ramp with the log-law wall functions
     res = CliRunner().invoke(cli, ["backtest", str(optimisation_file), "--live", "--work",
-                                   str(work), "--save-to", str(saved), "--json"])
+                                   str(work), "--save-to", str(saved), "--json",
+                                   "--set", "backtest.cycles=2.5",
+                                   "--set", 'cfd.wall_treatment="log_law"'])
     assert res.exit_code == 0, res.output
     import json
 

@@ -884,7 +884,9 @@ def test_campaign_command_runs_a_named_set_up(tmp_path):
 
     case = Path(__file__).parents[2] / "cases" / "paper2026.toml"
     out = tmp_path / "camp"
-    grid = ["--frequencies", "2", "--heave-amplitudes", "0.1", "--phases", "90"]
+    grid = ["--set", "identification.frequencies=[2]",
+            "--set", "identification.heave_amplitudes=[0.1]",
+            "--set", "identification.phases_deg=[90]"]
     both = CliRunner().invoke(cli, ["campaign", "run", str(case), "--out", str(out), *grid,
                                     "--mesh", "finest", "--setup", "affordable"])
     assert both.exit_code != 0 and "finest" in both.output and not out.exists()
@@ -893,7 +895,8 @@ def test_campaign_command_runs_a_named_set_up(tmp_path):
     assert unknown.exit_code != 0 and "setups.toml" in unknown.output
     assert "cheapest" in unknown.output
     res = CliRunner().invoke(cli, ["campaign", "run", str(case), "--out", str(out), *grid,
-                                   "--setup", "affordable", "--timeout", "3", "--keep-cases"])
+                                   "--setup", "affordable", "--set", "cfd.timeout_s=3",
+                                   "--keep-cases"])
     assert res.exit_code == 1, res.output  # the case failed (timed out): not a whole campaign
     assert ("exit status 1: 1 of 1 cases not done (1 failed: `--retry-failed` reruns them)"
             in res.stderr)
@@ -920,7 +923,9 @@ def test_a_case_the_folder_lists_with_other_values_is_refused_before_anything_ru
     out = tmp_path / "camp"
     out.mkdir()
     listed = CfdCase(2.0, 0.1, 90.0, 10.0, duration=1.5, ramp_time=0.125)  # paper2026's
-    _write_manifest(out, [listed], CampaignSetup())
+    # the set-up `campaign run` asks without a named set-up
+    _write_manifest(out, [listed], CampaignSetup(solver=SolverSettings(
+        wall_treatment="all_y_plus")))
     check_same_cases(out, [listed, OTHER])  # the same values, and a case not listed
     longer = CfdCase(2.0, 0.1, 90.0, 10.0, duration=2.5, ramp_time=0.125)
     with pytest.raises(ConfigError, match=r"duration: 1\.5 in the folder, 2\.5 asked") as err:
@@ -931,8 +936,9 @@ def test_a_case_the_folder_lists_with_other_values_is_refused_before_anything_ru
     case.write_text(text.replace("pitch_ramp_rate_deg = 10.0", "pitch_ramp_rate_deg = 5.0"))
     for dry_run in (["--dry-run"], []):
         res = CliRunner().invoke(cli, ["campaign", "run", str(case), "--out", str(out),
-                                       "--frequencies", "2", "--heave-amplitudes", "0.1",
-                                       "--phases", "90", *dry_run])
+                                       "--set", "identification.frequencies=[2]",
+                                       "--set", "identification.heave_amplitudes=[0.1]",
+                                       "--set", "identification.phases_deg=[90]", *dry_run])
         assert res.exit_code == 2, res.output
         assert (f"{out / 'campaign.toml'}: cases.{listed.case_id}: this folder holds case "
                 f"{listed.case_id} with other values (pitch_ramp_rate_deg: 10.0 in the "
@@ -955,9 +961,11 @@ def test_campaign_command_exit_status_says_whether_every_case_is_done(tmp_path):
     text = (Path(__file__).parents[2] / "cases" / "paper2026.toml").read_text()
     case.write_text(text.replace("n_cycles = 3.0", "n_cycles = 0.5"))
     out = tmp_path / "camp"
-    args = ["campaign", "run", str(case), "--out", str(out), "--frequencies", "2",
-            "--heave-amplitudes", "0.1", "--phases", "90"]
-    failed = CliRunner().invoke(cli, [*args, "--timeout", "1"])
+    args = ["campaign", "run", str(case), "--out", str(out),
+            "--set", "identification.frequencies=[2]",
+            "--set", "identification.heave_amplitudes=[0.1]",
+            "--set", "identification.phases_deg=[90]"]
+    failed = CliRunner().invoke(cli, [*args, "--set", "cfd.timeout_s=1"])
     assert failed.exit_code == 1, failed.output
     assert "0/1 cases done" in failed.stdout and "FAILED f2p000_h0p100_phi090p0" in failed.stdout
     assert "exit status 1: 1 of 1 cases not done (1 failed" in failed.stderr
@@ -1217,8 +1225,10 @@ def test_an_interrupted_campaign_stops_its_solvers_and_says_how_to_resume(tmp_pa
 
     case_file = Path(__file__).parents[2] / "cases" / "paper2026.toml"
     out = tmp_path / "camp"
-    arguments = {"campaign run": [str(case_file), "--out", str(out), "--frequencies", "0.5",
-                                  "--heave-amplitudes", "0.1", "--phases", "90"],
+    arguments = {"campaign run": [str(case_file), "--out", str(out),
+                                  "--set", "identification.frequencies=[0.5]",
+                                  "--set", "identification.heave_amplitudes=[0.1]",
+                                  "--set", "identification.phases_deg=[90]"],
                  "cfd linear-check": [str(out), "--cases", SMALL_MOTIONS[0].case_id]}
     command = [sys.executable, "-c", "from mfflap.cli.main import cli; cli()",
                *command_name.split(), *arguments[command_name]]
@@ -1284,9 +1294,11 @@ def test_a_case_another_process_runs_is_left_to_it_not_failed(tmp_path):
         assert listed.exit_code == 0 and "0 failed, 1 running, 0 started" in listed.output
         case_file = Path(__file__).parents[2] / "cases" / "paper2026.toml"
         (out / "campaign.toml").unlink()  # it lists SHORT's 0.04 s, not the grid's 3 s
+        # the same case id as SHORT
         left = CliRunner().invoke(cli, ["campaign", "run", str(case_file), "--out", str(out),
-                                        "--frequencies", "1", "--heave-amplitudes", "0.3",
-                                        "--phases", "90"])  # the same case id as SHORT
+                                        "--set", "identification.frequencies=[1]",
+                                        "--set", "identification.heave_amplitudes=[0.3]",
+                                        "--set", "identification.phases_deg=[90]"])
         assert left.exit_code == 1, left.output  # not done by this command
         assert f"BUSY {SHORT.case_id}: " in left.stdout
         assert f"being run by another process (pid {holder.pid}" in left.stdout
@@ -1363,9 +1375,11 @@ def test_an_interrupted_campaign_on_an_external_cluster_has_its_solvers_write(tm
     out = tmp_path / "camp"
     with _external_cluster() as (address, scheduler, worker):
         command = [sys.executable, "-c", "from mfflap.cli.main import cli; cli()", "campaign",
-                   "run", str(case_file), "--out", str(out), "--frequencies", "0.5",
-                   "--heave-amplitudes", "0.1", "--phases", "90,135", "--scheduler",
-                   address]
+                   "run", str(case_file), "--out", str(out),
+                       "--set", "identification.frequencies=[0.5]",
+                       "--set", "identification.heave_amplitudes=[0.1]",
+                       "--set", "identification.phases_deg=[90,135]", "--scheduler",
+                       address]
         proc = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                 text=True, process_group=0,
                                 preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
@@ -1509,7 +1523,9 @@ def test_a_dry_run_lists_each_case_with_its_state_or_refuses_as_the_run_would(tm
     case = Path(__file__).parents[2] / "cases" / "paper2026.toml"
     before = sorted(p.name for p in out.iterdir())
     args = ["campaign", "run", str(case), "--out", str(out), "--dry-run",
-            "--frequencies", "0.5,1", "--heave-amplitudes", "0.3,0.5", "--phases", "90,135"]
+            "--set", "identification.frequencies=[0.5,1]",
+            "--set", "identification.heave_amplitudes=[0.3,0.5]",
+            "--set", "identification.phases_deg=[90,135]"]
     res = CliRunner().invoke(cli, [*args, "--setup", "coarse_co2"])
     assert res.exit_code == 0, res.output
     states = {line.split()[0]: line.split()[-1] for line in res.output.splitlines()}
@@ -1519,6 +1535,7 @@ def test_a_dry_run_lists_each_case_with_its_state_or_refuses_as_the_run_would(tm
     res = CliRunner().invoke(cli, [*args, "--setup", "affordable"])
     assert res.exit_code != 0 and "another setup (mesh: 'coarse' in the folder" in res.output
     res = CliRunner().invoke(cli, [*args[:3], "--out", str(tmp_path / "new"), "--dry-run",
-                                   "--frequencies", "1", "--phases", "90"])
+                                   "--set", "identification.frequencies=[1]",
+                                   "--set", "identification.phases_deg=[90]"])
     assert res.exit_code == 0 and res.output.split()[-1] == "pending"
     assert sorted(p.name for p in out.iterdir()) == before and not (tmp_path / "new").exists()

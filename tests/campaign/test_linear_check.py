@@ -129,8 +129,12 @@ def test_command_reads_a_finished_campaign(tmp_path, records):
     out = tmp_path / "lc"
     shutil.copytree(FIXTURES, out)
     ids = [SMALL_MOTIONS[0].case_id, SMALL_MOTIONS[1].case_id]
-    res = CliRunner().invoke(cli, ["cfd", "linear-check", str(out), "--cases", ",".join(ids),
-                                   "--json"])
+    # the shipped records ran the log-law wall functions, not the default all_y_plus: a
+    # folder of another set-up is refused, the records' own is read
+    args = ["cfd", "linear-check", str(out), "--cases", ",".join(ids), "--json"]
+    res = CliRunner().invoke(cli, args)
+    assert res.exit_code == 2 and "solver.wall_treatment: 'log_law' in the folder" in res.output
+    res = CliRunner().invoke(cli, [*args, "--set", 'cfd.wall_treatment="log_law"'])
     assert res.exit_code == 0, res.output
     checks = json.loads(res.stdout)["checks"]
     assert [c["case_id"] for c in checks] == ids
@@ -149,13 +153,13 @@ def test_command_reads_a_finished_campaign(tmp_path, records):
 @pytest.mark.openfoam
 def test_command_runs_a_small_motion_in_openfoam(tmp_path):
     """One case from scratch: the campaign writes, runs and records it, the check follows;
-    --velocity-convection reaches the solver (the coarse mesh with LUST). Timed out first,
+    [cfd] velocity_convection reaches the solver (the coarse mesh with LUST). Timed out first,
     the motion is failed (exit status 1) until `--retry-failed` runs it again with a longer
     time limit."""
     case = SMALL_MOTIONS[8]  # f = 2 Hz, heave 2 mm leading pitch 0.75 deg: about 15 s CPU
     args = ["cfd", "linear-check", str(tmp_path), "--cases", case.case_id,
-            "--velocity-convection", "LUST"]
-    timed_out = CliRunner().invoke(cli, [*args, "--timeout", "1"])
+            "--set", 'cfd.velocity_convection="LUST"']
+    timed_out = CliRunner().invoke(cli, [*args, "--set", "cfd.timeout_s=1"])
     assert timed_out.exit_code == 1 and f"FAILED {case.case_id}: " in timed_out.stdout
     again = CliRunner().invoke(cli, [*args, "--json"])  # a failed motion is not rerun
     assert again.exit_code == 1 and "timed out" in json.loads(again.stdout)["failed"][

@@ -69,10 +69,12 @@ def test_a_mutated_motion_csv_is_written_or_refused_in_one_line(tmp_path, header
 
 @pytest.mark.slow
 @FUZZ
-@given(option=st.sampled_from(["--cycles", "--ramp-time", "--max-courant", "--writes",
-                               "--mesh", "--frame", "--setup"]),
+@given(option=st.sampled_from(["--cycles", "--ramp-time", "--mesh", "--setup",
+                               "cfd.max_courant", "cfd.writes", "cfd.frame", "cfd.procs"]),
        value=st.sampled_from(["0", "-3", "1e9", "nan", "inf", "x", "", "1e-320",
-                              "z" * 5000]))
+                              "z" * 5000, '"plate"', "[1, 2]"]))
 def test_mutated_options_are_refused_in_one_line(tmp_path, option, value):
+    given = ([option, value] if option.startswith("--")
+             else ["--set", f"{option}={value}"])
     _check(CliRunner().invoke(cli, ["cfd", "write", str(CASE), mkdtemp(dir=tmp_path),
-                                    option, value]))
+                                    *given]))

@@ -13,8 +13,9 @@ CASE = Path(__file__).resolve().parents[2] / "cases" / "paper2026.toml"
 
 
 @pytest.mark.openfoam
-@pytest.mark.parametrize("options", [[], ["--far-field", "inletOutlet", "--pressure-solver",
-                                          "GAMG", "--turbulence-convection", "upwind"]],
+@pytest.mark.parametrize("options", [[], ["--set", 'cfd.far_field="inletOutlet"',
+                                          "--set", 'cfd.pressure_solver="GAMG"',
+                                          "--set", 'cfd.turbulence_convection="upwind"']],
                          ids=["default", "inletOutlet-GAMG-upwind"])
 def test_cfd_write_run_parse_with_real_openfoam(tmp_path, options):
     runner = CliRunner()
@@ -30,7 +31,9 @@ def test_cfd_write_run_parse_with_real_openfoam(tmp_path, options):
     assert res.exit_code == 0, res.output
     health = json.loads(res.stdout)
     assert health["openfoam_build"].startswith("OPENFOAM=")
-    assert health["wall_treatment"] == "log_law"  # said with or without --y-plus
+    # a case without a named set-up: the wall treatment valid at the plate's y+; said
+    # with or without [cfd] y_plus
+    assert health["wall_treatment"] == "all_y_plus"
     assert health["n_time_steps"] > 10 and health["cpu_time_s"] > 0
     assert health["n_steps_bounding_epsilon"] <= health["n_time_steps"]
     assert health["numerical_bursts"] == []  # the impulsive start's force impulse is real

@@ -78,8 +78,10 @@ def test_status_and_a_dry_run_name_the_mixed_run_of_a_real_campaign(tmp_path):
     before = {p.name: p.read_bytes() for p in out.iterdir()}
     case = ROOT / "cases" / "paper2026.toml"
     dry = CliRunner().invoke(cli, ["campaign", "run", str(case), "--out", str(out), "--dry-run",
-                                   "--setup", "coarse_co2", "--frequencies", "1,2",
-                                   "--heave-amplitudes", "0.3", "--phases", "90",
+                                   "--setup", "coarse_co2",
+                                   "--set", "identification.frequencies=[1, 2]",
+                                   "--set", "identification.heave_amplitudes=[0.3]",
+                                   "--set", "identification.phases_deg=[90]",
                                    "--rerun-mixed"])
     assert dry.exit_code == 0, dry.output
     lines = {line.split()[0]: line for line in dry.output.splitlines()}
@@ -96,7 +98,7 @@ def test_rerun_mixed_keeps_the_record_aside_and_reruns_the_case_from_the_start(t
     kept as .mixed.h5, the kept case folder is written anew (not taken as finished), and
     the new record ran one set-up."""
     out = tmp_path / "camp"
-    setup = CampaignSetup(timeout_s=900.0, keep_case_dirs=True)
+    setup = CampaignSetup(timeout_s=900.0, keep_case_dirs=True, retries_from_start=False)
     run_campaign([SHORT], out, setup, progress=False)
     path = out / f"{SHORT.case_id}.h5"
     mixed = _resumed_at(path, 0.03)
@@ -133,8 +135,10 @@ def test_campaign_run_rerun_mixed_reads_the_start_up_from_the_case_file(tmp_path
     case = tmp_path / "short.toml"
     case.write_text(text.replace("n_cycles = 3.0", "n_cycles = 0.5\ndiscard_time = 0.15"))
     out = tmp_path / "camp"
-    args = ["campaign", "run", str(case), "--out", str(out), "--frequencies", "2",
-            "--heave-amplitudes", "0.1", "--phases", "90"]
+    args = ["campaign", "run", str(case), "--out", str(out),
+            "--set", "identification.frequencies=[2]",
+            "--set", "identification.heave_amplitudes=[0.1]",
+            "--set", "identification.phases_deg=[90]"]
     first = CliRunner().invoke(cli, args)
     assert first.exit_code == 0, first.output
     (path,) = out.glob("*.h5")

@@ -128,7 +128,8 @@ def resolve_mesh(mesh: str | AnyMeshSpec) -> AnyMeshSpec:
         return mesh
     specs = mesh_specs()
     if mesh not in specs:
-        raise ConfigError(f"unknown mesh {shown(mesh)}; allowed: {', '.join(specs)}", key="mesh",
+        raise ConfigError(f"unknown mesh {shown(mesh)}; meshes.toml has: {', '.join(specs)}",
+                          key="mesh",
                           source=str(template_dir() / "meshes.toml"))
     return specs[mesh]
 

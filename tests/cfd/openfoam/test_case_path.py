@@ -182,7 +182,7 @@ def test_cfd_write_over_a_case_that_ran_needs_overwrite_and_then_starts_afresh(t
     first run's last time; refused now, and overwritten it runs from t = 0 on a new mesh."""
     assert openfoam_available(), "OpenFOAM must be installed (.ci/run installs it)"
     case = tmp_path / "case"
-    write = ["cfd", "write", CASE_FILE, str(case), "--writes", "1"]
+    write = ["cfd", "write", CASE_FILE, str(case), "--set", "cfd.writes=1"]
     runner = CliRunner()
     assert runner.invoke(cli, [*write, "--cycles", "0.002"]).exit_code == 0
     run_case(case, timeout_s=120)

@@ -114,9 +114,9 @@ def test_cfd_cycles_names_the_cycles_run_before_a_retry_part_way():
 def test_retries_from_start_is_refused_without_live_runs(tmp_path):
     (tmp_path / "missing.h5").write_bytes(b"")
     result = CliRunner().invoke(cli, ["backtest", str(tmp_path / "missing.h5"),
-                                      "--retries-from-start"])
-    assert result.exit_code != 0
-    assert "--retries-from-start applies only to live" in result.output
+                                      "--set", "cfd.retries_from_start=false"])
+    assert result.exit_code == 2
+    assert "--set cfd.retries_from_start applies only to live" in result.output
 
 
 @pytest.mark.openfoam

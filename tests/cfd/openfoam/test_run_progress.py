@@ -116,7 +116,7 @@ def test_an_interrupted_cfd_run_stops_its_solver_and_says_where_it_resumes(tmp_p
 
     case = tmp_path / "case"
     res = CliRunner().invoke(cli, ["cfd", "write", str(CASE), str(case), "--cycles", "0.2",
-                                   "--writes", "8"])
+                                   "--set", "cfd.writes=8"])
     assert res.exit_code == 0, res.output
     command = [sys.executable, "-c", "from mfflap.cli.main import cli; cli()", "cfd", "run",
                str(case)]
@@ -238,8 +238,8 @@ def test_cfd_run_reports_the_plates_y_plus_against_the_wall_functions(tmp_path):
     from mfflap.cli.main import cli
 
     case = tmp_path / "yp"
-    res = CliRunner().invoke(cli, ["cfd", "write", str(CASE), str(case), "--y-plus",
-                                   "--cycles", "0.1", "--ramp-time", "0.04"])
+    res = CliRunner().invoke(cli, ["cfd", "write", str(CASE), str(case), "--set",
+                                   "cfd.y_plus=true", "--cycles", "0.1", "--ramp-time", "0.04"])
     assert res.exit_code == 0, res.output
     text = CliRunner().invoke(cli, ["cfd", "run", str(case)])
     assert text.exit_code == 0, text.output

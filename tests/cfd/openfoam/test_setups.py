@@ -125,17 +125,18 @@ def test_cfd_write_runs_a_setups_solver_on_another_mesh(tmp_path):
 
 def test_cfd_write_overrides_a_setups_velocity_convection(tmp_path):
     res = CliRunner().invoke(cli, ["cfd", "write", str(CASE), str(tmp_path / "c"),
-                                   "--setup", "affordable", "--velocity-convection",
-                                   "linearUpwind", "--cycles", "0.1"])
+                                   "--setup", "affordable", "--set",
+                                   'cfd.velocity_convection="linearUpwind"', "--cycles", "0.1"])
     assert res.exit_code == 0, res.output
     schemes = (tmp_path / "c" / "system" / "fvSchemes").read_text()
     assert "Gauss linearUpwind grad(U)" in schemes and "LUST" not in schemes
     assert "nOuterCorrectors 1;" in (tmp_path / "c" / "system" / "fvSolution").read_text()
 
 
-def test_every_mesh_and_scheme_is_named_in_the_options():
+def test_every_mesh_and_scheme_is_named_in_the_options_and_the_case_file():
     from mfflap.cfd.openfoam.writer import VELOCITY_CONVECTION_SCHEMES
-    from mfflap.cli.options import MESH_NAMES, VELOCITY_CONVECTION_NAMES
+    from mfflap.cli.options import MESH_NAMES
+    from mfflap.study_tables import VELOCITY_CONVECTION_NAMES
 
     assert MESH_NAMES.split(" | ") == list(mesh_specs())
     assert VELOCITY_CONVECTION_NAMES == VELOCITY_CONVECTION_SCHEMES
@@ -163,12 +164,13 @@ def test_mesh_and_solver_of_a_command():
 
 
 def test_cfd_write_sets_the_courant_limit_and_the_correctors(tmp_path):
-    """--max-courant, --outer-correctors and --correctors override the set-up's; an
-    impossible value is refused naming it, and no case is left behind."""
+    """[cfd] max_courant, outer_correctors and correctors override the set-up's; an
+    impossible value is refused naming its key, and no case is left behind."""
     res = CliRunner().invoke(cli, ["cfd", "write", str(CASE), str(tmp_path / "c"),
                                    "--setup", "affordable", "--cycles", "0.1",
-                                   "--max-courant", "2.5", "--outer-correctors", "3",
-                                   "--correctors", "2"])
+                                   "--set", "cfd.max_courant=2.5",
+                                   "--set", "cfd.outer_correctors=3",
+                                   "--set", "cfd.correctors=2"])
     assert res.exit_code == 0, res.output
     case = tmp_path / "c"
     assert res.stdout.strip() == (f"wrote {case} (mesh graded, inertial frame, PIMPLE 3x2, "
@@ -182,10 +184,10 @@ def test_cfd_write_sets_the_courant_limit_and_the_correctors(tmp_path):
     assert kept["solver_max_courant"] == 2.5 and kept["solver_n_outer_correctors"] == 3
     assert kept["solver_velocity_convection"] == "LUST"
     res = CliRunner().invoke(cli, ["cfd", "write", str(CASE), str(tmp_path / "bad"),
-                                   "--max-courant", "0"])
+                                   "--set", "cfd.max_courant=0"])
     assert res.exit_code == 2
-    assert "Invalid value for '--max-courant': must be a finite number > 0" in res.output
+    assert "cfd.max_courant: value 0 is out of range; allowed: (0, 100]" in res.output
     assert not (tmp_path / "bad").exists()
     res = CliRunner().invoke(cli, ["cfd", "write", str(CASE), str(tmp_path / "bad"),
-                                   "--correctors", "0"])
-    assert res.exit_code == 2 and "--correctors" in res.output
+                                   "--set", "cfd.correctors=0"])
+    assert res.exit_code == 2 and "cfd.correctors" in res.output

@@ -1,11 +1,12 @@
 """The plate's wall treatment: the k-epsilon wall functions made for the log layer
-("log_law", as shipped) or Spalding's law for nut with epsilon's low-Re correction
-("all_y_plus", valid at any y+ of the first cell, as Fluent's enhanced wall treatment that
-the paper used is).
+("log_law", which the older shipped records ran) or Spalding's law for nut with epsilon's
+low-Re correction ("all_y_plus", valid at any y+ of the first cell, as Fluent's enhanced
+wall treatment that the paper used is).
 
 The shipped meshes put the plate's first cells at y+ of about 5-15, below the 30-300 that
-the log-law wall functions assume (docs/findings/known_limits.md); `--wall-treatment all_y_plus`
-gives a case whose wall conditions hold there.
+the log-law wall functions assume (docs/findings/known_limits.md); all_y_plus, the default
+of a case without a named set-up (`[cfd] wall_treatment`), gives wall conditions that hold
+there.
 """
 
 from __future__ import annotations
@@ -82,8 +83,8 @@ def test_an_unknown_wall_treatment_is_refused_by_name():
     assert err.value.key == "wall_treatment"
 
 
-def test_the_command_line_offers_the_writers_wall_treatments():
-    from mfflap.cli.options import WALL_TREATMENT_NAMES
+def test_the_case_file_offers_the_writers_wall_treatments():
+    from mfflap.study_tables import WALL_TREATMENT_NAMES
 
     assert WALL_TREATMENT_NAMES == tuple(WALL_TREATMENTS)
 
@@ -142,7 +143,7 @@ def test_a_case_of_the_other_wall_treatment_is_not_resumed(tmp_path):
 
 def test_cfd_write_takes_the_wall_treatment_with_a_set_up_and_says_it(tmp_path):
     res = CliRunner().invoke(cli, ["cfd", "write", str(CASE), str(tmp_path / "c"), "--setup",
-                                   "affordable", "--wall-treatment", "all_y_plus",
+                                   "affordable", "--set", 'cfd.wall_treatment="all_y_plus"',
                                    "--cycles", "0.1"])
     assert res.exit_code == 0, res.output
     assert "all_y_plus wall treatment" in res.output
@@ -150,23 +151,25 @@ def test_cfd_write_takes_the_wall_treatment_with_a_set_up_and_says_it(tmp_path):
     kept = (tmp_path / "c" / "mfflap_case.toml").read_text()
     assert "solver_velocity_convection = 'LUST'" in kept  # the set-up's other settings stay
     bad = CliRunner().invoke(cli, ["cfd", "write", str(CASE), str(tmp_path / "d"),
-                                   "--wall-treatment", "spalding"])
-    assert bad.exit_code == 2 and "--wall-treatment" in bad.output
+                                   "--set", 'cfd.wall_treatment="spalding"'])
+    assert bad.exit_code == 2 and "cfd.wall_treatment" in bad.output
     assert not (tmp_path / "d").exists()
 
 
 def test_a_campaign_keeps_its_wall_treatment_in_its_set_up(tmp_path):
-    """`campaign run --wall-treatment`: the manifest says it, and a folder of the other one
-    is refused (as any other setting, `--dry-run` too)."""
+    """`campaign run` with [cfd] wall_treatment: the manifest says it, and a folder of the
+    other one is refused (as any other setting, `--dry-run` too)."""
     from mfflap.campaign.cases import grid_cases
     from mfflap.campaign.execute import CampaignSetup, _write_manifest
     from mfflap.config import load_case
     from mfflap.toml_io import read_toml
 
     out = tmp_path / "camp"
-    args = ["campaign", "run", str(CASE), "--out", str(out), "--frequencies", "1",
-            "--heave-amplitudes", "0.1", "--phases", "90", "--dry-run"]
-    res = CliRunner().invoke(cli, [*args, "--wall-treatment", "all_y_plus"])
+    args = ["campaign", "run", str(CASE), "--out", str(out), "--dry-run",
+            "--set", "identification.frequencies=[1]",
+            "--set", "identification.heave_amplitudes=[0.1]",
+            "--set", "identification.phases_deg=[90]"]
+    res = CliRunner().invoke(cli, [*args, "--set", 'cfd.wall_treatment="all_y_plus"'])
     assert res.exit_code == 0, res.output
     assert not out.exists()  # a dry run writes nothing
     case = load_case(CASE)
@@ -176,18 +179,18 @@ def test_a_campaign_keeps_its_wall_treatment_in_its_set_up(tmp_path):
     out.mkdir()
     _write_manifest(out, grid_cases(grid), setup)
     assert read_toml(out / "campaign.toml")["setup"]["solver"]["wall_treatment"] == "all_y_plus"
-    again = CliRunner().invoke(cli, [*args, "--wall-treatment", "all_y_plus"])
+    again = CliRunner().invoke(cli, args)  # all_y_plus: the default without a set-up
     assert again.exit_code == 0, again.output
-    other = CliRunner().invoke(cli, args)
+    other = CliRunner().invoke(cli, [*args, "--set", 'cfd.wall_treatment="log_law"'])
     assert other.exit_code == 2
     assert "another setup" in other.output and "wall_treatment" in other.output
 
 
 def test_backtest_refuses_a_wall_treatment_without_live_runs(optimisation_file):
-    res = CliRunner().invoke(cli, ["backtest", str(optimisation_file), "--wall-treatment",
-                                   "all_y_plus"])
+    res = CliRunner().invoke(cli, ["backtest", str(optimisation_file), "--set",
+                                   'cfd.wall_treatment="all_y_plus"'])
     assert res.exit_code == 2
-    assert "--wall-treatment" in res.output and "--live" in res.output
+    assert "--set cfd.wall_treatment applies only to live runs (--live)" in res.output
 
 
 @pytest.mark.openfoam
@@ -205,9 +208,10 @@ def test_both_wall_treatments_run_and_move_the_shear_not_the_pressure_forces(tmp
     runs = {}
     for treatment in WALL_TREATMENTS:
         case = tmp_path / treatment
-        res = CliRunner().invoke(cli, ["cfd", "write", str(CASE), str(case), "--y-plus",
-                                       "--cycles", "0.1", "--ramp-time", "0.04", "--writes",
-                                       "1", "--wall-treatment", treatment])
+        res = CliRunner().invoke(cli, ["cfd", "write", str(CASE), str(case), "--cycles",
+                                       "0.1", "--ramp-time", "0.04", "--set", "cfd.y_plus=true",
+                                       "--set", "cfd.writes=1",
+                                       "--set", f'cfd.wall_treatment="{treatment}"'])
         assert res.exit_code == 0, res.output
         run = CliRunner().invoke(cli, ["cfd", "run", str(case), "--json"])
         assert run.exit_code == 0, run.output
