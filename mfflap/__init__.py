@@ -13,13 +13,13 @@ from mfflap.version import __version__
 
 
 def __getattr__(name: str):
-    """``mfflap.Study`` is imported on first use: the facade brings in every layer below it
-    (identification, optimisation, CFD, the gap diagnosis), which ``import mfflap`` alone
-    does not need."""
-    if name == "Study":
-        from mfflap.api import Study
+    """``mfflap.Study`` and ``mfflap.open_results`` are imported on first use: the facade
+    brings in every layer below it (identification, optimisation, CFD, the gap diagnosis),
+    which ``import mfflap`` alone does not need."""
+    if name in ("Study", "open_results"):
+        from mfflap import api
 
-        return Study
+        return getattr(api, name)
     raise AttributeError(f"module 'mfflap' has no attribute {name!r}")
 
 
@@ -35,4 +35,5 @@ __all__ = [
     "RampHarmonicMotion",
     "Study",
     "__version__",
+    "open_results",
 ]

@@ -27,15 +27,23 @@ from mfflap.backtest.run import BacktestOutcome
 from mfflap.backtest.workflow import backtest_all
 from mfflap.config import CaseConfig, load_case
 from mfflap.errors import ConfigError, shown
-from mfflap.gap.diagnose import Diagnosis
 from mfflap.identification.fit import IdentificationResult
 from mfflap.identification.workflow import identify_strategies, load_cases
 from mfflap.kinematics import DiscreteMotion, to_discrete
 from mfflap.optimisation.optimise import OptimisationResult
 from mfflap.optimisation.study import beta_study
-from mfflap.performance import Evaluation, evaluate_discrete
+from mfflap.performance import evaluate_discrete
 from mfflap.pipeline import gap_diagnosis
 from mfflap.records.record import backtest_fixture_dirs
+from mfflap.study_results import (
+    BacktestResult,
+    CycleEvaluation,
+    GapDiagnosis,
+    IdentifiedCoefficients,
+    OptimisedMotion,
+    as_result,
+    open_results,
+)
 
 #: the frequency weightings :meth:`Study.identify` takes
 WEIGHTINGS = ("uniform", "low", "high")
@@ -79,17 +87,19 @@ class Study:
         """
         return cls(load_case(path))
 
-    def evaluate(self, motion: DiscreteMotion | None = None) -> Evaluation:
+    def evaluate(self, motion: DiscreteMotion | None = None) -> CycleEvaluation:
         """The model's loads, thrust and power over one cycle of ``motion`` (default: the
         case file's [motion], with its N steps per half cycle)."""
         if motion is None:
             spec = self.config.motion
             motion = to_discrete(spec.build(), 1.0 / spec.frequency,
                                  self.config.discretisation.n_steps)
-        return evaluate_discrete(self.model, motion, self.config.optimisation.scheme)
+        scheme = self.config.optimisation.scheme
+        return CycleEvaluation.of(evaluate_discrete(self.model, motion, scheme),
+                                  float(motion.period), scheme=scheme, config=self.config)
 
     def identify(self, records: str | Path | Sequence[str | Path] | None = None,
-                 weighting: str = "uniform", bootstrap: int = 200) -> IdentificationResult:
+                 weighting: str = "uniform", bootstrap: int = 200) -> IdentifiedCoefficients:
         """Fit the coefficients to CFD records (default: the shipped Table 1 runs) with one
         of :data:`WEIGHTINGS`; the study then optimises with them.
 
@@ -106,18 +116,18 @@ class Study:
                                      n_bootstrap=bootstrap)[weighting]
         self._cases, self.identification = cases, result
         self.model = result.model(self.config.morison_model())
-        return result
+        return as_result(result, IdentifiedCoefficients, config=self.config)
 
-    def optimise(self, beta: float, starts: int = 1) -> OptimisationResult:
+    def optimise(self, beta: float, starts: int = 1) -> OptimisedMotion:
         """The optimised motion for the weight ``beta`` (0: most thrust, 1: least power),
         from the best sinusoid of a sweep and ``starts`` - 1 more starts, with the study's
         model."""
         study = beta_study(self.config, [beta], n_starts=starts, with_ipopt=False,
                            model=self.model, progress=lambda _: None)
-        return study.sqp[beta]
+        return as_result(study.sqp[beta], OptimisedMotion, model=self.model, config=self.config)
 
     def backtest(self, optimum: OptimisationResult | DiscreteMotion, live: bool = False,
-                 work_dir: str | Path | None = None) -> BacktestOutcome:
+                 work_dir: str | Path | None = None) -> BacktestResult:
         """The optimum against CFD: a shipped record of the same motion, or with ``live`` a
         real OpenFOAM run (three periods after a start-up ramp). Without either, the
         outcome's status is "not back-tested" and its source says why."""
@@ -127,16 +137,16 @@ class Study:
         outcomes = backtest_all(self.config, {label: motion}, self.model,
                                 fixture_folders=backtest_fixture_dirs(), live=live,
                                 work_dir=work_dir)
-        return outcomes[label]
+        return as_result(outcomes[label], BacktestResult, config=self.config)
 
-    def diagnose(self, backtests: Sequence[BacktestOutcome] = ()) -> Diagnosis:
+    def diagnose(self, backtests: Sequence[BacktestOutcome] = ()) -> GapDiagnosis:
         """Where the model departs from the identification CFD and which unmodelled
         effect explains it, checked on the back-tests' runs (which no fit saw)."""
         if self._cases is None:
             self._cases, _ = load_cases(self.config, None)
-        diagnosis, _ = gap_diagnosis(self.config, self._cases,
-                                     {o.label: o for o in backtests})
-        return diagnosis
+        diagnosis, where = gap_diagnosis(self.config, self._cases,
+                                         {o.label: o for o in backtests})
+        return as_result(diagnosis, GapDiagnosis, where=where, config=self.config)
 
 
-__all__ = ["WEIGHTINGS", "Study"]
+__all__ = ["WEIGHTINGS", "Study", "open_results"]

@@ -563,13 +563,34 @@ def load_case(path: str | Path, settings: Sequence[str] = ()) -> CaseConfig:
     data = read_toml(path)
     if settings:
         data = apply_settings(data, settings)
-        source = f"{path} with --set {' '.join(settings)}"
+        source = settings_source(path, settings)
     else:
         source = str(path)
     config = case_from_dict(data, source=source)
     if isinstance(data.get("motion"), dict):
         _check_motion_keys(data["motion"], config.motion.kind, source)
     return config
+
+
+#: the most characters of one ``--set`` setting that a case file's name in an error repeats
+SETTING_CHARS = 40
+
+
+def settings_source(source: str | Path, settings: Sequence[str]) -> str:
+    """Name a case file with the ``--set`` settings applied to it, each setting cut to
+    :data:`SETTING_CHARS` characters so that an error (which repeats the offending value
+    after this) stays one readable line.
+
+    Examples
+    --------
+    >>> settings_source("case.toml", ["cfd.procs=2"])
+    'case.toml with --set cfd.procs=2'
+    >>> len(settings_source("case.toml", ["cfd.mesh=" + "z" * 5000])) < 100
+    True
+    """
+    cut = [item if len(item) <= SETTING_CHARS else item[:SETTING_CHARS] + "..."
+           for item in settings]
+    return f"{source} with --set {' '.join(cut)}"
 
 
 def loads_case(text: str, source: str = "<string>", settings: Sequence[str] = ()
@@ -588,7 +609,7 @@ def loads_case(text: str, source: str = "<string>", settings: Sequence[str] = ()
         raise ConfigError(f"TOML syntax error: {exc}", source=source) from exc
     if settings:
         data = apply_settings(data, settings)
-        source = f"{source} with --set {' '.join(settings)}"
+        source = settings_source(source, settings)
     return case_from_dict(data, source=source)
 
 

@@ -280,7 +280,7 @@ def run_convergence(out_dir: str | Path, motion: Motion, end_time: float, *,
         if s.solver.frame == "plate" and base.far_field != "inletOutlet":
             raise ConfigError(f"set-up {s.name!r} runs in the plate's frame, which needs the "
                               f"inletOutlet far field; the study's is {base.far_field} "
-                              "(--far-field inletOutlet)", key="far_field")
+                              "(cfd.far_field = \"inletOutlet\")", key="far_field")
         settings = replace(s.solver, far_field=base.far_field,
                            turbulence_convection=base.turbulence_convection,
                            wall_treatment=base.wall_treatment)

@@ -71,7 +71,10 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
     with ResultsFile(optimisation_file, kinds=("optimisation", "run")) as rf:
         case = loads_case(rf.config_toml, source=f"{optimisation_file}:/inputs",
                           settings=cfd_settings(settings, mesh, setup_name))
-        sweep, best = read_sweep(rf, "optimisation/sweep")
+        # a file of optima alone (OptimisedMotion.to_hdf5) has no sweep and so no best
+        # sinusoid to back-test beside them
+        sweep_best = (read_sweep(rf, "optimisation/sweep") if "optimisation/sweep" in rf.h5
+                      else None)
         model = optimised_with(rf, case)
         motions, scales = {}, {}
         for key in sorted(rf.h5["optimisation/sqp"]):
@@ -85,7 +88,8 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
     n_cycles, average_cycles = case.backtest.simulated_periods, case.backtest.average_cycles
     retries_from_start, n_procs = case.cfd.retries_from_start, case.cfd.procs
     n = next(iter(motions.values())).n_steps
-    motions = {"best sinusoid": sinusoid_motion(sweep, best, n), **motions}
+    if sweep_best is not None:
+        motions = {"best sinusoid": sinusoid_motion(*sweep_best, n), **motions}
     motions = _chosen(motions, only)
     click.echo("model: the coefficients the motions were optimised with, " + ", ".join(
         f"{k} {v:.3g}" for k, v in model.coefficients.items()), err=True)

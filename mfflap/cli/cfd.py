@@ -129,7 +129,7 @@ def run(case_dir: Path, timeout: float, procs: int, progress_every: float,
     Prints the CPU time, the number of time steps, how many k and epsilon solves OpenFOAM
     had to clip ("bounding epsilon") from the log, the numerical bursts of the force
     history (a few time steps where the run lost its pressure coupling, mfflap.records.bursts)
-    and, for a case written with --y-plus, the plate's y+ against the wall functions'
+    and, for a case written with cfd.y_plus = true, the plate's y+ against the wall functions'
     log-law range.
     """
     from mfflap.cfd.openfoam.forces import read_forces
@@ -174,7 +174,7 @@ def run(case_dir: Path, timeout: float, procs: int, progress_every: float,
     summary["numerical_bursts"] = [b.describe()
                                    for b in find_numerical_bursts(history.time, signals)]
     summary["wall_treatment"] = written_wall_treatment(case_dir)
-    if (case_dir / "postProcessing" / "yPlus").is_dir():  # written with --y-plus
+    if (case_dir / "postProcessing" / "yPlus").is_dir():  # written with cfd.y_plus = true
         summary.update(y_plus_summary(read_y_plus(case_dir)))
         summary["wall_function_note"] = wall_function_note(summary, summary["wall_treatment"])
     if as_json:

@@ -3,6 +3,7 @@ paper's mesh study."""
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import click
@@ -13,9 +14,33 @@ from mfflap.cli.options import (
     CYCLES,
     NON_NEGATIVE,
     FloatList,
-    refuse_given,
+    refuse_settings,
+    set_option,
 )
-from mfflap.study_tables import WALL_TREATMENT_NAMES
+from mfflap.errors import shown
+
+
+class CourantLimits(click.ParamType):
+    """``LIMITS[@MESH]``: comma-separated Courant limits (:class:`FloatList`) and, after
+    ``@``, the mesh repeated at the limits after the first (which needs two or more).
+
+    Examples
+    --------
+    >>> CourantLimits().convert("4,2@lean", None, None)
+    ([4.0, 2.0], 'lean')
+    """
+
+    name = "limits"
+
+    def convert(self, value, param, ctx) -> tuple[list[float], str | None]:
+        if isinstance(value, tuple):
+            return value
+        limits, _, mesh = str(value).partition("@")
+        numbers = FloatList().convert(limits, param, ctx)
+        if mesh and len(numbers) < 2:
+            self.fail(f"{shown(value)}: a mesh after @ is repeated at the limits after the "
+                      "first; give two or more", param, ctx)
+        return numbers, mesh.strip() or None
 
 
 @click.command()
@@ -23,101 +48,76 @@ from mfflap.study_tables import WALL_TREATMENT_NAMES
 @click.argument("out_dir", type=click.Path(file_okay=False, path_type=Path))
 @click.option("--meshes", default="coarse,medium,fine", show_default=True,
               help="Mesh resolutions, coarsest first; the last is the reference.")
-@click.option("--courant", "courants", default="4,2", show_default=True, type=FloatList(),
-              help="Courant limits; one mesh (--time-step-mesh) is repeated at each further "
-                   "one.")
-@click.option("--time-step-mesh", default=None,
-              help="The mesh repeated at the further Courant limits (default the first).")
+@click.option("--courant", "courants", default="4,2", show_default=True, type=CourantLimits(),
+              metavar="LIMITS[@MESH]",
+              help="Courant limits: every mesh runs at the first; the first mesh, or MESH "
+                   "(e.g. 4,2,1@medium), is repeated at each further one.")
 @click.option("--cycles", default=1.0, show_default=True, type=CYCLES,
               help="Carrier periods simulated.")
 @click.option("--ramp-time", default=None, type=NON_NEGATIVE,
               help="Start-up ramp, s (default: a quarter period).")
-@click.option("--procs", default=1, show_default=True, type=click.IntRange(min=1),
-              help="MPI ranks per run.")
-@click.option("--pressure-solver", type=click.Choice(["PCG", "GAMG"]), default="PCG",
-              show_default=True, help="Linear solver of the pressure equation.")
-@click.option("--n-correctors", default=1, show_default=True, type=click.IntRange(min=1),
-              help="PIMPLE pressure correctors per outer iteration.")
-@click.option("--far-field", type=click.Choice(["freestream", "inletOutlet"]),
-              default="freestream", show_default=True,
-              help="Far-field conditions (inletOutlet where the fine mesh's time step "
-                   "collapses with freestream under large, fast heaves).")
-@click.option("--turbulence-convection", type=click.Choice(["limitedLinear", "upwind"]),
-              default="limitedLinear", show_default=True,
-              help="Convection of k and epsilon in every run, set-ups included (upwind: no "
-                   "clipping of negative epsilon).")
-@click.option("--wall-treatment", type=click.Choice(WALL_TREATMENT_NAMES), default="log_law",
-              show_default=True,
-              help="The plate's wall conditions in every run, set-ups included: log_law "
-                   "(k-epsilon wall functions, for a first cell at y+ 30-300) or all_y_plus "
-                   "(Spalding's law for nut and epsilon's low-Re correction: any y+).")
 @click.option("--floor", is_flag=True,
               help="Rerun the reference, and each set-up, with the other pressure solver: "
                    "the round-off floor under every NRMSE of the study.")
 @click.option("--setups", "setup_names", default="",
               help="Named set-ups of setups.toml (comma separated) run as well, each with its "
                    "own mesh and solver settings, and compared with the reference.")
-@click.option("--phase-from", default=None, type=float,
-              help="Periodic motions: start of the mean cycles compared, s (default: the "
-                   "first period boundary after the first cycle; needs two whole periods "
-                   "after it, e.g. --cycles 3).")
 @motion_table_options("")
+@set_option()
 @click.option("--json", "as_json", is_flag=True, help="Print the NRMSE table as JSON.")
-def convergence(case_file: Path, out_dir: Path, meshes: str, courants: list[float],
-                cycles: float, ramp_time: float | None, procs: int, pressure_solver: str,
-                n_correctors: int, far_field: str, turbulence_convection: str,
-                wall_treatment: str, floor: bool,
-                setup_names: str, time_step_mesh: str | None, phase_from: float | None,
-                motion_table: Path | None, end_time: float | None, as_json: bool) -> None:
+def convergence(case_file: Path, out_dir: Path, meshes: str,
+                courants: tuple[list[float], str | None], cycles: float,
+                ramp_time: float | None, floor: bool, setup_names: str,
+                motion_table: Path | None, end_time: float | None,
+                settings: tuple[str, ...], as_json: bool) -> None:
     """Mesh and time-step convergence of the [motion] of CASE_FILE: NRMSE between runs, the
     grid convergence index of mean thrust, power, peak F_n and RMS moment over the three
     finest meshes, and the plate's y+ over time (HDF5 records, HTML report, resumable). A
     harmonic motion run over two or more periods after the first is also compared by mean
-    cycles, beside each run's cycle-to-cycle scatter."""
+    cycles from the first period boundary after its first period (the start-up left out),
+    beside each run's cycle-to-cycle scatter.
+
+    Every run takes the solver settings of the case's [cfd] table (--set cfd.KEY=VALUE),
+    named set-ups their own mesh and solver settings in the study's far field, k and
+    epsilon convection and wall treatment; the study's meshes and Courant limits are its
+    own options."""
     from mfflap.campaign.convergence import convergence_figure, run_convergence
-    from mfflap.cfd.openfoam.setups import setup
-    from mfflap.cfd.openfoam.writer import SolverSettings
+    from mfflap.cfd.openfoam.setups import case_mesh_and_solver, setup
     from mfflap.config import load_case
     from mfflap.reports.html import Report, figure_html, table_html, text_html
 
-    if len(courants) < 2:
-        refuse_given(("time_step_mesh",), "a study of two or more --courant limits (the mesh "
-                                          "repeated at each limit after the first)")
+    courants, time_step_mesh = courants
     mesh_names = [m.strip() for m in meshes.split(",")]
     if time_step_mesh is not None and time_step_mesh not in mesh_names:
         raise click.BadParameter(f"{time_step_mesh!r} is not one of the study's --meshes "
-                                 f"({', '.join(mesh_names)})", param_hint="--time-step-mesh")
-    case = load_case(case_file)
+                                 f"({', '.join(mesh_names)})", param_hint="--courant")
+    for key, option in (("cfd.mesh", "--meshes"), ("cfd.setup", "--setups"),
+                        ("cfd.max_courant", "--courant")):
+        refuse_settings(settings, key, f"single runs; a study's are its {option}")
+    case = load_case(case_file, settings)
+    # the study's meshes, set-ups and Courant limits are its options; the rest of [cfd]
+    # sets up every run
+    _, solver = case_mesh_and_solver(replace(case.cfd, setup=None, mesh=None,
+                                             max_courant=None), source=case.source)
     motion, end = motion_and_end_time(case, motion_table, end_time, cycles)
     period = 1.0 / case.motion.frequency
     if motion_table is None:
         ramp = 0.25 * period if ramp_time is None else ramp_time
         periodic = case.motion.kind == "harmonic"
-        if phase_from is not None and not periodic:
-            raise click.UsageError(f"--phase-from compares mean cycles of a periodic motion; "
-                                   f"the [motion] of {case_file} is {case.motion.kind!r}")
         described = f"{cycles:g} cycles"
     else:
         ramp, periodic = ramp_time or 0.0, False
-        if phase_from is not None:
-            raise click.UsageError("--phase-from compares mean cycles of the case file's "
-                                   "periodic motion, not of a --motion-table")
         described = f"motion table {motion_table.name}, {end:g} s"
     try:
         study = run_convergence(out_dir, motion, end,
                                 meshes=mesh_names,
                                 courants=courants, ramp_time=ramp,
                                 plate=case.plate, fluid=case.fluid, stream=case.flow,
-                                n_procs=procs, floor=floor, time_step_mesh=time_step_mesh,
+                                n_procs=case.cfd.procs, floor=floor,
+                                time_step_mesh=time_step_mesh,
                                 setups=[setup(n.strip()) for n in setup_names.split(",")
                                         if n.strip()],
-                                solver=SolverSettings(pressure_solver=pressure_solver,
-                                                      n_correctors=n_correctors,
-                                                      far_field=far_field,
-                                                      turbulence_convection=turbulence_convection,
-                                                      wall_treatment=wall_treatment),
-                                period=period if periodic else None,
-                                phase_from=phase_from,
+                                solver=solver, period=period if periodic else None,
                                 progress=lambda m: click.echo(m, err=True))
     except KeyboardInterrupt:  # the solver is stopped by then; finished runs are kept
         kept = sorted(p.stem for p in Path(out_dir).glob("*.h5"))
@@ -125,14 +125,15 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: list[floa
                    f"({', '.join(kept) or 'none yet'}); the same command reruns none of "
                    "them and resumes the one stopped from its last written time", err=True)
         raise click.Abort() from None
-    if phase_from is not None and not study.phase_cycles:
+    if periodic and not study.phase_cycles:
         click.echo(f"no mean cycles compared: the runs hold fewer than two whole periods "
-                   f"({period:.6g} s) after --phase-from {phase_from:g} s", err=True)
-    settings = (f"the meshes' runs: PIMPLE 2x{n_correctors}, {pressure_solver}; every run, "
-                f"named set-ups included: {far_field} far field, {turbulence_convection} k "
-                f"and epsilon convection, {wall_treatment} wall treatment")
+                   f"({period:.6g} s) after their first", err=True)
+    made_with = (f"the meshes' runs: PIMPLE {solver.n_outer_correctors}x"
+                 f"{solver.n_correctors}, {solver.pressure_solver}; every run, named set-ups "
+                 f"included: {solver.far_field} far field, {solver.turbulence_convection} k "
+                 f"and epsilon convection, {solver.wall_treatment} wall treatment")
     rep = Report("Mesh and time-step convergence", f"{case.study.name}: {described}; "
-                                                   f"{settings}")
+                                                   f"{made_with}")
     sec = rep.section("NRMSE between runs")
     sec.blocks.append(table_html(["comparison", "F_n", "F_t", "M"],
                                  [[k, *v.values()] for k, v in study.nrmse.items()]))
@@ -166,7 +167,7 @@ def convergence(case_file: Path, out_dir: Path, meshes: str, courants: list[floa
     if as_json:
         echo_json(study.as_dict())
         return
-    click.echo(settings)
+    click.echo(made_with)
     for k, note in notes.items():
         click.echo(f"{k}: {note}")
     for k, v in runs.items():

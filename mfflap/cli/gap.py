@@ -10,11 +10,10 @@ import numpy as np
 
 from mfflap.cli.json_output import echo_json
 from mfflap.cli.options import (
-    NON_NEGATIVE,
     POSITIVE,
     RESIDUAL_SCALING_NAMES,
     ResultsOutput,
-    residual_scaling_option,
+    set_option,
 )
 
 if TYPE_CHECKING:
@@ -45,23 +44,24 @@ def gap() -> None:
               help="Folders of CFD records or record files the fits must not see (e.g. the "
                    "back-tested optimised motions): whether the claimed effect (else the best "
                    "candidate) predicts their last period better. Repeat for several.")
-@click.option("--discard", default=None, type=NON_NEGATIVE,
-              help="Start-up time left out, s (default: the case's identification.discard_time).")
 @click.option("--alpha", default=0.01, show_default=True, help="Significance level.")
 @click.option("--min-gain", default=0.02, show_default=True,
               help="Smallest held-out error reduction worth claiming.")
-@residual_scaling_option
+@set_option()
 @click.option("--output", type=ResultsOutput("gap_diagnosis"),
               default=Path("gap.h5"), show_default=True)
 @click.option("--report", "report_path", type=click.Path(dir_okay=False, path_type=Path),
               default=None, help="HTML report (default: <output>.html).")
 @click.option("--json", "as_json", is_flag=True)
 def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Path, ...],
-                 flow_dirs: tuple[str, ...], check_on: tuple[Path, ...],
-                 discard: float | None, alpha: float,
-                 min_gain: float, residual_scaling: str | None, output: Path,
+                 flow_dirs: tuple[str, ...], check_on: tuple[Path, ...], alpha: float,
+                 min_gain: float, settings: tuple[str, ...], output: Path,
                  report_path: Path | None, as_json: bool) -> None:
-    """Where the model of CASE_FILE departs from CFD, and which effect explains it."""
+    """Where the model of CASE_FILE departs from CFD, and which effect explains it.
+
+    The start-up left out of every case (records and CSV files alike) and the weighing of
+    the cases' residuals are the case file's [identification] discard_time and
+    residual_scaling (--set identification.discard_time=2.0)."""
     from mfflap.config import load_case
     from mfflap.gap.external import read_csv_case
     from mfflap.gap.store import write_diagnosis
@@ -75,7 +75,8 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
     from mfflap.reports.gap import gap_report
     from mfflap.results import ResultsFile
 
-    case = load_case(case_file)
+    case = load_case(case_file, settings)
+    discard = case.identification.discard_time
     cases = []
     sources = []
     given_folders = bool(folders)
@@ -83,13 +84,12 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
     if folders:
         records, _ = pooled_records(folders, case, use="gap diagnosis")
         prepared, excluded = prepare_cases(
-            records, case.identification.discard_time if discard is None else discard,
-            plate=case.plate, fluid=case.fluid, stream=case.flow)
+            records, discard, plate=case.plate, fluid=case.fluid, stream=case.flow)
         cases += prepared
         sources += [str(f) for f in folders]
         for name, why in excluded.items():
             click.echo(f"left out {name}: {why}", err=True)
-    cases += [read_csv_case(p) for p in csv_files]
+    cases += [read_csv_case(p, discard_s=discard) for p in csv_files]
     sources += [str(p) for p in csv_files]
     if len(cases) < MIN_CASES and csv_files and not given_folders:
         raise click.UsageError(f"{len(cases)} case(s) from --csv; a diagnosis needs at least "
@@ -99,7 +99,8 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
     held_out, held_out_excluded = (_held_out(check_on, case, cases, discard) if check_on
                                    else (None, None))
     diag, where, pred = diagnose_cases(case, cases, alpha=alpha, min_gain=min_gain,
-                                       residual_scaling=residual_scaling, held_out=held_out,
+                                       residual_scaling=case.identification.residual_scaling,
+                                       held_out=held_out,
                                        held_out_excluded=held_out_excluded)
     snapshots = []
     for index, folder in flows:
@@ -116,7 +117,8 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
     html = gap_report(report_path or output.with_suffix(".html"), diag, where,
                       ", ".join(sources), snapshots)
     if as_json:
-        echo_json({"verdict": diag.verdict,
+        echo_json({"verdict": diag.verdict, "whiteness": diag.whiteness,
+                   "indistinguishable": diag.indistinguishable,
                    "residual_scaling": diag.residual_scaling,
                    "error_growth": {k: g.summary() for k, g in diag.error_growth.items()},
                    "chosen": diag.chosen.label if diag.chosen else None,
@@ -153,7 +155,7 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
 
 
 def _held_out(paths: tuple[Path, ...], config: CaseConfig, cases: list,
-              discard: float | None) -> tuple[list, dict[str, str]]:
+              discard: float) -> tuple[list, dict[str, str]]:
     """The ``--check-on`` runs, refused when one of them is also among the diagnosed cases
     (a run the fits saw says nothing about how the effect carries over)."""
     from mfflap.gap.transfer import held_out_motions
@@ -165,8 +167,7 @@ def _held_out(paths: tuple[Path, ...], config: CaseConfig, cases: list,
         raise click.BadParameter(f"{', '.join(seen)} are also among the diagnosed cases; the "
                                  "check needs runs the fits do not see", param_hint="--check-on")
     motions, excluded = held_out_motions(
-        records, config.identification.discard_time if discard is None else discard,
-        plate=config.plate, fluid=config.fluid, stream=config.flow)
+        records, discard, plate=config.plate, fluid=config.fluid, stream=config.flow)
     return motions, {**failed, **excluded}
 
 

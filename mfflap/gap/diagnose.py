@@ -3,8 +3,10 @@
 Every candidate (and every small combination) is added to the base model, fitted on training
 cases and scored on held-out cases (folds grouped by case). A candidate is *claimed* only
 when it lowers the held-out error by at least ``min_gain`` of the base model's and the
-per-case improvements pass a one-sided Wilcoxon signed-rank test at level ``alpha``;
-otherwise the verdict is "no candidate explains it". A combination is preferred over the
+per-case improvements pass a one-sided Wilcoxon signed-rank test at level ``alpha``.
+Otherwise the verdict says whether anything is left to explain: "within noise" when the base
+model's held-out residual passes the whiteness test of :mod:`mfflap.gap.whiteness`, else
+"structured, unexplained", with the best candidate's score. A combination is preferred over the
 best single candidate only if it clears the same bar against that candidate.
 
 Beside the claim, each candidate's coefficient is reported two ways, and how far it can be
@@ -33,6 +35,7 @@ from scipy.stats import wilcoxon
 from mfflap.errors import ConfigError
 from mfflap.gap.candidates import CandidateEffect, FlowContext, load_all
 from mfflap.gap.system import COMPONENTS, GapSystem, group_folds
+from mfflap.gap.whiteness import residual_whiteness
 from mfflap.hydro.base import ForceModel
 from mfflap.hydro.loads import Loads
 from mfflap.identification.data import CaseData
@@ -96,6 +99,14 @@ class Diagnosis:
     #: per candidate: what it is and what its coefficient means (physical_name,
     #: coefficient_name of its class)
     descriptions: dict[str, dict[str, str]] = field(default_factory=dict)
+    #: the candidates the chosen one cannot be told from on these cases
+    #: (:func:`indistinguishable_from`)
+    indistinguishable: list[str] = field(default_factory=list)
+    #: the same test of the residual left with the chosen effect added (empty when none is)
+    whiteness_after: dict = field(default_factory=dict)
+    #: the Ljung-Box test of the base model's held-out residual
+    #: (:meth:`mfflap.gap.whiteness.WhitenessTest.as_dict`): whether it is noise
+    whiteness: dict = field(default_factory=dict)
     #: whether the claimed effect (else the best candidate) predicts CFD runs outside the
     #: cases better (:mod:`mfflap.gap.transfer`); None when none were given
     transfer: TransferCheck | None = None
@@ -120,6 +131,17 @@ class Diagnosis:
 #: variance inflation factor above which a coefficient is called confounded (the usual rule
 #: of thumb: its variance ten times what it would be were the regressor orthogonal)
 CONFOUNDED_VIF = 10.0
+
+
+def indistinguishable_from(chosen: CandidateScore, singles: Sequence[CandidateScore],
+                           alpha: float) -> list[CandidateScore]:
+    """The significant single candidates outside ``chosen`` whose held-out errors
+    ``chosen``'s are not significantly below (the one-sided signed-rank test at ``alpha``):
+    on these cases the data cannot tell them from it (near-duplicate effects, such as
+    circulatory lift at three-quarter chord and its wake-lagged form at low reduced
+    frequency)."""
+    return [s for s in singles if s.significant and not set(s.names) & set(chosen.names)
+            and _significance(s.heldout_sse, chosen.heldout_sse) > alpha]
 
 
 def _significance(before: np.ndarray, after: np.ndarray) -> float:
@@ -280,15 +302,25 @@ def diagnose(cases: Sequence[CaseData], base_model: ForceModel,
             if pair.significant and (chosen is best or pair.gain > chosen.gain):
                 chosen = pair
     scores.sort(key=lambda s: -s.gain)
+    base_predictions = _predictions(system, base_cols, folds)
+    whiteness = residual_whiteness(system.cases, base_predictions, alpha)
     if chosen is None:
         top = singles[0] if singles else None
-        verdict = ("no candidate explains it" + (
-            f" (best: {top.label}, held-out gain {top.gain:+.1%}, p = {top.p_value:.2g})"
-            if top else ""))
+        best_said = (f" (best: {top.label}, held-out gain {top.gain:+.1%}, p = "
+                     f"{top.p_value:.2g})" if top else "")
+        verdict = (f"within noise: {whiteness.said()}; no candidate explains more"
+                   if whiteness.within_noise else
+                   f"structured, unexplained: no candidate explains it{best_said}; "
+                   f"{whiteness.said()}")
     else:
         implaus = [n for n, ok in chosen.plausible.items() if not ok]
+        rivals = indistinguishable_from(chosen, singles, alpha)
         verdict = (f"{chosen.label}: held-out error {chosen.gain:.1%} lower "
                    f"(p = {chosen.p_value:.2g})"
+                   + ("; indistinguishable on these cases from "
+                      + ", ".join(f"{s.label} ({s.gain:.1%} lower)" for s in rivals)
+                      + " (the chosen one's error not significantly below theirs)"
+                      if rivals else "")
                    + (f"; implausible coefficient for {', '.join(implaus)}" if implaus else "")
                    + "".join(f"; the coefficient of {n} is confounded with "
                              f"{chosen.confounded_with[n][0]} (variance inflation "
@@ -300,18 +332,28 @@ def diagnose(cases: Sequence[CaseData], base_model: ForceModel,
         verdict += (f"; with {n_cases} cases no improvement can reach p < {alpha:g} (the "
                     f"one-sided signed-rank test needs at least "
                     f"{int(np.ceil(np.log2(1 / alpha)))} cases): add cases")
+    rivals = indistinguishable_from(chosen, singles, alpha) if chosen is not None else []
     diag = Diagnosis(list(system.names[: system.n_base]), base_sse, scores, chosen, verdict,
+                     indistinguishable=[s.label for s in rivals],
                      case_names=[c.name for c in system.cases],
                      residual_scaling=system.residual_scaling, error_growth=growth,
                      scaling_asked=asked,
                      descriptions={n: {"physical_name": c.physical_name,
                                        "coefficient_name": c.coefficient_name}
-                                   for n, c in candidates.items()})
-    diag.gap["before"] = gap_metrics(system, _predictions(system, base_cols, folds))
+                                   for n, c in candidates.items()},
+                     whiteness=whiteness.as_dict())
+    diag.gap["before"] = gap_metrics(system, base_predictions)
     validated = chosen or (singles[0] if singles else None)
     if chosen is not None:
         cols = base_cols + [system.names.index(n) for n in chosen.names]
-        diag.gap["after"] = gap_metrics(system, _predictions(system, cols, folds))
+        after_predictions = _predictions(system, cols, folds)
+        diag.gap["after"] = gap_metrics(system, after_predictions)
+        left = residual_whiteness(system.cases, after_predictions, alpha)
+        diag.whiteness_after = left.as_dict()
+        if not left.within_noise:  # the claim is not the whole gap
+            diag.verdict += (f"; a structured residual remains with it (Ljung-Box against "
+                             f"AR(1) noise, p = {left.p_value:.2g}): it explains part of the "
+                             "gap, or stands in for an effect no candidate has")
     if validated is not None:
         # leave-one-group-out of the chosen effect; of the best candidate when none is
         # claimed, so the user sees how it would generalise (labelled as not claimed)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -21,18 +22,28 @@ MIN_SAMPLES = 8
 
 def case_from_arrays(name: str, time, pitch_angle, heave_position, normal_force,
                      tangential_force, moment, parameters: dict | None = None,
-                     source: str | None = None) -> CaseData:
+                     source: str | None = None, discard_s: float = 0.0) -> CaseData:
     """A case from sampled positions (rad, m) and loads (N, N*m, body frame, about the LE).
 
     Rates and accelerations come from smoothing splines of the positions (the generalised
-    cross-validation choice of smoothing), so noisy measured motions can be used.
+    cross-validation choice of smoothing), so noisy measured motions can be used. The first
+    ``discard_s`` seconds (a start-up transient) are left out after the splines are fitted
+    over the whole record, so that the splines' end conditions fall in the part left out.
 
     Raises
     ------
     ParseError
         Naming ``source`` (the file the arrays came from), for fewer than
-        :data:`MIN_SAMPLES` samples, a time that does not increase (which sample), or
-        positions that are not finite.
+        :data:`MIN_SAMPLES` samples (before or after ``discard_s``), a time that does not
+        increase (which sample), or positions that are not finite.
+
+    Examples
+    --------
+    >>> t = np.linspace(0.0, 2.0, 201)
+    >>> case = case_from_arrays("c", t, 0.1 * np.sin(t), 0.05 * np.cos(t), t, t, t,
+    ...                         discard_s=0.5)
+    >>> float(case.state.time[0]), float(case.cfd.time[0])
+    (0.5, 0.5)
     """
     t = np.asarray(time, dtype=float)
     if t.ndim != 1 or len(t) < MIN_SAMPLES:
@@ -59,12 +70,24 @@ def case_from_arrays(name: str, time, pitch_angle, heave_position, normal_force,
                            heave_acceleration=arrays["heave"][2])
     loads = Loads(t, *(np.asarray(v, dtype=float) for v in (normal_force, tangential_force,
                                                             moment)), source=name)
+    if discard_s > 0:
+        kept = t >= t[0] + discard_s - 1e-9 * max(1.0, abs(t[-1]))
+        if kept.sum() < MIN_SAMPLES:
+            raise ParseError(f"{name}: {int(kept.sum())} samples after the first "
+                             f"{discard_s:g} s left out (identification.discard_time); the "
+                             f"diagnosis needs at least {MIN_SAMPLES}", path=source)
+        state = KinematicState(**{f.name: getattr(state, f.name)[kept]
+                                  for f in dataclasses.fields(KinematicState)})
+        loads = Loads(t[kept], loads.normal_force[kept], loads.tangential_force[kept],
+                      loads.moment[kept], source=name)
     return CaseData(name, dict(parameters or {}), state, loads)
 
 
-def read_csv_case(path: str | Path, parameters: dict | None = None) -> CaseData:
+def read_csv_case(path: str | Path, parameters: dict | None = None,
+                  discard_s: float = 0.0) -> CaseData:
     """A CSV with a header naming the columns of :data:`CSV_COLUMNS` (any order; SI units;
-    ``#`` comment lines allowed).
+    ``#`` comment lines allowed), its first ``discard_s`` seconds left out
+    (:func:`case_from_arrays`).
 
     Raises
     ------
@@ -74,4 +97,4 @@ def read_csv_case(path: str | Path, parameters: dict | None = None) -> CaseData:
     path = Path(path)
     col = read_csv_columns(path, CSV_COLUMNS)
     return case_from_arrays(path.stem, *(col[c] for c in CSV_COLUMNS), parameters=parameters,
-                            source=str(path))
+                            source=str(path), discard_s=discard_s)

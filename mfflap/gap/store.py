@@ -7,22 +7,29 @@ import json
 
 import numpy as np
 
-from mfflap.gap.diagnose import Diagnosis
+from mfflap.gap.diagnose import CandidateScore, Diagnosis
 from mfflap.gap.transfer import BASE, TransferCheck
-from mfflap.identification.error_growth import growth_to_json
+from mfflap.identification.error_growth import growth_from_json, growth_to_json
 from mfflap.results import ResultsFile
 
 
 def write_diagnosis(rf: ResultsFile, diag: Diagnosis, where: dict, group: str = "gap") -> None:
     """Store the scores, the decomposition, the gap before/after and the verdict."""
+    n_cases = len(diag.base_sse)
     rf.write_group(f"{group}/scores", {
         "heldout_gain": np.array([s.gain for s in diag.scores]),
         "p_value": np.array([s.p_value for s in diag.scores]),
         "significant": np.array([s.significant for s in diag.scores]),
-        "base_heldout_sse": diag.base_sse},
-        {"heldout_gain": "1", "p_value": "1", "significant": "1", "base_heldout_sse": "1"},
+        "base_heldout_sse": diag.base_sse,
+        "heldout_sse": np.array([s.heldout_sse for s in diag.scores]).reshape(
+            len(diag.scores), n_cases)},
+        {"heldout_gain": "1", "p_value": "1", "significant": "1", "base_heldout_sse": "1",
+         "heldout_sse": "1"},
         {"labels": json.dumps([s.label for s in diag.scores]),
+         "names": json.dumps([list(s.names) for s in diag.scores]),
          "coefficients": json.dumps([s.coefficients for s in diag.scores]),
+         "coefficient_spread": json.dumps([s.coefficient_spread for s in diag.scores]),
+         "plausible": json.dumps([s.plausible for s in diag.scores]),
          "held_coefficients": json.dumps([s.held_coefficients for s in diag.scores]),
          "variance_inflation": json.dumps([s.variance_inflation for s in diag.scores]),
          "confounded_with": json.dumps([s.confounded_with for s in diag.scores])})
@@ -48,6 +55,7 @@ def write_diagnosis(rf: ResultsFile, diag: Diagnosis, where: dict, group: str = 
          "by_state": json.dumps(where["by_state"]), "by_regime": json.dumps(where["by_regime"]),
          "by_harmonic": json.dumps(where["by_harmonic"])})
     g = rf.h5[group]
+    g.attrs["base_names"] = json.dumps(list(diag.base_names))
     g.attrs["verdict"] = diag.verdict
     g.attrs["chosen"] = diag.chosen.label if diag.chosen else ""
     g.attrs["case_names"] = json.dumps(diag.case_names)
@@ -56,8 +64,78 @@ def write_diagnosis(rf: ResultsFile, diag: Diagnosis, where: dict, group: str = 
     g.attrs["error_growth"] = growth_to_json(diag.error_growth)
     g.attrs["residual_scaling_asked"] = diag.scaling_asked
     g.attrs["descriptions"] = json.dumps(diag.descriptions)
+    g.attrs["whiteness"] = json.dumps(diag.whiteness)
+    g.attrs["indistinguishable"] = json.dumps(diag.indistinguishable)
+    g.attrs["whiteness_after"] = json.dumps(diag.whiteness_after)
     if diag.transfer is not None:
         write_transfer(rf, diag.transfer, f"{group}/transfer")
+
+
+def read_diagnosis(rf: ResultsFile, group: str = "gap") -> tuple[Diagnosis, dict]:
+    """Read back :func:`write_diagnosis`: the diagnosis and where its residual lies.
+
+    The check on held-out motions (``<group>/transfer``) stays in the file: its motions'
+    errors are arrays there, and the diagnosis read back has ``transfer = None``.
+
+    Raises
+    ------
+    MfflapError
+        Naming the file, for a file without the group.
+    """
+    arrays, attrs = rf.read_group(f"{group}/scores")
+    labels = json.loads(attrs["labels"])
+    names = json.loads(attrs.get("names", json.dumps([lbl.split(" + ") for lbl in labels])))
+    n = len(labels)
+
+    def listed(key: str) -> list[dict]:
+        return json.loads(attrs.get(key, json.dumps([{}] * n)))
+
+    sse = arrays.get("heldout_sse", np.full((n, 0), np.nan))
+    scores = [CandidateScore(
+        names=tuple(names[i]), heldout_sse=np.asarray(sse[i]),
+        gain=float(arrays["heldout_gain"][i]), p_value=float(arrays["p_value"][i]),
+        significant=bool(arrays["significant"][i]), coefficients=listed("coefficients")[i],
+        coefficient_spread=listed("coefficient_spread")[i], plausible=listed("plausible")[i],
+        held_coefficients=listed("held_coefficients")[i],
+        variance_inflation=listed("variance_inflation")[i],
+        confounded_with={k: tuple(v) for k, v in listed("confounded_with")[i].items()})
+        for i in range(n)]
+    g = rf.h5[group]
+    chosen_label = str(g.attrs.get("chosen", ""))
+    gap: dict[str, dict] = {}
+    for phase in ("before", "after"):
+        if f"{group}/gap_{phase}" not in rf.h5:
+            continue
+        flat, _ = rf.read_group(f"{group}/gap_{phase}")
+        metrics: dict = {}
+        for key, value in flat.items():
+            metric, _, signal = key.partition("_")
+            if metric in ("nrmse", "pearson") and signal:
+                metrics.setdefault(signal, {})[metric] = value
+            else:
+                metrics[key] = value
+        gap[phase] = metrics
+    where_arrays, where_attrs = rf.read_group(f"{group}/where")
+    where = {"by_phase": {"bin_centres_deg": where_arrays["phase_bin_centres"],
+                          "squared_share": where_arrays["phase_squared_share"]},
+             "phase_lag_deg": where_arrays["phase_lag"], "case_sse": where_arrays["case_sse"],
+             **{key: json.loads(where_attrs[key]) for key in
+                ("ranking", "by_component", "by_state", "by_regime", "by_harmonic")}}
+    diagnosis = Diagnosis(
+        base_names=json.loads(g.attrs.get("base_names", "[]")),
+        base_sse=arrays["base_heldout_sse"], scores=scores,
+        chosen=next((s for s in scores if s.label == chosen_label), None),
+        verdict=str(g.attrs["verdict"]), gap=gap,
+        validation=json.loads(g.attrs.get("validation", "{}")),
+        case_names=json.loads(g.attrs.get("case_names", "[]")),
+        residual_scaling=str(g.attrs.get("residual_scaling", "grid")),
+        error_growth=growth_from_json(g.attrs.get("error_growth", "{}")),
+        scaling_asked=str(g.attrs.get("residual_scaling_asked", "grid")),
+        descriptions=json.loads(g.attrs.get("descriptions", "{}")),
+        whiteness=json.loads(g.attrs.get("whiteness", "{}")),
+        indistinguishable=json.loads(g.attrs.get("indistinguishable", "[]")),
+        whiteness_after=json.loads(g.attrs.get("whiteness_after", "{}")))
+    return diagnosis, where
 
 
 def write_transfer(rf: ResultsFile, check: TransferCheck, group: str = "gap/transfer") -> None:

@@ -58,14 +58,16 @@ def _regime_figure(where: dict, diag: Diagnosis):
     return fig
 
 
-def _candidate_figure(diag: Diagnosis):
+def candidate_figure(diag: Diagnosis):
+    """Each candidate's held-out error reduction against the base model, the significant
+    ones in green."""
     fig, ax = plt.subplots(figsize=(8, 0.35 * len(diag.scores) + 1.5))
     labels = [s.label for s in diag.scores]
-    gains = [s.gain for s in diag.scores]
+    gains = [100 * s.gain for s in diag.scores]
     colours = ["C2" if s.significant else "0.6" for s in diag.scores]
     ax.barh(labels, gains, color=colours)
     ax.invert_yaxis()
-    ax.set_xlabel("held-out error reduction vs the base model (green: significant)")
+    ax.set_xlabel("held-out error reduction vs the base model [%] (green: significant)")
     fig.tight_layout()
     return fig
 
@@ -195,7 +197,7 @@ def add_gap_sections(rep: Report, diag: Diagnosis, where: dict,
         "with the base coefficients held as configured. A variance inflation factor above "
         f"{CONFOUNDED_VIF:g} means the fit cannot tell the candidate's coefficient from the "
         "named term's."))
-    s.blocks.append(figure_html(_candidate_figure(diag), "Held-out gain per candidate"))
+    s.blocks.append(figure_html(candidate_figure(diag), "Held-out gain per candidate"))
     s = rep.section("How far the gap shrinks (held-out cases)")
     rows = []
     for sig in SIGNALS:

@@ -55,7 +55,6 @@ REFUSED = [
     (["cfd", "fluent", str(CASE), "OUT", "--time-step", "0"], "--time-step",
      "finite number > 0"),
     (["cfd", "fluent", str(CASE), "OUT", "--cycles", "0"], "--cycles", "finite number > 0"),
-    (["cfd", "convergence", str(CASE), "OUT", "--procs", "0"], "--procs", "x>=1"),
     (["cfd", "convergence", str(CASE), "OUT", "--cycles", "inf"], "--cycles",
      "finite number > 0"),
     (["campaign", "run", str(CASE), "--out", "OUT", "--workers", "0"], "--workers", "x>=1"),
@@ -117,6 +116,10 @@ SET_REFUSED = [
      "identification.phases_deg[1]", "value nan is out of range"),
     (["campaign", "run", str(CASE), "--out", "OUT"], 'cfd.frame="moving"', "cfd.frame",
      "one of 'inertial', 'plate'"),
+    (["cfd", "convergence", str(CASE), "OUT"], "cfd.procs=0", "cfd.procs",
+     "allowed: [1, 4096]"),
+    (["cfd", "convergence", str(CASE), "OUT"], 'cfd.far_field="outlet"', "cfd.far_field",
+     "one of"),
 ]
 
 
@@ -503,11 +506,12 @@ IGNORED = [  # an option the rest of the command line would make it ignore
      "CFD records (--fixtures), run on the mesh and set-up they were made with"),
     (["backtest", "OPT", "--work", "OUT"], "--work applies only to live runs (--live)"),
     (["backtest", "OPT", "--mesh", "medium", "--json"], "--mesh applies only to live runs"),
-    (["cfd", "convergence", str(CASE), "OUT", "--courant", "4", "--time-step-mesh", "coarse"],
-     "--time-step-mesh applies only to a study of two or more --courant limits"),
-    (["cfd", "convergence", str(CASE), "OUT", "--meshes", "coarse,medium",
-      "--time-step-mesh", "fine"],
-     "Invalid value for --time-step-mesh: 'fine' is not one of the study's --meshes (coarse, "
+    (["cfd", "convergence", str(CASE), "OUT", "--courant", "4@coarse"],
+     "Invalid value for '--courant': '4@coarse': a mesh after @ is repeated at the limits "
+     "after the first; give two or more"),
+    (["cfd", "convergence", str(CASE), "OUT", "--meshes", "coarse,medium", "--courant",
+      "4,2@fine"],
+     "Invalid value for --courant: 'fine' is not one of the study's --meshes (coarse, "
      "medium)"),
     (["campaign", "run", str(CASE), "--out", "OUT", "--workers", "2", "--scheduler",
       "tcp://127.0.0.1:1"], "--workers applies only to the LocalCluster mfflap starts; with "

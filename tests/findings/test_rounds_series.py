@@ -116,6 +116,14 @@ def test_rounds_refit_on_their_back_tests_and_stop_when_a_motion_has_no_cfd(tmp_
         assert f["rounds/round_2/cfd_mean_thrust"].attrs["units"] == "N"
     assert thrust[labels.index("β = 0")] == pytest.approx(
         second["checks"]["β = 0"]["cfd_mean_thrust"])
+    # read back as a study's results: every round, in order, with its numbers
+    import mfflap
+
+    back = mfflap.open_results(out / "rounds.h5")
+    assert back.kind == "rounds" and [r.index for r in back.rounds] == [1, 2, 3, 4]
+    assert back.rounds[1].labels == labels
+    assert back.rounds[1].values["cfd_mean_thrust"] == pytest.approx(thrust)
+    assert back.config.rounds.count == 4
     assert (out / "rounds.png").stat().st_size > 10_000
     assert "Not converged: round 4: " in (out / "rounds.html").read_text()
 

@@ -77,11 +77,41 @@ def test_a_new_candidate_is_one_class_and_is_used_by_the_diagnosis():
         _REGISTRY.pop("test_constant_normal_force")
 
 
+def test_a_near_duplicate_standing_in_for_a_missing_effect_leaves_structure_and_says_so():
+    """The leading-edge vortex hidden (SNR 3) and withheld: circulatory lift, nearly a
+    multiple of it on these motions, is claimed, but the residual left with it is not noise
+    and the verdict says the claim is not the whole gap."""
+    from mfflap.gap.blindtest import default_candidates
+
+    others = {k: v for k, v in default_candidates().items() if k != "leading_edge_vortex"}
+    diag = diagnose(synthesize(np.random.default_rng(403), "leading_edge_vortex", 3.0),
+                    MorisonModel(), candidates=others)
+    assert diag.chosen is not None and "leading_edge_vortex" not in diag.chosen.names
+    assert diag.whiteness_after["within_noise"] is False
+    assert "a structured residual remains with it" in diag.verdict
+
+
+def test_an_effect_no_candidate_has_is_called_structured_and_unexplained():
+    """Skin friction hidden (SNR 3) and left out of the candidates: nothing is claimed, and
+    the residual is not taken for noise."""
+    from mfflap.gap.blindtest import default_candidates
+
+    others = {k: v for k, v in default_candidates().items() if k != "skin_friction"}
+    diag = diagnose(synthesize(np.random.default_rng(7), "skin_friction", 3.0), MorisonModel(),
+                    candidates=others)
+    assert diag.chosen is None
+    assert diag.verdict.startswith("structured, unexplained: no candidate explains it (best: ")
+    assert diag.whiteness["within_noise"] is False and diag.whiteness["p_value"] < 0.01
+
+
 @pytest.mark.parametrize("effect", ["wake_lag", "skin_friction", "added_mass_coupling"])
 def test_hidden_effect_is_found_and_the_gap_shrinks(effect):
     data = synthesize(np.random.default_rng(11), effect, 4.0)
     diag = diagnose(data, MorisonModel())
     assert diag.chosen is not None and diag.chosen.names[0] == effect
+    # what is left with it is noise: the claim is the whole gap
+    assert diag.whiteness_after["within_noise"] is True
+    assert "structured residual remains" not in diag.verdict
     before = diag.gap["before"]
     after = diag.gap["after"]
     shrink = {k: np.median(after[k]["nrmse"]) / np.median(before[k]["nrmse"])
@@ -91,10 +121,11 @@ def test_hidden_effect_is_found_and_the_gap_shrinks(effect):
     assert diag.validation["leave-one-frequency-out"]["claimed"] is True
 
 
-def test_null_dataset_claims_nothing_and_says_so():
+def test_null_dataset_claims_nothing_and_says_it_is_noise():
     diag = diagnose(synthesize(np.random.default_rng(5), NULL, 0.0), MorisonModel())
     assert diag.chosen is None
-    assert diag.verdict.startswith("no candidate explains it")
+    assert diag.verdict.startswith("within noise: Ljung-Box test of the held-out residual")
+    assert diag.whiteness["within_noise"] is True and diag.whiteness["n_series"] == 60
     assert "after" not in diag.gap
     lofo = diag.validation["leave-one-frequency-out"]
     assert lofo["claimed"] is False and lofo["candidate"] == diag.scores[0].label
@@ -298,6 +329,15 @@ def test_external_csv_case_and_its_errors(tmp_path):
     case = read_csv_case(good)
     assert case.state.heave_velocity[50] == pytest.approx(
         -0.4 * np.pi * np.sin(2 * np.pi * t[50]), rel=0.02)
+    # a start-up left out: the rates are those of the whole record, the samples start later
+    later = read_csv_case(good, discard_s=0.5)
+    kept = t >= 0.5
+    assert later.state.time[0] == pytest.approx(t[kept][0])
+    assert later.cfd.time.shape == later.state.heave_velocity.shape == (kept.sum(),)
+    assert later.state.heave_velocity == pytest.approx(case.state.heave_velocity[kept])
+    with pytest.raises(ParseError, match=r"run: 0 samples after the first 5 s left out "
+                                         r"\(identification\.discard_time\)"):
+        read_csv_case(good, discard_s=5.0)
     bad = tmp_path / "bad.csv"
     bad.write_text("\n".join([*rows[:10], "0.5,0.1,oops,1,1,1", *rows[10:]]) + "\n")
     with pytest.raises(ParseError, match=r"bad\.csv.*line 11"):
@@ -375,7 +415,8 @@ def test_gap_cli_on_a_record_folder(tmp_path):
     assert held == pytest.approx(chosen["held_coefficients"])
     # the residuals scaled per case: said on screen, in the JSON, the file and the report
     res = CliRunner().invoke(cli, ["gap", "diagnose", str(CASE), "--fixtures", str(folder),
-                                   "--output", str(out), "--residual-scaling", "case"])
+                                   "--output", str(out), "--set",
+                                   'identification.residual_scaling="case"'])
     assert res.exit_code == 0, res.output
     assert "residuals scaled each component of each case by its range" in res.output
     with h5py.File(out) as h5:
@@ -422,7 +463,8 @@ def test_vorticity_at_the_largest_residual_from_real_openfoam_fields(tmp_path):
     # the strongest vorticity sits at the plate (within a chord of the leading edge)
     assert np.linalg.norm(xy[np.argmax(np.abs(w))]) < 0.2
     res = CliRunner().invoke(cli, ["gap", "diagnose", str(CASE), "--fixtures", str(records),
-                                   "--flow", f"live={tmp_path / 'of'}", "--discard", "0",
+                                   "--flow", f"live={tmp_path / 'of'}", "--set",
+                                   "identification.discard_time=0",
                                    "--output", str(tmp_path / "g.h5")])
     assert res.exit_code == 0, res.output
     assert "live: vorticity at t =" in (tmp_path / "g.html").read_text()
@@ -430,7 +472,8 @@ def test_vorticity_at_the_largest_residual_from_real_openfoam_fields(tmp_path):
     # never had
     other = next(p.stem for p in sorted(records.glob("*.h5")) if p.stem != "live")
     res = CliRunner().invoke(cli, ["gap", "diagnose", str(CASE), "--fixtures", str(records),
-                                   "--flow", f"{other}={tmp_path / 'of'}", "--discard", "0",
+                                   "--flow", f"{other}={tmp_path / 'of'}", "--set",
+                                   "identification.discard_time=0",
                                    "--output", str(tmp_path / "g2.h5")])
     assert res.exit_code == 2
     assert f"{tmp_path / 'of'} is not the run of record {other}: it was written" in res.output
@@ -482,3 +525,20 @@ def test_a_flow_folder_of_another_plate_is_refused(tmp_path):
             f"file, but {folder} was written for 0.2") in " ".join(res.output.split())
     assert "its flow field is not this case's" in " ".join(res.output.split())
     assert not (tmp_path / "g.h5").exists()
+
+
+def test_a_candidate_the_chosen_one_does_not_beat_is_named_as_indistinguishable():
+    from mfflap.gap.diagnose import CandidateScore, indistinguishable_from
+
+    rng = np.random.default_rng(0)
+    errors = rng.uniform(1.0, 2.0, 30)
+
+    def score(name: str, sse: np.ndarray, significant: bool = True) -> CandidateScore:
+        return CandidateScore((name,), sse, 0.3, 1e-4, significant, {}, {}, {})
+
+    chosen = score("a", errors)
+    twin = score("b", errors * rng.uniform(0.98, 1.02, 30))  # as good, case by case
+    worse = score("c", errors * 1.5)                          # worse in every case
+    weak = score("d", errors, significant=False)
+    assert [s.names for s in indistinguishable_from(chosen, [chosen, twin, worse, weak],
+                                                    0.01)] == [("b",)]

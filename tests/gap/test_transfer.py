@@ -138,8 +138,8 @@ def test_gap_cli_checks_the_claim_on_the_shipped_back_tests(tmp_path):
     from mfflap.cli.main import cli
 
     out = tmp_path / "gap.h5"
-    args = ["gap", "diagnose", CASE, "--residual-scaling", "case", "--check-on",
-            str(fixture_dir("backtest")), "--output", str(out)]
+    args = ["gap", "diagnose", CASE, "--set", 'identification.residual_scaling="case"',
+            "--check-on", str(fixture_dir("backtest")), "--output", str(out)]
     res = CliRunner().invoke(cli, [*args, "--json"])
     assert res.exit_code == 0, res.output
     transfer = json.loads(res.output[res.output.index("{"):])["transfer"]

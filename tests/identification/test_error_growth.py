@@ -157,7 +157,8 @@ def test_on_the_shipped_fixtures_the_errors_grow_in_proportion_and_the_tools_say
     verdicts = {}
     for scaling in ("grid", "case"):
         out = tmp_path / f"gap_{scaling}.h5"
-        res = runner.invoke(cli, ["gap", "diagnose", str(CASE), "--residual-scaling", scaling,
+        res = runner.invoke(cli, ["gap", "diagnose", str(CASE), "--set",
+                                  f'identification.residual_scaling="{scaling}"',
                                   "--output", str(out), "--json"])
         assert res.exit_code == 0, res.output
         said = json.loads(res.stdout)
@@ -211,12 +212,13 @@ def test_auto_on_real_cfd_claims_the_known_missing_circulation_in_both_datasets(
     small = Path(__file__).parents[2] / "data" / "mfflap_data" / "fixtures" / "small_motion_coarse"
     runner = CliRunner()
     said = {}
-    for name, extra in (("table1", []), ("small", ["--fixtures", str(small), "--discard",
-                                                   "0.5"])):
+    for name, extra in (("table1", []), ("small", ["--fixtures", str(small), "--set",
+                                                   "identification.discard_time=0.5"])):
         for scaling in ("auto", "grid", "case"):
             res = runner.invoke(cli, ["gap", "diagnose", str(CASE), *extra, "--output",
-                                      str(tmp_path / f"{name}_{scaling}.h5"),
-                                      "--residual-scaling", scaling, "--json"])
+                                      str(tmp_path / f"{name}_{scaling}.h5"), "--set",
+                                      f'identification.residual_scaling="{scaling}"',
+                                      "--json"])
             assert res.exit_code == 0, res.output
             out = json.loads(res.stdout)
             said[name, scaling] = (out["chosen"], out["residual_scaling"])

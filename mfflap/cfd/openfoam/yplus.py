@@ -124,7 +124,7 @@ def wall_function_note(summary: dict[str, float],
         parts.append(f"below {low:g} for {below:.0%} of the output times (the first cells in "
                      "the buffer layer or viscous sublayer, where the wall functions' log law "
                      "does not hold; nutkWallFunction takes a cell below y+ of about 11 as "
-                     "laminar, --wall-treatment all_y_plus holds there)")
+                     "laminar; cfd.wall_treatment = \"all_y_plus\" holds there)")
     if above:
         parts.append(f"above {high:g} for {above:.0%} of {'them' if below else 'the output times'}"
                      " (the first cells past the log layer)")

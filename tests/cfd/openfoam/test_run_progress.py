@@ -229,9 +229,10 @@ def test_a_solver_stopped_by_a_signal_of_its_own_is_not_a_finished_run(tmp_path)
 
 @pytest.mark.openfoam
 def test_cfd_run_reports_the_plates_y_plus_against_the_wall_functions(tmp_path):
-    """A real run written with --y-plus (coarse mesh, 0.1 s): `cfd run` gives the plate's
-    y+ from the yPlus function object, in text and JSON, and says that it lies below the
-    wall functions' log-law range (the coarse mesh's first cells sit at y+ of a few)."""
+    """A real run written with cfd.y_plus and the log-law wall functions (0.1 s): `cfd run`
+    gives the plate's y+ from the yPlus function object, in text and JSON, and says that its
+    average lies below the wall functions' log-law range (the first cells sit at y+ of a
+    few; the plate's maximum, at its edges, may pass 30)."""
     import json
 
     from mfflap.cfd.openfoam.yplus import read_y_plus
@@ -239,14 +240,16 @@ def test_cfd_run_reports_the_plates_y_plus_against_the_wall_functions(tmp_path):
 
     case = tmp_path / "yp"
     res = CliRunner().invoke(cli, ["cfd", "write", str(CASE), str(case), "--set",
-                                   "cfd.y_plus=true", "--cycles", "0.1", "--ramp-time", "0.04"])
+                                   "cfd.y_plus=true", "--set", 'cfd.wall_treatment="log_law"',
+                                   "--cycles", "0.1", "--ramp-time", "0.04"])
     assert res.exit_code == 0, res.output
     text = CliRunner().invoke(cli, ["cfd", "run", str(case)])
     assert text.exit_code == 0, text.output
     history = read_y_plus(case)
     data = json.loads(CliRunner().invoke(cli, ["cfd", "run", str(case), "--json"]).stdout)
     assert data["y_plus_mean"] == pytest.approx(history.average.mean())
-    assert 0 < data["y_plus_min"] < data["y_plus_mean"] < data["y_plus_max"] < 30
+    assert 0 < data["y_plus_min"] < data["y_plus_mean"] < data["y_plus_max"]
+    assert data["y_plus_mean"] < 30
     assert data["y_plus_share_below_log_law"] == 1.0
     assert data["wall_function_note"].startswith(
         "the plate's average y+ lies outside the wall functions' log-law range (30-300)")
