@@ -96,12 +96,10 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
                                f"{MIN_CASES}, and the shipped fixtures are read only without "
                                "--csv: add CSV files, or --fixtures DIR to pool records")
     flows = [_flow_record(item, cases, case) for item in flow_dirs]  # before the work
-    held_out, held_out_excluded = (_held_out(check_on, case, cases, discard) if check_on
+    held_out, held_out_excluded = (_held_out(check_on, case, cases) if check_on
                                    else (None, None))
     diag, where, pred = diagnose_cases(case, cases, alpha=alpha, min_gain=min_gain,
-                                       residual_scaling=case.identification.residual_scaling,
-                                       held_out=held_out,
-                                       held_out_excluded=held_out_excluded)
+                                       held_out=held_out, held_out_excluded=held_out_excluded)
     snapshots = []
     for index, folder in flows:
         from mfflap.gap.flowfield import vorticity_figure
@@ -154,8 +152,8 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
     click.echo(f"wrote {output} and {html}")
 
 
-def _held_out(paths: tuple[Path, ...], config: CaseConfig, cases: list,
-              discard: float) -> tuple[list, dict[str, str]]:
+def _held_out(paths: tuple[Path, ...], config: CaseConfig, cases: list
+              ) -> tuple[list, dict[str, str]]:
     """The ``--check-on`` runs, refused when one of them is also among the diagnosed cases
     (a run the fits saw says nothing about how the effect carries over)."""
     from mfflap.gap.transfer import held_out_motions
@@ -167,7 +165,8 @@ def _held_out(paths: tuple[Path, ...], config: CaseConfig, cases: list,
         raise click.BadParameter(f"{', '.join(seen)} are also among the diagnosed cases; the "
                                  "check needs runs the fits do not see", param_hint="--check-on")
     motions, excluded = held_out_motions(
-        records, discard, plate=config.plate, fluid=config.fluid, stream=config.flow)
+        records, config.identification.discard_time, plate=config.plate, fluid=config.fluid,
+        stream=config.flow)
     return motions, {**failed, **excluded}
 
 

@@ -302,6 +302,7 @@ def diagnose(cases: Sequence[CaseData], base_model: ForceModel,
             if pair.significant and (chosen is best or pair.gain > chosen.gain):
                 chosen = pair
     scores.sort(key=lambda s: -s.gain)
+    rivals = indistinguishable_from(chosen, singles, alpha) if chosen is not None else []
     base_predictions = _predictions(system, base_cols, folds)
     whiteness = residual_whiteness(system.cases, base_predictions, alpha)
     if chosen is None:
@@ -314,7 +315,6 @@ def diagnose(cases: Sequence[CaseData], base_model: ForceModel,
                    f"{whiteness.said()}")
     else:
         implaus = [n for n, ok in chosen.plausible.items() if not ok]
-        rivals = indistinguishable_from(chosen, singles, alpha)
         verdict = (f"{chosen.label}: held-out error {chosen.gain:.1%} lower "
                    f"(p = {chosen.p_value:.2g})"
                    + ("; indistinguishable on these cases from "
@@ -332,7 +332,6 @@ def diagnose(cases: Sequence[CaseData], base_model: ForceModel,
         verdict += (f"; with {n_cases} cases no improvement can reach p < {alpha:g} (the "
                     f"one-sided signed-rank test needs at least "
                     f"{int(np.ceil(np.log2(1 / alpha)))} cases): add cases")
-    rivals = indistinguishable_from(chosen, singles, alpha) if chosen is not None else []
     diag = Diagnosis(list(system.names[: system.n_base]), base_sse, scores, chosen, verdict,
                      indistinguishable=[s.label for s in rivals],
                      case_names=[c.name for c in system.cases],
