@@ -13,6 +13,7 @@ values)::
     [optimisation]    beta values, limits, penalties, smoothing, period bounds, and the
                       coefficients ``mfflap run`` optimises with
     [identification]  the Table 1 grid and the pitch ramp rate
+    [harmonic_set]    the second identification set: harmonic motions at large pitch
     [cfd]             how OpenFOAM runs are set up and kept (mesh, set-up, solver, ranks)
     [backtest]        how ``mfflap run`` and ``mfflap backtest`` check optima in CFD
     [rounds]          CFD in the loop (studies of the method)
@@ -41,7 +42,7 @@ from mfflap.errors import ConfigError, shown
 from mfflap.hydro.morison import MorisonModel
 from mfflap.kinematics.continuous import UPRIGHT_PITCH, HarmonicMotion, RampHarmonicMotion
 from mfflap.parameters import Fluid, FreeStream, MorisonCoefficients, Plate, StripSettings
-from mfflap.study_tables import BacktestSettings, CfdSettings, RoundsSettings
+from mfflap.study_tables import BacktestSettings, CfdSettings, HarmonicSet, RoundsSettings
 from mfflap.toml_io import dumps, read_toml
 from mfflap.validation import bounded, check_fields, from_mapping
 
@@ -368,6 +369,7 @@ class CaseConfig:
     discretisation: Discretisation = field(default_factory=Discretisation)
     optimisation: OptimisationSettings = field(default_factory=OptimisationSettings)
     identification: IdentificationGrid = field(default_factory=IdentificationGrid)
+    harmonic_set: HarmonicSet = field(default_factory=HarmonicSet)
     cfd: CfdSettings = field(default_factory=CfdSettings)
     backtest: BacktestSettings = field(default_factory=BacktestSettings)
     rounds: RoundsSettings = field(default_factory=RoundsSettings)
@@ -414,6 +416,7 @@ _SECTIONS: dict[str, type] = {
     "discretisation": Discretisation,
     "optimisation": OptimisationSettings,
     "identification": IdentificationGrid,
+    "harmonic_set": HarmonicSet,
     "cfd": CfdSettings,
     "backtest": BacktestSettings,
     "rounds": RoundsSettings,

@@ -1,8 +1,11 @@
-"""The case-file tables of CFD runs, back-tests and CFD in the loop.
+"""The case-file tables of CFD runs, the second identification set, back-tests and CFD in
+the loop.
 
 ``[cfd]`` says how every OpenFOAM run of a case is set up and kept (mesh, set-up, solver
 details, ranks, time limit, retries, record precision), for every command that runs or
-writes one; ``[backtest]`` says how ``mfflap run`` and ``mfflap backtest`` check optima in
+writes one; ``[harmonic_set]`` is the second identification set, harmonic motions at the
+large pitch and fast pitching of optimised motions (``mfflap campaign run --cases
+harmonic``); ``[backtest]`` says how ``mfflap run`` and ``mfflap backtest`` check optima in
 CFD; ``[rounds]`` holds the settings that only studies of the method use (rounds of CFD in
 the loop, the output correction, the trust region, first-order corrections, CFD's
 repeatability). Each table refuses a combination that cannot run, naming the key, so that
@@ -11,6 +14,7 @@ what a case file says is what runs.
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass, fields
 
 from mfflap.errors import ConfigError
@@ -133,6 +137,10 @@ class CfdSettings:
         doc="campaign records store their time series in float32, like the shipped "
             "records (half the size; 7 significant digits, far below CFD's cycle-to-cycle "
             "scatter)")
+    keep_case_dirs: bool = bounded(
+        False, choices=(True, False), unit="",
+        doc="keep a campaign's OpenFOAM case folders once their records are written "
+            "(false: a finished case keeps only its record)")
 
     def __post_init__(self) -> None:
         check_fields(self, prefix="cfd.")
@@ -146,6 +154,64 @@ class CfdSettings:
         if self.frame == "plate" and self.far_field is None:
             out["far_field"] = "inletOutlet"
         return out
+
+
+@dataclass(frozen=True)
+class HarmonicSet:
+    """The second identification set: harmonic motions, theta = theta_a sin(2 pi f t),
+    h = h_a sin(2 pi f t + phi), at the pitch amplitudes and rates optimised motions reach
+    (the Table 1 grid's pitch ramp never pitches faster than 3.3 rad/s; optima reach
+    15 rad/s and 58 deg).
+
+    Every (frequency, pitch amplitude) pair is run at every heave amplitude, and each of
+    these meets the phases in turn (a Latin square over heave amplitude and phase), so
+    that the set spans all four axes at a third of the full factorial's cost: 36 cases by
+    default, each ``n_cycles`` periods long after a start-up ramp of a quarter period.
+
+    Examples
+    --------
+    >>> cases = HarmonicSet().motions()
+    >>> len(cases), cases[0]
+    (36, (1.0, 0.05, 30.0, 60.0))
+    >>> sorted({phi for _, _, _, phi in cases})
+    [60.0, 90.0, 120.0]
+    """
+
+    frequencies: tuple[float, ...] = bounded((1.0, 1.5, 2.0, 2.5), low=0.0, low_open=True,
+                                             high=100.0, unit="Hz", unique=True)
+    heave_amplitudes: tuple[float, ...] = bounded((0.05, 0.15, 0.3), low=0.0, low_open=True,
+                                                  high=10.0, unit="m", unique=True)
+    pitch_amplitudes_deg: tuple[float, ...] = bounded((30.0, 45.0, 60.0), low=0.0,
+                                                      low_open=True, high=89.0, unit="deg",
+                                                      unique=True)
+    phases_deg: tuple[float, ...] = bounded((60.0, 90.0, 120.0), low=-360.0, high=360.0,
+                                            unit="deg", unique=True, period=360.0,
+                                            doc="by which heave leads pitch")
+    n_cycles: float = bounded(4.0, low=1.0, high=1000.0, unit="1",
+                              doc="periods simulated, the start-up ramp's included")
+
+    def __post_init__(self) -> None:
+        check_fields(self, prefix="harmonic_set.")
+
+    def motions(self) -> list[tuple[float, float, float, float]]:
+        """The set's motions as (frequency Hz, heave amplitude m, pitch amplitude deg,
+        phase deg), ordered so that the frequency varies fastest (a campaign stopped
+        part-way still spans the frequencies)."""
+        pairs = list(itertools.product(self.pitch_amplitudes_deg, self.frequencies))
+        out = []
+        for j, h in enumerate(self.heave_amplitudes):
+            for i, (theta, f) in enumerate(pairs):
+                out.append((f, h, theta, self.phases_deg[(i + j) % len(self.phases_deg)]))
+        return out
+
+    def duration(self, frequency: float) -> float:
+        """Simulated time of the set's case at ``frequency``, s."""
+        return self.n_cycles / frequency
+
+    @staticmethod
+    def ramp_time(frequency: float) -> float:
+        """C^2 start-up ramp of the set's case at ``frequency``, s: a quarter period."""
+        return 0.25 / frequency
 
 
 @dataclass(frozen=True)

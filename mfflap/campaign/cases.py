@@ -1,4 +1,5 @@
-"""One CFD case of a campaign and the grid of them (the paper's Table 1 by default)."""
+"""One CFD case of a campaign and the sets of them: the identification grid (the paper's
+Table 1 by default) and the harmonic set at large pitch."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ from mfflap.cfd.imposed_motion import check_end_time, check_ramp_time
 from mfflap.config import CASE_ID_DECIMALS, IdentificationGrid
 from mfflap.errors import ConfigError, MotionError
 from mfflap.kinematics.continuous import HarmonicMotion, Motion, RampHarmonicMotion
+from mfflap.study_tables import HarmonicSet
 
 
 class CampaignCase(Protocol):
@@ -169,3 +171,16 @@ def grid_cases(grid: IdentificationGrid, frequencies: Iterable[float] | None = N
     hs = sorted(hs, key=lambda v: abs(v - sorted(hs)[len(hs) // 2]))
     ps = sorted(ps, key=lambda v: abs(v - 90.0))
     return [case_for(grid, f, h, p) for p, h, f in itertools.product(ps, hs, fs)]
+
+
+def harmonic_set_cases(harmonic_set: HarmonicSet) -> list[HarmonicCase]:
+    """The cases of the second identification set (the case file's ``[harmonic_set]``).
+
+    Examples
+    --------
+    >>> cases = harmonic_set_cases(HarmonicSet())
+    >>> len(cases), cases[0].case_id, cases[0].duration
+    (36, 'harmonic_f1p000_h0p0500_th30p00_phi060p0', 4.0)
+    """
+    return [HarmonicCase(f, h, theta, phi, harmonic_set.duration(f), harmonic_set.ramp_time(f))
+            for f, h, theta, phi in harmonic_set.motions()]

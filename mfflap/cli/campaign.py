@@ -62,28 +62,33 @@ def campaign() -> None:
               "identification's start-up (the case file's [identification] discard_time): "
               "two set-ups in the fitted window (`campaign status` names them); their "
               "records kept as <case>.mixed.h5.")
-@click.option("--keep-cases", is_flag=True, help="Keep the OpenFOAM case folders.")
+@click.option("--cases", "case_set", type=click.Choice(["grid", "harmonic"]), default="grid",
+              show_default=True,
+              help="grid: the [identification] grid of pitch-ramp motions (the paper's "
+                   "Table 1); harmonic: the [harmonic_set] of harmonic motions at large "
+                   "pitch, the second identification set. Each in its own --out folder.")
 @click.option("--dry-run", is_flag=True,
               help="List the cases with their state in --out (done, failed, pending, ...) "
                    "and exit; a folder of another setup is refused as the run would be.")
 @set_option()
 def run_cmd(case_file: Path, out_dir: Path, mesh: str | None, setup_name: str | None,
             workers: int, scheduler: str | None, retry_failed: bool, rerun_mixed: bool,
-            keep_cases: bool, dry_run: bool, settings: tuple[str, ...]) -> None:
-    """Run the identification grid of CASE_FILE in OpenFOAM.
+            case_set: str, dry_run: bool, settings: tuple[str, ...]) -> None:
+    """Run an identification set of CASE_FILE in OpenFOAM.
 
     The grid is the case file's [identification] table (a part of it:
     ``--set identification.frequencies=[1,2]``, likewise heave_amplitudes and
-    phases_deg); the runs' mesh, solver settings, time limit, retries and record precision
-    are its [cfd] table, with --mesh, --setup and --set cfd.KEY=VALUE. Finished cases are
-    never rerun: rerun the same command to continue a campaign that was stopped. Failed
-    cases are reported and do not stop the others. The exit status is 1 unless every case
+    phases_deg), the harmonic set its [harmonic_set] table; the runs' mesh, solver
+    settings, time limit, retries, record precision and kept case folders are its [cfd]
+    table, with --mesh, --setup and --set cfd.KEY=VALUE. Finished cases are never rerun:
+    rerun the same command to continue a campaign that was stopped. Failed cases are
+    reported and do not stop the others. The exit status is 1 unless every case
     is done (failed, or left busy to another process running it).
     """
     if scheduler is not None:
         refuse_given(("workers",), "the LocalCluster mfflap starts; with --scheduler the "
                                    "cluster's own workers run the cases")
-    from mfflap.campaign.cases import grid_cases
+    from mfflap.campaign.cases import grid_cases, harmonic_set_cases
     from mfflap.campaign.execute import (
         CampaignSetup,
         campaign_status,
@@ -96,10 +101,12 @@ def run_cmd(case_file: Path, out_dir: Path, mesh: str | None, setup_name: str | 
 
     case = load_case(case_file, cfd_settings(settings, mesh, setup_name))
     spec, solver = case_mesh_and_solver(case.cfd, case.source)
-    cases = grid_cases(case.identification)
+    cases = (grid_cases(case.identification) if case_set == "grid"
+             else harmonic_set_cases(case.harmonic_set))
     campaign_setup = CampaignSetup(mesh=spec.name, solver=solver, plate=case.plate,
                                    fluid=case.fluid, stream=case.flow,
-                                   timeout_s=case.cfd.timeout_s, keep_case_dirs=keep_cases,
+                                   timeout_s=case.cfd.timeout_s,
+                                   keep_case_dirs=case.cfd.keep_case_dirs,
                                    single_precision=case.cfd.single_precision,
                                    retries_from_start=case.cfd.retries_from_start)
     discard_s = case.identification.discard_time

@@ -896,7 +896,7 @@ def test_campaign_command_runs_a_named_set_up(tmp_path):
     assert "cheapest" in unknown.output
     res = CliRunner().invoke(cli, ["campaign", "run", str(case), "--out", str(out), *grid,
                                    "--setup", "affordable", "--set", "cfd.timeout_s=3",
-                                   "--keep-cases"])
+                                   "--set", "cfd.keep_case_dirs=true"])
     assert res.exit_code == 1, res.output  # the case failed (timed out): not a whole campaign
     assert ("exit status 1: 1 of 1 cases not done (1 failed: `--retry-failed` reruns them)"
             in res.stderr)
