@@ -41,12 +41,18 @@ img { max-width: 100%; } figure { margin: 1em 0; } figcaption { color: #555; }
 
 
 def figure_html(fig: Figure, caption: str = "", dpi: int = 110) -> str:
-    """An ``<figure>`` with the PNG embedded (base64); closes the figure."""
+    """An ``<figure>`` with the PNG embedded (base64), drawn once as the figure is laid out
+    (its own layout must keep its text within its canvas); closes the figure."""
     # matplotlib takes about a second to load: only figures need it
     import matplotlib.pyplot as plt
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
 
+    # drawn once: savefig would lay out a figure that tight_layout() laid out already again,
+    # in a pass of its own that costs as much as the drawing (a layout engine of the figure
+    # still runs in the one draw)
+    fig.set_dpi(dpi)
     buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=dpi, bbox_inches="tight")
+    FigureCanvasAgg(fig).print_png(buf)
     plt.close(fig)
     data = base64.b64encode(buf.getvalue()).decode()
     return (f'<figure><img src="data:image/png;base64,{data}" alt="{html.escape(caption)}">'

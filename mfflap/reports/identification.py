@@ -36,6 +36,7 @@ from mfflap.reports.html import (
 SIGNAL_LABELS = {"normal_force": "F_n", "tangential_force": "F_t", "moment": "M",
                  "thrust": "thrust", "input_power": "input power"}
 APPLICABLE_NRMSE = 0.10
+METRIC_NAMES = {"nrmse": "NRMSE [%]", "pearson": "Pearson r"}
 
 
 def _param(result: IdentificationResult, key: str) -> np.ndarray:
@@ -60,14 +61,17 @@ def map_figure(result: IdentificationResult, signal: str = "normal_force",
     optimised motions pooled in) are not on the grid and not drawn.
     """
     f, h, p = (_param(result, k) for k in ("frequency", "heave_amplitude", "phase_deg"))
-    values = result.metrics[signal][metric]
+    values = np.asarray(result.metrics[signal][metric], dtype=float)
+    if metric == "nrmse":  # NRMSE in percent, as everywhere in the report
+        values = 100.0 * values
     bridged = [any(BURST_NOTE in n for n in result.notes.get(name, ()))
                for name in result.case_names]
     grid_case = np.isfinite(f) & np.isfinite(h) & np.isfinite(p)  # not a pooled back-test
     fs, hs, ps = (np.unique(a[grid_case]) for a in (f, h, p))
-    fig, axes = plt.subplots(1, len(ps), figsize=(3.2 * len(ps) + 1, 3.2), squeeze=False)
+    fig, axes = plt.subplots(1, len(ps), figsize=(3.2 * len(ps) + 1, 3.2), squeeze=False,
+                             layout="constrained")
     cmap = "viridis_r" if metric == "nrmse" else "viridis"
-    vmin, vmax = (0, max(0.3, float(np.nanmax(values)))) if metric == "nrmse" else (0, 1)
+    vmin, vmax = (0, max(30.0, float(np.nanmax(values)))) if metric == "nrmse" else (0, 1)
     im = None
     for ax, phase in zip(axes[0], ps, strict=True):
         grid = np.full((len(hs), len(fs)), np.nan)
@@ -79,7 +83,8 @@ def map_figure(result: IdentificationResult, signal: str = "normal_force",
         im = ax.imshow(grid, origin="lower", cmap=cmap, vmin=vmin, vmax=vmax, aspect="auto")
         for (r, c), v in np.ndenumerate(grid):
             if np.isfinite(v):
-                ax.text(c, r, f"{v:.2f}{marks[r, c]}", ha="center", va="center", fontsize=7,
+                text = f"{v:.0f}" if metric == "nrmse" else f"{v:.2f}"
+                ax.text(c, r, f"{text}{marks[r, c]}", ha="center", va="center", fontsize=7,
                         color="w" if (v > 0.5 * vmax) == (metric == "nrmse") else "k")
         ax.set_xticks(range(len(fs)), [f"{v:g}" for v in fs])
         ax.set_yticks(range(len(hs)), [f"{v:g}" for v in hs])
@@ -88,7 +93,9 @@ def map_figure(result: IdentificationResult, signal: str = "normal_force",
     axes[0][0].set_ylabel("h_amp [m]")
     if any(bridged):
         fig.text(0.01, 0.99, "* numerical bursts in the CFD bridged", fontsize=7, va="top")
-    fig.colorbar(im, ax=axes[0].tolist(), label=f"{metric} of {SIGNAL_LABELS[signal]}")
+    label = (f"NRMSE of {SIGNAL_LABELS[signal]} [%]" if metric == "nrmse"
+             else f"Pearson r of {SIGNAL_LABELS[signal]}")
+    fig.colorbar(im, ax=axes[0].tolist(), label=label)
     return fig
 
 
@@ -371,8 +378,8 @@ def add_identification_sections(rep: Report, results: Mapping[str, Identificatio
     for sig in ("normal_force", "thrust"):
         for metric in ("pearson", "nrmse"):
             sec.blocks.append(figure_html(map_figure(res, sig, metric),
-                                          f"{metric} of {SIGNAL_LABELS[sig]} over "
-                                          "(f, h_amp) per phase"))
+                                          f"{METRIC_NAMES[metric]} of {SIGNAL_LABELS[sig]} "
+                                          "over (f, h_amp) per phase"))
     err = res.metrics["normal_force"]["nrmse"]
     order = np.argsort(err)
     pick = [res.case_names[order[0]], res.case_names[order[len(order) // 2]],

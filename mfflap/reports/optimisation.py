@@ -109,7 +109,7 @@ def history_figure(results: Mapping[float, OptimisationResult]) -> Figure:
                     color=motion_colour(beta_label(beta)), label=f"β = {beta:g}")
     ax.set_yscale("log")
     ax.set_xlabel("SQP iteration")
-    ax.set_ylabel("J - min J (thrust N and power W, as J weighs them)")
+    ax.set_ylabel("J − min J [N, W as weighted]")
     ax.legend(fontsize=8)
     fig.tight_layout()
     return fig

@@ -82,3 +82,41 @@ def test_the_summarys_numbers_are_on_the_first_screen_in_chromium(run):
         assert "Back-test against CFD" in titles
     finally:
         driver.quit()
+
+
+def _fit_of(fig) -> tuple[float, float]:
+    """How far a figure's drawn content runs past its canvas (> 0: clipped) and the
+    widest empty margin inside it, inches."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    box = fig.get_tightbbox(canvas.get_renderer())
+    width, height = fig.get_size_inches()
+    over = max(-box.x0, -box.y0, box.x1 - width, box.y1 - height)
+    margin = max(box.x0, box.y0, width - box.x1, height - box.y1)
+    return float(over), float(margin)
+
+
+@pytest.mark.slow
+def test_every_report_figure_fits_its_canvas(run, monkeypatch, tmp_path):
+    """The report saves each figure as laid out, once (no second layout pass to trim it):
+    so each figure's text and legends must lie within its canvas, with no wide empty
+    margin."""
+    import sys
+
+    config, outcome, _ = run
+    seen: list[tuple[str, float, float]] = []
+    for name, module in list(sys.modules.items()):
+        original = getattr(module, "figure_html", None)
+        if name.startswith("mfflap.reports") and callable(original):
+            def checked(fig, caption="", dpi=110, _original=original):
+                seen.append((caption, *_fit_of(fig)))
+                return _original(fig, caption, dpi)
+            monkeypatch.setattr(module, "figure_html", checked)
+    write_run_report(config, outcome, tmp_path / "report.html", "the shipped records")
+    assert len(seen) >= 15
+    clipped = [(c, over) for c, over, _ in seen if over > 0.02]
+    assert not clipped, clipped
+    loose = [(c, margin) for c, _, margin in seen if margin > 0.6]
+    assert not loose, loose
