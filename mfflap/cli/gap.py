@@ -32,10 +32,13 @@ def gap() -> None:
               help="Folders of CFD records (campaign, back-test) or record files; default: "
                    "shipped fixtures, unless --csv is given.")
 @click.option("--csv", "csv_files", multiple=True,
-              type=click.Path(dir_okay=False, exists=True, path_type=Path),
-              help="External (motion, force) CSV files: time, pitch_angle, heave_position, "
-                   "normal_force, tangential_force, moment (rad, m, N, N*m about the leading "
-                   "edge); repeat for several. With --fixtures, pooled with the records.")
+              type=click.Path(exists=True, path_type=Path),
+              help="External (motion, force) CSV files, or folders of them: time, "
+                   "pitch_angle, heave_position, normal_force, tangential_force, moment "
+                   "(rad, m, N, N*m about the leading edge), and '# frequency = 1.5' lines "
+                   "before the header for the run's parameters (velocity, chord: checked "
+                   "against the case file); repeat for several. With --fixtures, pooled "
+                   "with the records.")
 @click.option("--flow", "flow_dirs", multiple=True,
               help="CASE=DIR: an OpenFOAM case folder with written fields for record CASE; the "
                    "report shows its vorticity where the model misses most.")
@@ -63,7 +66,7 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
     the cases' residuals are the case file's [identification] discard_time and
     residual_scaling (--set identification.discard_time=2.0)."""
     from mfflap.config import load_case
-    from mfflap.gap.external import read_csv_case
+    from mfflap.gap.external import csv_paths, read_csv_case
     from mfflap.gap.store import write_diagnosis
     from mfflap.gap.system import MIN_CASES
     from mfflap.gap.workflow import diagnose_cases
@@ -89,7 +92,8 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
         sources += [str(f) for f in folders]
         for name, why in excluded.items():
             click.echo(f"left out {name}: {why}", err=True)
-    cases += [read_csv_case(p, discard_s=discard) for p in csv_files]
+    csv_files = tuple(csv_paths(csv_files))
+    cases += [read_csv_case(p, discard_s=discard, config=case) for p in csv_files]
     sources += [str(p) for p in csv_files]
     if len(cases) < MIN_CASES and csv_files and not given_folders:
         raise click.UsageError(f"{len(cases)} case(s) from --csv; a diagnosis needs at least "
@@ -133,6 +137,7 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
                         "confounded_with": s.confounded_with}
                        for s in diag.scores],
                    "validation": diag.validation,
+                   "validation_skipped": diag.validation_skipped,
                    "transfer": diag.transfer.as_dict() if diag.transfer else None})
         return
     click.echo(diag.verdict)
@@ -145,6 +150,8 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
                "it explains, eta^2):")
     for name, share in where["ranking"][:5]:
         click.echo(f"  {name}: {share:.2f}")
+    for key, why in diag.validation_skipped.items():
+        click.echo(f"not checked by {key}: {why}")
     if diag.transfer is not None:
         click.echo(f"on runs outside the cases: {diag.transfer.verdict}")
         for name, why in diag.transfer.excluded.items():

@@ -88,6 +88,9 @@ class Diagnosis:
     verdict: str
     gap: dict[str, dict] = field(default_factory=dict)
     validation: dict[str, dict] = field(default_factory=dict)
+    #: the leave-one-group-out checks that could not run, with why (e.g. a case without a
+    #: frequency, or a single frequency among the cases)
+    validation_skipped: dict[str, str] = field(default_factory=dict)
     case_names: list[str] = field(default_factory=list)
     residual_scaling: str = "grid"
     #: how the base model's error (its terms refitted over every case on the grid's scale)
@@ -359,7 +362,18 @@ def diagnose(cases: Sequence[CaseData], base_model: ForceModel,
         cols = base_cols + [system.names.index(n) for n in validated.names]
         for key in validate_by:
             labels = [c.parameters.get(key) for c in system.cases]
-            if any(v is None for v in labels) or len(set(labels)) < 2:
+            unlabelled = [c.name for c, v in zip(system.cases, labels, strict=True)
+                          if v is None]
+            if unlabelled:
+                diag.validation_skipped[f"leave-one-{key}-out"] = (
+                    f"{len(unlabelled)} of {len(labels)} cases give no {key} (e.g. "
+                    f"{unlabelled[0]}); give each case its {key} to check how the effect "
+                    "carries over between them")
+                continue
+            if len(set(labels)) < 2:
+                diag.validation_skipped[f"leave-one-{key}-out"] = (
+                    f"every case has the same {key} ({labels[0]}): there is no other "
+                    "group to withhold")
                 continue
             g = group_folds(labels)
             before, _ = system.cross_validate(base_cols, g)

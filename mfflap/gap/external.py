@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import dataclasses
+import re
 from pathlib import Path
 
 import numpy as np
 from scipy.interpolate import make_smoothing_spline
 
 from mfflap.csv_columns import read_csv_columns
-from mfflap.errors import ParseError
+from mfflap.errors import ConfigError, ParseError
 from mfflap.hydro.loads import Loads
 from mfflap.identification.data import CaseData
 from mfflap.kinematics.state import KinematicState
@@ -18,6 +19,15 @@ CSV_COLUMNS = ("time", "pitch_angle", "heave_position", "normal_force", "tangent
                "moment")
 #: the fewest samples a case may have (the smoothing splines of its motion need them)
 MIN_SAMPLES = 8
+#: the ``# key = value`` parameters a CSV file may give of its run's motion
+MOTION_KEYS = ("frequency", "heave_amplitude", "phase_deg", "pitch_amplitude_deg", "period")
+#: the set-up a CSV file may state, checked against the case file: (table, key, unit)
+SETUP_KEYS = {"velocity": ("flow", "velocity", "m/s"), "chord": ("plate", "chord", "m"),
+              "span": ("plate", "span", "m"), "density": ("fluid", "density", "kg/m^3"),
+              "kinematic_viscosity": ("fluid", "kinematic_viscosity", "m^2/s")}
+#: relative difference within which a stated set-up value is the case file's
+SETUP_TOLERANCE = 1e-3
+_PARAMETER_LINE = re.compile(r"#\s*([A-Za-z_][A-Za-z0-9_]*)\s*[=:]\s*(\S+)\s*$")
 
 
 def case_from_arrays(name: str, time, pitch_angle, heave_position, normal_force,
@@ -83,18 +93,112 @@ def case_from_arrays(name: str, time, pitch_angle, heave_position, normal_force,
     return CaseData(name, dict(parameters or {}), state, loads)
 
 
+def csv_parameters(path: str | Path) -> dict[str, float]:
+    r"""The ``# key = value`` lines of a CSV file before its header, for the keys of
+    :data:`MOTION_KEYS` and :data:`SETUP_KEYS` (other comment lines are comments).
+
+    Raises
+    ------
+    ParseError
+        Naming the file and line, for a known key whose value is not a finite number or
+        that is given twice.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "run.csv"
+    >>> _ = p.write_text("# frequency = 1.5\n# a note\ntime,pitch_angle\n0,0\n")
+    >>> csv_parameters(p)
+    {'frequency': 1.5}
+    """
+    path = Path(path)
+    out: dict[str, float] = {}
+    with path.open(encoding="utf-8-sig") as fh:
+        for number, line in enumerate(fh, start=1):
+            text = line.strip()
+            if not text:
+                continue
+            if not text.startswith("#"):
+                break  # the header: parameters come before it
+            match = _PARAMETER_LINE.match(text)
+            if match is None or match[1] not in (*MOTION_KEYS, *SETUP_KEYS):
+                continue
+            key, value = match[1], match[2]
+            try:
+                number_value = float(value)
+            except ValueError:
+                number_value = float("nan")
+            if not np.isfinite(number_value):
+                raise ParseError(f"parameter {key}: {value!r} is not a finite number",
+                                 path=str(path), line=number)
+            if key in out:
+                raise ParseError(f"parameter {key} given twice", path=str(path), line=number)
+            out[key] = number_value
+    return out
+
+
+def check_setup(parameters: dict[str, float], config, source: str) -> None:
+    """Refuse a case whose stated set-up (:data:`SETUP_KEYS`) is not ``config``'s (a
+    :class:`~mfflap.config.CaseConfig`) within :data:`SETUP_TOLERANCE`.
+
+    Raises
+    ------
+    ConfigError
+        Naming the file, the key, both values and the case file's table.
+    """
+    for key, (table, attribute, unit) in SETUP_KEYS.items():
+        if key not in parameters:
+            continue
+        stated, expected = float(parameters[key]), float(getattr(getattr(config, table),
+                                                                 attribute))
+        if abs(stated - expected) > SETUP_TOLERANCE * abs(expected):
+            raise ConfigError(
+                f"the run states {key} = {stated:g} {unit}; the case file's "
+                f"[{table}] {attribute} is {expected:g} {unit}: a run of another set-up "
+                f"cannot be compared with this model (give the case file its {key}, or "
+                "diagnose the run with a case file of its own)", source=source, key=key)
+
+
 def read_csv_case(path: str | Path, parameters: dict | None = None,
-                  discard_s: float = 0.0) -> CaseData:
+                  discard_s: float = 0.0, config=None) -> CaseData:
     """A CSV with a header naming the columns of :data:`CSV_COLUMNS` (any order; SI units;
-    ``#`` comment lines allowed), its first ``discard_s`` seconds left out
-    (:func:`case_from_arrays`).
+    ``#`` comment lines allowed, ``# key = value`` ones before the header giving its
+    parameters, :func:`csv_parameters`), its first ``discard_s`` seconds left out
+    (:func:`case_from_arrays`). ``parameters`` adds to and overrides the file's own; with
+    ``config`` (a :class:`~mfflap.config.CaseConfig`) a stated set-up is checked against it
+    (:func:`check_setup`).
 
     Raises
     ------
     ParseError
         Naming the file and the line for a missing column or an unreadable value.
+    ConfigError
+        For a stated set-up that is not the case file's.
     """
     path = Path(path)
+    given = {**csv_parameters(path), **(parameters or {})}
+    if config is not None:
+        check_setup(given, config, str(path))
     col = read_csv_columns(path, CSV_COLUMNS)
-    return case_from_arrays(path.stem, *(col[c] for c in CSV_COLUMNS), parameters=parameters,
+    return case_from_arrays(path.stem, *(col[c] for c in CSV_COLUMNS), parameters=given,
                             source=str(path), discard_s=discard_s)
+
+
+def csv_paths(paths) -> list[Path]:
+    """CSV files from files and folders (a folder: every ``*.csv`` in it, by name).
+
+    Raises
+    ------
+    ParseError
+        For a folder without CSV files.
+    """
+    out: list[Path] = []
+    for p in map(Path, paths):
+        if p.is_dir():
+            found = sorted(p.glob("*.csv"))
+            if not found:
+                raise ParseError("a folder given as --csv holds no *.csv file", path=str(p))
+            out += found
+        else:
+            out.append(p)
+    return out

@@ -60,6 +60,7 @@ def write_diagnosis(rf: ResultsFile, diag: Diagnosis, where: dict, group: str = 
     g.attrs["chosen"] = diag.chosen.label if diag.chosen else ""
     g.attrs["case_names"] = json.dumps(diag.case_names)
     g.attrs["validation"] = json.dumps(diag.validation)
+    g.attrs["validation_skipped"] = json.dumps(diag.validation_skipped)
     g.attrs["residual_scaling"] = diag.residual_scaling
     g.attrs["error_growth"] = growth_to_json(diag.error_growth)
     g.attrs["residual_scaling_asked"] = diag.scaling_asked
@@ -127,6 +128,7 @@ def read_diagnosis(rf: ResultsFile, group: str = "gap") -> tuple[Diagnosis, dict
         chosen=next((s for s in scores if s.label == chosen_label), None),
         verdict=str(g.attrs["verdict"]), gap=gap,
         validation=json.loads(g.attrs.get("validation", "{}")),
+        validation_skipped=json.loads(g.attrs.get("validation_skipped", "{}")),
         case_names=json.loads(g.attrs.get("case_names", "[]")),
         residual_scaling=str(g.attrs.get("residual_scaling", "grid")),
         error_growth=growth_from_json(g.attrs.get("error_growth", "{}")),

@@ -222,5 +222,9 @@ def add_gap_sections(rep: Report, diag: Diagnosis, where: dict,
                                      "; ".join(f"{g}: {x:+.1%}" for g, x in
                                                v["per_group_gain"].items()))
                                     for k, v in diag.validation.items()]))
+    if diag.validation_skipped:
+        s = (rep.section("Validation on withheld groups") if not diag.validation else s)
+        for key, why in diag.validation_skipped.items():
+            s.blocks.append(text_html(f"Not checked by {key}: {why}.", warn=True))
     if diag.transfer is not None:
         add_transfer_section(rep, diag.transfer)
