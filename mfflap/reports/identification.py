@@ -22,6 +22,7 @@ from mfflap.identification.fit import (
     most_influential,
     scalings_said,
 )
+from mfflap.identification.paper_figure3 import figure3_comparison
 from mfflap.performance import thrust_and_power
 from mfflap.reports.error_growth_plot import error_growth_figure
 from mfflap.reports.html import (
@@ -392,6 +393,12 @@ def add_identification_sections(rep: Report, results: Mapping[str, Identificatio
     sec.blocks.append(text_html(f"{ok.sum()} of {len(err)} cases within NRMSE ≤ 10 % on "
                                 f"F_n; median Pearson of F_n "
                                 f"{np.median(res.metrics['normal_force']['pearson']):.3f}."))
+    against = figure3_comparison(res, cases, base_model.plate.chord, velocity)
+    if against.case_names:
+        sec.blocks.append(text_html(
+            f"Against the paper's Figure 3 (its Table 1 grid cases here, {label} weighting; "
+            "St = 2 f A / U with A the trailing edge's half excursion):"))
+        sec.blocks.append(table_html(["measure", "here", "the paper"], against.rows()))
     if len(results) > 1:
         sec = rep.section("Sensitivity to the frequency weighting")
         sec.blocks.append(figure_html(strategy_error_figure(results),
