@@ -76,6 +76,22 @@ class CandidateScore:
         """``a + b`` for reports."""
         return " + ".join(self.names)
 
+    def unclaimable(self) -> list[str]:
+        """Why this set's coefficients may not be claimed, one reason per coefficient: a
+        value outside the candidate's plausible range, or one confounded with another term
+        (variance inflation above :data:`CONFOUNDED_VIF`); empty when they may."""
+        reasons = [f"{n} = {self.coefficients[n]:.3g} is implausible" for n in self.names
+                   if not self.plausible.get(n, True)]
+        reasons += [f"{n} is confounded with {self.confounded_with[n][0]} (variance "
+                    f"inflation {self.variance_inflation[n]:.3g})" for n in self.names
+                    if self.variance_inflation.get(n, 1.0) > CONFOUNDED_VIF]
+        return reasons
+
+    @property
+    def claimable(self) -> bool:
+        """Significant, with plausible coefficients that are not confounded."""
+        return self.significant and not self.unclaimable()
+
 
 @dataclass
 class Diagnosis:
@@ -107,6 +123,9 @@ class Diagnosis:
     indistinguishable: list[str] = field(default_factory=list)
     #: the same test of the residual left with the chosen effect added (empty when none is)
     whiteness_after: dict = field(default_factory=dict)
+    #: significant candidates that explain more than the claim (or than nothing) but were
+    #: not claimed, with why (:meth:`CandidateScore.unclaimable`)
+    not_claimed: dict[str, list[str]] = field(default_factory=dict)
     #: the Ljung-Box test of the base model's held-out residual
     #: (:meth:`mfflap.gap.whiteness.WhitenessTest.as_dict`): whether it is noise
     whiteness: dict = field(default_factory=dict)
@@ -293,7 +312,11 @@ def diagnose(cases: Sequence[CaseData], base_model: ForceModel,
                for n in candidates]
     singles.sort(key=lambda s: -s.gain)
     scores = list(singles)
-    best = singles[0] if singles and singles[0].significant else None
+    # a claim is the best single candidate when its coefficient is plausible and not
+    # confounded, or the best such pair with it; when the best one's is not, nothing is
+    # claimed (a lesser candidate would be claimed for what the best one explains, and an
+    # implausible or confounded fit says the form stands in for another effect)
+    best = singles[0] if singles and singles[0].claimable else None
     chosen = best
     if best is not None and max_combination >= 2:
         for combo in itertools.combinations(candidates, 2):
@@ -302,9 +325,13 @@ def diagnose(cases: Sequence[CaseData], base_model: ForceModel,
             pair = _score(system, combo, folds, base_sse, candidates, alpha, min_gain,
                           base_values, reference=best.heldout_sse)
             scores.append(pair)
-            if pair.significant and (chosen is best or pair.gain > chosen.gain):
-                chosen = pair
+            if pair.significant and pair.gain > chosen.gain:
+                if pair.claimable:
+                    chosen = pair
     scores.sort(key=lambda s: -s.gain)
+    bar = chosen.gain if chosen is not None else -np.inf
+    not_claimed = {sc.label: sc.unclaimable() for sc in scores
+                   if sc.significant and sc.gain > bar and sc.unclaimable()}
     rivals = indistinguishable_from(chosen, singles, alpha) if chosen is not None else []
     base_predictions = _predictions(system, base_cols, folds)
     whiteness = residual_whiteness(system.cases, base_predictions, alpha)
@@ -317,19 +344,19 @@ def diagnose(cases: Sequence[CaseData], base_model: ForceModel,
                    f"structured, unexplained: no candidate explains it{best_said}; "
                    f"{whiteness.said()}")
     else:
-        implaus = [n for n, ok in chosen.plausible.items() if not ok]
         verdict = (f"{chosen.label}: held-out error {chosen.gain:.1%} lower "
                    f"(p = {chosen.p_value:.2g})"
                    + ("; indistinguishable on these cases from "
                       + ", ".join(f"{s.label} ({s.gain:.1%} lower)" for s in rivals)
                       + " (the chosen one's error not significantly below theirs)"
-                      if rivals else "")
-                   + (f"; implausible coefficient for {', '.join(implaus)}" if implaus else "")
-                   + "".join(f"; the coefficient of {n} is confounded with "
-                             f"{chosen.confounded_with[n][0]} (variance inflation "
-                             f"{chosen.variance_inflation[n]:.3g}): its value is uncertain"
-                             for n in chosen.names
-                             if chosen.variance_inflation[n] > CONFOUNDED_VIF))
+                      if rivals else ""))
+    if not_claimed:
+        first, reasons = next(iter(not_claimed.items()))
+        more = len(not_claimed) - 1
+        verdict += (f"; not claimed although {'they explain' if more else 'it explains'} "
+                    f"more: {first} ({'; '.join(reasons)})"
+                    + (f" and {more} other set{'s' if more > 1 else ''} of candidates"
+                       if more else ""))
     n_cases = len(system.cases)
     if 0.5**n_cases > alpha:
         verdict += (f"; with {n_cases} cases no improvement can reach p < {alpha:g} (the "
@@ -343,7 +370,7 @@ def diagnose(cases: Sequence[CaseData], base_model: ForceModel,
                      descriptions={n: {"physical_name": c.physical_name,
                                        "coefficient_name": c.coefficient_name}
                                    for n, c in candidates.items()},
-                     whiteness=whiteness.as_dict())
+                     whiteness=whiteness.as_dict(), not_claimed=not_claimed)
     diag.gap["before"] = gap_metrics(system, base_predictions)
     validated = chosen or (singles[0] if singles else None)
     if chosen is not None:

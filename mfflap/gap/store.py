@@ -61,6 +61,7 @@ def write_diagnosis(rf: ResultsFile, diag: Diagnosis, where: dict, group: str = 
     g.attrs["case_names"] = json.dumps(diag.case_names)
     g.attrs["validation"] = json.dumps(diag.validation)
     g.attrs["validation_skipped"] = json.dumps(diag.validation_skipped)
+    g.attrs["not_claimed"] = json.dumps(diag.not_claimed)
     g.attrs["residual_scaling"] = diag.residual_scaling
     g.attrs["error_growth"] = growth_to_json(diag.error_growth)
     g.attrs["residual_scaling_asked"] = diag.scaling_asked
@@ -129,6 +130,7 @@ def read_diagnosis(rf: ResultsFile, group: str = "gap") -> tuple[Diagnosis, dict
         verdict=str(g.attrs["verdict"]), gap=gap,
         validation=json.loads(g.attrs.get("validation", "{}")),
         validation_skipped=json.loads(g.attrs.get("validation_skipped", "{}")),
+        not_claimed=json.loads(g.attrs.get("not_claimed", "{}")),
         case_names=json.loads(g.attrs.get("case_names", "[]")),
         residual_scaling=str(g.attrs.get("residual_scaling", "grid")),
         error_growth=growth_from_json(g.attrs.get("error_growth", "{}")),

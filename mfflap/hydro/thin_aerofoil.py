@@ -83,7 +83,8 @@ def jones_theodorsen_function(reduced_frequency: np.ndarray | float) -> np.ndarr
     return 1.0 - sum(a * ik / (ik + b) for a, b in JONES_WAGNER)
 
 
-def wagner_filter(values: np.ndarray, time: np.ndarray, velocity: float, chord: float,
+def wagner_filter(values: np.ndarray, time: np.ndarray, velocity: float | np.ndarray,
+                  chord: float,
                   start: WagnerStart = "equilibrium") -> np.ndarray:
     """Response of Wagner's lag to ``values`` (last axis is time): sum over the input's history.
 
@@ -98,25 +99,36 @@ def wagner_filter(values: np.ndarray, time: np.ndarray, velocity: float, chord: 
     time : ndarray, s
         Increasing sample times, shape (n_times,) or that of ``values``.
     velocity : m/s
-        Free-stream speed U (s = 2 U t / c).
+        The speed the wake is laid down at: the free stream's U (s = 2 U t / c), or one per
+        sample, shape (n_times,) (s = 2 / c times its integral over time, trapezoidal).
     chord : m
     start : {"equilibrium", "rest"}
-        "equilibrium": the input held its first value forever before (y = x at the first
-        sample; the gap diagnosis's periodic cycles). "rest": the input was zero before and
-        steps to its first value (y = x / 2 there, Wagner's start from rest).
+        "equilibrium": the input oscillated about its mean before the first sample (the
+        gap diagnosis's cycles, cut from runs that started long before): the lag's states
+        start at the mean's equilibrium. Starting them at the first sample's value instead
+        leaves a transient as slow as the slowest lag (about 22 semichords, seconds of a
+        run), which on the shipped small-motion CFD hid most of the wake's lag. "rest":
+        the input was zero before and steps to its first value (y = x / 2 there, Wagner's
+        start from rest).
     """
     if start not in ("equilibrium", "rest"):
         raise MotionError(f"start must be 'equilibrium' or 'rest', got {start!r}")
     x = np.asarray(values, dtype=float)
     t = np.asarray(time, dtype=float)
-    s = 2 * velocity * (t - t[..., :1]) / chord
+    v = np.asarray(velocity, dtype=float)
+    if v.ndim == 0:
+        s = 2 * v * (t - t[..., :1]) / chord
+    else:
+        steps = 0.5 * (v[..., 1:] + v[..., :-1]) * np.diff(t, axis=-1)
+        s = 2 / chord * np.concatenate([np.zeros((*steps.shape[:-1], 1)), np.cumsum(
+            steps, axis=-1)], axis=-1)
     ds = np.diff(s, axis=-1)
     if np.any(ds < 0):
         raise MotionError("wagner_filter needs increasing sample times")
     y = (1 - sum(a for a, _ in JONES_WAGNER)) * x
     for a, b in JONES_WAGNER:
         z = np.empty_like(x)
-        z[..., 0] = x[..., 0] / b if start == "equilibrium" else 0.0
+        z[..., 0] = x.mean(axis=-1) / b if start == "equilibrium" else 0.0
         decay = np.exp(-b * ds)
         for n in range(x.shape[-1] - 1):
             z[..., n + 1] = z[..., n] * decay[..., n] + x[..., n] * (1 - decay[..., n]) / b

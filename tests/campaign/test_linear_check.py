@@ -101,13 +101,11 @@ def test_gap_diagnosis_finds_the_circulation_the_strip_model_leaves_out(records)
     assert result.chosen is not None and result.chosen.names == ("wake_lag",), result.verdict
     assert result.chosen.gain > 0.1 and result.chosen.p_value < 0.01
     assert config.plate.chord > 0 and 1.0 < result.chosen.coefficients["wake_lag"] < 8.0
-    # Refitted, the strip model's quadratic normal drag takes over part of the lift (the
-    # slope comes out near 2.3); fitted to the residual of the model as configured, the slope
-    # is much nearer the theory's 2 pi (measured 4.7): the report gives both
-    refit = result.chosen.coefficients["wake_lag"]
-    held = result.chosen.held_coefficients["wake_lag"]
-    assert abs(held - 2 * math.pi) < 0.5 * abs(refit - 2 * math.pi), (held, refit)
-    assert 0.6 * 2 * math.pi < held < 1.1 * 2 * math.pi
+    # refitted with the strip model's terms and fitted to the residual of the model as
+    # configured, the lift slope is the theory's 2 pi within 15 % (measured 6.1 and 6.6)
+    for slope in (result.chosen.coefficients["wake_lag"],
+                  result.chosen.held_coefficients["wake_lag"]):
+        assert 0.85 * 2 * math.pi < slope < 1.15 * 2 * math.pi, slope
     assert result.chosen.variance_inflation["wake_lag"] < 5
     assert result.chosen.confounded_with["wake_lag"][0] == "normal_drag"
     # on small motions skin friction and the tangential drag are one regressor

@@ -203,3 +203,27 @@ def test_real_openfoam_small_motions_match_linear_theory(tmp_path, motion):
         assert theory[f"pearson_{name}"] > 0.99, (name, theory)
     assert out["nrmse_normal_force"] > 3 * theory["nrmse_normal_force"]
     assert out["cfd_mean_power"] == pytest.approx(theory["mean_power"], rel=0.3)
+
+
+def test_wagner_filter_clocked_by_a_varying_speed_and_started_at_the_mean():
+    """The wake's clock is the distance travelled: a constant speed given per sample is the
+    scalar speed, twice the speed runs the lag twice as fast; a periodic input started at
+    its mean's equilibrium has no slow transient, unlike one started at its first value."""
+    t = np.linspace(0.0, 20.0, 4001)
+    x = (t >= 1.0).astype(float)
+    u = 0.3
+    same = wagner_filter(x, t, np.full_like(t, u), CHORD, start="rest")
+    assert np.allclose(same, wagner_filter(x, t, u, CHORD, start="rest"), atol=1e-12)
+    fast = wagner_filter(x, t, np.full_like(t, 2 * u), CHORD, start="rest")
+    later = (t > 1.0) & (t < 10.0)  # the slow run at twice the time since the step
+    assert np.allclose(fast[later], np.interp(1.0 + 2 * (t[later] - 1.0), t, same),
+                       atol=5e-3)
+    periodic = np.cos(2 * np.pi * 0.5 * t) + 0.2
+    long_t = np.linspace(0.0, 60.0, 12001)  # 40 s earlier: the same phase, settled
+    settled = wagner_filter(np.cos(2 * np.pi * 0.5 * long_t) + 0.2, long_t, u,
+                            CHORD)[-len(t):]
+    from_mean = wagner_filter(periodic, t, u, CHORD)
+    from_first = wagner_filter(periodic, t, u, CHORD, start="rest")  # a far start
+    early = t < 4.0
+    assert np.max(np.abs(from_mean - settled)[early]) < 0.5 * np.max(
+        np.abs(from_first - settled)[early])

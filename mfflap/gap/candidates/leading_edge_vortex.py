@@ -9,9 +9,11 @@ from mfflap.gap.candidates.base import CandidateEffect, register
 
 @register
 class LeadingEdgeVortex(CandidateEffect):
-    """Polhamus vortex normal force C_N,v = K_v cos(alpha) sin^2(alpha) sign(alpha), at 0.4 c.
+    """Polhamus vortex normal force C_N,v = K_v sin^2(alpha) sign(alpha), at 0.4 c.
 
-    With v_n = V sin(alpha) and |v_t| = V cos(alpha): F_n = -1/2 rho S K_v |v_t| |v_n| v_n / V.
+    Polhamus' suction analogy gives the vortex lift K_v cos(alpha) sin^2(alpha), whose
+    normal component is K_v sin^2(alpha): it grows with the incidence up to 90 deg. With
+    v_n = V sin(alpha) at the leading edge: F_n = -1/2 rho S K_v |v_n| v_n.
     """
 
     name = "leading_edge_vortex"
@@ -23,7 +25,6 @@ class LeadingEdgeVortex(CandidateEffect):
     def regressor(self, state):
         f = self.flow(state)
         ctx = self.context
-        vn, vt = f.normal_velocity_le, f.tangential_velocity
-        speed = np.sqrt(vn**2 + vt**2) + 1e-12
-        fn = -0.5 * ctx.fluid.density * ctx.area * np.abs(vt) * np.abs(vn) * vn / speed
+        vn = f.normal_velocity_le
+        fn = -0.5 * ctx.fluid.density * ctx.area * np.abs(vn) * vn
         return self.loads(state, normal=fn, moment=fn * 0.4 * ctx.plate.chord)

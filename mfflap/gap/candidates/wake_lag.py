@@ -31,5 +31,8 @@ class WakeLag(CandidateEffect):
         c = ctx.plate.chord
         downwash = f.normal_velocity_le + 0.75 * c * state.pitch_rate
         qs = -0.5 * ctx.fluid.density * ctx.area * np.abs(f.tangential_velocity) * downwash
-        fn = wagner_filter(qs, state.time, ctx.stream.velocity, c)
+        # the wake is laid down at the flow's speed along the chord, not the stream's: at
+        # large heave rates the plate travels several chords of its own wake per chord of
+        # stream
+        fn = wagner_filter(qs, state.time, np.abs(f.tangential_velocity), c)
         return self.loads(state, normal=fn, moment=fn * 0.25 * c)
