@@ -17,8 +17,16 @@ from mfflap.kinematics.state import KinematicState
 
 CSV_COLUMNS = ("time", "pitch_angle", "heave_position", "normal_force", "tangential_force",
                "moment")
+#: the motion's rates a CSV file may give too (rad/s, rad/s^2, m/s, m/s^2): all four, or
+#: none and they are derived from the positions
+RATE_COLUMNS = ("pitch_rate", "pitch_acceleration", "heave_velocity", "heave_acceleration")
 #: the fewest samples a case may have (the smoothing splines of its motion need them)
 MIN_SAMPLES = 8
+#: the share of samples left out at each end of a record whose rates come from smoothing
+#: splines: a natural spline's second derivative is zero at the ends, and its accelerations
+#: are wrong there (measured: up to 1.5 standard deviations of the heave acceleration within
+#: the last 2 % of the samples, below 0.01 beyond them)
+SPLINE_END_SHARE = 0.03
 #: the ``# key = value`` parameters a CSV file may give of its run's motion
 MOTION_KEYS = ("frequency", "heave_amplitude", "phase_deg", "pitch_amplitude_deg", "period")
 #: the set-up a CSV file may state, checked against the case file: (table, key, unit)
@@ -32,11 +40,16 @@ _PARAMETER_LINE = re.compile(r"#\s*([A-Za-z_][A-Za-z0-9_]*)\s*[=:]\s*(\S+)\s*$")
 
 def case_from_arrays(name: str, time, pitch_angle, heave_position, normal_force,
                      tangential_force, moment, parameters: dict | None = None,
-                     source: str | None = None, discard_s: float = 0.0) -> CaseData:
+                     source: str | None = None, discard_s: float = 0.0,
+                     rates: dict | None = None) -> CaseData:
     """A case from sampled positions (rad, m) and loads (N, N*m, body frame, about the LE).
 
-    Rates and accelerations come from smoothing splines of the positions (the generalised
-    cross-validation choice of smoothing), so noisy measured motions can be used. The first
+    Rates and accelerations are ``rates`` (the four :data:`RATE_COLUMNS`, as the motion
+    imposed them: exact, and no fit) when given, else they come from smoothing splines of
+    the positions (the generalised cross-validation choice of smoothing), so noisy measured
+    motions can be used; a natural spline's second derivative is zero at the record's ends,
+    which biases the accelerations there: the first and last :data:`SPLINE_END_SHARE` of
+    the samples (at least 3) are then left out. The first
     ``discard_s`` seconds (a start-up transient) are left out after the splines are fitted
     over the whole record, so that the splines' end conditions fall in the part left out.
 
@@ -65,13 +78,22 @@ def case_from_arrays(name: str, time, pitch_angle, heave_position, normal_force,
         raise ParseError(f"{name}: time must increase: sample {i} (t = {t[i]:g} s) is not "
                          f"after sample {i - 1} (t = {t[i - 1]:g} s)", path=source)
     arrays = {}
+    given = {k: np.asarray(v, dtype=float) for k, v in (rates or {}).items()}
     for key, values in (("pitch", pitch_angle), ("heave", heave_position)):
         y = np.asarray(values, dtype=float)
         if y.shape != t.shape or not np.all(np.isfinite(y)):
             raise ParseError(f"{name}: {key} must be finite with one value per time",
                              path=source)
-        spline = make_smoothing_spline(t, y)
-        arrays[key] = (spline(t), spline.derivative(1)(t), spline.derivative(2)(t))
+        if given:
+            rate, acceleration = (given[c] for c in RATE_COLUMNS if c.startswith(key))
+            arrays[key] = (y, rate, acceleration)
+        else:
+            spline = make_smoothing_spline(t, y)
+            arrays[key] = (spline(t), spline.derivative(1)(t), spline.derivative(2)(t))
+    kept = np.ones(t.shape, dtype=bool)
+    if not given:
+        ends = max(3, int(np.ceil(SPLINE_END_SHARE * len(t))))
+        kept[:ends] = kept[-ends:] = False
     state = KinematicState(time=t, pitch_angle=arrays["pitch"][0],
                            pitch_rate=arrays["pitch"][1],
                            pitch_acceleration=arrays["pitch"][2],
@@ -81,11 +103,12 @@ def case_from_arrays(name: str, time, pitch_angle, heave_position, normal_force,
     loads = Loads(t, *(np.asarray(v, dtype=float) for v in (normal_force, tangential_force,
                                                             moment)), source=name)
     if discard_s > 0:
-        kept = t >= t[0] + discard_s - 1e-9 * max(1.0, abs(t[-1]))
+        kept &= t >= t[0] + discard_s - 1e-9 * max(1.0, abs(t[-1]))
         if kept.sum() < MIN_SAMPLES:
             raise ParseError(f"{name}: {int(kept.sum())} samples after the first "
                              f"{discard_s:g} s left out (identification.discard_time); the "
                              f"diagnosis needs at least {MIN_SAMPLES}", path=source)
+    if not kept.all():
         state = KinematicState(**{f.name: getattr(state, f.name)[kept]
                                   for f in dataclasses.fields(KinematicState)})
         loads = Loads(t[kept], loads.normal_force[kept], loads.tangential_force[kept],
@@ -161,9 +184,10 @@ def check_setup(parameters: dict[str, float], config, source: str) -> None:
 
 def read_csv_case(path: str | Path, parameters: dict | None = None,
                   discard_s: float = 0.0, config=None) -> CaseData:
-    """A CSV with a header naming the columns of :data:`CSV_COLUMNS` (any order; SI units;
-    ``#`` comment lines allowed, ``# key = value`` ones before the header giving its
-    parameters, :func:`csv_parameters`), its first ``discard_s`` seconds left out
+    """A CSV with a header naming the columns of :data:`CSV_COLUMNS` and, optionally, all
+    four of :data:`RATE_COLUMNS` (any order; SI units; ``#`` comment lines allowed,
+    ``# key = value`` ones before the header giving its parameters,
+    :func:`csv_parameters`), its first ``discard_s`` seconds left out
     (:func:`case_from_arrays`). ``parameters`` adds to and overrides the file's own; with
     ``config`` (a :class:`~mfflap.config.CaseConfig`) a stated set-up is checked against it
     (:func:`check_setup`).
@@ -180,8 +204,15 @@ def read_csv_case(path: str | Path, parameters: dict | None = None,
     if config is not None:
         check_setup(given, config, str(path))
     col = read_csv_columns(path, CSV_COLUMNS)
+    present = [c for c in RATE_COLUMNS if c in col]
+    if present and len(present) < len(RATE_COLUMNS):
+        missing = [c for c in RATE_COLUMNS if c not in col]
+        raise ParseError(f"rate columns {present} without {missing}: give all four of "
+                         f"{list(RATE_COLUMNS)}, or none and they are derived from the "
+                         "positions", path=str(path), line=col.header_line)
+    rates = {c: col[c] for c in present} or None
     return case_from_arrays(path.stem, *(col[c] for c in CSV_COLUMNS), parameters=given,
-                            source=str(path), discard_s=discard_s)
+                            source=str(path), discard_s=discard_s, rates=rates)
 
 
 def csv_paths(paths) -> list[Path]:

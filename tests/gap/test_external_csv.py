@@ -99,6 +99,9 @@ def test_gap_diagnose_reads_a_folder_of_csv_files_with_their_frequencies(tmp_pat
     res = CliRunner().invoke(cli, ["gap", "diagnose", str(CASE), "--csv", str(folder),
                                    "--output", str(out)])
     assert res.exit_code == 0, res.output
+    # the loads are the model's plus noise: rates from the splines of the positions (their
+    # ends left out) leave noise only
+    assert res.output.startswith("within noise"), res.output
     assert "not checked by leave-one-frequency-out" not in res.output
     # without the frequencies, the check is said to be skipped, and why
     for c in data:
@@ -108,3 +111,26 @@ def test_gap_diagnose_reads_a_folder_of_csv_files_with_their_frequencies(tmp_pat
     assert res.exit_code == 0, res.output
     assert "not checked by leave-one-frequency-out: 6 of 6 cases give no frequency" in (
         res.output)
+
+
+def test_rates_given_in_the_file_are_used_as_they_are(tmp_path):
+    """All four rate columns: the case's rates are the file's (no spline, no end bias);
+    some of them only: refused naming the missing ones."""
+    data = synthesize(np.random.default_rng(4), NULL, 0.0, n_cases=1)
+    s = data[0].state
+    path = _write_csv(tmp_path / "rates.csv", data[0], [])
+    text = path.read_text().splitlines()
+    header = HEADER + ",pitch_rate,pitch_acceleration,heave_velocity,heave_acceleration"
+    rows = [",".join([line, *(repr(float(v)) for v in values)]) for line, values in zip(
+        text[1:], zip(s.pitch_rate, s.pitch_acceleration, s.heave_velocity,
+                      s.heave_acceleration, strict=True), strict=True)]
+    path.write_text("\n".join([header, *rows]) + "\n")
+    case = read_csv_case(path)
+    assert np.array_equal(case.state.heave_acceleration, s.heave_acceleration)
+    assert np.array_equal(case.state.pitch_rate, s.pitch_rate)
+    splined = read_csv_case(_write_csv(tmp_path / "positions.csv", data[0], []))
+    end_error = abs(splined.state.heave_acceleration[-1] - s.heave_acceleration[-1])
+    assert end_error > 10 * abs(case.state.heave_acceleration[-1] - s.heave_acceleration[-1])
+    path.write_text("\n".join([HEADER + ",pitch_rate", *(f"{r},0" for r in text[1:])]) + "\n")
+    with pytest.raises(ParseError, match=r"rate columns \['pitch_rate'\] without"):
+        read_csv_case(path)
