@@ -455,16 +455,6 @@ def test_gap_cli_on_a_record_folder(tmp_path):
         assert h5["gap"].attrs["residual_scaling"] == "case"
     assert 'residual_scaling = "case"' in out.with_suffix(".html").read_text().replace(
         "&quot;", '"')
-    res = CliRunner().invoke(cli, ["gap", "blindtest", "--trials", "5", "--json"])
-    assert res.exit_code == 0, res.output
-    blind = json.loads(res.stdout)
-    assert len(blind["confusion"]) == 7 and "coefficient_error" in blind
-    assert (blind["noise"], blind["residual_scaling"]) == ("absolute", "grid")
-    for scaling in ("case", "auto"):
-        res = CliRunner().invoke(cli, ["gap", "blindtest", "--trials", "2", "--noise",
-                                       "relative", "--residual-scaling", scaling])
-        assert res.exit_code == 0, res.output
-        assert f"2 trials (relative noise, residuals scaled by {scaling})" in res.output
     again = tmp_path / "again"
     write_record(again / f"{data[0].name}.h5",
                  CfdRecord(data[0].name, data[0].state, data[0].cfd, data[0].parameters))

@@ -1,23 +1,24 @@
 """The gap diagnosis on effects written apart from its candidates
-(benchmarks/gap_blind_independent.py): its goals on a few datasets of each effect, and the
-benchmark's own forms against their limits."""
+(mfflap.gap.textbook_effects, run by `mfflap gap blindtest`): its goals on a few datasets of
+each effect, the forms against their limits, and the command line."""
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
+from click.testing import CliRunner
 
+from mfflap.cli.main import cli
 from mfflap.config import CaseConfig
+from mfflap.errors import ConfigError
+from mfflap.gap import textbook_effects as bench
 from mfflap.gap.workflow import diagnose_cases
 from mfflap.kinematics.continuous import HarmonicMotion
 
 
-@pytest.fixture(scope="module")
-def bench(load_benchmark):
-    return load_benchmark("gap_blind_independent.py")
-
-
-def test_the_textbook_forms_meet_their_limits(bench):
+def test_the_textbook_forms_meet_their_limits():
     """Quasi-steady lift of a plate held at a small incidence is 2 pi alpha q S; Wagner's
     lag of a constant input is the input; the Polhamus force of a plate at 90 deg is
     K_v q S; Blasius friction at Re 1e4 has C_f = 0.0133."""
@@ -42,7 +43,7 @@ def test_the_textbook_forms_meet_their_limits(bench):
 
 
 @pytest.mark.slow
-def test_the_diagnosis_meets_the_goals_on_independent_effects(bench):
+def test_the_diagnosis_meets_the_goals_on_independent_effects():
     """Three datasets of each effect (forty of none): every in-library effect attributed,
     at most 5 % of the null datasets called anything but noise, at least two thirds of the
     out-of-library ones called structured and unexplained (docs/findings/gap_diagnosis.md
@@ -55,3 +56,28 @@ def test_the_diagnosis_meets_the_goals_on_independent_effects(bench):
     assert scores["in_library_attributed"] >= 0.9, said
     assert scores["null_false_alarms"] <= 0.05, said["none"]
     assert scores["out_of_library_structured"] >= 2 / 3, said
+
+
+def test_an_unknown_effect_or_noise_model_is_refused_naming_it():
+    with pytest.raises(ConfigError) as err:
+        bench.dataset("stall_flutter", 0, CaseConfig(), 3.0)
+    assert err.value.key == "effect" and "thin_aerofoil_lift" in str(err.value)
+    with pytest.raises(ConfigError) as err:
+        bench.dataset("none", 0, CaseConfig(), 3.0, noise="pink")
+    assert err.value.key == "noise"
+
+
+@pytest.mark.slow
+def test_gap_blindtest_runs_the_independent_forms_and_reports_the_goals():
+    res = CliRunner().invoke(cli, ["gap", "blindtest", "--trials", "1", "--json"])
+    assert res.exit_code == 0, res.output
+    out = json.loads(res.output[res.output.index("{"):])
+    assert set(out["verdicts"]) == set(bench.ACCEPTED)
+    assert all(len(v) == 1 for v in out["verdicts"].values())
+    assert set(out["scores"]) == {"in_library_attributed", "null_false_alarms",
+                                  "out_of_library_structured"}
+    assert out["noise"] == "relative" and out["trials"] == 8
+    text = CliRunner().invoke(cli, ["gap", "blindtest", "--trials", "1", "--noise",
+                                    "absolute", "--residual-scaling", "case"])
+    assert text.exit_code == 0, text.output
+    assert "in-library effects attributed" in text.output and "(goal >= 90 %)" in text.output
