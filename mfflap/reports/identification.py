@@ -23,6 +23,7 @@ from mfflap.identification.fit import (
     scalings_said,
 )
 from mfflap.identification.paper_figure3 import figure3_comparison
+from mfflap.identification.repeatability import cycle_nrmse
 from mfflap.performance import thrust_and_power
 from mfflap.reports.error_growth_plot import error_growth_figure
 from mfflap.reports.html import (
@@ -399,6 +400,18 @@ def add_identification_sections(rep: Report, results: Mapping[str, Identificatio
             f"Against the paper's Figure 3 (its Table 1 grid cases here, {label} weighting; "
             "St = 2 f A / U with A the trailing edge's half excursion):"))
         sec.blocks.append(table_html(["measure", "here", "the paper"], against.rows()))
+    by_name = {c.name: c for c in cases}
+    repeat = [(n, 100 * float(e), 100 * cycle_nrmse(by_name[n]))
+              for n, e in zip(res.case_names, err, strict=True) if n in by_name]
+    repeat = [r for r in repeat if np.isfinite(r[2])]
+    if repeat:
+        sec.blocks.append(text_html(
+            f"The model's NRMSE beside CFD's own cycle-to-cycle NRMSE (each whole cycle's F_n "
+            f"against the case's mean cycle, over the same range) on the {len(repeat)} "
+            "periodic cases: the model cannot be asked to follow a run more closely than the "
+            "run repeats itself."))
+        sec.blocks.append(table_html(["case", "model NRMSE of F_n [%]",
+                                      "CFD cycle-to-cycle NRMSE of F_n [%]"], repeat))
     if len(results) > 1:
         sec = rep.section("Sensitivity to the frequency weighting")
         sec.blocks.append(figure_html(strategy_error_figure(results),
