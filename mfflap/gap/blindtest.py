@@ -52,13 +52,31 @@ def trial_cases(rng: np.random.Generator, n_cases: int = 20, n_samples: int = 24
     return out
 
 
-def _ar1(rng, n: int, rho: float = 0.9) -> np.ndarray:
+def ar1_noise(rng: np.random.Generator, n: int, rho: float = 0.9) -> np.ndarray:
+    """``n`` samples of AR(1) noise, x[i] = rho x[i-1] + sqrt(1 - rho^2) e[i], from
+    x[0] = e[0] (e standard normal)."""
     e = rng.standard_normal(n)
     x = np.empty(n)
     x[0] = e[0]
     for i in range(1, n):
         x[i] = rho * x[i - 1] + np.sqrt(1 - rho**2) * e[i]
     return x
+
+
+def unabsorbed_rms(base: MorisonModel, cases: Sequence[CaseData], effects: Sequence[Loads],
+                   scale: dict[str, float]) -> float:
+    """The largest per-component RMS of the part of ``effects`` (one per case) that no refit
+    of ``base``'s coefficients absorbs: the effect's residual after a least-squares
+    projection on the base regressors, each component over its grid ``scale``."""
+    regs = [base.regressors(c.state) for c in cases]
+    a = np.vstack([np.column_stack([np.concatenate([getattr(r[t.name], k) for r in regs])
+                                    / scale[k] for t in base.terms]) for k in COMPONENTS])
+    e = np.concatenate([np.concatenate([getattr(ld, k) for ld in effects]) / scale[k]
+                        for k in COMPONENTS])
+    orth = e - a @ np.linalg.lstsq(a, e, rcond=None)[0]
+    n = len(orth) // len(COMPONENTS)
+    return max(float(np.sqrt(np.mean(orth[i * n:(i + 1) * n] ** 2)))
+               for i in range(len(COMPONENTS)))
 
 
 def synthesize(rng: np.random.Generator, effect: str, snr: float, noise_level: float = 0.05,
@@ -92,16 +110,7 @@ def synthesize_with_strength(rng: np.random.Generator, effect: str, snr: float,
     if effect != NULL:
         term = default_candidates()[effect]
         regs = [term.regressor(c.state) for c in cases]
-        base_regs = [base.regressors(c.state) for c in cases]
-        a = np.vstack([np.column_stack([np.concatenate([getattr(br[t.name], k) for br in
-                                                        base_regs]) / scale[k]
-                                        for t in base.terms]) for k in COMPONENTS])
-        e = np.concatenate([np.concatenate([getattr(r, k) for r in regs]) / scale[k]
-                            for k in COMPONENTS])
-        orth = e - a @ np.linalg.lstsq(a, e, rcond=None)[0]
-        n = len(orth) // len(COMPONENTS)
-        rms = max(float(np.sqrt(np.mean(orth[i * n:(i + 1) * n] ** 2)))
-                  for i in range(len(COMPONENTS)))
+        rms = unabsorbed_rms(base, cases, regs, scale)
         # the effect at a physical strength (its typical coefficient, +-20 %), the noise
         # sized for the signal-to-noise ratio: a fitted coefficient can then be judged
         # plausible or not as it would be on real data
@@ -120,7 +129,7 @@ def synthesize_with_strength(rng: np.random.Generator, effect: str, snr: float,
             size = scale[k]
             if noise == "relative":  # the case's own RMS (their mean square is scale's)
                 size = float(np.sqrt(np.mean(getattr(ld, k)**2)))
-            y = y + noise_level * size * _ar1(rng, len(y))
+            y = y + noise_level * size * ar1_noise(rng, len(y))
             comps[k] = y
         out.append(CaseData(c.name, c.parameters, c.state,
                             Loads(c.state.time, comps["normal_force"],

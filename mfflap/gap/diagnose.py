@@ -325,13 +325,12 @@ def diagnose(cases: Sequence[CaseData], base_model: ForceModel,
             pair = _score(system, combo, folds, base_sse, candidates, alpha, min_gain,
                           base_values, reference=best.heldout_sse)
             scores.append(pair)
-            if pair.significant and pair.gain > chosen.gain:
-                if pair.claimable:
-                    chosen = pair
+            if pair.claimable and pair.gain > chosen.gain:
+                chosen = pair
     scores.sort(key=lambda s: -s.gain)
     bar = chosen.gain if chosen is not None else -np.inf
-    not_claimed = {sc.label: sc.unclaimable() for sc in scores
-                   if sc.significant and sc.gain > bar and sc.unclaimable()}
+    not_claimed = {sc.label: why for sc in scores
+                   if sc.significant and sc.gain > bar and (why := sc.unclaimable())}
     rivals = indistinguishable_from(chosen, singles, alpha) if chosen is not None else []
     base_predictions = _predictions(system, base_cols, folds)
     whiteness = residual_whiteness(system.cases, base_predictions, alpha)

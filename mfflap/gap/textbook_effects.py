@@ -27,19 +27,19 @@ and unexplained.
 
 from __future__ import annotations
 
+from collections import Counter
 from collections.abc import Callable
 
 import numpy as np
 
 from mfflap.config import CaseConfig
 from mfflap.errors import ConfigError
-from mfflap.gap.blindtest import trial_cases
+from mfflap.gap.blindtest import ar1_noise, trial_cases, unabsorbed_rms
+from mfflap.gap.system import COMPONENTS
 from mfflap.gap.workflow import diagnose_cases
 from mfflap.hydro.loads import Loads
-from mfflap.hydro.morison import MorisonModel
 from mfflap.identification.data import CaseData
 
-COMPONENTS = ("normal_force", "tangential_force", "moment")
 #: how a dataset's noise is sized, case by case
 NOISE_MODELS = ("relative", "absolute")
 
@@ -147,20 +147,6 @@ def effect_loads(name: str, state, chord: float, span: float, density: float,
     raise ValueError(name)
 
 
-def _orthogonal_rms(base: MorisonModel, cases, effects, scale) -> float:
-    """The largest per-component RMS of the part of the effect no refit of the base
-    coefficients absorbs (each component on its grid scale)."""
-    regs = [base.regressors(c.state) for c in cases]
-    a = np.vstack([np.column_stack([np.concatenate([getattr(r[t.name], k) for r in regs])
-                                    / scale[k] for t in base.terms]) for k in COMPONENTS])
-    e = np.concatenate([np.concatenate([getattr(ld, k) for ld in effects]) / scale[k]
-                        for k in COMPONENTS])
-    orth = e - a @ np.linalg.lstsq(a, e, rcond=None)[0]
-    n = len(orth) // len(COMPONENTS)
-    return max(float(np.sqrt(np.mean(orth[i * n:(i + 1) * n] ** 2)))
-               for i in range(len(COMPONENTS)))
-
-
 def dataset(name: str, seed: int, config, snr: float, n_cases: int = 36,
             noise_level: float = 0.05, noise: str = "relative") -> list[CaseData]:
     """One blind dataset: perturbed Morison + the hidden effect at its textbook strength +
@@ -195,7 +181,7 @@ def dataset(name: str, seed: int, config, snr: float, n_cases: int = 36,
         effects = [effect_loads(name, c.state, p.chord, p.span, f.density,
                                 f.kinematic_viscosity, config.flow.velocity, rng)
                    for c in cases]
-        noise_level = _orthogonal_rms(base, cases, effects, scale) / snr
+        noise_level = unabsorbed_rms(base, cases, effects, scale) / snr
     out = []
     for i, (c, ld) in enumerate(zip(cases, clean, strict=True)):
         comps = {}
@@ -205,12 +191,7 @@ def dataset(name: str, seed: int, config, snr: float, n_cases: int = 36,
                 y += getattr(effects[i], k)
             size = (float(np.sqrt(np.mean(getattr(ld, k) ** 2))) if noise == "relative"
                     else scale[k])
-            e = rng.standard_normal(len(y))
-            wiggle = np.empty_like(y)  # AR(1), rho = 0.9, unit innovations' share
-            wiggle[0] = e[0]
-            for j in range(1, len(y)):
-                wiggle[j] = 0.9 * wiggle[j - 1] + np.sqrt(1 - 0.81) * e[j]
-            comps[k] = y + noise_level * size * wiggle
+            comps[k] = y + noise_level * size * ar1_noise(rng, len(y))
         out.append(CaseData(c.name, c.parameters, c.state,
                             Loads(c.state.time, comps["normal_force"],
                                   comps["tangential_force"], comps["moment"])))
@@ -279,10 +260,7 @@ def summary(said: dict[str, list[str]]) -> str:
     lines = []
     for name, verdicts in said.items():
         hits = sum(right(name, s) for s in verdicts)
-        counts: dict[str, int] = {}
-        for s in verdicts:
-            counts[s] = counts.get(s, 0) + 1
-        shown = ", ".join(f"{s} x{n}" for s, n in sorted(counts.items(), key=lambda i: -i[1]))
+        shown = ", ".join(f"{s} x{n}" for s, n in Counter(verdicts).most_common())
         lines.append(f"{name:24s} {hits}/{len(verdicts)} right   ({shown})")
     s = scores(said)
     lines += [f"in-library effects attributed      {s['in_library_attributed']:.0%} (goal >= 90 %)",
