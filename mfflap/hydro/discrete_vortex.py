@@ -191,134 +191,233 @@ def _sheet(x, y, x1, y1, x2, y2):
     return w.real, -w.imag
 
 
+#: the layout of the wake's scalar state in the kernels' ``aux`` array: the circulation and
+#: the impulse (x, y, angular) of the vortices that left the ring, and the last shed
+#: vortices' positions
+AUX_DROPPED, AUX_DROPPED_X, AUX_DROPPED_Y, AUX_DROPPED_ANG = 0, 1, 2, 3
+AUX_TEV_X, AUX_TEV_Y, AUX_LEV_X, AUX_LEV_Y = 4, 5, 6, 7
+#: rows of the kernels' ``work`` array: what one step's solution leaves for the loads, the
+#: wake's motion and the reverse sweep
+W_PX, W_PY, W_BOUND, W_A_KNOWN, W_A_TEV, W_A_LEV, W_COEFFS = 0, 1, 2, 3, 4, 5, 6
+
+
 @numba.njit(cache=True)
-def _march(heave, heave_rate, pitch, pitch_rate, chord, velocity, density, span, time_step,
-           critical_lesp, core2, n_points, wake_steps):
-    """The model's time march (module docstring); returns the step outputs and the wake."""
-    n_times = heave.size
+def _quadrature(chord, velocity, n_points):
+    """The chord's midpoints in phi, the map from normal velocity to the Glauert
+    coefficients (A = fourier @ W) and from these to the bound vortices (sheet @ A)."""
     phi = (np.arange(n_points) + 0.5) * math.pi / n_points
     dphi = math.pi / n_points
     x_chord = chord / 2 * (1 - np.cos(phi))
-    fourier = np.empty((n_points, n_points))  # A = fourier @ W
-    sheet = np.empty((n_points, n_points))  # clockwise bound circulation = sheet @ A
+    fourier = np.empty((n_points, n_points))
+    sheet = np.empty((n_points, n_points))  # clockwise bound circulation
     for i in range(n_points):
         fourier[0, i] = dphi / (math.pi * velocity)
         sheet[i, 0] = velocity * chord * dphi * (1 + math.cos(phi[i]))
         for n in range(1, n_points):
             fourier[n, i] = -2 * dphi / (math.pi * velocity) * math.cos(n * phi[i])
             sheet[i, n] = velocity * chord * dphi * math.sin(n * phi[i]) * math.sin(phi[i])
+    return x_chord, fourier, sheet
+
+
+@numba.njit(cache=True)
+def _initial_aux(heave0, heave_rate0, pitch0, chord, velocity, time_step):
+    """The wake's scalar state before the first step (the previous trailing-edge vortex
+    one and a half steps of stream behind the trailing edge)."""
+    aux = np.zeros(8)
+    aux[AUX_TEV_X] = chord * math.cos(pitch0) + 1.5 * time_step * velocity
+    aux[AUX_TEV_Y] = heave0 + chord * math.sin(pitch0) - 1.5 * time_step * heave_rate0
+    return aux
+
+
+@numba.njit(cache=True)
+def _solve_step(j, heave, heave_rate, pitch, pitch_rate, chord, velocity, density, span,
+                time_step, critical_lesp, core2, wake_steps, x_chord, fourier, sheet,
+                xs, ys, gs, aux, lev_was_shed, prev_imp, prev2_imp, work):
+    """One step up to the wake's motion: the oldest vortices leave the ring, the bound
+    circulation and the shed vortices follow from no penetration and Kelvin, the shed
+    vortices join the ring (xs, ys, gs and aux updated in place) and the loads follow from
+    the impulse. ``work`` receives the plate's points, bound vortices and coefficients.
+
+    Returns (F_n, F_t, M, shed, gam_tev, gam_lev, total circulation, imp_x, imp_y, ang,
+    geometry): geometry = (c, s, tx, ty, tex, tey, lex, ley, k_tev, k_lev).
+    """
+    n_points = x_chord.size
+    slot = j % wake_steps
     kelvin_scale = math.pi * chord * velocity
+    # the oldest vortices leave the ring; their circulation stays in Kelvin's balance
+    shift = velocity * time_step * j
+    for k in (slot, wake_steps + slot):
+        if gs[k] != 0.0:
+            xr = xs[k] - shift
+            aux[AUX_DROPPED] += gs[k]
+            aux[AUX_DROPPED_X] += gs[k] * ys[k]
+            aux[AUX_DROPPED_Y] -= gs[k] * xr
+            aux[AUX_DROPPED_ANG] += gs[k] * (xr * xr + ys[k] * ys[k])
+            gs[k] = 0.0
+    c, s_ = math.cos(pitch[j]), math.sin(pitch[j])
+    lx, ly = 0.0, heave[j]
+    tx, ty = lx + chord * c, ly + chord * s_
+    px, py = work[W_PX], work[W_PY]
+    w_known = np.empty(n_points)
+    w_tev, w_lev = np.empty(n_points), np.empty(n_points)
+    for i in range(n_points):
+        px[i], py[i] = lx + x_chord[i] * c, ly + x_chord[i] * s_
+        wu, wv = _induced(px[i], py[i], xs, ys, gs, core2)
+        w_known[i] = (-velocity * s_ - heave_rate[j] * c - pitch_rate[j] * x_chord[i]
+                      - wu * s_ + wv * c)
+    # the circulation shed in this step: a uniform sheet from each edge
+    tex = tx + (aux[AUX_TEV_X] - tx) * (2 / 3)
+    tey = ty + (aux[AUX_TEV_Y] - ty) * (2 / 3)
+    if lev_was_shed:
+        lex = lx + (aux[AUX_LEV_X] - lx) * (2 / 3)
+        ley = ly + (aux[AUX_LEV_Y] - ly) * (2 / 3)
+    else:
+        lex, ley = lx + time_step * velocity, ly - time_step * heave_rate[j]
+    for i in range(n_points):
+        u, v = _sheet(px[i], py[i], tx, ty, tex, tey)
+        w_tev[i] = -u * s_ + v * c
+        u, v = _sheet(px[i], py[i], lx, ly, lex, ley)
+        w_lev[i] = -u * s_ + v * c
+    a_known, a_tev, a_lev = work[W_A_KNOWN], work[W_A_TEV], work[W_A_LEV]
+    a_known[:] = fourier @ w_known
+    a_tev[:] = fourier @ w_tev
+    a_lev[:] = fourier @ w_lev
+    k_known = kelvin_scale * (a_known[0] + a_known[1] / 2)
+    k_tev = kelvin_scale * (a_tev[0] + a_tev[1] / 2)
+    k_lev = kelvin_scale * (a_lev[0] + a_lev[1] / 2)
+    free_total = gs.sum() + aux[AUX_DROPPED]
+    gam_tev = (k_known - free_total) / (1 - k_tev)
+    gam_lev = 0.0
+    a0_trial = a_known[0] + gam_tev * a_tev[0]
+    shed = abs(a0_trial) > critical_lesp
+    if shed:
+        target = critical_lesp if a0_trial > 0 else -critical_lesp
+        det = a_tev[0] * (1 - k_lev) - a_lev[0] * (1 - k_tev)
+        rhs0, rhs1 = target - a_known[0], k_known - free_total
+        gam_tev = (rhs0 * (1 - k_lev) - a_lev[0] * rhs1) / det
+        gam_lev = (a_tev[0] * rhs1 - (1 - k_tev) * rhs0) / det
+    coeffs, bound = work[W_COEFFS], work[W_BOUND]
+    coeffs[:] = a_known + gam_tev * a_tev + gam_lev * a_lev
+    bound[:] = sheet @ coeffs
+    # the shed sheets become point vortices at their centres
+    xs[slot], ys[slot], gs[slot] = (tx + tex) / 2, (ty + tey) / 2, gam_tev
+    xs[wake_steps + slot], ys[wake_steps + slot] = (lx + lex) / 2, (ly + ley) / 2
+    gs[wake_steps + slot] = gam_lev
+    total = -kelvin_scale * (coeffs[0] + coeffs[1] / 2) + gs.sum() + aux[AUX_DROPPED]
+    # the loads from the rate of change of the vortex impulse, in the frame of the fluid
+    # at rest (x' = x - U t): every vortex, bound and free, with those that left the ring
+    imp_x, imp_y = aux[AUX_DROPPED_X], aux[AUX_DROPPED_Y]
+    ang = aux[AUX_DROPPED_ANG]
+    for k in range(2 * wake_steps):
+        if gs[k] != 0.0:
+            xr = xs[k] - shift
+            imp_x += gs[k] * ys[k]
+            imp_y -= gs[k] * xr
+            ang += gs[k] * (xr * xr + ys[k] * ys[k])
+    for i in range(n_points):
+        xr = px[i] - shift
+        imp_x -= bound[i] * py[i]
+        imp_y += bound[i] * xr
+        ang -= bound[i] * (xr * xr + py[i] * py[i])
+    scale = density * span / time_step
+    if j == 0:  # the plate at rest, and the fluid with it, before t_0
+        fx, fy, mo = -scale * imp_x, -scale * imp_y, scale * ang / 2
+    else:
+        fx = -scale * (1.5 * imp_x - 2 * prev_imp[0] + 0.5 * prev2_imp[0])
+        fy = -scale * (1.5 * imp_y - 2 * prev_imp[1] + 0.5 * prev2_imp[1])
+        mo = scale * (1.5 * ang - 2 * prev_imp[2] + 0.5 * prev2_imp[2]) / 2
+    normal = -fx * s_ + fy * c
+    tangential = fx * c + fy * s_
+    # about the leading edge: M_LE = M_O - (r_LE x F)
+    moment = mo - ((lx - shift) * fy - ly * fx)
+    geometry = (c, s_, tx, ty, tex, tey, lex, ley, k_tev, k_lev)
+    return (normal, tangential, moment, shed, gam_tev, gam_lev, total, imp_x, imp_y, ang,
+            geometry)
+
+
+@numba.njit(cache=True)
+def _wake_velocity(k, xs, ys, gs, work, velocity, core2):
+    """The velocity of free vortex k: the stream, the bound sheet and the other vortices."""
+    u, v = _induced(xs[k], ys[k], work[W_PX], work[W_PY], -work[W_BOUND], core2)
+    uw, vw = _induced(xs[k], ys[k], xs, ys, gs, core2)
+    return velocity + u + uw, v + vw
+
+
+@numba.njit(cache=True)
+def _advect(slot, xs, ys, gs, aux, work, velocity, time_step, core2, move_u, move_v):
+    """The free vortices move with the local flow (forward Euler); the last shed vortices'
+    positions are kept for the next step's sheets."""
+    wake_steps = xs.size // 2
+    for k in range(2 * wake_steps):
+        if gs[k] != 0.0:
+            move_u[k], move_v[k] = _wake_velocity(k, xs, ys, gs, work, velocity, core2)
+    for k in range(2 * wake_steps):
+        if gs[k] != 0.0:
+            xs[k] += time_step * move_u[k]
+            ys[k] += time_step * move_v[k]
+    aux[AUX_TEV_X], aux[AUX_TEV_Y] = xs[slot], ys[slot]
+    aux[AUX_LEV_X], aux[AUX_LEV_Y] = xs[wake_steps + slot], ys[wake_steps + slot]
+
+
+@numba.njit(cache=True)
+def _march(heave, heave_rate, pitch, pitch_rate, chord, velocity, density, span, time_step,
+           critical_lesp, core2, n_points, wake_steps, tape_wake, tape_aux, tape_flags,
+           tape_impulse):
+    """The model's time march (module docstring); returns the step outputs and the wake.
+
+    The tape arrays, when they have a row per step (else zero rows), receive the wake before
+    each step (xs, ys, gs), its scalar state, whether the previous and this step shed from
+    the leading edge and the step's impulse: what the reverse sweep needs.
+    """
+    n_times = heave.size
+    x_chord, fourier, sheet = _quadrature(chord, velocity, n_points)
+    taping = tape_wake.shape[0] == n_times
     xs = np.zeros(2 * wake_steps)  # trailing-edge vortices first, then leading-edge ones
     ys = np.zeros(2 * wake_steps)
     gs = np.zeros(2 * wake_steps)
     out = np.zeros((7, n_times))
-    px, py = np.empty(n_points), np.empty(n_points)
-    wu, wv = np.empty(n_points), np.empty(n_points)
-    w_known, w_tev, w_lev = np.empty(n_points), np.empty(n_points), np.empty(n_points)
-    bound = np.empty(n_points)
+    work = np.empty((7, n_points))
     move_u, move_v = np.empty(2 * wake_steps), np.empty(2 * wake_steps)
-    dropped = 0.0
-    last_tev_x = chord * math.cos(pitch[0]) + 1.5 * time_step * velocity
-    last_tev_y = heave[0] + chord * math.sin(pitch[0]) - 1.5 * time_step * heave_rate[0]
-    last_lev_x = last_lev_y = 0.0
+    aux = _initial_aux(heave[0], heave_rate[0], pitch[0], chord, velocity, time_step)
     lev_was_shed = False
-    dropped_x = dropped_y = dropped_ang = 0.0
     prev_imp, prev2_imp = np.zeros(3), np.zeros(3)
     for j in range(n_times):
-        slot = j % wake_steps
-        # the oldest vortices leave the ring; their circulation stays in Kelvin's balance
-        shift = velocity * time_step * j
-        for k in (slot, wake_steps + slot):
-            if gs[k] != 0.0:
-                xr = xs[k] - shift
-                dropped += gs[k]
-                dropped_x += gs[k] * ys[k]
-                dropped_y -= gs[k] * xr
-                dropped_ang += gs[k] * (xr * xr + ys[k] * ys[k])
-                gs[k] = 0.0
-        c, s_ = math.cos(pitch[j]), math.sin(pitch[j])
-        lx, ly = 0.0, heave[j]
-        tx, ty = lx + chord * c, ly + chord * s_
-        for i in range(n_points):
-            px[i], py[i] = lx + x_chord[i] * c, ly + x_chord[i] * s_
-            wu[i], wv[i] = _induced(px[i], py[i], xs, ys, gs, core2)
-            w_known[i] = (-velocity * s_ - heave_rate[j] * c - pitch_rate[j] * x_chord[i]
-                          - wu[i] * s_ + wv[i] * c)
-        # the circulation shed in this step: a uniform sheet from each edge
-        tex = tx + (last_tev_x - tx) * (2 / 3)
-        tey = ty + (last_tev_y - ty) * (2 / 3)
-        if lev_was_shed:
-            lex, ley = lx + (last_lev_x - lx) * (2 / 3), ly + (last_lev_y - ly) * (2 / 3)
-        else:
-            lex, ley = lx + time_step * velocity, ly - time_step * heave_rate[j]
-        for i in range(n_points):
-            u, v = _sheet(px[i], py[i], tx, ty, tex, tey)
-            w_tev[i] = -u * s_ + v * c
-            u, v = _sheet(px[i], py[i], lx, ly, lex, ley)
-            w_lev[i] = -u * s_ + v * c
-        a_known, a_tev, a_lev = fourier @ w_known, fourier @ w_tev, fourier @ w_lev
-        k_known = kelvin_scale * (a_known[0] + a_known[1] / 2)
-        k_tev = kelvin_scale * (a_tev[0] + a_tev[1] / 2)
-        k_lev = kelvin_scale * (a_lev[0] + a_lev[1] / 2)
-        free_total = gs.sum() + dropped
-        gam_tev = (k_known - free_total) / (1 - k_tev)
-        gam_lev = 0.0
-        a0_trial = a_known[0] + gam_tev * a_tev[0]
-        shed = abs(a0_trial) > critical_lesp
-        if shed:
-            target = critical_lesp if a0_trial > 0 else -critical_lesp
-            det = a_tev[0] * (1 - k_lev) - a_lev[0] * (1 - k_tev)
-            rhs0, rhs1 = target - a_known[0], k_known - free_total
-            gam_tev = (rhs0 * (1 - k_lev) - a_lev[0] * rhs1) / det
-            gam_lev = (a_tev[0] * rhs1 - (1 - k_tev) * rhs0) / det
-        coeffs = a_known + gam_tev * a_tev + gam_lev * a_lev
-        bound[:] = sheet @ coeffs
-        # the shed sheets become point vortices at their centres, and everything moves
-        xs[slot], ys[slot], gs[slot] = (tx + tex) / 2, (ty + tey) / 2, gam_tev
-        xs[wake_steps + slot], ys[wake_steps + slot] = (lx + lex) / 2, (ly + ley) / 2
-        gs[wake_steps + slot] = gam_lev
-        out[3, j], out[4, j], out[5, j] = coeffs[0], gam_tev, gam_lev
-        out[6, j] = -kelvin_scale * (coeffs[0] + coeffs[1] / 2) + gs.sum() + dropped
-        # the loads from the rate of change of the vortex impulse, in the frame of the fluid
-        # at rest (x' = x - U t): every vortex, bound and free, with those that left the ring
-        imp_x, imp_y, ang = dropped_x, dropped_y, dropped_ang
-        for k in range(2 * wake_steps):
-            if gs[k] != 0.0:
-                xr = xs[k] - shift
-                imp_x += gs[k] * ys[k]
-                imp_y -= gs[k] * xr
-                ang += gs[k] * (xr * xr + ys[k] * ys[k])
-        for i in range(n_points):
-            xr = px[i] - shift
-            imp_x -= bound[i] * py[i]
-            imp_y += bound[i] * xr
-            ang -= bound[i] * (xr * xr + py[i] * py[i])
-        scale = density * span / time_step
-        if j == 0:  # the plate at rest, and the fluid with it, before t_0
-            fx, fy, mo = -scale * imp_x, -scale * imp_y, scale * ang / 2
-        else:
-            fx = -scale * (1.5 * imp_x - 2 * prev_imp[0] + 0.5 * prev2_imp[0])
-            fy = -scale * (1.5 * imp_y - 2 * prev_imp[1] + 0.5 * prev2_imp[1])
-            mo = scale * (1.5 * ang - 2 * prev_imp[2] + 0.5 * prev2_imp[2]) / 2
+        if taping:
+            tape_wake[j, 0], tape_wake[j, 1], tape_wake[j, 2] = xs, ys, gs
+            tape_aux[j] = aux
+            tape_flags[j, 0] = lev_was_shed
+        res = _solve_step(j, heave, heave_rate, pitch, pitch_rate, chord, velocity, density,
+                          span, time_step, critical_lesp, core2, wake_steps, x_chord, fourier,
+                          sheet, xs, ys, gs, aux, lev_was_shed, prev_imp, prev2_imp, work)
+        out[0, j], out[1, j], out[2, j] = res[0], res[1], res[2]
+        out[3, j], out[4, j], out[5, j] = work[W_COEFFS, 0], res[4], res[5]
+        out[6, j] = res[6]
+        if taping:
+            tape_flags[j, 1] = res[3]
+            tape_impulse[j, 0], tape_impulse[j, 1], tape_impulse[j, 2] = res[7], res[8], res[9]
         prev2_imp[:] = prev_imp
-        prev_imp[0], prev_imp[1], prev_imp[2] = imp_x, imp_y, ang
-        out[0, j] = -fx * s_ + fy * c
-        out[1, j] = fx * c + fy * s_
-        # about the leading edge: M_LE = M_O - (r_LE x F)
-        out[2, j] = mo - ((lx - shift) * fy - ly * fx)
-        for k in range(2 * wake_steps):
-            if gs[k] != 0.0:
-                u, v = _induced(xs[k], ys[k], px, py, -bound, core2)
-                uw, vw = _induced(xs[k], ys[k], xs, ys, gs, core2)
-                move_u[k], move_v[k] = velocity + u + uw, v + vw
-        for k in range(2 * wake_steps):
-            if gs[k] != 0.0:
-                xs[k] += time_step * move_u[k]
-                ys[k] += time_step * move_v[k]
-        last_tev_x, last_tev_y = xs[slot], ys[slot]
-        last_lev_x, last_lev_y = xs[wake_steps + slot], ys[wake_steps + slot]
-        lev_was_shed = shed
+        prev_imp[0], prev_imp[1], prev_imp[2] = res[7], res[8], res[9]
+        _advect(j % wake_steps, xs, ys, gs, aux, work, velocity, time_step, core2, move_u,
+                move_v)
+        lev_was_shed = res[3]
     return out, xs, ys, gs
+
+
+def _check_stream(stream: FreeStream) -> None:
+    if not stream.velocity > 0:
+        raise ConfigError("the discrete-vortex model needs a stream: flow.velocity > 0",
+                          key="flow.velocity")
+
+
+def _wake_steps_for(settings: VortexModelSettings, plate: Plate, stream: FreeStream,
+                    time_step: float, n_times: int) -> int:
+    """The wake ring's length: the settings' cut-off, at most the motion's samples."""
+    return min(settings.wake_steps(plate.chord, stream.velocity, time_step), n_times)
+
+
+def _no_tape() -> tuple[np.ndarray, ...]:
+    return (np.zeros((0, 3, 1)), np.zeros((0, 8)), np.zeros((0, 2), dtype=np.bool_),
+            np.zeros((0, 3)))
 
 
 def simulate_vortex_model(state: KinematicState, plate: Plate | None = None,
@@ -354,17 +453,15 @@ def simulate_vortex_model(state: KinematicState, plate: Plate | None = None,
     plate, fluid, stream = plate or Plate(), fluid or Fluid(), stream or FreeStream()
     settings = settings or VortexModelSettings()
     dt = _uniform_time_step(state.time)
-    if not stream.velocity > 0:
-        raise ConfigError("the discrete-vortex model needs a stream: flow.velocity > 0",
-                          key="flow.velocity")
+    _check_stream(stream)
     n_times = np.size(state.time)
-    wake_steps = min(settings.wake_steps(plate.chord, stream.velocity, dt), n_times)
+    wake_steps = _wake_steps_for(settings, plate, stream, dt, n_times)
     kinematics = (np.ascontiguousarray(getattr(state, k), dtype=float) for k in (
         "heave_position", "heave_velocity", "pitch_angle", "pitch_rate"))
     out, xs, ys, gs = _march(*kinematics, plate.chord, stream.velocity, fluid.density,
                              plate.span, dt, settings.critical_lesp,
                              (settings.core_radius_chords * plate.chord) ** 2,
-                             settings.chord_points, wake_steps)
+                             settings.chord_points, wake_steps, *_no_tape())
     normal, tangential, moment, a0, gam_tev, gam_lev, total = out
     slot = n_times % wake_steps
     order = (slot - 1 - np.arange(wake_steps)) % wake_steps
