@@ -47,6 +47,7 @@ from mfflap.cfd.openfoam.writer import SolverSettings
 from mfflap.errors import ConfigError, MfflapError
 from mfflap.parameters import Fluid, FreeStream, Plate
 from mfflap.records.bursts import bridge_load_bursts, find_load_bursts
+from mfflap.records.cycle_scatter import add_cycle_scatter
 from mfflap.records.force_envelope import find_envelope_breaches
 from mfflap.records.mixed_set_up import DEFAULT_DISCARD_TIME_S, describe_mixed, mixed_since_s
 from mfflap.records.record import (
@@ -159,6 +160,7 @@ def run_one(case: CampaignCase, out_dir: str, setup: CampaignSetup) -> CaseStatu
                                 timeout_s=setup.timeout_s,
                                 retries_from_start=setup.retries_from_start)
         write_record(record_path, record, single_precision=setup.single_precision)
+        add_cycle_scatter(record_path)
     except CaseBusyError as exc:  # not a failure: the process running it records it
         return CaseStatus(case.case_id, "busy", str(exc).splitlines()[0])
     except RunStopped as exc:  # the campaign was stopped: resumed by the next run

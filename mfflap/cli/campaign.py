@@ -175,6 +175,35 @@ def status_cmd(out_dir: Path, discard_time_s: float | None, as_json: bool) -> No
                   "--rerun-mixed` reruns them as one set-up)" if mixed else ""))
 
 
+@campaign.command("scatter")
+@click.argument("out_dir", type=click.Path(file_okay=False, exists=True, path_type=Path))
+@click.option("--json", "as_json", is_flag=True, help="Print the scatters as JSON.")
+def scatter_cmd(out_dir: Path, as_json: bool) -> None:
+    """Each record's own statistical uncertainty: the means over its whole periods after the
+    start-up of thrust, input power and RMS F_n, with their cycle-to-cycle standard
+    deviation (stored in each record's /cycle_scatter group; added to records that lack
+    it). A pitch-ramp record's scatter includes the ramp's change ("ramp")."""
+    from dataclasses import asdict
+
+    from mfflap.records.cycle_scatter import folder_cycle_scatter
+
+    rows = folder_cycle_scatter(out_dir)
+    if as_json:
+        echo_json([{"name": n, **(asdict(s) if s else {})} for n, s in rows])
+        return
+    click.echo(f"{'record':44s} cycles  thrust [N]           power [W]            "
+               "RMS F_n [N]")
+    for name, s in rows:
+        if s is None:
+            click.echo(f"{name:44s} no whole period after the start-up")
+            continue
+        kind = "" if s.repeats else "  ramp"
+        click.echo(f"{name:44s} {s.n_cycles:6d}  {s.mean_thrust_n:8.3g} +- "
+                   f"{s.thrust_scatter_n:<8.2g}  {s.mean_power_w:8.3g} +- "
+                   f"{s.power_scatter_w:<8.2g}  {s.rms_normal_force_n:8.3g} +- "
+                   f"{s.rms_normal_force_scatter_n:<8.2g}{kind}")
+
+
 def _setups_line(differences: list[tuple[str, Any, Any]] | None) -> str:
     """What separates the two campaigns' set-ups, for the head of the comparison."""
     if differences is None:
