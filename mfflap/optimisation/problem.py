@@ -25,28 +25,15 @@ import numpy as np
 
 from mfflap.errors import ConfigError, shown
 from mfflap.hydro.morison import MorisonModel
-from mfflap.kinematics.discrete import SCHEMES, DiscreteMotion, initial_state_weights
+from mfflap.kinematics.discrete import SCHEMES, DiscreteMotion
 from mfflap.optimisation.adjoint_kernel import objective_and_gradient
+from mfflap.optimisation.state_adjoint import (
+    Gradient,
+    chain_state_partials,
+    smoothness,
+    smoothness_gradient,
+)
 from mfflap.performance import thrust_and_power
-
-
-@dataclass(frozen=True)
-class Gradient:
-    """dJ/d(controls) and dJ/d(time step).
-
-    pitch_acceleration : shape (..., N), units of J per rad/s^2
-    heave_acceleration : shape (..., N)
-    time_step : shape (...)
-    """
-
-    pitch_acceleration: np.ndarray
-    heave_acceleration: np.ndarray
-    time_step: np.ndarray
-
-    def flat(self) -> np.ndarray:
-        """[d/d pitch (N), d/d heave (N), d/d dt] of one motion."""
-        return np.concatenate([self.pitch_acceleration, self.heave_acceleration,
-                               np.atleast_1d(self.time_step)])
 
 
 def _positive_part(x):
@@ -240,13 +227,7 @@ class FlappingProblem:
 
     def smoothness(self, motion: DiscreteMotion):
         """J_s with the wrap term (acc_1 + acc_N), shape (...)."""
-        out = 0.0
-        for eps, a in ((self.smoothing_pitch, motion.pitch_acceleration),
-                       (self.smoothing_heave, motion.heave_acceleration)):
-            d = np.diff(a, axis=-1)
-            wrap = a[..., 0] + a[..., -1]
-            out = out + 0.5 * eps * ((d**2).sum(axis=-1) + wrap**2)
-        return out
+        return smoothness(motion, self.smoothing_pitch, self.smoothing_heave)
 
     def objective(self, motion: DiscreteMotion):
         """J = mean_j L_j + J_s (+ the linear modifier), shape (...)."""
@@ -395,50 +376,13 @@ class FlappingProblem:
     def adjoint_gradient(self, motion: DiscreteMotion) -> Gradient:
         """The array implementation of the adjoint (any batch shape; the reference)."""
         n = motion.n_steps
-        dt = np.asarray(motion.time_step, dtype=float)
-        dtc = dt[..., None]
         tr = motion.trajectory()
-        p = self._local_partials(motion, tr)
-        grads = {}
-        grad_dt = np.zeros(dt.shape)
-        for dof, acc, rate_key, g_rate, g_pos, g_acc in (
-            ("pitch", motion.pitch_acceleration, "pitch_rate",
-             p["td"], p["th"], p["tdd"]),
-            ("heave", motion.heave_acceleration, "heave_velocity",
-             p["hd"], p["hp"], p["hdd"]),
-        ):
-            g_rate, g_pos, g_acc = g_rate / n, g_pos / n, g_acc / n
-            if self.scheme == "midpoint":
-                # hydro rate = rate_j + dt acc_j / 2
-                g_acc = g_acc + 0.5 * dtc * g_rate
-                grad_dt = grad_dt + 0.5 * (g_rate * acc).sum(-1)
-            # backward sweep, lambda_{N+1} = 0: lam_p_j = sum_{i>=j} g_pos_i,
-            # lam_r_j = g_rate_j + lam_r_{j+1} + dt lam_p_{j+1}
-            lam_p = np.flip(np.cumsum(np.flip(g_pos, -1), -1), -1)
-            lam_p_next = np.concatenate([lam_p[..., 1:], np.zeros_like(lam_p[..., :1])], -1)
-            lam_r = np.flip(np.cumsum(np.flip(g_rate + dtc * lam_p_next, -1), -1), -1)
-            lam_r_next = np.concatenate([lam_r[..., 1:], np.zeros_like(lam_r[..., :1])], -1)
-            rate = tr[rate_key][..., :-1]
-            g_u = g_acc + dtc * lam_r_next + dtc**2 * lam_p_next
-            grad_dt = grad_dt + (acc * lam_r_next + (rate + 2 * dtc * acc) * lam_p_next).sum(-1)
-            # chain through x_1(u, dt): rate_1 = -(dt/2) sum acc, pos_1 = dt^2 sum w_j acc_j
-            w = initial_state_weights(n)
-            g_u = g_u + lam_r[..., :1] * (-0.5 * dtc) + lam_p[..., :1] * dtc**2 * w
-            grad_dt = grad_dt + lam_r[..., 0] * (-0.5 * acc.sum(-1)) + lam_p[..., 0] * (
-                2 * dt * (acc @ w))
-            grads[dof] = g_u
-        for dof, eps, acc in (("pitch", self.smoothing_pitch, motion.pitch_acceleration),
-                              ("heave", self.smoothing_heave, motion.heave_acceleration)):
-            if eps == 0:
-                continue
-            d = np.diff(acc, axis=-1)
-            gs = np.zeros_like(acc)
-            gs[..., :-1] -= eps * d
-            gs[..., 1:] += eps * d
-            wrap = acc[..., 0] + acc[..., -1]
-            gs[..., 0] += eps * wrap
-            gs[..., -1] += eps * wrap
-            grads[dof] = grads[dof] + gs
+        partials = {k: v / n for k, v in self._local_partials(motion, tr).items()}
+        chained = chain_state_partials(motion, partials, self.scheme, tr)
+        smooth = smoothness_gradient(motion, self.smoothing_pitch, self.smoothing_heave)
+        grads = {"pitch": chained.pitch_acceleration + smooth["pitch"],
+                 "heave": chained.heave_acceleration + smooth["heave"]}
+        grad_dt = chained.time_step
         if self.linear_modifier is not None:
             self._check_modifier(n)
             g = self.linear_modifier.gradient
