@@ -160,7 +160,7 @@ def run_one(case: CampaignCase, out_dir: str, setup: CampaignSetup) -> CaseStatu
                                 timeout_s=setup.timeout_s,
                                 retries_from_start=setup.retries_from_start)
         write_record(record_path, record, single_precision=setup.single_precision)
-        add_cycle_scatter(record_path)
+        add_cycle_scatter(record_path, record)
     except CaseBusyError as exc:  # not a failure: the process running it records it
         return CaseStatus(case.case_id, "busy", str(exc).splitlines()[0])
     except RunStopped as exc:  # the campaign was stopped: resumed by the next run

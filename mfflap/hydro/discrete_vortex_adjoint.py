@@ -401,18 +401,68 @@ def vortex_loads_vjp(state: KinematicState, normal_weight: np.ndarray,
     >>> bool(abs(grad.heave_velocity[40] - fd) < 1e-5 * abs(fd))
     True
     """
+    return record_vortex_run(state, plate, fluid, stream, settings).gradient(
+        normal_weight, tangential_weight, moment_weight)
+
+
+@dataclass(frozen=True, eq=False)
+class TapedVortexRun:
+    """A forward run of the discrete-vortex model with its tape: its loads, and the gradient
+    of any weighted sum of them by the reverse sweep (:meth:`gradient`), without running the
+    model forward again. Made by :func:`record_vortex_run`.
+
+    Attributes
+    ----------
+    loads : Loads
+        The run's F_n, F_t (N) and M about the leading edge (N*m).
+    """
+
+    loads: Loads
+    _time: np.ndarray
+    _kinematics: tuple
+    _constants: tuple
+    _tape: tuple
+
+    def gradient(self, normal_weight: np.ndarray, tangential_weight: np.ndarray,
+                 moment_weight: np.ndarray) -> VortexLoadsGradient:
+        """The gradient of sum_j (a_j F_n,j + b_j F_t,j + c_j M_j), as
+        :func:`vortex_loads_vjp` returns it."""
+        n_times = self._time.size
+        weights = [np.ascontiguousarray(w, dtype=float) for w in (
+            normal_weight, tangential_weight, moment_weight)]
+        for name, w in zip(("normal_weight", "tangential_weight", "moment_weight"), weights,
+                           strict=True):
+            if w.shape != (n_times,):
+                raise ConfigError(f"{name} must have one value per sample ({n_times}), got "
+                                  f"shape {w.shape}", key=name)
+        h_bar, hd_bar, th_bar, thd_bar, dt_bar = _march_adjoint(
+            *self._kinematics, *self._constants, *self._tape, *weights)
+        return VortexLoadsGradient(self.loads, h_bar, hd_bar, th_bar, thd_bar, float(dt_bar))
+
+
+def record_vortex_run(state: KinematicState, plate: Plate | None = None,
+                      fluid: Fluid | None = None, stream: FreeStream | None = None,
+                      settings: VortexModelSettings | None = None) -> TapedVortexRun:
+    """Run the discrete-vortex model forward keeping the tape its reverse sweep needs (the
+    wake before every step: 3 x 2 x (wake steps) numbers a step).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from mfflap.kinematics.continuous import HarmonicMotion
+    >>> state = HarmonicMotion(frequency=1.0, heave_amplitude=0.1,
+    ...                        pitch_amplitude=0.3).sample(0.01 + np.arange(50) / 100)
+    >>> run = record_vortex_run(state, settings=VortexModelSettings(wake_chords=0.5))
+    >>> weight = np.full(50, 1 / 50)
+    >>> grad = run.gradient(weight, 0 * weight, 0 * weight)  # d(mean F_n)
+    >>> grad.pitch_rate.shape
+    (50,)
+    """
     plate, fluid, stream = plate or Plate(), fluid or Fluid(), stream or FreeStream()
     settings = settings or VortexModelSettings()
     _check_stream(stream)
     dt = _uniform_time_step(state.time)
     n_times = np.size(state.time)
-    weights = [np.ascontiguousarray(w, dtype=float) for w in (
-        normal_weight, tangential_weight, moment_weight)]
-    for name, w in zip(("normal_weight", "tangential_weight", "moment_weight"), weights,
-                       strict=True):
-        if w.shape != (n_times,):
-            raise ConfigError(f"{name} must have one value per sample ({n_times}), got shape "
-                              f"{w.shape}", key=name)
     wake_steps = _wake_steps_for(settings, plate, stream, dt, n_times)
     kinematics = tuple(np.ascontiguousarray(getattr(state, k), dtype=float) for k in (
         "heave_position", "heave_velocity", "pitch_angle", "pitch_rate"))
@@ -422,11 +472,9 @@ def vortex_loads_vjp(state: KinematicState, normal_weight: np.ndarray,
     tape = (np.empty((n_times, 3, 2 * wake_steps)), np.empty((n_times, 8)),
             np.empty((n_times, 2), dtype=np.bool_), np.empty((n_times, 3)))
     out, _, _, _ = _march(*kinematics, *constants, *tape)
-    h_bar, hd_bar, th_bar, thd_bar, dt_bar = _march_adjoint(*kinematics, *constants, *tape,
-                                                            *weights)
-    loads = Loads(np.asarray(state.time, dtype=float), out[0], out[1], out[2],
-                  source="discrete_vortex")
-    return VortexLoadsGradient(loads, h_bar, hd_bar, th_bar, thd_bar, float(dt_bar))
+    time = np.asarray(state.time, dtype=float)
+    loads = Loads(time, out[0], out[1], out[2], source="discrete_vortex")
+    return TapedVortexRun(loads, time, kinematics, constants, tape)
 
 
-__all__ = ["VortexLoadsGradient", "vortex_loads_vjp"]
+__all__ = ["TapedVortexRun", "VortexLoadsGradient", "record_vortex_run", "vortex_loads_vjp"]

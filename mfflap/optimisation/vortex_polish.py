@@ -95,13 +95,18 @@ def polish_on_vortex_model(problem: VortexFlappingProblem, start: DiscreteMotion
     bounds = [(None, None)] * (2 * n) + [(lo / scale[-1], hi / scale[-1])]
     x0 = np.real(start.controls()) / scale
     history: list[float] = []
+    last: dict[str, np.ndarray | float] = {}
 
     def fun(xs):
         value, grad = problem.packed_value_and_gradient(xs * scale)
+        last.update(x=xs.copy(), value=value)
         return value, grad * scale
 
     def record(xs):
-        history.append(problem.packed_value_and_gradient(xs * scale, False)[0])
+        # the iterate is the one the line search evaluated last: no second forward run
+        seen = "x" in last and np.array_equal(xs, last["x"])
+        history.append(float(last["value"]) if seen else
+                       problem.packed_value_and_gradient(xs * scale, False)[0])
         if callback is not None:
             callback(len(history), history[-1])
 

@@ -27,7 +27,7 @@ import numpy as np
 
 from mfflap.errors import ConfigError
 from mfflap.hydro.discrete_vortex import VortexModelSettings, vortex_loads
-from mfflap.hydro.discrete_vortex_adjoint import vortex_loads_vjp
+from mfflap.hydro.discrete_vortex_adjoint import record_vortex_run
 from mfflap.kinematics.discrete import DiscreteMotion
 from mfflap.kinematics.state import KinematicState
 from mfflap.optimisation.state_adjoint import (
@@ -153,10 +153,9 @@ class VortexFlappingProblem:
         period = 2 * n
         state = self.repeated_states(motion)
         n_total = state.time.size
-        zeros = np.zeros(n_total)
-        # a first forward run for the loads the cotangents depend on; the reverse sweep's own
-        # forward run repeats it with its tape
-        loads = self._loads(state)
+        # one forward run with its tape: the loads the cotangents depend on, then the sweep
+        run = record_vortex_run(state, self.plate, self.fluid, self.stream, self.settings)
+        loads = run.loads
         cost, excess_p, excess_h = self._stage_terms(state, loads)
         weight = np.zeros(n_total)
         weight[-period:] = 1.0 / period
@@ -165,9 +164,8 @@ class VortexFlappingProblem:
         fn, ft, mo = loads.normal_force, loads.tangential_force, loads.moment
         d_thrust = -(1 - self.beta) * weight
         d_power = (self.beta + self.penalty_power * excess_p) * weight
-        vjp = vortex_loads_vjp(state, d_thrust * s - d_power * c * hd,
-                               -d_thrust * c - d_power * s * hd, -d_power * td,
-                               self.plate, self.fluid, self.stream, self.settings)
+        vjp = run.gradient(d_thrust * s - d_power * c * hd, -d_thrust * c - d_power * s * hd,
+                           -d_power * td)
         g_th = vjp.pitch_angle + d_thrust * (fn * c + ft * s) + d_power * (fn * s - ft * c) * hd
         g_td = vjp.pitch_rate - d_power * mo
         g_hd = vjp.heave_velocity - d_power * (fn * c + ft * s)
@@ -175,7 +173,7 @@ class VortexFlappingProblem:
             state.heave_position) * weight
         partials = {name: _fold(g, n) for name, g in (
             ("th", g_th), ("td", g_td), ("hp", g_hp), ("hd", g_hd))}
-        partials["tdd"] = partials["hdd"] = _fold(zeros, n)
+        partials["tdd"] = partials["hdd"] = np.zeros(n)  # the model sees no acceleration
         chained = chain_state_partials(motion, partials, "paper")
         smooth = smoothness_gradient(motion, self.smoothing_pitch, self.smoothing_heave)
         value = float(cost[-period:].mean() + smoothness(

@@ -72,12 +72,12 @@ class CycleScatter:
         >>> s.relative("power"), s.relative("rms_normal_force")
         (0.1, 0.05)
         """
-        units = {"thrust": "n", "power": "w", "rms_normal_force": "n"}
-        if name not in units:
-            raise KeyError(f"no cycle scatter of {name!r}: one of {sorted(units)}")
-        mean = getattr(self, f"{'mean_' if name != 'rms_normal_force' else ''}{name}_"
-                       f"{units[name]}")
-        scatter = getattr(self, f"{name}_scatter_{units[name]}")
+        fields = {"thrust": ("mean_thrust_n", "thrust_scatter_n"),
+                  "power": ("mean_power_w", "power_scatter_w"),
+                  "rms_normal_force": ("rms_normal_force_n", "rms_normal_force_scatter_n")}
+        if name not in fields:
+            raise KeyError(f"no cycle scatter of {name!r}: one of {sorted(fields)}")
+        mean, scatter = (getattr(self, f) for f in fields[name])
         return float(abs(scatter / mean)) if mean != 0 else float("nan")
 
 
@@ -149,8 +149,10 @@ def read_cycle_scatter(path: str | Path) -> CycleScatter | None:
                                for k in fields})
 
 
-def add_cycle_scatter(path: str | Path) -> CycleScatter | None:
-    """Compute the record's cycle scatter and store it in the record in place.
+def add_cycle_scatter(path: str | Path, record: CfdRecord | None = None
+                      ) -> CycleScatter | None:
+    """Compute the record's cycle scatter and store it in the record in place (``record``:
+    the record the file holds, if the caller has it, so that it is not read again).
 
     Raises
     ------
@@ -158,8 +160,7 @@ def add_cycle_scatter(path: str | Path) -> CycleScatter | None:
         If ``path`` is not a readable record (named in the message).
     """
     path = Path(path)
-    record = read_record(path)
-    scatter = cycle_scatter(record)
+    scatter = cycle_scatter(read_record(path) if record is None else record)
     try:
         with h5py.File(path, "a") as h5:
             write_cycle_scatter(h5, scatter)
