@@ -9,6 +9,7 @@ the allowed range in every error.
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import math
 from collections.abc import Mapping
 from typing import Any, TypeVar
@@ -165,6 +166,31 @@ def _check_shape(name: str, value: Any, f: dataclasses.Field, where: str | None)
                           key=name)
 
 
+
+#: tables with more keys than this name the nearest ones, not all, when a key is unknown
+_LISTED_KEYS = 12
+
+
+def _unknown_keys_hint(unknown: list[str], allowed: list[str]) -> str:
+    """The unknown keys and what is allowed, in one line of bounded length: at most three
+    unknown keys named, and a table's allowed keys listed only when they are few (else the
+    nearest to the first unknown key, and where to see them all).
+
+    Examples
+    --------
+    >>> _unknown_keys_hint(["lift"], ["drag", "mass"])
+    'lift; allowed: drag, mass'
+    >>> _unknown_keys_hint(["a", "b", "c", "d"], [f"key{i}" for i in range(20)] + ["ab"])
+    'a, b, c (+1 more); did you mean ab? 21 keys allowed (`mfflap case show` prints them)'
+    """
+    named = ", ".join(unknown[:3]) + (f" (+{len(unknown) - 3} more)" if len(unknown) > 3
+                                       else "")
+    if len(allowed) <= _LISTED_KEYS:
+        return f"{named}; allowed: {', '.join(allowed)}"
+    near = difflib.get_close_matches(unknown[0], allowed, n=3)
+    guess = f"did you mean {', '.join(near)}? " if near else ""
+    return f"{named}; {guess}{len(allowed)} keys allowed (`mfflap case show` prints them)"
+
 def from_mapping(cls: type[T], mapping: Mapping[str, Any], *, source: str | None = None,
                  prefix: str = "") -> T:
     """Build a dataclass from a mapping, refusing unknown keys and out-of-range values.
@@ -189,11 +215,8 @@ def from_mapping(cls: type[T], mapping: Mapping[str, Any], *, source: str | None
     fields = {f.name: f for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
     unknown = sorted(set(mapping) - set(fields))
     if unknown:
-        raise ConfigError(
-            f"unknown key(s) {', '.join(unknown)}; allowed: {', '.join(sorted(fields))}",
-            source=source,
-            key=prefix + unknown[0],
-        )
+        raise ConfigError(f"unknown key(s) {_unknown_keys_hint(unknown, sorted(fields))}",
+                          source=source, key=prefix + unknown[0])
     for name, value in mapping.items():
         _check_shape(prefix + name, value, fields[name], source)
     for name, f in fields.items():

@@ -123,6 +123,20 @@ def test_every_validation_error_names_file_key_value_range(tmp_path, text, key, 
     assert fragment in message
 
 
+def test_a_dropped_table_header_is_refused_in_a_short_line(tmp_path):
+    """Without its [identification] header, that table's keys land in [optimisation]: the
+    error names the first of them and stays short however many keys either table has."""
+    text = (ROOT / "cases" / "paper2026.toml").read_text()
+    path = tmp_path / "case.toml"
+    path.write_text(text.replace("[identification]", "", 1))
+    with pytest.raises(ConfigError) as caught:
+        load_case(path)
+    assert caught.value.key == "optimisation.frequencies"
+    message = str(caught.value)
+    assert "more)" in message and "`mfflap case show`" in message
+    assert len(message) < 250 + len(str(path))
+
+
 def test_toml_syntax_error_names_file_and_line(tmp_path):
     path = tmp_path / "broken.toml"
     path.write_text("[plate]\nchord = 0.16\nspan = = 3\n")
