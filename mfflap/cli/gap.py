@@ -35,10 +35,10 @@ def gap() -> None:
               type=click.Path(exists=True, path_type=Path),
               help="External (motion, force) CSV files, or folders of them: time, "
                    "pitch_angle, heave_position, normal_force, tangential_force, moment "
-                   "(rad, m, N, N*m about the leading edge), and '# frequency = 1.5' lines "
-                   "before the header for the run's parameters (velocity, chord: checked "
-                   "against the case file); repeat for several. With --fixtures, pooled "
-                   "with the records.")
+                   "(rad, m, N, N*m about the leading edge). A folder with a manifest.toml "
+                   "is one dataset: the manifest gives each run's motion and the set-up "
+                   "(checked against the case file); otherwise '# frequency = 1.5' lines "
+                   "before a file's header do. With --fixtures, pooled with the records.")
 @click.option("--flow", "flow_dirs", multiple=True,
               help="CASE=DIR: an OpenFOAM case folder with written fields for record CASE; the "
                    "report shows its vorticity where the model misses most.")
@@ -67,6 +67,7 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
     residual_scaling (--set identification.discard_time=2.0)."""
     from mfflap.config import load_case
     from mfflap.gap.external import csv_paths, read_csv_case
+    from mfflap.gap.manifest import MANIFEST_NAME, has_manifest, read_dataset
     from mfflap.gap.store import write_diagnosis
     from mfflap.gap.system import MIN_CASES
     from mfflap.gap.workflow import diagnose_cases
@@ -92,7 +93,10 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
         sources += [str(f) for f in folders]
         for name, why in excluded.items():
             click.echo(f"left out {name}: {why}", err=True)
-    csv_files = tuple(csv_paths(csv_files))
+    for dataset in [p for p in csv_files if p.is_dir() and has_manifest(p)]:
+        cases += read_dataset(dataset, discard_s=discard, config=case)
+        sources.append(str(dataset / MANIFEST_NAME))
+    csv_files = tuple(csv_paths(p for p in csv_files if not (p.is_dir() and has_manifest(p))))
     cases += [read_csv_case(p, discard_s=discard, config=case) for p in csv_files]
     sources += [str(p) for p in csv_files]
     if len(cases) < MIN_CASES and csv_files and not given_folders:
@@ -119,7 +123,8 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
     html = gap_report(report_path or output.with_suffix(".html"), diag, where,
                       ", ".join(sources), snapshots)
     if as_json:
-        echo_json({"verdict": diag.verdict, "whiteness": diag.whiteness,
+        echo_json({"finding": diag.finding, "verdict": diag.verdict,
+                   "whiteness": diag.whiteness,
                    "indistinguishable": diag.indistinguishable,
                    "residual_scaling": diag.residual_scaling,
                    "error_growth": {k: g.summary() for k, g in diag.error_growth.items()},
@@ -140,7 +145,7 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
                    "validation_skipped": diag.validation_skipped,
                    "transfer": diag.transfer.as_dict() if diag.transfer else None})
         return
-    click.echo(diag.verdict)
+    click.echo(f"{diag.finding}. {diag.verdict}")
     if diag.chosen is not None:
         click.echo(diag.claim_said())
     click.echo(f"residuals scaled {scaling_said(diag.residual_scaling, diag.scaling_asked)}; "
@@ -216,8 +221,8 @@ def _flow_record(item: str, cases: list, config: CaseConfig) -> tuple[int, str]:
 
 
 @gap.command("blindtest")
-@click.option("--trials", default=13, show_default=True, type=click.IntRange(min=1),
-              help="Datasets per hidden effect (eight effects, none among them: 13 make 104 "
+@click.option("--trials", default=12, show_default=True, type=click.IntRange(min=1),
+              help="Datasets per hidden effect (nine effects, none among them: 12 make 108 "
                    "trials).")
 @click.option("--snr", default=3.0, show_default=True, type=POSITIVE,
               help="Signal-to-noise ratio of the part of the effect no refit of the Morison "
@@ -238,7 +243,7 @@ def _flow_record(item: str, cases: list, config: CaseConfig) -> tuple[int, str]:
 def blindtest_cmd(trials: int, snr: float, seed: int, noise: str, residual_scaling: str,
                   as_json: bool) -> None:
     """Diagnose datasets with a hidden effect written from its textbook form, apart from
-    the candidates (four the library can explain, three it cannot, and none), and score
+    the candidates (five the library can explain, three it cannot, and none), and score
     the verdicts against the goals."""
     from tqdm import tqdm
 

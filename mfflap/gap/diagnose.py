@@ -121,6 +121,10 @@ class Diagnosis:
     #: the candidates the chosen one cannot be told from on these cases
     #: (:func:`indistinguishable_from`)
     indistinguishable: list[str] = field(default_factory=list)
+    #: when the chosen (else the best) candidate's relatives of its family
+    #: (:attr:`CandidateEffect.family`) explain the cases as well: the family's name, then
+    #: its forms the cases cannot tell apart; else empty
+    family: list[str] = field(default_factory=list)
     #: the same test of the residual left with the chosen effect added (empty when none is)
     whiteness_after: dict = field(default_factory=dict)
     #: significant candidates that explain more than the claim (or than nothing) but were
@@ -132,6 +136,20 @@ class Diagnosis:
     #: whether the claimed effect (else the best candidate) predicts CFD runs outside the
     #: cases better (:mod:`mfflap.gap.transfer`); None when none were given
     transfer: TransferCheck | None = None
+
+    @property
+    def finding(self) -> str:
+        """The verdict's class, what a user acts on: "within noise" (nothing structured is
+        left to explain), "explained by X" (the claim leaves a residual that passes the
+        whiteness test), "partly explained by X" (the claim lowers the held-out error, but
+        a structured residual remains with it: it stands in for part of the gap, or for an
+        effect no candidate has), or "structured, unexplained"."""
+        if self.chosen is not None:
+            whole = self.whiteness_after.get("within_noise", True)
+            return f"{'explained' if whole else 'partly explained'} by {self.chosen.label}"
+        if self.whiteness.get("within_noise", False):
+            return "within noise"
+        return "structured, unexplained"
 
     def claim_said(self) -> str | None:
         """The claimed effect in words: what it is, what its coefficient means and its
@@ -164,6 +182,29 @@ def indistinguishable_from(chosen: CandidateScore, singles: Sequence[CandidateSc
     frequency)."""
     return [s for s in singles if s.significant and not set(s.names) & set(chosen.names)
             and _significance(s.heldout_sse, chosen.heldout_sse) > alpha]
+
+
+def _one_family(names: Sequence[str], candidates: dict[str, CandidateEffect]) -> str | None:
+    """The family all of ``names`` belong to (:attr:`CandidateEffect.family`), else None."""
+    families = {candidates[n].family for n in names}
+    return families.pop() if len(families) == 1 else None
+
+
+def _family_said(top: CandidateScore | None, singles: Sequence[CandidateScore],
+                 candidates: dict[str, CandidateEffect], alpha: float) -> list[str]:
+    """When the top single candidate has relatives of its family whose held-out errors are
+    not significantly above its own: the family's name and its forms, top first, as one
+    effect whose form these cases cannot pin down (so the claim or the not-claimed name
+    stands for the family, not for a form picked by the noise); else empty."""
+    if top is None or len(top.names) != 1:
+        return []
+    family = candidates[top.names[0]].family
+    if family is None:
+        return []
+    kin = [s.names[0] for s in singles if len(s.names) == 1 and s.names != top.names
+           and candidates[s.names[0]].family == family
+           and _significance(s.heldout_sse, top.heldout_sse) > alpha]
+    return [family, top.names[0], *kin] if kin else []
 
 
 def _significance(before: np.ndarray, after: np.ndarray) -> float:
@@ -320,8 +361,8 @@ def diagnose(cases: Sequence[CaseData], base_model: ForceModel,
     chosen = best
     if best is not None and max_combination >= 2:
         for combo in itertools.combinations(candidates, 2):
-            if best.names[0] not in combo:
-                continue
+            if best.names[0] not in combo or _one_family(combo, candidates):
+                continue  # two forms of one effect are not fitted together
             pair = _score(system, combo, folds, base_sse, candidates, alpha, min_gain,
                           base_values, reference=best.heldout_sse)
             scores.append(pair)
@@ -332,6 +373,8 @@ def diagnose(cases: Sequence[CaseData], base_model: ForceModel,
     not_claimed = {sc.label: why for sc in scores
                    if sc.significant and sc.gain > bar and (why := sc.unclaimable())}
     rivals = indistinguishable_from(chosen, singles, alpha) if chosen is not None else []
+    family = _family_said(chosen or (singles[0] if singles else None), singles, candidates,
+                          alpha)
     base_predictions = _predictions(system, base_cols, folds)
     whiteness = residual_whiteness(system.cases, base_predictions, alpha)
     if chosen is None:
@@ -349,6 +392,9 @@ def diagnose(cases: Sequence[CaseData], base_model: ForceModel,
                       + ", ".join(f"{s.label} ({s.gain:.1%} lower)" for s in rivals)
                       + " (the chosen one's error not significantly below theirs)"
                       if rivals else ""))
+    if family:
+        verdict += (f"; {family[0]}: {' and '.join(family[1:])} are forms of one effect that "
+                    "these cases cannot tell apart")
     if not_claimed:
         first, reasons = next(iter(not_claimed.items()))
         more = len(not_claimed) - 1
@@ -369,7 +415,8 @@ def diagnose(cases: Sequence[CaseData], base_model: ForceModel,
                      descriptions={n: {"physical_name": c.physical_name,
                                        "coefficient_name": c.coefficient_name}
                                    for n, c in candidates.items()},
-                     whiteness=whiteness.as_dict(), not_claimed=not_claimed)
+                     whiteness=whiteness.as_dict(), not_claimed=not_claimed,
+                     family=family)
     diag.gap["before"] = gap_metrics(system, base_predictions)
     validated = chosen or (singles[0] if singles else None)
     if chosen is not None:

@@ -69,6 +69,7 @@ def write_diagnosis(rf: ResultsFile, diag: Diagnosis, where: dict, group: str = 
     g.attrs["whiteness"] = json.dumps(diag.whiteness)
     g.attrs["indistinguishable"] = json.dumps(diag.indistinguishable)
     g.attrs["whiteness_after"] = json.dumps(diag.whiteness_after)
+    g.attrs["family"] = json.dumps(diag.family)
     if diag.transfer is not None:
         write_transfer(rf, diag.transfer, f"{group}/transfer")
 
@@ -138,7 +139,8 @@ def read_diagnosis(rf: ResultsFile, group: str = "gap") -> tuple[Diagnosis, dict
         descriptions=json.loads(g.attrs.get("descriptions", "{}")),
         whiteness=json.loads(g.attrs.get("whiteness", "{}")),
         indistinguishable=json.loads(g.attrs.get("indistinguishable", "[]")),
-        whiteness_after=json.loads(g.attrs.get("whiteness_after", "{}")))
+        whiteness_after=json.loads(g.attrs.get("whiteness_after", "{}")),
+        family=json.loads(g.attrs.get("family", "[]")))
     return diagnosis, where
 
 

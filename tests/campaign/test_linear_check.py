@@ -109,9 +109,9 @@ def test_gap_diagnosis_finds_the_circulation_the_strip_model_leaves_out(records)
     assert result.chosen.variance_inflation["wake_lag"] < 5
     assert result.chosen.confounded_with["wake_lag"][0] == "normal_drag"
     # on small motions skin friction and the tangential drag are one regressor
-    skin = next(sc for sc in result.scores if sc.names == ("skin_friction",))
-    assert skin.confounded_with["skin_friction"][0] == "tangential_drag"
-    assert skin.variance_inflation["skin_friction"] > 1e3
+    skin = next(sc for sc in result.scores if sc.names == ("turbulent_skin_friction",))
+    assert skin.confounded_with["turbulent_skin_friction"][0] == "tangential_drag"
+    assert skin.variance_inflation["turbulent_skin_friction"] > 1e3
 
 
 def test_check_refuses_a_record_that_is_not_harmonic():

@@ -90,7 +90,53 @@ def test_added_mass_coupling_is_the_potential_flow_munk_moment():
 
 def test_skin_friction_is_the_turbulent_flat_plate_law_on_both_faces():
     t = np.linspace(0.0, 1.0, 3)
-    loads = CANDIDATES["skin_friction"].regressor(_state(t))
+    loads = CANDIDATES["turbulent_skin_friction"].regressor(_state(t))
     re = U * C / FLUID.kinematic_viscosity
     expected = 0.5 * RHO * 2 * C * S * 0.074 * re**-0.2 * U**2  # drag on the plate, along +t
     assert loads.tangential_force == pytest.approx(expected)
+
+
+def test_laminar_skin_friction_is_blasius_on_both_faces():
+    t = np.linspace(0.0, 1.0, 3)
+    loads = CANDIDATES["laminar_skin_friction"].regressor(_state(t))
+    re = U * C / FLUID.kinematic_viscosity
+    expected = 0.5 * RHO * 2 * C * S * 1.328 / np.sqrt(re) * U**2
+    assert loads.tangential_force == pytest.approx(expected)
+    assert CANDIDATES["laminar_skin_friction"].family == "skin friction"
+    assert CANDIDATES["turbulent_skin_friction"].family == "skin friction"
+
+
+def test_dynamic_stall_takes_nothing_from_attached_flow():
+    """Below the break incidence the flow stays attached (x = 1): no lift is lost."""
+    t = np.linspace(0.0, 5.0, 51)
+    loads = CANDIDATES["dynamic_stall"].regressor(_state(t, pitch=np.radians(3.0)))
+    attached = Q_AREA * np.sin(np.radians(3.0))
+    assert np.max(np.abs(loads.normal_force)) < 1e-4 * attached
+
+
+def test_dynamic_stall_in_steady_flow_is_kirchhoff_on_the_static_separation_curve():
+    """Held at incidence alpha long enough, x = x0(alpha), and the lift lost is
+    a sin(alpha) [((1 + sqrt x0)/2)^2 - 1] q S: at 90 deg (x0 = 0) three quarters of the
+    attached normal force, at the break incidence (x0 = 1/2) 1 - ((1 + 0.707)/2)^2."""
+    from mfflap.gap.candidates.dynamic_stall import BREAK_INCIDENCE_RAD, static_separation
+
+    assert static_separation(np.array([BREAK_INCIDENCE_RAD]))[0] == pytest.approx(0.5)
+    t = np.linspace(0.0, 5.0, 51)
+    for alpha, kept in ((np.pi / 2, 0.25), (BREAK_INCIDENCE_RAD, ((1 + 0.5**0.5) / 2)**2)):
+        fn = CANDIDATES["dynamic_stall"].regressor(_state(t, pitch=alpha)).normal_force
+        assert fn == pytest.approx(Q_AREA * np.sin(alpha) * (1.0 - kept), rel=1e-9)
+
+
+def test_dynamic_stall_separates_with_the_convective_lag_of_the_relative_flow():
+    """A step from attached flow to 40 deg: the separation state relaxes as
+    exp(-t V / (2 c)) (tau1 = 2 convective times), so the lift lost reaches
+    1 - 1/e of its steady value after 2 c / V, and twice as fast at twice the speed."""
+    from mfflap.gap.candidates.dynamic_stall import separation_state
+
+    for speed in (U, 2 * U):
+        t = np.linspace(0.0, 20 * C / speed, 2001)
+        alpha = np.where(t > 0, np.radians(40.0), 0.0)
+        x = separation_state(t, alpha, np.zeros_like(t), np.full_like(t, speed), C)
+        x0 = 1.0 / (1.0 + np.exp(57.0 * (np.radians(40.0) - np.radians(15.0))))
+        at_tau = np.interp(2 * C / speed, t, x)
+        assert (1 - at_tau) / (1 - x0) == pytest.approx(1 - np.exp(-1.0), rel=2e-2)

@@ -27,7 +27,7 @@ CASE = Path(__file__).parents[2] / "cases" / "paper2026.toml"
 def test_library_has_the_required_effects_with_finite_regressors():
     names = set(load_all())
     assert {"circulatory_lift", "wake_lag", "pitch_rate_lift", "leading_edge_vortex",
-            "added_mass_coupling", "skin_friction"} <= names
+            "added_mass_coupling", "turbulent_skin_friction"} <= names
     data = synthesize(np.random.default_rng(0), NULL, 0.0, n_cases=3)
     for name, effect in default_candidates().items():
         r = effect.regressor(data[0].state)
@@ -98,9 +98,9 @@ def test_an_effect_no_candidate_has_is_called_structured_and_unexplained():
     the residual is not taken for noise."""
     from mfflap.gap.blindtest import default_candidates
 
-    others = {k: v for k, v in default_candidates().items() if k != "skin_friction"}
-    diag = diagnose(synthesize(np.random.default_rng(7), "skin_friction", 3.0), MorisonModel(),
-                    candidates=others)
+    others = {k: v for k, v in default_candidates().items() if v.family != "skin friction"}
+    diag = diagnose(synthesize(np.random.default_rng(7), "turbulent_skin_friction", 3.0),
+                    MorisonModel(), candidates=others)
     assert diag.chosen is None
     assert diag.verdict.startswith("structured, unexplained: no candidate explains it (best: ")
     assert diag.whiteness["within_noise"] is False and diag.whiteness["p_value"] < 0.01
@@ -288,20 +288,35 @@ def test_a_hidden_effect_on_the_exact_base_model_has_its_coefficient_both_ways()
 
 def test_an_effect_the_base_terms_can_mimic_is_named_and_not_claimed():
     """Skin friction, |v_t|^0.8 v_t Re-scaled, is nearly the tangential drag |v_t| v_t: the
-    diagnosis finds it explains the residual best, but its coefficient cannot be told from
-    the drag's, so it is not claimed, and the verdict says which and why."""
-    data = synthesize(np.random.default_rng(11), "skin_friction", 4.0)
+    diagnosis finds a friction form explains the residual best, but its coefficient cannot
+    be told from the drag's, so it is not claimed, and the verdict says which and why, and
+    that the laminar and turbulent forms cannot be told apart."""
+    data = synthesize(np.random.default_rng(11), "turbulent_skin_friction", 4.0)
     diag = diagnose(data, MorisonModel())
     assert diag.chosen is None
     best = diag.scores[0]
-    assert best.names == ("skin_friction",) and best.significant and not best.claimable
-    name, r = best.confounded_with["skin_friction"]
+    (form,) = best.names
+    assert form in {"turbulent_skin_friction", "laminar_skin_friction"}
+    assert best.significant and not best.claimable
+    name, r = best.confounded_with[form]
     assert name == "tangential_drag" and abs(r) > 0.95
-    assert best.variance_inflation["skin_friction"] > CONFOUNDED_VIF
+    assert best.variance_inflation[form] > CONFOUNDED_VIF
     assert diag.verdict.startswith("structured, unexplained")
-    assert ("not claimed although it explains more: skin_friction (skin_friction is "
-            "confounded with tangential_drag (variance inflation") in diag.verdict
-    assert "skin_friction" in diag.not_claimed
+    assert (f"not claimed although they explain more: {form} ({form} is confounded with "
+            "tangential_drag (variance inflation") in diag.verdict
+    assert set(diag.not_claimed) >= {"turbulent_skin_friction", "laminar_skin_friction"}
+
+
+def test_forms_of_one_effect_the_cases_cannot_tell_apart_are_named_as_their_family():
+    """At SNR 1.5 the laminar and turbulent friction laws explain the hidden friction
+    alike (their held-out errors within the signed-rank test): the verdict names the
+    family and both forms, rather than one form picked by the noise."""
+    diag = diagnose(synthesize(np.random.default_rng(11), "turbulent_skin_friction", 1.5),
+                    MorisonModel())
+    assert ("skin friction: turbulent_skin_friction and laminar_skin_friction are forms of "
+            "one effect that these cases cannot tell apart") in diag.verdict.replace(
+                "laminar_skin_friction and turbulent_skin_friction",
+                "turbulent_skin_friction and laminar_skin_friction")
 
 
 def test_an_implausible_best_candidate_is_not_claimed_nor_a_lesser_one_in_its_place():

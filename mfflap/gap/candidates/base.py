@@ -56,12 +56,17 @@ class CandidateEffect(ForceTerm):
         Range of physically plausible coefficient values.
     typical : float
         A typical value (used by the blind benchmark to draw strengths).
+    family : str or None
+        The effect several candidates are forms of (e.g. laminar and turbulent skin
+        friction): candidates of one family are never fitted together, and a diagnosis that
+        cannot tell them apart names the family.
     """
 
     physical_name = "candidate"
     coefficient_name = "coefficient"
     plausible: tuple[float, float] = (-np.inf, np.inf)
     typical: float = 1.0
+    family: str | None = None
 
     def __init__(self, context: FlowContext | None = None):
         self.context = context or FlowContext()

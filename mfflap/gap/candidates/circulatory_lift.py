@@ -28,6 +28,7 @@ class CirculatoryLift(CandidateEffect):
     coefficient_name = "lift slope a = dC_L/dalpha (thin-aerofoil theory: 2 pi)"
     plausible = (1.0, 8.0)
     typical = 2 * np.pi
+    family = "circulatory lift"
 
     def regressor(self, state):
         fn = quasi_steady_normal_force(self, state)

@@ -24,6 +24,7 @@ class WakeLag(CandidateEffect):
     coefficient_name = "lift slope a = dC_L/dalpha (thin-aerofoil theory: 2 pi)"
     plausible = (1.0, 8.0)
     typical = 2 * np.pi
+    family = "circulatory lift"
 
     def regressor(self, state):
         f = self.flow(state)
