@@ -34,6 +34,9 @@ class BacktestComparison:
         the curves, NRMSE, Pearson and maximum power are the last cycle's
     cfd_thrust_standard_error : N; cfd_power_standard_error : W; of the CFD means over
         ``cycles_averaged`` cycles (:class:`~mfflap.backtest.cycles.CycleMeans`; NaN with one)
+    cfd_repeat_nrmse : dict per signal: the CFD's last cycle against its own cycle before
+        (NRMSE over the same range as ``nrmse``; NaN without a whole cycle before): how
+        closely the run repeats itself, the yardstick beside which ``nrmse`` is read
     compared_from_s : s, where the cycles the CFD means are taken over start
     cfd_settings_since_s : s, since when the CFD ran the settings it ended with
         (:func:`~mfflap.records.as_run.as_run_since_s`: 0 unless a retry resumed it
@@ -60,6 +63,7 @@ class BacktestComparison:
     cfd_power_standard_error: float = float("nan")
     compared_from_s: float = float("nan")
     cfd_settings_since_s: float = 0.0
+    cfd_repeat_nrmse: dict[str, float] = field(default_factory=dict)
 
     @property
     def compared_cycles_mixed_set_up(self) -> bool:
@@ -102,6 +106,7 @@ class BacktestComparison:
     def as_dict(self) -> dict[str, float | bool | dict]:
         """Scalars only (for JSON and HDF5 attributes)."""
         return {"nrmse": self.nrmse, "pearson": self.pearson,
+                "cfd_repeat_nrmse": {k: _or_none(v) for k, v in self.cfd_repeat_nrmse.items()},
                 "cfd_mean_thrust": self.cfd_mean_thrust,
                 "model_mean_thrust": self.model_mean_thrust,
                 "cfd_mean_power": self.cfd_mean_power, "model_mean_power": self.model_mean_power,
@@ -166,8 +171,11 @@ def compare_last_cycle(record: CfdRecord, model, period: float,
                "normal_force": (pred.normal_force, cfd.normal_force),
                "moment": (pred.moment, cfd.moment)}
     nr = {k: float(nrmse(m[last], c[last])) for k, (m, c) in signals.items()}
-    pe = {k: float(pearson(m[last], c[last])) for k, (m, c) in signals.items()}
     tl = t[last]
+    whole_cycle_before = bool(tl[0] - period >= t[0] - 1e-9 * max(1.0, period))
+    repeat = {k: (float(nrmse(np.interp(tl - period, t, c), c[last])) if whole_cycle_before
+                  else float("nan")) for k, (_, c) in signals.items()}
+    pe = {k: float(pearson(m[last], c[last])) for k, (m, c) in signals.items()}
     cfd_mean_thrust = time_mean(tl, c_thrust[last])
     change = np.nan
     if prev.sum() > 4:
@@ -194,4 +202,4 @@ def compare_last_cycle(record: CfdRecord, model, period: float,
         cfd_power=c_power[last], model_power=m_power[last], nrmse=nr, pearson=pe,
         **means, cfd_max_power=cfd_max,
         max_power_ok=bool(cfd_max <= max_power), cycle_to_cycle_thrust_change=float(change),
-        numerical_bursts=[b.describe() for b in bursts], **errors)
+        numerical_bursts=[b.describe() for b in bursts], cfd_repeat_nrmse=repeat, **errors)

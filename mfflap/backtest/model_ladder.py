@@ -37,7 +37,9 @@ class LevelFigures:
     mean_power : W
     peak_power : W
     normal_force_nrmse : float
-        NRMSE of F_n against CFD on CFD's samples (0 for CFD itself).
+        NRMSE of F_n against CFD on CFD's samples; for CFD itself its own repeat: the last
+        period against the one before (NaN when fewer than two periods are compared), the
+        closest a model can be asked to follow it.
     """
 
     mean_thrust: float
@@ -139,6 +141,11 @@ def compare_model_ladder(record: CfdRecord, morison: ForceModel | None = None,
     vortex = simulate_vortex_model(state, plate, fluid, stream, settings).loads
     cfd = _figures(record.loads, record.state, cfd_window, None, t_cfd)
     cfd_normal = record.loads.normal_force[cfd_window]
+    last = t_cfd >= t_cfd[-1] - period
+    repeat = (float(nrmse(np.interp(t_cfd[last] - period, t_cfd, record.loads.normal_force),
+                          record.loads.normal_force[last]))
+              if periods >= 2 else float("nan"))
+    cfd = LevelFigures(cfd.mean_thrust, cfd.mean_power, cfd.peak_power, repeat)
     levels = {name: _figures(loads, state, window, cfd_normal, t_cfd[cfd_window])
               for name, loads in (("morison", morison.loads(state)), ("vortex", vortex))}
     return LadderComparison(record.name, str(record.parameters.get("label", record.name)),

@@ -78,4 +78,6 @@ def _comparison(arrays: dict, metrics: dict) -> BacktestComparison:
         cfd_thrust_standard_error=number("cfd_thrust_standard_error"),
         cfd_power_standard_error=number("cfd_power_standard_error"),
         compared_from_s=number("compared_from_s"),
-        cfd_settings_since_s=number("cfd_settings_since_s", 0.0))
+        cfd_settings_since_s=number("cfd_settings_since_s", 0.0),
+        cfd_repeat_nrmse={k: float("nan") if v is None else float(v)
+                          for k, v in metrics.get("cfd_repeat_nrmse", {}).items()})

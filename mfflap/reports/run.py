@@ -62,12 +62,13 @@ def add_backtest_sections(rep: Report, outcomes: Mapping[str, BacktestOutcome],
     rows = []
     for label, o in outcomes.items():
         if o.comparison is None:
-            rows.append([label, o.status, o.source] + ["-"] * 9)
+            rows.append([label, o.status, o.source] + ["-"] * 10)
             continue
         c = o.comparison
         rows.append([label, o.status, o.source, describe_as_run(o.record) or "-",
                      c.cfd_mean_thrust, c.model_mean_thrust,
                      c.cfd_mean_power, c.model_mean_power, 100 * c.nrmse["thrust"],
+                     100 * c.cfd_repeat_nrmse.get("thrust", float("nan")),
                      c.pearson["thrust"], c.cfd_max_power,
                      "yes" if c.max_power_ok else "NO"])
     averaged = {label: o.comparison for label, o in outcomes.items()
@@ -76,13 +77,16 @@ def add_backtest_sections(rep: Report, outcomes: Mapping[str, BacktestOutcome],
         s.blocks.append(text_html(
             "Means over the last "
             + ", ".join(sorted({str(c.cycles_averaged) for c in averaged.values()}))
-            + " whole cycles of each run (curves, NRMSE and maximum power: the last cycle's); "
+            + " whole cycles of each run (curves, NRMSE and maximum power: the last cycle's; "
+            "CFD's own repeat NRMSE: its last cycle against the one before, the closest a "
+            "model can be asked to follow it); "
             "CFD's standard errors from its cycle means: " + "; ".join(
                 f"{label} thrust ± {c.cfd_thrust_standard_error:.2g} N, power ± "
                 f"{c.cfd_power_standard_error:.2g} W" for label, c in averaged.items()) + "."))
     s.blocks.append(table_html(["motion", "status", "CFD from", "CFD as run", "CFD thrust [N]",
                                 "model thrust [N]", "CFD power [W]", "model power [W]",
-                                "NRMSE thrust [%]", "Pearson thrust", "CFD max power [W]",
+                                "NRMSE thrust [%]", "CFD's own repeat NRMSE thrust [%]",
+                                "Pearson thrust", "CFD max power [W]",
                                 "CFD power ≤ P_max"], rows))
     if any(o.comparison is not None for o in outcomes.values()):
         s.blocks.append(figure_html(backtest_figure(outcomes, max_power),
