@@ -67,6 +67,7 @@ def add_ladder_section(rep: Report, ladders: Mapping[str, LadderComparison],
                          100 * fig.normal_force_nrmse])
     s.blocks.append(table_html(["motion", "level", "mean thrust [N]", "mean power [W]",
                                 "peak power [W]",
-                                "F_n NRMSE [%] (CFD: its last period against the one before)"], rows))
+                                "F_n NRMSE [%] (CFD: its last period against the one "
+                                "before)"], rows))
     s.blocks.append(figure_html(ladder_figure(ladders, max_power),
                                 "Mean and peak input power, three levels"))
