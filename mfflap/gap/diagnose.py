@@ -386,15 +386,19 @@ def diagnose(cases: Sequence[CaseData], base_model: ForceModel,
                    f"structured, unexplained: no candidate explains it{best_said}; "
                    f"{whiteness.said()}")
     else:
+        # the family's forms are said below, with the family
+        others = [s for s in rivals if s.label not in family[1:]]
         verdict = (f"{chosen.label}: held-out error {chosen.gain:.1%} lower "
                    f"(p = {chosen.p_value:.2g})"
                    + ("; indistinguishable on these cases from "
-                      + ", ".join(f"{s.label} ({s.gain:.1%} lower)" for s in rivals)
+                      + ", ".join(f"{s.label} ({s.gain:.1%} lower)" for s in others)
                       + " (the chosen one's error not significantly below theirs)"
-                      if rivals else ""))
+                      if others else ""))
     if family:
-        verdict += (f"; {family[0]}: {' and '.join(family[1:])} are forms of one effect that "
-                    "these cases cannot tell apart")
+        gains = {sc.label: sc.gain for sc in singles}
+        verdict += (f"; {family[0]}: "
+                    + " and ".join(f"{n} ({gains[n]:.1%} lower)" for n in family[1:])
+                    + " are forms of one effect that these cases cannot tell apart")
     if not_claimed:
         first, reasons = next(iter(not_claimed.items()))
         more = len(not_claimed) - 1
