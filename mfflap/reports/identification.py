@@ -41,6 +41,28 @@ APPLICABLE_NRMSE = 0.10
 METRIC_NAMES = {"nrmse": "NRMSE [%]", "pearson": "Pearson r"}
 
 
+def uncertainty_weighting_said(model_nrmse: list[float], cfd_nrmse: list[float]) -> str:
+    """Why the fit weighs these cases alike whatever their CFD's uncertainty: the
+    inverse-variance weights 1 / (e^2 + u_c^2) (e the model's median NRMSE, u_c each
+    case's CFD cycle-to-cycle NRMSE) and how far they would spread, in words.
+
+    Examples
+    --------
+    >>> uncertainty_weighting_said([0.17, 0.2], [0.01, 0.05])[:38]
+    'The cases are weighed alike whatever t'
+    """
+    e = float(np.median(model_nrmse))
+    u = np.asarray(cfd_nrmse, dtype=float)
+    w = 1.0 / (e**2 + u**2)
+    w = w / w.mean()
+    return (f"The cases are weighed alike whatever their CFD's uncertainty: inverse-variance "
+            f"weights 1 / (e² + u²), e the model's median NRMSE ({100 * e:.1f} %) and u a "
+            f"case's CFD cycle-to-cycle NRMSE (median {100 * float(np.median(u)):.1f} %), "
+            f"would range {w.min():.2f}-{w.max():.2f} of their mean; the model's misfit, "
+            f"{e / max(float(np.median(u)), 1e-12):.0f} times CFD's in the median, is what "
+            "each case's residual holds.")
+
+
 def _param(result: IdentificationResult, key: str) -> np.ndarray:
     """A motion parameter of every case (NaN where its record has none); the frequency as
     identification weighs it (:func:`~mfflap.identification.data.motion_frequency`)."""
@@ -409,7 +431,8 @@ def add_identification_sections(rep: Report, results: Mapping[str, Identificatio
             f"The model's NRMSE beside CFD's own cycle-to-cycle NRMSE (each whole cycle's F_n "
             f"against the case's mean cycle, over the same range) on the {len(repeat)} "
             "periodic cases: the model cannot be asked to follow a run more closely than the "
-            "run repeats itself."))
+            "run repeats itself. " + uncertainty_weighting_said(
+                [r[1] / 100 for r in repeat], [r[2] / 100 for r in repeat])))
         sec.blocks.append(table_html(["case", "model NRMSE of F_n [%]",
                                       "CFD cycle-to-cycle NRMSE of F_n [%]"], repeat))
     if len(results) > 1:
