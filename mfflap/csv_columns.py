@@ -11,6 +11,7 @@ which are more likely a mistake than a value. Every error names the file and the
 
 from __future__ import annotations
 
+import io
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -23,6 +24,17 @@ from mfflap.errors import ParseError
 #: a plain ASCII decimal number, with an optional sign, fraction and exponent
 _PLAIN_NUMBER = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?",
                            re.ASCII)
+
+
+#: one field of a row: a plain number, or nan / inf (refused later as not finite)
+_FIELD = (r"\s*(?:[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?"
+          r"|[+-]?(?:nan|inf|infinity))\s*")
+
+
+def _row_pattern(separator: str, n_columns: int) -> re.Pattern:
+    """A whole row of ``n_columns`` plain numbers separated by ``separator``."""
+    return re.compile(_FIELD + f"(?:{re.escape(separator)}{_FIELD}){{{n_columns - 1}}}",
+                      re.ASCII | re.IGNORECASE)
 
 
 def _number(text: str) -> float:
@@ -102,8 +114,22 @@ def read_csv_columns(path: str | Path, required: Sequence[str],
         if len(present) != 1:
             raise ParseError(f"exactly one of the columns {list(group)} is needed, the header "
                              f"has {present or 'none'}", path=str(path), line=header_line)
+    body = lines[1:]
+    row = _row_pattern(separator, len(header))
+    if body and all(row.fullmatch(line) for _, line in body):
+        # every row is well formed: numpy's parser reads them at once (one check a row, not
+        # one a value; the rows are checked value by value below only to name an error)
+        data = np.loadtxt(io.StringIO("\n".join(line for _, line in body)),
+                          delimiter=separator, dtype=float, ndmin=2)
+        finite = np.isfinite(data)
+        if not finite.all():
+            r, c = (int(k[0]) for k in np.nonzero(~finite))
+            raise ParseError(f"column {header[c]} is not finite", path=str(path),
+                             line=body[r][0])
+        return CsvColumns({h: data[:, j] for j, h in enumerate(header)},
+                          np.array([i for i, _ in body]), header_line)
     rows, numbers = [], []
-    for i, line in lines[1:]:
+    for i, line in body:
         parts = line.split(separator)
         if len(parts) != len(header):
             raise ParseError(f"{len(parts)} values for {len(header)} columns "

@@ -247,7 +247,7 @@ def blindtest_cmd(trials: int, snr: float, seed: int, noise: str, residual_scali
     the verdicts against the goals."""
     from tqdm import tqdm
 
-    from mfflap.gap.textbook_effects import ACCEPTED, run, scores, summary
+    from mfflap.gap.textbook_effects import ACCEPTED, confusion, recall, run, scores, summary
 
     bar = tqdm(total=trials * len(ACCEPTED), desc="blind trials", disable=as_json)
     said = run(trials, snr, seed=seed, noise=noise, residual_scaling=residual_scaling,
@@ -256,6 +256,7 @@ def blindtest_cmd(trials: int, snr: float, seed: int, noise: str, residual_scali
     if as_json:
         echo_json({"noise": noise, "residual_scaling": residual_scaling, "snr": snr,
                    "trials": trials * len(ACCEPTED), "verdicts": said,
-                   "scores": scores(said)})
+                   "scores": scores(said), "recall": recall(said),
+                   "confusion": confusion(said)})
         return
     click.echo(summary(said))

@@ -295,28 +295,57 @@ def scores(said: dict[str, list[str]]) -> dict[str, float]:
     """The three goal figures: in-library attribution, null false alarms, out-of-library
     effects called structured and unexplained."""
     def share(names, test):
-        hits = [test(n, s) for n in names for s in said[n]]
+        hits = [test(n, s) for n in names for s in said.get(n, [])]
         return float(np.mean(hits)) if hits else float("nan")
 
     return {"in_library_attributed": share(IN_LIBRARY, right),
             "null_false_alarms": share(["none"], lambda n, s: s != "noise"),
-            "out_of_library_structured": share(OUT_OF_LIBRARY, right)}
+            "out_of_library_structured": share(OUT_OF_LIBRARY, right),
+            "out_of_library_overclaimed": share(OUT_OF_LIBRARY, lambda n, s: is_claim(s))}
+
+
+def is_claim(said: str) -> bool:
+    """Whether an :func:`outcome` claims an effect (whole or partly)."""
+    return not (said == "noise" or said.startswith("structured"))
+
+
+def predicted(said: str) -> str:
+    """The column of an :func:`outcome` in the confusion matrix: the effect claimed
+    (whole or partly), "X (not claimed)", "structured" or "noise"."""
+    if said.startswith("structured, ") and said.endswith(" not claimed"):
+        return f"{said[len('structured, '):-len(' not claimed')]} (not claimed)"
+    return said.removeprefix("partly ")
+
+
+def confusion(said: dict[str, list[str]]) -> dict[str, dict[str, int]]:
+    """Hidden effect -> predicted column (:func:`predicted`) -> trials."""
+    return {name: dict(Counter(predicted(s) for s in verdicts).most_common())
+            for name, verdicts in said.items()}
+
+
+def recall(said: dict[str, list[str]]) -> dict[str, float]:
+    """Each hidden effect's share of right verdicts (:func:`right`)."""
+    return {name: float(np.mean([right(name, s) for s in verdicts]))
+            for name, verdicts in said.items() if verdicts}
 
 
 def summary(said: dict[str, list[str]]) -> str:
-    """Each effect's right verdicts and the three goal figures, as lines of text."""
-    lines = []
-    for name, verdicts in said.items():
-        hits = sum(right(name, s) for s in verdicts)
-        shown = ", ".join(f"{s} x{n}" for s, n in Counter(verdicts).most_common())
-        lines.append(f"{name:24s} {hits}/{len(verdicts)} right   ({shown})")
+    """Each effect's recall and row of the confusion matrix, the three goal figures and the
+    out-of-library over-claims, as lines of text."""
+    lines = ["hidden effect            right   verdicts (confusion matrix row)"]
+    for name, row in confusion(said).items():
+        hits = sum(right(name, s) for s in said[name])
+        shown = ", ".join(f"{k} x{n}" for k, n in row.items())
+        lines.append(f"{name:24s} {hits:3d}/{len(said[name]):<3d} {shown}")
     s = scores(said)
     lines += [f"in-library effects attributed      {s['in_library_attributed']:.0%} (goal >= 90 %)",
               f"null datasets not called noise     {s['null_false_alarms']:.0%} (goal <= 5 %)",
               f"out-of-library called unexplained  {s['out_of_library_structured']:.0%} "
-              "(goal >= 67 %)"]
+              "(goal >= 67 %)",
+              f"out-of-library claimed as an effect {s['out_of_library_overclaimed']:.0%}"]
     return "\n".join(lines)
 
 
-__all__ = ["ACCEPTED", "IN_LIBRARY", "NOISE_MODELS", "OUT_OF_LIBRARY", "dataset",
-           "effect_loads", "outcome", "right", "run", "scores", "summary"]
+__all__ = ["ACCEPTED", "IN_LIBRARY", "NOISE_MODELS", "OUT_OF_LIBRARY", "confusion", "dataset",
+           "effect_loads", "is_claim", "outcome", "predicted", "recall", "right", "run",
+           "scores", "summary"]

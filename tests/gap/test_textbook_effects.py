@@ -80,6 +80,21 @@ def test_the_diagnosis_meets_the_goals_on_independent_effects():
     assert scores["out_of_library_structured"] >= 2 / 3, said
 
 
+def test_the_confusion_matrix_and_scores_count_each_verdict_once():
+    said = {"thin_aerofoil_lift": ["circulatory_lift", "partly circulatory_lift",
+                                   "structured, wake_lag not claimed"],
+            "wake_encounter": ["partly wake_lag", "structured", "noise"],
+            "none": ["noise", "structured"]}
+    table = bench.confusion(said)
+    assert table["thin_aerofoil_lift"] == {"circulatory_lift": 2, "wake_lag (not claimed)": 1}
+    assert table["wake_encounter"] == {"wake_lag": 1, "structured": 1, "noise": 1}
+    assert bench.recall(said)["thin_aerofoil_lift"] == pytest.approx(2 / 3)
+    s = bench.scores(said)
+    assert s["out_of_library_overclaimed"] == pytest.approx(1 / 3)
+    assert s["out_of_library_structured"] == pytest.approx(1 / 3)
+    assert s["null_false_alarms"] == pytest.approx(1 / 2)
+
+
 def test_an_unknown_effect_or_noise_model_is_refused_naming_it():
     with pytest.raises(ConfigError) as err:
         bench.dataset("stall_flutter", 0, CaseConfig(), 3.0)
@@ -97,7 +112,10 @@ def test_gap_blindtest_runs_the_independent_forms_and_reports_the_goals():
     assert set(out["verdicts"]) == set(bench.ACCEPTED)
     assert all(len(v) == 1 for v in out["verdicts"].values())
     assert set(out["scores"]) == {"in_library_attributed", "null_false_alarms",
-                                  "out_of_library_structured"}
+                                  "out_of_library_structured", "out_of_library_overclaimed"}
+    assert set(out["recall"]) == set(bench.ACCEPTED)
+    assert {n: sum(row.values()) for n, row in out["confusion"].items()} == {
+        n: 1 for n in bench.ACCEPTED}
     assert out["noise"] == "relative" and out["trials"] == len(bench.ACCEPTED)
     text = CliRunner().invoke(cli, ["gap", "blindtest", "--trials", "1", "--noise",
                                     "absolute", "--residual-scaling", "case"])
