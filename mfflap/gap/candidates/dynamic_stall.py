@@ -69,9 +69,8 @@ class DynamicStall(CandidateEffect):
     typical = 2 * np.pi
 
     def regressor(self, state):
+        c, rho, area = self.context.plate.chord, self.context.fluid.density, self.context.area
         f = self.flow(state)
-        ctx = self.context
-        c = ctx.plate.chord
         vn = f.normal_velocity_le + 0.75 * c * state.pitch_rate
         vn_rate = f.normal_acceleration_le + 0.75 * c * state.pitch_acceleration
         along = np.abs(f.tangential_velocity)
@@ -82,5 +81,5 @@ class DynamicStall(CandidateEffect):
         x = separation_state(np.asarray(state.time, dtype=float), incidence, incidence_rate,
                              np.sqrt(speed2), c)
         lost = ((1.0 + np.sqrt(x)) / 2.0) ** 2 - 1.0
-        fn = -0.5 * ctx.fluid.density * ctx.area * speed2 * np.sin(incidence) * lost
+        fn = -0.5 * rho * area * speed2 * np.sin(incidence) * lost
         return self.loads(state, normal=fn, moment=fn * 0.25 * c)
