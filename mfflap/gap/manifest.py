@@ -61,6 +61,17 @@ def read_manifest(folder: str | Path) -> tuple[dict[str, float], list[tuple[Path
         Naming the manifest and the key: an unknown table or key, a value that is not a
         finite number, a run without ``file`` or listed twice, a listed file that is
         missing, or a CSV file of the folder the manifest does not list.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> _ = (d / "a.csv").write_text("time\\n0\\n")
+    >>> _ = (d / "manifest.toml").write_text(
+    ...     '[setup]\\nchord = 0.16\\n[[run]]\\nfile = "a.csv"\\nfrequency = 1.0\\n')
+    >>> setup, runs = read_manifest(d)
+    >>> setup, [(p.name, given) for p, given in runs]
+    ({'chord': 0.16}, [('a.csv', {'frequency': 1.0})])
     """
     folder = Path(folder)
     path = folder / MANIFEST_NAME

@@ -311,14 +311,26 @@ def is_claim(said: str) -> bool:
 
 def predicted(said: str) -> str:
     """The column of an :func:`outcome` in the confusion matrix: the effect claimed
-    (whole or partly), "X (not claimed)", "structured" or "noise"."""
+    (whole or partly), "X (not claimed)", "structured" or "noise".
+
+    Examples
+    --------
+    >>> predicted("partly wake_lag"), predicted("structured, skin friction family not claimed")
+    ('wake_lag', 'skin friction family (not claimed)')
+    """
     if said.startswith("structured, ") and said.endswith(" not claimed"):
         return f"{said[len('structured, '):-len(' not claimed')]} (not claimed)"
     return said.removeprefix("partly ")
 
 
 def confusion(said: dict[str, list[str]]) -> dict[str, dict[str, int]]:
-    """Hidden effect -> predicted column (:func:`predicted`) -> trials."""
+    """Hidden effect -> predicted column (:func:`predicted`) -> trials.
+
+    Examples
+    --------
+    >>> confusion({"none": ["noise", "noise", "structured"]})
+    {'none': {'noise': 2, 'structured': 1}}
+    """
     return {name: dict(Counter(predicted(s) for s in verdicts).most_common())
             for name, verdicts in said.items()}
 
