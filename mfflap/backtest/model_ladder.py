@@ -12,7 +12,6 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from mfflap.errors import MfflapError
 from mfflap.hydro.base import ForceModel
 from mfflap.hydro.discrete_vortex import VortexModelSettings, simulate_vortex_model
 from mfflap.hydro.loads import Loads
@@ -115,7 +114,8 @@ def compare_model_ladder(record: CfdRecord, morison: ForceModel | None = None,
     Raises
     ------
     MfflapError
-        If the record names no period, or is shorter than the compared periods.
+        If the record names neither its period nor its frequency, or is shorter than the
+        compared periods (:meth:`~mfflap.records.record.CfdRecord.last_periods`).
 
     Examples
     --------
@@ -125,15 +125,8 @@ def compare_model_ladder(record: CfdRecord, morison: ForceModel | None = None,
     >>> ladder.vortex.peak_power > 0
     True
     """
-    period = record.parameters.get("period")
-    if not period or not period > 0:
-        raise MfflapError(f"record {record.name} names no period: its parameters are "
-                          f"{sorted(record.parameters)}")
+    period, start = record.last_periods(periods)
     t_cfd = np.asarray(record.state.time, dtype=float)
-    start = t_cfd[-1] - periods * period
-    if start < 0:
-        raise MfflapError(f"record {record.name} runs {t_cfd[-1]:.3g} s, shorter than the "
-                          f"{periods} periods of {period:.3g} s to compare")
     state = record.state.on_uniform_time(period / steps_per_period, start=0.0)
     window = state.time >= start
     cfd_window = t_cfd >= start

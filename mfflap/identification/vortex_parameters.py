@@ -17,7 +17,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from mfflap.errors import ConfigError, MfflapError
+from mfflap.errors import ConfigError
 from mfflap.hydro.discrete_vortex import VortexModelSettings, simulate_vortex_model
 from mfflap.metrics import nrmse
 from mfflap.parameters import Fluid, FreeStream, Plate
@@ -71,18 +71,10 @@ def record_nrmse(record, settings: VortexModelSettings, plate: Plate | None = No
     ------
     MfflapError
         A record that names neither its period nor its frequency, or is shorter than the
-        periods compared.
+        periods compared (:meth:`~mfflap.records.record.CfdRecord.last_periods`).
     """
-    frequency = record.parameters.get("frequency")
-    period = record.parameters.get("period") or (1.0 / frequency if frequency else None)
-    if not period or not period > 0:
-        raise MfflapError(f"record {record.name} names no period nor frequency: its "
-                          f"parameters are {sorted(record.parameters)}")
+    period, start = record.last_periods(periods)
     t = np.asarray(record.state.time, dtype=float)
-    start = t[-1] - periods * period
-    if start < 0:
-        raise MfflapError(f"record {record.name} runs {t[-1]:.3g} s, shorter than the "
-                          f"{periods} periods of {period:.3g} s compared")
     state = record.state.on_uniform_time(period / steps_per_period, start=0.0)
     loads = simulate_vortex_model(state, plate, fluid, stream, settings).loads
     window = t >= start

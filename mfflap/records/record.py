@@ -79,6 +79,27 @@ class CfdRecord:
         """Sample times, s."""
         return self.loads.time
 
+    def last_periods(self, periods: float) -> tuple[float, float]:
+        """The motion's period (its ``period`` parameter, else 1 / ``frequency``), s, and
+        the time its last ``periods`` periods start at, s.
+
+        Raises
+        ------
+        MfflapError
+            Naming the record: it gives neither a period nor a frequency, or it is shorter
+            than ``periods`` periods.
+        """
+        frequency = self.parameters.get("frequency")
+        period = self.parameters.get("period") or (1.0 / frequency if frequency else None)
+        if not period or not period > 0:
+            raise MfflapError(f"record {self.name} names no period nor frequency: its "
+                              f"parameters are {sorted(self.parameters)}")
+        start = float(self.time[-1]) - periods * float(period)
+        if start < 0:
+            raise MfflapError(f"record {self.name} runs {self.time[-1]:.3g} s, shorter than "
+                              f"the {periods:g} periods of {period:.3g} s compared")
+        return float(period), start
+
     def window(self, start_time: float) -> CfdRecord:
         """The record from ``start_time`` s on (drops a start-up transient)."""
         keep = self.time >= start_time
