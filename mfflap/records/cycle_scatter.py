@@ -99,9 +99,7 @@ def cycle_scatter(record: CfdRecord) -> CycleScatter | None:
     >>> s.n_cycles, s.repeats, round(s.relative("rms_normal_force"), 3)
     (2, True, 0.031)
     """
-    params = record.parameters
-    period = float(params["period"]) if "period" in params else \
-        1.0 / float(params.get("frequency", float("nan")))
+    period = record.period
     if not (np.isfinite(period) and period > 0):
         return None
     t = np.asarray(record.time, dtype=float)
@@ -122,7 +120,7 @@ def cycle_scatter(record: CfdRecord) -> CycleScatter | None:
         per_cycle[2, k] = np.sqrt(np.mean(np.interp(at, t, record.loads.normal_force) ** 2))
     means = per_cycle.mean(axis=1)
     scatter = per_cycle.std(axis=1, ddof=1) if n_cycles > 1 else np.full(3, np.nan)
-    return CycleScatter(n_cycles, params.get("kind") != "ramp_harmonic",
+    return CycleScatter(n_cycles, record.parameters.get("kind") != "ramp_harmonic",
                         *(float(v) for v in means), *(float(v) for v in scatter))
 
 

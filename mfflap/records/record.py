@@ -79,9 +79,17 @@ class CfdRecord:
         """Sample times, s."""
         return self.loads.time
 
+    @property
+    def period(self) -> float:
+        """The motion's period, s: its ``period`` parameter, else 1 / ``frequency``; NaN
+        when it gives neither."""
+        if "period" in self.parameters:
+            return float(self.parameters["period"])
+        return 1.0 / float(self.parameters.get("frequency", float("nan")))
+
     def last_periods(self, periods: float) -> tuple[float, float]:
-        """The motion's period (its ``period`` parameter, else 1 / ``frequency``), s, and
-        the time its last ``periods`` periods start at, s.
+        """The motion's :attr:`period`, s, and the time its last ``periods`` periods start
+        at, s.
 
         Raises
         ------
@@ -89,16 +97,15 @@ class CfdRecord:
             Naming the record: it gives neither a period nor a frequency, or it is shorter
             than ``periods`` periods.
         """
-        frequency = self.parameters.get("frequency")
-        period = self.parameters.get("period") or (1.0 / frequency if frequency else None)
-        if not period or not period > 0:
+        period = self.period
+        if not (np.isfinite(period) and period > 0):
             raise MfflapError(f"record {self.name} names no period nor frequency: its "
                               f"parameters are {sorted(self.parameters)}")
-        start = float(self.time[-1]) - periods * float(period)
+        start = float(self.time[-1]) - periods * period
         if start < 0:
             raise MfflapError(f"record {self.name} runs {self.time[-1]:.3g} s, shorter than "
                               f"the {periods:g} periods of {period:.3g} s compared")
-        return float(period), start
+        return period, start
 
     def window(self, start_time: float) -> CfdRecord:
         """The record from ``start_time`` s on (drops a start-up transient)."""
