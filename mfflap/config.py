@@ -5,7 +5,7 @@ values)::
 
     [study]           name, description
     [fluid]           density, kinematic_viscosity
-    [plate]           chord, span, thickness
+    [plate]           chord, span, thickness, pivot_chord_fraction
     [flow]            velocity
     [model]           n_strips, scheme, and [model.coefficients] (the four Morison values)
     [motion]          the motion evaluated by ``mfflap evaluate``

@@ -31,13 +31,25 @@ class Fluid:
 
 @dataclass(frozen=True)
 class Plate:
-    """Rigid flat plate pitching about its leading edge."""
+    """Rigid flat plate that heaves and pitches about a pivot on its chord.
+
+    The heave h is the pivot's displacement across the stream and the moment M is taken
+    about the pivot; the pivot lies ``pivot_chord_fraction`` of the chord behind the leading
+    edge (0: the leading edge, the paper's set-up; 0.25: the quarter chord).
+
+    Examples
+    --------
+    >>> Plate(pivot_chord_fraction=0.25).pivot_m
+    0.04
+    """
 
     chord: float = bounded(0.16, low=0.0, low_open=True, high=100.0, unit="m",
                            doc="chord length l")
     span: float = bounded(0.18, low=0.0, low_open=True, high=1000.0, unit="m", doc="span s")
     thickness: float = bounded(0.003, low=0.0, low_open=True, high=10.0, unit="m",
                                doc="thickness d")
+    pivot_chord_fraction: float = bounded(0.0, low=0.0, high=1.0, unit="1",
+                                          doc="pivot's distance behind the leading edge / chord")
 
     def __post_init__(self) -> None:
         check_fields(self, prefix="plate.")
@@ -47,6 +59,11 @@ class Plate:
                 f"value {self.thickness!r} must be smaller than the chord {self.chord!r} m",
                 key="plate.thickness",
             )
+
+    @property
+    def pivot_m(self) -> float:
+        """The pivot's distance behind the leading edge, m."""
+        return self.pivot_chord_fraction * self.chord
 
 
 @dataclass(frozen=True)
@@ -127,7 +144,11 @@ class StripSettings:
 
 @dataclass(frozen=True)
 class StripGeometry:
-    """Resolved per-strip geometry (all strips equal): positions, volumes, areas."""
+    """Resolved per-strip geometry (all strips equal): positions, volumes, areas.
+
+    ``positions`` are the strip centres' signed distances along the chord from the pivot
+    (:attr:`Plate.pivot_m`), m: negative ahead of it.
+    """
 
     chord: float
     n_strips: int
@@ -153,5 +174,6 @@ class StripGeometry:
             volume_tangential=chord * s * d if vt is None else vt,
             area_normal=chord * s if sn is None else sn,
             area_tangential=d * s if st is None else st,
-            positions=tuple(chord * (2 * k - 1) / (2 * n) for k in range(1, n + 1)),
+            positions=tuple(chord * (2 * k - 1) / (2 * n) - plate.pivot_m
+                            for k in range(1, n + 1)),
         )

@@ -155,7 +155,7 @@ def evaluate_states(model, state: KinematicState, frequency, trailing_edge_ampli
     thrust, power = thrust_and_power(loads, state)
     u = model.stream.velocity
     if trailing_edge_amplitude is None:
-        te = np.real(state.trailing_edge_position(model.plate.chord))
+        te = np.real(state.trailing_edge_position(model.plate.chord, model.plate.pivot_m))
         trailing_edge_amplitude = 0.5 * (te.max(axis=-1) - te.min(axis=-1))
     mf, mp = thrust.mean(axis=-1), power.mean(axis=-1)
     if hasattr(model, "dissipation"):
@@ -181,7 +181,7 @@ def evaluate_discrete(model, motion: DiscreteMotion, scheme: Scheme = "paper") -
     The trailing-edge amplitude uses the half cycle's samples and their mirror images.
     """
     state = motion.states(scheme)
-    te = np.real(state.trailing_edge_position(model.plate.chord))
+    te = np.real(state.trailing_edge_position(model.plate.chord, model.plate.pivot_m))
     amplitude = np.maximum(np.abs(te.max(axis=-1)), np.abs(te.min(axis=-1)))
     return evaluate_states(model, state, np.real(motion.frequency), amplitude)
 

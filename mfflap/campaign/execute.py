@@ -35,7 +35,7 @@ from typing import Any
 from distributed import WorkerPlugin
 
 from mfflap.campaign.cases import CampaignCase
-from mfflap.cfd.case_inputs import ADDED_SOLVER_SETTINGS
+from mfflap.cfd.case_inputs import ADDED_PLATE_SETTINGS, ADDED_SOLVER_SETTINGS
 from mfflap.cfd.openfoam.case_lock import CaseBusyError, lock_holder
 from mfflap.cfd.openfoam.case_path import check_case_path
 from mfflap.cfd.openfoam.retry_log import read_retry_log, request_rerun
@@ -181,6 +181,8 @@ def _with_added_settings(setup: dict[str, Any]) -> dict[str, Any]:
     setup = dict(setup)
     if isinstance(setup.get("solver"), dict):
         setup["solver"] = {**ADDED_SOLVER_SETTINGS, **setup["solver"]}
+    if isinstance(setup.get("plate"), dict):
+        setup["plate"] = {**ADDED_PLATE_SETTINGS, **setup["plate"]}
     return setup
 
 

@@ -25,7 +25,7 @@ from mfflap.cfd.imposed_motion import imposed_state
 from mfflap.errors import ConfigError
 from mfflap.kinematics.continuous import Motion
 from mfflap.parameters import Fluid, FreeStream, Plate
-from mfflap.records.inputs import PHYSICAL_KEYS, RELATIVE_TOLERANCE
+from mfflap.records.inputs import IMPLIED_KEYS, PHYSICAL_KEYS, RELATIVE_TOLERANCE
 from mfflap.toml_io import read_toml
 
 #: Solver settings added after cases, records and campaigns first kept theirs, at the values
@@ -35,6 +35,8 @@ ADDED_SOLVER_SETTINGS = {"pressure_solver": "PCG", "pressure_tolerance": 1e-7,
                          "pressure_final_rel_tol": 0.0,
                          "turbulence_convection": "limitedLinear", "frame": "inertial",
                          "wall_treatment": "log_law"}
+#: Plate settings added after campaigns first kept theirs, at the values those runs used
+ADDED_PLATE_SETTINGS = {"pivot_chord_fraction": 0.0}
 #: samples of the imposed motion kept with a case
 N_MOTION_SAMPLES = 64
 
@@ -78,7 +80,8 @@ def check_case_inputs(kept: str | Path, meta: dict[str, Any], case_file: str | P
         The file that says what the case was written for: an OpenFOAM case's
         mfflap_case.toml, or the mfflap_fluent.toml beside a Fluent UDF.
     meta
-        Its contents. Keys it lacks (a case written by an earlier mfflap) are not checked.
+        Its contents. Keys it lacks are not checked, but for those of
+        :data:`~mfflap.records.inputs.IMPLIED_KEYS`, taken at the values they imply.
     case_file
         Where ``motion``, ``plate``, ``fluid`` and ``stream`` came from, for the message.
     advice, given_as
@@ -93,9 +96,10 @@ def check_case_inputs(kept: str | Path, meta: dict[str, Any], case_file: str | P
     case_dir = kept.parent
     source = None if case_file is None else str(case_file)
     for key, (case_key, getter) in PHYSICAL_KEYS.items():
-        if key not in meta:
+        if key not in meta and key not in IMPLIED_KEYS:
             continue
-        given, written = float(getter(plate, fluid, stream)), float(meta[key])
+        given = float(getter(plate, fluid, stream))
+        written = float(meta.get(key, IMPLIED_KEYS.get(key)))
         if not _close(given, written):
             raise ConfigError(f"{given!r} {given_as}, but {case_dir} was written for "
                               f"{written!r} ({kept}); {advice}", source=source,

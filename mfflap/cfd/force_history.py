@@ -48,14 +48,12 @@ def to_loads(history: ForceHistory, state: KinematicState, span: float, depth: f
     The forces are scaled by span/depth. ``frame`` is the case's
     (:attr:`~mfflap.cfd.openfoam.writer.SolverSettings.frame`): "inertial" (the mesh
     moves; forces along the case axes, moment about the origin, taken here about the
-    *moving* leading edge: M_LE = M_CofR - r_LE x F with r_LE = (0, h, 0)) or "plate"
-    (static mesh in the plate's frame; forces along the plate's axes, moment about the
-    leading edge at the origin). Moments taken about another point than the origin (the
-    forces function object's CofR, :attr:`ForceHistory.centre_of_rotation`) are first
-    moved to the origin: M_O = M_C + r_C x F. ``pivot_m`` is the pivot (the plate's leading
-    edge) at rest in the case's axes, m: in the inertial frame it heaves with the plate, at
-    r_P = (x_P, y_P + h), and the moment is taken about it. mfflap's own cases have it at the
-    origin.
+    *moving* pivot: M_P = M_O - r_P x F with r_P = (x_P, y_P + h, 0)) or "plate" (static
+    mesh in the plate's frame; forces along the plate's axes, moment about the pivot at the
+    origin). Moments taken about another point than the origin (the forces function
+    object's CofR, :attr:`ForceHistory.centre_of_rotation`) are first moved to the origin:
+    M_O = M_C + r_C x F. ``pivot_m`` is the pivot (the point the plate pitches about, whose
+    heave is h) at rest in the case's axes, m; mfflap's own cases have it at the origin.
     """
     if history.moment is None:
         raise ParseError("the force history has no moments; need moment.dat or forces.dat")
@@ -76,12 +74,12 @@ def to_loads(history: ForceHistory, state: KinematicState, span: float, depth: f
                               key="pivot")
         normal, tangential = plate_frame_force_to_model(fx, fy)
         return Loads(state.time, normal, tangential, case_moment_to_model(mz), source=source)
-    x_le, y_le = pivot_m[0], pivot_m[1] + state.heave_position
-    mz_le = mz - (x_le * fy - y_le * fx)  # M_P = M_O - r_P x F
+    x_p, y_p = pivot_m[0], pivot_m[1] + state.heave_position
+    mz_p = mz - (x_p * fy - y_p * fx)  # M_P = M_O - r_P x F
     f_x0, f_y0 = case_force_to_model(fx, fy)
     th = state.pitch_angle
     s, c = np.sin(th), np.cos(th)
     # e_n = (cos, -sin), e_t = (sin, cos) in (X0, Y0)
     normal = f_x0 * c - f_y0 * s
     tangential = f_x0 * s + f_y0 * c
-    return Loads(state.time, normal, tangential, case_moment_to_model(mz_le), source=source)
+    return Loads(state.time, normal, tangential, case_moment_to_model(mz_p), source=source)

@@ -3,7 +3,7 @@
 Model: X0 = heave direction, Y0 = free stream (water moves at +U along Y0); chord unit vector
 e_t = (sin theta, cos theta) in (X0, Y0).
 CFD case: x = stream direction (inflow +x), y = heave direction, z out of the 2D plane; the
-plate lies along +x from the leading edge at the origin at theta = 0.
+plate lies along +x at theta = 0, its pivot at the origin.
 So (x, y) = (Y0, X0), e_t = (cos theta, sin theta) in (x, y): theta is the case's rotation
 about +z (anticlockwise positive), and the heave is the case's y displacement.
 """
@@ -38,17 +38,17 @@ def case_force_to_model(force_x: np.ndarray, force_y: np.ndarray
 
 
 def case_moment_to_model(moment_z: np.ndarray) -> np.ndarray:
-    """Moment about the leading edge in the model's sign (M = sum F_nk l_k).
+    """Moment about the pivot in the model's sign (M = sum F_nk l_k).
 
     The model's M is the moment of normal forces (along e_n = (cos, -sin) in (X0, Y0), i.e.
     (-sin, cos) in (x, y), which is e_t rotated +90 deg) at arm l along e_t: r x F = l F_n e_z.
-    So the model's M equals the case's M_z about the leading edge.
+    So the model's M equals the case's M_z about the pivot.
     """
     return np.asarray(moment_z)
 
 
 # The plate's frame (SolverSettings.frame = "plate"): a static mesh whose axes are the case
-# axes of the plate at theta = 0, rotating with the plate about its leading edge (the origin)
+# axes of the plate at theta = 0, rotating with the plate about its pivot (the origin)
 # and translating with its heave. Velocities there are relative to the translating frame,
 # with components along the rotating axes: w = R(theta)^T (U_abs - (0, h')).
 
@@ -69,7 +69,7 @@ def plate_frame_inflow(pitch_angle: np.ndarray, heave_velocity: np.ndarray,
 
 def plate_frame_acceleration(pitch_angle: np.ndarray, heave_acceleration: np.ndarray
                              ) -> np.ndarray:
-    """The leading edge's acceleration (0, h'') along the plate's axes, shape (..., 3), m/s^2.
+    """The pivot's acceleration (0, h'') along the plate's axes, shape (..., 3), m/s^2.
 
     R(theta)^T (0, h'') = (h'' sin theta, h'' cos theta); the fluid in the plate's frame
     feels minus this as a body force.

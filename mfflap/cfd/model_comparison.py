@@ -2,7 +2,7 @@
 ``mfflap cfd parse`` prints.
 
 The run is an OpenFOAM case folder written by mfflap or a Fluent report file (.out). Its
-forces become F_n, F_t and M about the moving leading edge, and thrust and input power, with
+forces become F_n, F_t and M about the moving pivot, and thrust and input power, with
 the motion, ramp and plate the case was written for (:mod:`mfflap.cfd.case_inputs` refuses
 a case file that describes another run). Numerical bursts after the discarded start are
 bridged before the comparison and listed (:mod:`mfflap.records.bursts`), stretches whose forces

@@ -35,7 +35,7 @@ def gap() -> None:
               type=click.Path(exists=True, path_type=Path),
               help="External (motion, force) CSV files, or folders of them: time, "
                    "pitch_angle, heave_position, normal_force, tangential_force, moment "
-                   "(rad, m, N, N*m about the leading edge). A folder with a manifest.toml "
+                   "(rad, m, N, N*m about the pivot). A folder with a manifest.toml "
                    "is one dataset: the manifest gives each run's motion and the set-up "
                    "(checked against the case file); otherwise '# frequency = 1.5' lines "
                    "before a file's header do. With --fixtures, pooled with the records.")

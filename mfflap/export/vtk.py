@@ -23,9 +23,10 @@ FRAME = "CFD case: x along the stream, y heave, z span (m)"
 
 
 def plate_surface(chord: float, span: float, pitch_angle: float, heave: float,
-                  n_strips: int = 10) -> pv.PolyData:
-    """The plate at one instant: leading edge at (0, heave), rotated by the pitch angle."""
-    xs = np.linspace(0.0, chord, n_strips + 1)
+                  n_strips: int = 10, pivot_m: float = 0.0) -> pv.PolyData:
+    """The plate at one instant: its pivot (``pivot_m`` behind the leading edge) at
+    (0, heave), rotated about it by the pitch angle."""
+    xs = np.linspace(-pivot_m, chord - pivot_m, n_strips + 1)
     zs = np.array([-span / 2, span / 2])
     x, z = np.meshgrid(xs, zs, indexing="ij")
     c, s = np.cos(pitch_angle), np.sin(pitch_angle)
@@ -55,7 +56,7 @@ def export_motion(folder: str | Path, motion: DiscreteMotion, model, scheme: str
     entries = []
     for k, i in enumerate(idx):
         surf = plate_surface(model.plate.chord, model.plate.span, float(pitch[i]),
-                             float(heave[i]))
+                             float(heave[i]), pivot_m=model.plate.pivot_m)
         for key, value in (("pitch_angle_rad", pitch[i]), ("heave_m", heave[i]),
                            ("thrust_N", thrust[i]), ("input_power_W", power[i])):
             surf.point_data[key] = np.full(surf.n_points, float(np.real(value)))

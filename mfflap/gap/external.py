@@ -32,7 +32,8 @@ MOTION_KEYS = ("frequency", "heave_amplitude", "phase_deg", "pitch_amplitude_deg
 #: the set-up a CSV file may state, checked against the case file: (table, key, unit)
 SETUP_KEYS = {"velocity": ("flow", "velocity", "m/s"), "chord": ("plate", "chord", "m"),
               "span": ("plate", "span", "m"), "density": ("fluid", "density", "kg/m^3"),
-              "kinematic_viscosity": ("fluid", "kinematic_viscosity", "m^2/s")}
+              "kinematic_viscosity": ("fluid", "kinematic_viscosity", "m^2/s"),
+              "pivot_chord_fraction": ("plate", "pivot_chord_fraction", "")}
 #: relative difference within which a stated set-up value is the case file's
 SETUP_TOLERANCE = 1e-3
 _PARAMETER_LINE = re.compile(r"#\s*([A-Za-z_][A-Za-z0-9_]*)\s*[=:]\s*(\S+)\s*$")
@@ -42,7 +43,7 @@ def case_from_arrays(name: str, time, pitch_angle, heave_position, normal_force,
                      tangential_force, moment, parameters: dict | None = None,
                      source: str | None = None, discard_s: float = 0.0,
                      rates: dict | None = None) -> CaseData:
-    """A case from sampled positions (rad, m) and loads (N, N*m, body frame, about the LE).
+    """A case from sampled positions (rad, m) and loads (N, N*m, body frame, about the pivot).
 
     Rates and accelerations are ``rates`` (the four :data:`RATE_COLUMNS`, as the motion
     imposed them: exact, and no fit) when given, else they come from smoothing splines of

@@ -58,7 +58,7 @@ def decompose(system: GapSystem, predictions: list[dict[str, np.ndarray]], veloc
         res.append(r)
         phase.append(np.mod(2 * np.pi * f * t, 2 * np.pi) if np.isfinite(f) else 0 * t)
         flow = RelativeFlow.of(c.state, velocity)
-        alpha.append(np.degrees(np.arctan2(flow.normal_velocity_le,
+        alpha.append(np.degrees(np.arctan2(flow.normal_velocity,
                                            -flow.tangential_velocity)))
         acc_p.append(np.abs(c.state.pitch_acceleration))
         acc_h.append(np.abs(c.state.heave_acceleration))

@@ -24,7 +24,7 @@ free vortices alike, in the frame of the fluid at rest (Wu 1981):
 
     F = -rho d/dt sum_k Gamma_k (y_k, -x_k),   M_O = (rho / 2) d/dt sum_k Gamma_k |r_k|^2,
 
-moved to the leading edge, with the derivative taken by the second-order backward difference.
+moved to the pivot, with the derivative taken by the second-order backward difference.
 This is exact for the discretised flow and holds with leading-edge shedding. The pressure-jump
 form delta p = rho [V_t gamma + d/dt int_0^x gamma dx'] with the suction pi rho c U^2 A_0^2
 (Ramesh et al.) gives the same loads in attached flow, but it takes the potential jump at the
@@ -42,9 +42,10 @@ the balances as if they drifted with the stream, so that the cost per step stays
 however long the record.
 
 Frames and signs are the package's (:class:`~mfflap.hydro.loads.Loads`): the stream along
-+Y0, heave h of the leading edge along X0, pitch theta with the chord along
-(sin theta, cos theta); F_n along e_n = (cos theta, -sin theta), F_t along the chord from the
-leading to the trailing edge, M about the leading edge. Inside, the kernel works in the
++Y0, heave h of the pivot (:attr:`~mfflap.parameters.Plate.pivot_m` behind the leading edge)
+along X0, pitch theta about it with the chord along (sin theta, cos theta); F_n along
+e_n = (cos theta, -sin theta), F_t along the chord from the leading to the trailing edge, M
+about the pivot. Inside, the kernel works in the
 plane (x, y) = (Y0, X0), with circulation anticlockwise positive there.
 
 References
@@ -134,7 +135,7 @@ class VortexRun:
     Attributes
     ----------
     loads : Loads
-        F_n, F_t (N) and M about the leading edge (N*m) at every step.
+        F_n, F_t (N) and M about the pivot (N*m) at every step.
     leading_edge_suction_parameter : ndarray
         A_0 after shedding (reference speed U), dimensionless.
     trailing_edge_circulation, leading_edge_circulation : ndarray, m^2/s
@@ -220,17 +221,17 @@ def _quadrature(chord, velocity, n_points):
 
 
 @numba.njit(cache=True)
-def _initial_aux(heave0, heave_rate0, pitch0, chord, velocity, time_step):
+def _initial_aux(heave0, heave_rate0, pitch0, chord, pivot, velocity, time_step):
     """The wake's scalar state before the first step (the previous trailing-edge vortex
     one and a half steps of stream behind the trailing edge)."""
     aux = np.zeros(8)
-    aux[AUX_TEV_X] = chord * math.cos(pitch0) + 1.5 * time_step * velocity
-    aux[AUX_TEV_Y] = heave0 + chord * math.sin(pitch0) - 1.5 * time_step * heave_rate0
+    aux[AUX_TEV_X] = pivot + (chord - pivot) * math.cos(pitch0) + 1.5 * time_step * velocity
+    aux[AUX_TEV_Y] = heave0 + (chord - pivot) * math.sin(pitch0) - 1.5 * time_step * heave_rate0
     return aux
 
 
 @numba.njit(cache=True)
-def _solve_step(j, heave, heave_rate, pitch, pitch_rate, chord, velocity, density, span,
+def _solve_step(j, heave, heave_rate, pitch, pitch_rate, chord, pivot, velocity, density, span,
                 time_step, critical_lesp, core2, wake_steps, x_chord, fourier, sheet,
                 xs, ys, gs, aux, lev_was_shed, prev_imp, prev2_imp, work):
     """One step up to the wake's motion: the oldest vortices leave the ring, the bound
@@ -255,7 +256,9 @@ def _solve_step(j, heave, heave_rate, pitch, pitch_rate, chord, velocity, densit
             aux[AUX_DROPPED_ANG] += gs[k] * (xr * xr + ys[k] * ys[k])
             gs[k] = 0.0
     c, s_ = math.cos(pitch[j]), math.sin(pitch[j])
-    lx, ly = 0.0, heave[j]
+    # the leading edge: the pivot, at (pivot, heave) in the stream's frame, lies `pivot`
+    # along the chord behind it
+    lx, ly = pivot * (1 - c), heave[j] - pivot * s_
     tx, ty = lx + chord * c, ly + chord * s_
     px, py = work[W_PX], work[W_PY]
     w_known = np.empty(n_points)
@@ -263,7 +266,7 @@ def _solve_step(j, heave, heave_rate, pitch, pitch_rate, chord, velocity, densit
     for i in range(n_points):
         px[i], py[i] = lx + x_chord[i] * c, ly + x_chord[i] * s_
         wu, wv = _induced(px[i], py[i], xs, ys, gs, core2)
-        w_known[i] = (-velocity * s_ - heave_rate[j] * c - pitch_rate[j] * x_chord[i]
+        w_known[i] = (-velocity * s_ - heave_rate[j] * c - pitch_rate[j] * (x_chord[i] - pivot)
                       - wu * s_ + wv * c)
     # the circulation shed in this step: a uniform sheet from each edge
     tex = tx + (aux[AUX_TEV_X] - tx) * (2 / 3)
@@ -272,7 +275,10 @@ def _solve_step(j, heave, heave_rate, pitch, pitch_rate, chord, velocity, densit
         lex = lx + (aux[AUX_LEV_X] - lx) * (2 / 3)
         ley = ly + (aux[AUX_LEV_Y] - ly) * (2 / 3)
     else:
-        lex, ley = lx + time_step * velocity, ly - time_step * heave_rate[j]
+        # one step of the flow past the leading edge, which moves at
+        # (pivot sin theta theta', h' - pivot cos theta theta')
+        lex = lx + time_step * (velocity - pivot * s_ * pitch_rate[j])
+        ley = ly - time_step * (heave_rate[j] - pivot * c * pitch_rate[j])
     for i in range(n_points):
         u, v = _sheet(px[i], py[i], tx, ty, tex, tey)
         w_tev[i] = -u * s_ + v * c
@@ -328,8 +334,8 @@ def _solve_step(j, heave, heave_rate, pitch, pitch_rate, chord, velocity, densit
         mo = scale * (1.5 * ang - 2 * prev_imp[2] + 0.5 * prev2_imp[2]) / 2
     normal = -fx * s_ + fy * c
     tangential = fx * c + fy * s_
-    # about the leading edge: M_LE = M_O - (r_LE x F)
-    moment = mo - ((lx - shift) * fy - ly * fx)
+    # about the pivot: M_P = M_O - (r_P x F)
+    moment = mo - ((pivot - shift) * fy - heave[j] * fx)
     geometry = (c, s_, tx, ty, tex, tey, lex, ley, k_tev, k_lev)
     return (normal, tangential, moment, shed, gam_tev, gam_lev, total, imp_x, imp_y, ang,
             geometry)
@@ -360,9 +366,9 @@ def _advect(slot, xs, ys, gs, aux, work, velocity, time_step, core2, move_u, mov
 
 
 @numba.njit(cache=True)
-def _march(heave, heave_rate, pitch, pitch_rate, chord, velocity, density, span, time_step,
-           critical_lesp, core2, n_points, wake_steps, tape_wake, tape_aux, tape_flags,
-           tape_impulse):
+def _march(heave, heave_rate, pitch, pitch_rate, chord, pivot, velocity, density, span,
+           time_step, critical_lesp, core2, n_points, wake_steps, tape_wake, tape_aux,
+           tape_flags, tape_impulse):
     """The model's time march (module docstring); returns the step outputs and the wake.
 
     The tape arrays, when they have a row per step (else zero rows), receive the wake before
@@ -378,7 +384,7 @@ def _march(heave, heave_rate, pitch, pitch_rate, chord, velocity, density, span,
     out = np.zeros((7, n_times))
     work = np.empty((7, n_points))
     move_u, move_v = np.empty(2 * wake_steps), np.empty(2 * wake_steps)
-    aux = _initial_aux(heave[0], heave_rate[0], pitch[0], chord, velocity, time_step)
+    aux = _initial_aux(heave[0], heave_rate[0], pitch[0], chord, pivot, velocity, time_step)
     lev_was_shed = False
     prev_imp, prev2_imp = np.zeros(3), np.zeros(3)
     for j in range(n_times):
@@ -386,9 +392,10 @@ def _march(heave, heave_rate, pitch, pitch_rate, chord, velocity, density, span,
             tape_wake[j, 0], tape_wake[j, 1], tape_wake[j, 2] = xs, ys, gs
             tape_aux[j] = aux
             tape_flags[j, 0] = lev_was_shed
-        res = _solve_step(j, heave, heave_rate, pitch, pitch_rate, chord, velocity, density,
-                          span, time_step, critical_lesp, core2, wake_steps, x_chord, fourier,
-                          sheet, xs, ys, gs, aux, lev_was_shed, prev_imp, prev2_imp, work)
+        res = _solve_step(j, heave, heave_rate, pitch, pitch_rate, chord, pivot, velocity,
+                          density, span, time_step, critical_lesp, core2, wake_steps, x_chord,
+                          fourier, sheet, xs, ys, gs, aux, lev_was_shed, prev_imp, prev2_imp,
+                          work)
         out[0, j], out[1, j], out[2, j] = res[0], res[1], res[2]
         out[3, j], out[4, j], out[5, j] = work[W_COEFFS, 0], res[4], res[5]
         out[6, j] = res[6]
@@ -458,8 +465,8 @@ def simulate_vortex_model(state: KinematicState, plate: Plate | None = None,
     wake_steps = _wake_steps_for(settings, plate, stream, dt, n_times)
     kinematics = (np.ascontiguousarray(getattr(state, k), dtype=float) for k in (
         "heave_position", "heave_velocity", "pitch_angle", "pitch_rate"))
-    out, xs, ys, gs = _march(*kinematics, plate.chord, stream.velocity, fluid.density,
-                             plate.span, dt, settings.critical_lesp,
+    out, xs, ys, gs = _march(*kinematics, plate.chord, plate.pivot_m, stream.velocity,
+                             fluid.density, plate.span, dt, settings.critical_lesp,
                              (settings.core_radius_chords * plate.chord) ** 2,
                              settings.chord_points, wake_steps, *_no_tape())
     normal, tangential, moment, a0, gam_tev, gam_lev, total = out

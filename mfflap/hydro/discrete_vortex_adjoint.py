@@ -99,8 +99,8 @@ def _sheet_adjoint(x, y, x1, y1, x2, y2, u_bar, v_bar):
 
 
 @numba.njit(cache=True)
-def _march_adjoint(heave, heave_rate, pitch, pitch_rate, chord, velocity, density, span,
-                   time_step, critical_lesp, core2, n_points, wake_steps, tape_wake,
+def _march_adjoint(heave, heave_rate, pitch, pitch_rate, chord, pivot, velocity, density,
+                   span, time_step, critical_lesp, core2, n_points, wake_steps, tape_wake,
                    tape_aux, tape_flags, tape_impulse, g_normal, g_tangential, g_moment):
     """The reverse sweep (module docstring): returns the adjoints of heave, heave rate,
     pitch, pitch rate (one per step) and of the time step."""
@@ -132,13 +132,15 @@ def _march_adjoint(heave, heave_rate, pitch, pitch_rate, chord, velocity, densit
             prev_imp[:] = tape_impulse[j - 1]
         if j >= 2:
             prev2_imp[:] = tape_impulse[j - 2]
-        res = _solve_step(j, heave, heave_rate, pitch, pitch_rate, chord, velocity, density,
-                          span, time_step, critical_lesp, core2, wake_steps, x_chord, fourier,
-                          sheet, xs, ys, gs, aux, lev_was_shed, prev_imp, prev2_imp, work)
+        res = _solve_step(j, heave, heave_rate, pitch, pitch_rate, chord, pivot, velocity,
+                          density, span, time_step, critical_lesp, core2, wake_steps, x_chord,
+                          fourier, sheet, xs, ys, gs, aux, lev_was_shed, prev_imp, prev2_imp,
+                          work)
         shed, gam_tev, gam_lev = res[3], res[4], res[5]
         imp_x, imp_y, ang = res[7], res[8], res[9]
         c, s_, tx, ty, tex, tey, lex, ley, k_tev, k_lev = res[10]
-        h, hd = heave[j], heave_rate[j]
+        h, hd, thd = heave[j], heave_rate[j], pitch_rate[j]
+        lx, ly = pivot * (1 - c), h - pivot * s_  # the leading edge
         px, py, bound = work[W_PX], work[W_PY], work[W_BOUND]
         a_tev, a_lev = work[W_A_TEV], work[W_A_LEV]
         g1[:] = gs
@@ -146,7 +148,7 @@ def _march_adjoint(heave, heave_rate, pitch, pitch_rate, chord, velocity, densit
         px_bar[:] = 0.0
         py_bar[:] = 0.0
         bound_bar[:] = 0.0
-        c_bar = s_bar = shift_bar = 0.0
+        c_bar = s_bar = shift_bar = lx_bar = ly_bar = 0.0
         # the last shed vortices' positions, taken after the wake moved
         xs_bar[slot] += aux_bar[AUX_TEV_X]
         ys_bar[slot] += aux_bar[AUX_TEV_Y]
@@ -176,7 +178,7 @@ def _march_adjoint(heave, heave_rate, pitch, pitch_rate, chord, velocity, densit
             mo = scale * (1.5 * ang - 2 * prev_imp[2] + 0.5 * prev2_imp[2]) / 2
         gn, gt, gm = g_normal[j], g_tangential[j], g_moment[j]
         fx_bar = -gn * s_ + gt * c + gm * h
-        fy_bar = gn * c + gt * s_ + gm * shift
+        fy_bar = gn * c + gt * s_ + gm * (shift - pivot)
         mo_bar = gm
         s_bar += -gn * fx + gt * fy
         c_bar += gn * fy + gt * fx
@@ -216,9 +218,8 @@ def _march_adjoint(heave, heave_rate, pitch, pitch_rate, chord, velocity, densit
         tx_bar = tex_bar = xb2[slot] / 2
         ty_bar = tey_bar = yb2[slot] / 2
         gam_tev_bar, gam_lev_bar = gb2[slot], gb2[lev_slot]
-        lex_bar = xb2[lev_slot] / 2
-        ley_bar = yb2[lev_slot] / 2
-        h_bar[j] += yb2[lev_slot] / 2
+        lex_bar = lx_bar = xb2[lev_slot] / 2
+        ley_bar = ly_bar = yb2[lev_slot] / 2
         for k in (slot, lev_slot):
             xb2[k] = yb2[k] = gb2[k] = 0.0
         # the bound circulation and the solve for the shed circulations
@@ -265,13 +266,14 @@ def _march_adjoint(heave, heave_rate, pitch, pitch_rate, chord, velocity, densit
             tex_bar += adj[4]
             tey_bar += adj[5]
             wb = w_lev_bar[i]
-            u, v = _sheet(px[i], py[i], 0.0, h, lex, ley)
+            u, v = _sheet(px[i], py[i], lx, ly, lex, ley)
             s_bar -= wb * u
             c_bar += wb * v
-            adj = _sheet_adjoint(px[i], py[i], 0.0, h, lex, ley, -wb * s_, wb * c)
+            adj = _sheet_adjoint(px[i], py[i], lx, ly, lex, ley, -wb * s_, wb * c)
             px_bar[i] += adj[0]
             py_bar[i] += adj[1]
-            h_bar[j] += adj[3]  # the leading edge stays at x = 0: the frame moves with U
+            lx_bar += adj[2]
+            ly_bar += adj[3]
             lex_bar += adj[4]
             ley_bar += adj[5]
         # the sheets reach two thirds of the way to the last shed vortices
@@ -280,12 +282,19 @@ def _march_adjoint(heave, heave_rate, pitch, pitch_rate, chord, velocity, densit
         aux_bar[AUX_TEV_X] = 2 * tex_bar / 3
         aux_bar[AUX_TEV_Y] = 2 * tey_bar / 3
         if lev_was_shed:
-            h_bar[j] += ley_bar / 3
+            lx_bar += lex_bar / 3
+            ly_bar += ley_bar / 3
             aux_bar[AUX_LEV_X] = 2 * lex_bar / 3
             aux_bar[AUX_LEV_Y] = 2 * ley_bar / 3
         else:
-            dt_bar += velocity * lex_bar - hd * ley_bar
-            h_bar[j] += ley_bar
+            # lex = lx + dt (U - pivot s theta'), ley = ly - dt (h' - pivot c theta')
+            lx_bar += lex_bar
+            ly_bar += ley_bar
+            dt_bar += ((velocity - pivot * s_ * thd) * lex_bar
+                       - (hd - pivot * c * thd) * ley_bar)
+            s_bar -= time_step * pivot * thd * lex_bar
+            c_bar += time_step * pivot * thd * ley_bar
+            thd_bar[j] += time_step * pivot * (c * ley_bar - s_ * lex_bar)
             hd_bar[j] -= time_step * ley_bar
             aux_bar[AUX_LEV_X] = aux_bar[AUX_LEV_Y] = 0.0
         # the normal velocity the plate cancels: its motion, the stream and the wake
@@ -295,19 +304,24 @@ def _march_adjoint(heave, heave_rate, pitch, pitch_rate, chord, velocity, densit
             s_bar += wb * (-velocity - wu)
             c_bar += wb * (-hd + wv)
             hd_bar[j] -= wb * c
-            thd_bar[j] -= wb * x_chord[i]
+            thd_bar[j] -= wb * (x_chord[i] - pivot)
             a, b = _induced_adjoint(px[i], py[i], xs, ys, g1, core2, -wb * s_, wb * c, xb2,
                                     yb2, gb2, 1.0)
             px_bar[i] += a
             py_bar[i] += b
-        # the plate's points and trailing edge
+        # the plate's points and trailing edge, lx + x c and ly + x s, and the leading edge
         for i in range(n_points):
             c_bar += px_bar[i] * x_chord[i]
             s_bar += py_bar[i] * x_chord[i]
-            h_bar[j] += py_bar[i]
+            lx_bar += px_bar[i]
+            ly_bar += py_bar[i]
         c_bar += tx_bar * chord
         s_bar += ty_bar * chord
-        h_bar[j] += ty_bar
+        lx_bar += tx_bar
+        ly_bar += ty_bar
+        c_bar -= pivot * lx_bar
+        s_bar -= pivot * ly_bar
+        h_bar[j] += ly_bar
         th_bar[j] += -c_bar * s_ + s_bar * c
         # the oldest vortices left the ring at this step's start
         for k in (slot, lev_slot):
@@ -327,7 +341,8 @@ def _march_adjoint(heave, heave_rate, pitch, pitch_rate, chord, velocity, densit
         prev_bar[:], prev2_bar[:] = new_prev_bar, new_prev2_bar
     # the last trailing-edge vortex before the first step
     th0 = pitch[0]
-    th_bar[0] += chord * (-math.sin(th0) * aux_bar[AUX_TEV_X] + math.cos(th0) * aux_bar[AUX_TEV_Y])
+    th_bar[0] += (chord - pivot) * (-math.sin(th0) * aux_bar[AUX_TEV_X]
+                                    + math.cos(th0) * aux_bar[AUX_TEV_Y])
     h_bar[0] += aux_bar[AUX_TEV_Y]
     hd_bar[0] -= 1.5 * time_step * aux_bar[AUX_TEV_Y]
     dt_bar += 1.5 * velocity * aux_bar[AUX_TEV_X] - 1.5 * heave_rate[0] * aux_bar[AUX_TEV_Y]
@@ -341,7 +356,7 @@ class VortexLoadsGradient:
     Attributes
     ----------
     loads : Loads
-        The run's F_n, F_t (N) and M about the leading edge (N*m).
+        The run's F_n, F_t (N) and M about the pivot (N*m).
     heave_position, heave_velocity, pitch_angle, pitch_rate : ndarray
         d(sum) / d(each step's h [m], h' [m/s], theta [rad], theta' [rad/s]), in the sum's
         units per unit of each.
@@ -414,7 +429,7 @@ class TapedVortexRun:
     Attributes
     ----------
     loads : Loads
-        The run's F_n, F_t (N) and M about the leading edge (N*m).
+        The run's F_n, F_t (N) and M about the pivot (N*m).
     """
 
     loads: Loads
@@ -466,7 +481,7 @@ def record_vortex_run(state: KinematicState, plate: Plate | None = None,
     wake_steps = _wake_steps_for(settings, plate, stream, dt, n_times)
     kinematics = tuple(np.ascontiguousarray(getattr(state, k), dtype=float) for k in (
         "heave_position", "heave_velocity", "pitch_angle", "pitch_rate"))
-    constants = (plate.chord, stream.velocity, fluid.density, plate.span, dt,
+    constants = (plate.chord, plate.pivot_m, stream.velocity, fluid.density, plate.span, dt,
                  settings.critical_lesp, (settings.core_radius_chords * plate.chord) ** 2,
                  settings.chord_points, wake_steps)
     tape = (np.empty((n_times, 3, 2 * wake_steps)), np.empty((n_times, 8)),

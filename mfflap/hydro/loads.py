@@ -18,7 +18,7 @@ LOAD_COMPONENTS: tuple[str, ...] = tuple(LOAD_UNITS)
 
 @dataclass(frozen=True)
 class Loads:
-    """Force on the plate: normal and tangential components and moment about the leading edge.
+    """Force on the plate: normal and tangential components and moment about the pivot.
 
     Body frame: e_t = (sin theta, cos theta) from leading to trailing edge, e_n =
     (cos theta, -sin theta) in the global (X0 = heave, Y0 = stream) frame. The moment is

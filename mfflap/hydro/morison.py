@@ -1,12 +1,14 @@
 """The Morison strip model of the paper, with the signs of docs/theory.md.
 
-Relative velocities of strip k (centre l_k = l (2k - 1) / (2n)):
+Relative velocities of strip k, whose centre lies l_k = l (2k - 1) / (2n) - x_p along the
+chord from the pivot (x_p behind the leading edge, :attr:`mfflap.parameters.Plate.pivot_m`;
+h is the pivot's heave):
     v_nk = hdot cos(theta) + U sin(theta) + thetadot l_k
     v_t  = hdot sin(theta) - U cos(theta)
 and their full time derivatives. Each strip carries
     F_nk = -C_an rho V_nk dv_nk/dt - 1/2 rho C_Dn S_nk |v_nk| v_nk
     F_tk = -C_at rho V_tk dv_t/dt  - 1/2 rho C_Dt S_tk |v_t| v_t
-and M = sum_k F_nk l_k about the leading edge. All strips are equal, so the added-mass sums
+and M = sum_k F_nk l_k about the pivot. All strips are equal, so the added-mass sums
 collapse to chord means of l_k and l_k^2; the drag sum is evaluated strip by strip.
 """
 
@@ -31,28 +33,35 @@ from mfflap.parameters import (
 
 @dataclass(frozen=True)
 class RelativeFlow:
-    """Relative velocities and their time derivatives at the plate (strip-independent parts).
+    """Relative velocities and their time derivatives at one point of the chord.
 
-    normal_velocity_le : v_n at the leading edge, m/s (v_nk = this + pitch_rate l_k)
-    normal_acceleration_le : dv_n/dt at the leading edge, m/s^2 (+ pitch_acceleration l_k)
-    tangential_velocity, tangential_acceleration : v_t and dv_t/dt
+    normal_velocity : v_n there, m/s (at a point l further along the chord it is this
+        + pitch_rate l)
+    normal_acceleration : dv_n/dt there, m/s^2 (+ pitch_acceleration l)
+    tangential_velocity, tangential_acceleration : v_t and dv_t/dt (the same all along the
+        chord)
     """
 
-    normal_velocity_le: np.ndarray
-    normal_acceleration_le: np.ndarray
+    normal_velocity: np.ndarray
+    normal_acceleration: np.ndarray
     tangential_velocity: np.ndarray
     tangential_acceleration: np.ndarray
 
     @classmethod
-    def of(cls, state: KinematicState, free_stream_velocity: float) -> RelativeFlow:
-        """Evaluate from a kinematic state and the free-stream speed U (m/s)."""
+    def of(cls, state: KinematicState, free_stream_velocity: float,
+           from_pivot_m: float = 0.0) -> RelativeFlow:
+        """Evaluate from a kinematic state (the pivot's heave) and the free-stream speed U
+        (m/s) at the point ``from_pivot_m`` along the chord from the pivot (m; the leading
+        edge is at minus :attr:`~mfflap.parameters.Plate.pivot_m`)."""
         u = free_stream_velocity
         s, c = np.sin(state.pitch_angle), np.cos(state.pitch_angle)
         hd, hdd = state.heave_velocity, state.heave_acceleration
         td = state.pitch_rate
+        arm = from_pivot_m
         return cls(
-            normal_velocity_le=hd * c + u * s,
-            normal_acceleration_le=hdd * c - hd * td * s + u * td * c,
+            normal_velocity=hd * c + u * s + (td * arm if arm else 0.0),
+            normal_acceleration=(hdd * c - hd * td * s + u * td * c
+                                 + (state.pitch_acceleration * arm if arm else 0.0)),
             tangential_velocity=hd * s - u * c,
             tangential_acceleration=hdd * s + hd * td * c + u * td * s,
         )
@@ -84,7 +93,7 @@ class NormalAddedMass(_MorisonTerm):
     def regressor(self, state: KinematicState) -> Loads:
         flow = self._flow(state)
         rv = self.fluid.density * self.geometry.volume_normal
-        a0, tdd = flow.normal_acceleration_le, state.pitch_acceleration
+        a0, tdd = flow.normal_acceleration, state.pitch_acceleration
         fn = -rv * (a0 + tdd * self.mean_position)
         mo = -rv * (a0 * self.mean_position + tdd * self.mean_position_sq)
         return Loads(state.time, fn, self._zeros(state), mo, source=self.name)
@@ -112,7 +121,7 @@ class NormalDrag(_MorisonTerm):
     def strip_velocities(self, state: KinematicState) -> np.ndarray:
         """v_nk, shape (..., n_times, n_strips)."""
         flow = self._flow(state)
-        return flow.normal_velocity_le[..., None] + state.pitch_rate[..., None] * self.positions
+        return flow.normal_velocity[..., None] + state.pitch_rate[..., None] * self.positions
 
     def regressor(self, state: KinematicState) -> Loads:
         k = 0.5 * self.fluid.density * self.geometry.area_normal / self.geometry.n_strips
@@ -121,7 +130,7 @@ class NormalDrag(_MorisonTerm):
             fn, mo = q.sum(axis=-1), q @ self.positions
         else:
             flow = self._flow(state)
-            fn, mo = self.strip_sums(flow.normal_velocity_le, state.pitch_rate)
+            fn, mo = self.strip_sums(flow.normal_velocity, state.pitch_rate)
         return Loads(state.time, -k * fn, self._zeros(state), -k * mo, source=self.name)
 
     def _runs(self, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -185,7 +194,7 @@ class NormalDrag(_MorisonTerm):
     def dissipation(self, state: KinematicState) -> np.ndarray:
         """Power dissipated per unit coefficient, sum_k 1/2 rho S_nk |v_nk|^3, W."""
         k = 0.5 * self.fluid.density * self.geometry.area_normal / self.geometry.n_strips
-        a = np.real(self._flow(state).normal_velocity_le)
+        a = np.real(self._flow(state).normal_velocity)
         return k * self.strip_abs_cubes(a, np.real(state.pitch_rate))
 
 
@@ -261,8 +270,8 @@ class MorisonModel(ForceModel):
         flow = RelativeFlow.of(state, self.stream.velocity)
         g, rho, c = self.geometry, self.fluid.density, self.coefficients
         pos = np.asarray(g.positions)
-        vn = flow.normal_velocity_le[..., None] + state.pitch_rate[..., None] * pos
-        an = flow.normal_acceleration_le[..., None] + state.pitch_acceleration[..., None] * pos
+        vn = flow.normal_velocity[..., None] + state.pitch_rate[..., None] * pos
+        an = flow.normal_acceleration[..., None] + state.pitch_acceleration[..., None] * pos
         normal = c["normal_added_mass"] * rho * g.volume_normal / g.n_strips * (vn * an).sum(-1)
         tangential = (c["tangential_added_mass"] * rho * g.volume_tangential
                       * flow.tangential_velocity * flow.tangential_acceleration)

@@ -2,10 +2,13 @@
 
 Theodorsen's theory of a flat plate in a uniform stream, written in the time domain with
 Wagner's function (R. T. Jones' two-exponential approximation), for the plate of this package:
-pitching about its leading edge (Theodorsen's a = -1), heave h along X0, pitch theta
-anticlockwise, F_n along e_n and M = sum F_n l about the leading edge (the model's signs,
-:class:`~mfflap.hydro.loads.Loads`). With semichord b, span s and the normal velocity of the
-three-quarter-chord point (Theodorsen's downwash, linearised)
+written here for a pitch about the leading edge (Theodorsen's a = -1), heave h along X0,
+pitch theta anticlockwise, F_n along e_n and M = sum F_n l about the leading edge (the
+model's signs, :class:`~mfflap.hydro.loads.Loads`). A plate pitching about a pivot x_p behind
+its leading edge is the same plate with the leading edge heaving h - x_p theta (to first
+order), its moment about the pivot M - x_p F_n: the functions below take the pivot of their
+plate that way. With semichord b, span s and the normal velocity of the three-quarter-chord
+point (Theodorsen's downwash, linearised)
 
     q(t) = hdot + U theta + (3/2) b thetadot,
 
@@ -34,6 +37,7 @@ Report 681 (the approximation of Wagner's function used here).
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 from typing import Literal
 
 import numpy as np
@@ -138,7 +142,8 @@ def wagner_filter(values: np.ndarray, time: np.ndarray, velocity: float | np.nda
 
 def three_quarter_chord_velocity(state: KinematicState, free_stream_velocity: float,
                                  chord: float) -> np.ndarray:
-    """Theodorsen's downwash q = hdot + U theta + (3/4) c thetadot, linearised, m/s."""
+    """Theodorsen's downwash q = hdot + U theta + (3/4) c thetadot, linearised, m/s (h and
+    its rates those of the leading edge)."""
     return (state.heave_velocity + free_stream_velocity * state.pitch_angle
             + 0.75 * chord * state.pitch_rate)
 
@@ -151,33 +156,55 @@ def _check_single_motion(state: KinematicState) -> np.ndarray:
     return t
 
 
+def _leading_edge_state(state: KinematicState, pivot_m: float) -> KinematicState:
+    """The state of the leading edge of a plate whose pivot, ``pivot_m`` behind it, moves as
+    ``state`` (first order in the pitch: the leading edge heaves h - x_p theta)."""
+    if not pivot_m:
+        return state
+    return replace(state, heave_position=state.heave_position - pivot_m * state.pitch_angle,
+                   heave_velocity=state.heave_velocity - pivot_m * state.pitch_rate,
+                   heave_acceleration=(state.heave_acceleration
+                                       - pivot_m * state.pitch_acceleration))
+
+
+def _about_pivot(loads: Loads, pivot_m: float) -> Loads:
+    """Loads with their moment moved from the leading edge to the pivot, M - x_p F_n."""
+    if not pivot_m:
+        return loads
+    return replace(loads, moment=loads.moment - pivot_m * loads.normal_force)
+
+
 def added_mass_loads(state: KinematicState, plate: Plate | None = None,
                      fluid: Fluid | None = None, stream: FreeStream | None = None) -> Loads:
     """The non-circulatory loads of the theory, exact in time (module docstring).
 
     F_n = -pi rho b^2 s (hddot + U thetadot + b thetaddot),
-    M = -pi rho b^3 s (hddot + 3/2 U thetadot + 9/8 b thetaddot); tangential force zero.
+    M = -pi rho b^3 s (hddot + 3/2 U thetadot + 9/8 b thetaddot) about the leading edge
+    (moved to the plate's pivot); tangential force zero.
     """
     plate, fluid, stream = plate or Plate(), fluid or Fluid(), stream or FreeStream()
     t = _check_single_motion(state)
+    state = _leading_edge_state(state, plate.pivot_m)
     u, b = stream.velocity, plate.chord / 2
     hdd, td, tdd = state.heave_acceleration, state.pitch_rate, state.pitch_acceleration
     mass = np.pi * fluid.density * b**2 * plate.span
     normal = -mass * (hdd + u * td + b * tdd)
     moment = -mass * b * (hdd + 1.5 * u * td + 9 / 8 * b * tdd)
-    return Loads(t, normal, np.zeros_like(normal), moment, source="thin_aerofoil_added_mass")
+    return _about_pivot(Loads(t, normal, np.zeros_like(normal), moment,
+                              source="thin_aerofoil_added_mass"), plate.pivot_m)
 
 
 def circulatory_loads(state: KinematicState, plate: Plate | None = None,
                       fluid: Fluid | None = None, stream: FreeStream | None = None) -> Loads:
     """The circulatory loads of the theory for a motion from rest (module docstring).
 
-    F_n = -2 pi rho U b s q_W at the quarter chord (M = F_n c / 4), q_W the downwash
+    F_n = -2 pi rho U b s q_W at the quarter chord (M = F_n (c / 4 - x_p)), q_W the downwash
     :func:`three_quarter_chord_velocity` through Wagner's lag from rest; tangential force
     zero. ``metadata`` as :func:`thin_aerofoil_loads`.
     """
     plate, fluid, stream = plate or Plate(), fluid or Fluid(), stream or FreeStream()
     t = _check_single_motion(state)
+    state = _leading_edge_state(state, plate.pivot_m)
     u, b = stream.velocity, plate.chord / 2
     q = three_quarter_chord_velocity(state, u, plate.chord)
     q_lagged = wagner_filter(q, t, u, plate.chord, start="rest")
@@ -185,8 +212,9 @@ def circulatory_loads(state: KinematicState, plate: Plate | None = None,
     incidence = np.degrees(np.arctan2(np.abs(q), u))
     metadata = {"max_effective_incidence_deg": float(np.max(incidence, initial=0.0)),
                 "reduced_time_span": float(2 * u * (t[-1] - t[0]) / plate.chord)}
-    return Loads(t, normal, np.zeros_like(normal), normal * b / 2,
-                 source="thin_aerofoil_circulatory", metadata=metadata)
+    return _about_pivot(Loads(t, normal, np.zeros_like(normal), normal * b / 2,
+                              source="thin_aerofoil_circulatory", metadata=metadata),
+                        plate.pivot_m)
 
 
 def thin_aerofoil_loads(state: KinematicState, plate: Plate | None = None,

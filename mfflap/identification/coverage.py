@@ -51,7 +51,7 @@ def motion_features(state: KinematicState, frequency: float, velocity: float
     """The variables of :data:`FEATURE_UNITS` of one motion over ``state`` (a window of whole
     periods); ``frequency`` (Hz) NaN when it has none."""
     flow = RelativeFlow.of(state, velocity)
-    alpha = np.degrees(np.arctan2(flow.normal_velocity_le, -flow.tangential_velocity))
+    alpha = np.degrees(np.arctan2(flow.normal_velocity, -flow.tangential_velocity))
     return {
         "frequency": float(frequency),
         "heave amplitude": float(np.ptp(state.heave_position) / 2),

@@ -228,7 +228,7 @@ def _solve(gram: np.ndarray, rhs: np.ndarray, names: Sequence[str]) -> np.ndarra
     """min x'Gx - 2 g'x subject to x >= 0 (NNLS on the Cholesky factor).
 
     A term whose regressor is zero on every sample fitted (a tangential term fitted to the
-    moment about the leading edge alone, which the tangential force has no arm for) is not
+    moment about the pivot alone, which the tangential force has no arm for) is not
     determined by the data: refused by name, where the ridge below would set it to 0.
     """
     diagonal = np.diag(gram)

@@ -34,7 +34,7 @@ class KinematicState:
     pitch_rate : ndarray, rad/s
     pitch_acceleration : ndarray, rad/s^2
     heave_position : ndarray, m
-        h, the leading edge's displacement along X0.
+        h, the pivot's displacement along X0 (:attr:`~mfflap.parameters.Plate.pivot_m`).
     heave_velocity : ndarray, m/s
     heave_acceleration : ndarray, m/s^2
     """
@@ -73,9 +73,10 @@ class KinematicState:
                 )
         return self
 
-    def trailing_edge_position(self, chord: float) -> np.ndarray:
-        """Trailing-edge displacement along X0, m: h + l sin(theta)."""
-        return self.heave_position + chord * np.sin(self.pitch_angle)
+    def trailing_edge_position(self, chord: float, pivot_m: float = 0.0) -> np.ndarray:
+        """Trailing-edge displacement along X0, m: h + (l - x_p) sin(theta), the heave h
+        being that of the pivot ``pivot_m`` (x_p) behind the leading edge."""
+        return self.heave_position + (chord - pivot_m) * np.sin(self.pitch_angle)
 
     def take(self, index: tuple | slice | np.ndarray) -> KinematicState:
         """Index the leading (motion) axes, e.g. ``state.take(3)`` for one motion."""

@@ -6,13 +6,13 @@ jump of a numerical burst (:mod:`mfflap.records.bursts`) nor a collapse of the t
 forces then grow far beyond anything the motion can drive. This module bounds them.
 
 At time t the plate's normal acceleration is at most ``|h''| + c |theta''|`` anywhere on the
-chord (c the chord, pitch about the leading edge) and the flow's speed relative to it at most
+chord (c the chord, the pivot anywhere on it) and the flow's speed relative to it at most
 ``U + |h'| + c |theta'|``. A plate's normal force is then at most its added mass
 ``rho pi (c/2)^2 s`` times that acceleration plus ``rho c s C_N V^2 / 2`` at that speed, with
 ``C_N`` = 3 (a flat plate normal to a steady stream gives 2; dynamic stall's leading-edge
 vortex about 3). Shed vortices act after the motion that shed them, so the bound at t is the
 largest over the preceding and following convective times ``c / U``. The moment about the
-leading edge is bounded by the chord times the same force.
+pivot is bounded by the chord times the same force.
 
 The stream starts impulsively at t = 0 (a uniform initial field around a no-slip plate): the
 solver spreads that start's pressure impulse over its first time steps, whatever the motion,

@@ -8,7 +8,8 @@ it. A record says what it was run for in its provenance (``chord_m`` and ``span_
 the first records; the plate's thickness, the fluid and the stream with the keys of
 mfflap_case.toml, :data:`PHYSICAL_KEYS`, in newer records) and in
 the ``campaign.toml`` of the folder it was run into; what neither says cannot be checked
-and is not refused.
+and is not refused, but for the pivot: a run that does not give it pitched about the leading
+edge (:data:`IMPLIED_KEYS`).
 """
 
 from __future__ import annotations
@@ -28,11 +29,16 @@ PHYSICAL_KEYS = {
     "span": ("plate.span", lambda p, f, s: p.span),
     "plate_chord_m": ("plate.chord", lambda p, f, s: p.chord),
     "plate_thickness_m": ("plate.thickness", lambda p, f, s: p.thickness),
+    "plate_pivot_chord_fraction": ("plate.pivot_chord_fraction",
+                                   lambda p, f, s: p.pivot_chord_fraction),
     "fluid_density_kg_per_m3": ("fluid.density", lambda p, f, s: f.density),
     "fluid_kinematic_viscosity_m2_per_s": ("fluid.kinematic_viscosity",
                                            lambda p, f, s: f.kinematic_viscosity),
     "flow_velocity_m_per_s": ("flow.velocity", lambda p, f, s: s.velocity),
 }
+#: mfflap_case.toml keys a run that does not give them was run for, at these values (the
+#: pivot was the leading edge before it could be placed elsewhere)
+IMPLIED_KEYS = {"plate_pivot_chord_fraction": 0.0}
 #: relative tolerance of the comparisons (the kept values are exact float reprs)
 RELATIVE_TOLERANCE = 1e-6
 #: provenance keys a record had before it kept mfflap_case.toml's (the case-file key's)
@@ -75,6 +81,10 @@ def run_for(record: CfdRecord, folder_setup: dict[str, Any] | None = None
                                          {}).get(field)
         if isinstance(value, (int, float)):
             found[key] = (float(value), "the folder's campaign.toml")
+            continue
+        implied = next((IMPLIED_KEYS[n] for n in names if n in IMPLIED_KEYS), None)
+        if implied is not None:
+            found[key] = (implied, "the value every run that does not say it was run for")
     return found
 
 

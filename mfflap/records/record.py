@@ -10,7 +10,7 @@ Layout::
     /                 attrs: kind = "cfd_record", schema version, mfflap version
     /inputs           attrs: config_toml (the case parameters as TOML)
     /kinematics       imposed KinematicState (SI units)
-    /loads            body-frame F_n, F_t, M about the moving leading edge, whole span
+    /loads            body-frame F_n, F_t, M about the moving pivot, whole span
     /raw              case-frame total force and moment about CofR, per mesh depth
     /parameters       attrs: the motion's parameters (e.g. frequency, heave_amplitude, ...)
     /provenance       attrs: solver, version, mesh, cells, solver settings, CPU time, ...
@@ -56,7 +56,7 @@ class CfdRecord:
     state : KinematicState
         Imposed kinematics on the force time base.
     loads : Loads
-        CFD loads (body frame, whole span, moment about the leading edge).
+        CFD loads (body frame, whole span, moment about the pivot).
     parameters : dict
         Parameters of the motion (``kind`` plus e.g. ``frequency`` Hz, ``heave_amplitude`` m,
         ``phase_deg``, ``pitch_ramp_rate_deg``, ``duration`` s, ``ramp_time`` s).

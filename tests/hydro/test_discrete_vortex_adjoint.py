@@ -13,6 +13,7 @@ from mfflap.errors import ConfigError
 from mfflap.hydro.discrete_vortex import ATTACHED_FLOW, VortexModelSettings, vortex_loads
 from mfflap.hydro.discrete_vortex_adjoint import vortex_loads_vjp
 from mfflap.kinematics.continuous import HarmonicMotion
+from mfflap.parameters import Plate
 
 N_STEPS, TIME_STEP = 160, 0.01
 KINEMATICS = ("heave_position", "heave_velocity", "pitch_angle", "pitch_rate")
@@ -32,8 +33,8 @@ def _weights(seed=1):
     return np.random.default_rng(seed).normal(size=(3, N_STEPS))
 
 
-def _objective(state, weights, settings):
-    loads = vortex_loads(state, settings=settings)
+def _objective(state, weights, settings, plate=None):
+    loads = vortex_loads(state, plate, settings=settings)
     return (weights[0] @ loads.normal_force + weights[1] @ loads.tangential_force
             + weights[2] @ loads.moment)
 
@@ -45,21 +46,26 @@ def _moved(state, direction, dt_direction, eps):
                                                                 / TIME_STEP))
 
 
+@pytest.mark.parametrize("pivot_chord_fraction", [0.0, 0.3])
 @pytest.mark.parametrize("critical_lesp", [ATTACHED_FLOW, 0.2])
-def test_the_directional_derivative_matches_central_differences(critical_lesp):
-    """Along a random direction of all 4 x 160 samples and the time step: the reverse
-    sweep against a Richardson-extrapolated central difference, within 1e-7."""
+def test_the_directional_derivative_matches_central_differences(critical_lesp,
+                                                                pivot_chord_fraction):
+    """Along a random direction of all 4 x 160 samples and the time step, pivot at the
+    leading edge and behind it: the reverse sweep against a Richardson-extrapolated central
+    difference, within 1e-7."""
     settings = VortexModelSettings(critical_lesp=critical_lesp, **SMOOTH)
+    plate = Plate(pivot_chord_fraction=pivot_chord_fraction)
     state, weights = _state(), _weights()
     rng = np.random.default_rng(2)
     direction = {k: rng.normal(size=N_STEPS) for k in KINEMATICS}
     dt_direction = float(rng.normal())
-    grad = vortex_loads_vjp(state, *weights, settings=settings)
+    grad = vortex_loads_vjp(state, *weights, plate=plate, settings=settings)
     exact = sum(getattr(grad, k) @ direction[k] for k in KINEMATICS) \
         + grad.time_step * dt_direction
 
     def along(eps):
-        return _objective(_moved(state, direction, dt_direction, eps), weights, settings)
+        return _objective(_moved(state, direction, dt_direction, eps), weights, settings,
+                          plate)
 
     h = 1e-6
     coarse = (along(h) - along(-h)) / (2 * h)
@@ -84,20 +90,23 @@ def test_the_remainder_of_the_linearisation_is_second_order(critical_lesp):
     assert 50 < remainder[0] / remainder[1] < 200, remainder
 
 
+@pytest.mark.parametrize("pivot_chord_fraction", [0.0, 0.5])
 @pytest.mark.parametrize("name", KINEMATICS)
-def test_single_entries_match_central_differences_with_shedding(name):
-    """Entries early, mid-way and at the end of the run, leading-edge shedding on: within
-    1e-5 of a Richardson-extrapolated difference (single entries carry the forward model's
-    round-off relative to a much smaller derivative than a whole direction does)."""
+def test_single_entries_match_central_differences_with_shedding(name, pivot_chord_fraction):
+    """Entries early, mid-way and at the end of the run, leading-edge shedding on, pivot at
+    the leading edge and at mid-chord: within 1e-5 of a Richardson-extrapolated difference
+    (single entries carry the forward model's round-off relative to a much smaller
+    derivative than a whole direction does)."""
     settings = VortexModelSettings(critical_lesp=0.2, **SMOOTH)
+    plate = Plate(pivot_chord_fraction=pivot_chord_fraction)
     state, weights = _state(), _weights()
-    grad = getattr(vortex_loads_vjp(state, *weights, settings=settings), name)
+    grad = getattr(vortex_loads_vjp(state, *weights, plate=plate, settings=settings), name)
     for index in (3, N_STEPS // 2, N_STEPS - 1):
         def at(eps, index=index):
             step = np.zeros(N_STEPS)
             step[index] = eps
             moved = replace(state, **{name: getattr(state, name) + step})
-            return _objective(moved, weights, settings)
+            return _objective(moved, weights, settings, plate)
 
         h = 1e-5
         difference = (4 * (at(h / 2) - at(-h / 2)) / h - (at(h) - at(-h)) / (2 * h)) / 3

@@ -80,6 +80,35 @@ def test_still_fluid_limit_is_the_flat_plates_added_mass():
     assert np.all(heave.tangential_force == 0)
 
 
+def test_a_plate_pitching_about_its_mid_chord_in_still_fluid():
+    """U = 0, pivot at mid-chord: no normal force from pitch (the added mass is symmetric
+    about the centre) and the flat plate's own added inertia there, rho pi b^4 s / 8."""
+    t = np.linspace(0.0, 1.0, 201)
+    w = 2 * np.pi
+    trig = (np.sin(w * t), w * np.cos(w * t), -w**2 * np.sin(w * t))
+    loads = thin_aerofoil_loads(_state(t, pitch=trig), plate=Plate(pivot_chord_fraction=0.5),
+                                stream=FreeStream(velocity=0.0))
+    assert np.allclose(loads.normal_force, 0.0, atol=1e-12)
+    assert np.allclose(loads.moment, -np.pi * RHO * B**4 * SPAN / 8 * trig[2])
+
+
+@pytest.mark.parametrize("pivot_chord_fraction", [0.25, 0.5])
+def test_steady_lift_acts_at_the_quarter_chord_whatever_the_pivot(pivot_chord_fraction):
+    """Held at 2 deg about the pivot: the same lift, and M = F_n (c / 4 - x_p) about it."""
+    u, theta0 = 1.0, math.radians(2.0)
+    t = np.linspace(0.0, 60.0, 60001)
+    r = np.clip(t, 0.0, 1.0)
+    state = _state(t, pitch=(theta0 * r, theta0 * np.where(t < 1.0, 1.0, 0.0),
+                             np.zeros_like(t)))
+    plate = Plate(pivot_chord_fraction=pivot_chord_fraction)
+    loads = thin_aerofoil_loads(state, plate=plate, stream=FreeStream(velocity=u))
+    lift_coefficient = -loads.normal_force[-1] / (0.5 * RHO * u**2 * CHORD * SPAN)
+    assert lift_coefficient / theta0 == pytest.approx(2 * np.pi, rel=1e-3)
+    arm = CHORD / 4 - plate.pivot_m
+    assert loads.moment[-1] == pytest.approx(loads.normal_force[-1] * arm,
+                                             abs=1e-3 * abs(loads.normal_force[-1]) * CHORD)
+
+
 def test_strip_models_added_mass_is_the_theorys_in_f_n_not_in_m():
     """With C_an = 1 the strip sum's normal added mass (V = pi c^2/4 s at mid-chord) is
     potential flow's in F_n; in M it puts 4/3 pi rho b^4 s on thetaddot (potential flow: 9/8)
@@ -172,19 +201,27 @@ def test_defaults_are_the_packages_plate_and_fluid():
 
 
 @pytest.mark.openfoam
-@pytest.mark.parametrize("motion", [
-    {"heave_amplitude": 0.005, "pitch_amplitude_deg": 0.0, "phase_deg": 0.0},
-    {"heave_amplitude": 0.0, "pitch_amplitude_deg": 2.0, "phase_deg": 90.0},
-], ids=["heave-5mm", "pitch-2deg"])
-def test_real_openfoam_small_motions_match_linear_theory(tmp_path, motion):
+@pytest.mark.parametrize(("motion", "pivot_chord_fraction", "max_nrmse", "min_pearson"), [
+    ({"heave_amplitude": 0.005, "pitch_amplitude_deg": 0.0, "phase_deg": 0.0}, 0.0, 0.06, 0.99),
+    ({"heave_amplitude": 0.0, "pitch_amplitude_deg": 2.0, "phase_deg": 90.0}, 0.0, 0.06, 0.99),
+    # about the mid-chord the pitch drives about half the normal force (effective incidence
+    # 3.4 deg, not 7.6 deg), so the same viscous departures are a larger share of it:
+    # measured 6.0 % NRMSE, Pearson 0.985 in F_n; 2.3 %, 0.999 in M
+    ({"heave_amplitude": 0.0, "pitch_amplitude_deg": 2.0, "phase_deg": 90.0}, 0.5, 0.08, 0.98),
+], ids=["heave-5mm", "pitch-2deg", "pitch-2deg-about-mid-chord"])
+def test_real_openfoam_small_motions_match_linear_theory(tmp_path, motion,
+                                                         pivot_chord_fraction, max_nrmse,
+                                                         min_pearson):
     """Two cycles of a small heave or pitch at f = 1 Hz (k = 1.7, effective incidence below
-    8 deg) on the coarse mesh: the CFD's F_n and M about the moving leading edge, through the
-    whole adapter chain (motion table, frames, span scaling, moment transfer), follow
-    Theodorsen's theory in amplitude and phase. Measured: 3-4 % NRMSE, Pearson 0.996-0.997,
-    the same on the medium mesh; the strip model, which has no circulation, is 21-24 % off."""
+    8 deg) on the coarse mesh: the CFD's F_n and M about the moving pivot, through the whole
+    adapter chain (motion table, frames, span scaling, moment transfer, the mesh placed about
+    the pivot), follow Theodorsen's theory in amplitude and phase. Measured: 3-4 % NRMSE,
+    Pearson 0.996-0.997, the same on the medium mesh; the strip model, which has no
+    circulation, is 21-24 % off."""
     case = tmp_path / "small.toml"
     case.write_text("[motion]\nkind = \"harmonic\"\nfrequency = 1.0\n" + "".join(
-        f"{key} = {value}\n" for key, value in motion.items()))
+        f"{key} = {value}\n" for key, value in motion.items())
+        + f"[plate]\npivot_chord_fraction = {pivot_chord_fraction}\n")
     runner = CliRunner()
     case_dir = tmp_path / "of"
     res = runner.invoke(cli, ["cfd", "write", str(case), str(case_dir), "--cycles", "2",
@@ -199,8 +236,8 @@ def test_real_openfoam_small_motions_match_linear_theory(tmp_path, motion):
     theory = out["thin_aerofoil"]
     assert theory["max_effective_incidence_deg"] < 10
     for name in ("normal_force", "moment"):
-        assert theory[f"nrmse_{name}"] < 0.06, (name, theory)
-        assert theory[f"pearson_{name}"] > 0.99, (name, theory)
+        assert theory[f"nrmse_{name}"] < max_nrmse, (name, theory)
+        assert theory[f"pearson_{name}"] > min_pearson, (name, theory)
     assert out["nrmse_normal_force"] > 3 * theory["nrmse_normal_force"]
     assert out["cfd_mean_power"] == pytest.approx(theory["mean_power"], rel=0.3)
 

@@ -33,7 +33,9 @@ def _case_file(tmp_path: Path, old: str, new: str) -> Path:
 
 def test_a_record_says_what_it_was_run_for_from_its_provenance_and_its_folder():
     record = read_record(next(iter(sorted(TABLE1.glob("f*.h5")))))
-    assert set(run_for(record)) == {"plate.chord", "plate.span"}  # the shipped provenance
+    # the shipped provenance, and the pivot every run that does not say pitched about
+    assert set(run_for(record)) == {"plate.chord", "plate.span", "plate.pivot_chord_fraction"}
+    assert run_for(record)["plate.pivot_chord_fraction"][0] == 0.0
     from mfflap.records.inputs import folder_setup
 
     found = run_for(record, folder_setup(TABLE1))
@@ -45,6 +47,9 @@ def test_a_record_says_what_it_was_run_for_from_its_provenance_and_its_folder():
     assert input_mismatches(record, close, Fluid(), FreeStream()) == []
     (m,) = input_mismatches(record, Plate(chord=0.1), Fluid(), FreeStream())
     assert (m.key, m.record_value, m.case_value) == ("plate.chord", 0.16, 0.1)
+    # a quarter-chord model is not identified from leading-edge runs unseen
+    (m,) = input_mismatches(record, Plate(pivot_chord_fraction=0.25), Fluid(), FreeStream())
+    assert (m.key, m.record_value, m.case_value) == ("plate.pivot_chord_fraction", 0.0, 0.25)
 
 
 def test_the_refusal_counts_the_records_of_each_folder_and_names_the_first_key():

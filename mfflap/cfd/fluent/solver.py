@@ -48,10 +48,20 @@ class Fluent:
         ``motion_table``."""
         source = Path(source)
         kept = source.parent / FLUENT_KEPT_FILE
+        meta = read_toml(kept) if kept.is_file() else None
         return RunForces(report_forces(source, *self.columns),
                          FLUENT_DEPTH_M if depth_m is None else depth_m, "inertial",
-                         f"fluent:{source}", kept if kept.is_file() else None,
-                         read_toml(kept) if kept.is_file() else None)
+                         f"fluent:{source}", kept if kept.is_file() else None, meta,
+                         pivot_m=(kept_pivot_m(meta), 0.0))
+
+
+def kept_pivot_m(meta: dict | None) -> float:
+    """The pivot's distance behind the leading edge a UDF was written for, m (0 where its
+    mfflap_fluent.toml does not say, or there is none: the leading edge)."""
+    if not meta:
+        return 0.0
+    fraction = float(meta.get("plate_pivot_chord_fraction", 0.0))
+    return fraction * float(meta.get("plate_chord_m", 0.0))
 
 
 __all__ = ["FLUENT_COLUMNS", "FLUENT_DEPTH_M", "Fluent"]

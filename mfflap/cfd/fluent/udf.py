@@ -140,10 +140,11 @@ def journal(udf_file: str, report_file: str = REPORT_FILE, case_file: str = "pla
             udf_name: str = "mfflap_motion", time_step: float = 1e-3, n_steps: int = 1000,
             max_iterations: int = 20, velocity: float = 0.3, plate_zone: str = "plate",
             fluid_zone: str = "fluid", journal_name: str = "mfflap_run.jou",
-            output_case: str = "plate_final.cas.h5") -> str:
+            output_case: str = "plate_final.cas.h5", pivot_x_m: float = 0.0) -> str:
     """Batch journal: read the case, compile and load the UDF, make the fluid zone a rigid
-    body driven by it, add force/moment report definitions and a report file with the flow
-    time, and run ``n_steps`` time steps."""
+    body driven by it about the pivot (``pivot_x_m`` behind the leading edge, which the
+    case has at the origin), add force/moment report definitions (moments about the origin)
+    and a report file with the flow time, and run ``n_steps`` time steps."""
     _check_name(udf_name)
     if n_steps < 1 or time_step <= 0 or max_iterations < 1:
         raise ConfigError("n_steps and max_iterations must be >= 1 and time_step > 0",
@@ -152,7 +153,7 @@ def journal(udf_file: str, report_file: str = REPORT_FILE, case_file: str = "pla
         version=__version__, udf_file=udf_file, report_file=report_file, case_file=case_file,
         udf_name=udf_name, time_step=time_step, n_steps=n_steps, max_iterations=max_iterations,
         velocity=velocity, plate_zone=plate_zone, fluid_zone=fluid_zone,
-        journal_name=journal_name, output_case=output_case)
+        journal_name=journal_name, output_case=output_case, pivot_x=float(pivot_x_m))
 
 
 def write_fluent_case(folder: str | Path, motion: Motion, end_time: float, *,
@@ -204,7 +205,7 @@ def write_fluent_case(folder: str | Path, motion: Motion, end_time: float, *,
               else table_udf(motion, end_time, ramp_time, udf_name, periodic_period=period))
     n_steps = max(math.ceil(end_time / time_step), 1)
     run_journal = journal("mfflap_motion.c", time_step=time_step, n_steps=n_steps,
-                          velocity=velocity, udf_name=udf_name)
+                          velocity=velocity, udf_name=udf_name, pivot_x_m=plate.pivot_m)
     folder.mkdir(parents=True, exist_ok=True)
     report.unlink(missing_ok=True)  # only once the new UDF is sure to be written
     (folder / "mfflap_motion.c").write_text(source)

@@ -5,7 +5,7 @@ A 3 x 3 block grid with the plate as the missing middle block: columns upstream,
 chord and downstream; rows below, across the thickness and above. Every row and column
 runs out to the far field, so the thin rows that meet the plate (its first cells and the
 band that continues its thickness) cross the whole domain: when the mesh turns about the
-leading edge they sweep through the water at up to the far field's distance times the
+pivot they sweep through the water at up to the far field's distance times the
 pitch rate, and the faster it turns, the more they set the time step (openfoam.md, "What
 sets the time step"): at f = 1 Hz, h = 0.3 m and max Co 2 it took 2,722, 3,090 and 4,216
 time steps per cycle at a pitch of 5, 10 and 20 degrees. mfflap's O-grids
@@ -102,9 +102,10 @@ class HGridSpec:
         columns = self.n_upstream + self.n_chord + self.n_downstream
         return columns * (2 * self.n_side + self.n_thickness) - self.n_chord * self.n_thickness
 
-    def block_mesh_context(self, chord: float, thickness: float) -> dict:
+    def block_mesh_context(self, chord: float, thickness: float, pivot_m: float = 0.0
+                           ) -> dict:
         """What the H-grid blockMeshDict template needs, for a plate of ``chord`` and
-        ``thickness`` (m) with its leading edge at the origin.
+        ``thickness`` (m) with the point ``pivot_m`` behind its leading edge at the origin.
 
         Returns
         -------
@@ -116,7 +117,8 @@ class HGridSpec:
             the chordwise cells continue into the columns up- and downstream at the size of
             a chordwise cell).
         """
-        x = [-self.upstream_chords * chord, 0.0, chord, chord * (1 + self.downstream_chords)]
+        x = [x - pivot_m for x in (-self.upstream_chords * chord, 0.0, chord,
+                                   chord * (1 + self.downstream_chords))]
         y = [-self.side_chords * chord, -thickness / 2, thickness / 2, self.side_chords * chord]
         chord_cell = chord / self.n_chord
         side = expansion_ratio(y[3] - y[2], self.n_side, self.first_cell_m)

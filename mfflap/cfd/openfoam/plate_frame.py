@@ -1,6 +1,6 @@
 """The tables of a case in the plate's frame (``SolverSettings.frame = "plate"``).
 
-The mesh stays still; the frame turns with the pitch about the leading edge (an MRF zone
+The mesh stays still; the frame turns with the pitch about the pivot (an MRF zone
 whose rate is ``constant/pitchRate.dat``), and translates with the heave: the far field's
 inflow is the stream minus the heave velocity (``constant/farFieldVelocity.dat``, a
 uniformInletOutlet table) and the fluid feels minus the heave acceleration as a uniform body

@@ -1,13 +1,15 @@
 """Write a runnable 2D OpenFOAM case of the plate for any motion.
 
-The templates live in ``cfd_templates/openfoam`` (jinja2 where they carry numbers); the mesh
-resolutions in ``cfd_templates/openfoam/meshes.toml``. Two formulations
-(:attr:`SolverSettings.frame`):
+The mesh has the pivot (:attr:`~mfflap.parameters.Plate.pivot_m` behind the leading edge)
+at the origin, so the rotation centre, the moments' centre and the plate frame's origin are
+the origin whatever the pivot. The templates live in ``cfd_templates/openfoam`` (jinja2
+where they carry numbers); the mesh resolutions in ``cfd_templates/openfoam/meshes.toml``.
+Two formulations (:attr:`SolverSettings.frame`):
 
 - "inertial": the whole mesh moves as a rigid body (solidBody / tabulated6DoFMotion about
-  the leading edge), so there is no mesh deformation;
+  the pivot), so there is no mesh deformation;
 - "plate": the mesh stays still in the plate's frame, which turns with the pitch about the
-  leading edge (MRF with a tabulated rate, absolute-velocity formulation) and moves with the
+  pivot (MRF with a tabulated rate, absolute-velocity formulation) and moves with the
   heave (the far field's inflow is the stream minus the heave velocity; the heave
   acceleration is a uniform body force, tabulatedAccelerationSource). The files only this
   formulation needs are in ``cfd_templates/openfoam/plate_frame``.
@@ -340,12 +342,15 @@ def write_case(case_dir: str | Path, motion: Motion, end_time: float,
     src = template_dir()
     skip = [src / PLATE_FRAME_TEMPLATES, src / H_GRID_TEMPLATES]
     if isinstance(spec, HGridSpec):  # its own blockMeshDict instead of the O-grid's
-        context["grid"] = spec.block_mesh_context(plate.chord, plate.thickness)
+        context["grid"] = spec.block_mesh_context(plate.chord, plate.thickness,
+                                                  pivot_m=plate.pivot_m)
         skip.append(src / "system" / "blockMeshDict.j2")
         _render_templates(src / H_GRID_TEMPLATES, case_dir, env, context)
     else:
         radius = spec.radius_chords * plate.chord
-        context.update(xc=plate.chord / 2, radius=radius, r45=radius / math.sqrt(2))
+        x_le = 0.0 - plate.pivot_m
+        context.update(x_le=x_le, x_te=x_le + plate.chord, xc=x_le + plate.chord / 2,
+                       radius=radius, r45=radius / math.sqrt(2))
     _render_templates(src, case_dir, env, context, skip=skip)
     constant = case_dir / "constant"
     if solver.frame == "plate":

@@ -23,7 +23,7 @@ class AddedMassCoupling(CandidateEffect):
         ctx = self.context
         c = ctx.plate.chord
         mass = ctx.fluid.density * np.pi * (c / 2) ** 2 * ctx.plate.span
-        vt, vn = f.tangential_velocity, f.normal_velocity_le
+        vt, vn = f.tangential_velocity, f.normal_velocity
         fn = -mass * vt * state.pitch_rate
         munk = -mass * vn * vt
         return self.loads(state, normal=fn, moment=fn * 0.5 * c + munk)

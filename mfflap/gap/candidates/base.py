@@ -72,15 +72,20 @@ class CandidateEffect(ForceTerm):
         self.context = context or FlowContext()
 
     def flow(self, state: KinematicState) -> RelativeFlow:
-        """Relative velocities at the leading edge."""
-        return RelativeFlow.of(state, self.context.stream.velocity)
+        """Relative velocities at the leading edge (the state is the pivot's)."""
+        return RelativeFlow.of(state, self.context.stream.velocity,
+                               from_pivot_m=-self.context.plate.pivot_m)
 
     def loads(self, state: KinematicState, normal=None, tangential=None, moment=None) -> Loads:
-        """Loads with zeros where a component is not given."""
+        """Loads with zeros where a component is not given; ``moment`` is about the leading
+        edge and is returned about the pivot, M_pivot = M_LE - x_p F_n (the tangential force
+        acts along the chord, through both)."""
         z = np.zeros(state.shape)
-        return Loads(state.time, z if normal is None else z + normal,
-                     z if tangential is None else z + tangential,
-                     z if moment is None else z + moment, source=self.name)
+        fn = z if normal is None else z + normal
+        mo = z if moment is None else z + moment
+        pivot = self.context.plate.pivot_m
+        return Loads(state.time, fn, z if tangential is None else z + tangential,
+                     mo - pivot * fn if pivot else mo, source=self.name)
 
     def is_plausible(self, value: float) -> bool:
         """Whether a fitted coefficient lies in the plausible range."""

@@ -13,7 +13,7 @@ def quasi_steady_normal_force(effect: CandidateEffect, state) -> np.ndarray:
     the chord (the leading edge's plus the pitch rate's 3/4 c thetadot)."""
     f = effect.flow(state)
     rho, area = effect.context.fluid.density, effect.context.area
-    downwash = f.normal_velocity_le + 0.75 * effect.context.plate.chord * state.pitch_rate
+    downwash = f.normal_velocity + 0.75 * effect.context.plate.chord * state.pitch_rate
     return -0.5 * rho * area * np.abs(f.tangential_velocity) * downwash
 
 

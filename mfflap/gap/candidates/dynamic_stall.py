@@ -71,8 +71,8 @@ class DynamicStall(CandidateEffect):
     def regressor(self, state):
         c, rho, area = self.context.plate.chord, self.context.fluid.density, self.context.area
         f = self.flow(state)
-        vn = f.normal_velocity_le + 0.75 * c * state.pitch_rate
-        vn_rate = f.normal_acceleration_le + 0.75 * c * state.pitch_acceleration
+        vn = f.normal_velocity + 0.75 * c * state.pitch_rate
+        vn_rate = f.normal_acceleration + 0.75 * c * state.pitch_acceleration
         along = np.abs(f.tangential_velocity)
         along_rate = np.sign(f.tangential_velocity) * f.tangential_acceleration
         speed2 = np.maximum(vn**2 + along**2, 1e-18)

@@ -25,6 +25,6 @@ class LeadingEdgeVortex(CandidateEffect):
     def regressor(self, state):
         f = self.flow(state)
         ctx = self.context
-        vn = f.normal_velocity_le
+        vn = f.normal_velocity
         fn = -0.5 * ctx.fluid.density * ctx.area * np.abs(vn) * vn
         return self.loads(state, normal=fn, moment=fn * 0.4 * ctx.plate.chord)

@@ -30,7 +30,7 @@ class WakeLag(CandidateEffect):
         f = self.flow(state)
         ctx = self.context
         c = ctx.plate.chord
-        downwash = f.normal_velocity_le + 0.75 * c * state.pitch_rate
+        downwash = f.normal_velocity + 0.75 * c * state.pitch_rate
         qs = -0.5 * ctx.fluid.density * ctx.area * np.abs(f.tangential_velocity) * downwash
         # the wake is laid down at the flow's speed along the chord, not the stream's: at
         # large heave rates the plate travels several chords of its own wake per chord of

@@ -398,3 +398,29 @@ def test_a_motion_that_starts_pitched_without_a_ramp_is_refused_by_both_writers(
     res = CliRunner().invoke(cli, ["cfd", "fluent", str(case), str(tmp_path / "f"),
                                    "--motion-table", str(tmp_path / "pitched.csv")])
     assert res.exit_code == 2 and "--ramp-time" in res.output
+
+
+def test_a_plate_pitching_about_mid_chord_turns_about_it_and_reports_moments_about_it(tmp_path):
+    """The journal puts the rigid body's centre of gravity at the pivot (the case's leading
+    edge at the origin); the report's moments about the origin, read back beside the UDF, are
+    moved to the moving pivot: a force acting there has no moment about it."""
+    from mfflap.cfd.fluent.solver import Fluent
+    from mfflap.parameters import Plate
+
+    plate = Plate(pivot_chord_fraction=0.5)
+    motion = HarmonicMotion(1.0, 0.2, np.deg2rad(20), np.pi / 2)
+    folder = write_fluent_case(tmp_path / "fl", motion, 2.0, time_step=2e-3, plate=plate)
+    create = next(ln for ln in (folder / "mfflap_run.jou").read_text().splitlines()
+                  if ln.startswith("/define/dynamic-mesh/zones/create"))
+    assert create.endswith(" yes 0.08 0 no no"), create
+    t = np.linspace(0.0, 2.0, 401)
+    heave = imposed_state(motion, t).heave_position
+    fx, fy = 3.0 + np.sin(5 * t), -2.0 + np.cos(3 * t)
+    report = write_plate_report(folder / "plate-forces.out", t, fx, fy,
+                                0.08 * fy - heave * fx)  # r_P x F, r_P = (x_p, h)
+    run = Fluent().read_forces(report)
+    assert run.pivot_m == pytest.approx((0.08, 0.0))
+    loads = to_loads(run.history, imposed_state(motion, run.history.time), plate.span,
+                     run.depth_m, "fluent", pivot_m=run.pivot_m)
+    np.testing.assert_allclose(loads.moment, 0.0, atol=1e-12)
+    assert np.max(np.abs(loads.normal_force)) > 0.1  # 0.18 m of span from the 1 m report
