@@ -187,3 +187,31 @@ def test_mesh_gci_reads_cells_from_the_records():
     assert gci["rms_moment_Nm"].behaviour == "exact"
     with pytest.raises(ValueError, match="three meshes"):
         mesh_gci(recs[:2], 0.1)
+
+
+@pytest.mark.parametrize(("order", "ratio"), [(1.0, 2.0), (2.0, 1.49), (2.0, 2.0), (1.7, 1.3)])
+def test_two_level_index_bounds_a_power_law_error_by_its_safety_factor(order, ratio):
+    """phi(h) = phi0 + C h^p sampled at h and h / r: the band around the coarse value is
+    exactly Fs times its error when the assumed order is the true one."""
+    from mfflap.cfd.gci import two_level_index
+
+    phi0, c, h = 3.0, -0.8, 0.4
+    coarse, fine = phi0 + c * h**order, phi0 + c * (h / ratio) ** order
+    ix = two_level_index(coarse, fine, ratio, order=order)
+    assert ix.uncertainty_coarse == pytest.approx(3.0 * abs(coarse - phi0), rel=1e-12)
+    assert ix.gci_coarse == pytest.approx(ix.uncertainty_coarse / abs(coarse), rel=1e-12)
+    assert ix.relative_difference == pytest.approx((fine - coarse) / abs(coarse))
+    # an order assumed higher than the true one under-states the error
+    assert two_level_index(coarse, fine, ratio, order=order + 1).uncertainty_coarse < \
+        ix.uncertainty_coarse
+
+
+@pytest.mark.parametrize(("args", "key"), [((1.0, np.nan, 2.0), "values"),
+                                           ((1.0, 2.0, 1.0), "refinement_ratio"),
+                                           ((1.0, 2.0, 0.5), "refinement_ratio")])
+def test_two_level_index_refuses_what_it_cannot_estimate(args, key):
+    from mfflap.cfd.gci import two_level_index
+
+    with pytest.raises(ConfigError) as err:
+        two_level_index(*args)
+    assert err.value.key == key

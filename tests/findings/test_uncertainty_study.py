@@ -75,3 +75,44 @@ def test_the_medium_mesh_moves_the_fastest_harmonic_means_beyond_their_cycle_sca
     coarse = cycle_scatter(read_record(CAMPAIGNS / "harmonic_set" / slower))
     for key in ("mean_thrust_n", "mean_power_w", "rms_normal_force_n"):
         assert abs(getattr(fine, key) / getattr(coarse, key) - 1) < 0.015, key
+
+
+def _changes(study: str, name: str) -> dict[str, float]:
+    path = CAMPAIGNS / study / name
+    if not path.exists():
+        pytest.fail(f"{path} has not run")
+    fine = cycle_scatter(read_record(path))
+    coarse = cycle_scatter(read_record(CAMPAIGNS / STUDIES[study][0] / name))
+    return {key: getattr(fine, key) / getattr(coarse, key) - 1
+            for key in ("mean_thrust_n", "mean_power_w", "rms_normal_force_n")}
+
+
+def test_on_the_grid_the_medium_mesh_moves_large_heaves_not_small_ones():
+    """The findings page: at h = 0.1 m, phi = 45 deg the medium mesh moves the power and RMS
+    F_n by at most 3 %; at h = 0.3 m by 8-30 % (and its coarse index exceeds 40 %)."""
+    from mfflap.cfd.gci import two_level_index
+
+    for name in ("f1p000_h0p100_phi045p0.h5", "f2p000_h0p100_phi045p0.h5"):
+        changes = _changes("uncertainty_grid_medium", name)
+        for key in ("mean_power_w", "rms_normal_force_n"):
+            assert abs(changes[key]) < 0.035, (name, key, changes[key])
+    for name in ("f1p000_h0p300_phi045p0.h5", "f1p000_h0p300_phi135p0.h5",
+                 "f2p000_h0p300_phi045p0.h5", "f2p000_h0p300_phi135p0.h5"):
+        changes = _changes("uncertainty_grid_medium", name)
+        for key in ("mean_power_w", "rms_normal_force_n"):
+            assert 0.08 < abs(changes[key]) < 0.31, (name, key, changes[key])
+            fine = read_record(CAMPAIGNS / "uncertainty_grid_medium" / name)
+            coarse = read_record(CAMPAIGNS / "table1_full" / name)
+            ratio = (fine.provenance["n_cells"] / coarse.provenance["n_cells"]) ** 0.5
+            index = two_level_index(1.0, 1.0 + changes[key], ratio)
+            assert index.gci_coarse > 0.4, (name, key, index.gci_coarse)
+
+
+def test_halving_the_courant_limit_moves_the_grids_small_heaves_little():
+    """The findings page: at max Co 1 the h = 0.1 m, phi = 45 deg grid motions move by less
+    than 3 % in all three means; f = 2 Hz, h = 0.3 m, phi = 45 deg by 15-25 %."""
+    for name in ("f1p000_h0p100_phi045p0.h5", "f2p000_h0p100_phi045p0.h5"):
+        for key, change in _changes("uncertainty_grid_co1", name).items():
+            assert abs(change) < 0.03, (name, key, change)
+    for key, change in _changes("uncertainty_grid_co1", "f2p000_h0p300_phi045p0.h5").items():
+        assert 0.14 < change < 0.26, (key, change)
