@@ -75,6 +75,7 @@ def _register_subgroups() -> None:
     from mfflap.cli.cfd_motion_table import motion_table_cmd
     from mfflap.cli.gap import gap
     from mfflap.cli.identify import identify, report
+    from mfflap.cli.identify_vortex import identify_vortex
     from mfflap.cli.optimise import optimise
     from mfflap.cli.run import run_cmd
 
@@ -85,6 +86,7 @@ def _register_subgroups() -> None:
     cli.add_command(cfd)
     cli.add_command(campaign)
     cli.add_command(identify)
+    cli.add_command(identify_vortex)
     cli.add_command(report)
     cli.add_command(optimise)
     cli.add_command(backtest)
