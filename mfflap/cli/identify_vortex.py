@@ -11,10 +11,10 @@ from mfflap.cli.json_output import echo_json
 
 @click.command("identify-vortex")
 @click.argument("case_file", type=click.Path(dir_okay=False, exists=True, path_type=Path))
-@click.option("--fixtures", "folders", multiple=True,
+@click.option("--fixtures", "folders", multiple=True, required=True,
               type=click.Path(file_okay=False, exists=True, path_type=Path),
-              help="Folders of CFD records (repeatable; default: the shipped back-test "
-                   "records of the main job).")
+              help="Folders of CFD records to identify from (repeatable), e.g. "
+                   "campaigns/harmonic_set; keep the back-tests, the check, out of them.")
 @click.option("--json", "as_json", is_flag=True, help="Print the grid and the pair as JSON.")
 def identify_vortex(case_file: Path, folders: tuple[Path, ...], as_json: bool) -> None:
     """Identify the discrete-vortex model's critical LESP and core radius from CFD records.
@@ -28,10 +28,9 @@ def identify_vortex(case_file: Path, folders: tuple[Path, ...], as_json: bool) -
     from mfflap.config import load_case
     from mfflap.identification.vortex_parameters import identify_vortex_parameters
     from mfflap.records.inputs import check_records_inputs
-    from mfflap.records.record import fixture_dir, read_records
+    from mfflap.records.record import read_records
 
     case = load_case(case_file)
-    folders = folders or (fixture_dir("backtest_main_job"),)
     records = [(record, folder) for folder in folders for record in read_records(folder)]
     check_records_inputs(records, case.plate, case.fluid, case.flow,
                          case_source=str(case_file), use="vortex identification")

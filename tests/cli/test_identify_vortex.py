@@ -43,3 +43,8 @@ def test_records_of_another_pivot_are_refused_by_key(tmp_path):
     res = CliRunner().invoke(cli, ["identify-vortex", str(case), "--fixtures", str(folder)])
     assert res.exit_code != 0
     assert "plate.pivot_chord_fraction" in res.output and "0.25" in res.output
+
+
+def test_the_records_are_asked_for():
+    res = CliRunner().invoke(cli, ["identify-vortex", CASE])
+    assert res.exit_code == 2 and "--fixtures" in res.output
