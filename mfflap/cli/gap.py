@@ -1,4 +1,4 @@
-"""``mfflap gap diagnose | blindtest``."""
+"""``mfflap gap diagnose | blindtest | levels``."""
 
 from __future__ import annotations
 
@@ -260,3 +260,40 @@ def blindtest_cmd(trials: int, snr: float, seed: int, noise: str, residual_scali
                    "confusion": confusion(said)})
         return
     click.echo(summary(said))
+
+
+@gap.command("levels")
+@click.argument("case_file", type=click.Path(dir_okay=False, exists=True, path_type=Path))
+@click.option("--fixtures", "folders", multiple=True, required=True,
+              type=click.Path(file_okay=False, exists=True, path_type=Path),
+              help="Folders of CFD records (repeatable), e.g. a back-test's.")
+@click.option("--json", "as_json", is_flag=True)
+def levels_cmd(case_file: Path, folders: tuple[Path, ...], as_json: bool) -> None:
+    """The discrete-vortex model as a level: per record, the F_n NRMSE of CASE_FILE's
+    Morison model and of the vortex model (its defaults) against CFD over the last two
+    periods, and the share of Morison's residual the vortex model removes."""
+    from mfflap.config import load_case
+    from mfflap.gap.levels import level_residuals
+    from mfflap.records.inputs import check_records_inputs
+    from mfflap.records.record import read_records
+
+    case = load_case(case_file)
+    records = [(record, folder) for folder in folders for record in read_records(folder)]
+    check_records_inputs(records, case.plate, case.fluid, case.flow,
+                         case_source=str(case_file), use="the levels' comparison")
+    rows = level_residuals([r for r, _ in records], case.morison_model(),
+                           progress=None if as_json else lambda line: click.echo(line))
+    shares = np.array([row.explained_share for row in rows], dtype=float)
+    summary = {"n_records": len(rows),
+               "median_morison_nrmse": float(np.median([r.morison_nrmse for r in rows])),
+               "median_vortex_nrmse": float(np.median([r.vortex_nrmse for r in rows])),
+               "median_explained_share": float(np.nanmedian(shares)),
+               "records_explained": int(np.sum(shares > 0))}
+    if as_json:
+        echo_json({**summary, "records": [row.__dict__ for row in rows]})
+        return
+    click.echo(f"{summary['n_records']} records: median F_n NRMSE Morison "
+               f"{summary['median_morison_nrmse']:.1%}, vortex "
+               f"{summary['median_vortex_nrmse']:.1%}; the vortex model removes a median "
+               f"{summary['median_explained_share']:.0%} of Morison's residual, and some of "
+               f"it on {summary['records_explained']} of {summary['n_records']}")
