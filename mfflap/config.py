@@ -8,6 +8,8 @@ values)::
     [plate]           chord, span, thickness, pivot_chord_fraction
     [flow]            velocity
     [model]           n_strips, scheme, and [model.coefficients] (the four Morison values)
+    [vortex]          the discrete-vortex model: critical_lesp, core_radius_chords,
+                      chord_points, wake_chords
     [motion]          the motion evaluated by ``mfflap evaluate``
     [discretisation]  n_steps (N per half cycle)
     [optimisation]    beta values, limits, penalties, smoothing, period bounds, and the
@@ -41,7 +43,14 @@ import numpy as np
 from mfflap.errors import ConfigError, shown
 from mfflap.hydro.morison import MorisonModel
 from mfflap.kinematics.continuous import UPRIGHT_PITCH, HarmonicMotion, RampHarmonicMotion
-from mfflap.parameters import Fluid, FreeStream, MorisonCoefficients, Plate, StripSettings
+from mfflap.parameters import (
+    Fluid,
+    FreeStream,
+    MorisonCoefficients,
+    Plate,
+    StripSettings,
+    VortexModelSettings,
+)
 from mfflap.study_tables import BacktestSettings, CfdSettings, HarmonicSet, RoundsSettings
 from mfflap.toml_io import dumps, read_toml
 from mfflap.validation import bounded, check_fields, from_mapping
@@ -365,6 +374,7 @@ class CaseConfig:
     flow: FreeStream = field(default_factory=FreeStream)
     model: ModelSettings = field(default_factory=ModelSettings)
     coefficients: MorisonCoefficients = field(default_factory=MorisonCoefficients)
+    vortex: VortexModelSettings = field(default_factory=VortexModelSettings)
     motion: MotionSpec = field(default_factory=MotionSpec)
     discretisation: Discretisation = field(default_factory=Discretisation)
     optimisation: OptimisationSettings = field(default_factory=OptimisationSettings)
@@ -412,6 +422,7 @@ _SECTIONS: dict[str, type] = {
     "plate": Plate,
     "flow": FreeStream,
     "model": ModelSettings,
+    "vortex": VortexModelSettings,
     "motion": MotionSpec,
     "discretisation": Discretisation,
     "optimisation": OptimisationSettings,

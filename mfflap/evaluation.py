@@ -89,7 +89,7 @@ def _evaluate_with_vortex_model(case: CaseConfig, motion, frequency: float,
         periods = duration / period
     n = int(np.ceil(VORTEX_STEPS_PER_PERIOD * periods))
     state = motion.sample(np.arange(n) * (periods * period / n))
-    loads = simulate_vortex_model(state, case.plate, case.fluid, case.flow).loads
+    loads = simulate_vortex_model(state, case.plate, case.fluid, case.flow, case.vortex).loads
     keep = slice(n - VORTEX_STEPS_PER_PERIOD, None) if duration is None else slice(None)
     kept = KinematicState(state.time[keep],
                           **{k: getattr(state, k)[keep] for k in KINEMATIC_UNITS})

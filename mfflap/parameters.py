@@ -177,3 +177,55 @@ class StripGeometry:
             positions=tuple(chord * (2 * k - 1) / (2 * n) - plate.pivot_m
                             for k in range(1, n + 1)),
         )
+
+
+#: the critical leading-edge suction parameter that means "never shed from the leading edge":
+#: the attached-flow limit of the model (linear theory's small motions)
+ATTACHED_FLOW = float("inf")
+
+
+@dataclass(frozen=True)
+class VortexModelSettings:
+    """The free parameters and the discretisation of the discrete-vortex model.
+
+    Attributes
+    ----------
+    critical_lesp : float
+        The leading-edge suction parameter |A_0| (reference speed U) above which the plate
+        sheds from its leading edge. :data:`ATTACHED_FLOW` never sheds there. Ramesh et al.
+        find 0.1-0.25 for round-nosed aerofoils at Re 1e4-1e5; a sharp plate sheds sooner.
+    core_radius_chords : float
+        The radius of the free vortices' regularising core, in chords.
+    chord_points : int
+        Midpoints in phi on the chord (the bound sheet's vortices and the quadrature).
+    wake_chords : float
+        The far-wake cut-off: the vortices shed while the stream travels this many chords are
+        kept (at least one period of the motion is the rule: a shorter wake loses the plate's
+        own wake of the last stroke).
+
+    Examples
+    --------
+    >>> VortexModelSettings(critical_lesp=ATTACHED_FLOW, core_radius_chords=0.001)
+    ... # doctest: +ELLIPSIS
+    VortexModelSettings(critical_lesp=inf, core_radius_chords=0.001, ...)
+    >>> VortexModelSettings().wake_steps(chord=0.16, velocity=0.3, time_step=0.005)
+    320
+    """
+
+    critical_lesp: float = bounded(0.2, low=0.0, low_open=True, high=math.inf, unit="1",
+                                   doc="leading-edge suction parameter above which it sheds "
+                                       "(inf: never)")
+    core_radius_chords: float = bounded(0.02, low=0.0, high=1.0, low_open=True,
+                                        high_open=True, unit="1",
+                                        doc="free vortices' core radius / chord")
+    chord_points: int = bounded(64, low=4, high=1024, unit="1",
+                                doc="points on the chord (bound sheet and quadrature)")
+    wake_chords: float = bounded(3.0, low=0.0, low_open=True, high=1000.0, unit="1",
+                                 doc="far-wake cut-off, in chords the stream travels")
+
+    def __post_init__(self) -> None:
+        check_fields(self, prefix="vortex.")
+
+    def wake_steps(self, chord: float, velocity: float, time_step: float) -> int:
+        """The steps of shed vortices that the wake ring keeps."""
+        return max(math.ceil(self.wake_chords * chord / (velocity * time_step)), 1)

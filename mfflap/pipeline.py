@@ -499,7 +499,7 @@ def _model_ladder(ctx: RunContext) -> None:
     for label, o in ctx.outcome.backtests.items():
         if o.record is None or o.comparison is None:
             continue
-        ladder = compare_model_ladder(o.record, ctx.model, plate=config.plate,
+        ladder = compare_model_ladder(o.record, ctx.model, config.vortex, plate=config.plate,
                                       fluid=config.fluid, stream=config.flow)
         ctx.outcome.ladder[label] = ladder
         ctx.progress(f"model ladder, {label}: peak power CFD {ladder.cfd.peak_power:.3g} W, "

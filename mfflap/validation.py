@@ -129,7 +129,9 @@ def _check_value(name: str, value: Any, meta: Mapping[str, Any], where: str | No
         )
     v = float(value)
     low, high = meta.get("low"), meta.get("high")
-    bad = not math.isfinite(v)
+    # +inf only where the range says so: a closed high bound of inf
+    bad = not math.isfinite(v) and not (v == math.inf and high == math.inf
+                                        and not meta.get("high_open"))
     if low is not None:
         bad |= v <= low if meta.get("low_open") else v < low
     if high is not None:

@@ -270,7 +270,7 @@ def blindtest_cmd(trials: int, snr: float, seed: int, noise: str, residual_scali
 @click.option("--json", "as_json", is_flag=True)
 def levels_cmd(case_file: Path, folders: tuple[Path, ...], as_json: bool) -> None:
     """The discrete-vortex model as a level: per record, the F_n NRMSE of CASE_FILE's
-    Morison model and of the vortex model (its defaults) against CFD over the last two
+    Morison model and of its vortex model ([vortex]) against CFD over the last two
     periods, and the share of Morison's residual the vortex model removes."""
     from mfflap.config import load_case
     from mfflap.gap.levels import level_residuals
@@ -281,7 +281,7 @@ def levels_cmd(case_file: Path, folders: tuple[Path, ...], as_json: bool) -> Non
     records = [(record, folder) for folder in folders for record in read_records(folder)]
     check_records_inputs(records, case.plate, case.fluid, case.flow,
                          case_source=str(case_file), use="the levels' comparison")
-    rows = level_residuals([r for r, _ in records], case.morison_model(),
+    rows = level_residuals([r for r, _ in records], case.morison_model(), case.vortex,
                            progress=None if as_json else lambda line: click.echo(line))
     shares = np.array([row.explained_share for row in rows], dtype=float)
     summary = {"n_records": len(rows),

@@ -35,7 +35,7 @@ def identify_vortex(case_file: Path, folders: tuple[Path, ...], as_json: bool) -
     check_records_inputs(records, case.plate, case.fluid, case.flow,
                          case_source=str(case_file), use="vortex identification")
     fit = identify_vortex_parameters(
-        [r for r, _ in records], case.plate, case.fluid, case.flow,
+        [r for r, _ in records], case.plate, case.fluid, case.flow, base=case.vortex,
         progress=None if as_json else lambda line: click.echo(line, err=True))
     if as_json:
         echo_json({"critical_lesp": fit.critical_lesp,
@@ -50,5 +50,8 @@ def identify_vortex(case_file: Path, folders: tuple[Path, ...], as_json: bool) -
     click.echo(f"{len(records)} records; identified: critical LESP {fit.critical_lesp:g}, "
                f"core radius {fit.core_radius_chords:g} chords, RMS NRMSE of F_n "
                f"{fit.score:.1%}")
+    lesp = "inf" if fit.critical_lesp == float("inf") else f"{fit.critical_lesp:g}"
+    click.echo(f"to use them: [vortex] critical_lesp = {lesp}, core_radius_chords = "
+               f"{fit.core_radius_chords:g} in the case file")
     for name, value in fit.record_nrmse.items():
         click.echo(f"  {name}: F_n NRMSE {value:.1%}")

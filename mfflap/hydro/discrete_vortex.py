@@ -69,63 +69,8 @@ import numpy as np
 from mfflap.errors import ConfigError, MotionError
 from mfflap.hydro.loads import Loads
 from mfflap.kinematics.state import KinematicState
-from mfflap.parameters import Fluid, FreeStream, Plate
-
-#: the critical leading-edge suction parameter that means "never shed from the leading edge":
-#: the attached-flow limit of the model (linear theory's small motions)
-ATTACHED_FLOW = float("inf")
-
-
-@dataclass(frozen=True)
-class VortexModelSettings:
-    """The free parameters and the discretisation of the discrete-vortex model.
-
-    Attributes
-    ----------
-    critical_lesp : float
-        The leading-edge suction parameter |A_0| (reference speed U) above which the plate
-        sheds from its leading edge. :data:`ATTACHED_FLOW` never sheds there. Ramesh et al.
-        find 0.1-0.25 for round-nosed aerofoils at Re 1e4-1e5; a sharp plate sheds sooner.
-    core_radius_chords : float
-        The radius of the free vortices' regularising core, in chords.
-    chord_points : int
-        Midpoints in phi on the chord (the bound sheet's vortices and the quadrature).
-    wake_chords : float
-        The far-wake cut-off: the vortices shed while the stream travels this many chords are
-        kept (at least one period of the motion is the rule: a shorter wake loses the plate's
-        own wake of the last stroke).
-
-    Examples
-    --------
-    >>> VortexModelSettings(critical_lesp=ATTACHED_FLOW, core_radius_chords=0.001)
-    ... # doctest: +ELLIPSIS
-    VortexModelSettings(critical_lesp=inf, core_radius_chords=0.001, ...)
-    >>> VortexModelSettings().wake_steps(chord=0.16, velocity=0.3, time_step=0.005)
-    320
-    """
-
-    critical_lesp: float = 0.2
-    core_radius_chords: float = 0.02
-    chord_points: int = 64
-    wake_chords: float = 3.0
-
-    def __post_init__(self) -> None:
-        if not self.critical_lesp > 0:
-            raise ConfigError(f"critical_lesp must be > 0, got {self.critical_lesp!r}",
-                              key="vortex.critical_lesp")
-        if not 0 < self.core_radius_chords < 1:
-            raise ConfigError("core_radius_chords must be in (0, 1), got "
-                              f"{self.core_radius_chords!r}", key="vortex.core_radius_chords")
-        if not 4 <= self.chord_points <= 1024:
-            raise ConfigError(f"chord_points must be in [4, 1024], got {self.chord_points!r}",
-                              key="vortex.chord_points")
-        if not 0 < self.wake_chords <= 1000:
-            raise ConfigError(f"wake_chords must be in (0, 1000], got {self.wake_chords!r}",
-                              key="vortex.wake_chords")
-
-    def wake_steps(self, chord: float, velocity: float, time_step: float) -> int:
-        """The steps of shed vortices that the wake ring keeps."""
-        return max(int(np.ceil(self.wake_chords * chord / (velocity * time_step))), 1)
+from mfflap.parameters import ATTACHED_FLOW as ATTACHED_FLOW  # re-exported with the model
+from mfflap.parameters import Fluid, FreeStream, Plate, VortexModelSettings
 
 
 @dataclass(frozen=True)

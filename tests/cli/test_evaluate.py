@@ -39,3 +39,20 @@ def test_a_discrete_scheme_is_refused_for_the_vortex_model():
                                    "midpoint"])
     assert res.exit_code == 2
     assert "scheme" in res.output and "discrete-vortex model" in res.output
+
+
+def test_the_case_files_vortex_table_sets_the_model(tmp_path):
+    """[vortex]: never shedding from the leading edge, against the default critical LESP."""
+    said = {}
+    for name, extra in (("default", ""), ("attached", "\n[vortex]\ncritical_lesp = inf\n")):
+        case = tmp_path / f"{name}.toml"
+        case.write_text(CASE.read_text() + extra)
+        res = CliRunner().invoke(cli, ["evaluate", str(case), "--model", "vortex", "--json",
+                                       "--output", str(tmp_path / f"{name}.h5")])
+        assert res.exit_code == 0, res.output
+        said[name] = json.loads(res.output[res.output.index("{"):])
+    assert said["attached"]["max_power"] != said["default"]["max_power"]
+    bad = tmp_path / "bad.toml"
+    bad.write_text(CASE.read_text() + "\n[vortex]\ncore_radius_chords = 2.0\n")
+    res = CliRunner().invoke(cli, ["evaluate", str(bad), "--model", "vortex"])
+    assert res.exit_code != 0 and "vortex.core_radius_chords" in res.output
