@@ -204,6 +204,37 @@ def scatter_cmd(out_dir: Path, as_json: bool) -> None:
                    f"{s.rms_normal_force_scatter_n:<8.2g}{kind}")
 
 
+@campaign.command("refinement")
+@click.argument("coarse_dir", type=click.Path(file_okay=False, exists=True, path_type=Path))
+@click.argument("refined_dir", type=click.Path(file_okay=False, exists=True, path_type=Path))
+@click.option("--json", "as_json", is_flag=True, help="Print the changes as JSON.")
+def refinement_cmd(coarse_dir: Path, refined_dir: Path, as_json: bool) -> None:
+    """The mesh or time-step uncertainty of the records of COARSE_DIR from the refined runs
+    of their motions in REFINED_DIR (a finer mesh or a smaller Courant limit, which is read
+    from the records): per record, the NRMSE and Pearson r of its F_n against the refined
+    run's, and the change and two-level index (Roache, Fs 3, order 2) of its mean thrust,
+    power and RMS F_n. Stored in each coarse record's /refinement group, where the reports
+    show it beside the model's NRMSE."""
+    from dataclasses import asdict
+
+    from mfflap.campaign.refinement import add_refinement
+
+    rows = add_refinement(coarse_dir, refined_dir)
+    if as_json:
+        echo_json([{"name": n, **asdict(c)} for n, c in rows])
+        return
+    click.echo(f"{'record':44s} {'refined':9s}   r     NRMSE F_n  Pearson  change (GCI) of: "
+               "thrust          power           RMS F_n")
+    for name, c in rows:
+        cells = "  ".join(f"{100 * c.relative_change(m):+6.1f} % ({100 * g:4.0f} %)"
+                          for m, g in (("mean_thrust", c.gci_mean_thrust),
+                                       ("mean_power", c.gci_mean_power),
+                                       ("rms_normal_force", c.gci_rms_normal_force)))
+        click.echo(f"{name:44s} {c.kind:9s} {c.refinement_ratio:5.2f}  "
+                   f"{100 * c.normal_force_nrmse:7.1f} %  {c.normal_force_pearson:7.3f}  "
+                   f"{cells}")
+
+
 def _setups_line(differences: list[tuple[str, Any, Any]] | None) -> str:
     """What separates the two campaigns' set-ups, for the head of the comparison."""
     if differences is None:

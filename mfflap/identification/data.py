@@ -55,6 +55,13 @@ class CaseData:
         Imposed kinematics on a uniform time base after the transient.
     cfd : Loads
         CFD loads on the same time base.
+    notes : list of str
+        What cleaning the record needed (bridged bursts, replaced spikes).
+    provenance : dict
+        The record's provenance (how it was run).
+    refinement : dict of str to RefinementChange
+        The record's mesh and time-step changes, where it has them
+        (:mod:`mfflap.records.refinement`).
     """
 
     name: str
@@ -63,6 +70,7 @@ class CaseData:
     cfd: Loads
     notes: list[str] = field(default_factory=list)
     provenance: dict = field(default_factory=dict)
+    refinement: dict = field(default_factory=dict)
 
     @property
     def frequency(self) -> float:
@@ -216,7 +224,7 @@ def prepare_case(record: CfdRecord, discard_time: float = 0.75, n_samples: int =
         cleaned.append(np.interp(tu, t, values))
     cfd = Loads(tu, *cleaned, source=record.loads.source)
     return CaseData(record.name, dict(record.parameters), state, cfd, notes,
-                    dict(record.provenance))
+                    dict(record.provenance), dict(record.refinement))
 
 
 def _bound_parameters(record: CfdRecord, plate: Plate | None, fluid: Fluid | None,

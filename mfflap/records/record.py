@@ -14,6 +14,9 @@ Layout::
     /raw              case-frame total force and moment about CofR, per mesh depth
     /parameters       attrs: the motion's parameters (e.g. frequency, heave_amplitude, ...)
     /provenance       attrs: solver, version, mesh, cells, solver settings, CPU time, ...
+    /cycle_scatter    attrs: the scatter of its cycle means (mfflap.records.cycle_scatter)
+    /refinement/mesh, /refinement/time_step
+                      attrs: how its answer moves when refined (mfflap.records.refinement)
 """
 
 from __future__ import annotations
@@ -28,6 +31,7 @@ import numpy as np
 from mfflap.errors import MfflapError, UnreadableRecordError
 from mfflap.hydro.loads import Loads
 from mfflap.kinematics.state import KINEMATIC_UNITS, KinematicState
+from mfflap.records.refinement import RefinementChange, read_refinement, write_refinement
 from mfflap.results import ResultsFile
 from mfflap.toml_io import dumps
 
@@ -64,6 +68,9 @@ class CfdRecord:
         Solver, version, mesh, number of cells, solver settings, CPU time s, ...
     raw_force, raw_moment : ndarray (n, 3) or None
         Case-frame total force N and moment N*m about CofR per mesh depth, as written.
+    refinement : dict of str to RefinementChange
+        How its answer moves when its mesh (``"mesh"``) or time step (``"time_step"``) is
+        refined, where a refined run of its motion exists (:mod:`mfflap.records.refinement`).
     """
 
     name: str
@@ -73,6 +80,7 @@ class CfdRecord:
     provenance: dict[str, Any] = field(default_factory=dict)
     raw_force: np.ndarray | None = None
     raw_moment: np.ndarray | None = None
+    refinement: dict[str, RefinementChange] = field(default_factory=dict)
 
     @property
     def time(self) -> np.ndarray:
@@ -120,7 +128,8 @@ class CfdRecord:
                       ld.moment[keep], source=ld.source)
         return CfdRecord(self.name, state, loads, dict(self.parameters), dict(self.provenance),
                          None if self.raw_force is None else self.raw_force[keep],
-                         None if self.raw_moment is None else self.raw_moment[keep])
+                         None if self.raw_moment is None else self.raw_moment[keep],
+                         dict(self.refinement))
 
 
 def _clean_attrs(mapping: Mapping[str, Any]) -> dict[str, Any]:
@@ -142,7 +151,7 @@ def _single(record: CfdRecord) -> CfdRecord:
     loads = Loads(ld.time, f32(ld.normal_force), f32(ld.tangential_force), f32(ld.moment),
                   source=ld.source)
     return CfdRecord(record.name, state, loads, record.parameters, record.provenance,
-                     f32(record.raw_force), f32(record.raw_moment))
+                     f32(record.raw_force), f32(record.raw_moment), record.refinement)
 
 
 def write_record(path: str | Path, record: CfdRecord, single_precision: bool = False) -> Path:
@@ -170,6 +179,8 @@ def write_record(path: str | Path, record: CfdRecord, single_precision: bool = F
                            {"frame": "case (x stream, y heave)", "per": "mesh depth"})
         rf.h5.create_group("parameters").attrs.update(_clean_attrs(record.parameters))
         rf.h5.create_group("provenance").attrs.update(_clean_attrs(record.provenance))
+        for change in record.refinement.values():
+            write_refinement(rf.h5, change)
         rf.h5.attrs["name"] = record.name
     return path
 
@@ -252,7 +263,8 @@ def _read_record(rf: ResultsFile, path: Path) -> CfdRecord:
         if bad.any():
             i = int(np.argmax(bad))
             raise MfflapError(f"{path}: loads/{key} is not finite at sample {i} (t = {t[i]})")
-    return CfdRecord(name, state, loads, params, prov, raw_force, raw_moment)
+    return CfdRecord(name, state, loads, params, prov, raw_force, raw_moment,
+                     read_refinement(rf.h5))
 
 
 def read_records(folder: str | Path) -> list[CfdRecord]:

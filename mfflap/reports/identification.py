@@ -63,6 +63,30 @@ def uncertainty_weighting_said(model_nrmse: list[float], cfd_nrmse: list[float])
             "each case's residual holds.")
 
 
+def cfd_own_nrmse_rows(case_names: Sequence[str], model_nrmse: np.ndarray,
+                       cases_by_name: dict[str, CaseData]) -> list[tuple[str, ...]]:
+    """(case, model NRMSE %, CFD cycle-to-cycle NRMSE %, CFD mesh NRMSE %, CFD time-step
+    NRMSE %) of F_n for each case whose CFD uncertainty is known in any part (NaN for a part
+    not measured): the rows that set the model's misfit beside CFD's own.
+
+    Examples
+    --------
+    >>> cfd_own_nrmse_rows(["a"], np.array([0.2]), {})
+    []
+    """
+    rows = []
+    for name, e in zip(case_names, model_nrmse, strict=True):
+        case = cases_by_name.get(name)
+        if case is None:
+            continue
+        parts = [cycle_nrmse(case)] + [
+            case.refinement[k].normal_force_nrmse if k in case.refinement else np.nan
+            for k in ("mesh", "time_step")]
+        if np.isfinite(parts).any():
+            rows.append((name, 100 * float(e), *(100 * float(v) for v in parts)))
+    return rows
+
+
 def _param(result: IdentificationResult, key: str) -> np.ndarray:
     """A motion parameter of every case (NaN where its record has none); the frequency as
     identification weighs it (:func:`~mfflap.identification.data.motion_frequency`)."""
@@ -364,6 +388,8 @@ def add_identification_sections(rep: Report, results: Mapping[str, Identificatio
                                   "cannot resample them and understates the uncertainty.",
                                   warn=True))
     by_name = {c.name: c for c in cases}
+    own_by_name = {r[0]: max(v for v in r[2:] if np.isfinite(v)) for r in cfd_own_nrmse_rows(
+        first.case_names, first.metrics["normal_force"]["nrmse"], by_name)}
     rows = []
     for i, name in enumerate(first.case_names):
         c = by_name.get(name)
@@ -379,6 +405,7 @@ def add_identification_sections(rep: Report, results: Mapping[str, Identificatio
                      float(prov.get("cpu_time_s", np.nan)),
                      str(prov.get("retries", "")) or "-",
                      100 * float(first.metrics["normal_force"]["nrmse"][i]),
+                     own_by_name.get(name, "-"),
                      float(first.metrics["normal_force"]["pearson"][i])])
     s.blocks.append(folded_html(
         f"CFD cases used: {len(rows)} runs, how each was run and its agreement with the "
@@ -386,7 +413,7 @@ def add_identification_sections(rep: Report, results: Mapping[str, Identificatio
         table_html(["case", "f [Hz]", "h_amp [m]", "φ [deg]", "mesh", "cells",
                     "set-up max Co", "set-up far field", "max Co at end", "far field at end",
                     "wall treatment", "CPU [s]", "solver retries", "NRMSE F_n [%]",
-                    "Pearson F_n"], rows)))
+                    "CFD's own NRMSE F_n [%] (largest part known)", "Pearson F_n"], rows)))
     if first.notes:
         s.blocks.append(text_html("Data cleaning (numerical bursts of the CFD bridged, "
                                   "one-step glitches replaced; marked * in the maps):"))
@@ -423,18 +450,24 @@ def add_identification_sections(rep: Report, results: Mapping[str, Identificatio
             "St = 2 f A / U with A the trailing edge's half excursion):"))
         sec.blocks.append(table_html(["measure", "here", "the paper"], against.rows()))
     by_name = {c.name: c for c in cases}
-    repeat = [(n, 100 * float(e), 100 * cycle_nrmse(by_name[n]))
-              for n, e in zip(res.case_names, err, strict=True) if n in by_name]
-    repeat = [r for r in repeat if np.isfinite(r[2])]
-    if repeat:
-        sec.blocks.append(text_html(
-            f"The model's NRMSE beside CFD's own cycle-to-cycle NRMSE (each whole cycle's F_n "
-            f"against the case's mean cycle, over the same range) on the {len(repeat)} "
-            "periodic cases: the model cannot be asked to follow a run more closely than the "
-            "run repeats itself. " + uncertainty_weighting_said(
-                [r[1] / 100 for r in repeat], [r[2] / 100 for r in repeat])))
-        sec.blocks.append(table_html(["case", "model NRMSE of F_n [%]",
-                                      "CFD cycle-to-cycle NRMSE of F_n [%]"], repeat))
+    own = cfd_own_nrmse_rows(res.case_names, err, by_name)
+    repeat = [(r[1], r[2]) for r in own if np.isfinite(r[2])]
+    if own:
+        said = ("The model's NRMSE of F_n beside CFD's own on the same case: its "
+                "cycle-to-cycle NRMSE (each whole cycle's F_n against the case's mean cycle, "
+                "periodic cases) and, where a refined run of its motion exists, the NRMSE of "
+                "its F_n against the medium mesh's and the halved Courant limit's "
+                "(`mfflap campaign refinement`; - where not measured). The model cannot be "
+                "asked to follow a run more closely than the run repeats itself or holds "
+                "under refinement. ")
+        if repeat:
+            said += uncertainty_weighting_said([r[0] / 100 for r in repeat],
+                                               [r[1] / 100 for r in repeat])
+        sec.blocks.append(text_html(said))
+        sec.blocks.append(table_html(
+            ["case", "model NRMSE of F_n [%]", "CFD cycle-to-cycle NRMSE of F_n [%]",
+             "CFD mesh NRMSE of F_n [%]", "CFD time-step NRMSE of F_n [%]"],
+            [[r[0], *(v if np.isfinite(v) else "-" for v in r[1:])] for r in own]))
     if len(results) > 1:
         sec = rep.section("Sensitivity to the frequency weighting")
         sec.blocks.append(figure_html(strategy_error_figure(results),

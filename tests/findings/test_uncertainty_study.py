@@ -116,3 +116,23 @@ def test_halving_the_courant_limit_moves_the_grids_small_heaves_little():
             assert abs(change) < 0.03, (name, key, change)
     for key, change in _changes("uncertainty_grid_co1", "f2p000_h0p300_phi045p0.h5").items():
         assert 0.14 < change < 0.26, (key, change)
+
+
+@pytest.mark.parametrize(("study", "path"), PAIRS, ids=[p.stem for _, p in PAIRS])
+def test_each_coarse_record_states_its_change_under_each_finished_refinement(study, path):
+    """The coarse record holds the change of the refined run as it is now (`mfflap
+    campaign refinement` rerun after a refined record is added or rerun: the hash
+    matches), and the stored figures are those the pair gives."""
+    import hashlib
+
+    from mfflap.campaign.refinement import refinement_change
+
+    coarse_folder, mesh, _ = STUDIES[study]
+    coarse = read_record(CAMPAIGNS / coarse_folder / path.name)
+    kind = "mesh" if mesh == "medium" else "time_step"
+    assert kind in coarse.refinement, f"rerun mfflap campaign refinement for {study}"
+    stored = coarse.refinement[kind]
+    assert stored.refined_sha256 == hashlib.sha256(path.read_bytes()).hexdigest()
+    again = refinement_change(coarse, read_record(path), kind)
+    assert stored.normal_force_nrmse == pytest.approx(again.normal_force_nrmse, rel=1e-9)
+    assert stored.gci_mean_power == pytest.approx(again.gci_mean_power, rel=1e-9)

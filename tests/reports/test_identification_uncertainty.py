@@ -1,6 +1,7 @@
 """The identification report reads the model's NRMSE beside CFD's own: each periodic case's
-cycle-to-cycle NRMSE, and why the fit does not weigh the cases by it (the inverse-variance
-weights it would give, computed from the same figures)."""
+cycle-to-cycle NRMSE, its mesh and time-step NRMSE where a refined run exists, and why the
+fit does not weigh the cases by it (the inverse-variance weights it would give, computed
+from the same figures)."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ import pytest
 from click.testing import CliRunner
 
 from mfflap.cli.main import cli
+from mfflap.records.record import read_record
 from mfflap.reports.identification import uncertainty_weighting_said
 
 ROOT = Path(__file__).parents[2]
@@ -49,3 +51,9 @@ def test_the_report_of_harmonic_cases_gives_cfds_repeat_and_the_weighting(tmp_pa
     html = out.with_suffix(".html").read_text()
     assert "CFD cycle-to-cycle NRMSE of F_n [%]" in html
     assert "inverse-variance" in html and "would range" in html
+    refined = [read_record(p) for p in shipped if read_record(p).refinement]
+    assert refined, "a shipped record of these has a refined run (campaigns/uncertainty_*)"
+    for record in refined:
+        for kind, change in record.refinement.items():
+            assert f"CFD {kind.replace('_', '-')} NRMSE of F_n [%]" in html
+            assert f"<td>{100 * change.normal_force_nrmse:.4g}</td>" in html
