@@ -85,11 +85,13 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
     sources = []
     given_folders = bool(folders)
     folders = folders or ((fixture_dir(),) if not csv_files else ())
+    level_records = None
     if folders:
         records, _ = pooled_records(folders, case, use="gap diagnosis")
         prepared, excluded = prepare_cases(
             records, discard, plate=case.plate, fluid=case.fluid, stream=case.flow)
         cases += prepared
+        level_records = [r for r in records if r.name in {c.name for c in prepared}]
         sources += [str(f) for f in folders]
         for name, why in excluded.items():
             click.echo(f"left out {name}: {why}", err=True)
@@ -104,10 +106,13 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
                                f"{MIN_CASES}, and the shipped fixtures are read only without "
                                "--csv: add CSV files, or --fixtures DIR to pool records")
     flows = [_flow_record(item, cases, case) for item in flow_dirs]  # before the work
-    held_out, held_out_excluded = (_held_out(check_on, case, cases) if check_on
-                                   else (None, None))
-    diag, where, pred = diagnose_cases(case, cases, alpha=alpha, min_gain=min_gain,
-                                       held_out=held_out, held_out_excluded=held_out_excluded)
+    held_out, held_out_excluded, held_out_records = (_held_out(check_on, case, cases)
+                                                     if check_on else (None, None, []))
+    diag, where, pred = diagnose_cases(
+        case, cases, alpha=alpha, min_gain=min_gain, held_out=held_out,
+        held_out_excluded=held_out_excluded, records=level_records,
+        held_out_records=held_out_records,
+        progress=lambda line: click.echo(f"vortex level, {line}", err=True))
     snapshots = []
     for index, folder in flows:
         from mfflap.gap.flowfield import vorticity_figure
@@ -143,7 +148,12 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
                        for s in diag.scores],
                    "validation": diag.validation,
                    "validation_skipped": diag.validation_skipped,
-                   "transfer": diag.transfer.as_dict() if diag.transfer else None})
+                   "transfer": diag.transfer.as_dict() if diag.transfer else None,
+                   "levels": None if diag.levels is None else {
+                       "summary": {g: diag.levels.summary(g) for g in ("diagnosed",
+                                                                        "held out")},
+                       "records": [row.__dict__ for row in diag.levels.rows],
+                       "excluded": diag.levels.excluded}})
         return
     click.echo(f"{diag.finding}. {diag.verdict}")
     if diag.chosen is not None:
@@ -161,13 +171,28 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
         click.echo(f"on runs outside the cases: {diag.transfer.verdict}")
         for name, why in diag.transfer.excluded.items():
             click.echo(f"  not checked on {name}: {why}")
+    if diag.levels is not None:
+        for group in ("diagnosed", "held out"):
+            summary = diag.levels.summary(group)
+            if summary["n_records"]:
+                click.echo(_levels_said(summary, group))
     click.echo(f"wrote {output} and {html}")
 
 
+def _levels_said(summary: dict, group: str) -> str:
+    """One line of the vortex level over ``group``'s records."""
+    return (f"vortex level, {summary['n_records']} {group} records: median F_n NRMSE Morison "
+            f"{summary['median_morison_nrmse']:.1%}, vortex {summary['median_vortex_nrmse']:.1%}"
+            f" (CFD's own {summary['median_cfd_repeat_nrmse']:.1%}); the vortex model removes "
+            f"a median {summary['median_explained_share']:.0%} of Morison's residual, and "
+            f"some of it on {summary['records_explained']} of {summary['n_records']}")
+
+
 def _held_out(paths: tuple[Path, ...], config: CaseConfig, cases: list
-              ) -> tuple[list, dict[str, str]]:
-    """The ``--check-on`` runs, refused when one of them is also among the diagnosed cases
-    (a run the fits saw says nothing about how the effect carries over)."""
+              ) -> tuple[list, dict[str, str], list]:
+    """The ``--check-on`` runs as held-out motions, those left out with why, and their
+    records; refused when one of them is also among the diagnosed cases (a run the fits saw
+    says nothing about how the effect carries over)."""
     from mfflap.gap.transfer import held_out_motions
     from mfflap.identification.workflow import pooled_records
 
@@ -179,7 +204,7 @@ def _held_out(paths: tuple[Path, ...], config: CaseConfig, cases: list
     motions, excluded = held_out_motions(
         records, config.identification.discard_time, plate=config.plate, fluid=config.fluid,
         stream=config.flow)
-    return motions, {**failed, **excluded}
+    return motions, {**failed, **excluded}, records
 
 
 def _flow_record(item: str, cases: list, config: CaseConfig) -> tuple[int, str]:

@@ -45,10 +45,12 @@ from mfflap.identification.error_growth import (
     choose_scaling,
     measure_error_growth,
 )
+from mfflap.identification.repeatability import cycle_nrmse
 from mfflap.metrics import nrmse, pearson
 from mfflap.performance import thrust_and_power
 
 if TYPE_CHECKING:
+    from mfflap.gap.levels import LevelComparison
     from mfflap.gap.transfer import TransferCheck
 
 
@@ -136,6 +138,10 @@ class Diagnosis:
     #: whether the claimed effect (else the best candidate) predicts CFD runs outside the
     #: cases better (:mod:`mfflap.gap.transfer`); None when none were given
     transfer: TransferCheck | None = None
+    #: the discrete-vortex model as a level over the cases' records and the held-out runs:
+    #: what its F_n residual leaves of Morison's (:mod:`mfflap.gap.levels`); None when the
+    #: cases came without their records
+    levels: LevelComparison | None = None
 
     @property
     def finding(self) -> str:
@@ -171,6 +177,11 @@ class Diagnosis:
 #: variance inflation factor above which a coefficient is called confounded (the usual rule
 #: of thumb: its variance ten times what it would be were the regressor orthogonal)
 CONFOUNDED_VIF = 10.0
+
+#: ``Diagnosis.gap`` keys of CFD's own NRMSE per case (NaN where not known): its cycles
+#: against its mean cycle (every signal), and its F_n against the run on a finer mesh and
+#: at a smaller Courant limit where the record holds one (:mod:`mfflap.records.refinement`)
+CFD_OWN = ("cfd_cycle", "cfd_mesh", "cfd_time_step")
 
 
 def indistinguishable_from(chosen: CandidateScore, singles: Sequence[CandidateScore],
@@ -280,6 +291,25 @@ def gap_metrics(system: GapSystem, predictions: list[dict[str, np.ndarray]]) -> 
         out["mean_thrust_error"][i] = (thrust.mean() - ct.mean()) / max(np.abs(ct).mean(),
                                                                         1e-12)
         out["mean_power_error"][i] = (power.mean() - cp.mean()) / max(np.abs(cp).mean(), 1e-12)
+    return out
+
+
+def cfd_own_metrics(cases: Sequence[CaseData]) -> dict[str, dict]:
+    """CFD's own NRMSE of each case, the yardstick beside :func:`gap_metrics`: per
+    :data:`CFD_OWN` key, signal -> {"nrmse": one value a case}.
+
+    Examples
+    --------
+    >>> own = cfd_own_metrics([])
+    >>> sorted(own), own["cfd_mesh"]["normal_force"]["nrmse"].shape
+    (['cfd_cycle', 'cfd_mesh', 'cfd_time_step'], (0,))
+    """
+    out = {"cfd_cycle": {s: {"nrmse": np.array([cycle_nrmse(c, s) for c in cases])}
+                         for s in (*COMPONENTS, "thrust", "input_power")}}
+    for key, kind in (("cfd_mesh", "mesh"), ("cfd_time_step", "time_step")):
+        out[key] = {"normal_force": {"nrmse": np.array(
+            [c.refinement[kind].normal_force_nrmse if kind in c.refinement else np.nan
+             for c in cases])}}
     return out
 
 
@@ -422,6 +452,7 @@ def diagnose(cases: Sequence[CaseData], base_model: ForceModel,
                      whiteness=whiteness.as_dict(), not_claimed=not_claimed,
                      family=family)
     diag.gap["before"] = gap_metrics(system, base_predictions)
+    diag.gap.update(cfd_own_metrics(system.cases))
     validated = chosen or (singles[0] if singles else None)
     if chosen is not None:
         cols = base_cols + [system.names.index(n) for n in chosen.names]

@@ -13,10 +13,11 @@ by record.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
+from mfflap.errors import MfflapError
 from mfflap.hydro.discrete_vortex import VortexModelSettings, simulate_vortex_model
 from mfflap.hydro.morison import MorisonModel
 from mfflap.metrics import nrmse
@@ -45,6 +46,11 @@ class LevelResidual:
     morison_nrmse: float
     vortex_nrmse: float
     explained_share: float
+    #: CFD's own F_n NRMSE: its last period against the period before (normalised by the
+    #: last period's range), the closest a model that repeats each cycle can come
+    cfd_repeat_nrmse: float = float("nan")
+    #: "diagnosed" for a case the diagnosis fitted, "held out" for a run it never saw
+    group: str = "diagnosed"
 
 
 def level_residuals(records: Sequence, morison: MorisonModel,
@@ -78,8 +84,11 @@ def level_residuals(records: Sequence, morison: MorisonModel,
         v = np.interp(t[window], vortex.time, vortex.normal_force)
         m = np.asarray(morison.loads(record.state).normal_force, dtype=float)[window]
         sse_m, sse_v = float(np.sum((m - cfd) ** 2)), float(np.sum((v - cfd) ** 2))
+        last = t >= float(t[-1]) - period
+        before = np.interp(t[last] - period, t, record.loads.normal_force)
         row = LevelResidual(record.name, float(nrmse(m, cfd)), float(nrmse(v, cfd)),
-                            1.0 - sse_v / sse_m if sse_m > 0 else float("nan"))
+                            1.0 - sse_v / sse_m if sse_m > 0 else float("nan"),
+                            float(nrmse(before, record.loads.normal_force[last])))
         out.append(row)
         if progress is not None:
             progress(f"{row.record}: F_n NRMSE Morison {row.morison_nrmse:.1%}, vortex "
@@ -87,4 +96,75 @@ def level_residuals(records: Sequence, morison: MorisonModel,
     return out
 
 
-__all__ = ["COMPARED_PERIODS", "STEPS_PER_PERIOD", "LevelResidual", "level_residuals"]
+@dataclass
+class LevelComparison:
+    """The vortex level over a diagnosis's records: a row per record it could compare.
+
+    Attributes
+    ----------
+    rows : list of LevelResidual
+    excluded : dict of str to str
+        Records it could not compare (no period, shorter than :data:`COMPARED_PERIODS`),
+        with why.
+    """
+
+    rows: list[LevelResidual]
+    excluded: dict[str, str]
+
+    def summary(self, group: str | None = None) -> dict[str, float | int]:
+        """Medians over the rows (of ``group`` only, if given): each level's F_n NRMSE and
+        CFD's own, the share of Morison's residual the vortex model removes, and on how many
+        records it removes some (NaN medians with no rows).
+
+        Examples
+        --------
+        >>> rows = [LevelResidual("a", 0.2, 0.1, 0.75, 0.05),
+        ...         LevelResidual("b", 0.1, 0.12, -0.44, 0.04, "held out")]
+        >>> LevelComparison(rows, {}).summary("diagnosed")["median_explained_share"]
+        0.75
+        """
+        rows = [r for r in self.rows if group is None or r.group == group]
+
+        def median(key: str) -> float:
+            values = np.array([getattr(r, key) for r in rows], dtype=float)
+            values = values[np.isfinite(values)]
+            return float(np.median(values)) if values.size else float("nan")
+
+        shares = np.array([r.explained_share for r in rows], dtype=float)
+        return {"n_records": len(rows), "median_morison_nrmse": median("morison_nrmse"),
+                "median_vortex_nrmse": median("vortex_nrmse"),
+                "median_cfd_repeat_nrmse": median("cfd_repeat_nrmse"),
+                "median_explained_share": median("explained_share"),
+                "records_explained": int(np.sum(shares > 0))}
+
+
+def compare_levels(records: Sequence, morison: MorisonModel,
+                   settings: VortexModelSettings | None = None, *,
+                   held_out: Sequence = (),
+                   progress: Callable[[str], None] | None = None) -> LevelComparison:
+    """:func:`level_residuals` of ``records`` (the diagnosed cases') and of ``held_out``
+    (runs the diagnosis never saw), each record that cannot be compared left out with why
+    rather than ending the comparison.
+
+    Examples
+    --------
+    >>> from mfflap.records.record import fixture_dir, read_records
+    >>> runs = read_records(fixture_dir("backtest_main_job"))
+    >>> levels = compare_levels(runs[:1], MorisonModel(), held_out=runs[1:2])
+    >>> [row.group for row in levels.rows], levels.excluded
+    (['diagnosed', 'held out'], {})
+    """
+    rows, excluded = [], {}
+    for group, group_records in (("diagnosed", records), ("held out", held_out)):
+        for record in group_records:
+            try:
+                (row,) = level_residuals([record], morison, settings, progress)
+            except MfflapError as exc:
+                excluded[record.name] = str(exc)
+                continue
+            rows.append(replace(row, group=group))
+    return LevelComparison(rows, excluded)
+
+
+__all__ = ["COMPARED_PERIODS", "STEPS_PER_PERIOD", "LevelComparison", "LevelResidual",
+           "compare_levels", "level_residuals"]

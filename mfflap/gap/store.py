@@ -1,16 +1,21 @@
 """A gap diagnosis in a results file: the candidates' scores, the residual's decomposition,
-the gap before and after, the verdict, and the check on the held-out motions."""
+the gap before and after, the verdict, the check on the held-out motions and the vortex
+level."""
 
 from __future__ import annotations
 
 import json
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from mfflap.gap.diagnose import CandidateScore, Diagnosis
+from mfflap.gap.diagnose import CFD_OWN, CandidateScore, Diagnosis
 from mfflap.gap.transfer import BASE, TransferCheck
 from mfflap.identification.error_growth import growth_from_json, growth_to_json
 from mfflap.results import ResultsFile
+
+if TYPE_CHECKING:
+    from mfflap.gap.levels import LevelComparison
 
 
 def write_diagnosis(rf: ResultsFile, diag: Diagnosis, where: dict, group: str = "gap") -> None:
@@ -72,6 +77,37 @@ def write_diagnosis(rf: ResultsFile, diag: Diagnosis, where: dict, group: str = 
     g.attrs["family"] = json.dumps(diag.family)
     if diag.transfer is not None:
         write_transfer(rf, diag.transfer, f"{group}/transfer")
+    if diag.levels is not None:
+        write_levels(rf, diag.levels, f"{group}/levels")
+
+
+#: the per-record figures of the vortex level in the results file
+LEVEL_FIGURES = ("morison_nrmse", "vortex_nrmse", "explained_share", "cfd_repeat_nrmse")
+
+
+def write_levels(rf: ResultsFile, levels: LevelComparison, group: str = "gap/levels") -> None:
+    """Per record the F_n NRMSE of each level and CFD's own, and the share of Morison's
+    residual the vortex model removes (fractions); the records, their groups and the
+    records left out as attributes."""
+    rows = levels.rows
+    rf.write_group(group, {key: np.array([getattr(r, key) for r in rows], dtype=float)
+                           for key in LEVEL_FIGURES}, dict.fromkeys(LEVEL_FIGURES, "1"),
+                   {"records": json.dumps([r.record for r in rows]),
+                    "groups": json.dumps([r.group for r in rows]),
+                    "excluded": json.dumps(levels.excluded)})
+
+
+def read_levels(rf: ResultsFile, group: str = "gap/levels") -> LevelComparison | None:
+    """Read back :func:`write_levels`; None where the file has no levels."""
+    from mfflap.gap.levels import LevelComparison, LevelResidual  # the vortex kernel's module
+
+    if group not in rf.h5:
+        return None
+    arrays, attrs = rf.read_group(group)
+    names, groups = json.loads(attrs["records"]), json.loads(attrs["groups"])
+    rows = [LevelResidual(name, *(float(arrays[key][i]) for key in LEVEL_FIGURES), groups[i])
+            for i, name in enumerate(names)]
+    return LevelComparison(rows, json.loads(attrs["excluded"]))
 
 
 def read_diagnosis(rf: ResultsFile, group: str = "gap") -> tuple[Diagnosis, dict]:
@@ -106,7 +142,7 @@ def read_diagnosis(rf: ResultsFile, group: str = "gap") -> tuple[Diagnosis, dict
     g = rf.h5[group]
     chosen_label = str(g.attrs.get("chosen", ""))
     gap: dict[str, dict] = {}
-    for phase in ("before", "after"):
+    for phase in ("before", "after", *CFD_OWN):
         if f"{group}/gap_{phase}" not in rf.h5:
             continue
         flat, _ = rf.read_group(f"{group}/gap_{phase}")
@@ -140,7 +176,8 @@ def read_diagnosis(rf: ResultsFile, group: str = "gap") -> tuple[Diagnosis, dict
         whiteness=json.loads(g.attrs.get("whiteness", "{}")),
         indistinguishable=json.loads(g.attrs.get("indistinguishable", "[]")),
         whiteness_after=json.loads(g.attrs.get("whiteness_after", "{}")),
-        family=json.loads(g.attrs.get("family", "[]")))
+        family=json.loads(g.attrs.get("family", "[]")),
+        levels=read_levels(rf, f"{group}/levels"))
     return diagnosis, where
 
 
@@ -157,6 +194,9 @@ def write_transfer(rf: ResultsFile, check: TransferCheck, group: str = "gap/tran
         for comp in (ms[0].nrmse[BASE] if ms else ()):
             arrays[f"nrmse_{comp}_{which}"] = np.array([m.nrmse[label][comp] for m in ms])
             units[f"nrmse_{comp}_{which}"] = "1"
+    for comp in (ms[0].cfd_repeat_nrmse if ms else ()):
+        arrays[f"cfd_repeat_nrmse_{comp}"] = np.array([m.cfd_repeat_nrmse[comp] for m in ms])
+        units[f"cfd_repeat_nrmse_{comp}"] = "1"
     for key, unit in (("mean_thrust", "N"), ("mean_power", "W")):
         for which, label in (("cfd", "cfd"), ("base", BASE), ("effect", check.label)):
             arrays[f"{key}_{which}"] = np.array([getattr(m, key)[label] for m in ms])

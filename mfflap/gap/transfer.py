@@ -48,10 +48,15 @@ class HeldOutMotion:
         The whole imposed motion from the run's start, on which the predictions are
         evaluated: a lagged term (the wake's) sees the run's history, not a window that
         starts in equilibrium.
+    cfd_repeat_nrmse : dict of str to float
+        CFD's own NRMSE per load component: the compared period against the period before
+        it, normalised as the model's NRMSE is (NaN when the run holds no whole period
+        before it): the closest a model that repeats each cycle can come.
     """
 
     case: CaseData
     history: KinematicState
+    cfd_repeat_nrmse: dict[str, float] = field(default_factory=dict)
 
     @property
     def name(self) -> str:
@@ -97,8 +102,18 @@ def held_out_motions(records: Sequence[CfdRecord], discard_time: float = 0.75,
         except MfflapError as exc:
             excluded[rec.name] = str(exc)
             continue
-        motions.append(HeldOutMotion(case, rec.state))
+        motions.append(HeldOutMotion(case, rec.state, _repeat_nrmse(rec, case, period)))
     return motions, excluded
+
+
+def _repeat_nrmse(record: CfdRecord, case: CaseData, period: float | None
+                  ) -> dict[str, float]:
+    """Each component's NRMSE of the record's period before the compared one against it."""
+    t = case.state.time
+    if period is None or t[0] - period < float(record.time[0]) - 1e-9 * period:
+        return {k: float("nan") for k in COMPONENTS}
+    return {k: float(nrmse(np.interp(t - period, record.time, getattr(record.loads, k)),
+                           case.cfd_signal(k))) for k in COMPONENTS}
 
 
 @dataclass
@@ -108,6 +123,8 @@ class MotionErrors:
     nrmse : set label -> component -> NRMSE
     error : set label -> mean over the components of the squared NRMSE
     mean_thrust, mean_power : "cfd" and set label -> the period's mean, N and W
+    cfd_repeat_nrmse : component -> CFD's own NRMSE, the period before against the compared
+        one (:attr:`HeldOutMotion.cfd_repeat_nrmse`)
     """
 
     name: str
@@ -116,6 +133,7 @@ class MotionErrors:
     error: dict[str, float]
     mean_thrust: dict[str, float]
     mean_power: dict[str, float]
+    cfd_repeat_nrmse: dict[str, float] = field(default_factory=dict)
 
 
 @dataclass
@@ -170,7 +188,10 @@ class TransferCheck:
                 "coefficients": self.coefficients, "excluded": self.excluded,
                 "motions": [{"name": m.name, "label": m.label, "nrmse": m.nrmse,
                              "error": m.error, "mean_thrust": m.mean_thrust,
-                             "mean_power": m.mean_power} for m in self.motions]}
+                             "mean_power": m.mean_power,
+                             "cfd_repeat_nrmse": {k: None if np.isnan(v) else v
+                                                  for k, v in m.cfd_repeat_nrmse.items()}}
+                            for m in self.motions]}
 
 
 def _window(loads: Loads, time: np.ndarray) -> Loads:
@@ -185,7 +206,7 @@ def _errors(motion: HeldOutMotion, models: Mapping[str, ForceModel],
     t = case.state.time
     thrust, power = thrust_and_power(case.cfd, case.state)
     out = MotionErrors(motion.name, motion.label, {}, {}, {"cfd": time_mean(t, thrust)},
-                       {"cfd": time_mean(t, power)})
+                       {"cfd": time_mean(t, power)}, dict(motion.cfd_repeat_nrmse))
     for label, model in models.items():
         pred = _window(model.loads(motion.history), t)
         out.nrmse[label] = {k: float(nrmse(getattr(pred, k), case.cfd_signal(k)))

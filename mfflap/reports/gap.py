@@ -2,18 +2,23 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
-from mfflap.gap.diagnose import CONFOUNDED_VIF, Diagnosis
+from mfflap.gap.diagnose import CFD_OWN, CONFOUNDED_VIF, Diagnosis
 from mfflap.gap.transfer import BASE, TransferCheck
 from mfflap.identification.error_growth import scaling_advice
 from mfflap.identification.fit import scaling_said
 from mfflap.reports.error_growth_plot import error_growth_figure
 from mfflap.reports.html import Report, figure_html, table_html, text_html
+
+if TYPE_CHECKING:
+    from mfflap.gap.levels import LevelComparison
 
 SIGNALS = ("normal_force", "tangential_force", "moment", "thrust", "input_power")
 
@@ -58,6 +63,16 @@ def _regime_figure(where: dict, diag: Diagnosis):
     return fig
 
 
+def _median_known(metric: dict | None) -> str:
+    """The median in % of a CFD-own NRMSE over the cases that have it, and how many; "-"
+    where none has it."""
+    values = np.asarray(metric["nrmse"], dtype=float) if metric else np.zeros(0)
+    known = values[np.isfinite(values)]
+    if not known.size:
+        return "-"
+    return f"{100 * float(np.median(known)):.1f} ({known.size} of {values.size})"
+
+
 def candidate_figure(diag: Diagnosis):
     """Each candidate's held-out error reduction against the base model, the significant
     ones in green."""
@@ -89,6 +104,73 @@ def _transfer_figure(check: TransferCheck):
     return fig
 
 
+def levels_figure(levels: LevelComparison):
+    """Each record's F_n NRMSE, the vortex model's against Morison's, with CFD's own as
+    the grey band's edge: below the diagonal the vortex model is nearer CFD."""
+    fig, ax = plt.subplots(figsize=(5.2, 4.6))
+    top = 0.0
+    for group, marker in (("diagnosed", "o"), ("held out", "^")):
+        rows = [r for r in levels.rows if r.group == group]
+        if not rows:
+            continue
+        m = 100 * np.array([r.morison_nrmse for r in rows])
+        v = 100 * np.array([r.vortex_nrmse for r in rows])
+        ax.scatter(m, v, s=16, marker=marker, label=f"{group} ({len(rows)})")
+        top = max(top, float(np.nanmax(m)), float(np.nanmax(v)))
+    own = np.array([r.cfd_repeat_nrmse for r in levels.rows], dtype=float)
+    top = 1.05 * top if top > 0 else 1.0
+    ax.plot([0, top], [0, top], color="0.4", lw=0.8)
+    if np.isfinite(own).any():
+        ax.axhspan(0, 100 * float(np.nanmedian(own)), color="0.85", zorder=0,
+                   label="below CFD's own (median)")
+    ax.set_xlim(0, top)
+    ax.set_ylim(0, top)
+    ax.set_xlabel("F_n NRMSE, Morison [%]")
+    ax.set_ylabel("F_n NRMSE, discrete-vortex model [%]")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def add_levels_section(rep: Report, levels: LevelComparison) -> None:
+    """The discrete-vortex model as a level: what its F_n residual leaves of Morison's."""
+    s = rep.section("The discrete-vortex level")
+    s.blocks.append(text_html(
+        "Morison as the case file configures it and the discrete-vortex model as its "
+        "[vortex] table does, each run through every record's motion from rest, against CFD "
+        "over the record's last two periods. The share removed is 1 - SSE_vortex / "
+        "SSE_Morison of F_n: what a model with a wake and leading-edge shedding explains of "
+        "the residual the candidates above work on (negative where it does worse). No "
+        "coefficient of either model is fitted here; CFD's own is its last period against "
+        "the one before."))
+    rows = []
+    for group in ("diagnosed", "held out"):
+        summary = levels.summary(group)
+        if summary["n_records"]:
+            rows.append([group, summary["n_records"], 100 * summary["median_morison_nrmse"],
+                         100 * summary["median_vortex_nrmse"],
+                         100 * summary["median_cfd_repeat_nrmse"],
+                         100 * summary["median_explained_share"],
+                         f"{summary['records_explained']} of {summary['n_records']}"])
+    if rows:
+        s.blocks.append(table_html(
+            ["records", "n", "median F_n NRMSE Morison [%]", "vortex [%]", "CFD's own [%]",
+             "median share removed [%]", "records with a share > 0"], rows))
+        s.blocks.append(figure_html(levels_figure(levels), "F_n NRMSE per record, the "
+                                                           "discrete-vortex model against "
+                                                           "Morison"))
+        s.blocks.append(table_html(
+            ["record", "set", "F_n NRMSE Morison [%]", "vortex [%]", "CFD's own [%]",
+             "share removed [%]"],
+            [[r.record, r.group, 100 * r.morison_nrmse, 100 * r.vortex_nrmse,
+              "-" if np.isnan(r.cfd_repeat_nrmse) else 100 * r.cfd_repeat_nrmse,
+              "-" if np.isnan(r.explained_share) else 100 * r.explained_share]
+             for r in levels.rows]))
+    if levels.excluded:
+        s.blocks.append(text_html(f"Not compared ({len(levels.excluded)} records): "
+                                  + "; ".join(levels.excluded.values()), warn=True))
+
+
 def add_transfer_section(rep: Report, check: TransferCheck) -> None:
     """Whether the effect predicts runs outside the diagnosed cases better."""
     s = rep.section("Does it carry over to runs outside the cases?")
@@ -113,12 +195,16 @@ def add_transfer_section(rep: Report, check: TransferCheck) -> None:
                     + [f"{m.mean_thrust['cfd']:.3g} / {m.mean_thrust[BASE]:.3g} / "
                        f"{m.mean_thrust[lab]:.3g}",
                        f"{m.mean_power['cfd']:.3g} / {m.mean_power[BASE]:.3g} / "
-                       f"{m.mean_power[lab]:.3g}"])
+                       f"{m.mean_power[lab]:.3g}",
+                       " / ".join("-" if np.isnan(m.cfd_repeat_nrmse.get(k, np.nan))
+                                  else f"{100 * m.cfd_repeat_nrmse[k]:.1f}"
+                                  for k in m.nrmse[BASE])])
     comps = list(check.motions[0].nrmse[BASE])
     s.blocks.append(table_html(
         ["motion", "record"] + [f"NRMSE {k} [%], base → + {lab}" for k in comps]
         + ["mean thrust [N]: CFD / base / + effect", "mean input power [W]: CFD / base / "
-           "+ effect"], rows))
+           "+ effect", "CFD's own NRMSE [%] " + " / ".join(comps)
+           + " (the period before against the compared one)"], rows))
     s.blocks.append(figure_html(_transfer_figure(check), f"NRMSE per held-out motion, base "
                                                           f"model and + {lab}"))
     s.blocks.append(table_html(
@@ -206,14 +292,24 @@ def add_gap_sections(rep: Report, diag: Diagnosis, where: dict,
         a = diag.gap.get("after", {}).get(sig)
         rows.append([sig, 100 * float(np.median(b["nrmse"])),
                      100 * float(np.median(a["nrmse"])) if a else "-",
-                     float(np.median(b["pearson"])), float(np.median(a["pearson"])) if a else "-"])
+                     float(np.median(b["pearson"])), float(np.median(a["pearson"])) if a else "-",
+                     *(_median_known(diag.gap.get(key, {}).get(sig)) for key in CFD_OWN)])
     for key in ("mean_thrust_error", "mean_power_error"):
         b = diag.gap["before"][key]
         a = diag.gap.get("after", {}).get(key)
         rows.append([key + " (mean |.|)", 100 * float(np.mean(np.abs(b))),
-                     100 * float(np.mean(np.abs(a))) if a is not None else "-", "", ""])
+                     100 * float(np.mean(np.abs(a))) if a is not None else "-", "", "",
+                     "", "", ""])
+    s.blocks.append(text_html(
+        "Beside the model's NRMSE, CFD's own over the same cases (median over the cases where "
+        "it is known, with how many): each case's cycles against its mean cycle, and its F_n "
+        "against the run of its motion on the medium mesh and at half the Courant limit where "
+        "the record holds one (mfflap campaign refinement). A model NRMSE at or below these "
+        "is within what the CFD can tell."))
     s.blocks.append(table_html(["signal", "median NRMSE before [%]", "after [%]",
-                                "median Pearson before", "after"], rows))
+                                "median Pearson before", "after",
+                                "CFD cycle-to-cycle NRMSE [%]", "CFD mesh NRMSE [%]",
+                                "CFD time-step NRMSE [%]"], rows))
     if diag.validation:
         s = rep.section("Validation on withheld groups")
         s.blocks.append(table_html(["validation", "candidate", "claimed", "held-out gain", "p",
@@ -229,3 +325,5 @@ def add_gap_sections(rep: Report, diag: Diagnosis, where: dict,
             s.blocks.append(text_html(f"Not checked by {key}: {why}.", warn=True))
     if diag.transfer is not None:
         add_transfer_section(rep, diag.transfer)
+    if diag.levels is not None:
+        add_levels_section(rep, diag.levels)

@@ -583,3 +583,47 @@ def test_a_candidate_the_chosen_one_does_not_beat_is_named_as_indistinguishable(
     weak = score("d", errors, significant=False)
     assert [s.names for s in indistinguishable_from(chosen, [chosen, twin, worse, weak],
                                                     0.01)] == [("b",)]
+
+
+def test_the_gap_is_shown_beside_cfd_s_own_nrmse_known_per_case(tmp_path):
+    """CFD's own NRMSE of each diagnosed case: its cycles against its mean cycle where the
+    motion repeats (not for a pitch ramp, whose cycles differ by design), its mesh NRMSE
+    where the record holds a refined run; stored with the diagnosis and read into the
+    report's table as a median over the cases that have it."""
+    import dataclasses
+
+    from mfflap.config import CaseConfig
+    from mfflap.gap.store import read_diagnosis, write_diagnosis
+    from mfflap.gap.workflow import diagnose_cases
+    from mfflap.records.refinement import RefinementChange
+    from mfflap.reports.gap import gap_report
+    from mfflap.results import ResultsFile
+
+    cases = synthesize(np.random.default_rng(4), "circulatory_lift", 4.0, n_cases=12)
+    mesh = RefinementChange("mesh", "r.h5", "refined", "0" * 64, 1.49, 2, 0.071, 0.98,
+                            (1.0, 1.1), (2.0, 2.1), (3.0, 3.1), 0.5, 0.3, 0.2)
+    repeating = {c.name for c in cases if c.frequency * (c.state.time[-1] - c.state.time[0])
+                 >= 2.0}
+    assert len(repeating) >= 2
+    cases = [dataclasses.replace(c, parameters={**c.parameters, "kind": "harmonic"},
+                                 refinement={"mesh": mesh} if i == 0 else {})
+             if c.name in repeating or i == 0 else c for i, c in enumerate(cases)]
+    diag, where, _ = diagnose_cases(CaseConfig(), cases)
+    cycle = diag.gap["cfd_cycle"]["normal_force"]["nrmse"]
+    assert np.isfinite(cycle).sum() == len(repeating)
+    assert all(np.isfinite(v) == (c.name in repeating) for v, c in zip(cycle, cases,
+                                                                        strict=True))
+    assert np.all(cycle[np.isfinite(cycle)] > 0)
+    mesh_nrmse = diag.gap["cfd_mesh"]["normal_force"]["nrmse"]
+    assert mesh_nrmse[0] == 0.071 and np.isnan(mesh_nrmse[1:]).all()
+    assert np.isnan(diag.gap["cfd_time_step"]["normal_force"]["nrmse"]).all()
+    with ResultsFile(tmp_path / "gap.h5", "w") as rf:
+        write_diagnosis(rf, diag, where)
+    with ResultsFile(tmp_path / "gap.h5") as rf:
+        back, _ = read_diagnosis(rf)
+    np.testing.assert_array_equal(back.gap["cfd_cycle"]["normal_force"]["nrmse"], cycle)
+    np.testing.assert_array_equal(back.gap["cfd_mesh"]["normal_force"]["nrmse"], mesh_nrmse)
+    html = Path(gap_report(tmp_path / "gap.html", back, where)).read_text()
+    assert "CFD mesh NRMSE [%]" in html and f"7.1 (1 of {len(cases)})" in html
+    median = 100 * float(np.median(cycle[np.isfinite(cycle)]))
+    assert f"{median:.1f} ({len(repeating)} of {len(cases)})" in html

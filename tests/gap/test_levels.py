@@ -52,3 +52,34 @@ def test_the_command_reports_each_record_and_refuses_another_plate(tmp_path):
         case.write_text(f.read().replace("[plate]", "[plate]\npivot_chord_fraction = 0.5"))
     res = CliRunner().invoke(cli, ["gap", "levels", str(case), "--fixtures", folder])
     assert res.exit_code != 0 and "plate.pivot_chord_fraction" in res.output
+
+
+def test_the_diagnosis_carries_the_level_of_its_records_and_held_out_runs_into_file_and_report(
+        tmp_path):
+    """Records given to the diagnosis get a vortex-level row each, grouped as diagnosed or
+    held out; the rows survive the results file and the report shows both groups."""
+    from pathlib import Path
+
+    from mfflap.config import CaseConfig
+    from mfflap.gap.blindtest import synthesize
+    from mfflap.gap.store import read_diagnosis, write_diagnosis
+    from mfflap.gap.workflow import diagnose_cases
+    from mfflap.reports.gap import gap_report
+    from mfflap.results import ResultsFile
+
+    records = read_records(fixture_dir("backtest_main_job"))
+    cases = synthesize(np.random.default_rng(1), "circulatory_lift", 4.0, n_cases=12)
+    diag, where, _ = diagnose_cases(CaseConfig(), cases, records=records[:2],
+                                    held_out_records=records[2:3])
+    assert [r.group for r in diag.levels.rows] == ["diagnosed", "diagnosed", "held out"]
+    assert all(0 < r.vortex_nrmse < 1 and 0 < r.cfd_repeat_nrmse < 1 for r in diag.levels.rows)
+    with ResultsFile(tmp_path / "gap.h5", "w") as rf:
+        write_diagnosis(rf, diag, where)
+    with ResultsFile(tmp_path / "gap.h5") as rf:
+        back, _ = read_diagnosis(rf)
+    assert [(r.record, r.group) for r in back.levels.rows] == [
+        (r.record, r.group) for r in diag.levels.rows]
+    np.testing.assert_allclose([r.explained_share for r in back.levels.rows],
+                               [r.explained_share for r in diag.levels.rows])
+    html = Path(gap_report(tmp_path / "gap.html", back, where)).read_text()
+    assert "The discrete-vortex level" in html and "held out" in html

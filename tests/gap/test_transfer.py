@@ -1,6 +1,7 @@
 """Whether a diagnosed effect carries over to CFD runs outside the diagnosed cases."""
 
 import json
+from pathlib import Path
 
 import h5py
 import numpy as np
@@ -182,3 +183,52 @@ def test_records_written_and_read_back_are_checked_alike(tmp_path):
     a = check_transfer(_fit_cases(True), motions, BASE_MODEL.terms, CANDIDATES, ["wake_lag"])
     b = check_transfer(_fit_cases(True), direct, BASE_MODEL.terms, CANDIDATES, ["wake_lag"])
     assert a.gains == pytest.approx(b.gains)
+
+
+def test_each_held_out_motion_carries_cfd_s_own_repeat_nrmse_into_the_check_and_file(tmp_path):
+    """A run that repeats its period has CFD's own NRMSE near zero; noise in the compared
+    period raises it; a run with no whole period before the compared one has none (NaN,
+    null in JSON) rather than a figure read off the start-up."""
+    from mfflap.gap.store import write_transfer
+    from mfflap.results import ResultsFile
+
+    records = _held_out_records(False)
+    rng = np.random.default_rng(2)
+    noisy = records[1]
+    last = noisy.time >= noisy.time[-1] - 1.1
+    fn = noisy.loads.normal_force.copy()
+    fn[last] += 0.05 * np.ptp(fn) * rng.standard_normal(last.sum())
+    records[1] = CfdRecord(noisy.name, noisy.state,
+                           Loads(noisy.time, fn, noisy.loads.tangential_force,
+                                 noisy.loads.moment), noisy.parameters)
+    short = _two_harmonic_state(0.8, n_cycles=1.5, n=600)
+    records.append(CfdRecord("short", short, _loads(short, False),
+                             {"kind": "periodic_spline", "period": 0.8}))
+    motions, excluded = held_out_motions(records)
+    assert excluded == {}
+    own = {m.name: m.cfd_repeat_nrmse for m in motions}
+    assert own["optimised_0"]["normal_force"] < 1e-3
+    assert 0.03 < own["optimised_1"]["normal_force"] < 0.1
+    assert own["optimised_1"]["moment"] < 1e-3
+    assert all(np.isnan(v) for v in own["short"].values())
+    check = check_transfer(_fit_cases(False), motions, BASE_MODEL.terms, CANDIDATES,
+                           ["wake_lag"], residual_scaling="case")
+    as_json = json.loads(json.dumps(check.as_dict(), allow_nan=False))
+    assert as_json["motions"][3]["cfd_repeat_nrmse"]["normal_force"] is None
+    assert as_json["motions"][1]["cfd_repeat_nrmse"]["normal_force"] == pytest.approx(
+        own["optimised_1"]["normal_force"])
+    with ResultsFile(tmp_path / "t.h5", "w") as rf:
+        write_transfer(rf, check)
+    with h5py.File(tmp_path / "t.h5") as h5:
+        stored = h5["gap/transfer/cfd_repeat_nrmse_normal_force"][()]
+    assert stored[1] == pytest.approx(own["optimised_1"]["normal_force"])
+    assert np.isnan(stored[3])
+    from mfflap.reports.gap import add_transfer_section
+    from mfflap.reports.html import Report
+
+    report = Report("transfer", "")
+    add_transfer_section(report, check)
+    page = Path(report.write(tmp_path / "t.html")).read_text()
+    assert "own NRMSE [%] normal_force / tangential_force / moment" in page
+    assert f"{100 * own['optimised_1']['normal_force']:.1f} / " in page
+    assert "- / - / -" in page
