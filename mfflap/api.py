@@ -32,6 +32,7 @@ from mfflap.identification.workflow import identify_strategies, load_cases
 from mfflap.kinematics import DiscreteMotion, to_discrete
 from mfflap.optimisation.optimise import OptimisationResult
 from mfflap.optimisation.study import beta_study
+from mfflap.optimisation.vortex_polish import PolishResult
 from mfflap.performance import evaluate_discrete
 from mfflap.pipeline import gap_diagnosis
 from mfflap.records.record import backtest_fixture_dirs
@@ -125,6 +126,22 @@ class Study:
         study = beta_study(self.config, [beta], n_starts=starts, with_ipopt=False,
                            model=self.model, progress=lambda _: None)
         return as_result(study.sqp[beta], OptimisedMotion, model=self.model, config=self.config)
+
+    def polish(self, optimum: OptimisationResult) -> PolishResult:
+        """The optimum polished on the case's discrete-vortex model ([vortex]): Morison
+        corrected sample by sample to the vortex model, in a trust region the vortex model
+        judges (:func:`~mfflap.optimisation.vortex_polish.polish_on_vortex_model`).
+
+        Examples
+        --------
+        >>> study = Study.from_toml("cases/paper2026.toml")           # doctest: +SKIP
+        >>> polished = study.polish(study.optimise(beta=0.0))        # doctest: +SKIP
+        >>> polished.samples.peak_power < polished.start_samples.peak_power  # doctest: +SKIP
+        True
+        """
+        from mfflap.optimisation.vortex_polish import polish_optima  # the compiled kernel
+
+        return polish_optima(self.config, {optimum.beta: optimum}, self.model)[optimum.beta]
 
     def backtest(self, optimum: OptimisationResult | DiscreteMotion, live: bool = False,
                  work_dir: str | Path | None = None) -> BacktestResult:

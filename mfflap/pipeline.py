@@ -36,7 +36,13 @@ from mfflap.kinematics.convert import to_spline
 from mfflap.optimisation.gradcheck import gradient_checks
 from mfflap.optimisation.optimise import optimise_sqp
 from mfflap.optimisation.output_correction import OutputCorrection, check_gain
-from mfflap.optimisation.store import beta_key, beta_label, write_result
+from mfflap.optimisation.store import (
+    beta_key,
+    beta_label,
+    polished_label,
+    write_polish,
+    write_result,
+)
 from mfflap.optimisation.study import (
     StudyInterrupted,
     beta_study,
@@ -125,6 +131,9 @@ class RunOptions:
     #: corrected to predict them (:mod:`mfflap.optimisation.output_correction`; the rounds'
     #: ``rounds.correct_outputs``)
     correct_at: dict = field(default_factory=dict)
+    #: polish each optimum on the discrete-vortex model and back-test the polish (the
+    #: rounds do not: their CFD corrects the model itself each round)
+    polish: bool = True
     #: K of the first-order filter from each point's scales to the measured ones (1: none;
     #: :meth:`~mfflap.optimisation.output_correction.OutputCorrection.filtered`)
     correction_gain: float = 1.0
@@ -215,6 +224,9 @@ class RunOutcome:
     #: label -> CFD, Morison and the discrete-vortex model on its back-test
     #: (:class:`~mfflap.backtest.model_ladder.LadderComparison`)
     ladder: dict = field(default_factory=dict)
+    #: beta -> its optimum polished on the discrete-vortex model
+    #: (:class:`~mfflap.optimisation.vortex_polish.PolishResult`)
+    polished: dict = field(default_factory=dict)
     #: the weighting whose identified coefficients the optimisation used, or None when it
     #: used the case file's
     optimised_with: str | None = None
@@ -448,20 +460,30 @@ def _optimise(ctx: RunContext) -> None:
         raise
 
 
+def _polish(ctx: RunContext) -> None:
+    # the discrete-vortex model loads its compiled kernel (numba) when it first runs
+    from mfflap.optimisation.vortex_polish import polish_optima
+
+    ctx.outcome.polished = polish_optima(ctx.config, ctx.outcome.study.sqp, ctx.model,
+                                         ctx.progress)
+
+
 def _gain_table(ctx: RunContext) -> None:
     ctx.outcome.gain = gain_table(ctx.config, model=ctx.model, sweep=ctx.outcome.study.sweep,
                                   progress=ctx.progress)
 
 
 def _motions_to_backtest(ctx: RunContext) -> None:
-    """The motions to back-test once the optimisation gave them: the best sinusoid and
-    each beta's optimum."""
+    """The motions to back-test once the optimisation gave them: the best sinusoid, each
+    beta's optimum and its polish on the discrete-vortex model."""
     study = ctx.outcome.study
     if study is None:
         return
     n = ctx.config.optimisation.n_steps
     motions = {"best sinusoid": sinusoid_motion(study.sweep, study.best_sinusoid, n)}
     motions.update({beta_label(b): r.motion for b, r in study.sqp.items()})
+    motions.update({polished_label(b): r.motion for b, r in ctx.outcome.polished.items()
+                    if r.moved_from(study.sqp[b].motion)})
     ctx.outcome.backtest_motions = motions
 
 
@@ -552,6 +574,7 @@ STAGES: tuple[Stage | Callable[[RunContext], None], ...] = (
     Stage("output correction", _measure_corrections,
           lambda ctx: bool(ctx.options.correct_at)),
     Stage("optimisation", _optimise),
+    Stage("vortex polish", _polish, lambda ctx: _optimised(ctx) and ctx.options.polish),
     Stage("gradient check", _check_gradient),
     Stage("gain table", _gain_table, lambda ctx: _optimised(ctx) and ctx.options.gain_table),
     _motions_to_backtest,
@@ -608,6 +631,8 @@ def write_results(config: CaseConfig, outcome: RunOutcome, h5_path: Path) -> Non
                            dict.fromkeys(("adjoint", "complex_step", "finite_difference"),
                                          "dJ/du_j, then dJ/d(dt)"),
                            {"beta": beta, **check.as_dict()})
+        for beta, polished in outcome.polished.items():
+            write_polish(rf, f"polished/{beta_key(beta)}", polished, beta)
         for label, ladder in outcome.ladder.items():
             levels = ("cfd", "morison", "vortex")
             rf.write_group(f"model_ladder/{safe_label(label)}", {

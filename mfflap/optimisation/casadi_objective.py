@@ -112,8 +112,14 @@ def build_objective(problem: FlappingProblem, n_steps: int) -> tuple[ca.Function
     e = symbolic_stages(problem, n)
     z, thrust, power, hp = e["z"], e["thrust"], e["power"], e["heave_position"]
     p = problem
+    peak = power
+    if p.sample_offsets is not None:
+        p._check_offsets(n)
+        thrust = thrust + ca.DM(p.sample_offsets.thrust)
+        peak = power + ca.DM(p.sample_offsets.peak_power)
+        power = power + ca.DM(p.sample_offsets.power)
     stage = (-(1 - p.beta) * thrust + p.beta * power
-             + 0.5 * p.penalty_power * ca.fmax(power - p.max_power, 0) ** 2
+             + 0.5 * p.penalty_power * ca.fmax(peak - p.max_power, 0) ** 2
              + 0.5 * p.penalty_heave * ca.fmax(ca.fabs(hp) - p.max_heave, 0) ** 2)
     for name, limit in p.pitch_limits.items():
         if np.isfinite(limit):

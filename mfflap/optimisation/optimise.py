@@ -190,7 +190,7 @@ def replace_problem(problem: FlappingProblem, **changes) -> FlappingProblem:
                                            "smoothing_heave", "scheme", "compiled",
                                            "max_pitch", "max_pitch_rate",
                                            "max_pitch_acceleration", "penalty_pitch",
-                                           "linear_modifier")}
+                                           "linear_modifier", "sample_offsets")}
     kw.update(changes)
     return FlappingProblem(problem.model, **kw)
 
@@ -261,6 +261,10 @@ def optimise_ipopt(problem: FlappingProblem, start: DiscreteMotion, *, min_perio
     as in :func:`optimise_sqp`.
     """
     n = start.n_steps
+    if problem.sample_offsets is not None:
+        raise ConfigError("IPOPT's constrained problem does not take sample offsets; "
+                          "optimise a problem with them by optimise_sqp",
+                          key="optimisation.solver")
     if fix_phase:
         check_phase_can_be_fixed(start, start_label)
     lo, hi = time_step_bounds(n, min_period, max_period)

@@ -8,6 +8,10 @@ L_j = -(1 - beta) F_thrust,j + beta P_in,j + 1/2 sigma_P max(0, P_in,j - P_max)^
 J_s = 1/2 eps_theta [sum_{j<N} (acc_{j+1} - acc_j)^2 + (acc_1 + acc_N)^2] + the same for heave,
 and, where a :class:`LinearModifier` is given (the first-order output correction of the rounds,
 :mod:`mfflap.optimisation.output_correction`), + g . (z - z_c) over the packed controls z.
+Where :class:`SampleOffsets` are given (a higher-fidelity model's correction,
+:mod:`mfflap.optimisation.vortex_polish`), F_thrust,j and P_in,j are the model's plus fixed
+offsets delta_T,j and delta_P,j (the P_max penalty may see its own power offsets): the
+offsets move J and where the power penalty bites, not the model's derivatives.
 
 Gradient (discrete adjoint, O(N)): a backward sweep of the semi-implicit Euler steps with
 lambda_{N+1} = 0 gives dJ/dx_1 and the partial gradients at fixed x_1; the closed-form linear
@@ -91,6 +95,51 @@ class LinearModifier:
         return float(self.gradient @ (z - self.centre))
 
 
+@dataclass(frozen=True, eq=False)
+class SampleOffsets:
+    """Fixed offsets added to the model's thrust and input power at each of the N samples.
+
+    Attributes
+    ----------
+    thrust : delta_T,j, N, shape (N,)
+    power : delta_P,j, W, shape (N,)
+        What the beta-weighted mean power sees.
+    peak_power : W, shape (N,), optional
+        What the P_max penalty sees instead of ``power`` (e.g. the largest power over each
+        sample's share of the cycle, so that the limit holds between the samples too);
+        None: ``power``.
+
+    Examples
+    --------
+    >>> offsets = SampleOffsets(np.zeros(4), np.ones(4))
+    >>> offsets.n_steps, offsets.peak_power.tolist()
+    (4, [1.0, 1.0, 1.0, 1.0])
+    """
+
+    thrust: np.ndarray
+    power: np.ndarray
+    peak_power: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        t = np.asarray(self.thrust, dtype=float)
+        p = np.asarray(self.power, dtype=float)
+        q = p if self.peak_power is None else np.asarray(self.peak_power, dtype=float)
+        if t.ndim != 1 or t.shape != p.shape or q.shape != p.shape or t.size < 2:
+            raise ConfigError(f"sample offsets need thrust, power and peak power of one "
+                              f"length N >= 2, got shapes {t.shape}, {p.shape} and "
+                              f"{q.shape}", key="sample_offsets")
+        if not (np.isfinite(t).all() and np.isfinite(p).all() and np.isfinite(q).all()):
+            raise ConfigError("sample offsets must be finite", key="sample_offsets")
+        object.__setattr__(self, "thrust", t)
+        object.__setattr__(self, "power", p)
+        object.__setattr__(self, "peak_power", q)
+
+    @property
+    def n_steps(self) -> int:
+        """N of the motions they apply to."""
+        return self.thrust.size
+
+
 _NO_GRAD = np.empty(0)
 _MORISON_TERMS = ("normal_added_mass", "tangential_added_mass", "normal_drag",
                   "tangential_drag")
@@ -117,6 +166,9 @@ class FlappingProblem:
     penalty_pitch : sigma_theta >= 0, N (in units of J) per squared relative excess
     linear_modifier
         An affine term added to J (:class:`LinearModifier`; None: none).
+    sample_offsets
+        Fixed offsets of the thrust and power at each sample (:class:`SampleOffsets`;
+        None: none). With them J is evaluated by the array code, not the compiled kernel.
     compiled
         Evaluate single real motions with the compiled kernel
         (:mod:`mfflap.optimisation.adjoint_kernel`) when the model allows it; the array code
@@ -129,7 +181,8 @@ class FlappingProblem:
                  smoothing_heave: float = 1e-2, scheme: str = "paper", compiled: bool = True,
                  max_pitch: float = np.inf, max_pitch_rate: float = np.inf,
                  max_pitch_acceleration: float = np.inf, penalty_pitch: float = 1.0e4,
-                 linear_modifier: LinearModifier | None = None):
+                 linear_modifier: LinearModifier | None = None,
+                 sample_offsets: SampleOffsets | None = None):
         checks = [
             ("beta", beta, 0 <= beta <= 1, "[0, 1]"),
             ("max_power", max_power, max_power > 0, "(0, inf) W"),
@@ -173,6 +226,7 @@ class FlappingProblem:
         self.max_pitch_acceleration = float(max_pitch_acceleration)
         self.penalty_pitch = float(penalty_pitch)
         self.linear_modifier = linear_modifier
+        self.sample_offsets = sample_offsets
         self._kernel_args: tuple | bool | None = False  # False: not looked up yet
 
     def without_penalties(self) -> FlappingProblem:
@@ -185,7 +239,7 @@ class FlappingProblem:
 
     def _kernel(self, motion: DiscreteMotion) -> tuple | None:
         """The compiled kernel's constants if it can evaluate ``motion``, else None."""
-        if not self.compiled:
+        if not self.compiled or self.sample_offsets is not None:
             return None
         pa, ha = motion.pitch_acceleration, motion.heave_acceleration
         if (pa.ndim != 1 or np.ndim(motion.time_step) != 0 or np.iscomplexobj(pa)
@@ -203,7 +257,13 @@ class FlappingProblem:
         """L_j, shape (..., N). Complex-step safe."""
         state = motion.states(self.scheme)  # type: ignore[arg-type]
         thrust, power = thrust_and_power(self.model.loads(state), state)
-        excess_p = _positive_part(power - self.max_power)
+        peak = power
+        if self.sample_offsets is not None:
+            self._check_offsets(motion.n_steps)
+            thrust = thrust + self.sample_offsets.thrust
+            peak = power + self.sample_offsets.peak_power
+            power = power + self.sample_offsets.power
+        excess_p = _positive_part(peak - self.max_power)
         excess_h = _positive_part(_abs(state.heave_position) - self.max_heave)
         return (-(1 - self.beta) * thrust + self.beta * power
                 + 0.5 * self.penalty_power * excess_p**2 + 0.5 * self.penalty_heave * excess_h**2
@@ -252,6 +312,13 @@ class FlappingProblem:
                               f"{self.linear_modifier.n_steps} steps, the motion has {n_steps}",
                               key="linear_modifier")
 
+    def _check_offsets(self, n_steps: int) -> None:
+        """Refuse motions of another N than the sample offsets'."""
+        if self.sample_offsets is not None and self.sample_offsets.n_steps != n_steps:
+            raise ConfigError(f"the objective's sample offsets are for N = "
+                              f"{self.sample_offsets.n_steps} steps, the motion has {n_steps}",
+                              key="sample_offsets")
+
     # -- gradient ----------------------------------------------------------------------------
     def _local_partials(self, motion: DiscreteMotion,
                         trajectory: dict[str, np.ndarray] | None = None
@@ -288,6 +355,9 @@ class FlappingProblem:
         d_vt = {"th": an, "td": zero, "tdd": zero, "hd": s, "hdd": zero}
         d_avt = {"th": adn, "td": an, "tdd": zero, "hd": td * c, "hdd": s}
         power = -(fn * c + ft * s) * hd - mo * td
+        if self.sample_offsets is not None:
+            self._check_offsets(motion.n_steps)
+            power = power + self.sample_offsets.peak_power
         dl_dp = self.beta + self.penalty_power * np.maximum(power - self.max_power, 0)
         dl_dt = -(1 - self.beta)
         out = {}

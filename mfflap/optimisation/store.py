@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 from dataclasses import asdict
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -11,6 +12,9 @@ from mfflap.optimisation.optimise import OptimisationResult
 from mfflap.optimisation.problem import FlappingProblem
 from mfflap.results import ResultsFile
 from mfflap.sweep import SweepResult
+
+if TYPE_CHECKING:
+    from mfflap.optimisation.vortex_polish import PolishResult
 
 
 def problem_settings(problem: FlappingProblem) -> dict[str, float | str]:
@@ -82,3 +86,52 @@ def beta_label(beta: float) -> str:
 def beta_key(beta: float) -> str:
     """Group name of a beta, e.g. ``beta_0.50``."""
     return f"beta_{beta:.2f}"
+
+
+def polished_label(beta: float) -> str:
+    """The label of a beta's optimum polished on the discrete-vortex model, e.g.
+    ``β = 0 polished``."""
+    return f"{beta_label(beta)} polished"
+
+
+#: the per-round figures of a polish in the results file
+POLISH_ROUND_UNITS = {"radius": "1", "predicted_decrease": "J", "vortex_decrease": "J",
+                      "ratio": "1", "accepted": "1", "vortex_objective": "J",
+                      "peak_power": "W"}
+#: the vortex model's figures of the start and the polished motion
+POLISH_SAMPLE_UNITS = {"thrust": "N", "power": "W", "sample_peaks": "W", "peak_power": "W",
+                       "mean_thrust": "N", "mean_power": "W"}
+
+
+def write_polish(rf: ResultsFile, group: str, result: PolishResult, beta: float) -> None:
+    """Store a polish: the polished motion, the vortex model's figures at the start and at
+    the end, each round, and why it stopped."""
+    rf.write_discrete_motion(f"{group}/motion", result.motion)
+    for name, samples in (("start", result.start_samples), ("polished", result.samples)):
+        rf.write_group(f"{group}/vortex_{name}", asdict(samples), POLISH_SAMPLE_UNITS)
+    rf.write_group(f"{group}/rounds", {k: np.array([float(getattr(r, k))
+                                                    for r in result.rounds])
+                                       for k in POLISH_ROUND_UNITS}, POLISH_ROUND_UNITS)
+    rf.h5[group].attrs.update({"beta": beta, "start_objective": result.start_objective,
+                               "objective": result.objective, "message": result.message,
+                               "wall_time_s": result.wall_time_s})
+
+
+def read_polish(rf: ResultsFile, group: str) -> PolishResult:
+    """Read back :func:`write_polish`."""
+    from mfflap.optimisation.vortex_polish import PolishResult, PolishRound, VortexSamples
+
+    def samples(name: str) -> VortexSamples:
+        arrays, _ = rf.read_group(f"{group}/vortex_{name}")
+        return VortexSamples(**{k: (np.asarray(v) if np.ndim(v) else float(v))
+                                for k, v in arrays.items()})
+
+    rounds, _ = rf.read_group(f"{group}/rounds")
+    n = len(rounds["radius"])
+    a = rf.h5[group].attrs
+    return PolishResult(
+        rf.read_discrete_motion(f"{group}/motion"), float(a["start_objective"]),
+        float(a["objective"]), samples("start"), samples("polished"),
+        [PolishRound(**{k: (bool(rounds[k][i]) if k == "accepted" else float(rounds[k][i]))
+                        for k in POLISH_ROUND_UNITS}) for i in range(n)],
+        str(a["message"]), float(a["wall_time_s"]))

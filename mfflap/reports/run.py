@@ -25,6 +25,7 @@ from mfflap.reports.html import Report, figure_html, table_html, text_html
 from mfflap.reports.identification import add_identification_sections
 from mfflap.reports.ladder import add_ladder_section
 from mfflap.reports.optimisation import add_optimisation_sections, cycle_curves
+from mfflap.reports.polish import add_polish_section
 from mfflap.reports.summary import add_run_summary
 
 
@@ -185,6 +186,9 @@ def write_run_report(config: CaseConfig, outcome: RunOutcome, html_path: Path,
         add_optimisation_sections(rep, outcome.study, outcome.model, config.optimisation.scheme,
                                   config.optimisation.max_power, outcome.gain,
                                   config.optimisation.phase)
+    if outcome.study is not None:
+        add_polish_section(rep, outcome.polished, outcome.study.sqp,
+                           config.optimisation.max_power)
     if outcome.gradient_checks:
         add_gradient_section(rep, outcome.gradient_checks)
     if outcome.coverage:

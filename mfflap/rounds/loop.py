@@ -121,7 +121,7 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
         points = {b: st.last_point for b, st in states.items() if st.last_point is not None}
         regions = {b: TrustRegion(st.centre.motion, st.radius, st.centre.source)
                    for b, st in centred.items()}
-        opts = replace(options, fixtures=base_fixtures + tuple(pooled),
+        opts = replace(options, polish=False, fixtures=base_fixtures + tuple(pooled),
                        backtest_fixtures=(records, *base_backtests),
                        done_backtests=(records,),
                        correct_at=(centres if trust_radius is not None else points)

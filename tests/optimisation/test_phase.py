@@ -166,7 +166,10 @@ def test_a_fixed_phase_puts_beta_1s_optimum_in_one_place_and_finds_the_shipped_c
         stdout, stderr = proc.communicate(timeout=600)
         assert proc.returncode == 0, stderr[-2000:]
         summary = json.loads(stdout[stdout.index("{\n"):])
-        assert {k: b["status"] for k, b in summary["backtest"].items()} == dict.fromkeys(
+        # the optima and the best sinusoid (the polishes of this series' optima have no
+        # shipped CFD)
+        assert {k: b["status"] for k, b in summary["backtest"].items()
+                if not k.endswith("polished")} == dict.fromkeys(
             ("best sinusoid", "β = 0", "β = 0.5", "β = 1"), "back-tested")
         with ResultsFile(tmp_path / f"threads_{threads}" / "results.h5") as rf:
             results[threads] = read_result(rf, "optimisation/sqp/beta_1.00")

@@ -64,7 +64,7 @@ def test_the_main_job_is_its_list_of_stages_in_order():
 
     names = [s.name for s in pipeline.STAGES if isinstance(s, pipeline.Stage)]
     assert names == ["identification", "identification coverage", "output correction",
-                     "optimisation", "gradient check", "gain table",
+                     "optimisation", "vortex polish", "gradient check", "gain table",
                      "motions against the identification data",
                      "back-test", "model ladder", "gap diagnosis", "coefficient sensitivity",
                      "VTK export"]
@@ -76,7 +76,8 @@ def test_the_main_job_is_its_list_of_stages_in_order():
     # the model ladder runs on the motions whose CFD the back-test found
     found = any(o.record is not None for o in outcome.backtests.values())
     assert [(s.name, s.status) for s in outcome.stages] == [
-        ("identification", FAILED), ("optimisation", DONE), ("gradient check", DONE),
+        ("identification", FAILED), ("optimisation", DONE), ("vortex polish", DONE),
+        ("gradient check", DONE),
         ("back-test", DONE)] + ([("model ladder", DONE)] if found else [])
     assert set(outcome.ladder) == {label for label, o in outcome.backtests.items()
                                    if o.record is not None and o.comparison is not None}
@@ -86,3 +87,9 @@ def test_the_main_job_is_its_list_of_stages_in_order():
                for c in outcome.gradient_checks.values())
     assert told.index("[optimisation] started") < told.index("[back-test] started")
     assert outcome.model is not None and outcome.optimised_with is None
+    # every optimum polished; a polish that moved it is back-tested under its own label
+    assert sorted(outcome.polished) == [0.0, 0.5, 1.0]
+    for beta, polished in outcome.polished.items():
+        moved = polished.moved_from(outcome.study.sqp[beta].motion)
+        assert (f"β = {beta:g} polished" in outcome.backtest_motions) == moved
+        assert polished.objective <= polished.start_objective
