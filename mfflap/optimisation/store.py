@@ -114,7 +114,7 @@ def write_polish(rf: ResultsFile, group: str, result: PolishResult, beta: float)
                                        for k in POLISH_ROUND_UNITS}, POLISH_ROUND_UNITS)
     rf.h5[group].attrs.update({"beta": beta, "start_objective": result.start_objective,
                                "objective": result.objective, "message": result.message,
-                               "wall_time_s": result.wall_time_s})
+                               "wall_time_s": result.wall_time_s, "start": result.start})
 
 
 def read_polish(rf: ResultsFile, group: str) -> PolishResult:
@@ -134,4 +134,4 @@ def read_polish(rf: ResultsFile, group: str) -> PolishResult:
         float(a["objective"]), samples("start"), samples("polished"),
         [PolishRound(**{k: (bool(rounds[k][i]) if k == "accepted" else float(rounds[k][i]))
                         for k in POLISH_ROUND_UNITS}) for i in range(n)],
-        str(a["message"]), float(a["wall_time_s"]))
+        str(a["message"]), float(a["wall_time_s"]), str(a["start"]))

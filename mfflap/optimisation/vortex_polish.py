@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -187,6 +187,9 @@ class PolishResult:
     message : str
         Why it stopped.
     wall_time_s : float
+    start : str
+        Where the polish started (the Morison optimum, or a sinusoid the vortex model
+        ranked best).
     """
 
     motion: DiscreteMotion
@@ -197,6 +200,7 @@ class PolishResult:
     rounds: list[PolishRound]
     message: str
     wall_time_s: float
+    start: str = "the Morison optimum"
 
     @property
     def n_accepted(self) -> int:
@@ -215,8 +219,8 @@ def polish_on_vortex_model(problem: FlappingProblem, vortex: VortexFlappingProbl
                            start: DiscreteMotion, *, min_period: float, max_period: float,
                            max_rounds: int = 10, radius: float = START_RADIUS,
                            steps_per_period: int = STEPS_PER_PERIOD,
-                           callback: Callable[[int, PolishRound], None] | None = None
-                           ) -> PolishResult:
+                           callback: Callable[[int, PolishRound], None] | None = None,
+                           start_label: str = "the Morison optimum") -> PolishResult:
     """Refine ``start`` on the vortex model (module docstring).
 
     Parameters
@@ -238,6 +242,8 @@ def polish_on_vortex_model(problem: FlappingProblem, vortex: VortexFlappingProbl
         The vortex model's resolution.
     callback : callable(round, PolishRound), optional
         Called after each round (progress).
+    start_label : str
+        What ``start`` is (:attr:`PolishResult.start`).
 
     Returns
     -------
@@ -298,7 +304,7 @@ def polish_on_vortex_model(problem: FlappingProblem, vortex: VortexFlappingProbl
             message = f"the trust region shrank below {MIN_RADIUS:g} after {k + 1} rounds"
             break
     return PolishResult(centre, start_objective, j_centre, start_samples, samples, rounds,
-                        message, time.perf_counter() - t0)
+                        message, time.perf_counter() - t0, start_label)
 
 
 def polished_problem(problem: FlappingProblem, result: PolishResult) -> FlappingProblem:
@@ -322,34 +328,138 @@ def vortex_problem_for(config, beta: float) -> VortexFlappingProblem:
                                  smoothing_heave=o.smoothing_heave)
 
 
-def polish_optima(config, optima: dict, model,
-                  progress: Callable[[str], None] | None = None) -> dict[float, PolishResult]:
-    """Polish each beta's optimum (beta -> OptimisationResult) of the case on its
-    discrete-vortex model, Morison being ``model`` (beta -> :class:`PolishResult`)."""
-    from mfflap.optimisation.study import problem_for
+#: the sinusoids the vortex model ranks best that a polish also starts from
+SINUSOID_STARTS = 3
+#: the vortex model's time steps per period and periods from rest when it ranks sinusoids
+RANKING_STEPS_PER_PERIOD, RANKING_CYCLES = 100, 2
+
+
+@dataclass(frozen=True)
+class SinusoidStart:
+    """A sinusoid the vortex model ran, a candidate start of the polish.
+
+    Attributes
+    ----------
+    label : str
+    motion : DiscreteMotion
+    samples : VortexSamples
+        At :data:`RANKING_STEPS_PER_PERIOD` steps a period, :data:`RANKING_CYCLES` periods
+        from rest.
+    """
+
+    label: str
+    motion: DiscreteMotion
+    samples: VortexSamples
+
+
+def sinusoid_starts(config, n_steps: int) -> list[SinusoidStart]:
+    """The vortex model on a coarse grid of sinusoids (heave leading pitch by 90 deg): eight
+    frequencies from max(1 / max_period, 0.3 Hz) to min(1 / min_period, 2 Hz), six heave
+    amplitudes from 0.1 m to h_max, pitch amplitudes 30, 45 and 60 deg (within the case's
+    pitch limit). Motions the vortex model cannot run are left out.
+
+    The Morison sweep's best sinusoid is a poor start on the vortex model: Morison
+    under-predicts the peak power of large motions 2-4x, so its best sinusoid within P_max
+    draws far more on the vortex model (and in CFD).
+    """
+    from mfflap.kinematics.convert import harmonic_to_discrete
 
     o = config.optimisation
-    out = {}
-    for beta, optimum in optima.items():
-        def said(k: int, r: PolishRound, beta=beta) -> None:
-            if progress is not None:
-                progress(f"polish beta {beta:g}, round {k}: radius {r.radius:.3g}, J "
-                         f"predicted -{r.predicted_decrease:.3g}, vortex model "
-                         f"{-r.vortex_decrease:+.3g} ({'taken' if r.accepted else 'refused'}); "
-                         f"peak power {r.peak_power:.3g} W")
-
-        out[beta] = polish_on_vortex_model(
-            problem_for(config, beta, model), vortex_problem_for(config, beta),
-            optimum.motion, min_period=o.min_period, max_period=o.max_period, callback=said)
-        if progress is not None:
-            s0, s1 = out[beta].start_samples, out[beta].samples
-            progress(f"polish beta {beta:g}: on the vortex model thrust {s0.mean_thrust:.3g} "
-                     f"-> {s1.mean_thrust:.3g} N, mean power {s0.mean_power:.3g} -> "
-                     f"{s1.mean_power:.3g} W, peak power {s0.peak_power:.3g} -> "
-                     f"{s1.peak_power:.3g} W ({out[beta].message})")
+    f_lo, f_hi = max(1.0 / o.max_period, 0.3), min(1.0 / o.min_period, 2.0)
+    max_pitch_deg = o.max_pitch_deg if o.max_pitch_deg is not None else 60.0
+    ranking = replace(vortex_problem_for(config, 0.0), cycles=RANKING_CYCLES)
+    out = []
+    for f in np.geomspace(f_lo, f_hi, 8):
+        for h in np.linspace(min(0.1, o.max_heave), o.max_heave, 6):
+            for pitch_deg in (30.0, 45.0, 60.0):
+                if pitch_deg > max_pitch_deg:
+                    continue
+                motion = harmonic_to_discrete(f, h, np.deg2rad(pitch_deg), np.pi / 2, n_steps)
+                try:
+                    samples = vortex_samples(ranking, motion, RANKING_STEPS_PER_PERIOD)
+                except ConfigError:
+                    continue
+                out.append(SinusoidStart(f"sinusoid f={f:.3g} Hz h={h:.3g} m "
+                                         f"th={pitch_deg:g} deg phi=90 deg", motion, samples))
     return out
 
 
-__all__ = ["MIN_RADIUS", "START_RADIUS", "STEPS_PER_PERIOD", "PolishResult", "PolishRound",
-           "VortexSamples", "corrected_problem", "morison_samples", "polish_on_vortex_model",
-           "polish_optima", "polished_problem", "vortex_problem_for", "vortex_samples"]
+def vortex_objective(problem: FlappingProblem, motion: DiscreteMotion,
+                     samples: VortexSamples) -> float:
+    """J of ``problem`` with the vortex model's ``samples`` of ``motion`` for Morison's."""
+    thrust, power = morison_samples(problem, motion)
+    return float(replace_problem(problem, sample_offsets=SampleOffsets(
+        samples.thrust - thrust, samples.power - power, samples.sample_peaks - power)
+    ).objective(motion))
+
+
+def polish_optima(config, optima: dict, model,
+                  progress: Callable[[str], None] | None = None,
+                  starts: list[SinusoidStart] | None = None) -> dict[float, PolishResult]:
+    """Polish each beta's optimum (beta -> OptimisationResult) of the case on its
+    discrete-vortex model, Morison being ``model`` (beta -> :class:`PolishResult`).
+
+    Each beta is polished from its Morison optimum and from the :data:`SINUSOID_STARTS`
+    sinusoids of ``starts`` (default :func:`sinusoid_starts`) with the lowest J on the
+    vortex model, and the polish with the lowest J on the vortex model is kept. The vortex
+    model's objective is rough and a polish ends in the optimum nearest its start; on
+    large motions Morison's optimum lies where the vortex model's power is far over P_max,
+    and the polish from it ends in a poorer optimum than one from a sinusoid within the
+    limit.
+    """
+    from mfflap.optimisation.study import problem_for
+
+    o = config.optimisation
+    if starts is None and optima:
+        starts = sinusoid_starts(config, next(iter(optima.values())).motion.n_steps)
+    out = {}
+    for beta, optimum in optima.items():
+        problem, vortex = problem_for(config, beta, model), vortex_problem_for(config, beta)
+        candidates = [("the Morison optimum", optimum.motion)]
+        ranked = sorted(starts or [],
+                        key=lambda s: vortex_objective(problem, s.motion, s.samples))
+        candidates += [(s.label, s.motion) for s in ranked[:SINUSOID_STARTS]]
+        results = []
+        for label, start in candidates:
+            def said(k: int, r: PolishRound, beta=beta, label=label) -> None:
+                if progress is not None:
+                    progress(f"polish beta {beta:g} from {label}, round {k}: radius "
+                             f"{r.radius:.3g}, J predicted {-r.predicted_decrease:+.3g}, "
+                             f"vortex model {-r.vortex_decrease:+.3g} "
+                             f"({'taken' if r.accepted else 'refused'}); peak power "
+                             f"{r.peak_power:.3g} W")
+
+            results.append(polish_on_vortex_model(
+                problem, vortex, start, min_period=o.min_period, max_period=o.max_period,
+                callback=said, start_label=label))
+        out[beta] = min(results, key=lambda r: r.objective)
+        if progress is not None:
+            s0, s1 = out[beta].start_samples, out[beta].samples
+            progress(f"polish beta {beta:g}, kept the one from {out[beta].start}: on the "
+                     f"vortex model thrust {s0.mean_thrust:.3g} -> {s1.mean_thrust:.3g} N, "
+                     f"mean power {s0.mean_power:.3g} -> {s1.mean_power:.3g} W, peak power "
+                     f"{s0.peak_power:.3g} -> {s1.peak_power:.3g} W ({out[beta].message})")
+    return out
+
+
+__all__ = [
+    "MIN_RADIUS",
+    "RANKING_CYCLES",
+    "RANKING_STEPS_PER_PERIOD",
+    "SINUSOID_STARTS",
+    "START_RADIUS",
+    "STEPS_PER_PERIOD",
+    "PolishResult",
+    "PolishRound",
+    "SinusoidStart",
+    "VortexSamples",
+    "corrected_problem",
+    "morison_samples",
+    "polish_on_vortex_model",
+    "polish_optima",
+    "polished_problem",
+    "sinusoid_starts",
+    "vortex_objective",
+    "vortex_problem_for",
+    "vortex_samples",
+]

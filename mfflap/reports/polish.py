@@ -23,7 +23,7 @@ def polish_figure(polished: Mapping[float, PolishResult], max_power: float) -> F
     fig, axes = plt.subplots(1, len(polished), figsize=(3.6 * len(polished) + 0.6, 3.4),
                              squeeze=False)
     for ax, (beta, result) in zip(axes[0], polished.items(), strict=True):
-        for samples, name, colour in ((result.start_samples, "Morison optimum", "tab:red"),
+        for samples, name, colour in ((result.start_samples, "start", "tab:red"),
                                       (result.samples, "polished", "tab:blue")):
             n = samples.sample_peaks.size
             phase = np.arange(n) / (2 * n)
@@ -47,8 +47,10 @@ def add_polish_section(rep: Report, polished: Mapping[float, PolishResult],
         "Each optimum is polished by Morison corrected sample by sample to the discrete-vortex "
         "model's thrust and power, optimised with its exact adjoint in a trust region that "
         "the vortex model judges (rounds taken when the vortex model confirms the predicted "
-        f"decrease of J). Vortex-model figures over its settled period at {STEPS_PER_PERIOD} "
-        "steps a period; Morison's over the cycle of its own samples."))
+        "decrease of J), from the Morison optimum and from the sinusoid the vortex model "
+        "ranks best; the better of the two is kept. The 'before' figures are the vortex "
+        "model's at the kept polish's start. Vortex-model figures over its settled period at "
+        f"{STEPS_PER_PERIOD} steps a period; Morison's over the cycle of its own samples."))
     rows = []
     for beta, result in polished.items():
         summary = morison_optima[beta].summary
@@ -56,12 +58,13 @@ def add_polish_section(rep: Report, polished: Mapping[float, PolishResult],
         rows.append([beta_label(beta), float(summary.mean_thrust), float(summary.mean_power),
                      morison_optima[beta].resampled_max_power, start.mean_thrust,
                      start.peak_power, end.mean_thrust, end.mean_power, end.peak_power,
-                     f"{result.n_accepted} of {len(result.rounds)}", result.message])
+                     result.start, f"{result.n_accepted} of {len(result.rounds)}",
+                     result.message])
     s.blocks.append(table_html(
         ["β", "Morison: thrust [N]", "mean power [W]", "peak power [W]",
          "vortex model, before: thrust [N]", "peak power [W]",
-         "polished: thrust [N]", "mean power [W]", "peak power [W]", "rounds taken",
-         "stopped"], rows))
+         "polished: thrust [N]", "mean power [W]", "peak power [W]", "started from",
+         "rounds taken", "stopped"], rows))
     s.blocks.append(figure_html(polish_figure(polished, max_power),
                                 "Input power over the half period on the vortex model, "
                                 "before and after the polish"))

@@ -77,6 +77,13 @@ def headline(config: CaseConfig, outcome: RunOutcome) -> list[str]:
         said.append("β = 0's thrust gain over the best feasible sinusoid is not confirmed "
                     "in CFD (see the back-test below).")
     p_max = config.optimisation.max_power
+    polished = outcome.backtests.get("β = 0 polished")
+    if polished is not None and polished.comparison is not None and 0.0 in outcome.polished:
+        c, v = polished.comparison, outcome.polished[0.0].samples
+        said.append(f"Polished on the discrete-vortex model, β = 0 gives {c.cfd_mean_thrust:.3g} "
+                    f"N mean thrust in CFD at a peak power of {c.cfd_max_power:.3g} W "
+                    f"({'within' if c.max_power_ok else 'over'} P_max; the vortex model "
+                    f"predicted {v.mean_thrust:.3g} N at {v.peak_power:.3g} W).")
     tested = {k: o.comparison for k, o in outcome.backtests.items() if o.comparison is not None}
     if tested:
         over = [k for k, c in tested.items() if not c.max_power_ok]

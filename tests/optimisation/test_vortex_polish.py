@@ -144,3 +144,55 @@ def test_a_polish_needs_a_round():
     with pytest.raises(ConfigError, match="max_rounds"):
         polish_on_vortex_model(FlappingProblem(MorisonModel()), _vortex(), _motion(),
                                min_period=0.3, max_period=3.0, max_rounds=0)
+
+
+def _quick_case(**optimisation):
+    from dataclasses import replace
+    from pathlib import Path
+
+    from mfflap.config import load_case
+
+    config = load_case(Path(__file__).parents[2] / "cases" / "paper2026.toml",
+                       ["vortex.wake_chords=0.5", "vortex.chord_points=16"])
+    return replace(config, optimisation=replace(config.optimisation, **optimisation))
+
+
+def test_the_sinusoid_starts_cover_the_case_s_periods_and_pitch_limit():
+    from mfflap.optimisation.vortex_polish import sinusoid_starts
+
+    config = _quick_case(min_period=1.0, max_period=2.5, max_pitch_deg=50.0)
+    starts = sinusoid_starts(config, N_STEPS)
+    assert len({s.label for s in starts}) == len(starts) >= 30
+    periods = np.array([float(s.motion.period) for s in starts])
+    assert periods.min() == pytest.approx(1.0) and periods.max() == pytest.approx(2.5)
+    pitch = np.array([np.max(np.abs(s.motion.trajectory()["pitch_angle"])) for s in starts])
+    assert np.degrees(pitch.max()) <= 50.0 + 1e-6 and "th=60" not in " ".join(
+        s.label for s in starts)
+
+
+def test_a_polish_from_several_starts_keeps_the_lowest_objective_on_the_vortex_model():
+    from types import SimpleNamespace
+
+    from mfflap.optimisation.study import problem_for
+    from mfflap.optimisation.vortex_polish import (
+        SinusoidStart,
+        polish_optima,
+        vortex_problem_for,
+    )
+
+    config = _quick_case(max_power=3.0)
+    model = MorisonModel()
+    optimum = SimpleNamespace(motion=_motion(scale=1.6))
+    ranking = vortex_problem_for(config, 0.0)
+    starts = [SinusoidStart(f"small {k}", m, vortex_samples(ranking, m))
+              for k, m in enumerate((_motion(0.5, 0.05), _motion(0.8, 0.03)))]
+    told = []
+    kept = polish_optima(config, {0.0: optimum}, model, told.append, starts)[0.0]
+    alone = polish_on_vortex_model(problem_for(config, 0.0, model),
+                                   vortex_problem_for(config, 0.0), optimum.motion,
+                                   min_period=config.optimisation.min_period,
+                                   max_period=config.optimisation.max_period)
+    assert kept.objective <= alone.objective
+    assert kept.start in {"the Morison optimum", "small 0", "small 1"}
+    assert any(line.startswith(f"polish beta 0, kept the one from {kept.start}")
+               for line in told)
