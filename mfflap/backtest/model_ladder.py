@@ -17,7 +17,7 @@ from mfflap.hydro.discrete_vortex import VortexModelSettings, simulate_vortex_mo
 from mfflap.hydro.loads import Loads
 from mfflap.hydro.morison import MorisonModel
 from mfflap.kinematics.state import KinematicState
-from mfflap.metrics import nrmse
+from mfflap.metrics import nrmse, time_mean
 from mfflap.parameters import Fluid, FreeStream, Plate
 from mfflap.performance import thrust_and_power
 from mfflap.records.record import CfdRecord
@@ -80,7 +80,10 @@ def _figures(loads: Loads, state: KinematicState, window: np.ndarray,
     else:
         on_cfd = np.interp(cfd_time, loads.time, loads.normal_force)
         error = float(nrmse(on_cfd, cfd_normal))
-    return LevelFigures(float(thrust[window].mean()), float(power[window].mean()),
+    # time averages: OpenFOAM's adaptive step samples the fast parts of a cycle densely, so
+    # a plain mean over its samples weighs them more than their share of the time
+    t = np.asarray(loads.time, dtype=float)[window]
+    return LevelFigures(time_mean(t, thrust[window]), time_mean(t, power[window]),
                         float(power[window].max()), error)
 
 

@@ -24,9 +24,12 @@ def objective_and_gradient(pitch_acc, heave_acc, dt, midpoint, want_gradient, u,
                            n_strips, k_an, k_at, k_dn, k_dt, lbar, l2bar, beta, max_power,
                            max_heave, penalty_power, penalty_heave, smoothing_pitch,
                            smoothing_heave, max_pitch, max_pitch_rate, max_pitch_acc,
-                           penalty_pitch, grad_out):
+                           penalty_pitch, thrust_offset, power_offset, peak_offset, grad_out):
     """J(u, dt); with ``want_gradient`` also fills ``grad_out`` = [dJ/d pitch_acc (N),
     dJ/d heave_acc (N), dJ/d dt].
+
+    ``thrust_offset``, ``power_offset`` and ``peak_offset`` are the per-sample offsets of
+    :class:`~mfflap.optimisation.problem.SampleOffsets` (N each), or empty arrays for none.
 
     k_an = C_an rho V_n, k_at = C_at rho V_t, k_dn = C_Dn rho S_n / (2 n), k_dt = C_Dt rho S_t / 2
     (the constants of :func:`mfflap.sweep_kernel.kernel_constants`).
@@ -55,6 +58,7 @@ def objective_and_gradient(pitch_acc, heave_acc, dt, midpoint, want_gradient, u,
     hp = dt * dt * wh
     total = 0.0
     w_thrust = -(1.0 - beta)
+    has_offsets = thrust_offset.shape[0] == n
     for j in range(n):
         tdd = pitch_acc[j]
         hdd = heave_acc[j]
@@ -76,13 +80,22 @@ def objective_and_gradient(pitch_acc, heave_acc, dt, midpoint, want_gradient, u,
         ft = -k_at * avt - k_dt * abs(vt) * vt
         thrust = fn * s - ft * c
         power = -(fn * c + ft * s) * hd - mo * td
-        excess_p = max(power - max_power, 0.0)
+        peak = power
+        if has_offsets:
+            thrust_j = thrust + thrust_offset[j]
+            power_j = power + power_offset[j]
+            peak = power + peak_offset[j]
+        else:
+            thrust_j = thrust
+            power_j = power
+        excess_p = max(peak - max_power, 0.0)
         excess_h = max(abs(hp) - max_heave, 0.0)
         # the pitch envelope: relative excesses (0 where the limit is inf)
         e_th = max(abs(th) - max_pitch, 0.0) / max_pitch
         e_td = max(abs(td) - max_pitch_rate, 0.0) / max_pitch_rate
         e_tdd = max(abs(tdd) - max_pitch_acc, 0.0) / max_pitch_acc
-        total += (w_thrust * thrust + beta * power + 0.5 * penalty_power * excess_p * excess_p
+        total += (w_thrust * thrust_j + beta * power_j
+                  + 0.5 * penalty_power * excess_p * excess_p
                   + 0.5 * penalty_heave * excess_h * excess_h
                   + 0.5 * penalty_pitch * (e_th * e_th + e_td * e_td + e_tdd * e_tdd))
         if want_gradient:
@@ -210,4 +223,10 @@ def problem_constants(problem) -> tuple | None:
             float(k["l2bar"]), problem.beta, problem.max_power, problem.max_heave,
             problem.penalty_power, problem.penalty_heave, problem.smoothing_pitch,
             problem.smoothing_heave, problem.max_pitch, problem.max_pitch_rate,
-            problem.max_pitch_acceleration, problem.penalty_pitch)
+            problem.max_pitch_acceleration, problem.penalty_pitch,
+            *((_NO_OFFSETS,) * 3 if problem.sample_offsets is None else (
+                problem.sample_offsets.thrust, problem.sample_offsets.power,
+                problem.sample_offsets.peak_power)))
+
+
+_NO_OFFSETS = np.empty(0)

@@ -168,7 +168,7 @@ class FlappingProblem:
         An affine term added to J (:class:`LinearModifier`; None: none).
     sample_offsets
         Fixed offsets of the thrust and power at each sample (:class:`SampleOffsets`;
-        None: none). With them J is evaluated by the array code, not the compiled kernel.
+        None: none).
     compiled
         Evaluate single real motions with the compiled kernel
         (:mod:`mfflap.optimisation.adjoint_kernel`) when the model allows it; the array code
@@ -239,7 +239,7 @@ class FlappingProblem:
 
     def _kernel(self, motion: DiscreteMotion) -> tuple | None:
         """The compiled kernel's constants if it can evaluate ``motion``, else None."""
-        if not self.compiled or self.sample_offsets is not None:
+        if not self.compiled:
             return None
         pa, ha = motion.pitch_acceleration, motion.heave_acceleration
         if (pa.ndim != 1 or np.ndim(motion.time_step) != 0 or np.iscomplexobj(pa)
@@ -292,6 +292,7 @@ class FlappingProblem:
     def objective(self, motion: DiscreteMotion):
         """J = mean_j L_j + J_s (+ the linear modifier), shape (...)."""
         self._check_modifier(motion.n_steps)
+        self._check_offsets(motion.n_steps)
         extra = 0.0 if self.linear_modifier is None else self.linear_modifier.value(motion)
         args = self._kernel(motion)
         if args is not None:
@@ -394,6 +395,7 @@ class FlappingProblem:
             return float(self.objective(motion)), self.gradient(motion).flat()
 
         self._check_modifier(motion.n_steps)
+        self._check_offsets(motion.n_steps)
         out = np.empty(2 * motion.n_steps + 1)
         value = objective_and_gradient(
             np.ascontiguousarray(motion.pitch_acceleration, dtype=float),
@@ -425,6 +427,7 @@ class FlappingProblem:
             return float(self.objective(motion)), self.adjoint_gradient(motion).flat()
 
         self._check_modifier(n)
+        self._check_offsets(n)
         out = np.empty(2 * n + 1) if want_gradient else _NO_GRAD
         value = objective_and_gradient(np.ascontiguousarray(z[:n]),
                                        np.ascontiguousarray(z[n:2 * n]), float(z[-1]),

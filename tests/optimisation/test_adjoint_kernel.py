@@ -313,3 +313,36 @@ def test_adjoint_matches_complex_step_with_the_pivot_at_mid_chord(scheme):
     le = FlappingProblem(MorisonModel(), beta=0.5, max_power=30.0, max_heave=0.4,
                          smoothing_pitch=1e-5, smoothing_heave=1e-3, scheme=scheme)
     assert not np.isclose(float(problem.objective(d)), float(le.objective(d)), rtol=1e-3)
+
+
+@pytest.mark.parametrize("scheme", ["paper", "midpoint"])
+def test_sample_offsets_give_one_objective_and_gradient_in_the_kernel_arrays_and_casadi(
+        scheme):
+    """Per-sample thrust, power and peak offsets (the vortex polish's correction) with the
+    power limit biting on part of the cycle: the compiled kernel, the array code, CasADi and
+    complex steps agree."""
+    from mfflap.optimisation.casadi_objective import build_objective, casadi_gradient
+    from mfflap.optimisation.problem import SampleOffsets
+
+    d = perturbed_motion()
+    rng = np.random.default_rng(7)
+    offsets = SampleOffsets(rng.normal(0, 2, N), rng.normal(0, 3, N), rng.normal(8, 4, N))
+    kw = dict(beta=0.3, max_power=30.0, max_heave=0.4, scheme=scheme, sample_offsets=offsets)
+    kernel = FlappingProblem(MorisonModel(), compiled=True, **kw)
+    arrays = FlappingProblem(MorisonModel(), compiled=False, **kw)
+    assert kernel._kernel(d) is not None
+    value = kernel.objective(d)
+    assert value == pytest.approx(arrays.objective(d), rel=1e-12)
+    assert value != pytest.approx(FlappingProblem(MorisonModel(), beta=0.3, max_power=30.0,
+                                                  max_heave=0.4, scheme=scheme).objective(d),
+                                  rel=1e-3)
+    adj = kernel.gradient(d).flat()
+    assert np.max(np.abs(adj - arrays.gradient(d).flat())) <= 1e-10 * np.max(np.abs(adj))
+    cs = complex_step(arrays, d)
+    assert np.max(np.abs(adj - cs)) <= 1e-10 * np.max(np.abs(cs))
+    packed_value, packed = kernel.packed_value_and_gradient(as_vector(d))
+    assert packed_value == pytest.approx(value, rel=1e-12)
+    assert np.max(np.abs(packed - adj)) <= 1e-10 * np.max(np.abs(adj))
+    f, _ = build_objective(kernel, N)
+    assert float(f(as_vector(d))) == pytest.approx(value, rel=1e-12)
+    assert np.max(np.abs(casadi_gradient(kernel, d) - adj)) <= 1e-10 * np.max(np.abs(adj))
