@@ -139,7 +139,7 @@ class Study:
         >>> polished.samples.peak_power < polished.start_samples.peak_power  # doctest: +SKIP
         True
         """
-        from mfflap.optimisation.vortex_polish import polish_optima  # the compiled kernel
+        from mfflap.optimisation.vortex_polish_study import polish_optima  # compiled kernel
 
         return polish_optima(self.config, {optimum.beta: optimum}, self.model)[optimum.beta]
 

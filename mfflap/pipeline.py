@@ -462,7 +462,7 @@ def _optimise(ctx: RunContext) -> None:
 
 def _polish(ctx: RunContext) -> None:
     # the discrete-vortex model loads its compiled kernel (numba) when it first runs
-    from mfflap.optimisation.vortex_polish import polish_optima
+    from mfflap.optimisation.vortex_polish_study import polish_optima
 
     ctx.outcome.polished = polish_optima(ctx.config, ctx.outcome.study.sqp, ctx.model,
                                          ctx.progress)

@@ -119,7 +119,8 @@ def write_polish(rf: ResultsFile, group: str, result: PolishResult, beta: float)
 
 def read_polish(rf: ResultsFile, group: str) -> PolishResult:
     """Read back :func:`write_polish`."""
-    from mfflap.optimisation.vortex_polish import PolishResult, PolishRound, VortexSamples
+    from mfflap.optimisation.vortex_correction import VortexSamples
+    from mfflap.optimisation.vortex_polish import PolishResult, PolishRound
 
     def samples(name: str) -> VortexSamples:
         arrays, _ = rf.read_group(f"{group}/vortex_{name}")

@@ -13,7 +13,8 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from mfflap.optimisation.store import beta_label
-from mfflap.optimisation.vortex_polish import STEPS_PER_PERIOD, PolishResult
+from mfflap.optimisation.vortex_correction import STEPS_PER_PERIOD
+from mfflap.optimisation.vortex_polish import PolishResult
 from mfflap.reports.html import Report, figure_html, table_html, text_html
 
 

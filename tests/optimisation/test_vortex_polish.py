@@ -14,12 +14,12 @@ from mfflap.kinematics.discrete import DiscreteMotion
 from mfflap.optimisation.optimise import optimise_ipopt, replace_problem
 from mfflap.optimisation.problem import FlappingProblem, SampleOffsets
 from mfflap.optimisation.store import read_polish, write_polish
-from mfflap.optimisation.vortex_polish import (
+from mfflap.optimisation.vortex_correction import (
     corrected_problem,
     morison_samples,
-    polish_on_vortex_model,
     vortex_samples,
 )
+from mfflap.optimisation.vortex_polish import polish_on_vortex_model
 from mfflap.optimisation.vortex_problem import VortexFlappingProblem
 from mfflap.results import ResultsFile
 
@@ -158,7 +158,7 @@ def _quick_case(**optimisation):
 
 
 def test_the_sinusoid_starts_cover_the_case_s_periods_and_pitch_limit():
-    from mfflap.optimisation.vortex_polish import sinusoid_starts
+    from mfflap.optimisation.vortex_polish_study import sinusoid_starts
 
     config = _quick_case(min_period=1.0, max_period=2.5, max_pitch_deg=50.0)
     starts = sinusoid_starts(config, N_STEPS)
@@ -174,11 +174,8 @@ def test_a_polish_from_several_starts_keeps_the_lowest_objective_on_the_vortex_m
     from types import SimpleNamespace
 
     from mfflap.optimisation.study import problem_for
-    from mfflap.optimisation.vortex_polish import (
-        SinusoidStart,
-        polish_optima,
-        vortex_problem_for,
-    )
+    from mfflap.optimisation.vortex_correction import vortex_problem_for
+    from mfflap.optimisation.vortex_polish_study import SinusoidStart, polish_optima
 
     config = _quick_case(max_power=3.0)
     model = MorisonModel()

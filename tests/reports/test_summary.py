@@ -44,15 +44,19 @@ def test_the_summary_gives_each_motions_model_and_cfd_figures(run):
     assert {"best sinusoid", "β = 0", "β = 0.5", "β = 1", "β = 0 polished"} <= set(rows)
     for label, o in outcome.backtests.items():
         c = o.comparison
+        if c is None:  # a polish that ended where no CFD ships (see test_run's main job)
+            assert label.endswith("polished") and "no CFD fixture" in o.source
+            continue
         assert rows[label][1:5] == [c.model_mean_thrust, c.cfd_mean_thrust,
                                     c.model_mean_power, c.cfd_mean_power]
         assert rows[label][-1] == ("yes" if c.max_power_ok else "NO")
     said = " ".join(headline(config, outcome))
     assert "in CFD (the model predicted" in said and "P_max = 50 W" in said
-    # the polish's CFD, against the vortex model's prediction of it
+    # the polish's CFD, against the vortex model's prediction of it, where it ships
     polished = outcome.backtests["β = 0 polished"].comparison
-    assert (f"β = 0 gives {polished.cfd_mean_thrust:.3g} N mean thrust in CFD at a peak power "
-            f"of {polished.cfd_max_power:.3g} W") in said
+    assert polished is None or (
+        f"β = 0 gives {polished.cfd_mean_thrust:.3g} N mean thrust in CFD at a peak power "
+        f"of {polished.cfd_max_power:.3g} W") in said
     assert outcome.gap[0].verdict in said
 
 
@@ -82,7 +86,8 @@ def test_the_summarys_numbers_are_on_the_first_screen_in_chromium(run):
         shown = " ".join(e.text for e in visible)
         assert "over the best feasible sinusoid in CFD" in shown
         for o in outcome.backtests.values():
-            assert f"{o.comparison.cfd_mean_thrust:.4g}" in shown
+            if o.comparison is not None:
+                assert f"{o.comparison.cfd_mean_thrust:.4g}" in shown
         assert "P_max = 50 W" in shown
         contents = driver.find_element(By.TAG_NAME, "nav")
         assert contents.rect["y"] > summary.rect["y"]
