@@ -48,7 +48,8 @@ def test_the_case_files_vortex_table_sets_the_model(tmp_path):
         case = tmp_path / f"{name}.toml"
         case.write_text(CASE.read_text() + extra)
         res = CliRunner().invoke(cli, ["evaluate", str(case), "--model", "vortex", "--json",
-                                       "--output", str(tmp_path / f"{name}.h5")])
+                                       "--output", str(tmp_path / f"{name}.h5"),
+                                       "--figure", str(tmp_path / f"{name}.png")])
         assert res.exit_code == 0, res.output
         said[name] = json.loads(res.output[res.output.index("{"):])
     assert said["attached"]["max_power"] != said["default"]["max_power"]
