@@ -66,15 +66,15 @@ def quantised(motion: DiscreteMotion, scales: np.ndarray) -> DiscreteMotion:
     """``motion`` with each control rounded to :data:`QUANTUM` of its scale in ``scales``
     (the scale taken down to a power of two).
 
-    The vortex model's wake is chaotic: a change of 1e-12 in a motion can change its period
-    means by more than a polish step gains, and with them which steps the trust region
-    takes. Rounded to a grid of its own (the scale taken down to a power of two, so that
-    the grid does not move with the motion's round-off), a candidate that SQP finds to
-    within less than the grid's step is the same motion to the vortex model. SQP's end
-    points move by 1e-6-1e-5 of the scales when its inputs change by 1e-15 (another BLAS,
-    the compiled kernel against the array code), so a control near a grid point can still
-    round the other way, and the polish then goes on elsewhere: the rounding makes the
-    polish repeat itself on one machine and set-up, not everywhere.
+    The vortex model's wake is chaotic: a change in a motion far below any that matters can
+    change its period means by more than a polish step gains, and with them which steps the
+    trust region takes. Rounded to a grid of its own (the scale taken down to a power of
+    two, so that the grid does not move with the motion's round-off), a candidate that SQP
+    finds to within less than the grid's step is the same motion to the vortex model. SQP's
+    end points move with round-off in its inputs (another BLAS, the compiled kernel against
+    the array code) by more than round-off, so a control near a grid point can still round
+    the other way and the polish go on elsewhere: the rounding makes the polish repeat
+    itself on one machine and set-up, not everywhere (docs' findings, *Known limits*).
 
     Examples
     --------

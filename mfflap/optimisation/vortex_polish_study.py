@@ -50,7 +50,7 @@ def sinusoid_starts(config, n_steps: int) -> list[SinusoidStart]:
     pitch limit). Motions the vortex model cannot run are left out.
 
     The Morison sweep's best sinusoid is a poor start on the vortex model: Morison
-    under-predicts the peak power of large motions 2-4x, so its best sinusoid within P_max
+    under-predicts the peak power of large motions several times, so its best sinusoid within P_max
     draws far more on the vortex model (and in CFD).
     """
     from mfflap.kinematics.convert import harmonic_to_discrete
@@ -85,9 +85,9 @@ def polish_optima(config, optima: dict, model,
     :func:`sinusoid_starts`), it is also polished from the :data:`SINUSOID_STARTS` of them
     with the lowest J on the vortex model, and the polish with the lowest J on the vortex
     model is kept: a polish ends in the optimum nearest its start. The main job does not
-    give them: in CFD the polishes from sinusoids drew 1.5-1.8 times the peak power the
-    vortex model predicted, where the polish from the Morison optimum held P_max (docs'
-    findings, *The discrete-vortex model*).
+    give them: in CFD the polishes from sinusoids drew far more peak power than the vortex
+    model predicted, where those from the Morison optimum came within it (docs' findings,
+    *The discrete-vortex model*).
     """
     from mfflap.optimisation.study import problem_for
 

@@ -193,3 +193,16 @@ def test_a_polish_from_several_starts_keeps_the_lowest_objective_on_the_vortex_m
     assert kept.start in {"the Morison optimum", "small 0", "small 1"}
     assert any(line.startswith(f"polish beta 0, kept the one from {kept.start}")
                for line in told)
+
+
+def test_the_rounding_grid_does_not_move_with_the_motion_s_round_off():
+    """Two runs whose optima differ in round-off have scales that differ in round-off too;
+    the grid is the scale taken down to a power of two, so both round to one motion."""
+    from mfflap.optimisation.vortex_polish import QUANTUM, quantised
+
+    motion = _motion()
+    scales = motion.control_scales()
+    nudged = DiscreteMotion.from_controls(np.real(motion.controls()) * (1 + 1e-12))
+    a, b = quantised(motion, scales), quantised(nudged, nudged.control_scales())
+    np.testing.assert_array_equal(a.controls(), b.controls())
+    assert np.max(np.abs(a.controls() - motion.controls()) / scales) <= QUANTUM
