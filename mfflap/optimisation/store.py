@@ -89,8 +89,13 @@ def beta_key(beta: float) -> str:
 
 
 def polished_label(beta: float) -> str:
-    """The label of a beta's optimum polished on the discrete-vortex model, e.g.
-    ``β = 0 polished``."""
+    """The label of a beta's optimum polished on the discrete-vortex model.
+
+    Examples
+    --------
+    >>> polished_label(0.5)
+    'β = 0.5 polished'
+    """
     return f"{beta_label(beta)} polished"
 
 

@@ -116,7 +116,17 @@ def _rounded(state):
 
 def morison_samples(problem: FlappingProblem, motion: DiscreteMotion
                     ) -> tuple[np.ndarray, np.ndarray]:
-    """Morison's thrust (N) and input power (W) at the motion's N samples."""
+    """Morison's thrust (N) and input power (W) at the motion's N samples.
+
+    Examples
+    --------
+    >>> from mfflap.hydro.morison import MorisonModel
+    >>> from mfflap.kinematics.convert import harmonic_to_discrete
+    >>> motion = harmonic_to_discrete(1.0, 0.1, 0.3, np.pi / 2, 20)
+    >>> thrust, power = morison_samples(FlappingProblem(MorisonModel()), motion)
+    >>> thrust.shape, power.shape
+    ((20,), (20,))
+    """
     state = motion.states(problem.scheme)  # type: ignore[arg-type]
     thrust, power = thrust_and_power(problem.model.loads(state), state)
     return np.asarray(thrust, dtype=float), np.asarray(power, dtype=float)
@@ -126,7 +136,22 @@ def corrected_problem(problem: FlappingProblem, vortex: VortexFlappingProblem,
                       motion: DiscreteMotion, steps_per_period: int = STEPS_PER_PERIOD
                       ) -> tuple[FlappingProblem, VortexSamples]:
     """``problem`` with the offsets that make Morison give the vortex model's outputs at
-    ``motion``, and those outputs."""
+    ``motion``, and those outputs.
+
+    Examples
+    --------
+    >>> from mfflap.hydro.discrete_vortex import VortexModelSettings
+    >>> from mfflap.hydro.morison import MorisonModel
+    >>> from mfflap.kinematics.convert import harmonic_to_discrete
+    >>> motion = harmonic_to_discrete(1.0, 0.1, 0.3, np.pi / 2, 20)
+    >>> vortex = VortexFlappingProblem(VortexModelSettings(wake_chords=0.5,
+    ...                                                    chord_points=16), cycles=2)
+    >>> corrected, samples = corrected_problem(FlappingProblem(MorisonModel()), vortex,
+    ...                                        motion, steps_per_period=40)
+    >>> thrust, _ = morison_samples(corrected, motion)
+    >>> bool(np.allclose(thrust + corrected.sample_offsets.thrust, samples.thrust))
+    True
+    """
     samples = vortex_samples(vortex, motion, steps_per_period)
     thrust, power = morison_samples(problem, motion)
     offsets = SampleOffsets(samples.thrust - thrust, samples.power - power,
@@ -136,7 +161,23 @@ def corrected_problem(problem: FlappingProblem, vortex: VortexFlappingProblem,
 
 def vortex_objective(problem: FlappingProblem, motion: DiscreteMotion,
                      samples: VortexSamples) -> float:
-    """J of ``problem`` with the vortex model's ``samples`` of ``motion`` for Morison's."""
+    """J of ``problem`` with the vortex model's ``samples`` of ``motion`` for Morison's
+    (what the polish judges a motion by).
+
+    Examples
+    --------
+    >>> from mfflap.hydro.discrete_vortex import VortexModelSettings
+    >>> from mfflap.hydro.morison import MorisonModel
+    >>> from mfflap.kinematics.convert import harmonic_to_discrete
+    >>> motion = harmonic_to_discrete(1.0, 0.1, 0.3, np.pi / 2, 20)
+    >>> vortex = VortexFlappingProblem(VortexModelSettings(wake_chords=0.5,
+    ...                                                    chord_points=16), cycles=2)
+    >>> problem = FlappingProblem(MorisonModel())
+    >>> corrected, samples = corrected_problem(problem, vortex, motion, 40)
+    >>> bool(np.isclose(vortex_objective(problem, motion, samples),
+    ...                 corrected.objective(motion)))
+    True
+    """
     thrust, power = morison_samples(problem, motion)
     return float(replace_problem(problem, sample_offsets=SampleOffsets(
         samples.thrust - thrust, samples.power - power, samples.sample_peaks - power)
@@ -145,7 +186,14 @@ def vortex_objective(problem: FlappingProblem, motion: DiscreteMotion,
 
 def vortex_problem_for(config, beta: float) -> VortexFlappingProblem:
     """The case's optimisation problem of ``beta`` on its discrete-vortex model ([vortex],
-    the plate, fluid and stream; three periods from rest)."""
+    the plate, fluid and stream; three periods from rest).
+
+    Examples
+    --------
+    >>> from mfflap.config import CaseConfig
+    >>> vortex_problem_for(CaseConfig(), 0.5).beta
+    0.5
+    """
     o = config.optimisation
     return VortexFlappingProblem(config.vortex, plate=config.plate, fluid=config.fluid,
                                  stream=config.flow, beta=beta, max_power=o.max_power,

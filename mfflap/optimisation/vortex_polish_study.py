@@ -52,6 +52,13 @@ def sinusoid_starts(config, n_steps: int) -> list[SinusoidStart]:
     The Morison sweep's best sinusoid is a poor start on the vortex model: Morison
     under-predicts the peak power of large motions several times, so its best sinusoid within P_max
     draws far more on the vortex model (and in CFD).
+
+    Examples
+    --------
+    >>> from mfflap.config import load_case
+    >>> starts = sinusoid_starts(load_case("cases/paper2026.toml"), 50)  # doctest: +SKIP
+    >>> len(starts), starts[0].label                                     # doctest: +SKIP
+    (144, 'sinusoid f=0.3 Hz h=0.1 m th=30 deg phi=90 deg')
     """
     from mfflap.kinematics.convert import harmonic_to_discrete
 
@@ -88,6 +95,15 @@ def polish_optima(config, optima: dict, model,
     give them: in CFD the polishes from sinusoids drew far more peak power than the vortex
     model predicted, where those from the Morison optimum came within it (docs' findings,
     *The discrete-vortex model*).
+
+    Examples
+    --------
+    >>> import mfflap
+    >>> study = mfflap.Study.from_toml("cases/paper2026.toml")             # doctest: +SKIP
+    >>> optima = {0.0: study.optimise(beta=0.0)}                           # doctest: +SKIP
+    >>> polished = polish_optima(study.config, optima, study.model)        # doctest: +SKIP
+    >>> polished[0.0].start                                                # doctest: +SKIP
+    'the Morison optimum'
     """
     from mfflap.optimisation.study import problem_for
 
