@@ -83,7 +83,7 @@ class Study:
 
         Examples
         --------
-        >>> Study.from_toml("cases/paper2026.toml").config.study.name  # doctest: +SKIP
+        >>> Study.from_toml("cases/paper2026.toml").config.study.name
         'paper2026'
         """
         return cls(load_case(path))
@@ -134,9 +134,10 @@ class Study:
 
         Examples
         --------
-        >>> study = Study.from_toml("cases/paper2026.toml")           # doctest: +SKIP
-        >>> polished = study.polish(study.optimise(beta=0.0))        # doctest: +SKIP
-        >>> polished.samples.peak_power < polished.start_samples.peak_power  # doctest: +SKIP
+        >>> study = Study(load_case("cases/paper2026.toml",  # a short wake: a quick example
+        ...                         ["vortex.wake_chords=0.5", "vortex.chord_points=16"]))
+        >>> polished = study.polish(study.optimise(beta=0.0))
+        >>> bool(polished.samples.peak_power < polished.start_samples.peak_power)
         True
         """
         from mfflap.optimisation.vortex_polish_study import polish_optima  # compiled kernel

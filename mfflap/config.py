@@ -614,7 +614,7 @@ def loads_case(text: str, source: str = "<string>", settings: Sequence[str] = ()
 
     Examples
     --------
-    >>> loads_case('[study]\nname = "demo"\n', settings=["cfd.procs=2"]).cfd.procs
+    >>> loads_case('[study]\\nname = "demo"\\n', settings=["cfd.procs=2"]).cfd.procs
     2
     """
     try:

@@ -94,7 +94,7 @@ class KinematicState:
         >>> import numpy as np
         >>> t = np.array([0.0, 0.1, 0.3])
         >>> state = KinematicState(t, t, t, t, t, t, t).on_uniform_time(0.1)
-        >>> state.time.tolist(), state.pitch_angle.round(12).tolist()
+        >>> state.time.round(12).tolist(), state.pitch_angle.round(12).tolist()
         ([0.0, 0.1, 0.2, 0.3], [0.0, 0.1, 0.2, 0.3])
         """
         t = np.asarray(self.time, dtype=float)

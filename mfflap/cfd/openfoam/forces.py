@@ -77,9 +77,9 @@ def detect_dialect(text: str, path: str = "<text>") -> str:
 
     Examples
     --------
-    >>> detect_dialect("0.1 (1 2 3) (1 2 3) (0 0 0)\n")
+    >>> detect_dialect("0.1 (1 2 3) (1 2 3) (0 0 0)\\n")
     'v1912'
-    >>> detect_dialect("0.1 ((1 2 3) (0 0 0)) ((4 5 6) (0 0 0))\n")
+    >>> detect_dialect("0.1 ((1 2 3) (0 0 0)) ((4 5 6) (0 0 0))\\n")
     'foundation'
     """
     first = _first_row(text)
