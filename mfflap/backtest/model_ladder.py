@@ -137,10 +137,7 @@ def compare_model_ladder(record: CfdRecord, morison: ForceModel | None = None,
     vortex = simulate_vortex_model(state, plate, fluid, stream, settings).loads
     cfd = _figures(record.loads, record.state, cfd_window, None, t_cfd)
     cfd_normal = record.loads.normal_force[cfd_window]
-    last = t_cfd >= t_cfd[-1] - period
-    repeat = (float(nrmse(np.interp(t_cfd[last] - period, t_cfd, record.loads.normal_force),
-                          record.loads.normal_force[last]))
-              if periods >= 2 else float("nan"))
+    repeat = record.repeat_nrmse() if periods >= 2 else float("nan")
     cfd = LevelFigures(cfd.mean_thrust, cfd.mean_power, cfd.peak_power, repeat)
     levels = {name: _figures(loads, state, window, cfd_normal, t_cfd[cfd_window])
               for name, loads in (("morison", morison.loads(state)), ("vortex", vortex))}

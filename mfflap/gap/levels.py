@@ -84,11 +84,9 @@ def level_residuals(records: Sequence, morison: MorisonModel,
         v = np.interp(t[window], vortex.time, vortex.normal_force)
         m = np.asarray(morison.loads(record.state).normal_force, dtype=float)[window]
         sse_m, sse_v = float(np.sum((m - cfd) ** 2)), float(np.sum((v - cfd) ** 2))
-        last = t >= float(t[-1]) - period
-        before = np.interp(t[last] - period, t, record.loads.normal_force)
         row = LevelResidual(record.name, float(nrmse(m, cfd)), float(nrmse(v, cfd)),
                             1.0 - sse_v / sse_m if sse_m > 0 else float("nan"),
-                            float(nrmse(before, record.loads.normal_force[last])))
+                            record.repeat_nrmse())
         out.append(row)
         if progress is not None:
             progress(f"{row.record}: F_n NRMSE Morison {row.morison_nrmse:.1%}, vortex "

@@ -153,10 +153,16 @@ def corrected_problem(problem: FlappingProblem, vortex: VortexFlappingProblem,
     True
     """
     samples = vortex_samples(vortex, motion, steps_per_period)
+    return corrected_by(problem, motion, samples), samples
+
+
+def corrected_by(problem: FlappingProblem, motion: DiscreteMotion,
+                 samples: VortexSamples) -> FlappingProblem:
+    """``problem`` with the offsets from Morison's outputs at ``motion`` to the vortex
+    model's ``samples`` of it (:func:`corrected_problem` without running the model)."""
     thrust, power = morison_samples(problem, motion)
-    offsets = SampleOffsets(samples.thrust - thrust, samples.power - power,
-                            samples.sample_peaks - power)
-    return replace_problem(problem, sample_offsets=offsets), samples
+    return replace_problem(problem, sample_offsets=SampleOffsets(
+        samples.thrust - thrust, samples.power - power, samples.sample_peaks - power))
 
 
 def vortex_objective(problem: FlappingProblem, motion: DiscreteMotion,
@@ -178,10 +184,7 @@ def vortex_objective(problem: FlappingProblem, motion: DiscreteMotion,
     ...                 corrected.objective(motion)))
     True
     """
-    thrust, power = morison_samples(problem, motion)
-    return float(replace_problem(problem, sample_offsets=SampleOffsets(
-        samples.thrust - thrust, samples.power - power, samples.sample_peaks - power)
-    ).objective(motion))
+    return float(corrected_by(problem, motion, samples).objective(motion))
 
 
 def vortex_problem_for(config, beta: float) -> VortexFlappingProblem:
@@ -203,5 +206,6 @@ def vortex_problem_for(config, beta: float) -> VortexFlappingProblem:
                                  smoothing_heave=o.smoothing_heave)
 
 
-__all__ = ["STATE_QUANTUM", "STEPS_PER_PERIOD", "VortexSamples", "corrected_problem",
+__all__ = ["STATE_QUANTUM", "STEPS_PER_PERIOD", "VortexSamples", "corrected_by",
+           "corrected_problem",
            "morison_samples", "vortex_objective", "vortex_problem_for", "vortex_samples"]

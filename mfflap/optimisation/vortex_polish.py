@@ -37,8 +37,8 @@ import numpy as np
 
 from mfflap.errors import ConfigError
 from mfflap.kinematics.discrete import DiscreteMotion
-from mfflap.optimisation.optimise import optimise_sqp, replace_problem
-from mfflap.optimisation.problem import FlappingProblem, SampleOffsets
+from mfflap.optimisation.optimise import optimise_sqp
+from mfflap.optimisation.problem import FlappingProblem
 from mfflap.optimisation.trust_region import (
     TrustRegion,
     accepted,
@@ -49,7 +49,6 @@ from mfflap.optimisation.vortex_correction import (
     STEPS_PER_PERIOD,
     VortexSamples,
     corrected_problem,
-    morison_samples,
 )
 from mfflap.optimisation.vortex_problem import VortexFlappingProblem
 
@@ -251,30 +250,5 @@ def polish_on_vortex_model(problem: FlappingProblem, vortex: VortexFlappingProbl
                         message, time.perf_counter() - t0, start_label)
 
 
-def polished_problem(problem: FlappingProblem, result: PolishResult) -> FlappingProblem:
-    """``problem`` corrected at the polished motion: Morison with the vortex model's
-    outputs there (what a report compares the polish against).
-
-    Examples
-    --------
-    >>> from mfflap.hydro.discrete_vortex import VortexModelSettings
-    >>> from mfflap.hydro.morison import MorisonModel
-    >>> from mfflap.kinematics.convert import harmonic_to_discrete
-    >>> motion = harmonic_to_discrete(1.0, 0.1, 0.3, np.pi / 2, 10)
-    >>> vortex = VortexFlappingProblem(VortexModelSettings(wake_chords=0.5,
-    ...                                                    chord_points=16), cycles=2)
-    >>> problem = FlappingProblem(MorisonModel(), max_power=1.0)
-    >>> result = polish_on_vortex_model(problem, vortex, motion, min_period=0.5,
-    ...                                 max_period=2.0, max_rounds=1, steps_per_period=40)
-    >>> bool(np.isclose(polished_problem(problem, result).objective(result.motion),
-    ...                 result.objective))
-    True
-    """
-    thrust, power = morison_samples(problem, result.motion)
-    return replace_problem(problem, sample_offsets=SampleOffsets(
-        result.samples.thrust - thrust, result.samples.power - power,
-        result.samples.sample_peaks - power))
-
-
 __all__ = ["MIN_RADIUS", "QUANTUM", "START_RADIUS", "PolishResult", "PolishRound",
-           "polish_on_vortex_model", "polished_problem", "quantised"]
+           "polish_on_vortex_model", "quantised"]

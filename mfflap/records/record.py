@@ -31,6 +31,7 @@ import numpy as np
 from mfflap.errors import MfflapError, UnreadableRecordError
 from mfflap.hydro.loads import Loads
 from mfflap.kinematics.state import KINEMATIC_UNITS, KinematicState
+from mfflap.metrics import nrmse
 from mfflap.records.refinement import RefinementChange, read_refinement, write_refinement
 from mfflap.results import ResultsFile
 from mfflap.toml_io import dumps
@@ -114,6 +115,25 @@ class CfdRecord:
             raise MfflapError(f"record {self.name} runs {self.time[-1]:.3g} s, shorter than "
                               f"the {periods:g} periods of {period:.3g} s compared")
         return period, start
+
+    def repeat_nrmse(self) -> float:
+        """CFD's own repeat of F_n: the NRMSE of its last :attr:`period` against the period
+        before (over the last period's range), the closest a model that repeats each cycle
+        can come to it.
+
+        Examples
+        --------
+        >>> t = np.linspace(0.0, 2.0, 201)
+        >>> state = KinematicState(t, *(np.zeros_like(t) for _ in range(6)))
+        >>> f_n = np.sin(2 * np.pi * t)
+        >>> run = CfdRecord("run", state, Loads(t, f_n, 0 * t, 0 * t), {"period": 1.0})
+        >>> round(run.repeat_nrmse(), 12)
+        0.0
+        """
+        t = np.asarray(self.time, dtype=float)
+        period, f_n = self.period, self.loads.normal_force
+        last = t >= t[-1] - period
+        return float(nrmse(np.interp(t[last] - period, t, f_n), f_n[last]))
 
     def window(self, start_time: float) -> CfdRecord:
         """The record from ``start_time`` s on (drops a start-up transient)."""
