@@ -204,6 +204,23 @@ def scatter_cmd(out_dir: Path, as_json: bool) -> None:
                    f"{s.rms_normal_force_scatter_n:<8.2g}{kind}")
 
 
+@campaign.command("reduce")
+@click.argument("out_dir", type=click.Path(file_okay=False, exists=True, path_type=Path))
+@click.argument("copy_dir", type=click.Path(file_okay=False, path_type=Path))
+def reduce_cmd(out_dir: Path, copy_dir: Path) -> None:
+    """A compact copy of every record of OUT_DIR in COPY_DIR: each history as means over
+    windows of a hundredth of a period, in single precision, without the raw case-frame
+    forces (what identification, back-tests and the gap diagnosis compare; the shipped
+    identification sets are such copies). Parameters, provenance, cycle scatter and
+    refinement are kept."""
+    from mfflap.records.reduce import SAMPLES_PER_PERIOD, reduce_folder
+
+    written = reduce_folder(out_dir, copy_dir)
+    size = sum(p.stat().st_size for p in written)
+    click.echo(f"{len(written)} records reduced to {SAMPLES_PER_PERIOD} samples a period in "
+               f"{copy_dir} ({size / 1e6:.1f} MB)")
+
+
 @campaign.command("refinement")
 @click.argument("coarse_dir", type=click.Path(file_okay=False, exists=True, path_type=Path))
 @click.argument("refined_dir", type=click.Path(file_okay=False, exists=True, path_type=Path))
