@@ -23,6 +23,8 @@ import numpy as np
 from mfflap.backtest.store import safe_label, write_backtests
 from mfflap.backtest.workflow import backtest_all
 from mfflap.cfd.openfoam.case_path import check_case_path
+from mfflap.cfd.openfoam.setups import case_mesh_and_solver
+from mfflap.cfd.openfoam.writer import SolverSettings
 from mfflap.config import CaseConfig
 from mfflap.errors import ConfigError, MfflapError
 from mfflap.gap.store import write_diagnosis
@@ -51,7 +53,7 @@ from mfflap.optimisation.study import (
     sinusoid_motion,
 )
 from mfflap.optimisation.workflow import write_study
-from mfflap.records.record import backtest_fixture_dirs, fixture_dir
+from mfflap.records.record import backtest_fixture_dirs, identification_fixture_dirs
 from mfflap.results import ResultsFile
 
 Progress = Callable[[str], None]
@@ -113,7 +115,10 @@ class RunOptions:
     gain_table: bool = False
     sensitivity: bool = True
     vtk_dir: Path | None = None
+    #: mesh and solver settings of a live back-test (None: the case's ``[cfd]`` set-up,
+    #: :func:`~mfflap.cfd.openfoam.setups.case_mesh_and_solver`)
     mesh: str = "coarse"
+    solver: SolverSettings | None = None
     #: periods a live back-test runs (:func:`~mfflap.backtest.run.backtest_motion`)
     backtest_cycles: float = 3.0
     #: whole cycles the back-test's CFD and model means are taken over (1: the last)
@@ -162,7 +167,9 @@ class RunOptions:
         ('identified:uniform', 2, 3.5)
         """
         opt, backtest = config.optimisation, config.backtest
+        spec, solver = case_mesh_and_solver(config.cfd, config.source)
         return cls(fixtures=fixtures, backtest_fixtures=backtest_fixtures, live=live,
+                   mesh=spec.name, solver=solver,
                    work_dir=out_dir / "cfd_cases", vtk_dir=out_dir / "vtk",
                    # rounds keep their records in their own folder (mfflap.rounds)
                    save_to=(out_dir / BACKTEST_RECORDS if live and config.rounds.count == 1
@@ -381,7 +388,7 @@ class Stage:
 
 
 def _identify(ctx: RunContext) -> None:
-    folders = ctx.options.fixtures or (fixture_dir(),)
+    folders = ctx.options.fixtures or identification_fixture_dirs()
     cases, excluded = load_cases(ctx.config, folders)
     for name, why in excluded.items():
         ctx.outcome.problems.append(f"identification: case {name} left out: {why}")
@@ -500,7 +507,7 @@ def _backtest(ctx: RunContext) -> None:
     folders = list(options.backtest_fixtures) or backtest_fixture_dirs()
     backtest_all(ctx.config, ctx.outcome.backtest_motions, ctx.model, fixture_folders=folders,
                  live=options.live, work_dir=options.work_dir, mesh=options.mesh,
-                 progress=ctx.progress,
+                 solver=options.solver, progress=ctx.progress,
                  # those done before a failure or Ctrl-C are kept in outcome.backtests
                  into=ctx.outcome.backtests, done_folders=options.done_backtests,
                  n_cycles=options.backtest_cycles, average_cycles=options.average_cycles,

@@ -76,9 +76,11 @@ class CfdSettings:
     mfflap.errors.ConfigError: cfd.far_field: value 'outlet' is not allowed
     """
 
-    setup: str | None = bounded(None, unit="",
+    setup: str | None = bounded("table1", unit="",
                                 doc="a named set-up of cfd_templates/openfoam/setups.toml "
-                                    "(left out: the coarse mesh at the default settings)")
+                                    "(table1: the one the shipped identification records "
+                                    "ran on, so that a back-test is run as the data the "
+                                    "model was fitted to)")
     mesh: str | None = bounded(None, unit="",
                                doc="a mesh of cfd_templates/openfoam/meshes.toml (left out: "
                                    "the set-up's, else coarse)")

@@ -266,6 +266,24 @@ def run_backtest_case(motion: DiscreteMotion, label: str, name: str, *,
                       retries_from_start=retries_from_start, n_procs=n_procs)
 
 
+def _folders_said(folders: Sequence[str | Path]) -> str:
+    """The fixture folders looked in, for a message: all of them when few, else their
+    count and the first.
+
+    Examples
+    --------
+    >>> _folders_said(["a/x", "a/y"])
+    'a/x, a/y'
+    >>> _folders_said([f"f{i}" for i in range(10)])
+    'the 10 fixture folders (f0, f1, ...)'
+    """
+    if not folders:
+        return "no fixture folder"
+    if len(folders) <= 3:
+        return ", ".join(str(f) for f in folders)
+    return f"the {len(folders)} fixture folders ({folders[0]}, {folders[1]}, ...)"
+
+
 def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float, *,
                     fixture_folders: Sequence[str | Path] = (), live: bool = False,
                     work_dir: str | Path | None = None, n_cycles: float = 3.0,
@@ -371,8 +389,8 @@ def backtest_motion(motion: DiscreteMotion, label: str, model, max_power: float,
             error = str(read_toml(failed[0]).get("error", "")).splitlines()[0]
             source = f"the CFD run of this motion failed ({failed[0].name}): {error}"
         elif not source:
-            source = (f"no CFD fixture for motion key {key} in "
-                      f"{[str(f) for f in folders] or 'no fixture folder'} and no live run")
+            source = (f"no CFD fixture for motion key {key} in {_folders_said(folders)} "
+                      "and no live run")
         else:
             source += f"; no CFD fixture for motion key {key}"
     if record is None:

@@ -75,7 +75,7 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
     from mfflap.identification.error_growth import scaling_advice
     from mfflap.identification.fit import scaling_said
     from mfflap.identification.workflow import pooled_records
-    from mfflap.records.record import fixture_dir
+    from mfflap.records.record import identification_fixture_dirs
     from mfflap.reports.gap import gap_report
     from mfflap.results import ResultsFile
 
@@ -84,7 +84,7 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
     cases = []
     sources = []
     given_folders = bool(folders)
-    folders = folders or ((fixture_dir(),) if not csv_files else ())
+    folders = folders or (identification_fixture_dirs() if not csv_files else ())
     level_records = None
     if folders:
         records, _ = pooled_records(folders, case, use="gap diagnosis")

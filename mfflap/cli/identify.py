@@ -87,10 +87,10 @@ def identify(case_file: Path, folders: tuple[Path, ...], left_out: tuple[str, ..
         source_text,
         sources_shown,
     )
-    from mfflap.records.record import fixture_dir
+    from mfflap.records.record import identification_fixture_dirs
 
     case = load_case(case_file)
-    folders = folders or (fixture_dir(),)
+    folders = folders or identification_fixture_dirs()
     cases, excluded = load_cases(case, folders)
     if left_out:
         try:

@@ -11,7 +11,7 @@ from mfflap.identification.data import CaseData, prepare_cases
 from mfflap.identification.fit import IdentificationResult, identify
 from mfflap.identification.store import write_identification
 from mfflap.records.inputs import check_records_inputs
-from mfflap.records.record import CfdRecord, fixture_dir, read_record, read_records
+from mfflap.records.record import CfdRecord, identification_fixture_dirs, read_record, read_records
 from mfflap.results import ResultsFile
 from mfflap.toml_io import read_toml
 
@@ -36,7 +36,7 @@ def _folder_list(folders: str | Path | Sequence[str | Path] | None) -> list[Path
         folders = []
     elif isinstance(folders, (str, Path)):
         folders = [f for f in str(folders).split(SOURCE_SEPARATOR) if f]
-    return [Path(f) for f in folders] or [fixture_dir()]
+    return [Path(f) for f in folders] or list(identification_fixture_dirs())
 
 
 def source_text(folders: Sequence[str | Path]) -> str:

@@ -326,9 +326,23 @@ def fixtures_root() -> Path:
                       "distribution (pip install ./data from a clone of mfflap)")
 
 
-def fixture_dir(name: str = "table1_coarse") -> Path:
+def fixture_dir(name: str) -> Path:
     """A shipped record set (``<fixtures_root>/<name>``, :func:`fixtures_root`)."""
     return fixtures_root() / name
+
+
+#: The shipped record sets identification uses by default: the paper's whole Table 1 grid
+#: (125 pitch-ramp motions, 3 periods each) and the harmonic set (36 motions pitching at up
+#: to 16 rad/s, as optimised motions do), both on the ``table1`` CFD set-up, as window
+#: means of 100 samples a period (:mod:`mfflap.records.reduce`; the full records are the
+#: repository's ``campaigns/table1_full`` and ``campaigns/harmonic_set``).
+IDENTIFICATION_FIXTURES = ("table1_grid", "harmonic_set")
+
+
+def identification_fixture_dirs() -> tuple[Path, ...]:
+    """The shipped record sets identification uses by default
+    (:data:`IDENTIFICATION_FIXTURES`)."""
+    return tuple(fixture_dir(name) for name in IDENTIFICATION_FIXTURES)
 
 
 #: The shipped back-test fixture folders: the optimised motions of the main job as the

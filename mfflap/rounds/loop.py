@@ -13,7 +13,7 @@ from mfflap.optimisation.store import beta_label
 from mfflap.optimisation.trust_region import MIN_RADIUS, TrustRegion
 from mfflap.pipeline import RunOutcome, run_study, write_results
 from mfflap.records.as_run import as_run_differences
-from mfflap.records.record import backtest_fixture_dirs, fixture_dir, write_record
+from mfflap.records.record import backtest_fixture_dirs, identification_fixture_dirs, write_record
 from mfflap.rounds.checks import motion_checks, optimised_means
 from mfflap.rounds.output import write_rounds_results
 from mfflap.rounds.refusals import check_rounds
@@ -106,7 +106,7 @@ def run_rounds(config: CaseConfig, options, n_rounds: int, tolerance: float, out
                  trust_radius, first_order, correction_gain, cfd_repeatability)
     refit = refit and options.coefficients.startswith("identified:")  # case: none to refit
     records = out_dir / RECORDS_FOLDER
-    base_fixtures = tuple(options.fixtures) or (fixture_dir(),)
+    base_fixtures = tuple(options.fixtures) or identification_fixture_dirs()
     base_backtests = tuple(options.backtest_fixtures) or tuple(backtest_fixture_dirs())
     rounds: list[RoundSummary] = []
     seen: set[str] = set()  # motion keys back-tested in earlier rounds

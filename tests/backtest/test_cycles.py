@@ -479,6 +479,9 @@ def test_a_live_back_test_on_two_processes_runs_the_serial_runs_flow(tmp_path,
     res = CliRunner().invoke(cli, ["backtest", str(optimisation_file), "--live", "--motion",
                                    "0.5", "--set", "backtest.cycles=1",
                                    "--set", "backtest.average_cycles=1",
+                                   # the serial run's set-up
+                                   "--set", "cfd.max_courant=4.0",
+                                   "--set", 'cfd.far_field="freestream"',
                                    "--set", "cfd.procs=2", "--work",
                                    str(work), "--save-to", str(saved), "--json"])
     assert res.exit_code == 0, res.output

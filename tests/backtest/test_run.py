@@ -623,7 +623,8 @@ def test_the_main_job_kept_within_the_identification_data(tmp_path, coefficients
     from mfflap.records.record import read_records
 
     case = load_case(CASE)
-    cases, _ = prepare_cases(read_records(fixture_dir()), case.identification.discard_time,
+    cases, _ = prepare_cases(read_records(fixture_dir("table1_coarse")),
+                             case.identification.discard_time,
                              plate=case.plate, fluid=case.fluid, stream=case.flow)
     ref = CoverageReference.from_cases(cases, case.morison_model(), case.flow.velocity)
     assert ref.ranges["peak |pitch rate|"][1] == pytest.approx(limits["max_pitch_rate"])
@@ -678,10 +679,13 @@ def test_a_live_backtest_takes_a_motion_saved_before_on_the_same_set_up(optimisa
     for path in fixture_dir("backtest").glob("backtest_*.h5"):
         shutil.copy(path, saved / path.name)
     work = tmp_path / "work"
-    # the saved records ran 2.5 periods after the ramp with the log-law wall functions
+    # the saved records ran 2.5 periods after the ramp at max Co 4 with the freestream far
+    # field and the log-law wall functions
     res = CliRunner().invoke(cli, ["backtest", str(optimisation_file), "--live", "--work",
                                    str(work), "--save-to", str(saved), "--json",
                                    "--set", "backtest.cycles=2.5",
+                                   "--set", "cfd.max_courant=4.0",
+                                   "--set", 'cfd.far_field="freestream"',
                                    "--set", 'cfd.wall_treatment="log_law"'])
     assert res.exit_code == 0, res.output
     import json

@@ -38,6 +38,7 @@ from mfflap.cfd.openfoam.retry_log import (
 )
 from mfflap.cfd.openfoam.run_motion import run_motion
 from mfflap.cfd.openfoam.runner import dies_with_caller, openfoam_available, run_case
+from mfflap.cfd.openfoam.setups import case_mesh_and_solver
 from mfflap.cfd.openfoam.writer import SolverSettings, write_case
 from mfflap.config import IdentificationGrid
 from mfflap.errors import CfdRunError, ConfigError, MfflapError
@@ -52,6 +53,7 @@ from mfflap.records.retries import (
     TIME_STEP_COLLAPSED,
     Retry,
 )
+from mfflap.study_tables import CfdSettings
 from mfflap.toml_io import read_toml
 
 SHORT = CfdCase(1.0, 0.3, 90.0, 10.0, duration=0.04, ramp_time=0.02)
@@ -923,9 +925,8 @@ def test_a_case_the_folder_lists_with_other_values_is_refused_before_anything_ru
     out = tmp_path / "camp"
     out.mkdir()
     listed = CfdCase(2.0, 0.1, 90.0, 10.0, duration=1.5, ramp_time=0.125)  # paper2026's
-    # the set-up `campaign run` asks without a named set-up
-    _write_manifest(out, [listed], CampaignSetup(solver=SolverSettings(
-        wall_treatment="all_y_plus")))
+    # the set-up `campaign run` asks by default
+    _write_manifest(out, [listed], CampaignSetup(solver=case_mesh_and_solver(CfdSettings())[1]))
     check_same_cases(out, [listed, OTHER])  # the same values, and a case not listed
     longer = CfdCase(2.0, 0.1, 90.0, 10.0, duration=2.5, ramp_time=0.125)
     with pytest.raises(ConfigError, match=r"duration: 1\.5 in the folder, 2\.5 asked") as err:

@@ -127,12 +127,15 @@ def test_command_reads_a_finished_campaign(tmp_path, records):
     out = tmp_path / "lc"
     shutil.copytree(FIXTURES, out)
     ids = [SMALL_MOTIONS[0].case_id, SMALL_MOTIONS[1].case_id]
-    # the shipped records ran the log-law wall functions, not the default all_y_plus: a
-    # folder of another set-up is refused, the records' own is read
+    # the shipped records ran the log-law wall functions at max Co 4 with the freestream far
+    # field, not the default set-up: a folder of another set-up is refused, the records' own
+    # is read
     args = ["cfd", "linear-check", str(out), "--cases", ",".join(ids), "--json"]
     res = CliRunner().invoke(cli, args)
     assert res.exit_code == 2 and "solver.wall_treatment: 'log_law' in the folder" in res.output
-    res = CliRunner().invoke(cli, [*args, "--set", 'cfd.wall_treatment="log_law"'])
+    res = CliRunner().invoke(cli, [*args, "--set", 'cfd.wall_treatment="log_law"',
+                                   "--set", "cfd.max_courant=4.0",
+                                   "--set", 'cfd.far_field="freestream"'])
     assert res.exit_code == 0, res.output
     checks = json.loads(res.stdout)["checks"]
     assert [c["case_id"] for c in checks] == ids

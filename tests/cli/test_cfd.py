@@ -13,17 +13,17 @@ CASE = Path(__file__).resolve().parents[2] / "cases" / "paper2026.toml"
 
 
 @pytest.mark.openfoam
-@pytest.mark.parametrize("options", [[], ["--set", 'cfd.far_field="inletOutlet"',
+@pytest.mark.parametrize("options", [[], ["--set", 'cfd.far_field="freestream"',
                                           "--set", 'cfd.pressure_solver="GAMG"',
                                           "--set", 'cfd.turbulence_convection="upwind"']],
-                         ids=["default", "inletOutlet-GAMG-upwind"])
+                         ids=["default", "freestream-GAMG-upwind"])
 def test_cfd_write_run_parse_with_real_openfoam(tmp_path, options):
     runner = CliRunner()
     case_dir = tmp_path / "of"
     res = runner.invoke(cli, ["cfd", "write", str(CASE), str(case_dir), "--cycles", "0.05",
                               *options])
     assert res.exit_code == 0, res.output
-    far = "inletOutlet" if options else "freestreamVelocity"
+    far = "freestreamVelocity" if options else "inletOutlet"  # the table1 set-up's
     assert f"type {far};" in (case_dir / "0" / "U").read_text()
     assert f"solver {'GAMG' if options else 'PCG'};" in (case_dir / "system/fvSolution"
                                                          ).read_text()
@@ -31,8 +31,8 @@ def test_cfd_write_run_parse_with_real_openfoam(tmp_path, options):
     assert res.exit_code == 0, res.output
     health = json.loads(res.stdout)
     assert health["openfoam_build"].startswith("OPENFOAM=")
-    # a case without a named set-up: the wall treatment valid at the plate's y+; said
-    # with or without [cfd] y_plus
+    # the default set-up's wall treatment, valid at the plate's y+; said with or without
+    # [cfd] y_plus
     assert health["wall_treatment"] == "all_y_plus"
     assert health["n_time_steps"] > 10 and health["cpu_time_s"] > 0
     assert health["n_steps_bounding_epsilon"] <= health["n_time_steps"]
@@ -42,7 +42,7 @@ def test_cfd_write_run_parse_with_real_openfoam(tmp_path, options):
     if options:  # bounded upwind k and epsilon: nothing to clip
         assert "div(phi,k)      Gauss upwind;" in schemes
         assert health["n_steps_bounding_epsilon"] == 0
-    else:  # the template's limitedLinear at max Co 4 clips epsilon in most steps
+    else:  # the template's limitedLinear at max Co 2 clips epsilon in most steps
         assert "div(phi,k)      Gauss limitedLinear 1;" in schemes
         assert health["n_steps_bounding_epsilon"] > health["n_time_steps"] / 4
     # fields written at the end: running the finished case again adds no time step

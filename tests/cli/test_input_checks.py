@@ -245,7 +245,7 @@ def test_identify_without_bootstrap_prints_strict_json_and_no_false_zero(tmp_pat
                                 str(fixture_dir("small_motion_coarse")), "--out",
                                 str(tmp_path / "other.html")])
     assert other.exit_code == 2
-    assert "small_motion_coarse lacks 43 of the 43 records" in other.output
+    assert "small_motion_coarse lacks 161 of the 161 records" in other.output
     assert not (tmp_path / "other.html").exists()
 
 
@@ -347,7 +347,7 @@ def test_a_results_file_of_another_kind_is_refused_by_its_kind(tmp_path):
     optimisation = tmp_path / "o.h5"
     with ResultsFile(optimisation, "w", kind="optimisation", config_toml=CASE.read_text()):
         pass
-    record = sorted(fixture_dir().glob("*.h5"))[0]
+    record = sorted(fixture_dir("table1_coarse").glob("*.h5"))[0]
     runner = CliRunner()
     for args, held, wanted in (
             (["report", "identification", str(optimisation)], "optimisation",
@@ -560,12 +560,13 @@ def test_identify_weights_not_one_per_frequency_of_the_records_name_the_option(t
     records' frequencies (it used to name only the case file's identification key)."""
     out = tmp_path / "out"
     for weights, said in (("1,2,3", "3 weights [1.0, 2.0, 3.0]"),
-                          ("0,0,0,0,0", "5 weights [0.0, 0.0, 0.0, 0.0, 0.0]")):
+                          ("0,0,0,0,0,0,0", "7 weights [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]")):
         res = CliRunner().invoke(cli, ["identify", str(CASE), "--weights", weights,
                                        "--bootstrap", "0", "--output", str(out / "i.h5")])
         assert res.exit_code == 2, res.output
         assert "Invalid value for --weights" in res.output
-        assert (f"{said} for the 5 frequencies of the records, 0.1, 0.2, 0.5, 1, 2 Hz"
+        assert (f"{said} for the 7 frequencies of the records, 0.1, 0.2, 0.5, 1, 1.5, 2, "
+                "2.5 Hz"
                 in " ".join(res.output.split()))
     assert not out.exists()
 

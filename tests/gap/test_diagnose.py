@@ -524,7 +524,7 @@ def test_vorticity_at_the_largest_residual_from_real_openfoam_fields(tmp_path):
 @pytest.mark.parametrize(("flow", "said"), [
     ("nocase", "'nocase': expected CASE=DIR, a record's case id and the OpenFOAM case folder"),
     ("=TMP", "'=TMP': expected CASE=DIR"),
-    ("f1p000_h0p300_phi90p0=TMP", "no record 'f1p000_h0p300_phi90p0' among the 43 records; "
+    ("f1p000_h0p300_phi90p0=TMP", "no record 'f1p000_h0p300_phi90p0' among the 161 records; "
                                   "nearest: f1p000_h0p300_phi090p0,"),
     ("f1p000_h0p300_phi090p0=TMP/missing", "TMP/missing is not a folder"),
 ])
@@ -554,7 +554,7 @@ def test_a_flow_folder_of_another_plate_is_refused(tmp_path):
     from mfflap.records.record import fixture_dir, read_record
 
     name = "f1p000_h0p300_phi090p0"
-    p = read_record(fixture_dir() / f"{name}.h5").parameters
+    p = read_record(fixture_dir("table1_coarse") / f"{name}.h5").parameters
     case = CfdCase(p["frequency"], p["heave_amplitude"], p["phase_deg"],
                    p["pitch_ramp_rate_deg"], duration=p["duration"], ramp_time=p["ramp_time"])
     folder = write_case(tmp_path / "of", case.motion(), case.duration,

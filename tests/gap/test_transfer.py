@@ -165,7 +165,7 @@ def test_gap_cli_checks_the_claim_on_the_shipped_back_tests(tmp_path):
     assert "Does it carry over to runs outside the cases?" in html
     # a run the fits saw is refused: it says nothing about carrying over
     res = CliRunner().invoke(cli, ["gap", "diagnose", CASE, "--check-on",
-                                   str(fixture_dir() / "f0p100_h0p100_phi045p0.h5"),
+                                   str(fixture_dir("table1_coarse") / "f0p100_h0p100_phi045p0.h5"),
                                    "--output", str(out)])
     assert res.exit_code != 0
     assert "f0p100_h0p100_phi045p0 are also among the diagnosed cases" in res.output

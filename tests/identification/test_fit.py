@@ -13,7 +13,7 @@ from mfflap.hydro import MorisonModel
 from mfflap.hydro.loads import Loads
 from mfflap.identification import frequency_weights, identify, prepare_cases
 from mfflap.identification.data import prepare_case
-from mfflap.records.record import CfdRecord
+from mfflap.records.record import CfdRecord, fixture_dir
 
 TRUE = {"normal_drag": 2.0, "tangential_drag": 4.0, "normal_added_mass": 1.2,
         "tangential_added_mass": 0.5}
@@ -336,18 +336,21 @@ def _paper_case():
 
 
 def _shipped_cases():
+    """The 43 usable Table 1 cases of the shipped ``table1_coarse`` records (max Co 4, the
+    log-law wall functions): a real set whose fit has an influential case and a tangential
+    drag at its bound."""
     from mfflap.config import load_case
     from mfflap.identification.workflow import load_cases
 
     case = load_case(Path(__file__).parents[2] / "cases" / "paper2026.toml")
-    return case, *load_cases(case)
+    return case, *load_cases(case, [fixture_dir("table1_coarse")])
 
 
 @pytest.mark.parametrize("strategy", ["uniform", "low", [1.0, 2.0, 3.0, 0.5, 1.0]])
 @pytest.mark.slow
 def test_each_cases_refit_without_it_is_identify_run_without_it(strategy):
     """The leave-one-out rows are the fits `identify` makes of the other cases (the
-    shipped CFD fixtures; the case of the largest forces, and the first and last)."""
+    table1_coarse records; the case of the largest forces, and the first and last)."""
     case, cases, _ = _shipped_cases()
     res = identify(cases, case.morison_model(), strategy, n_bootstrap=0)
     assert res.leave_one_out.shape == (len(cases), len(res.fitted_terms))
@@ -360,7 +363,7 @@ def test_each_cases_refit_without_it_is_identify_run_without_it(strategy):
 
 
 def test_the_most_influential_case_is_named_with_how_far_it_moves_the_coefficient():
-    """On the shipped fixtures the normal drag rests most on f = 2 Hz, h = 0.5 m,
+    """On the table1_coarse records the normal drag rests most on f = 2 Hz, h = 0.5 m,
     phi = 135 deg (5.05, and 5.53 without it), about one bootstrap standard error; a held term
     that no case moves is not listed."""
     from mfflap.identification.fit import most_influential
@@ -418,14 +421,15 @@ def test_the_refits_are_stored_reported_and_printed(tmp_path):
     case_file = Path(__file__).parents[2] / "cases" / "paper2026.toml"
     out = tmp_path / "id.h5"
     runner = CliRunner()
-    res = runner.invoke(cli, ["identify", str(case_file), "--strategy", "uniform",
-                              "--residual-scaling", "grid",
+    table1_coarse = str(fixture_dir("table1_coarse"))  # 43 cases, one that moves C_Dn most
+    res = runner.invoke(cli, ["identify", str(case_file), "--fixtures", table1_coarse,
+                              "--strategy", "uniform", "--residual-scaling", "grid",
                               "--bootstrap", "50", "--output", str(out)])
     assert res.exit_code == 0, res.output
     assert ("left out, moves most: normal_added_mass: f2p000_h0p500_phi045p0" in res.output
             and "normal_drag: f2p000_h0p500_phi135p0 (5.05 -> 5.53, +9.5%" in res.output)
-    res = runner.invoke(cli, ["identify", str(case_file), "--strategy", "uniform",
-                              "--residual-scaling", "grid",
+    res = runner.invoke(cli, ["identify", str(case_file), "--fixtures", table1_coarse,
+                              "--strategy", "uniform", "--residual-scaling", "grid",
                               "--bootstrap", "50", "--output", str(tmp_path / "j.h5"),
                               "--json"])
     moved = json.loads(res.stdout)["uniform"]["most_influential"]["normal_drag"]
@@ -469,7 +473,7 @@ def _mean_square_nrmse(cases, model, weights, components=("normal_force", "tange
 def test_case_scaling_fits_the_mean_square_nrmse_and_every_run_weighs_alike():
     """With residual_scaling="case" the fit is the least weighted mean square NRMSE: every
     step of a coefficient off it (within its bound) raises it, and the grid-scaled fit's
-    coefficients give more. On the shipped fixtures no run then moves the normal drag by
+    coefficients give more. On the table1_coarse records no run then moves the normal drag by
     more than 4 % (f = 2 Hz, h = 0.5 m, phi = 135 deg moves it by 9.5 % with grid scaling),
     the bootstrap spreads narrow and the tangential drag is determined
     (docs/findings/known_limits.md)."""
@@ -554,12 +558,13 @@ def test_a_case_can_be_left_out_by_name_and_its_fit_is_the_refit_without_it(tmp_
 
     case_file = Path(__file__).parents[2] / "cases" / "paper2026.toml"
     runner = CliRunner()
+    table1_coarse = str(fixture_dir("table1_coarse"))  # 43 cases, one that moves C_Dn most
     full = json.loads(runner.invoke(cli, [
-        "identify", str(case_file), "--strategy", "uniform",
+        "identify", str(case_file), "--fixtures", table1_coarse, "--strategy", "uniform",
         "--residual-scaling", "grid", "--bootstrap", "0", "--output",
         str(tmp_path / "all.h5"), "--json"]).stdout)["uniform"]
-    res = runner.invoke(cli, ["identify", str(case_file), "--strategy", "uniform",
-                              "--residual-scaling", "grid",
+    res = runner.invoke(cli, ["identify", str(case_file), "--fixtures", table1_coarse,
+                              "--strategy", "uniform", "--residual-scaling", "grid",
                               "--bootstrap", "0", "--exclude", "f2p000_h0p500_phi135p0",
                               "--output", str(tmp_path / "without.h5"), "--json"])
     assert res.exit_code == 0, res.output
@@ -570,7 +575,8 @@ def test_a_case_can_be_left_out_by_name_and_its_fit_is_the_refit_without_it(tmp_
     assert moved["case"] == "f2p000_h0p500_phi135p0"
     assert without["coefficients"]["normal_drag"] == pytest.approx(moved["value_without"],
                                                                    rel=1e-9)
-    res = runner.invoke(cli, ["identify", str(case_file), "--exclude", "f2p000_h0p500_phi136p0",
+    res = runner.invoke(cli, ["identify", str(case_file), "--fixtures", table1_coarse,
+                              "--exclude", "f2p000_h0p500_phi136p0",
                               "--output", str(tmp_path / "typo.h5")])
     assert res.exit_code == 2
     assert "Invalid value for --exclude: no case 'f2p000_h0p500_phi136p0' among the 43" in (

@@ -71,7 +71,7 @@ def test_a_real_periodic_record_repeats_and_a_pitch_ramp_does_not():
     assert periodic.repeats and periodic.n_cycles >= 2
     assert np.isfinite(periodic.thrust_scatter_n) and periodic.rms_normal_force_n > 0
     assert periodic.relative("rms_normal_force") < 0.2
-    ramp = cycle_scatter(read_record(record_paths(fixture_dir())[-1]))
+    ramp = cycle_scatter(read_record(record_paths(fixture_dir("table1_coarse"))[-1]))
     assert ramp is not None and not ramp.repeats
 
 

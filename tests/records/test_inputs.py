@@ -76,8 +76,8 @@ def test_the_refusal_counts_the_records_of_each_folder_and_names_the_first_key()
 def test_identify_refuses_records_of_another_plate_fluid_or_stream(tmp_path, old, new, said):
     case = _case_file(tmp_path, old, new)
     out = tmp_path / "out" / "id.h5"
-    res = CliRunner().invoke(cli, ["identify", str(case), "--bootstrap", "0",
-                                   "--output", str(out)])
+    res = CliRunner().invoke(cli, ["identify", str(case), "--fixtures", str(TABLE1),
+                                   "--bootstrap", "0", "--output", str(out)])
     assert res.exit_code == 2, res.output
     text = " ".join(res.output.split())
     assert f"records in {TABLE1} {said}" in text

@@ -149,10 +149,13 @@ def case_mesh_and_solver(cfd: CfdSettings, source: str | None = None
     Examples
     --------
     >>> spec, solver = case_mesh_and_solver(CfdSettings(mesh="medium", correctors=2))
-    >>> spec.name, solver.n_correctors, solver.max_courant
-    ('medium', 2, 4.0)
-    >>> solver.wall_treatment  # no set-up: the wall treatment valid at the plate's y+
-    'all_y_plus'
+    >>> spec.name, solver.n_correctors, solver.max_courant  # the table1 set-up's Courant
+    ('medium', 2, 2.0)
+    >>> solver.wall_treatment, solver.far_field
+    ('all_y_plus', 'inletOutlet')
+    >>> _, bare = case_mesh_and_solver(CfdSettings(setup=None))  # the solver's defaults
+    >>> bare.max_courant, bare.far_field, bare.wall_treatment
+    (4.0, 'freestream', 'all_y_plus')
     """
     keys = {field: key for key, field in SOLVER_KEYS.items()}
     overrides = cfd.solver_overrides()

@@ -23,7 +23,7 @@ from mfflap.records.as_run import as_run_since_s
 from mfflap.records.record import fixture_dir, read_record
 
 SHORT = CfdCase(1.0, 0.3, 90.0, 10.0, duration=0.04, ramp_time=0.02)
-FIXTURES = fixture_dir().parent
+FIXTURES = fixture_dir("table1_coarse").parent
 #: retried at 4.26 s with the inletOutlet far field, 0.75 of a period before its end
 RESUMED_LATE = FIXTURES / "backtest_within_data" / "backtest_de1ba4adb3e991be.h5"
 #: 8 periods; the inletOutlet far field from t = 0 s, then max Co 2 from t = 6.08 s
@@ -295,7 +295,7 @@ def test_an_identification_case_retried_within_its_fitted_window_says_so():
     note; one resumed before the window, or rerun from t = 0 s, has none."""
     from mfflap.identification.data import SET_UP_NOTE, prepare_case
 
-    record = read_record(fixture_dir() / "f1p000_h0p300_phi090p0.h5")
+    record = read_record(fixture_dir("table1_coarse") / "f1p000_h0p300_phi090p0.h5")
     assert not record.provenance.get("retries")
 
     def retried(text):

@@ -161,6 +161,7 @@ def test_a_campaign_keeps_its_wall_treatment_in_its_set_up(tmp_path):
     other one is refused (as any other setting, `--dry-run` too)."""
     from mfflap.campaign.cases import grid_cases
     from mfflap.campaign.execute import CampaignSetup, _write_manifest
+    from mfflap.cfd.openfoam.setups import case_mesh_and_solver
     from mfflap.config import load_case
     from mfflap.toml_io import read_toml
 
@@ -175,11 +176,11 @@ def test_a_campaign_keeps_its_wall_treatment_in_its_set_up(tmp_path):
     case = load_case(CASE)
     grid = replace(case.identification, frequencies=(1.0,), heave_amplitudes=(0.1,),
                    phases_deg=(90.0,))
-    setup = CampaignSetup(solver=SolverSettings(wall_treatment="all_y_plus"))
+    setup = CampaignSetup(solver=case_mesh_and_solver(case.cfd)[1])  # table1: all_y_plus
     out.mkdir()
     _write_manifest(out, grid_cases(grid), setup)
     assert read_toml(out / "campaign.toml")["setup"]["solver"]["wall_treatment"] == "all_y_plus"
-    again = CliRunner().invoke(cli, args)  # all_y_plus: the default without a set-up
+    again = CliRunner().invoke(cli, args)  # all_y_plus: the default set-up's
     assert again.exit_code == 0, again.output
     other = CliRunner().invoke(cli, [*args, "--set", 'cfd.wall_treatment="log_law"'])
     assert other.exit_code == 2
