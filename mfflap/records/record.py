@@ -346,8 +346,9 @@ def identification_fixture_dirs() -> tuple[Path, ...]:
 
 
 #: The shipped back-test fixture folders: the optimised motions of the main job as the
-#: shipped case file runs it, and as it ran with the 43-case identification (main_job), of the shipped case with its own coefficients
-#: (backtest), kept within the identification data (within_data), of the later rounds of
+#: shipped case file runs it, and as it ran with the 43-case identification (main_job), of
+#: the shipped case with its own coefficients (backtest), kept within the identification
+#: data (within_data), of the later rounds of
 #: CFD in the loop and of rounds with the output correction (filtered, with round 1's model
 #: kept, in a trust region, in a trust region with slopes, the same with the phase fixed;
 #: each record named by its motion's key).
