@@ -92,12 +92,11 @@ def test_every_real_run_that_kept_its_numerics_stays_inside_the_bound():
 
     by_motion, by_optimum = worst(prescribed), worst(optimised)
     # the closest real run (f = 2 Hz, h = 0.5 m) comes within a factor of about 1.1 of the
-    # breach level; a run of a prescribed motion (identification grid, small motions, test
-    # records) typically uses a third of the bound, an optimised motion, which runs at P_max,
-    # about 85 % of it
+    # breach level; a run of a prescribed motion (identification sets, small motions, test
+    # records) typically uses about 60 % of the bound, an optimised motion, which runs at
+    # P_max, about 85 % of it
     assert max(by_motion.max(), by_optimum.max()) < BREACH_FACTOR
-    assert np.median(by_motion) < 0.4
-    assert 0.7 < np.median(by_optimum) < 1.0
+    assert np.median(by_motion) < 0.7 < np.median(by_optimum) < 1.0
 
 
 def test_shipped_runs_that_lost_their_numerics_are_found_where_bursts_are_not():

@@ -5,7 +5,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from shipped_settings import SHIPPED_SETTINGS
+from shipped_settings import SHIPPED_IDENTIFICATION, SHIPPED_SETTINGS
 
 from mfflap.rounds import (
     THRUST_FLOOR,
@@ -209,7 +209,10 @@ def test_a_stop_in_a_round_ends_the_rounds_and_keeps_what_was_done(tmp_path):
         if message == "[round 2] [back-test] started":
             raise KeyboardInterrupt
 
-    options = RunOptions(coefficients="identified:uniform", within_data=True,
+    from mfflap.records.record import fixture_dir
+
+    options = RunOptions(fixtures=(fixture_dir(SHIPPED_IDENTIFICATION),),
+                         coefficients="identified:uniform", within_data=True,
                          with_ipopt=False, sensitivity=False, work_dir=tmp_path / "cases")
     out = tmp_path / "loop"
     # the settings the shipped back-tests of round 1 were optimised with
