@@ -117,7 +117,7 @@ class RunOptions:
     vtk_dir: Path | None = None
     #: mesh and solver settings of a live back-test (None: the case's ``[cfd]`` set-up,
     #: :func:`~mfflap.cfd.openfoam.setups.case_mesh_and_solver`)
-    mesh: str = "coarse"
+    mesh: str | None = None
     solver: SolverSettings | None = None
     #: periods a live back-test runs (:func:`~mfflap.backtest.run.backtest_motion`)
     backtest_cycles: float = 3.0
@@ -505,9 +505,13 @@ def _motion_coverage(ctx: RunContext) -> None:
 def _backtest(ctx: RunContext) -> None:
     options = ctx.options
     folders = list(options.backtest_fixtures) or backtest_fixture_dirs()
+    mesh, solver = options.mesh, options.solver
+    if mesh is None or solver is None:  # the case's [cfd] set-up for what is not given
+        spec, case_solver = case_mesh_and_solver(ctx.config.cfd, ctx.config.source)
+        mesh, solver = mesh or spec.name, solver or case_solver
     backtest_all(ctx.config, ctx.outcome.backtest_motions, ctx.model, fixture_folders=folders,
-                 live=options.live, work_dir=options.work_dir, mesh=options.mesh,
-                 solver=options.solver, progress=ctx.progress,
+                 live=options.live, work_dir=options.work_dir, mesh=mesh, solver=solver,
+                 progress=ctx.progress,
                  # those done before a failure or Ctrl-C are kept in outcome.backtests
                  into=ctx.outcome.backtests, done_folders=options.done_backtests,
                  n_cycles=options.backtest_cycles, average_cycles=options.average_cycles,

@@ -30,9 +30,10 @@ from mfflap.records.record import CfdRecord, read_record, record_paths, write_re
 
 #: window means per period of a reduced record
 SAMPLES_PER_PERIOD = 100
-#: groups of a record copied unchanged into its reduced copy (besides parameters,
-#: provenance and inputs, which :func:`~mfflap.records.record.write_record` writes)
-_KEPT_GROUPS = ("cycle_scatter", "refinement")
+#: groups of a record copied unchanged into its reduced copy (its parameters, provenance,
+#: inputs and refinement are part of the record, which
+#: :func:`~mfflap.records.record.write_record` writes)
+_KEPT_GROUPS = ("cycle_scatter",)
 
 
 def window_means(time: np.ndarray, values: np.ndarray, edges: np.ndarray) -> np.ndarray:
@@ -49,13 +50,12 @@ def window_means(time: np.ndarray, values: np.ndarray, edges: np.ndarray) -> np.
     values = np.asarray(values, dtype=float)
     integral = np.concatenate([[0.0], np.cumsum(0.5 * (values[1:] + values[:-1])
                                                 * np.diff(time))])
-    at_edges = np.interp(edges, time, integral)
-    # the integral of a linear signal is quadratic between samples: add its curvature
+    # the integral up to each edge: whole steps, then the part of the step it falls in
     i = np.clip(np.searchsorted(time, edges, side="right") - 1, 0, len(time) - 2)
     dt = time[i + 1] - time[i]
     s = np.clip(edges - time[i], 0.0, dt)
     slope = (values[i + 1] - values[i]) / dt
-    at_edges += 0.5 * slope * s * (s - dt)
+    at_edges = integral[i] + s * (values[i] + 0.5 * slope * s)
     return np.diff(at_edges) / np.diff(edges)
 
 
@@ -131,7 +131,7 @@ def reduce_folder(source: str | Path, destination: str | Path,
                      single_precision=True)
         with h5py.File(path, "r") as full, h5py.File(out, "a") as small:
             for group in _KEPT_GROUPS:
-                if group in full and group not in small:
+                if group in full:
                     full.copy(full[group], small, name=group)
         written.append(out)
     campaign_file = source / "campaign.toml"
