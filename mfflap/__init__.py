@@ -1,6 +1,8 @@
 """mfflap: Morison reduced-order model of flapping-foil propulsion, discrete adjoint
 optimisation, and the CFD pipeline (OpenFOAM, Fluent) that identifies and checks it."""
 
+# first: points numba's cache out of the installed package before any kernel compiles
+from mfflap import compiled_cache as _compiled_cache  # noqa: F401
 from mfflap.errors import ConfigError, MfflapError, MotionError, ParseError
 from mfflap.kinematics import (
     DiscreteMotion,

@@ -70,3 +70,12 @@ def test_the_readme_s_python_example_runs(tmp_path):
     assert done.returncode == 0, done.stderr
     assert re.search(r"^\d+\.\d N at \d\.\d\d Hz$", done.stdout, re.M), done.stdout
     assert "normal_drag" in done.stdout
+
+
+def test_ci_runs_the_readme_s_two_commands_in_order():
+    """CI runs README command 1 (a non-editable install and the main job) before command 2
+    (the editable install and the tests), as a new user would, reading both from the
+    README."""
+    script = (ROOT / ".ci" / "run").read_text()
+    assert 'open("README.md"' in script and "blocks[:2]" in script
+    assert "scripts/install-and-test.sh" not in script.split("PY\n)", 1)[1]
