@@ -205,3 +205,24 @@ class RepeatedTimes(ParseError):
         super().__init__(message, path=path, line=line)
         self._keep(message, path=path, line=line, time_s=time_s)
         self.time_s = time_s
+
+
+class OutputExistsError(MfflapError, FileExistsError):
+    """An output folder that already holds another run's outputs, which a new run would
+    overwrite or mix with its own.
+
+    Parameters
+    ----------
+    message
+        What the folder holds and how to go on.
+    path
+        The folder.
+    held
+        The names of the run outputs found in it.
+    """
+
+    def __init__(self, message: str, *, path: str, held: tuple[str, ...] = ()):
+        self._keep(message, path=path, held=held)
+        self.path = path
+        self.held = tuple(held)
+        super().__init__(f"{path}: {message}")

@@ -23,11 +23,15 @@ from mfflap.cli.options import set_option
               help="Back-test CFD records (default: shipped fixtures).")
 @click.option("--live", is_flag=True,
               help="Run the back-test CFD live with OpenFOAM (the case file's [backtest]).")
+@click.option("--overwrite", is_flag=True,
+              help="Replace the outputs of an earlier run in --out (its report, results, "
+                   "VTK files and rounds); without it such a folder is refused. The earlier "
+                   "run's CFD records and case folders are kept and reused.")
 @set_option()
 @click.option("--json", "as_json", is_flag=True, help="Print the key numbers as JSON.")
 def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
-            backtest_fixtures: tuple[Path, ...], live: bool, settings: tuple[str, ...],
-            as_json: bool) -> None:
+            backtest_fixtures: tuple[Path, ...], live: bool, overwrite: bool,
+            settings: tuple[str, ...], as_json: bool) -> None:
     """Identification, sweep, optimisation, back-test and reports for CASE_FILE.
 
     Optimises with the coefficients it identifies ([optimisation] coefficients), back-tests
@@ -42,12 +46,13 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
     from mfflap.identification.workflow import sources_shown
     from mfflap.pipeline import RunOptions, run_study
     from mfflap.reports.run import write_run_outputs
+    from mfflap.reports.run_folder import prepare_run_folder
 
     case = load_case(case_file, settings)
     out_dir = out_dir or Path(f"{case.study.name}_run")
     options = RunOptions.for_case(case, out_dir, fixtures=fixtures,
                                   backtest_fixtures=backtest_fixtures, live=live)
-    out_dir.mkdir(parents=True, exist_ok=True)
+    prepare_run_folder(out_dir, overwrite=overwrite)
     if case.rounds.count > 1:
         _run_rounds(case, options, out_dir, sources_shown(fixtures), as_json)
         return
@@ -57,7 +62,7 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
     if outcome.interrupted is not None:
         click.echo(f"interrupted ({outcome.interrupted}): {out_dir / 'report.html'} and "
                    f"{out_dir / 'results.h5'} hold the stages finished before; the same command "
-                   "runs the whole study again"
+                   "with --overwrite runs the whole study again"
                    + (f", and live back-test cases in {options.work_dir} resume from their last "
                       "written times" if live else ""), err=True)
         raise click.Abort()
@@ -87,8 +92,8 @@ def _run_rounds(case, options, out_dir: Path, source: str, as_json: bool) -> Non
                                  write_round=write_round_outputs, write_summary=write_rounds)
     if outcome is not None and outcome.interrupted is not None:
         click.echo(f"interrupted in round {len(result.rounds)} ({outcome.interrupted}): "
-                   f"{out_dir / 'rounds.html'} holds the rounds so far; the same command runs "
-                   "them again, finding the back-test CFD done before in "
+                   f"{out_dir / 'rounds.html'} holds the rounds so far; the same command with "
+                   "--overwrite runs them again, finding the back-test CFD done before in "
                    f"{out_dir / 'loop_records'}", err=True)
         raise click.Abort()
     if as_json:
