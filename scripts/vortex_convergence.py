@@ -76,7 +76,8 @@ def main() -> None:
                 figures, wall_s = period_figures(motion, n, settings)
                 mean = figures.mean(axis=1)
                 spread = np.ptp(figures, axis=1) / np.abs(mean)
-                cells = "  ".join(f"{m:7.1f} ({100 * s:3.0f} %)" for m, s in zip(mean, spread))
+                cells = "  ".join(f"{m:7.1f} ({100 * s:3.0f} %)"
+                                  for m, s in zip(mean, spread, strict=True))
                 print(f"{name:15s} {variant:11s} {n:4d}  {cells}  {wall_s:6.1f}", flush=True)
 
 

@@ -156,7 +156,7 @@ def model_comparison(source: str | Path, case_file: str | Path, *, discard_s: fl
         motion = run.motion
     else:
         motion = (case.motion.build() if motion_table is None
-                  else read_motion_table(motion_table))
+                  else read_motion_table(motion_table, case.plate.chord))
     if meta is not None:  # the case file must describe what the case was written for
         check_case_inputs(kept, meta, case_file, motion, case.plate, case.fluid, case.flow)
     state = imposed_state(motion, history.time, ramp_time_s)

@@ -48,7 +48,7 @@ def motion_and_end_time(case, motion_table: Path | None, end_time: float | None,
 
     refuse_given(("cycles",), "the case file's [motion]; a --motion-table runs to --end-time "
                               "(default: the table's last row)")
-    motion = read_motion_table(motion_table)
+    motion = read_motion_table(motion_table, case.plate.chord)
     try:
         end_time = table_end_time(motion, end_time)
     except MotionError as exc:

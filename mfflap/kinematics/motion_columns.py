@@ -47,6 +47,7 @@ class MotionColumn:
     header: str  # as the file names it
     unit: str  # the unit it was given in
     values: np.ndarray  # in SI units
+    unit_named: bool = True  # False: the header gave no unit, SI was taken
 
 
 def _split_unit(header: str) -> tuple[str, str | None]:
@@ -60,12 +61,13 @@ def _split_unit(header: str) -> tuple[str, str | None]:
     return text, None
 
 
-def _quantity_of(header: str) -> tuple[str, str] | None:
-    """(quantity, unit) a header names, or None for a column of something else."""
+def _quantity_of(header: str) -> tuple[str, str | None] | None:
+    """(quantity, unit) a header names (unit None: not named), or None for a column of
+    something else."""
     name, unit = _split_unit(header)
     for quantity, (aliases, units) in QUANTITIES.items():
         if name in aliases:
-            return quantity, unit or next(iter(units))
+            return quantity, unit
         if unit is None:  # a unit as a suffix: pitch_angle_deg, time_s, h_mm
             stem, _, suffix = name.rpartition("_")
             if stem in aliases and suffix in units:
@@ -97,15 +99,17 @@ def motion_columns(table: CsvColumns, path: str) -> dict[str, MotionColumn]:
         named = _quantity_of(header)
         if named is None:
             continue
-        quantity, unit = named
+        quantity, named_unit = named
         units = QUANTITIES[quantity][1]
+        unit = named_unit or next(iter(units))
         if unit not in units:
             raise ParseError(f"column {header!r}: {quantity} cannot be in {unit!r}; use one of "
                              f"{', '.join(units)}", path=path, line=table.header_line)
         if quantity in found:
             raise ParseError(f"columns {found[quantity].header!r} and {header!r} both hold "
                              f"{quantity}", path=path, line=table.header_line)
-        found[quantity] = MotionColumn(quantity, header, unit, values * units[unit])
+        found[quantity] = MotionColumn(quantity, header, unit, values * units[unit],
+                                       unit_named=named_unit is not None)
     missing = [q for q in REQUIRED if q not in found]
     if missing:
         said = "; ".join(f"{q} (as {' or '.join(QUANTITIES[q][0])})" for q in missing)

@@ -12,7 +12,10 @@ write a case from a table warn when it does not (:func:`largest_pitch`).
 
 Values beyond any flapping motion are refused, naming the line: a pitch above pi rad in
 magnitude (degrees in a radians column), a heave beyond :data:`MAX_HEAVE_M`, a time beyond
-:data:`MAX_TIME_S`.
+:data:`MAX_TIME_S`. Values that a plate could reach but that are far more likely a unit left
+out need the unit named in the header: a heave column without a unit whose heave exceeds
+:data:`MAX_HEAVE_CHORDS` chords (millimetres taken as metres), and a pitch column without a
+unit that passes the upright, pi / 2 (a small pitch in degrees taken as radians).
 
 Other columns are ignored; lines starting with ``#`` are comments. Between rows the motion
 is a cubic spline (continuous rates and accelerations); past the last row it is held at
@@ -27,8 +30,9 @@ import numpy as np
 
 from mfflap.csv_columns import read_csv_columns
 from mfflap.errors import MotionError, ParseError
-from mfflap.kinematics.continuous import Motion, TabulatedMotion
+from mfflap.kinematics.continuous import UPRIGHT_PITCH, Motion, TabulatedMotion
 from mfflap.kinematics.motion_columns import motion_columns
+from mfflap.parameters import Plate
 
 #: the fewest rows a cubic spline through the table needs
 MIN_ROWS = 4
@@ -36,6 +40,8 @@ MIN_ROWS = 4
 MAX_HEAVE_M = 100.0
 #: the latest time a table may give, s (about 12 days)
 MAX_TIME_S = 1.0e6
+#: the largest heave, in chords, a heave column may hold without naming its unit
+MAX_HEAVE_CHORDS = 10.0
 
 
 def _check_range(path: Path, lines: np.ndarray, values: np.ndarray, limit: float,
@@ -48,8 +54,16 @@ def _check_range(path: Path, lines: np.ndarray, values: np.ndarray, limit: float
                          line=int(lines[i]))
 
 
-def read_motion_table(path: str | Path) -> TabulatedMotion:
+def read_motion_table(path: str | Path, chord: float | None = None) -> TabulatedMotion:
     """The motion of a CSV table (module notes for the columns).
+
+    Parameters
+    ----------
+    path
+        The CSV file.
+    chord
+        The plate's chord, m, against which a heave column without a unit is checked
+        (:data:`MAX_HEAVE_CHORDS`); the package's default plate if omitted.
 
     Raises
     ------
@@ -76,7 +90,18 @@ def read_motion_table(path: str | Path) -> TabulatedMotion:
     _check_range(path, lines, t, MAX_TIME_S, col["time"].header, " s")
     heave = col["heave_position"]
     _check_range(path, lines, heave.values, MAX_HEAVE_M, heave.header, " m in magnitude")
+    if not heave.unit_named:
+        chord = Plate().chord if chord is None else chord
+        _check_range(path, lines, heave.values, MAX_HEAVE_CHORDS * chord, heave.header,
+                     f" m ({MAX_HEAVE_CHORDS:g} chords of {chord:g} m) in magnitude: is it "
+                     f"in mm or cm? Name its unit: '{heave.header} [mm]' (or [cm], or [m] "
+                     "for a heave this large)")
     pitch = col["pitch_angle"]
+    if not pitch.unit_named:
+        _check_range(path, lines, pitch.values, UPRIGHT_PITCH, pitch.header,
+                     " rad (the upright, 90 deg) in magnitude: is it in degrees? Name its "
+                     f"unit: '{pitch.header} [deg]' (or [rad] for a plate pitched past the "
+                     "upright)")
     if pitch.unit == "rad":
         _check_range(path, lines, pitch.values, np.pi, pitch.header,
                      " rad in magnitude: is it in degrees? Name its unit: "

@@ -390,7 +390,8 @@ def test_ctrl_c_during_a_live_back_test_writes_the_stages_finished_before(tmp_pa
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == 1, err
     assert re.search(rf"interrupted \(back-test\): {re.escape(str(out))}/report.html and "
-                     r".*the same command with --overwrite runs the whole study again, and live back-test cases "
+                     r".*the same command with --overwrite runs the whole study again, and "
+                     r"live back-test cases "
                      rf"in {re.escape(str(out / 'cfd_cases'))} resume", err), err
     assert solvers_left(f"pimpleFoam -case {out}") == ""  # no solver left writing into the case
     with ResultsFile(out / "results.h5") as rf:

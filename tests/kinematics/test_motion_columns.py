@@ -64,7 +64,7 @@ def test_rates_and_accelerations_are_used_as_given_at_the_rows(tmp_path):
     (["t", "theta", "pitch_angle_deg", "h"], "'theta' and 'pitch_angle_deg' both hold"),
     (["t", "theta [furlongs]", "h"], "pitch_angle cannot be in 'furlongs'"),
     (["t", "h"], r"missing column\(s\) for pitch_angle"),
-    (["t", "theta", "h", "theta_ddot"], "pitch_acceleration is used with pitch_rate"),
+    (["t", "theta [rad]", "h [m]", "theta_ddot"], "pitch_acceleration is used with pitch_rate"),
 ])
 def test_a_header_that_is_not_a_motion_is_refused_naming_the_file(tmp_path, header, message):
     path = _table(tmp_path / "m.csv", header, [T] * len(header))

@@ -193,7 +193,8 @@ def test_cfd_write_and_fluent_from_a_table(tmp_path):
 
 def test_degrees_in_the_radian_column_are_refused_naming_the_line(tmp_path):
     """Degrees written under ``pitch_angle`` (which is in rad, so up to 16 rad here) are
-    refused at the first row beyond pi rad, with the line and the column to use; the same
+    refused at the first row beyond the upright (pi / 2 rad: no unit named), with the line
+    and the column to use; the same
     numbers under ``pitch_angle_deg`` are a motion, written without a warning."""
     degrees = write_table(tmp_path / "deg.csv")
     wrong = tmp_path / "wrong.csv"
@@ -201,7 +202,7 @@ def test_degrees_in_the_radian_column_are_refused_naming_the_line(tmp_path):
     with pytest.raises(ParseError) as info:
         read_motion_table(wrong)
     first = next(i for i, line in enumerate(wrong.read_text().splitlines(), start=1)
-                 if line[:1].isdigit() and abs(float(line.split(",")[2])) > np.pi)
+                 if line[:1].isdigit() and abs(float(line.split(",")[2])) > np.pi / 2)
     assert info.value.path == str(wrong) and info.value.line == first
     assert "'pitch_angle [deg]'" in str(info.value)
     assert largest_pitch(read_motion_table(degrees), 2.0)[0] == pytest.approx(np.radians(16))
@@ -344,3 +345,72 @@ def test_a_mesh_study_of_a_table_motion(tmp_path):
     assert 0 <= data["nrmse"]["coarse_co4 vs lean_co4"]["normal_force"] < 0.5
     assert "motion table motion.csv, 0.03 s" in (tmp_path / "c" / "convergence.html").read_text()
     assert data["phase_nrmse"] == {}  # a table is not periodic: no mean cycles
+
+
+def _rows(path, header, heave, pitch):
+    t = np.linspace(0.0, 1.0, 11)
+    path.write_text(header + "\n" + "".join(
+        f"{a:.3f},{b:.6g},{c:.6g}\n" for a, b, c in zip(
+            t, heave * np.sin(2 * np.pi * t), pitch * np.cos(2 * np.pi * t), strict=True)))
+    return path
+
+
+def test_a_heave_in_millimetres_without_its_unit_is_refused_and_read_with_it(tmp_path):
+    """±50 under ``h`` (no unit: metres) is 300 chords of the plate: refused, naming the
+    line and the unit to name; under ``h [mm]`` it is a 5 cm heave. A heave beyond ten
+    chords with its unit named is taken as given."""
+    bare = _rows(tmp_path / "bare.csv", "t,h,theta [deg]", 50.0, 20.0)
+    with pytest.raises(ParseError) as refused:
+        read_motion_table(bare)
+    assert refused.value.line == 3 and "'h [mm]'" in str(refused.value)
+    assert "10 chords" in str(refused.value)
+    named = _rows(tmp_path / "mm.csv", "t,h [mm],theta [deg]", 50.0, 20.0)
+    row = np.sin(2 * np.pi * 0.3)  # a row's heave, a fraction of the amplitude
+    heave = read_motion_table(named).sample(np.array([0.3])).heave_position
+    assert heave == pytest.approx([0.05 * row], rel=1e-5)
+    large = _rows(tmp_path / "m.csv", "t,h [m],theta [deg]", 5.0, 20.0)
+    assert read_motion_table(large).sample(np.array([0.3])).heave_position == \
+        pytest.approx([5.0 * row], rel=1e-5)
+    # against the plate the caller names: 1 m is 10 chords of a 10 cm plate, 2 m is not
+    metre = _rows(tmp_path / "metre.csv", "t,h,theta [deg]", 1.5, 20.0)
+    read_motion_table(metre, chord=0.2)
+    with pytest.raises(ParseError, match=r"10 chords of 0\.1 m"):
+        read_motion_table(metre, chord=0.1)
+
+
+def test_a_small_pitch_in_degrees_without_its_unit_is_refused(tmp_path):
+    """A pitch of ±3 under ``theta`` (no unit: radians) passes the upright: refused as
+    degrees taken for radians; under ``theta [rad]`` it is taken as given."""
+    bare = _rows(tmp_path / "bare.csv", "t,h,theta", 0.1, 3.0)
+    with pytest.raises(ParseError) as refused:
+        read_motion_table(bare)
+    assert refused.value.line == 2 and "'theta [deg]'" in str(refused.value)
+    named = _rows(tmp_path / "rad.csv", "t,h,theta [rad]", 0.1, 3.0)
+    assert largest_pitch(read_motion_table(named), 1.0)[0] == pytest.approx(3.0, rel=1e-3)
+
+
+def test_numpy_savetxt_s_commented_header_is_the_header(tmp_path):
+    """``numpy.savetxt(..., header="t,h,theta")`` writes ``# t,h,theta`` over the rows:
+    the comment is the header, and the motion reads as written."""
+    t = np.linspace(0.0, 1.0, 21)
+    data = np.column_stack([t, 0.1 * np.sin(2 * np.pi * t), 0.3 * np.cos(2 * np.pi * t)])
+    path = tmp_path / "saved.csv"
+    np.savetxt(path, data, delimiter=",", header="t,h,theta")
+    motion = read_motion_table(path)
+    state = motion.sample(t)
+    assert state.heave_position == pytest.approx(data[:, 1])
+    assert state.pitch_angle == pytest.approx(data[:, 2])
+
+
+@pytest.mark.parametrize("text, says", [
+    ("t h theta\n0 0 0\n0.1 0.01 0.02\n0.2 0.02 0.01\n0.3 0 0\n",
+     "separated by ',', ';' or a tab"),
+    ("t,h,theta\n0,0,0\n0.1 0.01 0.02\n0.2,0.02,0.01\n0.3,0,0\n",
+     "a file may use ',', ';' or a tab"),
+])
+def test_a_file_separated_by_spaces_is_told_which_separators_work(tmp_path, text, says):
+    path = tmp_path / "spaces.csv"
+    path.write_text(text)
+    with pytest.raises(ParseError) as refused:
+        read_motion_table(path)
+    assert says in str(refused.value) and str(path) in str(refused.value)
