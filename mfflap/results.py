@@ -13,7 +13,6 @@ store the package's objects and read them back into the same objects.
 from __future__ import annotations
 
 import datetime as _dt
-import os
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -21,6 +20,7 @@ from typing import Any
 import h5py
 import numpy as np
 
+from mfflap.atomic_write import commit, temporary_beside
 from mfflap.errors import MfflapError
 from mfflap.hydro.loads import LOAD_UNITS, Loads
 from mfflap.kinematics.discrete import DiscreteMotion
@@ -93,13 +93,14 @@ class ResultsFile:
             check_overwrite(self.path, kind)
         if mode != "r":  # a file asked for in a new folder: made, not failed after the work
             self.path.parent.mkdir(parents=True, exist_ok=True)
-        # "w" writes beside the file and takes its place on a clean close: a run stopped or
-        # failed while writing leaves the results written before whole
-        self._writing = (self.path.with_name(f".{self.path.name}.{os.getpid()}.tmp")
-                         if mode == "w" else None)
+        # "w" writes beside the file (mfflap.atomic_write) and takes its place on a clean
+        # close: a run stopped or failed while writing leaves the results written before whole
+        self._writing = temporary_beside(self.path) if mode == "w" else None
         try:
             self._h5 = h5py.File(self._writing or self.path, mode)
-        except OSError as err:  # not HDF5, cut short, or locked by another writer
+        except (OSError, RuntimeError) as err:  # not HDF5, cut short, or locked by a writer
+            if self._writing is not None:
+                self._writing.unlink(missing_ok=True)
             raise MfflapError(f"{self.path}: cannot be opened as an HDF5 file ({err})") from err
         if mode == "r":
             version = self._h5.attrs.get("mfflap_schema_version")
@@ -136,10 +137,12 @@ class ResultsFile:
         return str(self._h5["inputs"].attrs.get("config_toml", ""))
 
     def close(self) -> None:
-        """Close the file; one opened with ``"w"`` then takes the place of ``path``."""
+        """Close the file; one opened with ``"w"`` then takes the place of ``path``
+        (:func:`mfflap.atomic_write.commit`: an error naming ``path`` if its new content was
+        removed meanwhile or the disk refused it)."""
         self._h5.close()
-        if self._writing is not None and self._writing.exists():
-            os.replace(self._writing, self.path)
+        if self._writing is not None:
+            commit(self._writing, self.path)
 
     def discard(self) -> None:
         """Close a file opened with ``"w"`` without writing it: ``path`` keeps what it held."""

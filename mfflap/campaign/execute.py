@@ -34,6 +34,7 @@ from typing import Any
 
 from distributed import WorkerPlugin
 
+from mfflap.atomic_write import stale_temporaries
 from mfflap.campaign.cases import CampaignCase
 from mfflap.cfd.case_inputs import ADDED_PLATE_SETTINGS, ADDED_SOLVER_SETTINGS
 from mfflap.cfd.openfoam.case_lock import CaseBusyError, lock_holder
@@ -581,7 +582,9 @@ def run_campaign(cases: Sequence[CampaignCase], out_dir: str | Path,
     out = check_case_path(out_dir)  # every case runs below it
     out.mkdir(parents=True, exist_ok=True)
     _write_manifest(out, cases, setup)
-    for stale in out.glob(f".*{RECORD_SUFFIX}.*.tmp"):  # a record half-written when killed
+    # a record half-written when its writer was killed; another process's record being
+    # written is left alone
+    for stale in stale_temporaries(out, RECORD_SUFFIX):
         stale.unlink(missing_ok=True)
     results: dict[str, CaseStatus] = {}
     todo = []

@@ -13,9 +13,9 @@ from __future__ import annotations
 import hashlib
 from pathlib import Path
 
-import h5py
 import numpy as np
 
+from mfflap.atomic_write import edited_copy
 from mfflap.cfd.gci import two_level_index
 from mfflap.errors import ConfigError, MfflapError
 from mfflap.metrics import nrmse, pearson
@@ -195,10 +195,10 @@ def add_refinement(coarse_folder: str | Path, refined_folder: str | Path
         coarse, refined = read_record(coarse_path), read_record(path)
         kind = refinement_kind(coarse, refined)
         change = refinement_change(coarse, refined, kind, refined_path=path)
-        try:
-            with h5py.File(coarse_path, "a") as h5:
+        try:  # rewritten whole: a kill during the write leaves the record as it was
+            with edited_copy(coarse_path) as h5:
                 write_refinement(h5, change)
-        except OSError as exc:
+        except MfflapError as exc:
             raise MfflapError(f"{coarse_path}: cannot add the {kind} refinement "
                               f"({exc})") from exc
         out.append((coarse_path.stem, change))

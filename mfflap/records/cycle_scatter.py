@@ -22,6 +22,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
+from mfflap.atomic_write import edited_copy
 from mfflap.errors import MfflapError
 from mfflap.performance import thrust_and_power
 from mfflap.records.record import CfdRecord, read_record, record_paths
@@ -149,8 +150,10 @@ def read_cycle_scatter(path: str | Path) -> CycleScatter | None:
 
 def add_cycle_scatter(path: str | Path, record: CfdRecord | None = None
                       ) -> CycleScatter | None:
-    """Compute the record's cycle scatter and store it in the record in place (``record``:
-    the record the file holds, if the caller has it, so that it is not read again).
+    """Compute the record's cycle scatter and store it in the record (``record``: the
+    record the file holds, if the caller has it, so that it is not read again). The record
+    is rewritten whole (:func:`mfflap.atomic_write.edited_copy`): a kill during the write
+    leaves it as it was.
 
     Raises
     ------
@@ -160,9 +163,9 @@ def add_cycle_scatter(path: str | Path, record: CfdRecord | None = None
     path = Path(path)
     scatter = cycle_scatter(read_record(path) if record is None else record)
     try:
-        with h5py.File(path, "a") as h5:
+        with edited_copy(path) as h5:
             write_cycle_scatter(h5, scatter)
-    except OSError as exc:
+    except MfflapError as exc:
         raise MfflapError(f"{path}: cannot add the cycle scatter ({exc})") from exc
     return scatter
 

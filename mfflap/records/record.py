@@ -230,7 +230,8 @@ def read_record(path: str | Path) -> CfdRecord:
             return _read_record(rf, path)
         except (KeyError, TypeError) as err:  # a group, dataset or field missing
             raise MfflapError(f"{path}: not a complete CFD record ({err})") from err
-        except OSError as err:  # h5py opened the file, but a chunk will not decompress
+        except (OSError, RuntimeError) as err:  # h5py opened the file, but a chunk will
+            # not decompress or a link cannot be followed (a file damaged mid-write)
             raise UnreadableRecordError(f"its data cannot be read ({err})",
                                         path=str(path)) from err
 
@@ -247,11 +248,11 @@ def read_record_parameters(path: str | Path) -> dict[str, Any]:
     """
     path = Path(path)
     with ResultsFile(path, "r", kinds=("cfd_record",)) as rf:
-        if "parameters" not in rf.h5:
-            raise MfflapError(f"{path}: not a complete CFD record (no parameters)")
         try:
+            if "parameters" not in rf.h5:
+                raise MfflapError(f"{path}: not a complete CFD record (no parameters)")
             return {k: _attr(v) for k, v in rf.h5["parameters"].attrs.items()}
-        except OSError as err:
+        except (OSError, RuntimeError) as err:
             raise UnreadableRecordError(f"its parameters cannot be read ({err})",
                                         path=str(path), dataset="parameters") from err
 

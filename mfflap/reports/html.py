@@ -6,7 +6,6 @@ import base64
 import datetime as _dt
 import html
 import io
-import os
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -16,6 +15,7 @@ import jinja2
 import numpy as np
 from matplotlib.figure import Figure
 
+from mfflap.atomic_write import commit, temporary_beside
 from mfflap.version import __version__
 
 _TEMPLATE = jinja2.Template("""<!DOCTYPE html>
@@ -142,13 +142,13 @@ class Report:
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         # beside it first, then in its place: a stop while writing keeps the report before
-        beside = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+        beside = temporary_beside(path)
         try:
             beside.write_text(_TEMPLATE.render(
                 title=html.escape(self.title), subtitle=html.escape(self.subtitle),
                 sections=self.sections, version=__version__,
                 created=_dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M UTC")))
-            os.replace(beside, path)
+            commit(beside, path)
         finally:
             beside.unlink(missing_ok=True)
         return path
