@@ -4,7 +4,11 @@ Layout: line 1 a quoted title; line 2 starts with ``"Time Step"`` (transient) or
 ``"Iteration"`` (steady); line 3 the column names as quoted tokens in parentheses; then
 whitespace-separated numeric rows. Columns are found by name (their order varies) and the
 time is the ``flow-time`` column, never step x dt (the step may change during a run).
-Restarted runs that append rows again from an earlier time keep the later rows. Fluent ends
+Restarted runs that append rows again from an earlier time keep the later rows. A restart
+is told by the file's own marker: the ``Time Step`` column goes back with the flow time, to
+the step the earlier rows put at that time. A flow time that goes back without it (a value
+written wrong, or rows from another run pasted in) is an error naming the line, never a
+reason to drop the rows before it. Fluent ends
 every row with a newline: a last line without one is a row cut short by a killed run and is
 dropped, even when it holds a value for every column (its last number may be cut).
 """
@@ -95,22 +99,60 @@ def parse_report(text: str, path: str = "<text>") -> FluentReport:
         raise ParseError("no data rows", path=path, line=4)
     data = np.array(rows)
     if kind == "transient" and "flow-time" in names:
-        t = data[:, names.index("flow-time")]
-        # a restart appends from an earlier time: keep, for each time, the last row written
-        keep = np.ones(len(t), dtype=bool)
-        latest = np.inf
-        for i in range(len(t) - 1, -1, -1):
-            if t[i] >= latest:
-                keep[i] = False
-            else:
-                latest = t[i]
-        data = data[keep]
-        lines_kept = np.array(row_lines)[keep]
-        bad = np.flatnonzero(np.diff(data[:, names.index("flow-time")]) <= 0)
-        if len(bad):
-            raise ParseError("flow-time is not increasing", path=path,
-                             line=int(lines_kept[bad[0] + 1]))
+        data, row_lines = _resolve_restarts(data, names, row_lines, path)
     return FluentReport(path, title[0], kind, {n: data[:, j] for j, n in enumerate(names)})
+
+
+def _time_at_step_matches(steps: np.ndarray, times: np.ndarray, step: float,
+                          time: float) -> bool:
+    """Whether the earlier rows (``steps``, ``times``) put ``step`` at ``time``: within a
+    tenth of the time step there (they may not have written that very step)."""
+    order = np.argsort(steps, kind="stable")
+    steps, times = steps[order], times[order]
+    if not steps[0] <= step <= steps[-1]:
+        return False
+    k = min(max(int(np.searchsorted(steps, step)), 1), len(steps) - 1)
+    per_step = (times[k] - times[k - 1]) / max(steps[k] - steps[k - 1], 1.0)
+    return abs(float(np.interp(step, steps, times)) - time) <= 0.1 * abs(per_step)
+
+
+def _resolve_restarts(data: np.ndarray, names: list[str], row_lines: list[int],
+                      path: str) -> tuple[np.ndarray, list[int]]:
+    """The rows of a transient report after its restarts: for each time, the last row
+    written (module notes for how a restart is told from a wrong value).
+
+    Raises
+    ------
+    ParseError
+        Naming the line where the flow time goes back without a restart, or the rows are
+        still not increasing in time.
+    """
+    t = data[:, names.index("flow-time")]
+    step = data[:, names.index("Time Step")] if "Time Step" in names else None
+    for i in np.flatnonzero(np.diff(t) <= 0) + 1:
+        restart = step is not None and step[i] < step[i - 1] and _time_at_step_matches(
+            step[:i], t[:i], step[i], t[i])
+        if not restart:
+            said = ("the Time Step column does not go back with it" if step is not None
+                    else "and the report has no Time Step column to show a restart")
+            raise ParseError(f"flow-time goes back from {t[i - 1]:.9g} s to {t[i]:.9g} s, "
+                             f"but this is no restart: {said} to the step of that time "
+                             "(a wrong value, or rows of another run?)", path=path,
+                             line=int(row_lines[i]))
+    # a restart appends from an earlier time: keep, for each time, the last row written
+    keep = np.ones(len(t), dtype=bool)
+    latest = np.inf
+    for i in range(len(t) - 1, -1, -1):
+        if t[i] >= latest:
+            keep[i] = False
+        else:
+            latest = t[i]
+    lines_kept = np.array(row_lines)[keep]
+    bad = np.flatnonzero(np.diff(t[keep]) <= 0)
+    if len(bad):
+        raise ParseError("flow-time is not increasing", path=path,
+                         line=int(lines_kept[bad[0] + 1]))
+    return data[keep], list(lines_kept)
 
 
 def read_report(path: str | Path) -> FluentReport:

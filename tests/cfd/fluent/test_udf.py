@@ -424,3 +424,31 @@ def test_a_plate_pitching_about_mid_chord_turns_about_it_and_reports_moments_abo
                      run.depth_m, "fluent", pivot_m=run.pivot_m)
     np.testing.assert_allclose(loads.moment, 0.0, atol=1e-12)
     assert np.max(np.abs(loads.normal_force)) > 0.1  # 0.18 m of span from the 1 m report
+
+
+def test_one_wrong_flow_time_is_an_error_naming_its_line_not_a_restart():
+    """1,500 rows of 2 ms; row 1,000's flow time written 0.2 for 2.0 s. Read as a restart it
+    would drop the 900 rows after 0.2 s; the Time Step column does not go back, so it is
+    an error naming the line."""
+    names = ["Time Step", "fx-plate", "fy-plate", "flow-time"]
+    rows = [[i, 0.1, -0.072, 0.002 * i] for i in range(1, 1501)]
+    rows[999][3] = 0.2  # 2.0 s, mistyped
+    with pytest.raises(ParseError, match=r"w\.out, line 1003: flow-time goes back from "
+                                         r"1\.998 s to 0\.2 s, but this is no restart"):
+        parse_report(report_text(names, rows), "w.out")
+    no_steps = report_text(["flow-time", "fx-plate"], [[r[3], r[1]] for r in rows])
+    with pytest.raises(ParseError, match="no Time Step column"):
+        parse_report(no_steps, "w.out")
+
+
+def test_a_restart_from_a_step_the_report_did_not_write_is_a_restart():
+    """Rows every 5 steps of 0.01 s; the run restarts from its data at step 42 (not a
+    written row) and writes steps 43, 48, ...: the rows after 0.42 s written before are
+    replaced by the restarted ones."""
+    names = ["Time Step", "fx-plate", "flow-time"]
+    rows = [[s, 1.0, 0.01 * s] for s in range(5, 80, 5)]
+    rows += [[s, 2.0, 0.01 * s] for s in range(43, 100, 5)]
+    rep = parse_report(report_text(names, rows), "r.out")
+    assert np.all(np.diff(rep.time) > 0)
+    assert rep.time[rep.columns["fx-plate"] == 1.0].max() == pytest.approx(0.40)
+    assert rep.time[rep.columns["fx-plate"] == 2.0].min() == pytest.approx(0.43)
