@@ -4,6 +4,7 @@ into body-frame loads on the whole span."""
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -16,6 +17,33 @@ from mfflap.cfd.frames import (
 from mfflap.errors import ConfigError, ParseError, shown
 from mfflap.hydro.loads import Loads
 from mfflap.kinematics.state import KinematicState
+
+
+def read_solver_text(path: str | Path) -> str:
+    """A solver's output file as text (UTF-8, which covers ASCII), or a ParseError naming the
+    file, the line and the byte that is not text (a file damaged on disk, or not a log).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> log = Path(tempfile.mkdtemp()) / "force.dat"
+    >>> _ = log.write_bytes(b"# Force\\n0.1 (1 2 3)\\n0.2 (1 \\xff 3)\\n")
+    >>> read_solver_text(log)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    mfflap.errors.ParseError: ...force.dat, line 3: byte 0xff at column 8 is not text ...
+    """
+    path = Path(path)
+    data = path.read_bytes()
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = data.count(b"\n", 0, exc.start) + 1
+        column = exc.start - (data.rfind(b"\n", 0, exc.start) + 1) + 1
+        raise ParseError(f"byte 0x{data[exc.start]:02x} at column {column} is not text "
+                         "(UTF-8): a file damaged on disk, or not a solver's output?",
+                         path=str(path), line=line) from None
 
 
 @dataclass(frozen=True)

@@ -31,8 +31,8 @@ from pathlib import Path
 
 import numpy as np
 
-from mfflap.cfd.force_history import ForceHistory
-from mfflap.errors import ParseError, RepeatedTimes
+from mfflap.cfd.force_history import ForceHistory, read_solver_text
+from mfflap.errors import ParseError, RepeatedTimes, shown
 
 _NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|[-+]?(?:nan|inf)", re.I)
 
@@ -43,10 +43,10 @@ def _numbers(line: str, path: str, lineno: int) -> list[float]:
     out = []
     for tok in toks:
         if not _NUMBER.fullmatch(tok):
-            raise ParseError(f"not a number: {tok!r}", path=path, line=lineno)
+            raise ParseError(f"not a number: {shown(tok)}", path=path, line=lineno)
         v = float(tok)
         if not math.isfinite(v):
-            raise ParseError(f"non-finite value {tok!r} (a diverged run?)", path=path,
+            raise ParseError(f"non-finite value {shown(tok)} (a diverged run?)", path=path,
                              line=lineno)
         out.append(v)
     return out
@@ -259,7 +259,7 @@ def read_forces(case_dir: str | Path, function_name: str = "forces") -> ForceHis
         forces_here, moments_here = [], []
         for stem in stems:
             for path in restart_segments(folder, stem):
-                text = path.read_text()
+                text = read_solver_text(path)
                 arr, dialect = parse_table(text, str(path), check_increasing=False)
                 point = header_centre_of_rotation(text, str(path))
                 if point is not None:
