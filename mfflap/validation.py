@@ -11,6 +11,7 @@ from __future__ import annotations
 import dataclasses
 import difflib
 import math
+import re
 from collections.abc import Mapping
 from typing import Any, TypeVar
 
@@ -81,6 +82,22 @@ def describe_range(meta: Mapping[str, Any]) -> str:
     hi = "inf" if high is None else f"{high:g}"
     unit = f" {meta['unit']}" if meta.get("unit") else ""
     return f"{left}{lo}, {hi}{right}{unit}"
+
+
+#: control characters a case file's text may not hold (all of C0 and DEL but tab, newline
+#: and carriage return): HDF5 attributes, OpenFOAM dictionaries and C sources cannot carry
+#: them whole
+_CONTROL = re.compile(r"[\x00-\x08\x0b\x0c\x0e-\x1f\x7f]")
+
+
+def _check_printable(name: str, value: Any, where: str | None) -> None:
+    """Refuse a text (or a list's text) that holds a control character (:data:`_CONTROL`)."""
+    for i, item in enumerate(value if isinstance(value, list | tuple) else [value]):
+        if isinstance(item, str) and (bad := _CONTROL.search(item)):
+            key = f"{name}[{i}]" if isinstance(value, list | tuple) else name
+            raise ConfigError(f"holds the control character {bad.group()!r} at position "
+                              f"{bad.start()}; text in a case file must be printable",
+                              source=where, key=key)
 
 
 def _check_value(name: str, value: Any, meta: Mapping[str, Any], where: str | None) -> None:
@@ -220,6 +237,7 @@ def from_mapping(cls: type[T], mapping: Mapping[str, Any], *, source: str | None
         raise ConfigError(f"unknown key(s) {_unknown_keys_hint(unknown, sorted(fields))}",
                           source=source, key=prefix + unknown[0])
     for name, value in mapping.items():
+        _check_printable(prefix + name, value, source)
         _check_shape(prefix + name, value, fields[name], source)
     for name, f in fields.items():
         if name in mapping and "unit" in f.metadata:

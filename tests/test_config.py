@@ -440,3 +440,23 @@ def test_a_motion_key_the_kind_does_not_read_is_warned_by_name(tmp_path):
     assert res.exit_code == 0
     assert (f"warning: {path}: motion.pitch_ramp_rate_deg is not read by a harmonic motion"
             in res.stderr)
+
+
+@pytest.mark.parametrize("text", ["a\x00b", "tab\tand\nnewline are fine\x1b[31m"])
+def test_a_control_character_in_the_case_file_s_text_is_refused_naming_the_key(tmp_path, text):
+    """HDF5 attributes cannot hold a NUL whole: refused when the case is read, not at the
+    results' write after the run's work."""
+    import tomllib
+
+    from mfflap.config import load_case
+
+    shipped = Path(__file__).parents[1] / "cases" / "paper2026.toml"
+    data = tomllib.loads(shipped.read_text())
+    case = tmp_path / "bad.toml"
+    case.write_text(shipped.read_text().replace(
+        f'description = "{data["study"]["description"]}"',
+        'description = "' + text.replace("\x00", "\\u0000").replace("\t", "\\t")
+        .replace("\n", "\\n").replace("\x1b", "\\u001b") + '"'))
+    with pytest.raises(ConfigError) as refused:
+        load_case(case)
+    assert refused.value.key == "study.description" and "control character" in str(refused.value)
