@@ -27,13 +27,15 @@ from mfflap.backtest.run import BacktestOutcome
 from mfflap.backtest.workflow import backtest_all
 from mfflap.config import CaseConfig, load_case
 from mfflap.errors import ConfigError, shown
+from mfflap.evaluation import table_states
 from mfflap.identification.fit import IdentificationResult
 from mfflap.identification.workflow import identify_strategies, load_cases
-from mfflap.kinematics import DiscreteMotion, to_discrete
+from mfflap.kinematics import DiscreteMotion, TabulatedMotion, to_discrete
+from mfflap.kinematics.table_file import read_motion_table
 from mfflap.optimisation.optimise import OptimisationResult
 from mfflap.optimisation.study import beta_study
 from mfflap.optimisation.vortex_polish import PolishResult
-from mfflap.performance import evaluate_discrete
+from mfflap.performance import evaluate_discrete, evaluate_states
 from mfflap.pipeline import gap_diagnosis
 from mfflap.records.record import backtest_fixture_dirs
 from mfflap.study_results import (
@@ -88,9 +90,30 @@ class Study:
         """
         return cls(load_case(path))
 
-    def evaluate(self, motion: DiscreteMotion | None = None) -> CycleEvaluation:
-        """The model's loads, thrust and power over one cycle of ``motion`` (default: the
-        case file's [motion], with its N steps per half cycle)."""
+    def evaluate(self, motion: DiscreteMotion | TabulatedMotion | str | Path | None = None
+                 ) -> CycleEvaluation:
+        """The model's loads, thrust and power over one cycle of ``motion``: a discrete
+        motion, a motion table (a CSV file's path, or a :class:`TabulatedMotion`, taken as
+        one cycle from its first row to its last) or, by default, the case file's [motion]
+        with its N steps per half cycle.
+
+        Examples
+        --------
+        >>> import numpy as np, tempfile
+        >>> from pathlib import Path
+        >>> from mfflap.api import Study
+        >>> table = Path(tempfile.mkdtemp()) / "motion.csv"
+        >>> t = np.linspace(0, 1, 41)
+        >>> _ = table.write_text("t,h [m],theta [deg]\\n" + "".join(
+        ...     f"{a},{0.2 * np.cos(2 * np.pi * a)},{20 * np.sin(2 * np.pi * a)}\\n" for a in t))
+        >>> import mfflap
+        >>> case = Path(mfflap.__file__).parents[1] / "cases" / "paper2026.toml"
+        >>> study = Study.from_toml(case)
+        >>> bool(study.evaluate(table).summary.mean_thrust > 0)  # heave leads pitch by 90 deg
+        True
+        """
+        if isinstance(motion, str | Path | TabulatedMotion):
+            return self._evaluate_table(motion)
         if motion is None:
             spec = self.config.motion
             motion = to_discrete(spec.build(), 1.0 / spec.frequency,
@@ -98,6 +121,16 @@ class Study:
         scheme = self.config.optimisation.scheme
         return CycleEvaluation.of(evaluate_discrete(self.model, motion, scheme),
                                   float(motion.period), scheme=scheme, config=self.config)
+
+    def _evaluate_table(self, table: TabulatedMotion | str | Path) -> CycleEvaluation:
+        """A motion table over its span as one cycle, with the study's model."""
+        if not isinstance(table, TabulatedMotion):
+            table = read_motion_table(table, self.config.plate.chord)
+        end_time = float(table.table_time[-1])
+        state = table_states(table, end_time)
+        return CycleEvaluation.of(evaluate_states(self.model, state, 1.0 / end_time),
+                                  end_time, half_cycle=False, scheme="continuous",
+                                  config=self.config)
 
     def identify(self, records: str | Path | Sequence[str | Path] | None = None,
                  weighting: str = "uniform", bootstrap: int = 200) -> IdentifiedCoefficients:

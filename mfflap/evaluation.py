@@ -102,6 +102,72 @@ def _evaluate_with_vortex_model(case: CaseConfig, motion, frequency: float,
     return ev, span, f"discrete-vortex model, {where}"
 
 
+#: samples a second of a motion table's span, at least
+TABLE_SAMPLES_PER_SECOND = 200
+#: samples between two rows of a motion table, at least, for the Morison model (cheap: the
+#: spline between the rows is followed closely); the vortex model, whose cost grows as the
+#: square of its steps, takes one a row
+MORISON_SAMPLES_PER_ROW = 10
+#: the most samples a motion table's evaluation takes (about 20 MB of state and loads)
+MAX_TABLE_SAMPLES = 200_000
+
+
+def table_states(table, end_time: float, per_row: int = MORISON_SAMPLES_PER_ROW
+                 ) -> KinematicState:
+    """Uniform samples of a motion table over [0, end_time]: the denser of
+    TABLE_SAMPLES_PER_SECOND and ``per_row`` a table row, at most MAX_TABLE_SAMPLES.
+
+    Raises
+    ------
+    ConfigError
+        If the span needs more than MAX_TABLE_SAMPLES samples.
+    """
+    rows = int(np.size(table.table_time))
+    n = max(int(np.ceil(TABLE_SAMPLES_PER_SECOND * end_time)), per_row * (rows - 1), 2)
+    if n > MAX_TABLE_SAMPLES:
+        raise ConfigError(f"the motion table's {end_time:g} s at "
+                          f"{TABLE_SAMPLES_PER_SECOND} samples a second and {per_row} a row "
+                          f"need {n:,} samples; at most {MAX_TABLE_SAMPLES:,} are taken",
+                          key="motion_table")
+    return table.sample(np.arange(n) * (end_time / n))
+
+
+def evaluate_table(case: CaseConfig, table_path: str | Path,
+                   model: str = "morison") -> CaseEvaluation:
+    """Evaluate a motion table (a CSV file, :mod:`mfflap.kinematics.table_file`) with the
+    case's plate, fluid, stream and model, over the table's whole span: the means are those
+    of the span from its first row to its last, taken as one cycle.
+
+    Raises
+    ------
+    ParseError
+        For a table that cannot be read (naming the file and the line).
+    ConfigError
+        If ``model`` is not one of MODELS, or the span needs more than MAX_TABLE_SAMPLES.
+    """
+    from mfflap.kinematics.table_file import read_motion_table, table_end_time
+
+    if model not in MODELS:
+        raise ConfigError(f"model must be one of {list(MODELS)}, got {model!r}", key="model")
+    table = read_motion_table(table_path, case.plate.chord)
+    end_time = table_end_time(table)
+    state = table_states(table, end_time, per_row=1 if model == "vortex" else
+                         MORISON_SAMPLES_PER_ROW)
+    if model == "vortex":
+        from mfflap.hydro.discrete_vortex import simulate_vortex_model
+
+        loads = simulate_vortex_model(state, case.plate, case.fluid, case.flow,
+                                      case.vortex).loads
+        force_model = _ComputedLoads(loads, case.plate, case.flow)
+        scheme = "discrete-vortex"
+    else:
+        force_model, scheme = case.morison_model(), "continuous"
+    ev = evaluate_states(force_model, state, 1.0 / end_time)
+    desc = f"motion table {Path(table_path).name}, {end_time:g} s"
+    fig = cycle_figure(ev, end_time, half_cycle=False, title=f"{case.study.name}: {desc}")
+    return CaseEvaluation(case, ev, scheme, desc, fig)
+
+
 def evaluate_case(path: str | Path, scheme: str | None = None,
                   model: str = "morison") -> CaseEvaluation:
     """Evaluate the [motion] of a case file.

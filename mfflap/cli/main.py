@@ -109,21 +109,34 @@ def _register_subgroups() -> None:
 @click.option("--model", "model", type=click.Choice(["morison", "vortex"]), default="morison",
               show_default=True,
               help="The Morison model of the case, or the discrete-vortex model.")
+@click.option("--motion", "motion_table", default=None,
+              type=click.Path(dir_okay=False, exists=True, path_type=Path),
+              help="Evaluate this motion table (CSV: t, heave, pitch with their units) "
+                   "instead of the case's [motion], over its whole span.")
 def evaluate(case_file: Path, as_json: bool, figure: Path | None, output: Path | None,
-             scheme: str | None, model: str) -> None:
-    """Evaluate the [motion] of CASE_FILE with the Morison model over one cycle, or with
-    the discrete-vortex model.
+             scheme: str | None, model: str, motion_table: Path | None) -> None:
+    """Evaluate the [motion] of CASE_FILE (or a --motion table) with the Morison model
+    over one cycle, or with the discrete-vortex model.
 
     For the Morison model, a harmonic motion is converted to the discrete half-cycle scheme
     with the case's [discretisation] n_steps; a ramp motion is evaluated continuously over
     its cycles. The discrete-vortex model runs the motion from rest, 200 steps a period,
     and gives a harmonic motion's last period once its start-up wake is 5 chords
-    downstream. Prints the cycle means and saves a figure of thrust, power, F_n, F_t and M.
+    downstream. A --motion table is evaluated continuously over its span, its first row to
+    its last, with the case's plate, fluid, stream and model. Prints the cycle means and
+    saves a figure of thrust, power, F_n, F_t and M.
     """
-    from mfflap.evaluation import evaluate_case
+    from mfflap.config import load_case
+    from mfflap.evaluation import evaluate_case, evaluate_table
     from mfflap.plots import save_figure
 
-    result = evaluate_case(case_file, scheme=scheme, model=model)
+    if motion_table is not None:
+        if scheme is not None:
+            raise click.UsageError("--scheme is a discrete scheme of the case's harmonic "
+                                   "[motion]; a --motion table is evaluated continuously")
+        result = evaluate_table(load_case(case_file), motion_table, model=model)
+    else:
+        result = evaluate_case(case_file, scheme=scheme, model=model)
     figure = figure or Path(f"{case_file.stem}.cycle.png")
     save_figure(result.figure, figure)
     if output is not None:

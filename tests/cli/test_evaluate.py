@@ -8,6 +8,7 @@ from pathlib import Path
 
 import h5py
 import numpy as np
+import pytest
 from click.testing import CliRunner
 
 from mfflap.cli.main import cli
@@ -57,3 +58,58 @@ def test_the_case_files_vortex_table_sets_the_model(tmp_path):
     bad.write_text(CASE.read_text() + "\n[vortex]\ncore_radius_chords = 2.0\n")
     res = CliRunner().invoke(cli, ["evaluate", str(bad), "--model", "vortex"])
     assert res.exit_code != 0 and "vortex.core_radius_chords" in res.output
+
+
+def _the_case_s_sinusoid_as_a_table(path: Path, rows_per_period: int = 400) -> Path:
+    """The case's [motion] (1 Hz, 0.3 m, 20 deg, heave leading by 90 deg) over one period,
+    heave in mm and pitch in degrees."""
+    t = np.arange(rows_per_period + 1) / rows_per_period
+    path.write_text("time [s],h [mm],theta [deg]\n" + "".join(
+        f"{a:.6f},{300 * np.sin(2 * np.pi * a + np.pi / 2):.9g},"
+        f"{20 * np.sin(2 * np.pi * a):.9g}\n" for a in t))
+    return path
+
+
+def test_one_s_own_motion_table_is_evaluated_like_the_case_s_own_motion(tmp_path):
+    """A table of the case's own sinusoid (in mm and degrees) gives the case's cycle means
+    within the difference of the continuous and the discrete scheme (a few per cent)."""
+    table = _the_case_s_sinusoid_as_a_table(tmp_path / "mine.csv")
+    runner = CliRunner()
+    own = runner.invoke(cli, ["evaluate", str(CASE), "--json", "--figure",
+                              str(tmp_path / "a.png")])
+    mine = runner.invoke(cli, ["evaluate", str(CASE), "--motion", str(table), "--json",
+                               "--figure", str(tmp_path / "b.png")])
+    assert own.exit_code == 0 and mine.exit_code == 0, (own.output, mine.output)
+    own_s = json.loads(own.output[own.output.index("{"):])
+    mine_s = json.loads(mine.output[mine.output.index("{"):])
+    assert mine_s["scheme"] == "continuous" and (tmp_path / "b.png").exists()
+    for key in ("mean_thrust", "mean_power"):
+        assert mine_s[key] == pytest.approx(own_s[key], rel=0.05), key
+    vortex = runner.invoke(cli, ["evaluate", str(CASE), "--motion", str(table), "--model",
+                                 "vortex", "--json", "--figure", str(tmp_path / "c.png")])
+    assert vortex.exit_code == 0, vortex.output
+    assert json.loads(vortex.output[vortex.output.index("{"):])["scheme"] == "discrete-vortex"
+
+
+def test_a_motion_table_with_a_discrete_scheme_or_a_bad_row_is_refused(tmp_path):
+    table = _the_case_s_sinusoid_as_a_table(tmp_path / "mine.csv")
+    res = CliRunner().invoke(cli, ["evaluate", str(CASE), "--motion", str(table),
+                                   "--scheme", "paper"])
+    assert res.exit_code == 2 and "evaluated continuously" in res.output
+    bad = tmp_path / "bad.csv"
+    bad.write_text(table.read_text().replace("\n0.005000,", "\n0.005000,abc", 1))
+    res = CliRunner().invoke(cli, ["evaluate", str(CASE), "--motion", str(bad)])
+    assert res.exit_code == 2 and f"{bad}, line 4" in " ".join(res.output.split())
+
+
+def test_study_evaluate_takes_a_table_s_path_or_its_motion(tmp_path):
+    from mfflap.api import Study
+    from mfflap.kinematics.table_file import read_motion_table
+
+    table = _the_case_s_sinusoid_as_a_table(tmp_path / "mine.csv")
+    study = Study.from_toml(CASE)
+    by_path, by_motion = study.evaluate(table), study.evaluate(read_motion_table(table))
+    assert by_path.summary.mean_thrust == pytest.approx(by_motion.summary.mean_thrust)
+    own = study.evaluate()
+    assert by_path.summary.mean_thrust == pytest.approx(own.summary.mean_thrust, rel=0.05)
+    assert by_path.plot() is not None
