@@ -155,7 +155,7 @@ def diagnose_cmd(case_file: Path, folders: tuple[Path, ...], csv_files: tuple[Pa
                        "records": [row.__dict__ for row in diag.levels.rows],
                        "excluded": diag.levels.excluded}})
         return
-    click.echo(f"{diag.finding}. {diag.verdict}")
+    click.echo(diag.headline())
     if diag.chosen is not None:
         click.echo(diag.claim_said())
     click.echo(f"residuals scaled {scaling_said(diag.residual_scaling, diag.scaling_asked)}; "

@@ -157,6 +157,18 @@ class Diagnosis:
             return "within noise"
         return "structured, unexplained"
 
+    def headline(self) -> str:
+        """The finding and the verdict in one sentence, the finding said once: "Structured,
+        unexplained: no candidate explains it ...", "Explained by X: held-out error ...".
+        """
+        verdict, finding = self.verdict, self.finding
+        for lead in (finding, finding.split(" by ", 1)[-1]):
+            if verdict.lower().startswith(lead.lower()):
+                verdict = verdict[len(lead):].lstrip(":;,. ")
+                break
+        head = finding[0].upper() + finding[1:]
+        return f"{head}: {verdict}" if verdict else f"{head}."
+
     def claim_said(self) -> str | None:
         """The claimed effect in words: what it is, what its coefficient means and its
         value both ways (refitted with the base terms; fitted to the residual of the model

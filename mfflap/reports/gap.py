@@ -229,7 +229,7 @@ def add_gap_sections(rep: Report, diag: Diagnosis, where: dict,
                      snapshots: list[tuple[object, str]] | None = None) -> None:
     """Verdict, where the model departs, candidates, gap before/after, validation."""
     s = rep.section("Sim-to-real gap: verdict")
-    s.blocks.append(text_html(f"{diag.finding[0].upper()}{diag.finding[1:]}. {diag.verdict}",
+    s.blocks.append(text_html(diag.headline(),
                               warn=not diag.finding.startswith(("explained", "within"))))
     claim = diag.claim_said()
     if claim is not None:

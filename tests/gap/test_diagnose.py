@@ -104,6 +104,9 @@ def test_an_effect_no_candidate_has_is_called_structured_and_unexplained():
     assert diag.chosen is None
     assert diag.verdict.startswith("structured, unexplained: no candidate explains it (best: ")
     assert diag.whiteness["within_noise"] is False and diag.whiteness["p_value"] < 0.01
+    # the headline a report and the command print says the finding once
+    assert diag.headline().startswith("Structured, unexplained: no candidate explains it")
+    assert diag.headline().lower().count("structured, unexplained") == 1
 
 
 @pytest.mark.parametrize("effect", ["wake_lag", "circulatory_lift", "added_mass_coupling"])
@@ -111,6 +114,7 @@ def test_hidden_effect_is_found_and_the_gap_shrinks(effect):
     data = synthesize(np.random.default_rng(11), effect, 4.0)
     diag = diagnose(data, MorisonModel())
     assert diag.chosen is not None and diag.chosen.names[0] == effect
+    assert diag.headline().startswith(f"Explained by {diag.chosen.label}: held-out error ")
     # what is left with it is noise: the claim is the whole gap
     assert diag.whiteness_after["within_noise"] is True
     assert "structured residual remains" not in diag.verdict
@@ -127,6 +131,7 @@ def test_null_dataset_claims_nothing_and_says_it_is_noise():
     diag = diagnose(synthesize(np.random.default_rng(5), NULL, 0.0), MorisonModel())
     assert diag.chosen is None
     assert diag.verdict.startswith("within noise: Ljung-Box test of the held-out residual")
+    assert diag.headline().startswith("Within noise: Ljung-Box test")
     assert diag.whiteness["within_noise"] is True and diag.whiteness["n_series"] == 60
     assert "after" not in diag.gap
     lofo = diag.validation["leave-one-frequency-out"]
