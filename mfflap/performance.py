@@ -87,7 +87,9 @@ class CycleSummary:
     mean_thrust : N
     mean_power : W
     efficiency : 1
-        eta = U mean_thrust / mean_power (NaN where the mean power is zero).
+        eta = U mean_thrust / mean_power where the actuators put power in (mean power > 0);
+        NaN where they do not (the stream drives the plate: energy extraction, or no power
+        at all), where a ratio would read as an efficiency but is none.
     strouhal_number : 1
     max_power : W
         Largest instantaneous input power over the samples.
@@ -111,6 +113,29 @@ class CycleSummary:
              "max_power": "W", "energy_residual": "W", "frequency": "Hz",
              "trailing_edge_amplitude": "m"}
 
+    @property
+    def regime(self) -> str:
+        """What the cycle does, for one motion: "propulsion" (thrust for input power),
+        "drag" (input power, no net thrust), "energy extraction" (the stream drives the
+        plate) or "free thrust" (thrust without input power: a model outside its range)."""
+        thrust, power = float(np.real(self.mean_thrust)), float(np.real(self.mean_power))
+        if power > 0:
+            return "propulsion" if thrust > 0 else "drag"
+        return "energy extraction" if thrust <= 0 else "free thrust"
+
+    def __repr__(self) -> str:
+        parts = []
+        for k, unit in self.UNITS.items():
+            v = np.real(np.asarray(getattr(self, k)))
+            unit = "" if unit == "1" else f" {unit}"
+            if v.ndim == 0:
+                parts.append(f"{k}={float(v):.4g}{unit}")
+            else:
+                parts.append(f"{k}={np.nanmin(v):.4g}..{np.nanmax(v):.4g}{unit}"
+                             if np.isfinite(v).any() else f"{k}=nan")
+        shape = "" if np.ndim(self.mean_thrust) == 0 else f"{np.shape(self.mean_thrust)} "
+        return f"CycleSummary({shape}{', '.join(parts)})"
+
     def as_dict(self) -> dict[str, float | list]:
         """JSON-friendly dict."""
         out = {}
@@ -132,8 +157,9 @@ class Evaluation:
 
 
 def _efficiency(u: float, f: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """U F / P where the mean input power is positive, else NaN (CycleSummary)."""
     with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(np.abs(p) > 0, u * f / np.where(p == 0, 1, p), np.nan)
+        return np.where(np.real(p) > 0, u * f / np.where(np.real(p) > 0, p, 1), np.nan)
 
 
 def evaluate_states(model, state: KinematicState, frequency, trailing_edge_amplitude=None

@@ -56,6 +56,11 @@ def _toml(config: CaseConfig | None) -> str | None:
     return None if config is None else config.to_toml()
 
 
+def _num(value: Any) -> str:
+    """A number as a short plain figure (4 significant digits), whatever its numpy type."""
+    return f"{float(np.real(value)):.4g}"
+
+
 def as_result(base: Any, cls: type, **extra: Any) -> Any:
     """``base`` (a result the rest of mfflap computes) as an instance of its subclass
     ``cls`` here, with ``extra`` fields (its case, its model).
@@ -103,6 +108,12 @@ class CycleEvaluation(Evaluation):
         """Thrust [N], input power [W], F_n, F_t [N] and M [N m] over the cycle."""
         return cycle_figure(self, self.period_s, self.half_cycle)
 
+    def __repr__(self) -> str:
+        m = self.summary
+        return (f"CycleEvaluation({_num(m.mean_thrust)} N mean thrust, {_num(m.mean_power)} W "
+                f"mean power, {_num(m.max_power)} W peak, period {_num(self.period_s)} s, "
+                f"scheme {self.scheme!r})")
+
     def to_hdf5(self, path: str | Path) -> Path:
         """Write state, loads, thrust, power and the cycle means (kind "evaluation")."""
         with ResultsFile(path, "w", kind="evaluation", config_toml=_toml(self.config)) as rf:
@@ -136,6 +147,12 @@ class IdentifiedCoefficients(IdentificationResult):
     def plot(self) -> Figure:
         """The coefficients with their bootstrap 95 % intervals."""
         return coefficient_figure({self.strategy: self})
+
+    def __repr__(self) -> str:
+        said = ", ".join(f"{k}={_num(v)} ± {_num(self.standard_error.get(k, 0.0))}"
+                         for k, v in self.coefficients.items())
+        return (f"IdentifiedCoefficients({said}; {self.strategy} weighting, "
+                f"{len(self.case_names)} cases)")
 
     def to_hdf5(self, path: str | Path) -> Path:
         """Write the fit (kind "identification", read by ``mfflap report identification``)."""
@@ -173,6 +190,13 @@ class OptimisedMotion(OptimisationResult):
         max_power = self.config.optimisation.max_power if self.config is not None else None
         return motion_figure(model, {beta_label(self.beta): self.motion}, scheme, max_power)
 
+    def __repr__(self) -> str:
+        m = self.summary
+        state = "converged" if self.converged else "not converged"
+        return (f"OptimisedMotion(β = {_num(self.beta)}: {_num(m.mean_thrust)} N mean thrust, "
+                f"{_num(m.mean_power)} W mean power, {_num(self.resampled_max_power)} W peak, "
+                f"period {_num(self.motion.period)} s, {state})")
+
     def to_hdf5(self, path: str | Path) -> Path:
         """Write the optimum (kind "optimisation", as ``mfflap optimise`` writes each β),
         with the coefficients it was optimised with, so that ``mfflap backtest`` takes it."""
@@ -206,6 +230,14 @@ class BacktestResult(BacktestOutcome):
         max_power = self.config.optimisation.max_power if self.config is not None else np.nan
         return backtest_figure({self.label: self}, max_power)
 
+    def __repr__(self) -> str:
+        c = self.comparison
+        if c is None:
+            return f"BacktestResult({self.label}: {self.status}, {self.source})"
+        return (f"BacktestResult({self.label}: CFD {_num(c.cfd_mean_thrust)} N, "
+                f"{_num(c.cfd_mean_power)} W mean, {_num(c.cfd_max_power)} W peak; model "
+                f"{_num(c.model_mean_thrust)} N, {_num(c.model_mean_power)} W)")
+
     def to_hdf5(self, path: str | Path) -> Path:
         """Write the comparison (kind "backtest"): histories, metrics, status and source."""
         with ResultsFile(path, "w", kind="backtest", config_toml=_toml(self.config)) as rf:
@@ -232,6 +264,10 @@ class GapDiagnosis(Diagnosis):
     def plot(self) -> Figure:
         """Each candidate's held-out error reduction [%], the significant ones in green."""
         return candidate_figure(self)
+
+    def __repr__(self) -> str:
+        headline = self.headline()
+        return f"GapDiagnosis({headline if len(headline) <= 160 else headline[:157] + '...'})"
 
     def to_hdf5(self, path: str | Path) -> Path:
         """Write the diagnosis (kind "gap_diagnosis", as ``mfflap gap diagnose`` does)."""

@@ -143,9 +143,13 @@ def evaluate(case_file: Path, as_json: bool, figure: Path | None, output: Path |
         result.save(output)
     if as_json:
         echo_json({"case": str(case_file), "scheme": result.scheme, **result.summary_dict(),
-                   "figure": str(figure)})
+                   "regime": result.evaluation.summary.regime, "figure": str(figure)})
         return
     click.echo(f"case {case_file} ({result.description}, scheme {result.scheme})")
+    regime = result.evaluation.summary.regime
+    if regime != "propulsion":
+        click.echo(f"  regime: {regime} (mean thrust and input power are not thrust bought "
+                   "with power: no efficiency)")
     for key, (value, unit) in result.summary_with_units().items():
         click.echo(f"  {key:26s} {value: .6g} {unit}")
     click.echo(f"figure: {figure}")

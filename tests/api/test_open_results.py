@@ -53,6 +53,9 @@ def test_each_step_of_a_study_writes_and_reads_back_its_result(tmp_path):
             assert h5.attrs["kind"] == kind and "[study]" in h5["inputs"].attrs["config_toml"]
         back = mfflap.open_results(path)
         assert back.kind == kind and back.config == study.config
+        said = repr(result)  # a line a terminal shows whole: no arrays, no numpy types
+        assert said.startswith(cls.__name__) and len(said) <= 400, said
+        assert "array(" not in said and "np.float" not in said, said
         _labels_have_units(result.plot())
         _labels_have_units(back.plot())
     back = mfflap.open_results(tmp_path / "identification.h5").identification["uniform"]
@@ -104,6 +107,10 @@ def test_the_main_job_s_results_file_reads_back_whole(tmp_path):
     assert back.gap is not None and back.gap.verdict
     for beta, optimum in back.optima.items():
         assert optimum.beta == beta and np.isfinite(optimum.summary.mean_power)
+    for shown in (*back.identification.values(), *back.optima.values(),
+                  *back.backtests.values(), back.gap):  # short, plain figures
+        said = repr(shown)
+        assert len(said) <= 400 and "array(" not in said and "np.float" not in said, said
     assert back.optima[0.0].summary.mean_thrust > 0
     figure = back.plot()  # Fig. 4a,b
     assert figure.axes[0].get_xlabel().endswith("[W]")

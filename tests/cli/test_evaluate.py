@@ -113,3 +113,18 @@ def test_study_evaluate_takes_a_table_s_path_or_its_motion(tmp_path):
     own = study.evaluate()
     assert by_path.summary.mean_thrust == pytest.approx(own.summary.mean_thrust, rel=0.05)
     assert by_path.plot() is not None
+
+
+def test_a_plate_the_stream_drives_has_no_efficiency_and_its_regime_is_named(tmp_path):
+    """At 1,000 m/s the paper's sinusoid makes no thrust and takes no power: energy
+    extraction, whose thrust-to-power ratio is no efficiency."""
+    fast = tmp_path / "fast.toml"
+    fast.write_text(CASE.read_text().replace("velocity = 0.3 ", "velocity = 1000.0 ", 1))
+    res = CliRunner().invoke(cli, ["evaluate", str(fast), "--json", "--figure",
+                                   str(tmp_path / "f.png")])
+    assert res.exit_code == 0, res.output
+    said = json.loads(res.output[res.output.index("{"):])
+    assert said["mean_thrust"] < 0 and said["mean_power"] < 0
+    assert said["regime"] == "energy extraction" and said["efficiency"] is None  # NaN: null
+    res = CliRunner().invoke(cli, ["evaluate", str(fast), "--figure", str(tmp_path / "f.png")])
+    assert "regime: energy extraction" in res.output
