@@ -590,3 +590,19 @@ def test_a_campaign_case_that_could_not_run_is_refused_when_it_is_made(duration,
                                           f"{re.escape(said)}"):
         HarmonicCase(1.0, 0.01, 2.0, 90.0, duration, ramp)
     assert CfdCase(1.0, 0.3, 90.0, 10.0, 3.0, 0.25).duration == 3.0
+
+
+@pytest.mark.parametrize(("args", "words"), [
+    (["cfd", "write", str(CASE), "OUT", "--cycles", "1e-300"],
+     "end_time: the run's 1e-300 s hold fewer than 10 of its first time steps"),
+    (["cfd", "fluent", str(CASE), "OUT", "--time-step", "1e-300"],
+     "at most 10,000,000 are written"),
+])
+def test_a_run_too_short_for_its_first_step_or_too_long_to_write_is_refused(
+        tmp_path, args, words):
+    """--cycles 1e-300 wrote an endTime below the first deltaT; --time-step 1e-300 a
+    journal of a 301-digit step count."""
+    out = tmp_path / "out"
+    res = CliRunner().invoke(cli, [a.replace("OUT", str(out)) for a in args])
+    assert res.exit_code == 2 and words in res.output, res.output
+    assert len(res.output) < 400 and not out.exists()

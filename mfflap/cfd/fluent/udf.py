@@ -131,6 +131,8 @@ REPORT_FILE = "plate-forces.out"
 FLUENT_KEPT_FILE = "mfflap_fluent.toml"
 #: the fewest time steps a journal may run: fewer jump over the motion
 MIN_STEPS_PER_RUN = 10
+#: the most time steps a written journal runs
+MAX_STEPS_PER_RUN = 10_000_000
 #: time steps per carrier period below which `cfd fluent` warns (Fluent's flapping-foil
 #: studies use a few hundred)
 FEW_STEPS_PER_PERIOD = 50
@@ -189,6 +191,11 @@ def write_fluent_case(folder: str | Path, motion: Motion, end_time: float, *,
         raise ConfigError(f"time_step {time_step:g} s leaves fewer than {MIN_STEPS_PER_RUN} "
                           f"steps in the {end_time:g} s run: Fluent would jump over the "
                           "motion", key="time_step")
+    if end_time > MAX_STEPS_PER_RUN * time_step:
+        raise ConfigError(f"time_step {time_step:.6g} s makes {end_time / time_step:.3g} steps "
+                          f"of the {end_time:g} s run; at most {MAX_STEPS_PER_RUN:,} are "
+                          "written (a thousand periods of a thousand steps each is a tenth "
+                          "of that)", key="time_step")
     folder = Path(folder)
     report = folder / REPORT_FILE
     if report.exists() and not overwrite:

@@ -279,6 +279,10 @@ def format_motion_table(rows: np.ndarray) -> str:
     return "\n".join(lines) + "\n"
 
 
+#: the fewest of its first time steps a run must hold
+MIN_STEPS_PER_RUN = 10
+
+
 def write_case(case_dir: str | Path, motion: Motion, end_time: float,
                mesh: str | AnyMeshSpec = "coarse",
                plate: Plate | None = None, fluid: Fluid | None = None,
@@ -312,6 +316,11 @@ def write_case(case_dir: str | Path, motion: Motion, end_time: float,
         raise ConfigError(f"the mesh depth must be > 0 m, got {depth!r}", key="depth")
     u = stream.velocity
     check_ramp_time(ramp_time, check_end_time(end_time))
+    if end_time < MIN_STEPS_PER_RUN * solver.initial_time_step:
+        raise ConfigError(f"the run's {end_time:.6g} s hold fewer than {MIN_STEPS_PER_RUN} of "
+                          f"its first time steps ({solver.initial_time_step:g} s): OpenFOAM "
+                          "would end before it began; run longer (more cycles, or a later "
+                          "end time)", key="end_time")
     check_start_at_mesh(motion, ramp_time)
     # the motion's tables first: they check the end time, the ramp and the motion
     if solver.frame == "plate":
