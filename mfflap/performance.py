@@ -156,7 +156,7 @@ class Evaluation:
     summary: CycleSummary
 
 
-def _efficiency(u: float, f: np.ndarray, p: np.ndarray) -> np.ndarray:
+def propulsive_efficiency(u: float, f: np.ndarray, p: np.ndarray) -> np.ndarray:
     """U F / P where the mean input power is positive, else NaN (CycleSummary)."""
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(np.real(p) > 0, u * f / np.where(np.real(p) > 0, p, 1), np.nan)
@@ -191,7 +191,7 @@ def evaluate_states(model, state: KinematicState, frequency, trailing_edge_ampli
     summary = CycleSummary(
         mean_thrust=np.real(mf),
         mean_power=np.real(mp),
-        efficiency=_efficiency(u, np.real(mf), np.real(mp)),
+        efficiency=propulsive_efficiency(u, np.real(mf), np.real(mp)),
         strouhal_number=strouhal_number(frequency, trailing_edge_amplitude, u),
         max_power=np.real(power).max(axis=-1),
         energy_residual=residual,

@@ -2,9 +2,14 @@
 
 Layout of a results file::
 
-    /                       attrs: mfflap_schema_version, mfflap_version, created_utc, kind
+    /                       attrs: mfflap_schema_version, mfflap_version, created_utc, kind,
+                            mfflap_checksum_sha256 (everything else the file holds)
     /inputs                 attrs: config_toml (the full input configuration as TOML text)
-    /<group>/<dataset>      attrs: units, description
+    /<group>/<dataset>      attrs: units, description; arrays carry HDF5's Fletcher-32
+
+A file is written beside its place and renamed into it when complete
+(:mod:`mfflap.atomic_write`); its checksum is checked whenever it is opened for reading, so
+a flipped bit is an error naming the file, never a wrong number.
 
 :func:`write_group` / :func:`read_group` store flat dicts of arrays; the typed helpers below
 store the package's objects and read them back into the same objects.
@@ -13,6 +18,7 @@ store the package's objects and read them back into the same objects.
 from __future__ import annotations
 
 import datetime as _dt
+import hashlib
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -21,7 +27,7 @@ import h5py
 import numpy as np
 
 from mfflap.atomic_write import commit, temporary_beside
-from mfflap.errors import MfflapError
+from mfflap.errors import MfflapError, UnreadableRecordError
 from mfflap.hydro.loads import LOAD_UNITS, Loads
 from mfflap.kinematics.discrete import DiscreteMotion
 from mfflap.kinematics.state import KINEMATIC_UNITS, KinematicState
@@ -29,6 +35,69 @@ from mfflap.performance import CycleSummary
 from mfflap.version import __version__
 
 SCHEMA_VERSION = 1
+#: the root attribute that holds the checksum of everything else a results file holds
+CHECKSUM_ATTR = "mfflap_checksum_sha256"
+
+
+def _value_bytes(value: Any) -> bytes:
+    """An attribute's or a small dataset's value as bytes, the same for the same value."""
+    if isinstance(value, bytes):
+        return value
+    if isinstance(value, str):
+        return value.encode("utf-8", "surrogatepass")
+    arr = np.asarray(value)
+    if arr.dtype.kind in "OSU":
+        return repr(arr.tolist()).encode("utf-8", "surrogatepass")
+    return arr.dtype.str.encode() + np.ascontiguousarray(arr).tobytes()
+
+
+def content_checksum(h5: h5py.File) -> str:
+    """SHA-256 over every attribute of the file (its own checksum left out), every dataset's
+    name, type and shape, and the data of the datasets HDF5's Fletcher-32 does not guard
+    (scalars, and datasets written without it): with Fletcher-32 on the rest, a flipped
+    bit anywhere in what mfflap wrote is found."""
+    digest = hashlib.sha256()
+    objects: list[tuple[str, Any]] = []
+    h5.visititems(lambda name, obj: objects.append((name, obj)))
+    for name, obj in [("/", h5), *sorted(objects, key=lambda item: item[0])]:
+        for key in sorted(obj.attrs):
+            if name == "/" and key == CHECKSUM_ATTR:
+                continue
+            digest.update(f"{name}@{key}=".encode("utf-8", "surrogatepass"))
+            digest.update(_value_bytes(obj.attrs[key]))
+        if isinstance(obj, h5py.Dataset):
+            digest.update(f"{name}:{obj.dtype.str}{obj.shape}".encode())
+            if not obj.fletcher32:
+                digest.update(_value_bytes(obj[()]))
+    return digest.hexdigest()
+
+
+def seal(h5: h5py.File) -> None:
+    """Store :func:`content_checksum` in the file (done by :class:`ResultsFile` on a clean
+    close; an edit of a file outside it calls this before the file is closed)."""
+    h5.attrs[CHECKSUM_ATTR] = content_checksum(h5)
+
+
+def check_seal(h5: h5py.File, path: str | Path) -> None:
+    """Refuse a file whose stored checksum does not match what it holds (a file written
+    before files carried one is taken as it is).
+
+    Raises
+    ------
+    UnreadableRecordError
+        Naming the file.
+    """
+    stored = h5.attrs.get(CHECKSUM_ATTR)
+    if stored is None:
+        return
+    try:
+        held = content_checksum(h5)
+    except (OSError, RuntimeError, KeyError, ValueError, TypeError) as err:  # h5py's forms
+        # of a damaged object header, link or chunk
+        raise UnreadableRecordError(f"its data cannot be read ({err})", path=str(path)) from err
+    if str(stored) != held:
+        raise UnreadableRecordError("what it holds does not match its checksum: damaged on "
+                                    "disk, or edited outside mfflap", path=str(path))
 
 
 def check_overwrite(path: str | Path, kind: str) -> None:
@@ -103,6 +172,11 @@ class ResultsFile:
                 self._writing.unlink(missing_ok=True)
             raise MfflapError(f"{self.path}: cannot be opened as an HDF5 file ({err})") from err
         if mode == "r":
+            try:
+                check_seal(self._h5, self.path)
+            except UnreadableRecordError:
+                self._h5.close()
+                raise
             version = self._h5.attrs.get("mfflap_schema_version")
             if version is None:
                 self._h5.close()
@@ -140,6 +214,8 @@ class ResultsFile:
         """Close the file; one opened with ``"w"`` then takes the place of ``path``
         (:func:`mfflap.atomic_write.commit`: an error naming ``path`` if its new content was
         removed meanwhile or the disk refused it)."""
+        if self._h5.id.valid and self._h5.mode != "r":
+            seal(self._h5)
         self._h5.close()
         if self._writing is not None:
             commit(self._writing, self.path)
@@ -179,8 +255,9 @@ class ResultsFile:
             if np.iscomplexobj(arr):
                 arr = np.real(arr)
             big = arr.size >= 256 and arr.dtype.kind in "fiu"
+            guarded = arr.ndim > 0 and arr.size > 0 and arr.dtype.kind in "fiub"
             ds = grp.create_dataset(key, data=arr, compression="gzip" if big else None,
-                                    shuffle=big)
+                                    shuffle=big, fletcher32=guarded)
             ds.attrs["units"] = units[key]
         for k, v in (attrs or {}).items():
             grp.attrs[k] = v
@@ -191,7 +268,11 @@ class ResultsFile:
         if name not in self._h5:
             raise MfflapError(f"{self.path}: no group {name!r}; has {sorted(self._h5)}")
         grp = self._h5[name]
-        arrays = {k: grp[k][()] for k in grp if isinstance(grp[k], h5py.Dataset)}
+        try:
+            arrays = {k: grp[k][()] for k in grp if isinstance(grp[k], h5py.Dataset)}
+        except (OSError, RuntimeError) as err:  # a damaged chunk, a failed checksum
+            raise UnreadableRecordError(f"its data cannot be read ({err})", path=str(self.path),
+                                        dataset=name) from err
         return arrays, dict(grp.attrs)
 
     def units(self, name: str) -> dict[str, str]:

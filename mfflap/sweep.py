@@ -10,7 +10,7 @@ import numpy as np
 from mfflap.errors import ConfigError
 from mfflap.hydro.morison import MorisonModel
 from mfflap.kinematics.convert import harmonic_to_discrete
-from mfflap.performance import evaluate_discrete
+from mfflap.performance import evaluate_discrete, propulsive_efficiency
 
 
 @dataclass(frozen=True)
@@ -106,9 +106,7 @@ def sinusoid_sweep(model, frequencies, heave_amplitudes, pitch_amplitudes, phase
             if progress is not None:
                 progress(stop * axes[1].size, total)
         out["mean_thrust"], out["mean_power"], out["max_power"] = res[:, 0], res[:, 1], res[:, 2]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            out["efficiency"] = np.where(res[:, 1] != 0, u * res[:, 0] / np.where(
-                res[:, 1] == 0, 1, res[:, 1]), np.nan)
+        out["efficiency"] = propulsive_efficiency(u, res[:, 0], res[:, 1])
         out["strouhal_number"] = 2 * f * res[:, 4] / u
         return SweepResult(f, h, th, ph, **out, feasible=out["max_power"] <= max_power)
     for start in range(0, total, chunk):

@@ -23,6 +23,7 @@ from mfflap.performance import thrust_and_power
 from mfflap.records.cycle_scatter import SAMPLES_PER_PERIOD
 from mfflap.records.record import CfdRecord, read_record, record_paths
 from mfflap.records.refinement import KINDS, RefinementChange, write_refinement
+from mfflap.results import seal
 
 #: the provenance key that says each kind of refinement was made
 _REFINED_KEY = {"mesh": "n_cells", "time_step": "solver_max_courant"}
@@ -198,6 +199,7 @@ def add_refinement(coarse_folder: str | Path, refined_folder: str | Path
         try:  # rewritten whole: a kill during the write leaves the record as it was
             with edited_copy(coarse_path) as h5:
                 write_refinement(h5, change)
+                seal(h5)
         except MfflapError as exc:
             raise MfflapError(f"{coarse_path}: cannot add the {kind} refinement "
                               f"({exc})") from exc

@@ -26,6 +26,7 @@ from mfflap.atomic_write import edited_copy
 from mfflap.errors import MfflapError
 from mfflap.performance import thrust_and_power
 from mfflap.records.record import CfdRecord, read_record, record_paths
+from mfflap.results import seal
 
 #: the group of a record that holds its cycle scatter
 GROUP = "cycle_scatter"
@@ -165,6 +166,7 @@ def add_cycle_scatter(path: str | Path, record: CfdRecord | None = None
     try:
         with edited_copy(path) as h5:
             write_cycle_scatter(h5, scatter)
+            seal(h5)
     except MfflapError as exc:
         raise MfflapError(f"{path}: cannot add the cycle scatter ({exc})") from exc
     return scatter

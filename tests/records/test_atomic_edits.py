@@ -134,3 +134,57 @@ def test_the_temporary_name_cannot_be_guessed_and_is_created_exclusively(tmp_pat
     first, second = temporary_beside(target), temporary_beside(target)
     assert first != second and first.exists() and second.exists()
     assert first.name.endswith(f".{os.getpid()}.tmp")
+
+
+def _flip_a_byte(path: Path, at: int) -> None:
+    data = bytearray(path.read_bytes())
+    data[at] ^= 0x10
+    path.write_bytes(bytes(data))
+
+
+def test_a_flipped_bit_anywhere_in_a_written_record_is_a_clean_error_naming_it(tmp_path):
+    """Every byte of what a record holds (attributes, scalars, Fletcher-32-guarded arrays,
+    compressed or not) is checked when it is read: a flip is an UnreadableRecordError
+    naming the file, or the file does not open as HDF5 at all, never a wrong record."""
+    from mfflap.errors import UnreadableRecordError
+    from mfflap.records.record import write_record
+
+    original = read_record(SHIPPED)
+    written = write_record(tmp_path / "whole.h5", original)
+    whole = written.read_bytes()
+    reference = read_record(written)
+    wrong_records = []
+    for at in range(0, len(whole), max(len(whole) // 400, 1)):
+        flipped = tmp_path / "flipped.h5"
+        flipped.write_bytes(whole)
+        _flip_a_byte(flipped, at)
+        try:
+            back = read_record(flipped)
+        except UnreadableRecordError as err:
+            assert str(flipped) in str(err)
+            continue
+        except MfflapError as err:  # not an HDF5 file any more, or its structure broken
+            assert str(flipped) in str(err)
+            continue
+        same = (back.loads.normal_force.tobytes() == reference.loads.normal_force.tobytes()
+                and back.parameters == reference.parameters
+                and back.provenance == reference.provenance
+                and back.time.tobytes() == reference.time.tobytes())
+        if not same:
+            wrong_records.append(at)
+    assert not wrong_records, f"flips read back as a wrong record at bytes {wrong_records}"
+
+
+def test_a_record_that_fails_its_checksum_counts_as_not_done(tmp_path):
+    import h5py
+
+    from mfflap.campaign.execute import read_finished_record
+    from mfflap.records.record import write_record
+    from mfflap.results import CHECKSUM_ATTR
+
+    path = write_record(tmp_path / "rec.h5", read_record(SHIPPED))
+    with h5py.File(path, "r+") as h5:  # an edit outside mfflap
+        h5["parameters"].attrs["frequency"] = 2.0
+        assert CHECKSUM_ATTR in h5.attrs
+    record, why = read_finished_record(path)
+    assert record is None and "does not match its checksum" in why

@@ -125,9 +125,12 @@ def test_a_back_test_fixture_of_the_same_motion_but_another_plate_is_not_used(
 
     doubled = tmp_path / "opt.h5"
     shutil.copy(optimisation_file, doubled)
-    with h5py.File(doubled, "r+") as h5:
+    from mfflap.results import seal
+
+    with h5py.File(doubled, "r+") as h5:  # an edit that keeps the file's checksum true
         h5["inputs"].attrs["config_toml"] = h5["inputs"].attrs["config_toml"].replace(
             "span = 0.18", "span = 0.36")
+        seal(h5)
     res = CliRunner().invoke(cli, ["backtest", str(doubled)])
     assert res.exit_code == 1, res.output
     assert res.stdout.count("NOT BACK-TESTED: fixture backtest_") == 2
