@@ -68,8 +68,20 @@ def prepare_run_folder(folder: Path, *, overwrite: bool) -> Path:
     Raises
     ------
     OutputExistsError
-        The folder holds another run's outputs and ``overwrite`` is False.
+        The folder holds another run's outputs and ``overwrite`` is False, or the folder, or
+        a name the run writes in it, is a symbolic link (outputs never follow a link out of
+        the folder).
     """
+    if folder.is_symlink():
+        raise OutputExistsError("is a symbolic link; a run writes into a folder of its own, "
+                                "not through a link", path=str(folder))
+    linked = tuple(sorted(name for name in (*RUN_OUTPUT_FILES, *RUN_OUTPUT_FOLDERS, *KEPT_CFD)
+                          if (folder / name).is_symlink()))
+    if linked:
+        raise OutputExistsError(f"holds symbolic links where the run writes its outputs "
+                                f"({', '.join(linked)}); outputs are never written through a "
+                                "link: remove them, or choose another --out",
+                                path=str(folder), held=linked)
     held = run_outputs_in(folder)
     if held and not overwrite:
         raise OutputExistsError(

@@ -65,3 +65,18 @@ def test_the_refusal_is_typed_and_names_what_the_folder_holds(tmp_path):
         prepare_run_folder(tmp_path, overwrite=False)
     assert refused.value.path == str(tmp_path)
     assert refused.value.held == ("report.html", "results.h5", "round_2", "vtk")
+
+
+def test_outputs_are_never_written_through_a_symbolic_link(tmp_path):
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    out = tmp_path / "run"
+    out.mkdir()
+    (out / "vtk").symlink_to(elsewhere)
+    with pytest.raises(OutputExistsError, match=r"symbolic links .*\(vtk\)"):
+        prepare_run_folder(out, overwrite=True)
+    linked = tmp_path / "linked_run"
+    linked.symlink_to(elsewhere)
+    res = CliRunner().invoke(cli, ["run", str(CASE), "--out", str(linked)])
+    assert res.exit_code == 2 and "is a symbolic link" in res.output
+    assert not any(elsewhere.iterdir())
