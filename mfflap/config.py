@@ -511,7 +511,7 @@ def apply_settings(data: dict[str, Any], settings: Sequence[str]) -> dict[str, A
         A parsed case file (left unchanged).
     settings
         ``"table.key=value"`` texts; a value is read as TOML, and text that is not a TOML
-        value as a string. ``model.coefficients.drag_normal=3`` reaches the nested table.
+        value as a string. ``model.coefficients.normal_drag=3`` reaches the nested table.
 
     Returns
     -------

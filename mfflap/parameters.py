@@ -80,10 +80,10 @@ class FreeStream:
 class MorisonCoefficients:
     """The four Morison coefficients (dimensionless). Paper's identified values by default."""
 
-    drag_normal: float = bounded(2.49, low=0.0, high=1000.0, unit="1", doc="C_Dn")
-    drag_tangential: float = bounded(3.12, low=0.0, high=1000.0, unit="1", doc="C_Dt")
-    added_mass_normal: float = bounded(1.02, low=0.0, high=1000.0, unit="1", doc="C_an")
-    added_mass_tangential: float = bounded(0.87, low=0.0, high=1000.0, unit="1", doc="C_at")
+    normal_drag: float = bounded(2.49, low=0.0, high=1000.0, unit="1", doc="C_Dn")
+    tangential_drag: float = bounded(3.12, low=0.0, high=1000.0, unit="1", doc="C_Dt")
+    normal_added_mass: float = bounded(1.02, low=0.0, high=1000.0, unit="1", doc="C_an")
+    tangential_added_mass: float = bounded(0.87, low=0.0, high=1000.0, unit="1", doc="C_at")
 
     def __post_init__(self) -> None:
         check_fields(self, prefix="coefficients.")
@@ -91,10 +91,10 @@ class MorisonCoefficients:
     def as_term_values(self) -> dict[str, float]:
         """Coefficient per Morison term name (see :mod:`mfflap.hydro.morison`)."""
         return {
-            "normal_drag": self.drag_normal,
-            "tangential_drag": self.drag_tangential,
-            "normal_added_mass": self.added_mass_normal,
-            "tangential_added_mass": self.added_mass_tangential,
+            "normal_drag": self.normal_drag,
+            "tangential_drag": self.tangential_drag,
+            "normal_added_mass": self.normal_added_mass,
+            "tangential_added_mass": self.tangential_added_mass,
         }
 
     @classmethod
@@ -103,11 +103,11 @@ class MorisonCoefficients:
         base = cls()
         return replace(
             base,
-            drag_normal=float(values.get("normal_drag", base.drag_normal)),
-            drag_tangential=float(values.get("tangential_drag", base.drag_tangential)),
-            added_mass_normal=float(values.get("normal_added_mass", base.added_mass_normal)),
-            added_mass_tangential=float(
-                values.get("tangential_added_mass", base.added_mass_tangential)
+            normal_drag=float(values.get("normal_drag", base.normal_drag)),
+            tangential_drag=float(values.get("tangential_drag", base.tangential_drag)),
+            normal_added_mass=float(values.get("normal_added_mass", base.normal_added_mass)),
+            tangential_added_mass=float(
+                values.get("tangential_added_mass", base.tangential_added_mass)
             ),
         )
 

@@ -1,3 +1,4 @@
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -20,7 +21,7 @@ def test_paper_case_loads_with_paper_values():
     case = load_case(ROOT / "cases" / "paper2026.toml")
     assert case.plate.chord == 0.16 and case.plate.span == 0.18 and case.plate.thickness == 0.003
     assert case.flow.velocity == 0.3
-    assert case.coefficients.drag_normal == 2.49 and case.coefficients.added_mass_tangential == 0.87
+    assert case.coefficients.normal_drag == 2.49 and case.coefficients.tangential_added_mass == 0.87
     assert case.optimisation.max_power == 50.0
     assert case.identification.frequencies == (0.1, 0.2, 0.5, 1.0, 2.0)
     assert len(case.identification.phases_deg) == 5
@@ -50,9 +51,9 @@ def test_case_toml_round_trip():
         ("[model]\nn_strips = 0\n", "model.n_strips", "[1, 100000]"),
         ("[model]\nn_strips = 2.5\n", "model.n_strips", "whole number"),
         ("[model]\nscheme = 'rk4'\n", "model.scheme", "'paper', 'midpoint'"),
-        ("[model.coefficients]\ndrag_normal = -2\n", "model.coefficients.drag_normal",
+        ("[model.coefficients]\nnormal_drag = -2\n", "model.coefficients.normal_drag",
          "[0, 1000]"),
-        ("[model.coefficients]\ndrag_normal = 1e308\n", "model.coefficients.drag_normal",
+        ("[model.coefficients]\nnormal_drag = 1e308\n", "model.coefficients.normal_drag",
          "[0, 1000]"),
         ("[model.coefficients]\nlift = 1\n", "model.coefficients.lift", "unknown key"),
         ("[motion]\nfrequency = 0\n", "motion.frequency", "[0.001, 100] Hz"),
@@ -460,3 +461,17 @@ def test_a_control_character_in_the_case_file_s_text_is_refused_naming_the_key(t
     with pytest.raises(ConfigError) as refused:
         load_case(case)
     assert refused.value.key == "study.description" and "control character" in str(refused.value)
+
+
+def test_the_case_file_names_each_coefficient_as_the_model_and_the_fit_do():
+    """One name per coefficient: the case file's [model.coefficients] keys are the Morison
+    model's term names, which identify and the results files use; another spelling is an
+    unknown key with the right one suggested."""
+    from mfflap.hydro.morison import MorisonModel
+
+    case = load_case(Path(__file__).parents[1] / "cases" / "paper2026.toml")
+    keys = set(case.coefficients.as_term_values())
+    assert keys == set(MorisonModel().coefficients)
+    assert {f.name for f in dataclasses.fields(case.coefficients)} == keys
+    with pytest.raises(ConfigError, match=r"did you mean normal_drag|allowed: .*normal_drag"):
+        loads_case('[study]\nname = "x"\n[model.coefficients]\ndrag_normal = 2.0\n')

@@ -98,11 +98,11 @@ def test_rounds_with_the_case_files_coefficients_and_no_correction_are_refused(t
 def test_set_overrides_a_key_as_toml_reads_it_and_a_bare_word_as_text():
     data = {"optimisation": {"betas": [0.0]}}
     out = apply_settings(data, ["optimisation.betas=[0.5, 1]", "optimisation.coefficients=case",
-                                "rounds.count=3", "model.coefficients.drag_normal=2.5",
+                                "rounds.count=3", "model.coefficients.normal_drag=2.5",
                                 "backtest.retries_from_start=false"])
     assert out["optimisation"] == {"betas": [0.5, 1], "coefficients": "case"}
     assert out["rounds"] == {"count": 3} and out["backtest"] == {"retries_from_start": False}
-    assert out["model"]["coefficients"]["drag_normal"] == 2.5
+    assert out["model"]["coefficients"]["normal_drag"] == 2.5
     assert data == {"optimisation": {"betas": [0.0]}}  # the file's mapping is left as read
 
 

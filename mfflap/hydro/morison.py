@@ -88,7 +88,7 @@ class NormalAddedMass(_MorisonTerm):
     """Normal added mass: -rho V_nk dv_nk/dt per strip (coefficient C_an)."""
 
     name = "normal_added_mass"
-    default_coefficient = MorisonCoefficients().added_mass_normal
+    default_coefficient = MorisonCoefficients().normal_added_mass
 
     def regressor(self, state: KinematicState) -> Loads:
         flow = self._flow(state)
@@ -103,7 +103,7 @@ class TangentialAddedMass(_MorisonTerm):
     """Tangential added mass: -rho V_tk dv_t/dt per strip (coefficient C_at)."""
 
     name = "tangential_added_mass"
-    default_coefficient = MorisonCoefficients().added_mass_tangential
+    default_coefficient = MorisonCoefficients().tangential_added_mass
 
     def regressor(self, state: KinematicState) -> Loads:
         flow = self._flow(state)
@@ -116,7 +116,7 @@ class NormalDrag(_MorisonTerm):
     """Normal quadratic drag: -1/2 rho S_nk |v_nk| v_nk per strip (coefficient C_Dn)."""
 
     name = "normal_drag"
-    default_coefficient = MorisonCoefficients().drag_normal
+    default_coefficient = MorisonCoefficients().normal_drag
 
     def strip_velocities(self, state: KinematicState) -> np.ndarray:
         """v_nk, shape (..., n_times, n_strips)."""
@@ -202,7 +202,7 @@ class TangentialDrag(_MorisonTerm):
     """Tangential quadratic drag: -1/2 rho S_t |v_t| v_t (coefficient C_Dt)."""
 
     name = "tangential_drag"
-    default_coefficient = MorisonCoefficients().drag_tangential
+    default_coefficient = MorisonCoefficients().tangential_drag
 
     def regressor(self, state: KinematicState) -> Loads:
         flow = self._flow(state)

@@ -77,8 +77,8 @@ def test_strip_sum_against_direct_loop(model, rng):
         for lk in g.positions:
             vn = hd * np.cos(th) + u * np.sin(th) + td * lk
             an = hdd * np.cos(th) - hd * td * np.sin(th) + u * td * np.cos(th) + tdd * lk
-            fk = (-c.added_mass_normal * rho * g.volume_normal / g.n_strips * an
-                  - 0.5 * rho * c.drag_normal * g.area_normal / g.n_strips * abs(vn) * vn)
+            fk = (-c.normal_added_mass * rho * g.volume_normal / g.n_strips * an
+                  - 0.5 * rho * c.normal_drag * g.area_normal / g.n_strips * abs(vn) * vn)
             fn += fk
             mo += fk * lk
         assert np.isclose(loads.normal_force[i], fn, rtol=1e-12)
@@ -161,7 +161,7 @@ def test_forces_are_linear_in_each_coefficient(model):
         lambda: Plate(thickness=0.2),
         lambda: StripSettings(n_strips=0),
         lambda: StripSettings(n_strips=2.5),
-        lambda: MorisonCoefficients(drag_normal=float("nan")),
+        lambda: MorisonCoefficients(normal_drag=float("nan")),
     ],
 )
 def test_bad_parameters_are_refused(make):
@@ -268,14 +268,14 @@ def test_pivot_on_the_chord_against_rigid_body_point_kinematics(pivot_fraction):
             s = chord * (2 * k - 1) / (2 * n) - plate.pivot_m
             vn, vt = relative_velocity(ti, s)
             an = (relative_velocity(ti + dt, s)[0] - relative_velocity(ti - dt, s)[0]) / (2 * dt)
-            f = -c.added_mass_normal * rho * vol_n * an - 0.5 * rho * c.drag_normal * (
+            f = -c.normal_added_mass * rho * vol_n * an - 0.5 * rho * c.normal_drag * (
                 chord * span / n) * abs(vn) * vn
             fn, mo = fn + f, mo + f * s
             if k == 1:
                 at = (relative_velocity(ti + dt, s)[1]
                       - relative_velocity(ti - dt, s)[1]) / (2 * dt)
-                ft = (-c.added_mass_tangential * rho * chord * span * thick * at
-                      - 0.5 * rho * c.drag_tangential * thick * span * abs(vt) * vt)
+                ft = (-c.tangential_added_mass * rho * chord * span * thick * at
+                      - 0.5 * rho * c.tangential_drag * thick * span * abs(vt) * vt)
         scale = np.max(np.abs(loads.normal_force))
         assert abs(loads.normal_force[i] - fn) < 1e-5 * scale
         assert abs(loads.moment[i] - mo) < 1e-5 * scale * chord

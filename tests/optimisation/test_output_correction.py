@@ -284,7 +284,7 @@ def _cfd_stand_in():
     from mfflap.parameters import MorisonCoefficients
 
     return MorisonModel(coefficients=MorisonCoefficients(
-        drag_normal=1.6, drag_tangential=0.2, added_mass_normal=1.4, added_mass_tangential=0.3))
+        normal_drag=1.6, tangential_drag=0.2, normal_added_mass=1.4, tangential_added_mass=0.3))
 
 
 def _point(cfd_model, motion, source):
