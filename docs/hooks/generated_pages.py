@@ -3,6 +3,7 @@ outside docs/ (the changelog)."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 #: the marker a page holds where the case-file reference goes
@@ -22,3 +23,16 @@ def on_page_markdown(markdown: str, page, config, files) -> str:
 
         markdown = markdown.replace(CASE_FILE_MARKER, case_file_reference_markdown())
     return markdown
+
+
+#: a default mkdocs-click shows for an option without one (click's own marker)
+_UNSET_DEFAULT = re.compile(r"<td><code>Sentinel\.UNSET</code></td>")
+#: a Sphinx cross-reference role left in a numpydoc docstring (:func:`name`), as rendered
+_SPHINX_ROLE = re.compile(r":(?:func|class|meth|mod|data|attr|exc|obj):<code>~?([^<]*)</code>")
+
+
+def on_page_content(html: str, page, config, files) -> str:
+    """The command-line table without click's marker for "no default", and the docstrings'
+    Sphinx roles as plain code (the name alone where the role shortened it with ``~``)."""
+    html = _UNSET_DEFAULT.sub("<td>(none)</td>", html)
+    return _SPHINX_ROLE.sub(lambda m: f"<code>{m.group(1)}</code>", html)

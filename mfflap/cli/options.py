@@ -10,9 +10,9 @@ from click.core import ParameterSource
 
 from mfflap.errors import shown
 
-MESH_NAMES = ("coarse | lean | medium | medium_r20 | fine | graded | medium_edge10 | "
-              "medium_edge9 | medium_edge6 | medium_edge4 | openfoam_md | "
-              "openfoam_md_medium | openfoam_md_fine | coarse_r20")  # meshes.toml's order
+MESH_NAMES = ("coarse, lean, medium, medium_r20, fine, graded, medium_edge10, "
+              "medium_edge9, medium_edge6, medium_edge4, openfoam_md, "
+              "openfoam_md_medium, openfoam_md_fine, coarse_r20")  # meshes.toml's order
 
 
 class FiniteFloat(click.ParamType):
@@ -211,7 +211,7 @@ def mesh_and_setup_options(runs: str = "") -> Callable:
         )(command)
         return click.option(
             "--mesh", default=None,
-            help=f"Mesh{runs}: {MESH_NAMES} (cfd_templates/openfoam/meshes.toml); default "
+            help=f"Mesh{runs}, one of {MESH_NAMES} (cfd_templates/openfoam/meshes.toml); default "
                  "the case's [cfd] mesh, else the set-up's, else coarse.",
         )(command)
     return decorate

@@ -138,7 +138,7 @@ def test_every_mesh_and_scheme_is_named_in_the_options_and_the_case_file():
     from mfflap.cli.options import MESH_NAMES
     from mfflap.study_tables import VELOCITY_CONVECTION_NAMES
 
-    assert MESH_NAMES.split(" | ") == list(mesh_specs())
+    assert MESH_NAMES.split(", ") == list(mesh_specs())
     assert VELOCITY_CONVECTION_NAMES == VELOCITY_CONVECTION_SCHEMES
 
 
