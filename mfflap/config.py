@@ -627,6 +627,41 @@ def loads_case(text: str, source: str = "<string>", settings: Sequence[str] = ()
     return case_from_dict(data, source=source)
 
 
+#: the spellings of [model.coefficients] keys that a case stored in a results file may hold
+#: besides the model's term names (the ones a case file takes)
+STORED_COEFFICIENT_SPELLINGS = {"drag_normal": "normal_drag",
+                                "drag_tangential": "tangential_drag",
+                                "added_mass_normal": "normal_added_mass",
+                                "added_mass_tangential": "tangential_added_mass"}
+
+
+def stored_case(text: str, source: str, settings: Sequence[str] = ()) -> CaseConfig:
+    """The case stored beside a results file's numbers (its ``/inputs``), read as
+    :func:`loads_case` reads a case, with the coefficient spellings of
+    :data:`STORED_COEFFICIENT_SPELLINGS` taken as the term names they stand for, so that
+    every results file mfflap wrote reads back.
+
+    Examples
+    --------
+    >>> stored_case('[model.coefficients]\\ndrag_normal = 3.0\\n', "x.h5:/inputs"
+    ...             ).coefficients.normal_drag
+    3.0
+    """
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"TOML syntax error: {exc}", source=source) from exc
+    coefficients = data.get("model", {}).get("coefficients")
+    if isinstance(coefficients, dict):
+        for spelled, name in STORED_COEFFICIENT_SPELLINGS.items():
+            if spelled in coefficients and name not in coefficients:
+                coefficients[name] = coefficients.pop(spelled)
+    if settings:
+        data = apply_settings(data, settings)
+        source = settings_source(source, settings)
+    return case_from_dict(data, source=source)
+
+
 def degrees(values) -> np.ndarray:
     """Convenience: degrees to radians as an array."""
     return np.deg2rad(np.asarray(values, dtype=float))

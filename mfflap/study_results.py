@@ -29,7 +29,7 @@ from matplotlib.figure import Figure
 
 from mfflap.backtest.run import BacktestOutcome
 from mfflap.backtest.store import read_backtests, write_backtests
-from mfflap.config import CaseConfig, loads_case
+from mfflap.config import CaseConfig, stored_case
 from mfflap.errors import MfflapError
 from mfflap.gap.diagnose import Diagnosis
 from mfflap.gap.store import read_diagnosis, write_diagnosis
@@ -378,7 +378,7 @@ def open_results(path: str | Path) -> Results:
         return Results(path, kind, record=read_record(path))
     with ResultsFile(path, "r") as rf:
         toml_text = rf.config_toml
-        config = loads_case(toml_text, source=f"{path}:/inputs") if toml_text else None
+        config = stored_case(toml_text, source=f"{path}:/inputs") if toml_text else None
         results = Results(path, kind, config)
         _read_into(results, rf)
     return results

@@ -475,3 +475,23 @@ def test_the_case_file_names_each_coefficient_as_the_model_and_the_fit_do():
     assert {f.name for f in dataclasses.fields(case.coefficients)} == keys
     with pytest.raises(ConfigError, match=r"did you mean normal_drag|allowed: .*normal_drag"):
         loads_case('[study]\nname = "x"\n[model.coefficients]\ndrag_normal = 2.0\n')
+
+
+def test_a_results_file_storing_the_other_coefficient_spellings_reads_back(tmp_path):
+    """A case stored in a results file with drag_normal and the like reads as the term
+    names; a case file with them is refused (one name per coefficient)."""
+    from mfflap.results import ResultsFile
+    from mfflap.study_results import open_results
+
+    stored = (Path(__file__).parents[1] / "cases" / "paper2026.toml").read_text()
+    for spelled, name in (("normal_drag", "drag_normal"),
+                          ("normal_added_mass", "added_mass_normal")):
+        stored = stored.replace(f"{spelled} =", f"{name} =")
+    path = tmp_path / "older.h5"
+    with ResultsFile(path, "w", kind="evaluation", config_toml=stored):
+        pass
+    back = open_results(path)
+    assert back.config.coefficients.normal_drag == 2.49
+    assert back.config.coefficients.normal_added_mass == 1.02
+    with pytest.raises(ConfigError, match="drag_normal"):
+        loads_case(stored)

@@ -56,7 +56,7 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
     """
     from mfflap.backtest.workflow import backtest_all
     from mfflap.cfd.openfoam.setups import case_mesh_and_solver
-    from mfflap.config import loads_case
+    from mfflap.config import stored_case
     from mfflap.optimisation.store import beta_label, read_result, read_sweep
     from mfflap.optimisation.study import sinusoid_motion
     from mfflap.records.record import backtest_fixture_dirs
@@ -69,7 +69,7 @@ def backtest(optimisation_file: Path, live: bool, work_dir: Path,
         refuse_settings(settings, "cfd", why)
         refuse_settings(settings, "backtest.cycles", why)
     with ResultsFile(optimisation_file, kinds=("optimisation", "run")) as rf:
-        case = loads_case(rf.config_toml, source=f"{optimisation_file}:/inputs",
+        case = stored_case(rf.config_toml, source=f"{optimisation_file}:/inputs",
                           settings=cfd_settings(settings, mesh, setup_name))
         # a file of optima alone (OptimisedMotion.to_hdf5) has no sweep and so no best
         # sinusoid to back-test beside them

@@ -164,7 +164,7 @@ def report() -> None:
 def report_identification(results_file: Path, folders: tuple[Path, ...],
                           out_path: Path | None) -> None:
     """Maps of Pearson and NRMSE, overlays, applicability region, weighting sensitivity."""
-    from mfflap.config import loads_case
+    from mfflap.config import stored_case
     from mfflap.errors import MfflapError
     from mfflap.identification.store import read_identification, strategies_in
     from mfflap.identification.workflow import load_cases, sources_shown
@@ -172,7 +172,7 @@ def report_identification(results_file: Path, folders: tuple[Path, ...],
     from mfflap.results import ResultsFile
 
     with ResultsFile(results_file, "r", kinds=("identification", "run")) as rf:
-        case = loads_case(rf.config_toml, source=f"{results_file}:/inputs")
+        case = stored_case(rf.config_toml, source=f"{results_file}:/inputs")
         results = {s: read_identification(rf, f"identification/{s}") for s in strategies_in(rf)}
         if not results:
             raise MfflapError(f"{results_file}: no identification results (its groups: "
