@@ -237,6 +237,12 @@ class OptimisationSettings:
                                 doc="bound the optimisation by what the identification cases "
                                     "reach (pitch amplitude, rate and acceleration, frequency, "
                                     "heave), each the tighter of this table's and the data's")
+    # an actuator's bandwidth: the highest harmonic of the flapping frequency a delivered
+    # motion may contain (mfflap.optimisation.bandwidth); the vortex polish holds it
+    bandwidth_harmonics: int = bounded(11, low=1, high=100_000, unit="1",
+                                       doc="the highest harmonic of the flapping frequency "
+                                           "a polished motion may contain (an actuator's "
+                                           "bandwidth)")
 
     def __post_init__(self) -> None:
         check_fields(self, prefix="optimisation.")

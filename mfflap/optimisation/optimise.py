@@ -19,6 +19,7 @@ from scipy.optimize import minimize
 from mfflap.errors import ConfigError
 from mfflap.kinematics.convert import resample
 from mfflap.kinematics.discrete import DiscreteMotion
+from mfflap.optimisation.bandwidth import band_limited, bandwidth_rows
 from mfflap.optimisation.blas_threads import optimiser_blas_threads
 from mfflap.optimisation.casadi_objective import symbolic_stages
 from mfflap.optimisation.interrupts import interrupts_kept
@@ -116,7 +117,8 @@ def optimise_sqp(problem: FlappingProblem, start: DiscreteMotion, *, min_period:
                  max_iterations: int = 400, tolerance: float = 1e-9, start_label: str = "start",
                  callback: Callable[[int, float], None] | None = None,
                  trust_region: TrustRegion | None = None,
-                 fix_phase: bool = False) -> OptimisationResult:
+                 fix_phase: bool = False,
+                 bandwidth_harmonics: int | None = None) -> OptimisationResult:
     """SLSQP on the penalised objective with the exact adjoint gradient.
 
     The power penalty is raised through ``continuation`` (multipliers of the problem's
@@ -126,7 +128,9 @@ def optimise_sqp(problem: FlappingProblem, start: DiscreteMotion, *, min_period:
     (:class:`~mfflap.optimisation.trust_region.TrustRegion`); the start is moved into it.
     ``fix_phase`` keeps the pitch's first harmonic at the phase of sin(2 pi t / T), a linear
     equality (:mod:`mfflap.optimisation.phase`): without it the motion's phase is free,
-    and where J is flat round-off decides it.
+    and where J is flat round-off decides it. ``bandwidth_harmonics`` keeps every iterate
+    free of the harmonics above it (linear equalities,
+    :mod:`mfflap.optimisation.bandwidth`); the start is projected onto the band first.
     """
     if not continuation or continuation[-1] != 1.0 or any(c <= 0 for c in continuation):
         raise ConfigError(f"continuation {list(continuation)} must be positive multipliers "
@@ -135,6 +139,8 @@ def optimise_sqp(problem: FlappingProblem, start: DiscreteMotion, *, min_period:
     lo, hi = time_step_bounds(n, min_period, max_period)
     dt0 = float(np.clip(start.time_step, lo, hi))
     start = DiscreteMotion(start.pitch_acceleration, start.heave_acceleration, dt0)
+    if bandwidth_harmonics is not None:
+        start = band_limited(start, bandwidth_harmonics)
     scale = start.control_scales()
     bounds = [(None, None)] * (2 * n) + [(lo / scale[-1], hi / scale[-1])]
     x = np.real(start.controls()) / scale
@@ -142,7 +148,12 @@ def optimise_sqp(problem: FlappingProblem, start: DiscreteMotion, *, min_period:
         lower, upper = trust_region.bounds(n, (lo, hi))
         bounds = list(zip(lower / scale, upper / scale, strict=True))
         x = np.clip(x, lower / scale, upper / scale)
-    constraints = _phase_constraints(start, start_label) if fix_phase else ()
+    constraints = list(_phase_constraints(start, start_label) if fix_phase else ())
+    if bandwidth_harmonics is not None:
+        rows = bandwidth_rows(n, bandwidth_harmonics) * scale  # on the scaled variables
+        if rows.size:
+            constraints.append({"type": "eq", "fun": lambda xs, rows=rows: rows @ xs,
+                                "jac": lambda xs, rows=rows: rows})
     history: list[float] = []
     t0 = time.perf_counter()
     converged, message, iterations = False, "not run", 0

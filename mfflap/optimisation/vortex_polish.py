@@ -37,6 +37,7 @@ import numpy as np
 
 from mfflap.errors import ConfigError
 from mfflap.kinematics.discrete import DiscreteMotion
+from mfflap.optimisation.bandwidth import band_limited
 from mfflap.optimisation.optimise import optimise_sqp
 from mfflap.optimisation.problem import FlappingProblem
 from mfflap.optimisation.trust_region import (
@@ -163,7 +164,8 @@ def polish_on_vortex_model(problem: FlappingProblem, vortex: VortexFlappingProbl
                            max_rounds: int = 10, radius: float = START_RADIUS,
                            steps_per_period: int = STEPS_PER_PERIOD,
                            callback: Callable[[int, PolishRound], None] | None = None,
-                           start_label: str = "the Morison optimum") -> PolishResult:
+                           start_label: str = "the Morison optimum",
+                           bandwidth_harmonics: int | None = None) -> PolishResult:
     """Refine ``start`` on the vortex model (module docstring).
 
     Parameters
@@ -187,6 +189,11 @@ def polish_on_vortex_model(problem: FlappingProblem, vortex: VortexFlappingProbl
         Called after each round (progress).
     start_label : str
         What ``start`` is (:attr:`PolishResult.start`).
+    bandwidth_harmonics : int, optional
+        The highest harmonic a polished motion may contain (an actuator's bandwidth,
+        :mod:`mfflap.optimisation.bandwidth`): the start is projected onto the band and every
+        round's SQP holds it. Without it, the vortex model's per-sample offsets let SQP
+        trade smoothness for thrust, and the controls chatter from sample to sample.
 
     Returns
     -------
@@ -211,6 +218,8 @@ def polish_on_vortex_model(problem: FlappingProblem, vortex: VortexFlappingProbl
         raise ConfigError(f"value {max_rounds!r} is not allowed; allowed: an integer >= 1",
                           key="vortex_polish.max_rounds")
     t0 = time.perf_counter()
+    if bandwidth_harmonics is not None:
+        start = band_limited(start, bandwidth_harmonics)
     centre = quantised(start, start.control_scales())
     corrected, samples = corrected_problem(problem, vortex, centre, steps_per_period)
     start_samples = samples
@@ -220,7 +229,8 @@ def polish_on_vortex_model(problem: FlappingProblem, vortex: VortexFlappingProbl
     for k in range(max_rounds):
         region = TrustRegion(centre, radius, "the polish's centre")
         result = optimise_sqp(corrected, centre, min_period=min_period, max_period=max_period,
-                              trust_region=region, start_label="polish centre")
+                              trust_region=region, start_label="polish centre",
+                              bandwidth_harmonics=bandwidth_harmonics)
         candidate = quantised(result.motion, centre.control_scales())
         predicted = j_centre - float(corrected.objective(candidate))
         try:

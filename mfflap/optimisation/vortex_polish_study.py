@@ -127,7 +127,7 @@ def polish_optima(config, optima: dict, model,
 
             results.append(polish_on_vortex_model(
                 problem, vortex, start, min_period=o.min_period, max_period=o.max_period,
-                callback=said, start_label=label))
+                callback=said, start_label=label, bandwidth_harmonics=o.bandwidth_harmonics))
         out[beta] = min(results, key=lambda r: r.objective)
         if progress is not None:
             s0, s1 = out[beta].start_samples, out[beta].samples
