@@ -44,11 +44,11 @@ def _harmonic_basis(n_steps: int, harmonics: list[int]) -> np.ndarray:
     """Orthonormal columns spanning cos and sin of the odd ``harmonics`` over the half
     period's samples, shape (n_steps, m)."""
     phase = np.pi * (np.arange(n_steps) + 0.5) / n_steps
-    columns = [f(k * phase) for k in harmonics for f in (np.cos, np.sin)]
-    if not columns:
-        return np.zeros((n_steps, 0))
-    q, r = np.linalg.qr(np.column_stack(columns))
-    return q[:, np.abs(np.diag(r)) > 1e-9 * np.sqrt(n_steps)]
+    # orthogonal already (module notes): normalised, the one that vanishes (the cosine of
+    # k = N, zero at every sample) left out
+    columns = [c / np.linalg.norm(c) for k in harmonics for f in (np.cos, np.sin)
+               if np.linalg.norm(c := f(k * phase)) > 1e-9 * np.sqrt(n_steps)]
+    return np.column_stack(columns) if columns else np.zeros((n_steps, 0))
 
 
 def _odd_harmonics(n_steps: int) -> list[int]:
