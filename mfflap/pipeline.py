@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from mfflap.backtest.baseline import CfdBaseline, cfd_baseline
 from mfflap.backtest.store import safe_label, write_backtests
 from mfflap.backtest.workflow import backtest_all
 from mfflap.cfd.openfoam.case_path import check_case_path
@@ -53,7 +54,13 @@ from mfflap.optimisation.study import (
     sinusoid_motion,
 )
 from mfflap.optimisation.workflow import write_study
-from mfflap.records.record import backtest_fixture_dirs, identification_fixture_dirs
+from mfflap.records.inputs import input_mismatches
+from mfflap.records.record import (
+    backtest_fixture_dirs,
+    fixture_dir,
+    identification_fixture_dirs,
+    read_records,
+)
 from mfflap.results import ResultsFile
 
 Progress = Callable[[str], None]
@@ -237,6 +244,9 @@ class RunOutcome:
     #: the weighting whose identified coefficients the optimisation used, or None when it
     #: used the case file's
     optimised_with: str | None = None
+    #: the best sinusoid within P_max in CFD, from the shipped runs of this case's plate,
+    #: fluid and stream (:mod:`mfflap.backtest.baseline`); None where none was run for them
+    cfd_baseline: CfdBaseline | None = None
 
 
 def _stage(outcome: RunOutcome, name: str, progress: Progress, fn):
@@ -518,6 +528,25 @@ def _backtest(ctx: RunContext) -> None:
                  retries_from_start=options.retries_from_start, save_to=options.save_to)
 
 
+#: the shipped CFD runs of sinusoids near the power limit (the CFD baseline's)
+BASELINE_FIXTURES = "baseline_sinusoids"
+
+
+def _cfd_baseline(ctx: RunContext) -> None:
+    config = ctx.config
+    records = [r for r in read_records(fixture_dir(BASELINE_FIXTURES))
+               if not input_mismatches(r, config.plate, config.fluid, config.flow)]
+    if not records:
+        ctx.progress("CFD baseline: no shipped sinusoid was run for this case's plate, fluid "
+                     "and stream")
+        return
+    baseline = cfd_baseline(records, config.optimisation.max_power)
+    ctx.outcome.cfd_baseline = baseline
+    best = baseline.best
+    ctx.progress(f"CFD baseline: {len(records)} sinusoid(s) in CFD; best within P_max: "
+                 + (best.said() if best is not None else "none holds it"))
+
+
 def _say_what_was_not_backtested(ctx: RunContext) -> None:
     for label, o in ctx.outcome.backtests.items():
         if o.status != "back-tested":
@@ -593,6 +622,7 @@ STAGES: tuple[Stage | Callable[[RunContext], None], ...] = (
           lambda ctx: _optimised(ctx) and ctx.reference is not None),
     Stage("back-test", _backtest, _optimised),
     _say_what_was_not_backtested,
+    Stage("CFD baseline", _cfd_baseline),
     Stage("model ladder", _model_ladder,
           lambda ctx: any(o.record is not None for o in ctx.outcome.backtests.values())),
     # after the back-test: its runs are the ones the fits never saw
@@ -653,6 +683,9 @@ def write_results(config: CaseConfig, outcome: RunOutcome, h5_path: Path) -> Non
                  "periods": ladder.periods})
         if outcome.gap is not None:
             write_diagnosis(rf, *outcome.gap)
+        if outcome.cfd_baseline is not None:
+            rf.write_group("cfd_baseline", {}, {},
+                           {"baseline": json.dumps(outcome.cfd_baseline.as_dict())})
         rf.h5.attrs["problems"] = "\n".join(outcome.problems)
         rf.h5.attrs["stage_times_s"] = str(outcome.timings)
         rf.h5.attrs["stages"] = json.dumps([asdict(stage) for stage in outcome.stages])

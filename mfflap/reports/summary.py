@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from mfflap.backtest.baseline import best_motion_within
 from mfflap.backtest.workflow import gain_in_cfd
 from mfflap.config import CaseConfig
 from mfflap.optimisation.store import beta_label
@@ -53,12 +54,38 @@ def motion_rows(config: CaseConfig, outcome: RunOutcome) -> list[list]:
     return rows
 
 
+def cfd_pair_said(config: CaseConfig, outcome: RunOutcome) -> str | None:
+    """The answer a user came for, in one sentence: the best motion within P_max in CFD
+    against the best sinusoid within P_max in CFD, with the gain's standard error."""
+    baseline = outcome.cfd_baseline
+    if baseline is None:
+        return None
+    p_max = config.optimisation.max_power
+    if baseline.best is None:
+        return (f"No sinusoid run in CFD holds P_max = {p_max:g} W: the CFD baseline is "
+                "missing.")
+    pair = best_motion_within(outcome.backtests, p_max, baseline)
+    sinusoid = f"the best sinusoid within it in CFD ({baseline.best.said()})"
+    if pair is None:
+        return (f"Within P_max = {p_max:g} W in CFD: no back-tested motion holds it; "
+                f"{sinusoid[0].upper()}{sinusoid[1:]}.")
+    efficiency = _efficiency(pair.mean_thrust_n, pair.mean_power_w, config.flow.velocity)
+    return (f"Within P_max = {p_max:g} W in CFD: {pair.label} gives "
+            f"{pair.mean_thrust_n:.3g} N at {pair.peak_power_w:.3g} W peak (efficiency "
+            f"{efficiency}), {signed_percent(pair.gain)} ± {pair.gain_standard_error:.0%} "
+            f"mean thrust against {sinusoid}.")
+
+
 def headline(config: CaseConfig, outcome: RunOutcome) -> list[str]:
-    """The run's findings in a few sentences, the CFD's first."""
+    """The run's findings in a few sentences: the CFD-confirmed pair within P_max first,
+    then the model's optimum and its CFD."""
     said = []
+    pair = cfd_pair_said(config, outcome)
+    if pair is not None:
+        said.append(pair)
     if outcome.study is not None:
         sweep, i = outcome.study.sweep, outcome.study.best_sinusoid
-        said.append(f"Best feasible sinusoid (the baseline): f = {sweep.frequency[i]:.3g} Hz, "
+        said.append(f"The model's best feasible sinusoid: f = {sweep.frequency[i]:.3g} Hz, "
                     f"h = {sweep.heave_amplitude[i]:.3g} m, "
                     f"θ = {np.degrees(sweep.pitch_amplitude[i]):.3g}°, "
                     f"φ = {np.degrees(sweep.phase[i]):.3g}°.")
@@ -70,9 +97,10 @@ def headline(config: CaseConfig, outcome: RunOutcome) -> list[str]:
         model_gain = thrust_gain(optimum.comparison.model_mean_thrust,
                                  best.comparison.model_mean_thrust)
     if cfd_gain is not None:
-        said.append(f"β = 0 gives {signed_percent(cfd_gain)} mean thrust over the best "
-                    f"feasible sinusoid in CFD (the model predicted "
-                    f"{signed_percent(model_gain)}).")
+        said.append(f"On the model's terms: β = 0 gives {signed_percent(cfd_gain)} mean "
+                    f"thrust over the model's best feasible sinusoid in CFD (the model "
+                    f"predicted {signed_percent(model_gain)}); both are within P_max in the "
+                    "model, not necessarily in CFD.")
     elif outcome.study is not None:
         said.append("β = 0's thrust gain over the best feasible sinusoid is not confirmed "
                     "in CFD (see the back-test below).")
@@ -130,4 +158,4 @@ def add_run_summary(s: Section, config: CaseConfig, outcome: RunOutcome) -> None
                                     "range over the weightings"], coefficients))
 
 
-__all__ = ["add_run_summary", "coefficient_rows", "headline", "motion_rows"]
+__all__ = ["add_run_summary", "cfd_pair_said", "coefficient_rows", "headline", "motion_rows"]

@@ -50,8 +50,14 @@ def test_the_summary_gives_each_motions_model_and_cfd_figures(run):
         assert rows[label][1:5] == [c.model_mean_thrust, c.cfd_mean_thrust,
                                     c.model_mean_power, c.cfd_mean_power]
         assert rows[label][-1] == ("yes" if c.max_power_ok else "NO")
-    said = " ".join(headline(config, outcome))
+    lines = headline(config, outcome)
+    said = " ".join(lines)
     assert "in CFD (the model predicted" in said and "P_max = 50 W" in said
+    # first: the best motion within P_max in CFD against the best sinusoid within it in CFD
+    baseline = outcome.cfd_baseline
+    assert baseline is not None and baseline.best is not None
+    assert lines[0].startswith("Within P_max = 50 W in CFD: ")
+    assert f"{baseline.best.mean_thrust_n:.3g} ± " in lines[0]
     # the polish's CFD, against the vortex model's prediction of it, where it ships
     polished = outcome.backtests["β = 0 polished"].comparison
     assert polished is None or (
@@ -84,7 +90,8 @@ def test_the_summarys_numbers_are_on_the_first_screen_in_chromium(run):
         visible = [e for e in summary.find_elements(By.CSS_SELECTOR, "p, td")
                    if e.rect["y"] + e.rect["height"] <= height]
         shown = " ".join(e.text for e in visible)
-        assert "over the best feasible sinusoid in CFD" in shown
+        assert "Within P_max = 50 W in CFD: " in shown  # the CFD-confirmed pair first
+        assert "over the model's best feasible sinusoid in CFD" in shown
         for o in outcome.backtests.values():
             if o.comparison is not None:
                 assert f"{o.comparison.cfd_mean_thrust:.4g}" in shown
