@@ -353,7 +353,8 @@ def identification_fixture_dirs() -> tuple[Path, ...]:
 #: CFD in the loop and of rounds with the output correction (filtered, with round 1's model
 #: kept, in a trust region, in a trust region with slopes, the same with the phase fixed;
 #: each record named by its motion's key).
-BACKTEST_FIXTURES = ("backtest_main_job", "backtest", "backtest_within_data", "backtest_rounds",
+BACKTEST_FIXTURES = ("backtest_main_job", "backtest_polish_bandwidth", "backtest",
+                     "backtest_within_data", "backtest_rounds",
                      "backtest_corrected", "backtest_filtered", "backtest_fixed_model",
                      "backtest_trust_region", "backtest_first_order",
                      "backtest_first_order_fixed_phase")
