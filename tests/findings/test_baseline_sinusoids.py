@@ -50,3 +50,28 @@ def test_at_0_70_hz_it_stays_well_below_the_limit():
     _, thrust, _, peaks = _settled("harmonic_f0p700_h0p3500_th60p00_phi112p0")
     assert 13.0 < thrust.mean() < 15.0
     assert np.all(peaks < 0.75 * P_MAX_W), peaks
+
+
+def test_the_smooth_polish_breaks_the_limit_in_cfd_where_the_vortex_model_held_it():
+    """The main job's β = 0 polish held to 11 harmonics, live in OpenFOAM: more thrust than
+    any sinusoid near the limit, but its peak power over P_max by more than a fifth."""
+    from mfflap.backtest.model_ladder import compare_model_ladder
+    from mfflap.records.record import fixture_dir, read_records
+
+    (record,) = read_records(fixture_dir("backtest_polish_bandwidth"))
+    assert record.parameters["label"] == "β = 0 polished"
+    assert record.provenance["solver"] == "OpenFOAM pimpleFoam"
+    ladder = compare_model_ladder(record)
+    assert 22.0 < ladder.cfd.mean_thrust < 26.0
+    assert ladder.cfd.peak_power > 1.2 * P_MAX_W
+    assert ladder.vortex.peak_power < 0.85 * ladder.cfd.peak_power
+
+
+def test_the_strict_baseline_is_the_run_that_holds_the_limit_in_every_period():
+    from mfflap.backtest.baseline import cfd_baseline
+    from mfflap.records.record import fixture_dir, read_records
+
+    baseline = cfd_baseline(read_records(fixture_dir("baseline_sinusoids")), P_MAX_W)
+    assert baseline.best.frequency_hz == 0.70 and baseline.best.heave_amplitude_m == 0.35
+    near = [c for c in baseline.candidates if 1.0 < c.peak_power_w / P_MAX_W < 1.05]
+    assert len(near) >= 3 and max(c.mean_thrust_n for c in near) > 17.0
