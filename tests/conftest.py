@@ -83,6 +83,7 @@ def optimisation_file(tmp_path_factory) -> Path:
     out = tmp_path_factory.mktemp("opt") / "opt.h5"
     res = CliRunner().invoke(cli, ["optimise", str(case), "--betas", "0.5", "--set",
                                    "optimisation.starts=1", "--set", "optimisation.ipopt=false",
+                                   "--set", "optimisation.coefficients=case",
                                    "--set", "optimisation.gain_table=false", "--set",
                                    "optimisation.phase=free", "--output", str(out)])
     assert res.exit_code == 0, res.output

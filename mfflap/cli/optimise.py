@@ -22,9 +22,11 @@ from mfflap.cli.options import FloatList, ResultsOutput, set_option
 @click.option("--json", "as_json", is_flag=True, help="Print the optimised means as JSON.")
 def optimise(case_file: Path, betas: list[float] | None, output: Path,
              report_path: Path | None, settings: tuple[str, ...], as_json: bool) -> None:
-    """Optimise the motion of CASE_FILE for each beta with the discrete adjoint, with the
-    case file's [model.coefficients] and its [optimisation] table (multi-starts, the IPOPT
-    comparison, the gain table).
+    """Optimise the motion of CASE_FILE for each beta with the discrete adjoint and its
+    [optimisation] table (multi-starts, the IPOPT comparison, the gain table), with the
+    coefficients [optimisation] coefficients names, as `mfflap run` does: identified from
+    the shipped CFD records with that frequency weighting (default uniform), or the case
+    file's [model.coefficients] (coefficients = "case"). The first line says which.
 
     Ctrl-C (or SIGTERM, SIGUSR1) stops it and writes the betas optimised before it.
     """
@@ -39,7 +41,20 @@ def optimise(case_file: Path, betas: list[float] | None, output: Path,
         if not as_json:
             click.echo(msg, err=True)
 
-    model = case.morison_model()
+    if opt.coefficients == "case":
+        model = case.morison_model()
+        said = "the case file's [model.coefficients]"
+    else:
+        from mfflap.api import Study
+
+        identified = Study(case)
+        identified.identify(weighting=opt.coefficients, bootstrap=0)
+        model = identified.model
+        said = (f"the coefficients identified from the shipped CFD records with the "
+                f"{opt.coefficients} weighting, as mfflap run does ([optimisation] "
+                "coefficients)")
+    values = ", ".join(f"{k} = {v:.4g}" for k, v in model.coefficients.items())
+    click.echo(f"optimising with {said}: {values}", err=True)
     try:
         study = beta_study(case, betas, n_starts=opt.starts, with_ipopt=opt.ipopt, model=model,
                            progress=progress)

@@ -53,6 +53,12 @@ def run_cmd(case_file: Path, out_dir: Path | None, fixtures: tuple[Path, ...],
     options = RunOptions.for_case(case, out_dir, fixtures=fixtures,
                                   backtest_fixtures=backtest_fixtures, live=live)
     prepare_run_folder(out_dir, overwrite=overwrite)
+    weighting = case.optimisation.coefficients
+    click.echo("optimising with " + ("the case file's [model.coefficients]" if weighting == "case"
+                                     else f"the coefficients it identifies from the CFD records "
+                                          f"with the {weighting} weighting") +
+               " ([optimisation] coefficients; the report's summary gives their values)",
+               err=True)
     if case.rounds.count > 1:
         _run_rounds(case, options, out_dir, sources_shown(fixtures), as_json)
         return

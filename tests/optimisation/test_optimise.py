@@ -17,8 +17,10 @@ from mfflap.optimisation.store import read_result, read_sweep, write_result
 from mfflap.results import ResultsFile
 
 #: one start and no IPOPT comparison or gain table unless asked: the quick optimisation
+# with the case file's coefficients: no identification first (what these tests are not about)
 ONE_START_NO_IPOPT = ("--set", "optimisation.starts=1", "--set", "optimisation.ipopt=false",
-                      "--set", "optimisation.gain_table=false")
+                      "--set", "optimisation.gain_table=false",
+                      "--set", "optimisation.coefficients=case")
 CASE = Path(__file__).parents[2] / "cases" / "paper2026.toml"
 START = harmonic_to_discrete(2.1, 0.05, np.deg2rad(50), np.deg2rad(112.5), 30)
 
@@ -572,3 +574,31 @@ def test_the_optimisers_run_on_one_blas_thread_whatever_the_environment_sets(mon
             with optimiser_blas_threads():
                 assert blas_threads() and set(blas_threads()) == {1}
             assert blas_threads() == before
+
+
+def test_optimise_uses_the_coefficients_run_uses_and_says_which_first(tmp_path):
+    """By default both identify from the shipped CFD with the uniform weighting: the same
+    model, so the same optimum from the same start; the first line says which."""
+    from mfflap.api import Study
+
+    cli = __import__("mfflap.cli.main", fromlist=["cli"]).cli
+    out = tmp_path / "opt.h5"
+    res = CliRunner().invoke(cli, ["optimise", str(CASE), "--betas", "0.5", "--set",
+                                   "optimisation.starts=1", "--set", "optimisation.ipopt=false",
+                                   "--set", "optimisation.gain_table=false", "--output",
+                                   str(out), "--json"])
+    assert res.exit_code == 0, res.output
+    first = res.stderr.splitlines()[0]
+    assert first.startswith("optimising with the coefficients identified from the shipped "
+                            "CFD records with the uniform weighting")
+    study = Study.from_toml(CASE)
+    study.identify(bootstrap=0)
+    for term, value in study.model.coefficients.items():
+        assert f"{term} = {value:.4g}" in first
+    with ResultsFile(out) as rf:
+        stored = json.loads(rf.h5["optimisation"].attrs["model_coefficients"])
+    assert stored == pytest.approx(dict(study.model.coefficients))
+    case = CliRunner().invoke(cli, ["optimise", str(CASE), "--betas", "0.5", *ONE_START_NO_IPOPT,
+                                    "--output", str(tmp_path / "case.h5")])
+    assert case.stderr.splitlines()[0].startswith(
+        "optimising with the case file's [model.coefficients]: ")

@@ -123,6 +123,7 @@ def test_optimise_fix_phase_stores_the_setting_and_optimises_in_phase(tmp_path):
     out = tmp_path / "opt.h5"
     res = CliRunner().invoke(cli, ["optimise", str(CASE), "--betas", "1", "--set",
                                    "optimisation.starts=1", "--set", "optimisation.ipopt=false",
+                                   "--set", "optimisation.coefficients=case",
                                    "--set", "optimisation.gain_table=false", "--set",
                                    "optimisation.phase=fixed", "--output", str(out)])
     assert res.exit_code == 0, res.output
