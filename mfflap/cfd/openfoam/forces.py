@@ -137,6 +137,38 @@ def header_centre_of_rotation(text: str, path: str = "<text>") -> np.ndarray | N
     return None
 
 
+def header_layout(text: str) -> str | None:
+    """What a file's column line (``# Time ...``) says its rows hold: ``"both"`` (forces
+    and moments in each row: the Foundation's ``forces(...) moment(...)``), ``"one"`` (one
+    quantity's total, pressure and viscous: openfoam.com's ``(total_x ...)``), or None
+    without such a line."""
+    for line in text.splitlines():
+        s = line.strip()
+        if s and not s.startswith("#"):
+            return None
+        body = s.lstrip("#").strip().lower()
+        if body.startswith("time") and len(body) > 4:
+            if "moment" in body and "force" in body:
+                return "both"
+            if "total" in body or "pressure_x" in body:
+                return "one"
+    return None
+
+
+def _check_layout_agrees(text: str, dialect: str, path: str) -> None:
+    """Refuse rows of one layout under a column line of the other: which columns hold
+    what would be guessed, and the loads read wrong without bound."""
+    said = header_layout(text)
+    rows = "both" if dialect in BOTH_LAYOUTS else "one"
+    if said is not None and said != rows:
+        what = {"both": "forces and moments in each row (the Foundation's forces.dat)",
+                "one": "one quantity's total, pressure and viscous parts (openfoam.com's "
+                       "force.dat or moment.dat)"}
+        raise ParseError(f"its header says the rows hold {what[said]}, but its rows are "
+                         f"{dialect} rows of {LAYOUT_NUMBERS[dialect]} numbers, which hold "
+                         f"{what[rows]}: the header and the rows disagree", path=path)
+
+
 def _whole_row(row: str, dialect: str) -> bool:
     """Whether a row without a final newline shows that it was written whole."""
     return "(" in row and row.endswith(")") and row.count("(") == row.count(")")
@@ -160,6 +192,7 @@ def parse_table(text: str, path: str = "<text>", columns: int = 9,
             # the only row is the last, cut short by a killed run
             raise ParseError("no complete data rows", path=path) from exc
         raise
+    _check_layout_agrees(text, dialect, path)
     ncol = 1 + (LAYOUT_NUMBERS[dialect] if dialect in BOTH_LAYOUTS else columns)
     nested = "(" in _first_row(text)[1]  # type: ignore[index]
     rows = []

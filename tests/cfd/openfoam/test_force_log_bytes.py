@@ -45,3 +45,28 @@ def test_a_megabyte_token_is_cut_short_in_the_error(tmp_path):
     with pytest.raises(ParseError) as refused:
         read_forces(case)
     assert len(str(refused.value)) < 500 and "xxx..." in str(refused.value)
+
+
+@pytest.mark.parametrize("header, rows_from", [
+    ("# Forces\n# Time forces(pressure viscous) moment(pressure viscous)\n", "force.dat"),
+    ("# Force\n# Time (total_x total_y total_z) (pressure_x pressure_y pressure_z) "
+     "(viscous_x viscous_y viscous_z)\n", "foundation"),
+])
+def test_a_header_and_rows_of_two_layouts_are_an_error_naming_the_file(tmp_path, header,
+                                                                        rows_from):
+    """openfoam.com rows under the Foundation's column line (in forces.dat), or Foundation
+    rows under openfoam.com's: which numbers are forces would be a guess."""
+    from tests.cfd.openfoam.test_runner import to_foundation
+
+    data = REAL_LOG.parent
+    if rows_from == "foundation":
+        body = to_foundation((data / "force.dat").read_text(), (data / "moment.dat").read_text())
+    else:
+        body = (data / "force.dat").read_text()
+    rows = "".join(line + "\n" for line in body.splitlines() if not line.startswith("#"))
+    folder = tmp_path / "case" / "postProcessing" / "forces" / "0"
+    folder.mkdir(parents=True)
+    (folder / "forces.dat").write_text(header + rows)
+    with pytest.raises(ParseError, match=r"forces\.dat: its header says the rows hold .* "
+                                         r"the header and the rows disagree"):
+        read_forces(tmp_path / "case")
