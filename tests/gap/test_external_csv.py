@@ -101,7 +101,7 @@ def test_gap_diagnose_reads_a_folder_of_csv_files_with_their_frequencies(tmp_pat
     assert res.exit_code == 0, res.output
     # the loads are the model's plus noise: rates from the splines of the positions (their
     # ends left out) leave noise only
-    assert res.output.startswith("within noise"), res.output
+    assert res.output.startswith("Within noise: "), res.output
     assert "not checked by leave-one-frequency-out" not in res.output
     # without the frequencies, the check is said to be skipped, and why
     for c in data:

@@ -66,7 +66,8 @@ def test_the_main_job_is_its_list_of_stages_in_order():
     assert names == ["identification", "identification coverage", "output correction",
                      "optimisation", "vortex polish", "gradient check", "gain table",
                      "motions against the identification data",
-                     "back-test", "model ladder", "gap diagnosis", "coefficient sensitivity",
+                     "back-test", "CFD baseline", "model ladder", "gap diagnosis",
+                     "coefficient sensitivity",
                      "VTK export"]
     told: list[str] = []
     outcome = run_study(load_case(CASE), RunOptions(n_starts=1, with_ipopt=False,
@@ -78,7 +79,8 @@ def test_the_main_job_is_its_list_of_stages_in_order():
     assert [(s.name, s.status) for s in outcome.stages] == [
         ("identification", FAILED), ("optimisation", DONE), ("vortex polish", DONE),
         ("gradient check", DONE),
-        ("back-test", DONE)] + ([("model ladder", DONE)] if found else [])
+        ("back-test", DONE), ("CFD baseline", DONE)] + ([("model ladder", DONE)] if found
+                                                        else [])
     assert set(outcome.ladder) == {label for label, o in outcome.backtests.items()
                                    if o.record is not None and o.comparison is not None}
     # the adjoint checked against complex step, controls and dt apart (Fig. 6)
