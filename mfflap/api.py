@@ -27,7 +27,7 @@ from mfflap.backtest.run import BacktestOutcome
 from mfflap.backtest.workflow import backtest_all
 from mfflap.config import CaseConfig, load_case
 from mfflap.errors import ConfigError, shown
-from mfflap.evaluation import table_states
+from mfflap.evaluation import table_evaluation
 from mfflap.identification.fit import IdentificationResult
 from mfflap.identification.workflow import identify_strategies, load_cases
 from mfflap.kinematics import DiscreteMotion, TabulatedMotion, to_discrete
@@ -35,7 +35,7 @@ from mfflap.kinematics.table_file import read_motion_table
 from mfflap.optimisation.optimise import OptimisationResult
 from mfflap.optimisation.study import beta_study
 from mfflap.optimisation.vortex_polish import PolishResult
-from mfflap.performance import evaluate_discrete, evaluate_states
+from mfflap.performance import evaluate_discrete
 from mfflap.pipeline import gap_diagnosis
 from mfflap.records.record import backtest_fixture_dirs
 from mfflap.study_results import (
@@ -126,11 +126,9 @@ class Study:
         """A motion table over its span as one cycle, with the study's model."""
         if not isinstance(table, TabulatedMotion):
             table = read_motion_table(table, self.config.plate.chord)
-        end_time = float(table.table_time[-1])
-        state = table_states(table, end_time)
-        return CycleEvaluation.of(evaluate_states(self.model, state, 1.0 / end_time),
-                                  end_time, half_cycle=False, scheme="continuous",
-                                  config=self.config)
+        evaluation, end_time = table_evaluation(self.model, table)
+        return CycleEvaluation.of(evaluation, end_time, half_cycle=False,
+                                  scheme="continuous", config=self.config)
 
     def identify(self, records: str | Path | Sequence[str | Path] | None = None,
                  weighting: str = "uniform", bootstrap: int = 200) -> IdentifiedCoefficients:

@@ -623,10 +623,19 @@ def loads_case(text: str, source: str = "<string>", settings: Sequence[str] = ()
     >>> loads_case('[study]\\nname = "demo"\\n', settings=["cfd.procs=2"]).cfd.procs
     2
     """
+    return _case_from_data(_parsed(text, source), source, settings)
+
+
+def _parsed(text: str, source: str) -> dict[str, Any]:
+    """Case TOML as a dict, a syntax error naming ``source``."""
     try:
-        data = tomllib.loads(text)
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"TOML syntax error: {exc}", source=source) from exc
+
+
+def _case_from_data(data: dict[str, Any], source: str, settings: Sequence[str]) -> CaseConfig:
+    """The case of parsed TOML with command-line ``settings`` applied."""
     if settings:
         data = apply_settings(data, settings)
         source = settings_source(source, settings)
@@ -653,19 +662,13 @@ def stored_case(text: str, source: str, settings: Sequence[str] = ()) -> CaseCon
     ...             ).coefficients.normal_drag
     3.0
     """
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"TOML syntax error: {exc}", source=source) from exc
+    data = _parsed(text, source)
     coefficients = data.get("model", {}).get("coefficients")
     if isinstance(coefficients, dict):
         for spelled, name in STORED_COEFFICIENT_SPELLINGS.items():
             if spelled in coefficients and name not in coefficients:
                 coefficients[name] = coefficients.pop(spelled)
-    if settings:
-        data = apply_settings(data, settings)
-        source = settings_source(source, settings)
-    return case_from_dict(data, source=source)
+    return _case_from_data(data, source, settings)
 
 
 def degrees(values) -> np.ndarray:

@@ -132,6 +132,15 @@ def table_states(table, end_time: float, per_row: int = MORISON_SAMPLES_PER_ROW
     return table.sample(np.arange(n) * (end_time / n))
 
 
+def table_evaluation(force_model, table, per_row: int = MORISON_SAMPLES_PER_ROW
+                     ) -> tuple[Evaluation, float]:
+    """``force_model``'s evaluation of a motion table over its span, first row to last,
+    taken as one cycle (:func:`table_states`), and that span, s."""
+    end_time = float(table.table_time[-1])
+    state = table_states(table, end_time, per_row)
+    return evaluate_states(force_model, state, 1.0 / end_time), end_time
+
+
 def evaluate_table(case: CaseConfig, table_path: str | Path,
                    model: str = "morison") -> CaseEvaluation:
     """Evaluate a motion table (a CSV file, :mod:`mfflap.kinematics.table_file`) with the
@@ -145,24 +154,24 @@ def evaluate_table(case: CaseConfig, table_path: str | Path,
     ConfigError
         If ``model`` is not one of MODELS, or the span needs more than MAX_TABLE_SAMPLES.
     """
-    from mfflap.kinematics.table_file import read_motion_table, table_end_time
+    from mfflap.kinematics.table_file import read_motion_table
 
     if model not in MODELS:
         raise ConfigError(f"model must be one of {list(MODELS)}, got {model!r}", key="model")
     table = read_motion_table(table_path, case.plate.chord)
-    end_time = table_end_time(table)
-    state = table_states(table, end_time, per_row=1 if model == "vortex" else
-                         MORISON_SAMPLES_PER_ROW)
     if model == "vortex":
         from mfflap.hydro.discrete_vortex import simulate_vortex_model
 
+        end_time = float(table.table_time[-1])
+        state = table_states(table, end_time, per_row=1)
         loads = simulate_vortex_model(state, case.plate, case.fluid, case.flow,
                                       case.vortex).loads
-        force_model = _ComputedLoads(loads, case.plate, case.flow)
+        ev = evaluate_states(_ComputedLoads(loads, case.plate, case.flow), state,
+                             1.0 / end_time)
         scheme = "discrete-vortex"
     else:
-        force_model, scheme = case.morison_model(), "continuous"
-    ev = evaluate_states(force_model, state, 1.0 / end_time)
+        ev, end_time = table_evaluation(case.morison_model(), table)
+        scheme = "continuous"
     desc = f"motion table {Path(table_path).name}, {end_time:g} s"
     fig = cycle_figure(ev, end_time, half_cycle=False, title=f"{case.study.name}: {desc}")
     return CaseEvaluation(case, ev, scheme, desc, fig)

@@ -10,7 +10,7 @@ Defaults are the paper's set-up (Yin et al. 2026, Biomimetics 11, 393).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 
 from mfflap.errors import ConfigError
 from mfflap.validation import bounded, check_fields
@@ -89,27 +89,15 @@ class MorisonCoefficients:
         check_fields(self, prefix="coefficients.")
 
     def as_term_values(self) -> dict[str, float]:
-        """Coefficient per Morison term name (see :mod:`mfflap.hydro.morison`)."""
-        return {
-            "normal_drag": self.normal_drag,
-            "tangential_drag": self.tangential_drag,
-            "normal_added_mass": self.normal_added_mass,
-            "tangential_added_mass": self.tangential_added_mass,
-        }
+        """Coefficient per Morison term name (see :mod:`mfflap.hydro.morison`): the fields
+        are named as the terms."""
+        return {f.name: getattr(self, f.name) for f in fields(self)}
 
     @classmethod
     def from_term_values(cls, values: dict[str, float]) -> MorisonCoefficients:
         """Inverse of :meth:`as_term_values` (missing terms keep the paper's values)."""
-        base = cls()
-        return replace(
-            base,
-            normal_drag=float(values.get("normal_drag", base.normal_drag)),
-            tangential_drag=float(values.get("tangential_drag", base.tangential_drag)),
-            normal_added_mass=float(values.get("normal_added_mass", base.normal_added_mass)),
-            tangential_added_mass=float(
-                values.get("tangential_added_mass", base.tangential_added_mass)
-            ),
-        )
+        return replace(cls(), **{f.name: float(values[f.name]) for f in fields(cls)
+                                 if f.name in values})
 
 
 @dataclass(frozen=True)

@@ -19,14 +19,15 @@ from __future__ import annotations
 
 import datetime as _dt
 import hashlib
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
 import h5py
 import numpy as np
 
-from mfflap.atomic_write import commit, temporary_beside
+from mfflap.atomic_write import commit, edited_copy, temporary_beside
 from mfflap.errors import MfflapError, UnreadableRecordError
 from mfflap.hydro.loads import LOAD_UNITS, Loads
 from mfflap.kinematics.discrete import DiscreteMotion
@@ -74,8 +75,25 @@ def content_checksum(h5: h5py.File) -> str:
 
 def seal(h5: h5py.File) -> None:
     """Store :func:`content_checksum` in the file (done by :class:`ResultsFile` on a clean
-    close; an edit of a file outside it calls this before the file is closed)."""
+    close, and by :func:`edited_results` at the end of an edit)."""
     h5.attrs[CHECKSUM_ATTR] = content_checksum(h5)
+
+
+@contextmanager
+def edited_results(path: str | Path) -> Iterator[h5py.File]:
+    """A results file or record opened for an edit outside :class:`ResultsFile` (derived
+    groups added to a finished record): a copy that is sealed (:func:`seal`) and takes the
+    file's place whole when the block ends without an error
+    (:func:`mfflap.atomic_write.edited_copy`).
+
+    Raises
+    ------
+    MfflapError
+        Naming the file, if it cannot be copied, opened or written.
+    """
+    with edited_copy(path) as h5:
+        yield h5
+        seal(h5)
 
 
 def check_seal(h5: h5py.File, path: str | Path) -> None:

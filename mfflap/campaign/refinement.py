@@ -15,7 +15,6 @@ from pathlib import Path
 
 import numpy as np
 
-from mfflap.atomic_write import edited_copy
 from mfflap.cfd.gci import two_level_index
 from mfflap.errors import ConfigError, MfflapError
 from mfflap.metrics import nrmse, pearson
@@ -23,7 +22,7 @@ from mfflap.performance import thrust_and_power
 from mfflap.records.cycle_scatter import SAMPLES_PER_PERIOD
 from mfflap.records.record import CfdRecord, read_record, record_paths
 from mfflap.records.refinement import KINDS, RefinementChange, write_refinement
-from mfflap.results import seal
+from mfflap.results import edited_results
 
 #: the provenance key that says each kind of refinement was made
 _REFINED_KEY = {"mesh": "n_cells", "time_step": "solver_max_courant"}
@@ -197,9 +196,8 @@ def add_refinement(coarse_folder: str | Path, refined_folder: str | Path
         kind = refinement_kind(coarse, refined)
         change = refinement_change(coarse, refined, kind, refined_path=path)
         try:  # rewritten whole: a kill during the write leaves the record as it was
-            with edited_copy(coarse_path) as h5:
+            with edited_results(coarse_path) as h5:
                 write_refinement(h5, change)
-                seal(h5)
         except MfflapError as exc:
             raise MfflapError(f"{coarse_path}: cannot add the {kind} refinement "
                               f"({exc})") from exc

@@ -22,11 +22,10 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from mfflap.atomic_write import edited_copy
 from mfflap.errors import MfflapError
 from mfflap.performance import thrust_and_power
 from mfflap.records.record import CfdRecord, read_record, record_paths
-from mfflap.results import seal
+from mfflap.results import edited_results
 
 #: the group of a record that holds its cycle scatter
 GROUP = "cycle_scatter"
@@ -153,7 +152,7 @@ def add_cycle_scatter(path: str | Path, record: CfdRecord | None = None
                       ) -> CycleScatter | None:
     """Compute the record's cycle scatter and store it in the record (``record``: the
     record the file holds, if the caller has it, so that it is not read again). The record
-    is rewritten whole (:func:`mfflap.atomic_write.edited_copy`): a kill during the write
+    is rewritten whole (:func:`mfflap.results.edited_results`): a kill during the write
     leaves it as it was.
 
     Raises
@@ -164,9 +163,8 @@ def add_cycle_scatter(path: str | Path, record: CfdRecord | None = None
     path = Path(path)
     scatter = cycle_scatter(read_record(path) if record is None else record)
     try:
-        with edited_copy(path) as h5:
+        with edited_results(path) as h5:
             write_cycle_scatter(h5, scatter)
-            seal(h5)
     except MfflapError as exc:
         raise MfflapError(f"{path}: cannot add the cycle scatter ({exc})") from exc
     return scatter

@@ -23,12 +23,11 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from mfflap.atomic_write import edited_copy
 from mfflap.errors import MfflapError
 from mfflap.hydro.loads import Loads
 from mfflap.kinematics.state import KINEMATIC_UNITS, KinematicState
 from mfflap.records.record import CfdRecord, read_record, record_paths, write_record
-from mfflap.results import seal
+from mfflap.results import edited_results
 
 #: window means per period of a reduced record
 SAMPLES_PER_PERIOD = 100
@@ -131,11 +130,10 @@ def reduce_folder(source: str | Path, destination: str | Path,
         out = destination / path.name
         write_record(out, reduced_record(read_record(path), samples_per_period),
                      single_precision=True)
-        with h5py.File(path, "r") as full, edited_copy(out) as small:
+        with h5py.File(path, "r") as full, edited_results(out) as small:
             for group in _KEPT_GROUPS:
                 if group in full:
                     full.copy(full[group], small, name=group)
-            seal(small)
         written.append(out)
     campaign_file = source / "campaign.toml"
     if campaign_file.is_file():
